@@ -1,0 +1,17 @@
+"""Errors wetcloth raises for users: each names what went wrong and how to fix it."""
+
+
+class ParameterError(ValueError):
+    """A scene parameter is unknown, of the wrong type or out of its allowed range."""
+
+    def __init__(self, name: str, message: str):
+        super().__init__(f"parameter '{name}': {message}")
+        self.name = name
+
+
+class BlowUpError(RuntimeError):
+    """The state went non-finite or exploded; carries the last good time (s)."""
+
+    def __init__(self, message: str, last_good_time: float):
+        super().__init__(message)
+        self.last_good_time = last_good_time

@@ -1,0 +1,127 @@
+"""The model: a scene's constants and scratch buffers, and the total force on every particle.
+
+Each force family is one kernel call, skipped when the scene does not need it: no spring
+kernel without springs, no water kernels while no particle touches the water.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from wetcloth.kernels.springs import spring_forces, spring_forces_and_blocks
+from wetcloth.kernels.water import buoyancy, face_drag, face_drag_and_blocks, stokes_drag, submerged_fractions
+from wetcloth.scene import Scene
+from wetcloth.topology import Topology, build_topology
+
+GRAVITY = 9.81  # m/s2, acting along -z
+
+
+class Model:
+    """Scene, topology and per-particle constants (dry mass kg, volume m3, Stokes coefficient N s/m)."""
+
+    def __init__(self, scene: Scene, topology: Topology | None = None):
+        self.topology = topo = topology if topology is not None else build_topology(scene)
+        n = topo.n
+        self.free = (~topo.pinned).astype(np.float64)  # 1 for moving particles, 0 for pinned
+        self.s = np.zeros(n)  # submerged fraction of each particle, from the last force evaluation
+        self.saturation = np.zeros(n)  # water / capacity, used by wetness-dependent stiffness
+        self.force = np.zeros((3, n))
+        self._buf = np.zeros((3, n))
+        self._cells = np.zeros((2, 9, n + topo.nx + 1))
+        families = len(topo.spring_offset)
+        self.direction = np.zeros((families, 3, n))
+        self.along = np.zeros((families, n))
+        self.across = np.zeros((families, n))
+        self.blocks = np.zeros((6, n))
+        self.diag = np.zeros((3, n))
+        self.rhs = np.zeros((3, n))
+        self.scene = scene
+
+    @property
+    def scene(self) -> Scene:
+        return self._scene
+
+    @scene.setter
+    def scene(self, scene: Scene) -> None:
+        """Take new parameters; those fixing the topology must not change."""
+        area = self.topology.area
+        self._scene = scene
+        self.dry_mass = scene.areal_density * area
+        self.volume = scene.thickness * area
+        self.stokes_coefficient = 6.0 * math.pi * np.sqrt(area / math.pi) * scene.water_viscosity
+        self.floor_z = scene.floor_level + 0.5 * scene.thickness
+
+    def mass(self, water: np.ndarray) -> np.ndarray:
+        """Particle masses (kg): dry fabric plus absorbed water."""
+        return self.dry_mass + water
+
+    def touches_water(self, z: np.ndarray) -> float:
+        """Fill ``self.s`` from heights ``z``; return the largest submerged fraction."""
+        sc = self.scene
+        return submerged_fractions(z, sc.water_level, sc.thickness, sc.buoyancy_model == "smooth", self.s)
+
+    def _springs(self):
+        t = self.topology
+        return t.spring_offset, t.spring_rest, t.spring_tension_only, t.spring_stiffness, t.spring_damping
+
+    def forces(self, pos: np.ndarray, vel: np.ndarray, water: np.ndarray) -> np.ndarray:
+        """Total force (N, (3, n)) on every particle; also leaves the submerged fractions in ``self.s``."""
+        sc = self.scene
+        force = self.force
+        force[:2] = 0.0
+        np.multiply(self.mass(water), -GRAVITY, out=force[2])
+        if self.topology.spring_offset.size:
+            spring_forces(*self._springs(), sc.damping_model == "projected", 0.0, self.saturation, pos, vel, force, self._buf)
+        if self.touches_water(pos[2]) > 0.0:
+            self._water_forces(pos, vel, force, h=None)
+        return force
+
+    def forces_and_blocks(self, pos: np.ndarray, vel: np.ndarray, water: np.ndarray, h: float) -> np.ndarray:
+        """Forces as ``forces``, plus the pieces of the backward-Euler system for step ``h`` (s).
+
+        Leaves in ``self.rhs`` the term ``h^2 K v``, in ``self.blocks`` the per-particle
+        symmetric blocks (drag, buoyancy) of ``-h C - h^2 K``, in ``self.diag`` the springs'
+        diagonal, and per-spring blocks in ``self.direction``, ``self.along``, ``self.across``.
+        """
+        sc = self.scene
+        force = self.force
+        force[:2] = 0.0
+        np.multiply(self.mass(water), -GRAVITY, out=force[2])
+        self.rhs[...] = 0.0
+        self.diag[...] = 0.0
+        self.blocks[...] = 0.0
+        if self.topology.spring_offset.size:
+            spring_forces_and_blocks(
+                *self._springs(), sc.damping_model == "projected", 0.0, self.saturation, pos, vel, h,
+                force, self.rhs, self.diag, self.direction, self.along, self.across, self._buf,
+            )
+        if self.touches_water(pos[2]) > 0.0:
+            self._water_forces(pos, vel, force, h=h)
+        return force
+
+    def _water_forces(self, pos, vel, force, h):
+        sc = self.scene
+        s = self.s
+        buoyancy(s, self.volume, sc.water_density, GRAVITY, force)
+        if sc.drag_model == "stokes":
+            stokes_drag(s, self.stokes_coefficient, 0.0, 0.0, vel, force)
+            if h is not None:
+                self.blocks[:3] += h * self.stokes_coefficient * s
+        elif h is None:
+            face_drag(
+                self.topology.nx, self.topology.ny, pos, vel, s, sc.water_density, sc.drag_normal,
+                sc.drag_tangential, sc.drag_linear, 0.0, 0.0, force, self._cells,
+            )
+        else:
+            face_drag_and_blocks(
+                self.topology.nx, self.topology.ny, pos, vel, s, sc.water_density, sc.drag_normal,
+                sc.drag_tangential, sc.drag_linear, 0.0, 0.0, h, force, self.blocks, self._cells,
+            )
+        if h is not None and sc.buoyancy_model == "smooth":
+            # dF_z/dz = -rho g V / thickness inside the surface slab (0 < s < 1).
+            partial = (s > 0.0) & (s < 1.0)
+            stiffness = np.where(partial, sc.water_density * GRAVITY * self.volume / sc.thickness, 0.0)
+            self.blocks[2] += h * h * stiffness
+            self.rhs[2] -= h * h * stiffness * vel[2]

@@ -1,0 +1,209 @@
+"""The scene: every parameter of a simulation, its unit, range and meaning, validated in one place.
+
+One vocabulary: the field names below are the names used in scene files (TOML),
+in ``wetcloth run --set name=value``, in ``load_scene(path, name=value)``, as FMU
+variables and as batch-study axes.  Units are SI.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from wetcloth.errors import ParameterError
+
+#: FMU causality of a scene parameter: changeable at every communication point,
+#: or fixed at instantiation.
+INPUT = "input"
+PARAMETER = "parameter"
+
+
+def _param(default, unit: str, doc: str, lo=None, hi=None, lo_open=False, choices=(), fmu=PARAMETER):
+    """A scene field with its unit, documentation and allowed range in the field metadata."""
+    return field(
+        default=default,
+        metadata=dict(unit=unit, doc=doc, lo=lo, hi=hi, lo_open=lo_open, choices=tuple(choices), fmu=fmu),
+    )
+
+
+INTEGRATORS = ("explicit_euler", "symplectic_euler", "implicit_euler")
+EDGES = ("none", "x_min", "x_max", "y_min", "y_max")
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A cloth dropped onto water.  The defaults are the cotton towel of ``models/towel.toml``."""
+
+    # --- cloth geometry and grid
+    nx: int = _param(21, "-", "particles along the width (x)", 2, 1024)
+    ny: int = _param(29, "-", "particles along the length (y)", 2, 1024)
+    width: float = _param(0.5, "m", "cloth size along x", 0.0, 100.0, lo_open=True)
+    length: float = _param(0.7, "m", "cloth size along y", 0.0, 100.0, lo_open=True)
+    # --- fabric
+    areal_density: float = _param(0.45, "kg/m2", "dry fabric mass per area", 0.0, 100.0, lo_open=True)
+    thickness: float = _param(
+        0.002, "m", "envelope thickness: buoyant volume = area * thickness", 0.0, 1.0, lo_open=True
+    )
+    stretch_stiffness: float = _param(
+        2000.0, "N/m", "spring stiffness per unit strain per unit width", 0.0, 1e8, lo_open=True
+    )
+    bend_stiffness: float = _param(20.0, "N/m", "bending-spring stiffness per unit strain per unit width; 0 = off", 0.0, 1e8)
+    damping: float = _param(0.2, "N s/m", "spring damping per unit strain rate per unit width", 0.0, 1e6)
+    damping_model: str = _param(
+        "projected", "-", "spring damping: 'projected' (along the spring) or 'thesis' (eq. 3.2)",
+        choices=("projected", "thesis"),
+    )
+    # --- water
+    water_level: float = _param(0.0, "m", "height of the water surface (z is up)", -1e4, 1e4, fmu=INPUT)
+    water_density: float = _param(1000.0, "kg/m3", "density of the water", 0.0, 1e5, lo_open=True, fmu=INPUT)
+    water_viscosity: float = _param(1.0e-3, "Pa s", "dynamic viscosity of the water (Stokes drag)", 0.0, 1e3)
+    drag_model: str = _param("face", "-", "'face' (per-triangle, default) or 'stokes' (thesis eq. 3.5)", choices=("face", "stokes"))
+    drag_normal: float = _param(1.2, "-", "face-drag coefficient across the cloth, C_n", 0.0, 100.0)
+    drag_tangential: float = _param(0.03, "-", "face-drag coefficient along the cloth, C_t", 0.0, 100.0)
+    drag_linear: float = _param(20.0, "N s/m3", "face-drag linear term c_lin per area", 0.0, 1e6)
+    buoyancy_model: str = _param(
+        "smooth", "-", "'smooth' (slab fraction, default) or 'thesis' (all or nothing)", choices=("smooth", "thesis")
+    )
+    # --- absorption (Buras law)
+    absorption_capacity: float = _param(
+        3.8, "kg/kg", "equilibrium water uptake per kg of dry fabric (Buras Q)", 0.0, 100.0, fmu=INPUT
+    )
+    absorption_rate: float = _param(
+        0.15, "1/s", "initial uptake rate, kg water per kg dry fabric per s (Buras I)", 0.0, 1e4, fmu=INPUT
+    )
+    # --- initial state and surroundings
+    initial_height: float = _param(0.1, "m", "z of the cloth's centre at t = 0 (cloth at rest)", -1e4, 1e4)
+    initial_tilt: float = _param(10.0, "deg", "rotation about the x axis at t = 0; 90 is vertical", -90.0, 90.0)
+    floor_level: float = _param(-1.0, "m", "z of the tank floor", -1e4, 1e4)
+    floor_friction: float = _param(0.5, "-", "Coulomb friction coefficient of the floor", 0.0, 10.0)
+    pinned_edge: str = _param("none", "-", "edge held fixed in space: none, x_min, x_max, y_min, y_max", choices=EDGES)
+    # --- time integration
+    integrator: str = _param("implicit_euler", "-", "time integrator; 'explicit_euler' is the thesis scheme", choices=INTEGRATORS)
+    tolerance: float = _param(
+        1e-4, "-", "local position error per step relative to the cloth size; 0 = fixed steps", 0.0, 1.0
+    )
+    max_step: float = _param(0.01, "s", "largest internal time step", 0.0, 1.0, lo_open=True)
+
+    def __post_init__(self):
+        validate(self)
+
+    def replace(self, **overrides) -> "Scene":
+        """A copy with some parameters changed (validated)."""
+        return from_dict(dataclasses.asdict(self) | overrides)
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+PARAMETERS: dict[str, dataclasses.Field] = {f.name: f for f in dataclasses.fields(Scene)}
+
+
+def describe_range(f: dataclasses.Field) -> str:
+    """The allowed values of a field, as a user reads them: '0 < thickness <= 1 m'."""
+    md = f.metadata
+    if md["choices"]:
+        return "one of " + ", ".join(repr(c) for c in md["choices"])
+    unit = "" if md["unit"] == "-" else f" {md['unit']}"
+    lo_sign = "<" if md["lo_open"] else "<="
+    return f"{md['lo']:g} {lo_sign} {f.name} <= {md['hi']:g}{unit}"
+
+
+def _check_value(f: dataclasses.Field, value) -> None:
+    md = f.metadata
+    if f.type == "str":
+        if not isinstance(value, str):
+            raise ParameterError(f.name, f"expected a string, got {value!r}; allowed: {describe_range(f)}")
+        if value not in md["choices"]:
+            raise ParameterError(f.name, f"{value!r} is not allowed; allowed: {describe_range(f)}")
+        return
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(f.name, f"expected a number, got {value!r}; allowed: {describe_range(f)}")
+    if f.type == "int" and not isinstance(value, int):
+        raise ParameterError(f.name, f"expected a whole number, got {value!r}; allowed: {describe_range(f)}")
+    if not math.isfinite(value):
+        raise ParameterError(f.name, f"{value!r} is not a finite number; allowed: {describe_range(f)}")
+    below = value <= md["lo"] if md["lo_open"] else value < md["lo"]
+    if below or value > md["hi"]:
+        raise ParameterError(f.name, f"{value!r} is out of range; allowed: {describe_range(f)}")
+
+
+def validate(scene: Scene) -> None:
+    """Check every parameter against its range and the scene as a whole; raise ParameterError."""
+    for f in dataclasses.fields(scene):
+        _check_value(f, getattr(scene, f.name))
+    half_drop = 0.5 * scene.length * abs(math.sin(math.radians(scene.initial_tilt)))
+    lowest = scene.initial_height - half_drop - 0.5 * scene.thickness
+    if lowest <= scene.floor_level:
+        raise ParameterError(
+            "initial_height",
+            f"the cloth starts at or below the floor (lowest point {lowest:g} m, floor_level "
+            f"{scene.floor_level:g} m); allowed: initial_height > floor_level + {half_drop + 0.5 * scene.thickness:g} m",
+        )
+
+
+def coerce(name: str, value):
+    """Convert a value given as text or TOML into the type of parameter ``name``."""
+    if name not in PARAMETERS:
+        raise ParameterError(name, f"unknown parameter; known: {', '.join(PARAMETERS)}")
+    f = PARAMETERS[name]
+    if isinstance(value, str) and f.type != "str":
+        text = value.strip()
+        try:
+            value = int(text) if f.type == "int" else float(text)
+        except ValueError:
+            raise ParameterError(name, f"expected a number, got {value!r}; allowed: {describe_range(f)}") from None
+    elif f.type == "float" and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    elif f.type == "int" and isinstance(value, float) and value.is_integer():
+        value = int(value)
+    return value
+
+
+def from_dict(values: dict[str, Any]) -> Scene:
+    """A validated Scene from a mapping of parameter names to values (text or typed)."""
+    return Scene(**{name: coerce(name, value) for name, value in values.items()})
+
+
+#: Keys of a scene file that are not scene parameters.
+RESERVED_KEYS = ("description", "run")
+
+
+def preset_dir() -> Path:
+    """Folder of the scene presets shipped with wetcloth (the repository's ``models/``)."""
+    return Path(str(resources.files("wetcloth.presets")))
+
+
+def resolve_scene_path(path: str | Path | None) -> Path:
+    """A scene file from a path, or a preset name such as 'thesis_fast'; None is the default towel."""
+    if path is None:
+        return preset_dir() / "towel.toml"
+    candidate = Path(path)
+    if candidate.exists():
+        return candidate
+    preset = preset_dir() / (candidate.name if candidate.suffix == ".toml" else candidate.name + ".toml")
+    if preset.exists():
+        return preset
+    names = ", ".join(sorted(p.stem for p in preset_dir().glob("*.toml")))
+    raise FileNotFoundError(f"scene file {str(path)!r} not found (presets: {names})")
+
+
+def read_scene_file(path: str | Path | None) -> dict[str, Any]:
+    """The raw contents of a scene file, with its ``[run]`` table (duration, fps) if any."""
+    resolved = resolve_scene_path(path)
+    with open(resolved, "rb") as fh:
+        try:
+            return tomllib.load(fh)
+        except tomllib.TOMLDecodeError as exc:
+            raise ValueError(f"scene file {resolved}: {exc}") from None
+
+
+def load_scene(path: str | Path | None = None, **overrides) -> Scene:
+    """Load a scene from TOML (default: the towel preset), with parameter overrides."""
+    data = read_scene_file(path)
+    values = {k: v for k, v in data.items() if k not in RESERVED_KEYS}
+    return from_dict(values | overrides)

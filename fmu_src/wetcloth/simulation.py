@@ -1,0 +1,161 @@
+"""The one simulator every front end drives: ``Simulation(scene).advance(seconds)``."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from wetcloth.errors import BlowUpError, ParameterError
+from wetcloth.integrators import make_integrator
+from wetcloth.kernels.absorption import absorb
+from wetcloth.kernels.floor import floor_contact
+from wetcloth.model import Model
+from wetcloth.scene import INPUT, PARAMETERS, Scene, load_scene
+from wetcloth.state import State, initial_state
+
+#: Names of the outputs, as the FMU publishes them.
+OUTPUT_NAMES = ("centroid_x", "centroid_y", "centroid_z", "depth", "wet_mass", "water_mass")
+
+#: Speed (m/s) beyond which the state counts as exploded: far above any fall in a tank.
+BLOW_UP_SPEED = 1.0e3
+#: Steps the controller will not go below (s); an error above tolerance is then accepted.
+SMALLEST_STEP = 1e-9
+#: Largest growth and shrink factors of the step between two steps.
+STEP_GROWTH, STEP_SHRINK = 2.0, 0.2
+
+
+class Simulation:
+    """A cloth on water, advanced in internal steps chosen by stability and ``tolerance``.
+
+    The step size is not the caller's: ``advance(duration)`` takes as many internal steps as
+    the integrator needs, so any communication step (FMU, frame rate) gives accurate results.
+    """
+
+    def __init__(self, scene: Scene | None = None):
+        scene = load_scene() if scene is None else scene
+        self.model = Model(scene)
+        self.state = initial_state(scene, self.model.topology)
+        self._trial = self.state.copy()
+        self.integrator = make_integrator(scene.integrator, self.model)
+        self._next_step = scene.max_step
+        self.steps = 0  # accepted internal steps
+        self.rejected_steps = 0  # steps redone with a smaller size (adaptive mode)
+
+    # ----------------------------------------------------------------- parameters
+    @property
+    def scene(self) -> Scene:
+        return self.model.scene
+
+    def set_inputs(self, **values) -> None:
+        """Change inputs (water level, density, absorption; see ``scene.INPUT``) from now on."""
+        for name in values:
+            if name not in PARAMETERS:
+                raise ParameterError(name, "unknown parameter")
+            if PARAMETERS[name].metadata["fmu"] != INPUT:
+                raise ParameterError(name, "is fixed once the simulation starts; only inputs may change")
+        self.model.scene = self.scene.replace(**values)
+
+    # ----------------------------------------------------------------- stepping
+    @property
+    def time(self) -> float:
+        """Simulated time (s)."""
+        return self.state.time
+
+    def advance(self, duration: float) -> None:
+        """Simulate ``duration`` seconds (>= 0) more."""
+        if not (duration >= 0.0 and math.isfinite(duration)):
+            raise ValueError(f"duration must be a finite number >= 0 s, got {duration!r}")
+        target = self.state.time + duration
+        while target - self.state.time > 1e-12 * max(1.0, abs(target)):
+            self._step(target - self.state.time)
+        self.state.time = max(self.state.time, target)
+
+    def _step(self, remaining: float) -> None:
+        """Take one accepted internal step of at most ``remaining`` seconds."""
+        scene = self.scene
+        state, trial = self.state, self._trial
+        adaptive = scene.tolerance > 0.0
+        allowed = scene.tolerance * max(scene.width, scene.length)  # m of local position error
+        while True:
+            limit = min(scene.max_step, self.integrator.stable_step(state))
+            planned = min(self._next_step, limit) if adaptive else limit
+            h = min(planned, remaining)
+            largest_dv = self.integrator(state, trial, h)
+            if not adaptive:
+                break
+            error = 0.5 * h * largest_dv  # |h (v+ - v)| / 2: first- against second-order position update
+            factor = 0.9 * math.sqrt(allowed / error) if error > 0.0 else STEP_GROWTH
+            if error <= allowed or h <= SMALLEST_STEP or not math.isfinite(error):
+                proposed = h * min(STEP_GROWTH, max(STEP_SHRINK, factor)) if math.isfinite(error) else h
+                # A step cut short by the end of the interval says nothing against the planned one.
+                self._next_step = max(proposed, planned) if h < planned and error <= allowed else proposed
+                break
+            self._next_step = max(SMALLEST_STEP, h * max(STEP_SHRINK, factor))
+            self.rejected_steps += 1
+        trial.time = state.time + h
+        self._finish_step(trial, h)
+        self._guard(trial, h)
+        self.state, self._trial = trial, state
+        self.steps += 1
+
+    def _finish_step(self, trial: State, h: float) -> None:
+        """Floor contact, then water uptake over the step (exact exponential update)."""
+        scene, model = self.scene, self.model
+        floor_contact(model.floor_z, scene.floor_friction, trial.pos, trial.vel)
+        trial.water[...] = self.state.water
+        if scene.absorption_capacity > 0.0 and scene.absorption_rate > 0.0:
+            if model.touches_water(trial.pos[2]) > 0.0:
+                decay = math.exp(-scene.absorption_rate * h / scene.absorption_capacity)
+                absorb(model.s, model.dry_mass, scene.absorption_capacity, decay, trial.water, trial.vel)
+
+    def _guard(self, trial: State, h: float) -> None:
+        """Refuse a non-finite or exploded state; the last good state stays current."""
+        speed = float(np.abs(trial.vel).max()) if trial.vel.size else 0.0
+        if trial.is_finite() and speed < BLOW_UP_SPEED:
+            return
+        scene = self.scene
+        what = "became non-finite" if not trial.is_finite() else f"exploded (speed {speed:.3g} m/s)"
+        raise BlowUpError(
+            f"the cloth state {what} in the step from t = {self.state.time:.6g} s to {trial.time:.6g} s "
+            f"(step {h:.3g} s, integrator {scene.integrator!r}). Likely cause: the step is too large for "
+            f"stretch_stiffness = {scene.stretch_stiffness:g} N/m; use integrator 'implicit_euler', a "
+            f"smaller max_step or a tolerance > 0. Last good time: {self.state.time:.6g} s.",
+            last_good_time=self.state.time,
+        )
+
+    # ----------------------------------------------------------------- results
+    def outputs(self) -> dict[str, float]:
+        """The FMU outputs (MODEL.md section 7): centroid (m), depth (m), wet and water mass (kg)."""
+        mass = self.model.mass(self.state.water)
+        total = float(mass.sum())
+        centroid = self.state.pos @ mass / total
+        return {
+            "centroid_x": float(centroid[0]),
+            "centroid_y": float(centroid[1]),
+            "centroid_z": float(centroid[2]),
+            "depth": float(self.scene.water_level - centroid[2]),
+            "wet_mass": total,
+            "water_mass": float(self.state.water.sum()),
+        }
+
+    @property
+    def positions(self) -> np.ndarray:
+        """Particle positions (n, 3), m."""
+        return self.state.pos.T.copy()
+
+    @property
+    def velocities(self) -> np.ndarray:
+        """Particle velocities (n, 3), m/s."""
+        return self.state.vel.T.copy()
+
+    @property
+    def wetness(self) -> np.ndarray:
+        """Saturation of each particle, absorbed water over capacity (0 to 1)."""
+        capacity = self.scene.absorption_capacity * self.model.dry_mass
+        return np.clip(np.divide(self.state.water, capacity, out=np.zeros_like(capacity), where=capacity > 0), 0.0, 1.0)
+
+    @property
+    def triangles(self) -> np.ndarray:
+        """Triangle vertex indices (m, 3), counter-clockwise seen from +z in the rest sheet."""
+        return self.model.topology.triangles

@@ -1,0 +1,45 @@
+"""The simulation state: flat arrays that the kernels advance."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from wetcloth.scene import Scene
+from wetcloth.topology import Topology
+
+
+@dataclass
+class State:
+    """Positions and velocities as (3, n) rows x, y, z (m, m/s); absorbed water per particle (kg)."""
+
+    time: float
+    pos: np.ndarray
+    vel: np.ndarray
+    water: np.ndarray
+
+    def copy(self) -> "State":
+        return State(self.time, self.pos.copy(), self.vel.copy(), self.water.copy())
+
+    def assign(self, other: "State") -> None:
+        """Overwrite this state's contents with ``other``'s (no new arrays)."""
+        self.time = other.time
+        self.pos[...] = other.pos
+        self.vel[...] = other.vel
+        self.water[...] = other.water
+
+    def is_finite(self) -> bool:
+        return bool(np.isfinite(self.pos).all() and np.isfinite(self.vel).all() and np.isfinite(self.water).all())
+
+
+def initial_state(scene: Scene, topo: Topology) -> State:
+    """The cloth at rest, flat, centred over the origin at ``initial_height``, tilted about x."""
+    tilt = math.radians(scene.initial_tilt)
+    x, y = topo.rest_xy
+    pos = np.empty((3, topo.n))
+    pos[0] = x
+    pos[1] = y * math.cos(tilt)
+    pos[2] = scene.initial_height + y * math.sin(tilt)
+    return State(time=0.0, pos=pos, vel=np.zeros((3, topo.n)), water=np.zeros(topo.n))

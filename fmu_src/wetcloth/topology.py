@@ -1,0 +1,121 @@
+"""The cloth's fixed structure: particle areas and masses, springs and triangles, built once per scene.
+
+Particles sit on an ``nx`` x ``ny`` grid, index ``i = row * nx + col`` (col along x, row along y).
+Springs are grouped in *families* that share one index offset: spring ``i`` of a family joins
+particle ``i`` to particle ``i + offset``.  A missing spring (across the grid's edge) has zero
+stiffness.  This layout lets every kernel loop over flat arrays with no index lists.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from wetcloth.scene import Scene
+
+
+@dataclass(frozen=True)
+class Topology:
+    """Grid connectivity and per-particle constants (SI units)."""
+
+    nx: int
+    ny: int
+    dx: float  # m, rest spacing along x
+    dy: float  # m, rest spacing along y
+    rest_xy: np.ndarray  # (2, n) m, particle coordinates in the flat rest sheet, centred on 0
+    area: np.ndarray  # (n,) m2, each particle's share of the sheet
+    spring_offset: np.ndarray  # (F,) int64, index offset of each family
+    spring_rest: np.ndarray  # (F,) m, rest length of each family
+    spring_tension_only: np.ndarray  # (F,) bool: True for structural and shear springs
+    spring_stiffness: np.ndarray  # (F, n) N/m, zero where a family has no spring
+    spring_damping: np.ndarray  # (F, n) N s/m
+    spring_family_names: tuple[str, ...]
+    triangles: np.ndarray  # (m, 3) int64, counter-clockwise seen from +z in the rest sheet
+    pinned: np.ndarray  # (n,) bool
+
+    @property
+    def n(self) -> int:
+        return self.nx * self.ny
+
+    @property
+    def spring_count(self) -> int:
+        """Number of actual springs (families' zero-stiffness slots not counted)."""
+        return int(np.count_nonzero(self.spring_stiffness))
+
+
+def _edge_weights(count: int) -> np.ndarray:
+    """1 inside, 1/2 on the edges: a particle's share of the cells along one axis."""
+    w = np.ones(count)
+    w[0] = w[-1] = 0.5
+    return w
+
+
+def build_topology(scene: Scene) -> Topology:
+    """Build the grid topology and per-spring constants of ``scene``."""
+    nx, ny = scene.nx, scene.ny
+    n = nx * ny
+    dx = scene.width / (nx - 1)
+    dy = scene.length / (ny - 1)
+    col = np.tile(np.arange(nx), ny)
+    row = np.repeat(np.arange(ny), nx)
+    rest_xy = np.stack([col * dx - 0.5 * scene.width, row * dy - 0.5 * scene.length])
+    wc = _edge_weights(nx)[col]
+    wr = _edge_weights(ny)[row]
+    area = dx * dy * wc * wr
+
+    # Each spring stands for a strip of the sheet of area a_s; with rest length l its constant
+    # is k = stiffness * a_s / l**2 (= stiffness * width / length), likewise for damping.
+    diag = np.hypot(dx, dy)
+    families = [
+        # name, offset, rest length, strip area per spring, exists, tension only, bending
+        ("structural_x", 1, dx, dx * dy * wr, col < nx - 1, True, False),
+        ("structural_y", nx, dy, dy * dx * wc, row < ny - 1, True, False),
+        ("shear_up_right", nx + 1, diag, np.full(n, 0.5 * dx * dy), (col < nx - 1) & (row < ny - 1), True, False),
+        ("shear_up_left", nx - 1, diag, np.full(n, 0.5 * dx * dy), (col > 0) & (row < ny - 1), True, False),
+        ("bend_x", 2, 2 * dx, 2 * dx * dy * wr, col < nx - 2, False, True),
+        ("bend_y", 2 * nx, 2 * dy, 2 * dy * dx * wc, row < ny - 2, False, True),
+    ]
+    names, offsets, rests, tension, ks, cs = [], [], [], [], [], []
+    for name, offset, rest, strip_area, exists, tension_only, bending in families:
+        modulus = scene.bend_stiffness if bending else scene.stretch_stiffness
+        if modulus == 0.0 or not exists.any():
+            continue
+        names.append(name)
+        offsets.append(offset)
+        rests.append(rest)
+        tension.append(tension_only)
+        ks.append(np.where(exists, modulus * strip_area / rest**2, 0.0))
+        cs.append(np.where(exists, scene.damping * strip_area / rest**2, 0.0))
+
+    quads = (col < nx - 1) & (row < ny - 1)
+    a = np.flatnonzero(quads)
+    triangles = np.concatenate(
+        [np.stack([a, a + 1, a + nx + 1], axis=1), np.stack([a, a + nx + 1, a + nx], axis=1)]
+    )
+    return Topology(
+        nx=nx,
+        ny=ny,
+        dx=dx,
+        dy=dy,
+        rest_xy=rest_xy,
+        area=area,
+        spring_offset=np.array(offsets, dtype=np.int64),
+        spring_rest=np.array(rests, dtype=np.float64),
+        spring_tension_only=np.array(tension, dtype=np.bool_),
+        spring_stiffness=np.array(ks, dtype=np.float64).reshape(len(ks), n),
+        spring_damping=np.array(cs, dtype=np.float64).reshape(len(cs), n),
+        spring_family_names=tuple(names),
+        triangles=triangles.astype(np.int64),
+        pinned=_pinned_mask(scene.pinned_edge, col, row, nx, ny),
+    )
+
+
+def _pinned_mask(edge: str, col: np.ndarray, row: np.ndarray, nx: int, ny: int) -> np.ndarray:
+    return {
+        "none": np.zeros(col.shape, dtype=bool),
+        "x_min": col == 0,
+        "x_max": col == nx - 1,
+        "y_min": row == 0,
+        "y_max": row == ny - 1,
+    }[edge]

@@ -1,0 +1,1 @@
+"""Scene presets (TOML files), installed as the package ``wetcloth.presets``."""
