@@ -30,6 +30,9 @@ class Simulation:
 
     The step size is not the caller's: ``advance(duration)`` takes as many internal steps as
     the integrator needs, so any communication step (FMU, frame rate) gives accurate results.
+    With ``tolerance > 0`` (the default) steps adapt to a local error bound and never exceed the
+    explicit schemes' stability limit or ``max_step``; with ``tolerance = 0`` every step is
+    ``max_step``, the thesis's fixed-step scheme, and only the blow-up guard watches.
     """
 
     def __init__(self, scene: Scene | None = None):
@@ -78,12 +81,14 @@ class Simulation:
         adaptive = scene.tolerance > 0.0
         allowed = scene.tolerance * max(scene.width, scene.length)  # m of local position error
         while True:
+            if not adaptive:  # fixed steps of max_step, as the user asked: the blow-up guard watches
+                h = min(scene.max_step, remaining)
+                self.integrator(state, trial, h)
+                break
             limit = min(scene.max_step, self.integrator.stable_step(state))
-            planned = min(self._next_step, limit) if adaptive else limit
+            planned = min(self._next_step, limit)
             h = min(planned, remaining)
             largest_dv = self.integrator(state, trial, h)
-            if not adaptive:
-                break
             error = 0.5 * h * largest_dv  # |h (v+ - v)| / 2: first- against second-order position update
             factor = 0.9 * math.sqrt(allowed / error) if error > 0.0 else STEP_GROWTH
             if error <= allowed or h <= SMALLEST_STEP or not math.isfinite(error):
