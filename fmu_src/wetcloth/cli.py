@@ -1,0 +1,39 @@
+"""The ``wetcloth`` command line.  Each subcommand lives in its own module with ``add_parser``."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from wetcloth.errors import BlowUpError, ParameterError
+
+#: Modules that each add one subcommand: ``add_parser(subparsers)`` sets ``func(args) -> int``.
+COMMAND_MODULES = (
+    "wetcloth.commands.run",
+)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="wetcloth",
+        description="Cloth that meets water: simulate, co-simulate (FMI 2.0) and export to Blender.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name in COMMAND_MODULES:
+        importlib.import_module(name).add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except (ParameterError, BlowUpError, FileNotFoundError, ValueError) as exc:
+        print(f"wetcloth {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

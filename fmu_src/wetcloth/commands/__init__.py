@@ -1,0 +1,1 @@
+"""Subcommands of the ``wetcloth`` command line, one module each."""
