@@ -8,6 +8,14 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
+# Blender for the exporter's import tests: bpy from PyPI in its own Python 3.11 venv (bpy pins
+# numpy < 2, the project uses numpy 2). pip keeps the downloaded wheel in its cache, so a rebuilt
+# venv installs without downloading again.  Override BLENDER_PYTHON if python3.11 is elsewhere.
+BLENDER_PYTHON ?= $(shell command -v python3.11 || echo python3)
+BLENDER_VENV := .venv-blender
+BLENDER_STAMP := $(BLENDER_VENV)/.installed
+BPY_VERSION := 5.0.1
+
 .PHONY: demo test bench clean
 
 $(STAMP): pyproject.toml
@@ -16,14 +24,21 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[test]'
 	touch $(STAMP)
 
+$(BLENDER_STAMP):
+	test -x $(BLENDER_VENV)/bin/python || $(BLENDER_PYTHON) -m venv $(BLENDER_VENV)
+	$(BLENDER_VENV)/bin/python -c 'import sys; sys.exit(0 if sys.version_info[:2] == (3, 11) else "bpy $(BPY_VERSION) needs Python 3.11: rm -r $(BLENDER_VENV) and set BLENDER_PYTHON")'
+	$(BLENDER_VENV)/bin/python -m pip install --quiet bpy==$(BPY_VERSION)
+	touch $(BLENDER_STAMP)
+
 demo: $(STAMP)
 	$(BIN)/wetcloth run --duration 90 --export out/demo/frames --csv out/demo/outputs.csv --plot out/demo/plot.png
 
-test: $(STAMP)
-	$(BIN)/python -m pytest -q
+test: $(STAMP) $(BLENDER_STAMP)
+	WETCLOTH_REQUIRE_BLENDER=1 $(BIN)/python -m pytest -q
 
 bench: $(STAMP)
 	$(BIN)/python bench/step_speed.py
+	$(BIN)/python bench/export_speed.py
 
 clean:
 	rm -rf out build .pytest_cache
