@@ -1,0 +1,68 @@
+"""``wetcloth batch``: run a parameter study on Dask (a local cluster by default), one table row per run."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+ENGINES = ("python", "fmu")
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser(
+        "batch",
+        help="run a parameter study (many scenes) on Dask",
+        description=(
+            "Run every scene of a study file on Dask: with no --scheduler a local cluster of processes "
+            "(one per core, or --workers N) starts and stops by itself; with --scheduler the study runs "
+            "on that cluster. Results go to a Parquet table, one row per run; a rerun skips the runs "
+            "already in it. See docs/batch.md."
+        ),
+    )
+    p.add_argument("study", help="study TOML file (see docs/batch.md and models/studies/)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="address of a running Dask scheduler, e.g. tcp://host:8786")
+    p.add_argument("--workers", type=int, metavar="N",
+                   help="local cluster: number of worker processes (default: one per core); "
+                        "with --scheduler: wait until N workers are connected")
+    p.add_argument("--out", type=Path, metavar="FILE",
+                   help="results table, Parquet (default: out/batch/<study name>.parquet)")
+    p.add_argument("--csv", type=Path, metavar="FILE", help="also write the results as CSV")
+    p.add_argument("--engine", choices=ENGINES, help="simulate with the Python simulator (default) or the FMU through fmpy")
+    p.add_argument("--fmu", type=Path, metavar="PATH", help="FMU for --engine fmu (default: models/WetCloth.fmu)")
+    p.add_argument("--plot", action="append", default=[], metavar="METRIC:AXIS[,AXIS2]",
+                   help="plot a metric against one axis, or as a heatmap over two axes (repeatable)")
+    p.add_argument("--plot-dir", type=Path, metavar="DIR", help="where plots go (default: beside the results table)")
+    p.add_argument("--retry-errors", action="store_true", help="run again the runs recorded with status 'error'")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=main)
+
+
+def main(args) -> int:
+    from wetcloth import batch  # imports dask: only when the command runs
+
+    study = batch.load_study(args.study)
+    if args.engine is not None:
+        study = study.replace(engine=args.engine)
+    if args.fmu is not None:
+        study = study.replace(fmu=str(args.fmu))
+    plot_specs = [batch.parse_plot_spec(text) for text in args.plot]
+    study.check_plots(plot_specs)
+    out = args.out if args.out is not None else Path("out/batch") / f"{study.name}.parquet"
+    report = batch.run_study(
+        study,
+        out=out,
+        scheduler=args.scheduler,
+        workers=args.workers,
+        progress=not args.no_progress,
+        retry_errors=args.retry_errors,
+    )
+    table = report.table
+    print(report.summary())
+    written = [str(out)]
+    if args.csv is not None:
+        written.append(str(batch.write_csv(table, args.csv)))
+    plot_dir = args.plot_dir if args.plot_dir is not None else out.parent
+    for spec in [*study.plots, *plot_specs]:
+        written.append(str(batch.plot(table, spec, plot_dir / spec.filename(study.name), study=study)))
+    print("wrote " + ", ".join(written))
+    return 0
