@@ -65,7 +65,7 @@ class Scene:
     drag_model: str = _param("face", "-", "'face' (per-triangle, default) or 'stokes' (thesis eq. 3.5)", choices=("face", "stokes"))
     drag_normal: float = _param(1.2, "-", "face-drag coefficient across the cloth, C_n", 0.0, 100.0)
     drag_tangential: float = _param(0.03, "-", "face-drag coefficient along the cloth, C_t", 0.0, 100.0)
-    drag_linear: float = _param(20.0, "N s/m3", "face-drag linear term c_lin per area", 0.0, 1e6)
+    drag_linear: float = _param(2.0, "N s/m3", "face-drag linear term c_lin per area", 0.0, 1e6)
     buoyancy_model: str = _param(
         "smooth", "-", "'smooth' (slab fraction, default) or 'thesis' (all or nothing)", choices=("smooth", "thesis")
     )

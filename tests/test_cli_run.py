@@ -1,0 +1,35 @@
+"""``wetcloth run``: outputs as CSV and a plot, overrides, and clear errors."""
+
+import csv
+import subprocess
+import sys
+from pathlib import Path
+
+from wetcloth.cli import main
+from wetcloth.simulation import OUTPUT_NAMES
+
+
+def test_run_writes_csv_and_plot(tmp_path):
+    csv_path, plot_path = tmp_path / "o.csv", tmp_path / "p.png"
+    code = main(["run", "thesis_float", "--duration", "1", "--fps", "10", "--set", "nx=5", "--set", "ny=5",
+                 "--csv", str(csv_path), "--plot", str(plot_path), "--no-progress"])
+    assert code == 0
+    rows = list(csv.DictReader(open(csv_path)))
+    assert list(rows[0]) == ["time", *OUTPUT_NAMES]
+    assert [float(r["time"]) for r in rows] == [k / 10 for k in range(11)]
+    assert plot_path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_bad_override_names_parameter_and_range(tmp_path, capsys):
+    code = main(["run", "--set", "thickness=-1", "--csv", str(tmp_path / "o.csv"), "--plot", str(tmp_path / "p.png")])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "thickness" in err and "0 < thickness <= 1 m" in err
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_console_script_is_installed(tmp_path):
+    exe = Path(sys.executable).with_name("wetcloth")
+    result = subprocess.run([str(exe), "run", "--set", "colour=blue"], capture_output=True, text=True, cwd=tmp_path)
+    assert result.returncode == 2
+    assert "unknown parameter" in result.stderr and "colour" in result.stderr

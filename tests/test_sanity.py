@@ -1,0 +1,125 @@
+"""Physical sanity: free fall, a hanging cloth at rest, monotone wet mass, no NaN, the blow-up guard."""
+
+import math
+
+import numpy as np
+import pytest
+
+import wetcloth
+from conftest import G, INTEGRATORS
+
+DRY_AIR = dict(water_level=-50.0, floor_level=-100.0, initial_tilt=0.0, initial_height=0.0)
+
+
+@pytest.mark.parametrize("integrator", INTEGRATORS)
+def test_free_fall_matches_g_t_squared_over_two(integrator):
+    """Without water, an unstretched cloth falls as one body: z(t) = z0 - g t^2 / 2.
+
+    With fixed steps h, Euler's position after n steps is z0 - g h^2 n (n +- 1) / 2: the error
+    is exactly g h t / 2 (explicit: too little fall, symplectic and implicit: too much).
+    """
+    h, duration = 1e-3, 1.0
+    sim = wetcloth.Simulation(wetcloth.load_scene(nx=5, ny=5, integrator=integrator, tolerance=0.0, max_step=h,
+                                                  **DRY_AIR))
+    sim.advance(duration)
+    fall = -sim.outputs()["centroid_z"]
+    bound = G * h * duration / 2
+    assert fall == pytest.approx(G * duration**2 / 2, abs=bound * (1 + 1e-6))
+    assert abs(fall - G * duration**2 / 2) == pytest.approx(bound, rel=1e-6)
+    assert np.ptp(sim.positions[:, 2]) < 1e-12, "falls as one flat body"
+
+
+@pytest.mark.parametrize("integrator", ["symplectic_euler", "implicit_euler"])
+def test_hanging_cloth_pinned_at_one_edge_comes_to_rest(integrator):
+    """A vertical cloth held by its top edge stretches under its weight, bounces, and the spring
+    damping brings it to rest: after 3 s the fastest particle moves slower than 10 um/s (the
+    conjugate-gradient tolerance leaves ~1e-7 m/s), and the pinned edge has not moved."""
+    scene = wetcloth.load_scene(nx=7, ny=9, initial_tilt=90.0, pinned_edge="y_max",
+                                water_level=-50.0, floor_level=-100.0, integrator=integrator)
+    sim = wetcloth.Simulation(scene)
+    pinned = sim.model.topology.pinned
+    start = sim.positions[pinned]
+    sim.advance(3.0)
+    assert np.abs(sim.velocities).max() < 1e-5
+    np.testing.assert_array_equal(sim.positions[pinned], start)
+    assert sim.positions[:, 2].min() < start[:, 2].min() - scene.length, "hangs, stretched by its weight"
+
+
+@pytest.mark.parametrize("integrator", ["symplectic_euler", "implicit_euler"])
+def test_swinging_cloth_is_damped_by_thesis_damping(integrator):
+    """Released 10 degrees off vertical it swings as a pendulum.  Projected damping leaves rigid
+    rotation alone (and the model has no air drag), but the thesis form -k_d (v_i - v_j) damps
+    it: the largest speed falls a hundredfold in 5 s."""
+    scene = wetcloth.load_scene(nx=7, ny=9, initial_tilt=80.0, pinned_edge="y_max", damping_model="thesis",
+                                water_level=-50.0, floor_level=-100.0, integrator=integrator)
+    sim = wetcloth.Simulation(scene)
+    sim.advance(0.5)
+    early = np.abs(sim.velocities).max()
+    sim.advance(5.0)
+    assert np.abs(sim.velocities).max() < 0.01 * early
+
+
+def test_wet_mass_never_decreases_and_nothing_is_nan():
+    """Over a landing, floating and sinking run: wet mass is non-decreasing (no drying in the
+    core), every output and every array finite."""
+    sim = wetcloth.Simulation(wetcloth.load_scene("thesis_fast", nx=9, ny=11, absorption_rate=1.0))
+    previous = 0.0
+    while sim.time < 20.0:
+        sim.advance(0.1)
+        out = sim.outputs()
+        assert all(math.isfinite(v) for v in out.values()), out
+        assert out["wet_mass"] >= previous
+        previous = out["wet_mass"]
+        assert sim.state.is_finite()
+    assert out["depth"] > 0.02, "absorbing fast, it has sunk"
+    assert 0.0 <= sim.wetness.min() and sim.wetness.max() <= 1.0
+
+
+def test_blow_up_guard_stops_with_cause_and_last_good_time():
+    """Fixed steps far beyond explicit Euler's limit (h > c/k = 1e-4 s) blow up; the guard stops
+    the run with a message naming the step, the stiffness and the last good time, and the
+    simulation keeps its last good (finite) state."""
+    scene = wetcloth.load_scene(nx=9, ny=9, integrator="explicit_euler", tolerance=0.0, max_step=2e-3,
+                                initial_tilt=30.0, **{k: v for k, v in DRY_AIR.items() if k != "initial_tilt"})
+    sim = wetcloth.Simulation(scene)
+    with pytest.raises(wetcloth.BlowUpError) as err:
+        sim.advance(10.0)
+    message = str(err.value)
+    assert "stretch_stiffness" in message and "step" in message and "Last good time" in message
+    assert err.value.last_good_time == sim.time < 10.0
+    assert sim.state.is_finite()
+    assert all(math.isfinite(v) for v in sim.outputs().values())
+
+
+def test_same_scene_with_adaptive_steps_does_not_blow_up():
+    scene = wetcloth.load_scene(nx=9, ny=9, integrator="explicit_euler", initial_tilt=30.0,
+                                **{k: v for k, v in DRY_AIR.items() if k != "initial_tilt"})
+    sim = wetcloth.Simulation(scene)
+    sim.advance(1.0)
+    assert sim.state.is_finite()
+
+
+def test_rising_water_carries_a_floating_cloth_up():
+    """Inputs change from the next step on: raise the water by 5 cm and the floating cloth
+    follows, ending at the same depth below the new surface."""
+    scene = wetcloth.load_scene("thesis_float", nx=7, ny=7, initial_tilt=0.0, initial_height=0.002)
+    sim = wetcloth.Simulation(scene)
+    sim.advance(2.0)
+    before = sim.outputs()
+    for k in range(50):
+        sim.set_inputs(water_level=0.001 * (k + 1))
+        sim.advance(0.02)
+    sim.advance(3.0)
+    after = sim.outputs()
+    assert after["centroid_z"] == pytest.approx(before["centroid_z"] + 0.05, abs=1e-4)
+    assert after["depth"] == pytest.approx(before["depth"], abs=1e-4)
+
+
+def test_only_inputs_change_during_a_run():
+    sim = wetcloth.Simulation(wetcloth.load_scene(nx=3, ny=3))
+    with pytest.raises(wetcloth.ParameterError, match="'nx'.*fixed"):
+        sim.set_inputs(nx=5)
+    with pytest.raises(wetcloth.ParameterError, match="'water_density'.*out of range"):
+        sim.set_inputs(water_density=-1.0)
+    with pytest.raises(ValueError, match="duration"):
+        sim.advance(-1.0)
