@@ -9,12 +9,14 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
 # Blender for the exporter's import tests: bpy from PyPI in its own Python 3.11 venv (bpy pins
-# numpy < 2, the project uses numpy 2). pip keeps the downloaded wheel in its cache, so a rebuilt
-# venv installs without downloading again.  Override BLENDER_PYTHON if python3.11 is elsewhere.
+# numpy < 2, the project uses numpy 2). The wheels (bpy is 374 MB) are downloaded once into
+# BLENDER_WHEELS and installed from there, so a rebuilt venv needs no download (pip's own HTTP
+# cache does not reliably keep a file this large).  Override BLENDER_PYTHON if python3.11 is elsewhere.
 BLENDER_PYTHON ?= $(shell command -v python3.11 || echo python3)
 BLENDER_VENV := .venv-blender
 BLENDER_STAMP := $(BLENDER_VENV)/.installed
 BPY_VERSION := 5.0.1
+BLENDER_WHEELS ?= $(HOME)/.cache/wetcloth/wheels
 
 .PHONY: demo test bench clean
 
@@ -27,7 +29,8 @@ $(STAMP): pyproject.toml
 $(BLENDER_STAMP):
 	test -x $(BLENDER_VENV)/bin/python || $(BLENDER_PYTHON) -m venv $(BLENDER_VENV)
 	$(BLENDER_VENV)/bin/python -c 'import sys; sys.exit(0 if sys.version_info[:2] == (3, 11) else "bpy $(BPY_VERSION) needs Python 3.11: rm -r $(BLENDER_VENV) and set BLENDER_PYTHON")'
-	$(BLENDER_VENV)/bin/python -m pip install --quiet bpy==$(BPY_VERSION)
+	ls $(BLENDER_WHEELS)/bpy-$(BPY_VERSION)-*.whl >/dev/null 2>&1 || $(BLENDER_VENV)/bin/python -m pip download --quiet --dest $(BLENDER_WHEELS) bpy==$(BPY_VERSION)
+	$(BLENDER_VENV)/bin/python -m pip install --quiet --no-index --find-links $(BLENDER_WHEELS) bpy==$(BPY_VERSION)
 	touch $(BLENDER_STAMP)
 
 demo: $(STAMP)
