@@ -1,0 +1,120 @@
+"""Plots of a results table: a metric against one axis, and a heatmap of a metric over two axes.
+
+Only runs with status 'ok' are plotted.  When other axes vary too, each point of the plot is the
+mean over them (the line plot also shows every run as a dot).  A run whose metric is NaN (for
+``time_to_sink``: it never sank) is drawn as 'never' rather than dropped silently.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from wetcloth.batch.metrics import METRICS
+from wetcloth.batch.study import PlotSpec
+from wetcloth.scene import PARAMETERS
+
+
+def _label(name: str) -> str:
+    if name in METRICS:
+        unit = METRICS[name].unit
+    elif name in PARAMETERS:
+        unit = PARAMETERS[name].metadata["unit"]
+    else:
+        unit = "-"
+    return name.replace("_", " ") + ("" if unit == "-" else f" ({unit})")
+
+
+def _ok(table: pd.DataFrame, spec: PlotSpec) -> pd.DataFrame:
+    for column in (spec.metric, spec.x, spec.y):
+        if column is not None and column not in table:
+            raise ValueError(f"cannot plot: the results table has no column {column!r}")
+    return table[table["status"] == "ok"]
+
+
+def line_data(table: pd.DataFrame, metric: str, x: str) -> pd.DataFrame:
+    """Per value of axis ``x``: ``mean`` of the metric over the finite values, ``count`` of ok runs,
+    ``never`` the number of ok runs whose metric is NaN."""
+    ok = _ok(table, PlotSpec(metric, x))
+    grouped = ok.groupby(x)[metric]
+    return pd.DataFrame({"mean": grouped.mean(), "count": grouped.size(), "never": grouped.apply(lambda s: int(s.isna().sum()))})
+
+
+def heatmap_data(table: pd.DataFrame, metric: str, x: str, y: str) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
+    """(values, ok, runs): per (y row, x column) cell, the mean metric over its ok runs' finite
+    values (NaN if none), the number of ok runs, and the number of runs of any status."""
+    ok = _ok(table, PlotSpec(metric, x, y))
+    xs = sorted(table[x].dropna().unique())
+    ys = sorted(table[y].dropna().unique())
+
+    def grid(frame: pd.DataFrame, values: str, aggfunc: str) -> pd.DataFrame:
+        if not len(frame):
+            return pd.DataFrame(np.nan, index=ys, columns=xs)
+        return frame.pivot_table(index=y, columns=x, values=values, aggfunc=aggfunc).reindex(index=ys, columns=xs)
+
+    counts = [grid(f, "run_key", "count").fillna(0).astype(int) for f in (ok, table)]
+    return grid(ok, metric, "mean"), counts[0], counts[1]
+
+
+def plot(table: pd.DataFrame, spec: PlotSpec, path: str | Path, study=None) -> Path:
+    """Draw ``spec`` (a line if ``spec.y`` is None, else a heatmap) from ``table`` to a PNG at ``path``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    title = f"{study.name}: " if study is not None else ""
+    fig, ax = plt.subplots(figsize=(6.4, 4.8), constrained_layout=True)
+    try:
+        if spec.y is None:
+            _line(ax, table, spec)
+            ax.set_title(f"{title}{spec.metric} vs {spec.x}")
+        else:
+            _heatmap(fig, ax, table, spec)
+            ax.set_title(f"{title}{spec.metric} over {spec.x} x {spec.y}")
+        fig.savefig(path, dpi=110)
+    finally:
+        plt.close(fig)
+    return path
+
+
+def _line(ax, table: pd.DataFrame, spec: PlotSpec) -> None:
+    ok = _ok(table, spec)
+    data = line_data(table, spec.metric, spec.x)
+    finite = ok[np.isfinite(ok[spec.metric])]
+    ax.plot(finite[spec.x], finite[spec.metric], "o", color="0.6", ms=4, label="runs")
+    ax.plot(data.index, data["mean"], "-o", color="C0", label="mean" if len(ok) > len(data) else spec.metric)
+    never = data[data["never"] > 0]
+    if len(never):
+        top = np.nanmax(ok[spec.metric]) if np.isfinite(ok[spec.metric]).any() else 1.0
+        ax.plot(never.index, np.full(len(never), top), "^", color="C3", label="never (NaN) in some runs")
+    ax.set_xlabel(_label(spec.x))
+    ax.set_ylabel(_label(spec.metric))
+    ax.grid(alpha=0.3)
+    ax.legend()
+
+
+def _heatmap(fig, ax, table: pd.DataFrame, spec: PlotSpec) -> None:
+    values, ok_counts, run_counts = heatmap_data(table, spec.metric, spec.x, spec.y)
+    grid = values.to_numpy(float)
+    image = ax.imshow(np.ma.masked_invalid(grid), origin="lower", aspect="auto", cmap="viridis")
+    image.cmap.set_bad("0.85")
+    fig.colorbar(image, ax=ax, label=_label(spec.metric))
+    ax.set_xticks(range(len(values.columns)), [f"{v:g}" if isinstance(v, (int, float)) else str(v) for v in values.columns])
+    ax.set_yticks(range(len(values.index)), [f"{v:g}" if isinstance(v, (int, float)) else str(v) for v in values.index])
+    ax.set_xlabel(_label(spec.x))
+    ax.set_ylabel(_label(spec.y))
+    small = grid.size <= 150
+    for (i, j), v in np.ndenumerate(grid):
+        if run_counts.iat[i, j] == 0:
+            continue
+        if ok_counts.iat[i, j] == 0:
+            ax.text(j, i, "error", ha="center", va="center", fontsize=7, color="C3")
+        elif not np.isfinite(v):
+            ax.text(j, i, "never", ha="center", va="center", fontsize=7, color="0.3")
+        elif small:
+            ax.text(j, i, f"{v:.3g}", ha="center", va="center", fontsize=7, color="k" if image.norm(v) > 0.6 else "w")
