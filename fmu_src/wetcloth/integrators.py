@@ -40,16 +40,15 @@ class Integrator:
         self.omega_squared = 2.0 * float(np.max(stiffness_sum / dry))
         self.damping_rate = 2.0 * float(np.max(damping_sum / dry))
 
-    def _drag_rate(self, state: State) -> float:
-        """Upper bound on the water drag's damping rate (1/s) at the state's speeds."""
+    def _drag_rate(self, speed: float) -> float:
+        """Upper bound on the water drag's damping rate (1/s) for particle speeds up to ``speed`` (m/s)."""
         sc = self.model.scene
         if sc.drag_model == "stokes":
             return float(np.max(self.model.stokes_coefficient / self.model.dry_mass))
-        speed = float(np.sqrt((state.vel**2).sum(axis=0)).max())
         return (sc.water_density * (sc.drag_normal + sc.drag_tangential) * speed + sc.drag_linear) / sc.areal_density
 
-    def stable_step(self, state: State) -> float:
-        """Largest step (s) for which the scheme is linearly stable at this state."""
+    def stable_step(self, speed: float) -> float:
+        """Largest step (s) for which the scheme is linearly stable with particles up to ``speed`` (m/s)."""
         raise NotImplementedError
 
     def __call__(self, state: State, out: State, h: float) -> float:
@@ -61,15 +60,20 @@ class ExplicitEuler(Integrator):
 
     name = "explicit_euler"
 
-    def stable_step(self, state: State) -> float:
+    def __init__(self, model: Model):
+        super().__init__(model)
         # Forward Euler on a damped spring is stable only for h < c/k (the disc |1 + h lambda| < 1),
         # and on pure damping for h < 2 m / c.  Undamped springs it can never hold: then 0.1 / omega.
-        topo = self.model.topology
+        topo = model.topology
         springs = topo.spring_stiffness > 0
         limit = float((topo.spring_damping[springs] / topo.spring_stiffness[springs]).min()) if springs.any() else math.inf
         if not math.isfinite(limit) or limit == 0.0:
             limit = 0.1 / math.sqrt(self.omega_squared) if self.omega_squared > 0 else math.inf
-        gamma = self.damping_rate + self._drag_rate(state)
+        self._spring_limit = limit
+
+    def stable_step(self, speed: float) -> float:
+        limit = self._spring_limit
+        gamma = self.damping_rate + self._drag_rate(speed)
         if gamma > 0:
             limit = min(limit, 2.0 / gamma)
         return STABILITY_SAFETY * limit
@@ -85,11 +89,11 @@ class SymplecticEuler(ExplicitEuler):
 
     name = "symplectic_euler"
 
-    def stable_step(self, state: State) -> float:
+    def stable_step(self, speed: float) -> float:
         # For x'' = -w^2 x - g x' the scheme is stable iff h < 4 / (g + sqrt(g^2 + 4 w^2)).
         sc = self.model.scene
         omega2 = self.omega_squared + sc.water_density * GRAVITY / sc.areal_density
-        gamma = self.damping_rate + self._drag_rate(state)
+        gamma = self.damping_rate + self._drag_rate(speed)
         return STABILITY_SAFETY * 4.0 / (gamma + math.sqrt(gamma * gamma + 4.0 * omega2))
 
     def __call__(self, state: State, out: State, h: float) -> float:
@@ -119,7 +123,7 @@ class ImplicitEuler(Integrator):
         self._scratch = [np.zeros(shape) for _ in range(5)]
         self.last_iterations = 0
 
-    def stable_step(self, state: State) -> float:
+    def stable_step(self, speed: float) -> float:
         return math.inf
 
     def __call__(self, state: State, out: State, h: float) -> float:

@@ -28,7 +28,7 @@ class Model:
         self.s = np.zeros(n)  # submerged fraction of each particle, from the last force evaluation
         self.saturation = np.zeros(n)  # water / capacity, used by wetness-dependent stiffness
         self.force = np.zeros((3, n))
-        self._buf = np.zeros((3, n))
+        self._buf = np.zeros((4, n))
         self._cells = np.zeros((2, 9, n + topo.nx + 1))
         families = len(topo.spring_offset)
         self.direction = np.zeros((families, 3, n))

@@ -10,6 +10,7 @@ from wetcloth.errors import BlowUpError, ParameterError
 from wetcloth.integrators import make_integrator
 from wetcloth.kernels.absorption import absorb
 from wetcloth.kernels.floor import floor_contact
+from wetcloth.kernels.integration import speed_and_finiteness
 from wetcloth.model import Model
 from wetcloth.scene import INPUT, PARAMETERS, Scene, load_scene
 from wetcloth.state import State, initial_state
@@ -42,6 +43,7 @@ class Simulation:
         self._trial = self.state.copy()
         self.integrator = make_integrator(scene.integrator, self.model)
         self._next_step = scene.max_step
+        self._speed = 0.0  # m/s, fastest particle of the current state
         self.steps = 0  # accepted internal steps
         self.rejected_steps = 0  # steps redone with a smaller size (adaptive mode)
 
@@ -85,7 +87,7 @@ class Simulation:
                 h = min(scene.max_step, remaining)
                 self.integrator(state, trial, h)
                 break
-            limit = min(scene.max_step, self.integrator.stable_step(state))
+            limit = min(scene.max_step, self.integrator.stable_step(self._speed))
             planned = min(self._next_step, limit)
             h = min(planned, remaining)
             largest_dv = self.integrator(state, trial, h)
@@ -116,11 +118,12 @@ class Simulation:
 
     def _guard(self, trial: State, h: float) -> None:
         """Refuse a non-finite or exploded state; the last good state stays current."""
-        speed = float(np.abs(trial.vel).max()) if trial.vel.size else 0.0
-        if trial.is_finite() and speed < BLOW_UP_SPEED:
+        speed, finite = speed_and_finiteness(trial.pos, trial.vel, trial.water)
+        if finite and speed < BLOW_UP_SPEED:
+            self._speed = speed
             return
         scene = self.scene
-        what = "became non-finite" if not trial.is_finite() else f"exploded (speed {speed:.3g} m/s)"
+        what = "became non-finite" if not finite else f"exploded (speed {speed:.3g} m/s)"
         raise BlowUpError(
             f"the cloth state {what} in the step from t = {self.state.time:.6g} s to {trial.time:.6g} s "
             f"(step {h:.3g} s, integrator {scene.integrator!r}). Likely cause: the step is too large for "

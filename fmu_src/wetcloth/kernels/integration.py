@@ -28,6 +28,18 @@ def euler_update(pos, vel, force, dry_mass, water, free, h, symplectic, out_pos,
 
 
 @njit(cache=True, fastmath=FASTMATH)
+def speed_and_finiteness(pos, vel, water):
+    """(fastest particle's speed in m/s, whether every value is finite) of a state."""
+    fastest = 0.0
+    total = 0.0
+    for i in range(pos.shape[1]):
+        v2 = vel[0, i] ** 2 + vel[1, i] ** 2 + vel[2, i] ** 2
+        fastest = max(fastest, v2)
+        total += v2 + pos[0, i] + pos[1, i] + pos[2, i] + water[i]
+    return math.sqrt(fastest), math.isfinite(total)
+
+
+@njit(cache=True, fastmath=FASTMATH)
 def _system_matvec(offsets, direction, along, across, mass, blocks, free, p, out, buf):
     """out = A p with A = M + per-particle blocks + spring blocks, rows of pinned particles zeroed."""
     n = p.shape[1]

@@ -1,8 +1,9 @@
 """Spring forces (MODEL.md section 3) and their Jacobians for the implicit integrator.
 
-A spring family joins particle ``i`` to ``i + offset``.  Each kernel first writes one value per
-spring into a buffer (a loop the compiler vectorises), then adds the buffer to both ends
-(``+b[i]`` at ``i``, ``-b[i - offset]`` at ``i``), which is again a plain vector loop.
+A spring family joins particle ``i`` to ``i + offset``.  Kernels work on views: with
+``m = n - offset``, ``a[:m]`` is every spring's first end and ``a[offset:]`` its second, so every
+loop indexes all its arrays with the same counter and the compiler vectorises it.  A loop
+first writes one value per spring into a buffer, then the buffer is added to both ends.
 """
 
 from __future__ import annotations
@@ -16,17 +17,54 @@ from wetcloth.kernels import FASTMATH
 _TINY_LENGTH = 1e-12  # m; below this a spring has no direction
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
-def _add_to_both_ends(b, off, out):
-    """out[i] += b[i] for the spring's first particle, out[i+off] -= b[i] for its second."""
-    n = out.shape[0]
-    m = n - off
-    for v in range(min(off, m)):
-        out[v] += b[v]
-    for v in range(off, m):
-        out[v] += b[v] - b[v - off]
-    for v in range(max(m, off), n):
-        out[v] -= b[v - off]
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def add_to_both_ends(b, off, out, sign):
+    """out[i] += b[i] at each spring's first end and ``sign * b[i]`` at its second (i + off)."""
+    m = out.shape[0] - off
+    first = out[:m]
+    second = out[off:]
+    values = b[:m]
+    for k in range(m):
+        first[k] += values[k]
+    for k in range(m):
+        second[k] += sign * values[k]
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _tension(off, l0, tension_only, projected, kf, cf, wet_factor, saturation, pos, vel, t):
+    """t[k] (N/m): spring k's force on its first end is ``t[k] * (x_i - x_j)`` (plus thesis damping).
+
+    Tension (eq. 3.1) ``-k (L - l0) / L``, zero when compressed for tension-only springs;
+    projected damping ``-c ((v_i - v_j) . d) / L^2``; stiffness scaled by ``1 + wet_factor * sat``.
+    """
+    m = pos.shape[1] - off
+    xi, yi, zi = pos[0, :m], pos[1, :m], pos[2, :m]
+    xj, yj, zj = pos[0, off:], pos[1, off:], pos[2, off:]
+    vxi, vyi, vzi = vel[0, :m], vel[1, :m], vel[2, :m]
+    vxj, vyj, vzj = vel[0, off:], vel[1, off:], vel[2, off:]
+    si, sj = saturation[:m], saturation[off:]
+    damp = 1.0 if projected else 0.0
+    floor = 0.0 if tension_only else -math.inf
+    for k in range(m):
+        dx = xi[k] - xj[k]
+        dy = yi[k] - yj[k]
+        dz = zi[k] - zj[k]
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        inv = 1.0 / max(length, _TINY_LENGTH)
+        stretch = max(length - l0, floor)
+        stiffness = kf[k] * (1.0 + wet_factor * 0.5 * (si[k] + sj[k]))
+        rate = (vxi[k] - vxj[k]) * dx + (vyi[k] - vyj[k]) * dy + (vzi[k] - vzj[k]) * dz
+        t[k] = -(stiffness * stretch * inv + damp * cf[k] * rate * inv * inv)
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _apply_pair_term(off, t, a, out, buf):
+    """out += t[k] * (a_i - a_j) at each spring's first end and the opposite at its second."""
+    m = a.shape[0] - off
+    ai, aj = a[:m], a[off:]
+    for k in range(m):
+        buf[k] = t[k] * (ai[k] - aj[k])
+    add_to_both_ends(buf, off, out, -1.0)
 
 
 @njit(cache=True, fastmath=FASTMATH)
@@ -38,46 +76,54 @@ def spring_forces(offsets, rest, tension_only, stiffness, damping, projected, we
     non-zero the stiffness is scaled by ``1 + wet_factor * saturation`` (mean of both ends).
     ``buf`` is (3, n) scratch.
     """
-    n = pos.shape[1]
-    px, py, pz = pos[0], pos[1], pos[2]
-    vx, vy, vz = vel[0], vel[1], vel[2]
-    bx, by, bz = buf[0], buf[1], buf[2]
+    t, scratch, negated = buf[0], buf[1], buf[2]
     for f in range(offsets.shape[0]):
         off = offsets[f]
-        l0 = rest[f]
-        tonly = tension_only[f]
-        kf = stiffness[f]
-        cf = damping[f]
-        m = n - off
-        for i in range(m):
-            j = i + off
-            dx = px[i] - px[j]
-            dy = py[i] - py[j]
-            dz = pz[i] - pz[j]
-            length = math.sqrt(dx * dx + dy * dy + dz * dz)
-            inv = 1.0 / length if length > _TINY_LENGTH else 0.0
-            stretch = length - l0
-            if tonly:
-                stretch = max(stretch, 0.0)
-            k = kf[i]
-            if wet_factor != 0.0:
-                k *= 1.0 + wet_factor * 0.5 * (saturation[i] + saturation[j])
-            t = k * stretch * inv
-            dvx = vx[i] - vx[j]
-            dvy = vy[i] - vy[j]
-            dvz = vz[i] - vz[j]
-            if projected:
-                t += cf[i] * (dvx * dx + dvy * dy + dvz * dz) * inv * inv
-                bx[i] = -t * dx
-                by[i] = -t * dy
-                bz[i] = -t * dz
-            else:
-                bx[i] = -t * dx - cf[i] * dvx
-                by[i] = -t * dy - cf[i] * dvy
-                bz[i] = -t * dz - cf[i] * dvz
-        _add_to_both_ends(bx, off, force[0])
-        _add_to_both_ends(by, off, force[1])
-        _add_to_both_ends(bz, off, force[2])
+        _tension(off, rest[f], tension_only[f], projected, stiffness[f], damping[f], wet_factor, saturation, pos, vel, t)
+        for c in range(3):
+            _apply_pair_term(off, t, pos[c], force[c], scratch)
+        if not projected:
+            m = pos.shape[1] - off
+            for k in range(m):
+                negated[k] = -damping[f, k]
+            for c in range(3):
+                _apply_pair_term(off, negated, vel[c], force[c], scratch)
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _blocks(off, l0, tension_only, projected, kf, cf, wet_factor, saturation, pos, vel, h, t, u, along, across, rate):
+    """Per spring: force coefficient ``t`` (as ``_tension``, without thesis damping), unit direction
+    ``u`` (3, n), the system-matrix block ``along u u^T + across (I - u u^T)`` and the relative
+    velocity along the spring ``rate``."""
+    m = pos.shape[1] - off
+    xi, yi, zi = pos[0, :m], pos[1, :m], pos[2, :m]
+    xj, yj, zj = pos[0, off:], pos[1, off:], pos[2, off:]
+    vxi, vyi, vzi = vel[0, :m], vel[1, :m], vel[2, :m]
+    vxj, vyj, vzj = vel[0, off:], vel[1, off:], vel[2, off:]
+    si, sj = saturation[:m], saturation[off:]
+    ux, uy, uz = u[0], u[1], u[2]
+    damp_along = 1.0 if projected else 0.0
+    damp_across = 0.0 if projected else 1.0
+    always_along = 0.0 if tension_only else 1.0
+    h2 = h * h
+    for k in range(m):
+        dx = xi[k] - xj[k]
+        dy = yi[k] - yj[k]
+        dz = zi[k] - zj[k]
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        inv = 1.0 / max(length, _TINY_LENGTH)
+        ux[k] = dx * inv
+        uy[k] = dy * inv
+        uz[k] = dz * inv
+        stretch = length - l0
+        taut = 1.0 if stretch > 0.0 else 0.0
+        stiffness = kf[k] * (1.0 + wet_factor * 0.5 * (si[k] + sj[k]))
+        rate[k] = (vxi[k] - vxj[k]) * ux[k] + (vyi[k] - vyj[k]) * uy[k] + (vzi[k] - vzj[k]) * uz[k]
+        stretch = stretch * max(taut, always_along)
+        t[k] = -(stiffness * stretch * inv + damp_along * cf[k] * rate[k] * inv)
+        # Geometric stiffness k (1 - l0/L) only while taut, so every block stays positive.
+        along[k] = h * cf[k] + h2 * stiffness * max(taut, always_along)
+        across[k] = damp_across * h * cf[k] + h2 * stiffness * stretch * inv * taut
 
 
 @njit(cache=True, fastmath=FASTMATH)
@@ -90,126 +136,70 @@ def spring_forces_and_blocks(
     With step ``h`` (s), each spring's block of the system matrix ``M - h C - h^2 K`` is
     ``along * u u^T + across * (I - u u^T)`` (kg; ``u`` its unit direction, stored in
     ``direction`` (F, 3, n)).  Adds ``h^2 K v`` to ``rhs`` and each block's diagonal to ``diag``
-    at both ends (the Jacobi preconditioner).  The geometric stiffness of a compressed spring
-    is dropped so that every block stays positive semi-definite.
+    at both ends (the Jacobi preconditioner).  ``buf`` is (4, n) scratch.
     """
     n = pos.shape[1]
-    px, py, pz = pos[0], pos[1], pos[2]
-    vx, vy, vz = vel[0], vel[1], vel[2]
-    bx, by, bz = buf[0], buf[1], buf[2]
-    h2 = h * h
+    t, rate, scratch, value = buf[0], buf[1], buf[2], buf[3]
     for f in range(offsets.shape[0]):
         off = offsets[f]
-        l0 = rest[f]
-        tonly = tension_only[f]
-        kf = stiffness[f]
-        cf = damping[f]
-        ux, uy, uz = direction[f, 0], direction[f, 1], direction[f, 2]
+        m = n - off
+        u = direction[f]
         al = along[f]
         ac = across[f]
-        m = n - off
-        # forces
-        for i in range(m):
-            j = i + off
-            dx = px[i] - px[j]
-            dy = py[i] - py[j]
-            dz = pz[i] - pz[j]
-            length = math.sqrt(dx * dx + dy * dy + dz * dz)
-            inv = 1.0 / length if length > _TINY_LENGTH else 0.0
-            ux[i] = dx * inv
-            uy[i] = dy * inv
-            uz[i] = dz * inv
-            stretch = length - l0
-            taut = stretch > 0.0
-            if tonly and not taut:
-                stretch = 0.0
-            k = kf[i]
-            if wet_factor != 0.0:
-                k *= 1.0 + wet_factor * 0.5 * (saturation[i] + saturation[j])
-            k_along = k if (taut or not tonly) else 0.0
-            k_across = k * stretch * inv if taut else 0.0  # geometric stiffness k (1 - l0/L)
-            dvx = vx[i] - vx[j]
-            dvy = vy[i] - vy[j]
-            dvz = vz[i] - vz[j]
-            dv_along = ux[i] * dvx + uy[i] * dvy + uz[i] * dvz
-            t = k * stretch
-            c = cf[i]
-            if projected:
-                t += c * dv_along
-                bx[i] = -t * ux[i]
-                by[i] = -t * uy[i]
-                bz[i] = -t * uz[i]
-                al[i] = h * c + h2 * k_along
-                ac[i] = h2 * k_across
-            else:
-                bx[i] = -t * ux[i] - c * dvx
-                by[i] = -t * uy[i] - c * dvy
-                bz[i] = -t * uz[i] - c * dvz
-                al[i] = h * c + h2 * k_along
-                ac[i] = h * c + h2 * k_across
-        _add_to_both_ends(bx, off, force[0])
-        _add_to_both_ends(by, off, force[1])
-        _add_to_both_ends(bz, off, force[2])
-        # h^2 K v: the stiffness part of the blocks applied to the relative velocity
-        for i in range(m):
-            j = i + off
-            dvx = vx[i] - vx[j]
-            dvy = vy[i] - vy[j]
-            dvz = vz[i] - vz[j]
-            length_term = ac[i] - (h * cf[i] if not projected else 0.0)
-            stiff_along = al[i] - h * cf[i]
-            dv_along = ux[i] * dvx + uy[i] * dvy + uz[i] * dvz
-            bx[i] = -(length_term * dvx + (stiff_along - length_term) * dv_along * ux[i])
-            by[i] = -(length_term * dvy + (stiff_along - length_term) * dv_along * uy[i])
-            bz[i] = -(length_term * dvz + (stiff_along - length_term) * dv_along * uz[i])
-        _add_to_both_ends(bx, off, rhs[0])
-        _add_to_both_ends(by, off, rhs[1])
-        _add_to_both_ends(bz, off, rhs[2])
-        # Jacobi diagonal: the block's diagonal at both ends
-        for i in range(m):
-            d = al[i] - ac[i]
-            bx[i] = ac[i] + d * ux[i] * ux[i]
-            by[i] = ac[i] + d * uy[i] * uy[i]
-            bz[i] = ac[i] + d * uz[i] * uz[i]
-        _add_to_both_ends_positive(bx, off, diag[0])
-        _add_to_both_ends_positive(by, off, diag[1])
-        _add_to_both_ends_positive(bz, off, diag[2])
-
-
-@njit(cache=True, fastmath=FASTMATH, inline="always")
-def _add_to_both_ends_positive(b, off, out):
-    """out[i] += b[i] and out[i+off] += b[i]: a quantity shared by both ends."""
-    n = out.shape[0]
-    m = n - off
-    for v in range(min(off, m)):
-        out[v] += b[v]
-    for v in range(off, m):
-        out[v] += b[v] + b[v - off]
-    for v in range(max(m, off), n):
-        out[v] += b[v - off]
+        cf = damping[f]
+        _blocks(off, rest[f], tension_only[f], projected, stiffness[f], cf, wet_factor, saturation, pos, vel, h, t,
+                u, al, ac, rate)
+        for c in range(3):
+            _apply_pair_term(off, t, pos[c], force[c], scratch)
+        # Thesis damping -c (v_i - v_j); stiffness part of the blocks times the relative velocity,
+        # h^2 K v = -(h^2 k_across) dv - h^2 (k_along - k_across) (u . dv) u.
+        thesis = 0.0 if projected else 1.0
+        for k in range(m):
+            value[k] = -(ac[k] - thesis * h * cf[k])
+            t[k] = -thesis * cf[k]
+        for c in range(3):
+            _apply_pair_term(off, t, vel[c], force[c], scratch)
+            _apply_pair_term(off, value, vel[c], rhs[c], scratch)
+        for k in range(m):
+            t[k] = -((al[k] - h * cf[k]) - (ac[k] - thesis * h * cf[k])) * rate[k]
+        for c in range(3):
+            uc = u[c]
+            for k in range(m):
+                scratch[k] = t[k] * uc[k]
+            add_to_both_ends(scratch, off, rhs[c], -1.0)
+            # Jacobi diagonal: the block's diagonal, at both ends
+            for k in range(m):
+                scratch[k] = ac[k] + (al[k] - ac[k]) * uc[k] * uc[k]
+            add_to_both_ends(scratch, off, diag[c], 1.0)
 
 
 @njit(cache=True, fastmath=FASTMATH)
 def spring_matvec(offsets, direction, along, across, p, out, buf):
-    """Add the springs' part of the system matrix times ``p`` ((3, n)) to ``out``."""
+    """Add the springs' part of the system matrix times ``p`` ((3, n)) to ``out``; ``buf`` (4, n)."""
     n = p.shape[1]
-    px, py, pz = p[0], p[1], p[2]
-    bx, by, bz = buf[0], buf[1], buf[2]
+    proj, scratch = buf[0], buf[1]
     for f in range(offsets.shape[0]):
         off = offsets[f]
-        ux, uy, uz = direction[f, 0], direction[f, 1], direction[f, 2]
+        m = n - off
+        u = direction[f]
         al = along[f]
         ac = across[f]
-        m = n - off
-        for i in range(m):
-            j = i + off
-            tx = px[i] - px[j]
-            ty = py[i] - py[j]
-            tz = pz[i] - pz[j]
-            proj = (al[i] - ac[i]) * (ux[i] * tx + uy[i] * ty + uz[i] * tz)
-            bx[i] = ac[i] * tx + proj * ux[i]
-            by[i] = ac[i] * ty + proj * uy[i]
-            bz[i] = ac[i] * tz + proj * uz[i]
-        _add_to_both_ends(bx, off, out[0])
-        _add_to_both_ends(by, off, out[1])
-        _add_to_both_ends(bz, off, out[2])
+        _projection(off, u, al, ac, p, proj)
+        for c in range(3):
+            pc = p[c]
+            pi, pj = pc[:m], pc[off:]
+            uc = u[c]
+            for k in range(m):
+                scratch[k] = ac[k] * (pi[k] - pj[k]) + proj[k] * uc[k]
+            add_to_both_ends(scratch, off, out[c], -1.0)
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _projection(off, u, al, ac, p, proj):
+    """proj[k] = (along - across) * (u . (p_i - p_j)) for each spring."""
+    m = p.shape[1] - off
+    xi, yi, zi = p[0, :m], p[1, :m], p[2, :m]
+    xj, yj, zj = p[0, off:], p[1, off:], p[2, off:]
+    ux, uy, uz = u[0], u[1], u[2]
+    for k in range(m):
+        proj[k] = (al[k] - ac[k]) * (ux[k] * (xi[k] - xj[k]) + uy[k] * (yi[k] - yj[k]) + uz[k] * (zi[k] - zj[k]))

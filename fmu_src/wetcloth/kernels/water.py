@@ -50,36 +50,33 @@ def stokes_drag(s, coefficient, current_x, current_y, vel, force):
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _triangle(a, b, c, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y):
-    """Drag on one triangle and its Jacobian coefficients.
+def _triangle(k, a, b, c, density, c_normal, c_tangential, c_linear, current_x, current_y):
+    """Drag on triangle k of a row and its Jacobian coefficients.
 
-    Returns (Fx, Fy, Fz, nx, ny, nz, k_normal, k_tangential, k_linear): the force (N), the unit
-    normal, and ``dF/du = k_normal n n^T + k_tangential (I - n n^T) + k_linear I`` (N s/m) with
-    ``u`` the water's velocity relative to the triangle.
+    ``a``, ``b``, ``c`` are the corners, each a tuple of views (x, y, z, vx, vy, vz, s) along the
+    row.  Returns (Fx, Fy, Fz, nx, ny, nz, k_normal, k_tangential, k_linear): the force (N), the
+    unit normal, and ``dF/du = k_normal n n^T + k_tangential (I - n n^T) + k_linear I`` (N s/m)
+    with ``u`` the water's velocity relative to the triangle.  Branch-free, so rows vectorise.
     """
-    st = (s[a] + s[b] + s[c]) * (1.0 / 3.0)
-    if st == 0.0:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0
-    e1x = pos[0, b] - pos[0, a]
-    e1y = pos[1, b] - pos[1, a]
-    e1z = pos[2, b] - pos[2, a]
-    e2x = pos[0, c] - pos[0, a]
-    e2y = pos[1, c] - pos[1, a]
-    e2z = pos[2, c] - pos[2, a]
+    st = (a[6][k] + b[6][k] + c[6][k]) * (1.0 / 3.0)
+    e1x = b[0][k] - a[0][k]
+    e1y = b[1][k] - a[1][k]
+    e1z = b[2][k] - a[2][k]
+    e2x = c[0][k] - a[0][k]
+    e2y = c[1][k] - a[1][k]
+    e2z = c[2][k] - a[2][k]
     cx = e1y * e2z - e1z * e2y
     cy = e1z * e2x - e1x * e2z
     cz = e1x * e2y - e1y * e2x
     twice_area = math.sqrt(cx * cx + cy * cy + cz * cz)
-    if twice_area == 0.0:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0
-    inv = 1.0 / twice_area
+    inv = 1.0 / max(twice_area, 1e-300)
     nx = cx * inv
     ny = cy * inv
     nz = cz * inv
     wet_area = 0.5 * twice_area * st
-    ux = current_x - (vel[0, a] + vel[0, b] + vel[0, c]) * (1.0 / 3.0)
-    uy = current_y - (vel[1, a] + vel[1, b] + vel[1, c]) * (1.0 / 3.0)
-    uz = -(vel[2, a] + vel[2, b] + vel[2, c]) * (1.0 / 3.0)
+    ux = current_x - (a[3][k] + b[3][k] + c[3][k]) * (1.0 / 3.0)
+    uy = current_y - (a[4][k] + b[4][k] + c[4][k]) * (1.0 / 3.0)
+    uz = -(a[5][k] + b[5][k] + c[5][k]) * (1.0 / 3.0)
     un = ux * nx + uy * ny + uz * nz
     utx = ux - un * nx
     uty = uy - un * ny
@@ -97,26 +94,67 @@ def _triangle(a, b, c, pos, vel, s, density, c_normal, c_tangential, c_linear, c
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
+def _corner(pos, vel, s, start, count):
+    """Views (x, y, z, vx, vy, vz, s) of ``count`` particles from index ``start``."""
+    stop = start + count
+    return (pos[0, start:stop], pos[1, start:stop], pos[2, start:stop],
+            vel[0, start:stop], vel[1, start:stop], vel[2, start:stop], s[start:stop])
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def _gather_cells(t1, t2, nx, out, scale):
     """out[v] += scale * (the values of the six triangles around particle v)."""
+    n = out.shape[0]
     pad = nx + 1
-    for v in range(out.shape[0]):
-        k = pad + v
-        out[v] += scale * (t1[k] + t1[k - 1] + t1[k - nx - 1] + t2[k] + t2[k - nx - 1] + t2[k - nx])
+    a1, b1, d1 = t1[pad:pad + n], t1[pad - 1:pad - 1 + n], t1[:n]
+    a2, d2, c2 = t2[pad:pad + n], t2[:n], t2[1:1 + n]
+    for v in range(n):
+        out[v] += scale * (a1[v] + b1[v] + d1[v] + a2[v] + d2[v] + c2[v])
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _drag_row(k_count, a, b, c, density, c_normal, c_tangential, c_linear, current_x, current_y, out, blocks_wanted):
+    """Triangles (a[k], b[k], c[k]) of one row: force and, if wanted, Jacobian blocks into ``out`` (9, k)."""
+    fx_, fy_, fz_ = out[0], out[1], out[2]
+    xx, yy, zz, xy, xz, yz = out[3], out[4], out[5], out[6], out[7], out[8]
+    for k in range(k_count):
+        fx, fy, fz, nxx, nyy, nzz, kn, kt, kl = _triangle(
+            k, a, b, c, density, c_normal, c_tangential, c_linear, current_x, current_y)
+        fx_[k] = fx
+        fy_[k] = fy
+        fz_[k] = fz
+        if blocks_wanted:
+            diff = kn - kt
+            iso = kt + kl
+            xx[k] = iso + diff * nxx * nxx
+            yy[k] = iso + diff * nyy * nyy
+            zz[k] = iso + diff * nzz * nzz
+            xy[k] = diff * nxx * nyy
+            xz[k] = diff * nxx * nzz
+            yz[k] = diff * nyy * nzz
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells, blocks_wanted):
+    """Fill ``cells`` (2, 9, n + nx + 1) with both triangles' force and, if wanted, Jacobian blocks
+    (xx, yy, zz, xy, xz, yz) for every cell, row by row."""
+    pad = nx + 1
+    w = nx - 1
+    for r in range(ny - 1):
+        base = r * nx
+        a = _corner(pos, vel, s, base, w)
+        b = _corner(pos, vel, s, base + 1, w)
+        c = _corner(pos, vel, s, base + nx, w)
+        d = _corner(pos, vel, s, base + nx + 1, w)
+        lo, hi = pad + base, pad + base + w
+        _drag_row(w, a, b, d, density, c_normal, c_tangential, c_linear, current_x, current_y, cells[0, :, lo:hi], blocks_wanted)
+        _drag_row(w, a, d, c, density, c_normal, c_tangential, c_linear, current_x, current_y, cells[1, :, lo:hi], blocks_wanted)
 
 
 @njit(cache=True, fastmath=FASTMATH)
 def face_drag(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, force, cells):
     """Add the face-model drag (MODEL.md section 4) to ``force``; ``cells`` is (2, 9, n + nx + 1) scratch."""
-    pad = nx + 1
-    for r in range(ny - 1):
-        for col in range(nx - 1):
-            i = r * nx + col
-            f1 = _triangle(i, i + 1, i + nx + 1, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y)
-            f2 = _triangle(i, i + nx + 1, i + nx, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y)
-            for comp in range(3):
-                cells[0, comp, pad + i] = f1[comp]
-                cells[1, comp, pad + i] = f2[comp]
+    _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells, False)
     for comp in range(3):
         _gather_cells(cells[0, comp], cells[1, comp], nx, force[comp], 1.0 / 3.0)
 
@@ -129,27 +167,7 @@ def face_drag_and_blocks(nx, ny, pos, vel, s, density, c_normal, c_tangential, c
     Jacobian goes one third to each of its particles (row-sum lumping: exact for a uniform
     velocity).  The tangential part uses its larger eigenvalue in every in-plane direction.
     """
-    pad = nx + 1
-    for r in range(ny - 1):
-        for col in range(nx - 1):
-            i = r * nx + col
-            for t in range(2):
-                if t == 0:
-                    res = _triangle(i, i + 1, i + nx + 1, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y)
-                else:
-                    res = _triangle(i, i + nx + 1, i + nx, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y)
-                fx, fy, fz, nxx, nyy, nzz, kn, kt, kl = res
-                cells[t, 0, pad + i] = fx
-                cells[t, 1, pad + i] = fy
-                cells[t, 2, pad + i] = fz
-                d = kn - kt
-                iso = kt + kl
-                cells[t, 3, pad + i] = iso + d * nxx * nxx
-                cells[t, 4, pad + i] = iso + d * nyy * nyy
-                cells[t, 5, pad + i] = iso + d * nzz * nzz
-                cells[t, 6, pad + i] = d * nxx * nyy
-                cells[t, 7, pad + i] = d * nxx * nzz
-                cells[t, 8, pad + i] = d * nyy * nzz
+    _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells, True)
     for comp in range(3):
         _gather_cells(cells[0, comp], cells[1, comp], nx, force[comp], 1.0 / 3.0)
     for comp in range(6):
