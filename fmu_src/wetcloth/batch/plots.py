@@ -101,8 +101,10 @@ def _line(ax, table: pd.DataFrame, spec: PlotSpec) -> None:
 def _heatmap(fig, ax, table: pd.DataFrame, spec: PlotSpec) -> None:
     values, ok_counts, run_counts = heatmap_data(table, spec.metric, spec.x, spec.y)
     grid = values.to_numpy(float)
-    image = ax.imshow(np.ma.masked_invalid(grid), origin="lower", aspect="auto", cmap="viridis")
-    image.cmap.set_bad("0.85")
+    import matplotlib
+
+    cmap = matplotlib.colormaps["viridis"].with_extremes(bad="0.85")  # grey: no finite value
+    image = ax.imshow(np.ma.masked_invalid(grid), origin="lower", aspect="auto", cmap=cmap)
     fig.colorbar(image, ax=ax, label=_label(spec.metric))
     ax.set_xticks(range(len(values.columns)), [f"{v:g}" if isinstance(v, (int, float)) else str(v) for v in values.columns])
     ax.set_yticks(range(len(values.index)), [f"{v:g}" if isinstance(v, (int, float)) else str(v) for v in values.index])

@@ -29,6 +29,7 @@ from wetcloth.batch.study import Run, Study, load_study
 from wetcloth.scene import from_dict
 
 FLUSH_INTERVAL = 2.0  # s between writes of the results table while a study runs
+LOCAL_HTTP = "127.0.0.1:0"  # the local cluster's dashboard / HTTP address: any free port, loopback only
 
 
 @dataclass
@@ -81,7 +82,8 @@ def dask_client(client=None, scheduler: str | None = None, workers: int | None =
             yield c
         return
     n = workers or os.cpu_count() or 1
-    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+    # the scheduler always serves HTTP: on a free port of this machine only, not on 8787 of every interface
+    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=LOCAL_HTTP,
                       silence_logs=logging.ERROR) as cluster, Client(cluster, set_as_default=False) as c:
         yield c
 

@@ -1,0 +1,208 @@
+"""Batch studies on a local Dask cluster of 2 worker processes (shared by the tests of this module)."""
+
+import logging
+import math
+import os
+import signal
+import time
+
+import matplotlib.image
+import numpy as np
+import pandas as pd
+import pytest
+
+import wetcloth
+from wetcloth.batch import Study, compute_metrics, read_table, run_study
+from wetcloth.batch.results import write_table
+from wetcloth.runner import run
+from wetcloth.scene import from_dict
+
+distributed = pytest.importorskip("distributed")
+
+SMALL = dict(nx=5, ny=5)
+
+
+@pytest.fixture(scope="module")
+def client():
+    """Two single-threaded worker processes, each under a Nanny that restarts it if it dies."""
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address="127.0.0.1:0",
+                                  silence_logs=logging.CRITICAL) as cluster, distributed.Client(cluster) as c:
+        yield c
+
+
+def small_study(name="t", duration=15.0, **data) -> Study:
+    """thesis_fast on a 5 x 5 grid for ``duration`` s at 10 Hz."""
+    data = dict(scene="thesis_fast", duration=duration, sample_rate=10.0, sink_depth=0.05,
+                metrics=list(wetcloth.batch.METRICS)) | data
+    data["base"] = SMALL | data.get("base", {})
+    return Study.from_dict(data, name=name)
+
+
+def direct_metrics(study: Study, params: dict) -> dict:
+    """The metrics of one run computed in this process, without Dask."""
+    result = run(from_dict(params), study.duration, study.sample_rate, snapshots=0, progress=False)
+    series = {name: result.column(name) for name in ("time", "depth", "wet_mass", "water_mass")}
+    return compute_metrics(series, study.metrics, study.sink_depth)
+
+
+def test_study_on_two_workers_matches_direct_runs(client):
+    study = small_study(axes={"absorption_rate": [0.5, 2.0], "initial_tilt": [10.0, 60.0]})
+    table = wetcloth.study(study, client=client)
+    assert isinstance(table, pd.DataFrame) and len(table) == 4
+    assert list(table["run_key"]) == [r.key for r in study.runs()]
+    assert (table["status"] == "ok").all() and table["error"].isna().all()
+    assert set(table["worker"]) <= set(client.scheduler_info()["workers"])
+    for run_ in study.runs():
+        row = table.set_index("run_key").loc[run_.key]
+        expected = direct_metrics(study, run_.params)
+        for name, value in expected.items():
+            # the same code on the same inputs in another process of this machine: identical numbers
+            assert row[name] == value or (math.isnan(value) and math.isnan(row[name])), name
+    # in 15 s the fast-absorbing runs sink (at ~7 s) and the slower ones do not (at ~22 s): both cases covered
+    assert set(table["sank"]) == {True, False}
+
+
+def test_invalid_values_and_failing_runs_are_rows_with_their_error(client):
+    # explicit Euler with 0.05 s fixed steps on a very stiff cloth blows up within 0.25 s (BlowUpError in
+    # the worker); a negative absorption rate is out of range (rejected before it reaches a worker)
+    study = small_study(duration=2.0, base=dict(stretch_stiffness=1e6, tolerance=0.0, max_step=0.05), axes={
+        "absorption_rate": [-1.0, 2.0], "integrator": ["implicit_euler", "explicit_euler"]})
+    report = run_study(study, client=client)
+    table = report.table.set_index(["absorption_rate", "integrator"])
+    assert report.ran == 4 and report.ok == 1 and report.failed == 3
+    for integrator in ("implicit_euler", "explicit_euler"):
+        row = table.loc[(-1.0, integrator)]
+        assert row["status"] == "error"
+        assert row["error"] == ("ParameterError: parameter 'absorption_rate': -1.0 is out of range; "
+                                "allowed: 0 <= absorption_rate <= 10000 1/s")
+        assert math.isnan(row["time_to_sink"]) and pd.isna(row["sank"])
+    blown = table.loc[(2.0, "explicit_euler")]
+    assert blown["status"] == "error" and blown["error"].startswith("BlowUpError: the cloth state exploded")
+    assert blown["worker"].startswith("tcp://")  # raised inside a worker, recorded, study went on
+    good = table.loc[(2.0, "implicit_euler")]
+    assert good["status"] == "ok" and pd.isna(good["error"]) and np.isfinite(good["final_wet_mass"])
+
+
+def test_rerun_skips_what_is_done_and_resumes_by_parameters(client, tmp_path):
+    out = tmp_path / "r.parquet"
+    study = small_study(duration=5.0, axes={"absorption_rate": [0.5, 1.0], "initial_tilt": [0.0, 30.0]})
+    first = run_study(study, out, client=client)
+    assert (first.ran, first.skipped) == (4, 0)
+    stamp = out.stat().st_mtime_ns
+    again = run_study(study, out, client=client)
+    assert (again.ran, again.skipped) == (0, 4)  # a second invocation runs nothing new
+    assert out.stat().st_mtime_ns == stamp  # and leaves the table alone
+    pd.testing.assert_frame_equal(again.table, first.table)
+    # a wider axis runs only the new parameter values
+    wider = small_study(duration=5.0, axes={"absorption_rate": [0.5, 1.0, 2.0], "initial_tilt": [0.0, 30.0]})
+    report = run_study(wider, out, client=client)
+    assert (report.ran, report.skipped) == (2, 4)
+    assert set(report.table.loc[report.table["absorption_rate"] == 2.0, "run_key"]) == set(read_table(out)["run_key"][-2:])
+    # runs missing from the table (lost, or deleted by hand) are run again, and only they
+    table = read_table(out)
+    write_table(table[table["initial_tilt"] != 30.0], out)
+    report = run_study(wider, out, client=client)
+    assert (report.ran, report.skipped) == (3, 3)
+    final = read_table(out)
+    assert sorted(final["run_key"]) == sorted(r.key for r in wider.runs())
+
+
+def test_interrupted_study_keeps_finished_runs_and_resumes(client, tmp_path):
+    out = tmp_path / "i.parquet"
+    study = small_study(duration=5.0, axes={"absorption_rate": [0.5, 1.0, 1.5, 2.0, 2.5, 3.0]})
+    seen = []
+
+    def interrupt_after_two(row):
+        seen.append(row["run_key"])
+        if len(seen) == 2:
+            raise KeyboardInterrupt  # as Ctrl-C would, in the client, between two results
+
+    with pytest.raises(KeyboardInterrupt):
+        run_study(study, out, client=client, on_result=interrupt_after_two)
+    saved = read_table(out)
+    assert list(saved["run_key"]) == seen  # what finished is on disk
+    report = run_study(study, out, client=client)
+    assert (report.ran, report.skipped) == (4, 2)
+    final = read_table(out)
+    assert sorted(final["run_key"]) == sorted(r.key for r in study.runs()) and (final["status"] == "ok").all()
+
+
+def test_worker_killed_mid_study_every_run_present_once(client, tmp_path):
+    # 12 runs of ~0.5 s each (9 x 9 grid, 30 s); after the first result, SIGKILL a worker that is running one
+    study = small_study(duration=30.0, base=dict(nx=9, ny=9),
+                        axes={"absorption_rate": [0.3, 0.6, 0.9, 1.2], "initial_tilt": [0.0, 30.0, 60.0]})
+    killed = {}
+
+    def kill_a_busy_worker(row):
+        if killed:
+            return
+        busy = {w: keys for w, keys in client.processing().items() if keys}
+        victim = sorted(busy)[0]
+        killed["address"] = victim
+        killed["tasks"] = {k.split("-")[1] for k in busy[victim]}  # run keys of its tasks
+        pid = client.run(os.getpid, workers=[victim])[victim]
+        os.kill(pid, signal.SIGKILL)
+
+    out = tmp_path / "k.parquet"
+    report = run_study(study, out, client=client, on_result=kill_a_busy_worker)
+    table = read_table(out)
+    keys = [r.key for r in study.runs()]
+    assert sorted(table["run_key"]) == sorted(keys)  # every run present exactly once
+    assert (table["status"] == "ok").all() and report.ok == len(keys)
+    assert killed["tasks"]  # the killed worker had work in hand ...
+    redone = table.set_index("run_key").loc[sorted(killed["tasks"]), "worker"]
+    assert killed["address"] not in set(redone)  # ... and another worker did it
+    client.wait_for_workers(2, timeout=60)  # the Nanny brings the killed worker back
+
+
+def test_cli_on_a_scheduler_writes_table_csv_and_plots(client, tmp_path, capsys):
+    from wetcloth.cli import main
+
+    study_file = tmp_path / "cli_study.toml"
+    study_file.write_text(
+        'scene = "thesis_fast"\nduration = 10.0\n[base]\nnx = 5\nny = 5\n'
+        '[axes]\nabsorption_capacity = [3.6, 5.0]\nabsorption_rate = [1.0, 2.0]\n'
+        '[[plot]]\nmetric = "time_to_sink"\nx = "absorption_capacity"\ny = "absorption_rate"\n'
+    )
+    out, csv = tmp_path / "res" / "cli.parquet", tmp_path / "res" / "cli.csv"
+    argv = ["batch", str(study_file), "--scheduler", client.scheduler.address, "--workers", "2",
+            "--out", str(out), "--csv", str(csv), "--plot", "final_wet_mass:absorption_rate", "--no-progress"]
+    assert main(argv) == 0
+    printed = capsys.readouterr().out
+    assert "cli_study: 4 runs; ran 4: 4 ok, 0 failed" in printed
+    table = read_table(out)
+    assert len(table) == 4 and (table["status"] == "ok").all()
+    assert pd.read_csv(csv)["run_key"].tolist() == table["run_key"].tolist()
+    for name in ("cli_study_time_to_sink_absorption_capacity_x_absorption_rate.png",
+                 "cli_study_final_wet_mass_vs_absorption_rate.png"):
+        image = matplotlib.image.imread(out.parent / name)
+        assert image.shape[0] > 100 and image.shape[1] > 100
+    assert main(argv) == 0
+    assert "4 already in" in capsys.readouterr().out and read_table(out).equals(table)
+
+
+def test_cli_starts_and_stops_its_own_local_cluster(tmp_path, capsys):
+    from wetcloth.cli import main
+
+    out = tmp_path / "local.parquet"
+    study_file = tmp_path / "local.toml"
+    study_file.write_text('scene = "thesis_fast"\nduration = 2.0\n[base]\nnx = 5\nny = 5\n'
+                          '[axes]\nabsorption_rate = [0.5, 1.0]\n')
+    before = time.perf_counter()
+    assert main(["batch", str(study_file), "--workers", "2", "--out", str(out), "--no-progress"]) == 0
+    assert "ran 2: 2 ok" in capsys.readouterr().out
+    assert len(read_table(out)) == 2
+    assert time.perf_counter() - before < 60
+
+
+def test_bad_workers_and_study_errors_are_reported_by_the_cli(tmp_path, capsys):
+    from wetcloth.cli import main
+
+    study_file = tmp_path / "bad.toml"
+    study_file.write_text('scene = "thesis_fast"\nduration = 2.0\n[axes]\nabsorbtion_rate = [0.5]\n')
+    assert main(["batch", str(study_file), "--out", str(tmp_path / "x.parquet")]) == 2
+    assert "study 'axes.absorbtion_rate': unknown parameter 'absorbtion_rate'" in capsys.readouterr().err
+    good = tmp_path / "good.toml"
+    good.write_text('scene = "thesis_fast"\nduration = 2.0\n[axes]\nabsorption_rate = [0.5]\n')
+    assert main(["batch", str(good), "--workers", "0", "--out", str(tmp_path / "x.parquet")]) == 2
+    assert "workers must be a whole number >= 1, got 0" in capsys.readouterr().err

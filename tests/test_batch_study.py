@@ -1,0 +1,248 @@
+"""Batch studies without Dask: study files, run expansion and keys, metrics, results table, plot data."""
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import wetcloth
+from wetcloth.batch import StudyError, Study, compute_metrics, first_crossing, heatmap_data, line_data, load_study
+from wetcloth.batch.results import make_table, read_table, write_table
+from wetcloth.batch.study import parse_plot_spec
+
+ROOT = Path(__file__).resolve().parents[1]
+STUDIES = sorted((ROOT / "models" / "studies").glob("*.toml"))
+
+
+def make(**data) -> Study:
+    data.setdefault("scene", "thesis_fast")
+    data.setdefault("duration", 5.0)
+    return Study.from_dict(data, name="t")
+
+
+# ---------------------------------------------------------------- metrics on hand-made series
+
+
+def test_first_crossing_interpolates_between_samples():
+    t = np.array([0.0, 1.0, 2.0, 3.0])
+    y = np.array([0.0, 0.02, 0.08, 0.2])
+    # past 0.05 first at t = 2; between (1, 0.02) and (2, 0.08): 1 + 0.03 / 0.06 = 1.5 s
+    assert first_crossing(t, y, 0.05, strict=True) == pytest.approx(1.5, rel=1e-12)
+    assert first_crossing(t, y, -1.0) == 0.0  # past at the first sample: its time
+    assert math.isnan(first_crossing(t, y, 0.5))  # never
+    # on the level exactly: '>=' takes that sample, '>' interpolates to the same time
+    y2 = np.array([0.0, 0.05, 0.1, 0.2])
+    assert first_crossing(t, y2, 0.05) == 1.0
+    assert first_crossing(t, y2, 0.05, strict=True) == 1.0
+
+
+def buras_series(duration=60.0, rate_hz=100.0, m0=0.1575, capacity=3.8, absorption=0.15, v=0.02, t_drop=10.0):
+    """Synthetic run: Buras uptake from t = 0 (MODEL.md section 8) and a centroid that floats at
+    1 mm until ``t_drop`` s, then goes down at ``v`` m/s."""
+    t = np.arange(0.0, duration + 1e-9, 1.0 / rate_hz)
+    water = m0 * capacity * (1 - np.exp(-absorption * t / capacity))
+    depth = np.where(t < t_drop, 0.001, 0.001 + v * (t - t_drop))
+    return dict(time=t, depth=depth, wet_mass=m0 + water, water_mass=water)
+
+
+def test_metrics_match_hand_computed_values():
+    m0, C, R, T, v, t_drop, sink = 0.1575, 3.8, 0.15, 60.0, 0.02, 10.0, 0.05
+    series = buras_series(T, 100.0, m0, C, R, v, t_drop)
+    names = list(wetcloth.batch.METRICS)
+    got = compute_metrics(series, names, sink)
+    # depth is piecewise linear and both samples around the crossing lie on the ramp: interpolation is exact
+    assert got["time_to_sink"] == pytest.approx(t_drop + (sink - 0.001) / v, rel=1e-12)
+    assert got["sank"] is True
+    final_water = m0 * C * (1 - math.exp(-R * T / C))
+    assert got["final_depth"] == pytest.approx(0.001 + v * (T - t_drop), rel=1e-12)
+    assert got["max_depth"] == got["final_depth"]
+    assert got["final_wet_mass"] == pytest.approx(m0 + final_water, rel=1e-12)
+    assert got["final_water_mass"] == pytest.approx(final_water, rel=1e-12)
+    # 90% of the final wet mass: m0 (1 + C (1 - exp(-R t / C))) = 0.9 (m0 + W_T)
+    t90_wet = -C / R * math.log(1 - (0.9 * (m0 + final_water) / m0 - 1) / C)
+    t90_water = -C / R * math.log(1 - 0.9 * (1 - math.exp(-R * T / C)))
+    # linear interpolation of a smooth curve errs by at most h^2/8 * |y''/y'| = (0.01 s)^2 / 8 * R/C ~ 5e-7 s
+    assert got["time_to_90_wet_mass"] == pytest.approx(t90_wet, abs=1e-6)
+    assert got["time_to_90_water_mass"] == pytest.approx(t90_water, abs=1e-6)
+
+
+def test_metrics_for_a_cloth_that_never_sinks_or_absorbs():
+    t = np.linspace(0.0, 10.0, 101)
+    series = dict(time=t, depth=np.full_like(t, 0.0006), wet_mass=np.full_like(t, 0.1575), water_mass=np.zeros_like(t))
+    got = compute_metrics(series, ["time_to_sink", "time_to_90_wet_mass", "time_to_90_water_mass"], 0.05)
+    assert math.isnan(got["time_to_sink"]) and got["sank"] is False
+    assert got["time_to_90_wet_mass"] == 0.0  # already at 100 % of its final mass at t = 0
+    assert math.isnan(got["time_to_90_water_mass"])  # no water: undefined
+
+
+def test_unknown_metric_is_rejected():
+    with pytest.raises(ValueError, match="unknown metric 'sink_time'"):
+        compute_metrics(buras_series(), ["sink_time"], 0.05)
+
+
+# ---------------------------------------------------------------- study files
+
+
+@pytest.mark.parametrize("path", STUDIES, ids=[p.stem for p in STUDIES])
+def test_example_studies_parse(path):
+    study = load_study(path)
+    assert study.runs() and study.name == path.stem
+    study.check_plots(study.plots)
+
+
+def test_grid_axes_cross_in_file_order_with_ranges_and_base():
+    s = make(base={"nx": 5, "ny": 5}, axes={
+        "absorption_capacity": [3.6, 4.0],
+        "initial_tilt": {"start": 0, "stop": 90, "step": 30},  # stop included: 0 30 60 90
+        "absorption_rate": {"start": 0.1, "stop": 1.0, "num": 2, "log": True},
+    })
+    runs = s.runs()
+    assert len(runs) == 2 * 4 * 2
+    assert [r.point for r in runs[:3]] == [
+        {"absorption_capacity": 3.6, "initial_tilt": 0.0, "absorption_rate": 0.1},
+        {"absorption_capacity": 3.6, "initial_tilt": 0.0, "absorption_rate": 1.0},
+        {"absorption_capacity": 3.6, "initial_tilt": 30.0, "absorption_rate": 0.1},
+    ]
+    first = runs[0].params
+    assert first["nx"] == 5 and first["ny"] == 5  # [base]
+    assert first["initial_height"] == 0.1  # from the thesis_fast scene file
+    assert first["thickness"] == wetcloth.Scene().thickness  # Scene default
+    assert len({r.key for r in runs}) == len(runs)
+
+
+def test_range_values_are_rounded_so_keys_match_a_list():
+    by_range = make(axes={"absorption_rate": {"start": 0.1, "stop": 0.3, "num": 3}})
+    by_list = make(axes={"absorption_rate": [0.1, 0.2, 0.3]})
+    assert [r.point["absorption_rate"] for r in by_range.runs()] == [0.1, 0.2, 0.3]
+    assert [r.key for r in by_range.runs()] == [r.key for r in by_list.runs()]
+
+
+def test_integer_parameters_take_integer_ranges():
+    s = make(axes={"nx": {"start": 5, "stop": 9, "step": 2}})
+    assert [r.point["nx"] for r in s.runs()] == [5, 7, 9]
+    assert all(isinstance(r.point["nx"], int) for r in s.runs())
+    with pytest.raises(StudyError, match="nx takes whole numbers"):
+        make(axes={"nx": {"start": 5, "stop": 6, "num": 3}})
+
+
+def test_random_axes_are_joint_seeded_draws_crossed_with_the_grid():
+    data = dict(samples=3, seed=7, axes={
+        "initial_tilt": [0.0, 45.0],
+        "absorption_rate": {"random": "uniform", "low": 0.1, "high": 0.5},
+        "absorption_capacity": {"random": "loguniform", "low": 3.5, "high": 7.0},
+    })
+    runs = make(**data).runs()
+    assert len(runs) == 2 * 3
+    draws = [(r.point["absorption_rate"], r.point["absorption_capacity"]) for r in runs]
+    assert draws[:3] == draws[3:]  # the same three joint draws for each grid point
+    assert all(0.1 <= a < 0.5 and 3.5 <= c <= 7.0 for a, c in draws)
+    assert [r.key for r in make(**data).runs()] == [r.key for r in runs]  # reproducible: resumable
+    assert [r.key for r in make(**(data | {"seed": 8})).runs()] != [r.key for r in runs]
+
+
+def test_keys_follow_parameters_and_run_settings():
+    s = make(axes={"absorption_rate": [0.2, 0.3]})
+    keys = [r.key for r in s.runs()]
+    assert [r.key for r in make(axes={"absorption_rate": [0.3]}).runs()] == keys[1:]  # a subset: same keys
+    assert [r.key for r in make(duration=6.0, axes={"absorption_rate": [0.2, 0.3]}).runs()] != keys
+    assert [r.key for r in make(sink_depth=0.1, axes={"absorption_rate": [0.2, 0.3]}).runs()] != keys
+    assert [r.key for r in s.replace(engine="fmu").runs()] != keys
+
+
+def test_invalid_values_parse_and_fail_per_run_not_up_front():
+    s = make(axes={"absorption_rate": [-1.0, 0.2], "nx": [1, 5]})  # ranges are checked per run
+    assert len(s.runs()) == 4
+
+
+@pytest.mark.parametrize("data, key, match", [
+    (dict(axes={"absorbtion_rate": [0.1]}), "axes.absorbtion_rate", "unknown parameter 'absorbtion_rate'; known: nx, ny"),
+    (dict(axes={"absorption_rate": ["fast"]}), "axes.absorption_rate", r"takes a number \(0 <= absorption_rate <= 10000 1/s\)"),
+    (dict(axes={"drag_model": [1.0]}), "axes.drag_model", "takes a string"),
+    (dict(axes={"absorption_rate": [0.1, 0.1]}), "axes.absorption_rate", "repeated values"),
+    (dict(axes={"absorption_rate": []}), "axes.absorption_rate", "at least one value"),
+    (dict(axes={"absorption_rate": {"start": 0.1, "stop": 0.2}}), "axes.absorption_rate", "exactly one of num or step"),
+    (dict(axes={"absorption_rate": {"start": 0.1, "stop": 0.2, "step": -0.1}}), "axes.absorption_rate", "step must be"),
+    (dict(axes={"absorption_rate": {"random": "gauss", "mean": 1, "std": 1}}), "axes.absorption_rate", "random must be one of"),
+    (dict(axes={"absorption_rate": {"random": "uniform", "low": 0.1, "high": 0.5}}), "samples", "need samples >= 1"),
+    (dict(samples=4), "samples", "only for random axes"),
+    (dict(base={"nx": 5}, axes={"nx": [5, 7]}), "axes.nx", "also set in"),
+    (dict(metrics=["time_to_sink", "sink_time"]), "metrics", "unknown metric 'sink_time'; known: time_to_sink"),
+    (dict(engine="modelica"), "engine", "allowed: python, fmu"),
+    (dict(duration=-1.0), "duration", "finite number > 0"),
+    (dict(sample_rate=0), "sample_rate", "finite number > 0"),
+    (dict(sweep={}), "sweep", "unknown key; allowed: name, description"),
+    (dict(plot=[{"metric": "final_depth", "x": "nx"}]), "plot", "not an axis of this study"),
+])
+def test_bad_study_errors_name_the_key(data, key, match):
+    with pytest.raises(StudyError, match=match) as info:
+        make(**data)
+    assert info.value.key == key
+
+
+def test_duration_defaults_to_the_scene_files_run_table(tmp_path):
+    assert Study.from_dict({"scene": "thesis_fast"}).duration == 90.0  # thesis_fast.toml [run]
+    scene = tmp_path / "bare.toml"
+    scene.write_text("nx = 5\n")
+    with pytest.raises(StudyError, match="duration"):
+        Study.from_dict({"scene": "bare.toml"}, base_dir=tmp_path)
+    study = tmp_path / "s.toml"
+    study.write_text('scene = "bare.toml"\nduration = 2.0\n')  # a scene path relative to the study file
+    assert load_study(study).runs()[0].params["nx"] == 5
+
+
+def test_plot_specs():
+    assert parse_plot_spec("time_to_sink:absorption_rate") == wetcloth.batch.PlotSpec("time_to_sink", "absorption_rate")
+    spec = parse_plot_spec("time_to_sink:absorption_capacity,absorption_rate")
+    assert (spec.x, spec.y) == ("absorption_capacity", "absorption_rate")
+    with pytest.raises(StudyError, match="METRIC:AXIS"):
+        parse_plot_spec("time_to_sink")
+
+
+# ---------------------------------------------------------------- results table and plot data
+
+
+def hand_table() -> pd.DataFrame:
+    rows = [  # capacity x rate, two repeats per cell (another axis 'initial_tilt')
+        dict(run_key="a", absorption_capacity=4.0, absorption_rate=0.2, initial_tilt=0.0, time_to_sink=30.0, sank=True, status="ok", error=None),
+        dict(run_key="b", absorption_capacity=4.0, absorption_rate=0.2, initial_tilt=45.0, time_to_sink=20.0, sank=True, status="ok", error=None),
+        dict(run_key="c", absorption_capacity=4.0, absorption_rate=0.4, initial_tilt=0.0, time_to_sink=math.nan, sank=False, status="ok", error=None),
+        dict(run_key="d", absorption_capacity=4.0, absorption_rate=0.4, initial_tilt=45.0, time_to_sink=10.0, sank=True, status="ok", error=None),
+        dict(run_key="e", absorption_capacity=6.0, absorption_rate=0.2, initial_tilt=0.0, time_to_sink=math.nan, sank=None, status="error", error="BlowUpError: x"),
+        dict(run_key="f", absorption_capacity=6.0, absorption_rate=0.2, initial_tilt=45.0, time_to_sink=math.nan, sank=None, status="error", error="BlowUpError: y"),
+        dict(run_key="g", absorption_capacity=6.0, absorption_rate=0.4, initial_tilt=0.0, time_to_sink=math.nan, sank=False, status="ok", error=None),
+    ]
+    return make_table(rows, ["absorption_capacity", "absorption_rate", "initial_tilt"])
+
+
+def test_heatmap_and_line_data():
+    values, ok, runs = heatmap_data(hand_table(), "time_to_sink", "absorption_capacity", "absorption_rate")
+    assert list(values.columns) == [4.0, 6.0] and list(values.index) == [0.2, 0.4]
+    assert values.loc[0.2, 4.0] == 25.0  # mean of 30 and 20
+    assert values.loc[0.4, 4.0] == 10.0  # the run that never sank is not averaged in
+    assert math.isnan(values.loc[0.2, 6.0]) and ok.loc[0.2, 6.0] == 0 and runs.loc[0.2, 6.0] == 2  # all errors
+    assert math.isnan(values.loc[0.4, 6.0]) and ok.loc[0.4, 6.0] == 1  # ran, never sank
+    line = line_data(hand_table(), "time_to_sink", "absorption_rate")
+    assert line.loc[0.2, "mean"] == 25.0 and line.loc[0.2, "count"] == 2 and line.loc[0.2, "never"] == 0
+    assert line.loc[0.4, "mean"] == 10.0 and line.loc[0.4, "count"] == 3 and line.loc[0.4, "never"] == 2
+
+
+def test_results_table_round_trips_through_parquet(tmp_path):
+    table = hand_table()
+    path = write_table(table, tmp_path / "r.parquet")
+    back = read_table(path)
+    pd.testing.assert_frame_equal(back, table, check_dtype=False)
+    assert str(back["sank"].dtype) == "boolean" and back["sank"].isna().sum() == 2
+    assert back.loc[back.run_key == "e", "error"].item() == "BlowUpError: x"
+    assert not list(tmp_path.glob(".*tmp"))  # written atomically, no temporary left over
+    assert len(read_table(tmp_path / "missing.parquet")) == 0
+
+
+def test_importing_wetcloth_does_not_import_dask():
+    code = ("import sys, wetcloth; assert 'study' in wetcloth.__all__ and callable(wetcloth.study); "
+            "print(sorted(m for m in ('dask', 'distributed', 'pandas') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
