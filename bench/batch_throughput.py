@@ -1,0 +1,113 @@
+"""Batch-study throughput (runs per minute) on a local Dask cluster of 1 and 2 worker processes.
+
+    .venv/bin/python bench/batch_throughput.py                 # 16 runs, 17 x 17 towel, 30 s each
+    .venv/bin/python bench/batch_throughput.py --runs 8 --nx 9 --workers 1 2 --markdown
+
+For each worker count: start a local cluster (timed apart), warm every worker with one run
+(imports and numba's cached kernels), then time ``run_study`` over the whole study.  The
+serial baseline runs the same scenes one after another in this process, without Dask, so the
+table shows both the scaling and Dask's own overhead.  The machine's load average is printed
+because other processes on a shared machine take cores away from the workers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+
+import numpy as np
+
+
+def make_study(runs: int, nx: int, duration: float):
+    from wetcloth.batch import Study
+
+    rates = np.round(np.linspace(0.2, 2.0, runs), 6).tolist()  # one axis, every run a different scene
+    return Study.from_dict(dict(scene="thesis_fast", duration=duration, sample_rate=10.0,
+                                base=dict(nx=nx, ny=nx), axes=dict(absorption_rate=rates)), name="throughput")
+
+
+def serial(study, repeat: int) -> float:
+    """Wall-clock s to run every scene in this process (no Dask), after one warm-up run; best of ``repeat``."""
+    from wetcloth.batch.engines import execute
+    from wetcloth.batch.runner import _task
+
+    runs = study.runs()
+    execute(_task(runs[0], study))  # warm-up: numba kernels loaded
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        rows = [execute(_task(r, study)) for r in runs]
+        times.append(time.perf_counter() - start)
+        assert all(r["status"] == "ok" for r in rows), [r["error"] for r in rows if r["status"] != "ok"]
+    return min(times)
+
+
+def on_cluster(study, workers: int, repeat: int) -> tuple[float, float, float]:
+    """(cluster start-up s, first run on every worker s, wall-clock s of the study on the warm
+    cluster of ``workers`` processes, best of ``repeat``)."""
+    import logging
+
+    from distributed import Client, LocalCluster
+
+    from wetcloth.batch import run_study
+    from wetcloth.batch.engines import execute
+    from wetcloth.batch.runner import LOCAL_HTTP, _task
+
+    start = time.perf_counter()
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=LOCAL_HTTP,
+                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+        client.wait_for_workers(workers)
+        startup = time.perf_counter() - start
+        start = time.perf_counter()
+        short = study.replace(duration=1.0)
+        warmups = [client.submit(execute, _task(short.runs()[0], short), workers=[address], pure=False)
+                   for address in client.scheduler_info()["workers"]]
+        client.gather(warmups)
+        warmup = time.perf_counter() - start
+        times = []
+        for _ in range(repeat):
+            start = time.perf_counter()
+            report = run_study(study, client=client)
+            times.append(time.perf_counter() - start)
+            assert report.ok == report.total, report.table[report.table.status != "ok"]["error"].tolist()
+    return startup, warmup, min(times)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=16, help="runs in the study (default 16)")
+    parser.add_argument("--nx", type=int, default=17, help="grid nx = ny (default 17)")
+    parser.add_argument("--duration", type=float, default=30.0, help="simulated s per run (default 30)")
+    parser.add_argument("--workers", type=int, nargs="+", default=[1, 2], help="worker counts (default 1 2)")
+    parser.add_argument("--repeat", type=int, default=1, help="time each setting this many times, keep the best")
+    parser.add_argument("--markdown", action="store_true", help="print a Markdown table")
+    args = parser.parse_args()
+
+    study = make_study(args.runs, args.nx, args.duration)
+    print(f"# {args.runs} runs of thesis_fast, {args.nx} x {args.nx} grid, {args.duration:g} s each; "
+          f"{os.cpu_count()} cores, {platform.processor() or platform.machine()}; "
+          f"load average before: {os.getloadavg()[0]:.2f}")
+    base = serial(study, args.repeat)
+    rows = [("serial, no Dask", "-", "-", base)]
+    for n in args.workers:
+        startup, warmup, elapsed = on_cluster(study, n, args.repeat)
+        rows.append((f"Dask, {n} worker{'s' if n > 1 else ''}", f"{startup:.1f}", f"{warmup:.1f}", elapsed))
+    one = next((e for label, _, _, e in rows if label == "Dask, 1 worker"), None)
+    if args.markdown:
+        print("| setting | cluster start-up (s) | worker warm-up (s) | study wall time (s) | runs/min | speed-up vs 1 worker |")
+        print("|---|---|---|---|---|---|")
+    for label, startup, warmup, elapsed in rows:
+        rate = 60.0 * args.runs / elapsed
+        speedup = f"{one / elapsed:.2f}x" if one and label.startswith("Dask") else "-"
+        if args.markdown:
+            print(f"| {label} | {startup} | {warmup} | {elapsed:.1f} | {rate:.1f} | {speedup} |")
+        else:
+            print(f"{label:18s} start-up {startup:>5s} s  warm-up {warmup:>5s} s  study {elapsed:6.1f} s  "
+                  f"{rate:6.1f} runs/min  speed-up {speedup}")
+    print(f"# load average after: {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":  # required: Dask's worker processes re-import this file when they start
+    main()
