@@ -1,1 +1,30 @@
-"""wetcloth.exporter: Blender-ready mesh sequences (PLY, OBJ, USD) of a simulated cloth."""
+"""wetcloth.exporter: Blender-ready mesh sequences (PLY, OBJ, USD) of a simulated cloth.
+
+    from wetcloth.exporter import open_sequence
+    sequence = open_sequence("out/frames", fmt="ply", writer="trimesh", fps=30, scene=scene)
+    run(scene, duration, fps, on_frame=sequence.on_frame)    # cloth_0001.ply, cloth_0002.ply, ...
+    sequence.close()                                         # frames.json; finishes a .usd
+
+One module per format and writer (``ply_trimesh``, ``ply_meshio``, ``obj_trimesh``, ``obj_meshio``,
+``usd``) behind ``open_sequence``; all write the same :class:`Frame`.  Beside the frames go
+``frames.json`` (fps, frame count, units, scene parameters) and ``load_in_blender.py``.
+"""
+
+from wetcloth.exporter.errors import ExportError
+from wetcloth.exporter.frame import COLORMAP, Frame, make_frame, sheet_uv, wetness_colors, wetness_lut
+from wetcloth.exporter.sequence import (
+    FORMATS,
+    LOADER,
+    MANIFEST,
+    WRITERS,
+    FrameSequence,
+    frame_file_name,
+    open_sequence,
+    previous_run_files,
+)
+
+__all__ = [
+    "COLORMAP", "ExportError", "FORMATS", "Frame", "FrameSequence", "LOADER", "MANIFEST", "WRITERS",
+    "frame_file_name", "make_frame", "open_sequence", "previous_run_files", "sheet_uv", "wetness_colors",
+    "wetness_lut",
+]

@@ -1,0 +1,306 @@
+"""A frame sequence on disk: the directory checks, one file per frame (or one USD), frames.json, the loader.
+
+``open_sequence`` checks the directory at once (before any simulating) and writes ``frames.json``
+(marked incomplete) and ``load_in_blender.py`` there; every ``on_frame`` / ``write_frame`` then
+writes one file and keeps nothing of it in memory; ``close()`` rewrites ``frames.json`` with the
+frame count and, for USD, finishes the ``.usd`` file.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import pprint
+import re
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from wetcloth.exporter import obj_meshio, obj_trimesh, ply_meshio, ply_trimesh
+from wetcloth.exporter.errors import ExportError
+from wetcloth.exporter.frame import COLORMAP, Frame, make_frame, sheet_uv, wetness_lut
+
+#: Mesh formats; ``usd`` is one animated file, the others one file per frame.
+FORMATS = ("ply", "obj", "usd")
+#: Writers of the per-frame formats (USD is always written by usd-core).
+WRITERS = ("trimesh", "meshio")
+#: One module per (format, writer), each with ``write(path, frame)``.
+FRAME_WRITERS: dict[tuple[str, str], Callable[[Path, Frame], None]] = {
+    ("ply", "trimesh"): ply_trimesh.write,
+    ("ply", "meshio"): ply_meshio.write,
+    ("obj", "trimesh"): obj_trimesh.write,
+    ("obj", "meshio"): obj_meshio.write,
+}
+MANIFEST = "frames.json"
+LOADER = "load_in_blender.py"
+#: Files that show a directory already holds a run's frames: any ``name_0001.ply``-like frame, a
+#: USD file, a manifest or a loader.
+_FRAME_FILE = re.compile(r"^.+_\d{4,}\.(ply|obj)$")
+_PREFIX = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
+
+
+def frame_file_name(prefix: str, number: int, fmt: str, digits: int = 4) -> str:
+    """``cloth_0001.ply``: the file of frame ``number`` (1-based), zero-padded to ``digits`` or more."""
+    return f"{prefix}_{number:0{digits}d}.{fmt}"
+
+
+def previous_run_files(directory: Path) -> list[Path]:
+    """Files in ``directory`` that belong to an earlier export (frames, USD, manifest, loader)."""
+    if not directory.is_dir():
+        return []
+    return sorted(
+        p for p in directory.iterdir()
+        if p.is_file() and (p.name in (MANIFEST, LOADER) or p.suffix == ".usd" or _FRAME_FILE.match(p.name))
+    )
+
+
+def _check_directory(directory: Path, overwrite: bool) -> None:
+    """Create ``directory`` if needed and make sure no other run's frames are in it; else ExportError."""
+    if directory.exists() and not directory.is_dir():
+        raise ExportError(f"export directory {directory} is an existing file, not a directory")
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ExportError(f"cannot create export directory {directory}: {exc.strerror or exc}") from None
+    taken = previous_run_files(directory)
+    if taken and not overwrite:
+        shown = ", ".join(p.name for p in taken[:3]) + (f" and {len(taken) - 3} more" if len(taken) > 3 else "")
+        raise ExportError(
+            f"export directory {directory} already holds another run's frames ({shown}); "
+            "choose a new directory or delete them first"
+        )
+    for path in taken:
+        try:
+            path.unlink()
+        except OSError as exc:
+            raise ExportError(f"cannot remove the old frame {path}: {exc.strerror or exc}") from None
+
+
+def _write_text(path: Path, text: str) -> None:
+    """Write a small text file via a temporary name, so a reader never sees half of it."""
+    tmp = path.with_name(path.name + ".tmp")
+    try:
+        tmp.write_text(text)
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise ExportError(f"cannot write {path.name} in export directory {path.parent}: {exc.strerror or exc}") from None
+
+
+def loader_source(settings: dict[str, Any]) -> str:
+    """The Blender loader script with ``settings`` filled in (see ``blender_loader.py``)."""
+    template = Path(__file__).with_name("blender_loader.py").read_text()
+    marker = "SETTINGS: dict = {}  # filled in by the exporter\n"
+    if marker not in template:
+        raise RuntimeError("blender_loader.py lost its SETTINGS marker line")
+    filled = "SETTINGS: dict = " + pprint.pformat(settings, width=110, compact=True, sort_dicts=False) + "\n"
+    return template.replace(marker, filled, 1)
+
+
+class FrameSequence:
+    """Frames of one run written into one directory.  Use ``open_sequence`` to make one.
+
+    ``on_frame(index, sim)`` is the runner's callback (index 0, the state at t = 0, becomes
+    ``<prefix>_0001``); ``write_frame(positions, wetness)`` is the same for arrays.
+    ``close()`` finishes the sequence.  Also a context manager.
+    """
+
+    def __init__(self, directory: Path, fmt: str, writer: str, fps: float, scene=None,
+                 triangles=None, uv=None, prefix: str = "cloth", digits: int = 4):
+        self.directory = directory
+        self.format = fmt
+        self.writer = "usd-core" if fmt == "usd" else writer
+        self.fps = float(fps)
+        self.scene = scene
+        self.prefix = prefix
+        self.digits = digits
+        self.frame_count = 0
+        self.closed = False
+        self._triangles = None if triangles is None else np.asarray(triangles)
+        self._uv = None if uv is None else np.asarray(uv, dtype=np.float32)
+        self._first_time: float | None = None
+        self._last_time: float | None = None
+        self._shape: tuple[int, int] | None = None
+        self._usd = None
+        if fmt == "usd":
+            from wetcloth.exporter.usd import UsdSequence
+
+            self._usd = UsdSequence(self.usd_path, self.fps, name=prefix, metadata=self._usd_metadata())
+
+    # ------------------------------------------------------------------ names
+    @property
+    def usd_path(self) -> Path:
+        """The USD file (format ``usd`` only)."""
+        return self.directory / f"{self.prefix}.usd"
+
+    def frame_path(self, number: int) -> Path:
+        """File of frame ``number`` (1-based); for USD, the one USD file."""
+        if self.format == "usd":
+            return self.usd_path
+        return self.directory / frame_file_name(self.prefix, number, self.format, self.digits)
+
+    # ------------------------------------------------------------------ writing
+    def on_frame(self, index: int, sim) -> None:
+        """Runner callback: write ``sim``'s cloth as frame ``index + 1`` (index 0 is t = 0)."""
+        if index != self.frame_count:
+            raise ExportError(
+                f"frame index {index} arrived but {self.frame_count} was expected next: frames are "
+                f"written in order, one per call, starting at 0 (export directory {self.directory})"
+            )
+        if self._triangles is None:
+            self._triangles = sim.triangles
+            self._uv = sheet_uv(sim.model.topology.rest_xy)
+        self.write_frame(sim.positions, sim.wetness, time=sim.time)
+
+    def _topology(self) -> tuple[np.ndarray, np.ndarray]:
+        if self._triangles is None:
+            if self.scene is None:
+                raise ExportError("write_frame needs the cloth's triangles: pass scene= or triangles= and uv=")
+            from wetcloth.topology import build_topology
+
+            topology = build_topology(self.scene)
+            self._triangles = topology.triangles
+            self._uv = sheet_uv(topology.rest_xy)
+        if self._uv is None:
+            raise ExportError("write_frame needs UVs with the triangles: pass uv= (n, 2) in 0..1")
+        return self._triangles, self._uv
+
+    def write_frame(self, positions, wetness, time: float | None = None) -> Path:
+        """Write the next frame: positions (n, 3) m, wetness (n,) 0..1, at ``time`` s; returns its file."""
+        if self.closed:
+            raise ExportError(f"the frame sequence in {self.directory} is closed")
+        triangles, uv = self._topology()
+        frame = make_frame(positions, wetness, triangles, uv)
+        shape = (frame.vertex_count, len(frame.triangles))
+        if self._shape is None:
+            self._shape = shape
+        elif shape != self._shape:
+            raise ExportError(f"frame {self.frame_count + 1} has {shape[0]} vertices and {shape[1]} faces, "
+                              f"the sequence {self._shape[0]} and {self._shape[1]}: the topology is fixed")
+        number = self.frame_count + 1
+        path = self.frame_path(number)
+        if self._usd is not None:
+            self._usd.write(number, frame)
+        else:
+            try:
+                FRAME_WRITERS[(self.format, self.writer)](path, frame)
+            except OSError as exc:
+                raise ExportError(f"cannot write frame {path}: {exc.strerror or exc}") from None
+        self.frame_count = number
+        time = float(number - 1) / self.fps if time is None else float(time)
+        if self._first_time is None:
+            self._first_time = time
+        self._last_time = time
+        return path
+
+    # ------------------------------------------------------------------ side files
+    def _usd_metadata(self) -> dict:
+        return {"fps": self.fps, "units": "m", "colormap": COLORMAP}
+
+    def manifest(self, complete: bool) -> dict[str, Any]:
+        """The contents of ``frames.json``."""
+        vertices, faces = self._shape if self._shape else (None, None)
+        files = (self.usd_path.name if self.format == "usd"
+                 else f"{self.prefix}_{{frame:0{self.digits}d}}.{self.format}")
+        return {
+            "generator": "wetcloth.exporter",
+            "format": self.format,
+            "writer": self.writer,
+            "files": files,
+            "prefix": self.prefix,
+            "first_frame": 1,
+            "frame_count": self.frame_count,
+            "complete": complete,
+            "fps": self.fps,
+            "first_time": self._first_time,
+            "last_time": self._last_time,
+            "vertex_count": vertices,
+            "face_count": faces,
+            "units": {"length": "m", "time": "s", "wetness": "1 (absorbed water over capacity, 0 to 1)"},
+            "up_axis": "Z",
+            "attributes": {
+                "wetness": "float per vertex: PLY property and USD primvar; OBJ has it only as the colour",
+                "color": f"RGBA 8-bit sRGB: matplotlib '{COLORMAP}' colour map of wetness",
+                "normals": "unit vertex normals of each frame",
+                "uv": "rest-sheet coordinates scaled to 0..1",
+            },
+            "colormap": COLORMAP,
+            "scene": self.scene.to_dict() if self.scene is not None else None,
+        }
+
+    def write_manifest(self, complete: bool) -> Path:
+        path = self.directory / MANIFEST
+        _write_text(path, json.dumps(self.manifest(complete), indent=1) + "\n")
+        return path
+
+    def loader_settings(self) -> dict[str, Any]:
+        return {
+            "format": self.format,
+            "prefix": self.prefix,
+            "fps": self.fps,
+            "first_frame": 1,
+            "directory": str(self.directory.resolve()),
+            "manifest": MANIFEST,
+            "usd_file": self.usd_path.name,
+            "colormap": COLORMAP,
+            "lut": wetness_lut()[:, :3].tolist(),
+        }
+
+    def write_loader(self) -> Path:
+        path = self.directory / LOADER
+        _write_text(path, loader_source(self.loader_settings()))
+        return path
+
+    # ------------------------------------------------------------------ closing
+    def close(self, complete: bool = True) -> None:
+        """Finish: the USD file (if any) and ``frames.json`` with the frame count.  Idempotent."""
+        if self.closed:
+            return
+        self.closed = True
+        if self._usd is not None:
+            self._usd.close()
+        self.write_manifest(complete=complete)
+
+    def __enter__(self) -> "FrameSequence":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        self.close(complete=exc_type is None)
+
+
+def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: float = 30.0, scene=None, *,
+                  triangles=None, uv=None, prefix: str = "cloth", digits: int = 4,
+                  overwrite: bool = False) -> FrameSequence:
+    """Start a frame sequence in ``directory``, checked now: ExportError if it cannot be used.
+
+    fmt: ``ply`` (binary, default), ``obj`` or ``usd``; writer: ``trimesh`` or ``meshio`` (ply and
+    obj; usd is always written by usd-core); fps: frames per second of the sequence (1/s);
+    scene: the Scene, recorded in frames.json and used for the triangles and UVs when frames come
+    from ``write_frame`` rather than ``on_frame``; triangles (m, 3) and uv (n, 2) in 0..1: the
+    same without a scene; prefix: file names ``<prefix>_0001.<fmt>``; digits: least zero-padding;
+    overwrite: delete an earlier run's frames in the directory instead of refusing it.
+
+    The directory is created if missing.  Refused up front: a path that is a file, a directory
+    that cannot be created or written, and one that already holds frames (``*_0001.ply``-like
+    files, a ``.usd``, ``frames.json`` or ``load_in_blender.py``) unless ``overwrite``.
+    """
+    if fmt not in FORMATS:
+        raise ExportError(f"unknown mesh format {fmt!r}; choose one of {', '.join(FORMATS)}")
+    if writer not in WRITERS:
+        raise ExportError(f"unknown mesh writer {writer!r}; choose one of {', '.join(WRITERS)}")
+    if not (isinstance(fps, (int, float)) and math.isfinite(fps) and fps > 0):
+        raise ExportError(f"fps must be a finite number > 0, got {fps!r}")
+    if not _PREFIX.match(prefix):
+        raise ExportError(f"file prefix {prefix!r} must be letters, digits, '.', '_' or '-' (no path)")
+    if not (isinstance(digits, int) and 1 <= digits <= 12):
+        raise ExportError(f"digits must be a whole number from 1 to 12, got {digits!r}")
+    if directory is None or str(directory) == "":
+        raise ExportError("no export directory given")
+    directory = Path(directory)
+    _check_directory(directory, overwrite)
+    sequence = FrameSequence(directory, fmt, writer, fps, scene=scene, triangles=triangles, uv=uv,
+                             prefix=prefix, digits=digits)
+    sequence.write_manifest(complete=False)  # also proves the directory is writable
+    sequence.write_loader()
+    return sequence
