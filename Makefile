@@ -34,7 +34,7 @@ $(BLENDER_STAMP):
 	touch $(BLENDER_STAMP)
 
 demo: $(STAMP)
-	$(BIN)/wetcloth run --duration 90 --export out/demo/frames --csv out/demo/outputs.csv --plot out/demo/plot.png
+	$(BIN)/wetcloth demo
 
 test: $(STAMP) $(BLENDER_STAMP)
 	WETCLOTH_REQUIRE_BLENDER=1 $(BIN)/python -m pytest -q

@@ -11,6 +11,8 @@ from wetcloth.errors import BlowUpError, ParameterError
 #: Modules that each add one subcommand: ``add_parser(subparsers)`` sets ``func(args) -> int``.
 COMMAND_MODULES = (
     "wetcloth.commands.run",
+    "wetcloth.commands.build_fmu",
+    "wetcloth.commands.demo",
     "wetcloth.commands.batch",
 )
 

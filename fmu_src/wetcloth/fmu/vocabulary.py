@@ -1,0 +1,170 @@
+"""The FMU's variables, generated from the ``Scene`` fields: one vocabulary for scene files and FMI.
+
+Every ``Scene`` field becomes an FMU variable of the same name: ints are FMI Integer, strings
+String, floats Real; fields whose metadata says ``fmu="input"`` are continuous Real inputs, the
+others fixed parameters.  Unit, description, start value and range come from the field metadata,
+so parameters added to the Scene later appear in the FMU without touching this package.
+Two FMU-only parameters (``mesh_output_dir``, ``mesh_format``) and the six outputs of
+``wetcloth.OUTPUT_NAMES`` complete the interface.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+from dataclasses import dataclass
+from typing import Any, Iterable
+
+from wetcloth.scene import INPUT, PARAMETERS, describe_range
+from wetcloth.simulation import OUTPUT_NAMES
+
+#: Model name and FMI model identifier (binary and FMU file name).
+MODEL_NAME = "WetCloth"
+
+#: Mesh formats the unit can write at every communication point.
+MESH_FORMATS = ("ply", "obj")
+
+#: Units and meanings of the outputs (MODEL.md section 7, INTERFACE.md), in ``OUTPUT_NAMES`` order.
+OUTPUTS = {
+    "centroid_x": ("m", "mass-weighted mean particle position, x"),
+    "centroid_y": ("m", "mass-weighted mean particle position, y"),
+    "centroid_z": ("m", "mass-weighted mean particle position, z (z is up)"),
+    "depth": ("m", "water_level - centroid_z; positive below the surface"),
+    "wet_mass": ("kg", "dry mass plus absorbed water"),
+    "water_mass": ("kg", "absorbed water"),
+}
+
+
+@dataclass(frozen=True)
+class VariableSpec:
+    """One FMU variable: FMI type ('Real', 'Integer', 'String'), causality, variability, start and range."""
+
+    name: str
+    type: str
+    causality: str  # "input", "parameter" or "output"
+    variability: str  # "continuous" or "fixed"
+    description: str
+    unit: str = "-"  # the Scene's unit text; "-" is dimensionless (no FMI unit)
+    start: Any = None  # None for outputs (initial="calculated")
+    min: float | int | None = None
+    max: float | int | None = None
+    scene: bool = True  # a Scene field (else an FMU-only parameter or an output)
+
+    @property
+    def initial(self) -> str | None:
+        return {"parameter": "exact", "output": "calculated"}.get(self.causality)
+
+
+def _fmi_type(f: dataclasses.Field) -> str:
+    kind = f.type if isinstance(f.type, str) else f.type.__name__
+    try:
+        return {"float": "Real", "int": "Integer", "str": "String"}[kind]
+    except KeyError:
+        raise TypeError(f"Scene field {f.name!r} has type {kind!r}; the FMU maps only float, int and str") from None
+
+
+def scene_spec(f: dataclasses.Field) -> VariableSpec:
+    """The FMU variable of one Scene field, from its metadata."""
+    md = f.metadata
+    fmi_type = _fmi_type(f)
+    is_input = md["fmu"] == INPUT
+    if is_input and fmi_type != "Real":
+        raise TypeError(f"Scene field {f.name!r} is an FMU input but not a float; FMU inputs are continuous Reals")
+    numeric = fmi_type != "String"
+    return VariableSpec(
+        name=f.name,
+        type=fmi_type,
+        causality="input" if is_input else "parameter",
+        variability="continuous" if is_input else "fixed",
+        description=f"{md['doc']} (allowed: {describe_range(f)})",
+        unit=md["unit"],
+        start=f.default,
+        min=md["lo"] if numeric else None,
+        max=md["hi"] if numeric else None,
+    )
+
+
+def variable_specs(fields: Iterable[dataclasses.Field] | None = None) -> list[VariableSpec]:
+    """All FMU variables in value-reference order: Scene fields, mesh parameters, outputs."""
+    fields = PARAMETERS.values() if fields is None else fields
+    specs = [scene_spec(f) for f in fields]
+    specs += [
+        VariableSpec("mesh_output_dir", "String", "parameter", "fixed",
+                     "folder for one mesh frame per communication point; empty = no meshes", start="", scene=False),
+        VariableSpec("mesh_format", "String", "parameter", "fixed",
+                     "mesh format of the frames (allowed: one of 'ply', 'obj')", start="ply", scene=False),
+    ]
+    if tuple(OUTPUTS) != tuple(OUTPUT_NAMES):
+        raise RuntimeError(f"wetcloth.OUTPUT_NAMES {OUTPUT_NAMES} and the FMU's outputs {tuple(OUTPUTS)} differ")
+    specs += [VariableSpec(n, "Real", "output", "continuous", doc, unit=u, scene=False) for n, (u, doc) in OUTPUTS.items()]
+    return specs
+
+
+# ----------------------------------------------------------------------------------- units
+#: SI base-unit exponents (and factor to SI) of the unit symbols scene metadata may use.
+_SYMBOLS: dict[str, tuple[dict[str, int], float]] = {
+    "m": ({"m": 1}, 1.0),
+    "kg": ({"kg": 1}, 1.0),
+    "g": ({"kg": 1}, 1e-3),
+    "s": ({"s": 1}, 1.0),
+    "K": ({"K": 1}, 1.0),
+    "mol": ({"mol": 1}, 1.0),
+    "A": ({"A": 1}, 1.0),
+    "N": ({"kg": 1, "m": 1, "s": -2}, 1.0),
+    "Pa": ({"kg": 1, "m": -1, "s": -2}, 1.0),
+    "J": ({"kg": 1, "m": 2, "s": -2}, 1.0),
+    "W": ({"kg": 1, "m": 2, "s": -3}, 1.0),
+    "rad": ({"rad": 1}, 1.0),
+    "deg": ({"rad": 1}, math.pi / 180.0),
+}
+_FACTOR = re.compile(r"^([A-Za-z]+)(-?\d+)?$")
+
+
+@dataclass(frozen=True)
+class Unit:
+    """An FMI unit: its name (Modelica syntax) and SI base-unit exponents and factor."""
+
+    name: str
+    exponents: tuple[tuple[str, int], ...]
+    factor: float = 1.0
+
+
+def fmi_unit_name(unit: str) -> str | None:
+    """The FMI/Modelica name of a scene unit ('N s/m' -> 'N.s/m'); None for dimensionless '-'."""
+    if unit in ("-", ""):
+        return None
+    return ".".join(unit.split())
+
+
+def parse_unit(unit: str) -> Unit:
+    """Base-unit exponents of a scene unit such as 'kg/m3', 'N s/m', '1/s' or 'deg'."""
+    numerator, _, denominator = unit.partition("/")
+    exponents: dict[str, int] = {}
+    factor = 1.0
+    for sign, part in ((1, numerator), (-1, denominator)):
+        for token in part.replace(".", " ").split():
+            if token == "1":
+                continue
+            match = _FACTOR.match(token)
+            if not match or match.group(1) not in _SYMBOLS:
+                raise ValueError(f"unit {unit!r}: unknown symbol {token!r}; known: {', '.join(_SYMBOLS)}")
+            power = sign * int(match.group(2) or 1)
+            base, scale = _SYMBOLS[match.group(1)]
+            for key, exp in base.items():
+                exponents[key] = exponents.get(key, 0) + exp * power
+            factor *= scale**power
+    return Unit(fmi_unit_name(unit), tuple((k, v) for k, v in exponents.items() if v), factor)
+
+
+def units_of(specs: Iterable[VariableSpec]) -> list[Unit]:
+    """The distinct FMI units the variables use, in order of first use."""
+    seen: dict[str, Unit] = {}
+    for spec in specs:
+        name = fmi_unit_name(spec.unit)
+        if spec.type == "Real" and name is not None and name not in seen:
+            try:
+                seen[name] = parse_unit(spec.unit)
+            except ValueError as exc:
+                raise ValueError(f"variable {spec.name!r}: {exc}") from None
+    return list(seen.values())
