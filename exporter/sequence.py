@@ -171,13 +171,12 @@ class FrameSequence:
         if self.closed:
             raise ExportError(f"the frame sequence in {self.directory} is closed")
         triangles, uv = self._topology()
+        count = len(np.asarray(positions))
+        if count != len(uv):
+            raise ExportError(f"frame {self.frame_count + 1} has {count} vertices, the cloth {len(uv)}: "
+                              "the topology is fixed")
         frame = make_frame(positions, wetness, triangles, uv)
-        shape = (frame.vertex_count, len(frame.triangles))
-        if self._shape is None:
-            self._shape = shape
-        elif shape != self._shape:
-            raise ExportError(f"frame {self.frame_count + 1} has {shape[0]} vertices and {shape[1]} faces, "
-                              f"the sequence {self._shape[0]} and {self._shape[1]}: the topology is fixed")
+        self._shape = (frame.vertex_count, len(frame.triangles))
         number = self.frame_count + 1
         path = self.frame_path(number)
         if self._usd is not None:
