@@ -1,0 +1,202 @@
+"""WetCloth.fmu as built: a model description fmpy accepts without complaint, generated from Scene."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import subprocess
+import sys
+import zipfile
+from xml.etree import ElementTree
+
+import pytest
+from fmpy import read_model_description
+from fmpy.validation import validate_fmu
+from test_fmu_support import built_fmu
+
+import wetcloth
+from wetcloth.fmu.description import extend_model_description, make_variable
+from wetcloth.fmu.vocabulary import OUTPUTS, fmi_unit_name, parse_unit, variable_specs
+from wetcloth.scene import INPUT, PARAMETERS, describe_range, read_scene_file
+from wetcloth.simulation import OUTPUT_NAMES
+
+
+@pytest.fixture(scope="module")
+def fmu():
+    return built_fmu()
+
+
+@pytest.fixture(scope="module")
+def md(fmu):
+    return read_model_description(str(fmu))
+
+
+def test_fmpy_validation_reports_no_problems(fmu):
+    assert validate_fmu(str(fmu)) == []
+
+
+def test_every_scene_field_is_a_variable_with_its_metadata(md):
+    variables = {v.name: v for v in md.modelVariables}
+    for name, f in PARAMETERS.items():
+        v = variables[name]
+        meta = f.metadata
+        assert v.type == {"float": "Real", "int": "Integer", "str": "String"}[f.type], name
+        if meta["fmu"] == INPUT:
+            assert (v.causality, v.variability) == ("input", "continuous"), name
+        else:
+            assert (v.causality, v.variability, v.initial) == ("parameter", "fixed", "exact"), name
+        start = v.start if v.type == "String" else float(v.start)
+        assert start == f.default, name
+        assert v.unit == fmi_unit_name(meta["unit"]) if v.type == "Real" else v.unit is None, name
+        assert meta["doc"] in v.description and describe_range(f) in v.description, name
+        if v.type != "String":
+            assert float(v.min) == meta["lo"] and float(v.max) == meta["hi"], name
+
+
+def test_outputs_and_mesh_parameters(md):
+    variables = {v.name: v for v in md.modelVariables}
+    for name in OUTPUT_NAMES:
+        v = variables[name]
+        assert (v.type, v.causality, v.variability, v.initial) == ("Real", "output", "continuous", "calculated")
+        assert v.unit == OUTPUTS[name][0]
+    assert [u.variable.name for u in md.outputs] == list(OUTPUT_NAMES)
+    assert sorted(u.variable.name for u in md.initialUnknowns) == sorted(OUTPUT_NAMES)
+    depth = next(u for u in md.outputs if u.variable.name == "depth")
+    assert [d.name for d in depth.dependencies] == ["water_level"]  # direct feedthrough, nothing else
+    for name, start in (("mesh_output_dir", ""), ("mesh_format", "ply")):
+        v = variables[name]
+        assert (v.type, v.causality, v.variability, v.start) == ("String", "parameter", "fixed", start)
+    assert len(md.modelVariables) == len(PARAMETERS) + 2 + len(OUTPUT_NAMES)
+
+
+def test_units_carry_si_base_exponents(md):
+    units = {u.name: u for u in md.unitDefinitions}
+    assert {fmi_unit_name(f.metadata["unit"]) for f in PARAMETERS.values() if f.type == "float"} - {None} <= set(units)
+    expected = {"N.s/m": {"kg": 1, "s": -1}, "kg/m3": {"kg": 1, "m": -3}, "Pa.s": {"kg": 1, "m": -1, "s": -1},
+                "1/s": {"s": -1}, "kg/kg": {}}
+    for name, exponents in expected.items():
+        base = units[name].baseUnit
+        for key in ("kg", "m", "s", "A", "K", "mol", "cd", "rad"):
+            assert getattr(base, key) == exponents.get(key, 0), (name, key)
+    assert math.isclose(units["deg"].baseUnit.factor, math.pi / 180) and units["deg"].baseUnit.rad == 1
+
+
+def test_capabilities_and_default_experiment(md):
+    cs = md.coSimulation
+    assert md.fmiVersion == "2.0" and md.modelName == "WetCloth" and cs.modelIdentifier == "WetCloth"
+    assert cs.canGetAndSetFMUstate and cs.canSerializeFMUstate and cs.canHandleVariableCommunicationStepSize
+    assert not cs.canBeInstantiatedOnlyOncePerProcess
+    run = read_scene_file(None)["run"]
+    assert float(md.defaultExperiment.stopTime) == run["duration"]
+    assert math.isclose(float(md.defaultExperiment.stepSize), 1.0 / run["fps"])
+
+
+def test_archive_holds_documentation_icon_and_bundled_wetcloth(fmu):
+    with zipfile.ZipFile(fmu) as archive:
+        names = set(archive.namelist())
+        doc = archive.read("documentation/index.html").decode()
+        icon = archive.read("model.png")
+        slave_module = archive.read("resources/slavemodule.txt").decode().strip()
+    assert slave_module == "wetcloth_fmu_slave" and "resources/wetcloth_fmu_slave.py" in names
+    for name in list(PARAMETERS) + list(OUTPUT_NAMES) + ["mesh_output_dir", "mesh_format"]:
+        assert f"<td>{name}</td>" in doc, name
+    assert "numba" in doc and "interpreter" in doc  # what the unit needs to run
+    assert icon.startswith(b"\x89PNG\r\n\x1a\n")
+    for path in ("resources/wetcloth/simulation.py", "resources/wetcloth/presets/towel.toml",
+                 "resources/wetcloth/exporter/__init__.py", "resources/wetcloth/fmu/vocabulary.py",
+                 "binaries/linux64/WetCloth.so"):
+        assert path in names, path
+    assert not any("__pycache__" in n or n.endswith(".fmu") for n in names)
+
+
+def test_new_scene_fields_become_variables_without_code_changes():
+    """Fields the lead adds later (here made up) appear with their metadata, type and causality."""
+
+    def field(name, default, type_, **meta):
+        f = dataclasses.field(default=default, metadata=dict(
+            unit="-", doc=name, lo=None, hi=None, lo_open=False, choices=(), fmu="parameter") | meta)
+        f.name, f.type = name, type_
+        return f
+
+    fields = list(PARAMETERS.values()) + [
+        field("current_x", 0.0, "float", unit="m/s", doc="water current along x", lo=-10.0, hi=10.0, fmu="input"),
+        field("wicking_rate", 0.0, "float", unit="m2/s", doc="diffusion of water in the fabric", lo=0.0, hi=1.0),
+        field("layers", 1, "int", lo=1, hi=8),
+        field("weave", "plain", "str", choices=("plain", "terry")),
+    ]
+    specs = {s.name: s for s in variable_specs(fields)}
+    assert (specs["current_x"].causality, specs["current_x"].type, specs["current_x"].unit) == ("input", "Real", "m/s")
+    assert (specs["wicking_rate"].causality, specs["wicking_rate"].min, specs["wicking_rate"].max) == ("parameter", 0.0, 1.0)
+    assert (specs["layers"].type, specs["weave"].type, specs["weave"].start) == ("Integer", "String", "plain")
+    assert "'plain', 'terry'" in specs["weave"].description
+    # Their units get definitions too.
+    root = ElementTree.Element("fmiModelDescription")
+    ElementTree.SubElement(root, "CoSimulation")
+    ElementTree.SubElement(ElementTree.SubElement(root, "ModelStructure"), "Outputs")
+    ordered = variable_specs(fields)
+    extend_model_description(root, ordered)
+    units = {u.get("name"): u.find("BaseUnit").attrib for u in root.iter("Unit")}
+    assert units["m/s"] == {"m": "1", "s": "-1"} and units["m2/s"] == {"m": "2", "s": "-1"}
+    real = make_variable(specs["current_x"], lambda: 0.0, None).to_xml()[0]
+    assert real.attrib == {"unit": "m/s", "min": "-10.0", "max": "10.0"}
+
+
+def test_unknown_unit_symbol_is_refused_by_name():
+    with pytest.raises(ValueError, match="'furlong'"):
+        parse_unit("furlong/s")
+
+
+def test_build_fmu_command_writes_a_valid_unit(tmp_path):
+    out = tmp_path / "sub" / "Custom.fmu"
+    done = subprocess.run([sys.executable, "-m", "wetcloth.cli", "build-fmu", "--out", str(out)],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert str(out) in done.stdout and validate_fmu(str(out)) == []
+
+
+CHILD_BUNDLED = r"""
+import json, sys
+# A host without wetcloth installed: drop the editable install's finder and path entries.
+sys.meta_path[:] = [f for f in sys.meta_path if "editable" not in getattr(f, "__module__", "").lower()]
+sys.path[:] = [p for p in sys.path if "fmu_src" not in p]
+import fmpy
+res = fmpy.simulate_fmu(sys.argv[1], stop_time=0.2, output_interval=0.1, start_values={"nx": 5, "ny": 5})
+wetcloth = sys.modules["wetcloth"]
+print(json.dumps({"file": wetcloth.__file__, "depth": float(res["depth"][-1])}))
+"""
+
+
+def test_unit_runs_its_bundled_wetcloth_where_none_is_installed(fmu, tmp_path):
+    """A Python with numpy and numba but no wetcloth runs the copy inside the FMU."""
+    done = subprocess.run([sys.executable, "-c", CHILD_BUNDLED, str(fmu)], capture_output=True, text=True,
+                          timeout=300, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr[-3000:]
+    result = __import__("json").loads(done.stdout.strip().splitlines()[-1])
+    assert "/resources/wetcloth/" in result["file"]
+    sim = wetcloth.Simulation(wetcloth.Scene(nx=5, ny=5))
+    sim.advance(0.1)
+    sim.advance(0.1)
+    assert math.isclose(result["depth"], sim.outputs()["depth"], rel_tol=1e-12, abs_tol=1e-15)
+
+
+CHILD_MISMATCH = r"""
+import json, shutil, sys, fmpy
+from pathlib import Path
+directory = Path(fmpy.extract(sys.argv[1]))
+manifest = directory / "resources" / "wetcloth_fmu_manifest.json"
+data = json.loads(manifest.read_text())
+data["variables"].append("made_up_variable")
+manifest.write_text(json.dumps(data))
+try:
+    fmpy.simulate_fmu(str(directory), stop_time=0.1, debug_logging=True)
+except Exception as exc:
+    print("RAISED", exc)
+"""
+
+
+def test_unit_refuses_a_wetcloth_whose_variables_differ(fmu, tmp_path):
+    done = subprocess.run([sys.executable, "-c", CHILD_MISMATCH, str(fmu)], capture_output=True, text=True,
+                          timeout=300, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert "RAISED" in done.stdout
+    assert "rebuild it with `wetcloth build-fmu`" in done.stdout + done.stderr

@@ -1,0 +1,180 @@
+"""Co-simulating WetCloth.fmu: equal to a direct Simulation, inputs act from their communication point,
+any communication step is accurate, MODEL.md section 8 holds through the unit, instances are separate."""
+
+from __future__ import annotations
+
+import math
+
+import fmpy
+import numpy as np
+import pytest
+from fmpy.simulation import Input
+from test_fmu_support import SMALL, Unit, assert_same_outputs, built_fmu
+
+import wetcloth
+from wetcloth.simulation import OUTPUT_NAMES
+
+
+@pytest.fixture(scope="module")
+def fmu():
+    return str(built_fmu())
+
+
+def direct_run(scene_values: dict, times: np.ndarray, signal: np.ndarray | None = None) -> list[dict]:
+    """What fmpy does, by hand: inputs at t0 before initializing; then at each communication point
+    apply the inputs, advance to the next point and record (so depth sees the previous point's level)."""
+    sim = wetcloth.Simulation(wetcloth.Scene(**scene_values))
+
+    def apply(t):
+        if signal is not None:
+            names = signal.dtype.names[1:]
+            values, _ = Input.interpolate(time=t, t=signal["time"], table=np.array([signal[n] for n in names]),
+                                          after_event=True)
+            sim.set_inputs(**dict(zip(names, map(float, values))))
+
+    apply(times[0])
+    rows = [sim.outputs()]
+    for previous, t in zip(times[:-1], times[1:]):
+        apply(previous)
+        sim.advance(t - sim.time)
+        rows.append(sim.outputs())
+    return rows
+
+
+def test_simulate_fmu_with_varying_inputs_equals_a_direct_run(fmu):
+    """fmpy with output_interval and time-varying inputs gives the direct simulation's numbers."""
+    signal = np.array([(0.0, 0.0, 0.15), (1.0, 0.03, 0.15), (1.0, 0.03, 0.6), (2.0, 0.01, 0.6)],
+                      dtype=[("time", float), ("water_level", float), ("absorption_rate", float)])
+    result = fmpy.simulate_fmu(fmu, stop_time=2.0, output_interval=0.05, start_values=SMALL, input=signal)
+    assert len(result) == 41
+    expected = direct_run(SMALL, result["time"], signal)
+    for row, want in zip(result, expected):
+        # Same arithmetic in the same order: equal to round-off (in practice bit for bit).
+        assert_same_outputs({n: row[n] for n in OUTPUT_NAMES}, want)
+    assert result["water_mass"][-1] > 0 and np.ptp(result["depth"]) > 0.05  # the run did something
+
+
+def test_a_rising_water_level_carries_a_floating_cloth_up(fmu):
+    """No absorption, lighter than water: the cloth floats at depth t (s - 1/2) and rises with the water."""
+    thickness, density = 0.002, 0.45
+    s = density / (1000.0 * thickness)  # MODEL.md 8: submerged fraction of a floating cloth
+    rest_depth = thickness * (s - 0.5)
+    values = SMALL | dict(absorption_capacity=0.0, initial_tilt=0.0, initial_height=-rest_depth,
+                          thickness=thickness, areal_density=density)
+    rise = 0.04  # m, from t = 0.5 s to 2.5 s
+    signal = np.array([(0.0, 0.0), (0.5, 0.0), (2.5, rise), (4.0, rise)],
+                      dtype=[("time", float), ("water_level", float)])
+    result = fmpy.simulate_fmu(fmu, stop_time=4.0, output_interval=0.05, start_values=values, input=signal)
+    # It stays in the surface slab all along (0 < s < 1), never left behind under the rising water.
+    assert np.all(np.abs(result["depth"]) < thickness / 2)
+    # Before the rise it rests; once settled after it, it floats at the analytic depth, 4 cm higher.
+    before, after = result[result["time"] <= 0.5], result[result["time"] >= 3.5]
+    assert np.allclose(before["depth"], rest_depth, atol=1e-9)
+    assert np.allclose(after["depth"], rest_depth, atol=1e-6)  # settled to well below the slab's 1 mm
+    assert math.isclose(after["centroid_z"][-1] - before["centroid_z"][-1], rise, abs_tol=1e-6)
+    # Inputs hold over a step and act from the point they are set at: the first raised level is
+    # applied at t = 0.55 s (1 mm), so the cloth is still at rest then and has risen by t = 0.6 s.
+    z = dict(zip(np.round(result["time"], 9), result["centroid_z"]))
+    assert abs(z[0.55] - z[0.5]) < 1e-9
+    assert z[0.6] - z[0.55] > 0.1 * 0.001  # a good part of the 1 mm within the 0.05 s step
+
+
+def heavy_submerged(**overrides) -> dict:
+    """MODEL.md 8, first case: a heavy flat cloth under water from t = 0 (every particle touches water)."""
+    return SMALL | dict(areal_density=5.0, thickness=0.002, initial_height=-0.2, initial_tilt=0.0,
+                        floor_level=-5.0, absorption_capacity=3.8, absorption_rate=0.15) | overrides
+
+
+def analytic_wet_mass(m0, capacity, rate, t):
+    return m0 * (1.0 + capacity * (1.0 - np.exp(-rate * t / capacity)))
+
+
+@pytest.mark.parametrize("step", [0.1, 1.0])
+def test_wet_mass_of_a_submerged_cloth_is_analytic_through_the_fmu(fmu, step):
+    values = heavy_submerged()
+    result = fmpy.simulate_fmu(fmu, stop_time=2.0, output_interval=step, start_values=values)
+    m0 = values["areal_density"] * 0.5 * 0.7
+    expected = analytic_wet_mass(m0, 3.8, 0.15, result["time"])
+    assert np.all(result["depth"] > 0.5 * values["thickness"])  # fully under water all along
+    # Exact exponential update per internal step: only rounding, a few hundred 1e-16 errors.
+    np.testing.assert_allclose(result["wet_mass"], expected, rtol=1e-10)
+
+
+def test_an_input_changed_at_a_communication_point_acts_from_that_point():
+    """absorption_rate jumps at t = 1 s: the Buras law restarts from q(1) with the new rate, exactly."""
+    values = heavy_submerged()
+    m0, capacity, rate1, rate2 = values["areal_density"] * 0.35, 3.8, 0.15, 0.6
+    unit = Unit(values)
+    try:
+        times, masses = [0.0], [unit.get("wet_mass")]
+        for k in range(8):
+            if k == 4:
+                assert unit.set(absorption_rate=rate2) == 0
+            assert unit.step(0.25) == 0
+            times.append(unit.time)
+            masses.append(unit.get("wet_mass"))
+    finally:
+        unit.close()
+    times, masses = np.array(times), np.array(masses)
+    q1 = m0 * capacity * (1.0 - math.exp(-rate1 * 1.0 / capacity))
+    q = np.where(times <= 1.0, m0 * capacity * (1.0 - np.exp(-rate1 * times / capacity)),
+                 m0 * capacity - (m0 * capacity - q1) * np.exp(-rate2 * (times - 1.0) / capacity))
+    np.testing.assert_allclose(masses, m0 + q, rtol=1e-10)
+
+
+def test_any_communication_step_is_as_accurate_as_a_fine_one(fmu):
+    """The unit sub-steps as the integrator needs: a 1 s communication step adds no error of its own.
+
+    The error of a run is set by the scene's ``tolerance`` (the integrator's error control); the
+    communication step must change the result by far less than that error (here under a tenth).
+    """
+    duration = 3.0
+    reference = wetcloth.Simulation(wetcloth.Scene(**SMALL, tolerance=1e-6))
+    reference.advance(duration)
+    ref = reference.outputs()
+    finals = {}
+    for step in (0.01, 1.0 / 30.0, 0.5, 1.0):
+        result = fmpy.simulate_fmu(fmu, stop_time=duration, output_interval=step, start_values=SMALL)
+        assert math.isclose(result["time"][-1], duration)
+        finals[step] = result[-1]
+    names = ("centroid_x", "centroid_y", "centroid_z")
+    integrator_error = max(abs(finals[0.01][n] - ref[n]) for n in names)
+    assert integrator_error > 0
+    for step, row in finals.items():
+        assert max(abs(row[n] - finals[0.01][n]) for n in names) < 0.1 * integrator_error, step
+
+
+def test_two_instances_in_one_process_keep_separate_states():
+    a_values = SMALL | {"water_level": 0.0}
+    b_values = {"nx": 7, "ny": 11, "water_level": 0.03, "initial_tilt": 30.0}
+    a, b = Unit(a_values, name="a"), Unit(b_values, name="b")
+    sim_a, sim_b = wetcloth.Simulation(wetcloth.Scene(**a_values)), wetcloth.Simulation(wetcloth.Scene(**b_values))
+    try:
+        for k in range(6):
+            assert a.step(0.1) == 0
+            sim_a.advance(0.1)
+            if k % 2:  # b steps half as often, with twice the step
+                assert b.step(0.2) == 0
+                sim_b.advance(0.2)
+            if k == 3:
+                a.set(water_level=0.01)
+                sim_a.set_inputs(water_level=0.01)
+            assert_same_outputs(a.outputs(), sim_a.outputs())
+            assert_same_outputs(b.outputs(), sim_b.outputs())
+        assert a.get("nx") == 9 and b.get("nx") == 7
+    finally:
+        a.close()
+        b.close()
+
+
+def test_depth_follows_a_new_water_level_at_once():
+    """depth = water_level - centroid_z is direct feedthrough (as ModelStructure declares)."""
+    unit = Unit(SMALL)
+    try:
+        unit.step(0.2)
+        z = unit.get("centroid_z")
+        unit.set(water_level=0.05)
+        assert unit.get("depth") == pytest.approx(0.05 - z, abs=1e-15)
+        assert unit.get("centroid_z") == z  # the state itself moves only in a step
+    finally:
+        unit.close()

@@ -1,0 +1,146 @@
+"""Shared helpers of the WetCloth.fmu tests: one FMU build per test process, an fmpy instance driver.
+
+Importable from the other ``test_fmu_*`` files (pytest puts ``tests/`` on ``sys.path``); it also
+checks that the helpers themselves drive the unit.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from ctypes import byref
+from pathlib import Path
+
+import numpy as np
+
+import wetcloth
+from wetcloth.simulation import OUTPUT_NAMES
+
+#: Small, fast scene used throughout: a 9 x 9 cloth (MODEL.md's coarsest refinement level).
+SMALL = {"nx": 9, "ny": 9}
+
+_BUILT: dict[str, Path] = {}
+
+
+def built_fmu() -> Path:
+    """WetCloth.fmu built from the current sources, once per test process."""
+    if "fmu" not in _BUILT:
+        from wetcloth.fmu.builder import build_fmu
+
+        folder = Path(tempfile.mkdtemp(prefix="wetcloth_fmu_test_"))
+        _BUILT["fmu"] = build_fmu(folder / "WetCloth.fmu")
+    return _BUILT["fmu"]
+
+
+def extracted_fmu() -> tuple[Path, object]:
+    """The unit extracted once per process, and its model description (fmpy)."""
+    if "dir" not in _BUILT:
+        from fmpy import extract, read_model_description
+
+        _BUILT["dir"] = Path(extract(str(built_fmu())))
+        _BUILT["md"] = read_model_description(str(built_fmu()))
+    return _BUILT["dir"], _BUILT["md"]
+
+
+class Unit:
+    """One WetCloth instance driven through fmpy's FMU2Slave, with its log messages collected.
+
+    ``Unit(parameters)`` instantiates with logging on, sets the parameters and initializes;
+    ``step(h)`` returns the FMI status (0 ok, 2 discard, ...), never raising on a bad status.
+    """
+
+    def __init__(self, values: dict | None = None, name: str = "unit", initialize: bool = True):
+        from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+        from fmpy import calloc, free
+
+        directory, md = extracted_fmu()
+        self.md = md
+        self.vars = {v.name: v for v in md.modelVariables}
+        self.messages: list[tuple[int, str]] = []
+
+        def logger(env, instance, status, category, message):
+            self.messages.append((int(status), message.decode("utf-8")))
+
+        self._callbacks = fmi2CallbackFunctions()
+        self._callbacks.logger = fmi2CallbackLoggerTYPE(logger)
+        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=str(directory),
+                             modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+        self.fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
+        self.time = 0.0
+        self.initialized = False
+        if initialize:
+            self.fmu.setupExperiment(startTime=0.0)
+            self.fmu.enterInitializationMode()
+            self.set(**(values or {}))
+            self.fmu.exitInitializationMode()
+            self.initialized = True
+
+    def _call(self, function, *args) -> int:
+        """Call a raw fmi2 function; its status (fmpy's wrappers raise on statuses above warning)."""
+        from fmpy.fmi1 import FMICallException
+
+        try:
+            function(*args)
+            return 0
+        except FMICallException as exc:
+            return int(exc.status)
+
+    def set(self, **values) -> int:
+        status = 0
+        for name, value in values.items():
+            v = self.vars[name]
+            setter = {"Real": self.fmu.setReal, "Integer": self.fmu.setInteger, "String": self.fmu.setString}[v.type]
+            status = max(status, self._call(setter, [v.valueReference], [value]))
+        return status
+
+    def get(self, *names):
+        values = []
+        for name in names:
+            v = self.vars[name]
+            getter = {"Real": self.fmu.getReal, "Integer": self.fmu.getInteger, "String": self.fmu.getString}[v.type]
+            value = getter([v.valueReference])[0]
+            values.append(value.decode() if isinstance(value, bytes) else value)
+        return values[0] if len(values) == 1 else values
+
+    def outputs(self) -> dict[str, float]:
+        return dict(zip(OUTPUT_NAMES, self.fmu.getReal([self.vars[n].valueReference for n in OUTPUT_NAMES])))
+
+    def step(self, h: float) -> int:
+        status = self._call(self.fmu.doStep, self.time, h)
+        if status == 0:
+            self.time += h
+        return status
+
+    def errors(self) -> list[str]:
+        return [m for s, m in self.messages if s >= 3]
+
+    def close(self) -> None:
+        self._call(self.fmu.terminate)
+        self.fmu.freeInstance()
+
+
+def direct_outputs(sim: wetcloth.Simulation) -> dict[str, float]:
+    return sim.outputs()
+
+
+def assert_same_outputs(a: dict, b: dict, rtol: float = 1e-12, atol: float = 1e-15) -> None:
+    """Equal to round-off: the unit runs the same arithmetic as the direct simulation."""
+    for name in OUTPUT_NAMES:
+        assert math.isclose(a[name], b[name], rel_tol=rtol, abs_tol=atol), (name, a[name], b[name])
+
+
+def test_unit_helper_reports_time_and_outputs():
+    unit = Unit(SMALL)
+    try:
+        before = unit.outputs()
+        sim = wetcloth.Simulation(wetcloth.Scene(**SMALL))
+        assert_same_outputs(before, sim.outputs())  # initial outputs are the scene's initial state
+        assert unit.step(0.1) == 0 and unit.time == 0.1
+        sim.advance(0.1)
+        assert_same_outputs(unit.outputs(), sim.outputs())
+        assert all(np.isfinite(list(unit.outputs().values())))
+    finally:
+        unit.close()
