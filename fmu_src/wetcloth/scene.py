@@ -83,7 +83,7 @@ class Scene:
     floor_friction: float = _param(0.5, "-", "Coulomb friction coefficient of the floor", 0.0, 10.0)
     pinned_edge: str = _param("none", "-", "edge held fixed in space: none, x_min, x_max, y_min, y_max", choices=EDGES)
     # --- time integration
-    integrator: str = _param("implicit_euler", "-", "time integrator; 'explicit_euler' is the thesis scheme", choices=INTEGRATORS)
+    integrator: str = _param("symplectic_euler", "-", "time integrator; 'explicit_euler' is the thesis scheme", choices=INTEGRATORS)
     tolerance: float = _param(
         1e-4, "-", "local position error per step relative to the cloth size; 0 = fixed steps", 0.0, 1.0
     )
