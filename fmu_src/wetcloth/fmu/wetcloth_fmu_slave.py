@@ -316,7 +316,10 @@ class WetCloth(Fmi2Slave):
 
     @staticmethod
     def _fmu_state_from_bytes(data: bytes) -> dict:
-        state = pickle.loads(data)  # bytes come from this unit's own fmi2SerializeFMUstate
+        try:
+            state = pickle.loads(data)  # bytes come from this unit's own fmi2SerializeFMUstate
+        except Exception as exc:
+            raise ValueError(f"not a serialized WetCloth FMU state ({type(exc).__name__}: {exc})") from None
         if not isinstance(state, dict) or state.get("format") != STATE_FORMAT:
             raise ValueError(f"not a serialized WetCloth FMU state (expected format {STATE_FORMAT!r})")
         return state
