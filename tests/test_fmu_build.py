@@ -200,3 +200,20 @@ def test_unit_refuses_a_wetcloth_whose_variables_differ(fmu, tmp_path):
     assert done.returncode == 0, done.stderr[-3000:]
     assert "RAISED" in done.stdout
     assert "rebuild it with `wetcloth build-fmu`" in done.stdout + done.stderr
+
+
+def test_an_fmu_older_than_the_sources_is_stale(fmu, tmp_path):
+    import os
+    import shutil
+
+    from wetcloth.fmu.builder import is_stale, source_files
+
+    copy = tmp_path / "WetCloth.fmu"
+    shutil.copy(fmu, copy)
+    newest = max(p.stat().st_mtime for p in source_files())
+    os.utime(copy, (newest + 10, newest + 10))
+    assert not is_stale(copy)
+    os.utime(copy, (newest - 10, newest - 10))
+    assert is_stale(copy) and is_stale(tmp_path / "missing.fmu")
+    assert any(p.name == "towel.toml" for p in source_files())
+    assert any("exporter" in p.parts for p in source_files())

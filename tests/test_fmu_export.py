@@ -1,0 +1,100 @@
+"""Mesh frames from the FMU (one per communication point, through wetcloth.exporter) and the demo."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import fmpy
+import numpy as np
+import pytest
+from test_fmu_support import SMALL, Unit, built_fmu
+
+import wetcloth
+from wetcloth.fmu.cosim import read_frame
+from wetcloth.simulation import OUTPUT_NAMES
+
+#: PLY frames store positions as float32: ~6e-8 relative, under a micrometre for a cloth within 1 m.
+FLOAT32_M = 1e-6
+
+
+@pytest.fixture(scope="module")
+def fmu():
+    return str(built_fmu())
+
+
+def test_one_ply_frame_per_communication_point_matching_the_direct_run(fmu, tmp_path):
+    frames = tmp_path / "frames"
+    result = fmpy.simulate_fmu(fmu, stop_time=0.5, output_interval=0.1,
+                               start_values=SMALL | {"mesh_output_dir": str(frames)})
+    files = sorted(frames.glob("cloth_*.ply"))
+    assert [f.name for f in files] == [f"cloth_{k:04d}.ply" for k in range(1, len(result) + 1)]
+    sim = wetcloth.Simulation(wetcloth.Scene(**SMALL))
+    for k, path in enumerate(files):
+        if k:
+            sim.advance(result["time"][k] - sim.time)
+        positions, wetness, triangles = read_frame(path)
+        np.testing.assert_allclose(positions, sim.positions, atol=FLOAT32_M)
+        np.testing.assert_allclose(wetness, sim.wetness, atol=1e-6)
+        assert np.array_equal(triangles, sim.triangles)
+    manifest = json.loads((frames / "frames.json").read_text())  # written when the unit terminates
+    assert manifest["frame_count"] == len(result) and manifest["fps"] == pytest.approx(10.0)
+
+
+def test_obj_frames_and_a_rerun_replaces_the_old_frames(fmu, tmp_path):
+    frames = tmp_path / "frames"
+    values = SMALL | {"mesh_output_dir": str(frames), "mesh_format": "obj"}
+    fmpy.simulate_fmu(fmu, stop_time=0.3, output_interval=0.1, start_values=values)
+    fmpy.simulate_fmu(fmu, stop_time=0.1, output_interval=0.1, start_values=values)
+    assert sorted(f.name for f in frames.glob("cloth_*")) == ["cloth_0001.obj", "cloth_0002.obj"]
+
+
+def test_a_rolled_back_run_rewrites_its_frames(tmp_path):
+    frames = tmp_path / "frames"
+    unit = Unit(SMALL | {"mesh_output_dir": str(frames)})
+    try:
+        unit.step(0.1)
+        state = unit.fmu.getFMUstate()
+        saved_time = unit.time
+        unit.set(water_level=0.05)  # a path the master then abandons
+        unit.step(0.1)
+        unit.step(0.1)
+        unit.fmu.setFMUstate(state)
+        unit.fmu.freeFMUstate(state)
+        unit.time = saved_time
+        unit.step(0.1)
+    finally:
+        unit.close()
+    assert sorted(f.name for f in frames.glob("cloth_*.ply"))[:3] == [f"cloth_{k:04d}.ply" for k in (1, 2, 3)]
+    sim = wetcloth.Simulation(wetcloth.Scene(**SMALL))
+    sim.advance(0.1)
+    sim.advance(0.1)
+    positions, _, _ = read_frame(frames / "cloth_0003.ply")
+    np.testing.assert_allclose(positions, sim.positions, atol=FLOAT32_M)  # the rolled-back path's frame
+    assert json.loads((frames / "frames.json").read_text())["frame_count"] == 3
+
+
+def test_demo_command_writes_frames_csv_and_plot(fmu, tmp_path):
+    out = tmp_path / "demo"
+    done = subprocess.run([sys.executable, "-m", "wetcloth.cli", "demo", "--out", str(out), "--fmu", fmu,
+                           "--duration", "0.2", "--no-progress"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    header, *rows = (out / "outputs.csv").read_text().splitlines()
+    assert header.split(",") == ["time", *OUTPUT_NAMES]
+    fps = wetcloth.scene.read_scene_file(None)["run"]["fps"]
+    assert len(rows) == round(0.2 * fps) + 1 == len(list((out / "frames").glob("cloth_*.ply")))
+    assert (out / "plot.png").read_bytes().startswith(b"\x89PNG")
+    # The default towel, through the FMU, equals a direct run of the towel preset.
+    sim = wetcloth.Simulation(wetcloth.load_scene())
+    last = [float(v) for v in rows[-1].split(",")]
+    for _ in range(len(rows) - 1):
+        sim.advance(1.0 / fps)
+    np.testing.assert_allclose(last[1:], [sim.outputs()[n] for n in OUTPUT_NAMES], rtol=1e-9, atol=1e-12)
+
+
+def test_demo_builds_a_missing_fmu(tmp_path):
+    from wetcloth.fmu import demo
+
+    paths = demo(tmp_path / "demo", fmu=tmp_path / "models" / "WetCloth.fmu", duration=0.1, progress=False)
+    assert paths["fmu"].exists() and paths["csv"].exists()
