@@ -11,10 +11,10 @@ from wetcloth.batch.metrics import DEFAULT_METRICS, METRICS, compute_metrics, fi
 from wetcloth.batch.plots import heatmap_data, line_data, plot
 from wetcloth.batch.results import read_table, write_csv, write_table
 from wetcloth.batch.runner import StudyReport, as_study, dask_client, run_study, study
-from wetcloth.batch.study import PlotSpec, Run, Study, StudyError, load_study, parse_plot_spec
+from wetcloth.batch.study import PlotSpec, Run, Study, StudyError, default_fmu_path, load_study, parse_plot_spec
 
 __all__ = [
     "DEFAULT_METRICS", "METRICS", "PlotSpec", "Run", "Study", "StudyError", "StudyReport", "as_study",
-    "compute_metrics", "dask_client", "execute", "first_crossing", "heatmap_data", "line_data", "load_study",
+    "compute_metrics", "dask_client", "default_fmu_path", "execute", "first_crossing", "heatmap_data", "line_data", "load_study",
     "parse_plot_spec", "plot", "read_table", "run_study", "study", "write_csv", "write_table",
 ]

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import argparse
+import sys
 from pathlib import Path
 
 ENGINES = ("python", "fmu")
@@ -45,17 +45,28 @@ def main(args) -> int:
         study = study.replace(engine=args.engine)
     if args.fmu is not None:
         study = study.replace(fmu=str(args.fmu))
+    if study.engine == "fmu" and not study.fmu:
+        from wetcloth.fmu.builder import build_fmu, is_stale
+
+        default = batch.default_fmu_path()
+        if is_stale(default):  # missing or older than wetcloth's sources: as 'wetcloth build-fmu' would
+            print(f"building {build_fmu(default)}")
     plot_specs = [batch.parse_plot_spec(text) for text in args.plot]
     study.check_plots(plot_specs)
     out = args.out if args.out is not None else Path("out/batch") / f"{study.name}.parquet"
-    report = batch.run_study(
-        study,
-        out=out,
-        scheduler=args.scheduler,
-        workers=args.workers,
-        progress=not args.no_progress,
-        retry_errors=args.retry_errors,
-    )
+    try:
+        report = batch.run_study(
+            study,
+            out=out,
+            scheduler=args.scheduler,
+            workers=args.workers,
+            progress=not args.no_progress,
+            retry_errors=args.retry_errors,
+        )
+    except KeyboardInterrupt:
+        print(f"wetcloth batch: interrupted; the finished runs are in {out}: run the same command again to resume",
+              file=sys.stderr)
+        return 130
     table = report.table
     print(report.summary())
     written = [str(out)]
