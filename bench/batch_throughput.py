@@ -1,7 +1,7 @@
 """Batch-study throughput (runs per minute) on a local Dask cluster of 1 and 2 worker processes.
 
     .venv/bin/python bench/batch_throughput.py                 # 16 runs, 17 x 17 towel, 30 s each
-    .venv/bin/python bench/batch_throughput.py --runs 8 --nx 9 --workers 1 2 --markdown
+    .venv/bin/python bench/batch_throughput.py --runs 8 --nx 9 --workers 1 2 --markdown --engine fmu
 
 For each worker count: start a local cluster (timed apart), warm every worker with one run
 (imports and numba's cached kernels), then time ``run_study`` over the whole study.  The
@@ -20,11 +20,11 @@ import time
 import numpy as np
 
 
-def make_study(runs: int, nx: int, duration: float):
+def make_study(runs: int, nx: int, duration: float, engine: str = "python"):
     from wetcloth.batch import Study
 
     rates = np.round(np.linspace(0.2, 2.0, runs), 6).tolist()  # one axis, every run a different scene
-    return Study.from_dict(dict(scene="thesis_fast", duration=duration, sample_rate=10.0,
+    return Study.from_dict(dict(scene="thesis_fast", duration=duration, sample_rate=10.0, engine=engine,
                                 base=dict(nx=nx, ny=nx), axes=dict(absorption_rate=rates)), name="throughput")
 
 
@@ -81,12 +81,20 @@ def main() -> None:
     parser.add_argument("--nx", type=int, default=17, help="grid nx = ny (default 17)")
     parser.add_argument("--duration", type=float, default=30.0, help="simulated s per run (default 30)")
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2], help="worker counts (default 1 2)")
+    parser.add_argument("--engine", choices=["python", "fmu"], default="python",
+                        help="python simulator (default) or models/WetCloth.fmu through fmpy (built if stale)")
     parser.add_argument("--repeat", type=int, default=1, help="time each setting this many times, keep the best")
     parser.add_argument("--markdown", action="store_true", help="print a Markdown table")
     args = parser.parse_args()
 
-    study = make_study(args.runs, args.nx, args.duration)
-    print(f"# {args.runs} runs of thesis_fast, {args.nx} x {args.nx} grid, {args.duration:g} s each; "
+    study = make_study(args.runs, args.nx, args.duration, args.engine)
+    if args.engine == "fmu":
+        from wetcloth.batch import default_fmu_path
+        from wetcloth.fmu.builder import build_fmu, is_stale
+
+        if is_stale(default_fmu_path()):
+            build_fmu(default_fmu_path())
+    print(f"# engine {args.engine}: {args.runs} runs of thesis_fast, {args.nx} x {args.nx} grid, {args.duration:g} s each; "
           f"{os.cpu_count()} cores, {platform.processor() or platform.machine()}; "
           f"load average before: {os.getloadavg()[0]:.2f}")
     base = serial(study, args.repeat)
