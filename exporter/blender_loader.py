@@ -7,10 +7,9 @@ It needs no add-on.  What it builds:
 
 * object ``<prefix>`` (e.g. ``cloth``): the cloth mesh with its UV map, smooth shaded, whose
   geometry-nodes modifier ``wetcloth sequence`` moves every vertex to the current frame's
-  position and stores the float attribute ``wetness`` (0 dry .. 1 saturated) and the colour
-  attribute ``color`` (the exporter's wetness colour map) on it;
+  position and stores the float attribute ``wetness`` (0 dry .. 1 saturated) on it;
 * object ``<prefix> trajectories`` (hidden): one curve per cloth vertex with a point per frame,
-  the cache the modifier reads (positions, ``wetness``, ``color``);
+  the cache the modifier reads (positions and ``wetness``; 16 bytes per vertex and frame);
 * material ``wetcloth wetness``: a Principled BSDF that darkens and turns glossier with ``wetness``;
 * the scene's frame range (1 .. frame count) and frame rate (the sequence's fps).
 
@@ -112,18 +111,28 @@ def srgb_from_linear(c):
 
 
 def wetness_from_colors(rgba_linear):
-    """Wetness (n,) from imported vertex colours (linear float RGBA): the nearest colour table entry."""
-    lut = np.asarray(SETTINGS["lut"], dtype=np.float64) / 255.0
-    srgb = srgb_from_linear(rgba_linear[:, :3].astype(np.float64))
-    distance = ((srgb[:, None, :] - lut[None, :, :]) ** 2).sum(axis=2)
-    return (distance.argmin(axis=1) / (len(lut) - 1)).astype(np.float32)
+    """Wetness (n,) from imported vertex colours (linear float RGBA): the index of the colour in the
+    exporter's table over its last index; a colour not in the table takes the nearest entry."""
+    lut = np.asarray(SETTINGS["lut"], dtype=np.int64)
+    rgb = np.rint(srgb_from_linear(rgba_linear[:, :3].astype(np.float64)) * 255.0).astype(np.int64)
+    lut_keys = (lut[:, 0] << 16) | (lut[:, 1] << 8) | lut[:, 2]
+    keys = (rgb[:, 0] << 16) | (rgb[:, 1] << 8) | rgb[:, 2]
+    order = np.argsort(lut_keys, kind="stable")  # equal colours: the lower (drier) entry first
+    sorted_keys = lut_keys[order]
+    at = np.clip(np.searchsorted(sorted_keys, keys), 0, len(lut) - 1)
+    index = order[at]
+    missing = sorted_keys[at] != keys
+    if missing.any():
+        distance = ((rgb[missing][:, None, :] - lut[None, :, :]) ** 2).sum(axis=2)
+        index[missing] = distance.argmin(axis=1)
+    return (index / (len(lut) - 1)).astype(np.float32)
 
 
 def read_frames(files):
-    """Positions (N, n, 3), wetness (N, n), colours (N, n, 4) of every frame, plus the first frame's
-    triangles (m, 3) and corner UVs (3 m, 2)."""
+    """Positions (N, n, 3) and wetness (N, n) of every frame, plus the first frame's triangles (m, 3)
+    and corner UVs (3 m, 2)."""
     count = len(files)
-    positions = wetness = colors = None
+    positions = wetness = None
     triangles = uv = None
     started = time.time()
     for k, path in enumerate(files):
@@ -133,7 +142,6 @@ def read_frames(files):
         if positions is None:
             positions = np.empty((count, n, 3), dtype=np.float32)
             wetness = np.empty((count, n), dtype=np.float32)
-            colors = np.empty((count, n, 4), dtype=np.float32)
             corners = np.empty(len(mesh.loops), dtype=np.int32)
             mesh.loops.foreach_get("vertex_index", corners)
             sizes = np.empty(len(mesh.polygons), dtype=np.int32)
@@ -151,31 +159,28 @@ def read_frames(files):
         mesh.vertices.foreach_get("co", co)
         positions[k] = co.reshape(n, 3)
         col = color_attribute(mesh)
-        colors[k] = read_float(col, n, 4) if col is not None else 1.0
         if "wetness" in mesh.attributes:
             wetness[k] = read_float(mesh.attributes["wetness"], n, 1)
         elif col is not None:
-            wetness[k] = wetness_from_colors(colors[k])
+            wetness[k] = wetness_from_colors(read_float(col, n, 4))
         else:
             raise RuntimeError(f"{path} has neither a wetness attribute nor vertex colours")
         bpy.data.objects.remove(ob)
         bpy.data.meshes.remove(mesh)
         if count > 50 and (k + 1) % max(1, count // 10) == 0:
             print(f"wetcloth: read {k + 1}/{count} frames ({time.time() - started:.1f} s)")
-    return positions, wetness, colors, triangles, uv
+    return positions, wetness, triangles, uv
 
 
 # ---------------------------------------------------------------------------- building the object
-def make_trajectories(name, positions, wetness, colors):
-    """A hidden curves object: one curve per vertex, point k = frame k (position, wetness, color)."""
+def make_trajectories(name, positions, wetness):
+    """A hidden curves object: one curve per vertex, point k = frame k (position, wetness)."""
     count, n, _ = positions.shape
     curves = bpy.data.hair_curves.new(name)
     curves.add_curves([count] * n)
     curves.position_data.foreach_set("vector", positions.transpose(1, 0, 2).ravel())
     wet = curves.attributes.new("wetness", "FLOAT", "POINT")
     wet.data.foreach_set("value", wetness.T.ravel())
-    col = curves.attributes.new("color", "FLOAT_COLOR", "POINT")
-    col.data.foreach_set("color", colors.transpose(1, 0, 2).ravel())
     ob = bpy.data.objects.new(name, curves)
     bpy.context.scene.collection.objects.link(ob)
     ob.hide_set(True)
@@ -238,7 +243,6 @@ def make_sequence_nodes(name, trajectories, frame_count, first_frame):
     fields = [
         ("FLOAT_VECTOR", _node(tree, "GeometryNodeInputPosition", x - 300, 200).outputs[0], None),
         ("FLOAT", None, "wetness"),
-        ("FLOAT_COLOR", None, "color"),
     ]
     for data_type, value, attribute in fields:
         if value is None:
@@ -276,7 +280,8 @@ def make_material(name="wetcloth wetness"):
     if material is not None:
         return material
     material = bpy.data.materials.new(name)
-    material.use_nodes = True
+    if bpy.app.version < (5, 0, 0):  # Blender 5 materials always use nodes (the flag is deprecated)
+        material.use_nodes = True
     tree = material.node_tree
     bsdf = next(node for node in tree.nodes if node.type == "BSDF_PRINCIPLED")
     wet = _node(tree, "ShaderNodeAttribute", -700, 200, attribute_type="GEOMETRY", attribute_name="wetness")
@@ -333,8 +338,8 @@ def load(directory=None, name=None):
     if not files:
         raise RuntimeError(f"no {SETTINGS['prefix']}_NNNN.{SETTINGS['format']} frames in {directory}")
     started = time.time()
-    positions, wetness, colors, triangles, uv = read_frames(files)
-    trajectories = make_trajectories(f"{name} trajectories", positions, wetness, colors)
+    positions, wetness, triangles, uv = read_frames(files)
+    trajectories = make_trajectories(f"{name} trajectories", positions, wetness)
     mesh = make_cloth_mesh(name, positions[0], triangles, uv)
     ob = bpy.data.objects.new(name, mesh)
     bpy.context.scene.collection.objects.link(ob)

@@ -1,0 +1,131 @@
+"""Exporter speed: frames written per second for a 64 x 64 cloth, each format and writer.
+
+    .venv/bin/python bench/export_speed.py [--grid 64] [--frames 60] [--repeats 3] [--blender]
+
+1. Simulates the default towel on a grid x grid mesh for a short while at 30 fps and times the
+   simulation per frame (the yardstick: the exporter must not dominate a ``wetcloth run``).
+2. Writes those frames (cycled up to --frames) through every format and writer, streaming into a
+   fresh directory, best of --repeats runs; reports frames/s, ms/frame, MB/frame and the share of
+   a run's time (simulation + export) that the export takes.
+3. With --blender (needs .venv-blender), times ``load_in_blender.py`` on the PLY and USD sequences.
+
+Prints a Markdown table and writes bench/results/export_speed.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+import wetcloth
+from wetcloth.exporter import open_sequence
+from wetcloth.runner import run
+
+ROOT = Path(__file__).resolve().parents[1]
+CASES = [("ply", "trimesh"), ("ply", "meshio"), ("obj", "trimesh"), ("obj", "meshio"), ("usd", "usd-core")]
+FPS = 30.0
+
+
+def simulate(grid: int, duration: float):
+    """Frames (positions, wetness) of the towel on a grid x grid mesh, and the simulation's s/frame."""
+    scene = wetcloth.load_scene(nx=grid, ny=grid)
+    run(scene, 1.0 / FPS, FPS, progress=False)  # compile the kernels outside the timing
+    frames = []
+    started = time.perf_counter()
+    run(scene, duration, FPS, progress=False,
+        on_frame=lambda i, sim: frames.append((sim.positions, sim.wetness)))
+    elapsed = time.perf_counter() - started
+    return scene, frames, elapsed / len(frames)
+
+
+def write_frames(scene, frames, fmt, writer, count, directory):
+    """Seconds to write ``count`` frames (cycling ``frames``) and close; bytes written."""
+    shutil.rmtree(directory, ignore_errors=True)
+    started = time.perf_counter()
+    sequence = open_sequence(directory, fmt=fmt, writer="trimesh" if writer == "usd-core" else writer,
+                             fps=FPS, scene=scene)
+    for k in range(count):
+        positions, wetness = frames[k % len(frames)]
+        sequence.write_frame(positions, wetness)
+    sequence.close()
+    elapsed = time.perf_counter() - started
+    size = sum(p.stat().st_size for p in Path(directory).iterdir() if p.suffix in (".ply", ".obj", ".usd"))
+    return elapsed, size
+
+
+def blender_load_seconds(directory: Path) -> float | None:
+    python = ROOT / ".venv-blender" / "bin" / "python"
+    if not python.exists():
+        return None
+    code = ("import bpy, runpy, time, sys; bpy.ops.wm.read_factory_settings(use_empty=True); t = time.time(); "
+            f"runpy.run_path({str(directory / 'load_in_blender.py')!r}, run_name='__main__'); "
+            "bpy.context.scene.frame_set(2); print('SECONDS', time.time() - t)")
+    done = subprocess.run([str(python), "-c", code], capture_output=True, text=True, timeout=1800)
+    for line in done.stdout.splitlines():
+        if line.startswith("SECONDS"):
+            return float(line.split()[1])
+    raise RuntimeError(done.stderr[-2000:])
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--grid", type=int, default=64, help="particles along each side (default 64)")
+    parser.add_argument("--frames", type=int, default=60, help="frames written per measurement (default 60)")
+    parser.add_argument("--repeats", type=int, default=3, help="best of this many measurements (default 3)")
+    parser.add_argument("--sim-duration", type=float, default=0.5, help="simulated seconds for the yardstick")
+    parser.add_argument("--blender", action="store_true", help="also time load_in_blender.py (PLY, USD)")
+    parser.add_argument("--out", type=Path, default=ROOT / "bench" / "results" / "export_speed.json")
+    args = parser.parse_args(argv)
+
+    scene, frames, sim_seconds = simulate(args.grid, args.sim_duration)
+    n = args.grid * args.grid
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for fmt, writer in CASES:
+            directory = Path(tmp) / f"{fmt}_{writer}"
+            best, size = min(write_frames(scene, frames, fmt, writer, args.frames, directory)
+                             for _ in range(args.repeats))
+            per_frame = best / args.frames
+            row = {"format": fmt, "writer": writer, "frames_per_s": 1.0 / per_frame, "ms_per_frame": 1e3 * per_frame,
+                   "mb_per_frame": size / args.frames / 1e6, "share_of_run": per_frame / (per_frame + sim_seconds)}
+            if args.blender and (fmt, writer) in (("ply", "trimesh"), ("usd", "usd-core")):
+                row["blender_load_s"] = blender_load_seconds(directory)
+            rows.append(row)
+
+    result = {
+        "grid": f"{args.grid}x{args.grid}", "vertices": n, "frames": args.frames, "repeats": args.repeats,
+        "simulation_ms_per_frame": 1e3 * sim_seconds, "fps": FPS, "rows": rows,
+        "machine": {"python": platform.python_version(), "cpu_count": os.cpu_count(), "platform": platform.platform()},
+        "command": "python bench/export_speed.py " + " ".join(sys.argv[1:] if argv is None else argv),
+    }
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(result, indent=1) + "\n")
+
+    print(f"{args.grid}x{args.grid} cloth ({n} vertices), {args.frames} frames, best of {args.repeats}; "
+          f"simulation {1e3 * sim_seconds:.1f} ms per frame at {FPS:g} fps")
+    print("| format | writer | frames/s | ms/frame | MB/frame | share of a run |" +
+          (" Blender load (s) |" if args.blender else ""))
+    print("|---|---|---:|---:|---:|---:|" + ("---:|" if args.blender else ""))
+    for r in rows:
+        line = (f"| {r['format']} | {r['writer']} | {r['frames_per_s']:.0f} | {r['ms_per_frame']:.1f} | "
+                f"{r['mb_per_frame']:.2f} | {100 * r['share_of_run']:.0f} % |")
+        if args.blender:
+            load = r.get("blender_load_s")
+            line += f" {load:.1f} |" if load is not None else " |"
+        print(line)
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
