@@ -21,8 +21,9 @@ GRAVITY = 9.81  # m/s2, acting along -z
 class Model:
     """Scene, topology and per-particle constants (dry mass kg, volume m3, Stokes coefficient N s/m)."""
 
-    def __init__(self, scene: Scene, topology: Topology | None = None):
+    def __init__(self, scene: Scene, topology: Topology | None = None, skip_idle_work: bool = True):
         self.topology = topo = topology if topology is not None else build_topology(scene)
+        self.skip_idle_work = skip_idle_work  # False: run the water kernels on dry cloth too (benchmarks)
         n = topo.n
         self.free = (~topo.pinned).astype(np.float64)  # 1 for moving particles, 0 for pinned
         self.s = np.zeros(n)  # submerged fraction of each particle, from the last force evaluation
@@ -74,7 +75,7 @@ class Model:
         np.multiply(self.mass(water), -GRAVITY, out=force[2])
         if self.topology.spring_offset.size:
             spring_forces(*self._springs(), sc.damping_model == "projected", 0.0, self.saturation, pos, vel, force, self._buf)
-        if self.touches_water(pos[2]) > 0.0:
+        if self.touches_water(pos[2]) > 0.0 or not self.skip_idle_work:
             self._water_forces(pos, vel, force, h=None)
         return force
 
@@ -97,7 +98,7 @@ class Model:
                 *self._springs(), sc.damping_model == "projected", 0.0, self.saturation, pos, vel, h,
                 force, self.rhs, self.diag, self.direction, self.along, self.across, self._buf,
             )
-        if self.touches_water(pos[2]) > 0.0:
+        if self.touches_water(pos[2]) > 0.0 or not self.skip_idle_work:
             self._water_forces(pos, vel, force, h=h)
         return force
 
@@ -112,12 +113,12 @@ class Model:
         elif h is None:
             face_drag(
                 self.topology.nx, self.topology.ny, pos, vel, s, sc.water_density, sc.drag_normal,
-                sc.drag_tangential, sc.drag_linear, 0.0, 0.0, force, self._cells,
+                sc.drag_tangential, sc.drag_linear, 0.0, 0.0, force, self._cells, self.skip_idle_work,
             )
         else:
             face_drag_and_blocks(
                 self.topology.nx, self.topology.ny, pos, vel, s, sc.water_density, sc.drag_normal,
-                sc.drag_tangential, sc.drag_linear, 0.0, 0.0, h, force, self.blocks, self._cells,
+                sc.drag_tangential, sc.drag_linear, 0.0, 0.0, h, force, self.blocks, self._cells, self.skip_idle_work,
             )
         if h is not None and sc.buoyancy_model == "smooth":
             # dF_z/dz = -rho g V / thickness inside the surface slab (0 < s < 1).

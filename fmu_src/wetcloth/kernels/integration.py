@@ -40,6 +40,16 @@ def speed_and_finiteness(pos, vel, water):
 
 
 @njit(cache=True, fastmath=FASTMATH)
+def largest_deviation(pos, anchor):
+    """Largest coordinate difference (m) between two (3, n) position arrays."""
+    largest = 0.0
+    for c in range(3):
+        for i in range(pos.shape[1]):
+            largest = max(largest, abs(pos[c, i] - anchor[c, i]))
+    return largest
+
+
+@njit(cache=True, fastmath=FASTMATH)
 def _system_matvec(offsets, direction, along, across, mass, blocks, free, p, out, buf):
     """out = A p with A = M + per-particle blocks + spring blocks, rows of pinned particles zeroed."""
     n = p.shape[1]

@@ -135,13 +135,18 @@ def _drag_row(k_count, a, b, c, density, c_normal, c_tangential, c_linear, curre
 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
-def _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells, blocks_wanted):
+def _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells,
+               blocks_wanted, skip_dry_rows):
     """Fill ``cells`` (2, 9, n + nx + 1) with both triangles' force and, if wanted, Jacobian blocks
-    (xx, yy, zz, xy, xz, yz) for every cell, row by row."""
+    (xx, yy, zz, xy, xz, yz) for every cell, row by row.  A row of cells none of whose particles
+    touches water has no drag: with ``skip_dry_rows`` it is zeroed, not computed."""
     pad = nx + 1
     w = nx - 1
     for r in range(ny - 1):
         base = r * nx
+        if skip_dry_rows and s[base:base + 2 * nx].max() == 0.0:
+            cells[:, :, pad + base:pad + base + w] = 0.0
+            continue
         a = _corner(pos, vel, s, base, w)
         b = _corner(pos, vel, s, base + 1, w)
         c = _corner(pos, vel, s, base + nx, w)
@@ -152,22 +157,26 @@ def _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, c
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def face_drag(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, force, cells):
+def face_drag(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, force, cells,
+              skip_dry_rows=True):
     """Add the face-model drag (MODEL.md section 4) to ``force``; ``cells`` is (2, 9, n + nx + 1) scratch."""
-    _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells, False)
+    _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells, False,
+               skip_dry_rows)
     for comp in range(3):
         _gather_cells(cells[0, comp], cells[1, comp], nx, force[comp], 1.0 / 3.0)
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def face_drag_and_blocks(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, h, force, blocks, cells):
+def face_drag_and_blocks(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, h, force,
+                         blocks, cells, skip_dry_rows=True):
     """Face drag as ``face_drag``, plus ``h`` times its lumped velocity Jacobian added to ``blocks``.
 
     ``blocks`` (6, n) holds symmetric 3x3 blocks as xx, yy, zz, xy, xz, yz.  Each triangle's
     Jacobian goes one third to each of its particles (row-sum lumping: exact for a uniform
     velocity).  The tangential part uses its larger eigenvalue in every in-plane direction.
     """
-    _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells, True)
+    _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells, True,
+               skip_dry_rows)
     for comp in range(3):
         _gather_cells(cells[0, comp], cells[1, comp], nx, force[comp], 1.0 / 3.0)
     for comp in range(6):
