@@ -72,7 +72,8 @@ def blender(tmp_path_factory):
     for sequence in sequences.values():
         sequence.close()
     (root / "work").mkdir()
-    spec = {"sequences": {name: str(root / name) for name in SEQUENCES}, "frames": LOOK_AT, "work": str(root / "work")}
+    spec = {"sequences": {name: str(root / name) for name in SEQUENCES}, "frames": LOOK_AT, "work": str(root / "work"),
+            "render": ["ply_trimesh", "usd"]}
     (root / "spec.json").write_text(json.dumps(spec))
     done = subprocess.run([str(python), str(PROBE), str(root / "spec.json"), str(root / "result.json")],
                           capture_output=True, text=True, timeout=600)
@@ -163,3 +164,12 @@ def test_usd_opens_and_animates_with_wetness(blender):
     wet = [np.float32(f["wetness"]) for f in frames]
     assert wet[0].max() == 0.0 and wet[-1].min() > 0.0  # wetness is animated, not frame 1's
     assert frames[0]["vertices"] == blender.n and frames[0]["faces"] == blender.m
+
+
+@pytest.mark.parametrize("name", ["ply_trimesh", "usd"])
+def test_renders_follow_the_animation(blender, name):
+    """A render (Cycles, not the viewport) sees the cloth, and sees it move between frames 1 and 6."""
+    render = sequence_report(blender, name)["render"]
+    assert render["frames"] == [1, FRAMES]
+    assert min(render["covered"]) > 0.01  # the cloth is in the picture at both frames
+    assert render["max_difference"] > 0.1  # and not in the same place (pixel values are 0..1)

@@ -2,12 +2,14 @@
 
     .venv-blender/bin/python tests/blender/probe.py SPEC.json RESULT.json
 
-SPEC: {"sequences": {name: directory}, "frames": [frame numbers to look at], "work": directory}.
+SPEC: {"sequences": {name: directory}, "frames": [frame numbers to look at], "work": directory,
+       "render": [names of sequences to render]}.
 For every sequence it reports, as JSON (the assertions are in tests/test_blender.py):
   "import": PLY frames through bpy.ops.wm.ply_import (vertex/face counts, attributes, positions, wetness);
   "loader": the scene after running the sequence's load_in_blender.py as Blender's --python would
             (timeline, modifiers, material, and at each frame the evaluated positions and wetness);
-  "reopened": the same frames after saving the .blend and opening it again, with no script run.
+  "reopened": the same frames after saving the .blend and opening it again, with no script run;
+  "render": (if asked) Cycles renders of the reopened scene at the first and last looked-at frame.
 """
 
 import json
@@ -100,6 +102,35 @@ def scene_summary(ob, numbers):
     }
 
 
+def render_frames(numbers, work, name):
+    """Cycles renders (CPU, 1 sample, 48 x 48) of the loaded scene at two frames, seen from the side.
+
+    Returns the largest pixel difference between them and the share of pixels the cloth covers in
+    each (pixels that differ from the top-left corner, which is background).
+    """
+    scene = bpy.context.scene
+    camera = bpy.data.objects.new("probe camera", bpy.data.cameras.new("probe camera"))
+    scene.collection.objects.link(camera)
+    camera.location = (1.2, 0.0, 0.3)
+    camera.rotation_euler = (1.45, 0.0, 1.5708)  # looking along -x, slightly down at the water plane
+    scene.camera = camera
+    sun = bpy.data.objects.new("probe sun", bpy.data.lights.new("probe sun", "SUN"))
+    scene.collection.objects.link(sun)
+    scene.render.engine = "CYCLES"
+    scene.cycles.samples = 1
+    scene.cycles.device = "CPU"
+    scene.render.resolution_x = scene.render.resolution_y = 48
+    pixels = []
+    for number in numbers:
+        scene.frame_set(number)
+        scene.render.filepath = os.path.join(work, f"{name}_{number}.png")
+        bpy.ops.render.render(write_still=True)
+        image = bpy.data.images.load(scene.render.filepath)
+        pixels.append(np.array(image.pixels[:], dtype=np.float32).reshape(-1, 4)[:, :3])
+    covered = [float((np.abs(p - p[-1]).max(axis=1) > 0.01).mean()) for p in pixels]
+    return {"frames": numbers, "max_difference": float(np.abs(pixels[0] - pixels[1]).max()), "covered": covered}
+
+
 def cloth_object():
     meshes = [ob for ob in bpy.context.scene.objects if ob.type == "MESH"]
     if len(meshes) != 1:
@@ -107,7 +138,7 @@ def cloth_object():
     return meshes[0]
 
 
-def probe(name, directory, numbers, work):
+def probe(name, directory, numbers, work, render=False):
     result = {}
     if os.path.exists(os.path.join(directory, "cloth_0001.ply")):
         result["import"] = import_ply_frames(directory, numbers[:2])
@@ -119,6 +150,8 @@ def probe(name, directory, numbers, work):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.ops.wm.open_mainfile(filepath=blend)
     result["reopened"] = scene_summary(cloth_object(), numbers)
+    if render:
+        result["render"] = render_frames([numbers[0], numbers[-1]], work, name)
     return result
 
 
@@ -128,7 +161,8 @@ def main(spec_path, result_path):
     results = {"blender": bpy.app.version_string, "sequences": {}}
     for name, directory in spec["sequences"].items():
         try:
-            results["sequences"][name] = probe(name, directory, spec["frames"], spec["work"])
+            results["sequences"][name] = probe(name, directory, spec["frames"], spec["work"],
+                                               render=name in spec.get("render", []))
         except Exception:
             results["sequences"][name] = {"error": traceback.format_exc()}
     with open(result_path, "w") as fh:
