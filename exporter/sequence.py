@@ -64,7 +64,10 @@ def _check_directory(directory: Path, overwrite: bool) -> None:
         directory.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise ExportError(f"cannot create export directory {directory}: {exc.strerror or exc}") from None
-    taken = previous_run_files(directory)
+    try:
+        taken = previous_run_files(directory)
+    except OSError as exc:
+        raise ExportError(f"cannot read export directory {directory}: {exc.strerror or exc}") from None
     if taken and not overwrite:
         shown = ", ".join(p.name for p in taken[:3]) + (f" and {len(taken) - 3} more" if len(taken) > 3 else "")
         raise ExportError(
