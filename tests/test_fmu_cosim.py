@@ -70,8 +70,10 @@ def test_a_rising_water_level_carries_a_floating_cloth_up(fmu):
     # Before the rise it rests; once settled after it, it floats at the analytic depth, 4 cm higher.
     before, after = result[result["time"] <= 0.5], result[result["time"] >= 3.5]
     assert np.allclose(before["depth"], rest_depth, atol=1e-9)
-    assert np.allclose(after["depth"], rest_depth, atol=1e-6)  # settled to well below the slab's 1 mm
-    assert math.isclose(after["centroid_z"][-1] - before["centroid_z"][-1], rise, abs_tol=1e-6)
+    # The heave mode is barely damped (symplectic Euler keeps its energy): allow a bob of a tenth
+    # of the 1 mm half-slab; a cloth the water left behind would be 4 cm off.
+    assert np.allclose(after["depth"], rest_depth, atol=1e-4)
+    assert math.isclose(after["centroid_z"][-1] - before["centroid_z"][-1], rise, abs_tol=1e-4)
     # Inputs hold over a step and act from the point they are set at: the first raised level is
     # applied at t = 0.55 s (1 mm), so the cloth is still at rest then and has risen by t = 0.6 s.
     z = dict(zip(np.round(result["time"], 9), result["centroid_z"]))

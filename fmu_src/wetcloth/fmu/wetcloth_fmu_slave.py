@@ -229,14 +229,13 @@ class WetCloth(Fmi2Slave):
             return False
         if self._values["mesh_output_dir"] and not self._open_sequence(step_size):
             return False
-        checkpoint = (sim.state.copy(), sim._next_step, sim.steps, sim.rejected_steps)
+        checkpoint = sim.snapshot()
         try:
             sim.advance(max(0.0, current_time + step_size - self._start_time - sim.time))
             if self._sequence is not None:
                 self._sequence.on_frame(self._frame, sim)
         except Exception as exc:  # a blow-up, or anything else: never let it reach the master as a crash
-            sim.state.assign(checkpoint[0])
-            sim._next_step, sim.steps, sim.rejected_steps = checkpoint[1:]
+            sim.restore(checkpoint)
             self._outputs = None
             kind = "" if isinstance(exc, BlowUpError) else f"{type(exc).__name__}: "
             self._error(f"step from t = {current_time:g} s by {step_size:g} s failed: {kind}{exc} "
