@@ -143,16 +143,16 @@ def test_worker_killed_mid_study_every_run_present_once(client, tmp_path):
     study = small_study(duration=30.0, base=dict(nx=9, ny=9),
                         axes={"absorption_rate": [0.3, 0.6, 0.9, 1.2], "initial_tilt": [0.0, 30.0, 60.0]})
     killed = {}
+    pids = client.run(os.getpid)  # worker address -> process id
 
     def kill_a_busy_worker(row):
         if killed:
             return
         busy = {w: keys for w, keys in client.processing().items() if keys}
         victim = sorted(busy)[0]
+        os.kill(pids[victim], signal.SIGKILL)  # at once: its tasks cannot finish in between
         killed["address"] = victim
         killed["tasks"] = {k.split("-")[1] for k in busy[victim]}  # run keys of its tasks
-        pid = client.run(os.getpid, workers=[victim])[victim]
-        os.kill(pid, signal.SIGKILL)
 
     out = tmp_path / "k.parquet"
     report = run_study(study, out, client=client, on_result=kill_a_busy_worker)

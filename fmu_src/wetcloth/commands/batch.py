@@ -54,6 +54,8 @@ def main(args) -> int:
     plot_specs = [batch.parse_plot_spec(text) for text in args.plot]
     study.check_plots(plot_specs)
     out = args.out if args.out is not None else Path("out/batch") / f"{study.name}.parquet"
+    if out.suffix.lower() == ".csv":
+        raise ValueError(f"--out {out} is the Parquet results table; give --csv FILE for a CSV copy")
     try:
         report = batch.run_study(
             study,
