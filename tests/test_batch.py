@@ -52,6 +52,8 @@ def test_study_on_two_workers_matches_direct_runs(client):
     assert list(table["run_key"]) == [r.key for r in study.runs()]
     assert (table["status"] == "ok").all() and table["error"].isna().all()
     assert set(table["worker"]) <= set(client.scheduler_info()["workers"])
+    # thread CPU time cannot exceed wall-clock time (1 ms slack: the two clocks are read one after the other)
+    assert ((table["cpu_time"] > 0) & (table["cpu_time"] <= table["run_time"] + 1e-3)).all()
     for run_ in study.runs():
         row = table.set_index("run_key").loc[run_.key]
         expected = direct_metrics(study, run_.params)

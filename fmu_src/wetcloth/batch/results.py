@@ -2,7 +2,8 @@
 
 Columns, in order: ``run_key``; the study's axes; the metrics (``sank`` after ``time_to_sink``);
 ``status`` ('ok' or 'error'), ``error`` (the message, or empty), ``run_time`` (s of wall-clock time
-in the worker), ``worker``; the run settings ``engine``, ``duration`` (s), ``sample_rate`` (Hz),
+in the worker), ``cpu_time`` (s of CPU time of the run), ``worker``; the run settings ``engine``,
+``duration`` (s), ``sample_rate`` (Hz),
 ``sink_depth`` (m); then every other scene parameter, so each row says how to reproduce it.
 """
 
@@ -18,7 +19,7 @@ from wetcloth.batch.metrics import METRICS
 from wetcloth.scene import PARAMETERS
 
 KEY = "run_key"
-STATUS_COLUMNS = ("status", "error", "run_time", "worker")
+STATUS_COLUMNS = ("status", "error", "run_time", "cpu_time", "worker")
 SETTING_COLUMNS = ("engine", "duration", "sample_rate", "sink_depth")
 
 
@@ -62,8 +63,9 @@ def normalise(table: pd.DataFrame, axes: Iterable[str] = ()) -> pd.DataFrame:
             table[name] = pd.to_numeric(table[name], errors="coerce").astype("float64")
     if "sank" in table:
         table["sank"] = table["sank"].astype("boolean")
-    if "run_time" in table:
-        table["run_time"] = table["run_time"].astype("float64")
+    for column in ("run_time", "cpu_time"):
+        if column in table:
+            table[column] = table[column].astype("float64")
     return table
 
 

@@ -168,7 +168,8 @@ def run_study(
             try:
                 from_dict(run.params)
             except ValueError as exc:
-                record(run, dict(status=ERROR, error=f"{type(exc).__name__}: {exc}", run_time=0.0, worker=None))
+                record(run, dict(status=ERROR, error=f"{type(exc).__name__}: {exc}", run_time=0.0, cpu_time=0.0,
+                                 worker=None))
             else:
                 tasks.append(run)
         if tasks:
@@ -204,7 +205,8 @@ def _run_on_dask(tasks: list[Run], study: Study, record, *, client, scheduler, w
                     result = future.result()
                 else:  # the task itself failed in Dask (e.g. KilledWorker: its workers kept dying)
                     exc = future.exception()
-                    result = dict(status=ERROR, error=f"{type(exc).__name__}: {exc}", run_time=math.nan, worker=None)
+                    result = dict(status=ERROR, error=f"{type(exc).__name__}: {exc}", run_time=math.nan,
+                                  cpu_time=math.nan, worker=None)
                 future.release()
                 record(run, result)
         finally:
