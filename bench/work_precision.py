@@ -10,15 +10,14 @@ Reference scenes (a 15 x 21 towel):
 Each run is compared with a converged reference (symplectic Euler, fixed 5 us steps; its own
 error is shown by halving that step).  Errors: centroid (max over the 30 Hz samples, m), vertex
 positions (RMS over vertices and samples, m), wet mass (max relative).  Writes
-``docs/work_precision.csv`` and ``docs/work_precision.png``.
+``docs/work_precision.csv``, ``docs/work_precision.png`` and the reference trajectories the
+accuracy tests compare against, ``tests/data/reference_trajectories.npz``.
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
-import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib
@@ -27,67 +26,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-import wetcloth  # noqa: E402
+from wetcloth.accuracy import REFERENCE_STEP, cases, errors, simulate, store_reference  # noqa: E402
 from wetcloth.errors import BlowUpError  # noqa: E402
 
-SAMPLE_RATE = 30.0  # Hz: how often outputs and inputs are exchanged, as an FMU master would
-GRID = dict(nx=15, ny=21)
-REFERENCE_STEP = 5e-6  # s
 OUT = Path(__file__).resolve().parents[1] / "docs"
-
-
-@dataclass
-class Case:
-    name: str
-    scene: wetcloth.Scene
-    duration: float
-    water_level: callable = None  # t (s) -> m, or None for a constant level
-
-
-def cases() -> list[Case]:
-    towel = wetcloth.load_scene(**GRID)
-    return [
-        Case("landing", towel, 3.0),
-        Case("sinking", towel.replace(absorption_rate=20.0, initial_height=0.05), 4.0),
-        Case("rising_water", towel.replace(absorption_capacity=0.0, absorption_rate=0.0, initial_height=0.02,
-                                           initial_tilt=0.0), 3.0,
-             water_level=lambda t: 0.03 * min(max(t - 1.0, 0.0), 1.0)),
-    ]
-
-
-@dataclass
-class Trajectory:
-    centroid: np.ndarray  # (T, 3) m
-    positions: np.ndarray  # (T, n, 3) m
-    wet_mass: np.ndarray  # (T,) kg
-    seconds: float  # wall time
-    steps: int
-
-
-def simulate(case: Case, **settings) -> Trajectory:
-    """Run a case with integrator settings, exchanging inputs and outputs at SAMPLE_RATE."""
-    sim = wetcloth.Simulation(case.scene.replace(**settings))
-    frames = int(round(case.duration * SAMPLE_RATE))
-    centroid, positions, wet_mass = [], [], []
-    start = time.perf_counter()
-    for k in range(frames):
-        if case.water_level is not None:
-            sim.set_inputs(water_level=case.water_level(sim.time))
-        sim.advance(1.0 / SAMPLE_RATE)
-        out = sim.outputs()
-        centroid.append([out["centroid_x"], out["centroid_y"], out["centroid_z"]])
-        positions.append(sim.positions)
-        wet_mass.append(out["wet_mass"])
-    seconds = time.perf_counter() - start
-    return Trajectory(np.array(centroid), np.array(positions), np.array(wet_mass), seconds, sim.steps)
-
-
-def errors(run: Trajectory, ref: Trajectory) -> dict[str, float]:
-    return {
-        "centroid_error": float(np.abs(run.centroid - ref.centroid).max()),
-        "vertex_rms_error": float(np.sqrt(((run.positions - ref.positions) ** 2).sum(axis=2).mean())),
-        "wet_mass_error": float(np.abs(run.wet_mass / ref.wet_mass - 1).max()),
-    }
+STORED_REFERENCE = Path(__file__).resolve().parents[1] / "tests" / "data" / "reference_trajectories.npz"
 
 
 def settings_grid(quick: bool) -> list[dict]:
@@ -105,11 +48,13 @@ def settings_grid(quick: bool) -> list[dict]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer settings (a smoke run)")
+    parser.add_argument("--reference-only", action="store_true", help="only compute and store the references")
     args = parser.parse_args()
     OUT.mkdir(exist_ok=True)
-    rows = []
+    rows, references = [], {}
     for case in cases():
         ref = simulate(case, integrator="symplectic_euler", tolerance=0.0, max_step=REFERENCE_STEP)
+        references[case.name] = ref
         half = simulate(case, integrator="symplectic_euler", tolerance=0.0, max_step=REFERENCE_STEP / 2)
         check = errors(ref, half)
         print(f"{case.name}: reference ({ref.seconds:.1f} s) against half its step: centroid "
@@ -117,7 +62,7 @@ def main() -> None:
               f"wet mass {check['wet_mass_error']:.2e}", flush=True)
         rows.append(dict(case=case.name, integrator="reference (halved step)", mode="fixed",
                          setting=REFERENCE_STEP / 2, seconds=half.seconds, steps=half.steps, **check))
-        for settings in settings_grid(args.quick):
+        for settings in [] if args.reference_only else settings_grid(args.quick):
             mode = "adaptive" if settings["tolerance"] > 0 else "fixed"
             value = settings["tolerance"] if mode == "adaptive" else settings["max_step"]
             try:
@@ -130,9 +75,13 @@ def main() -> None:
             print(f"  {settings['integrator']:17s} {mode:8s} {value:8.1e}: {row['seconds']:7.2f} s "
                   f"{row['steps']:7d} steps  centroid {row['centroid_error']:.2e} m  "
                   f"vertices {row['vertex_rms_error']:.2e} m  wet mass {row['wet_mass_error']:.1e}", flush=True)
+    store_reference(references, STORED_REFERENCE)
+    if args.reference_only:
+        print(f"wrote {STORED_REFERENCE}")
+        return
     write_csv(rows, OUT / "work_precision.csv")
     plot(rows, OUT / "work_precision.png")
-    print(f"wrote {OUT / 'work_precision.csv'} and {OUT / 'work_precision.png'}")
+    print(f"wrote {OUT / 'work_precision.csv'}, {OUT / 'work_precision.png'} and {STORED_REFERENCE}")
 
 
 def write_csv(rows, path: Path) -> None:

@@ -63,12 +63,14 @@ class ExplicitEuler(Integrator):
     def __init__(self, model: Model):
         super().__init__(model)
         # Forward Euler on a damped spring is stable only for h < c/k (the disc |1 + h lambda| < 1),
-        # and on pure damping for h < 2 m / c.  Undamped springs it can never hold: then 0.1 / omega.
+        # and on pure damping for h < 2 m / c.  Undamped springs it can never hold.
         topo = model.topology
         springs = topo.spring_stiffness > 0
         limit = float((topo.spring_damping[springs] / topo.spring_stiffness[springs]).min()) if springs.any() else math.inf
-        if not math.isfinite(limit) or limit == 0.0:
-            limit = 0.1 / math.sqrt(self.omega_squared) if self.omega_squared > 0 else math.inf
+        if self.omega_squared > 0:
+            # Below 0.1/omega an unstable mode grows by at most 0.5% a step: the damping is then too
+            # weak to matter, and a smaller limit would only stall (damping -> 0 gives h -> 0).
+            limit = max(limit, 0.1 / math.sqrt(self.omega_squared))
         self._spring_limit = limit
 
     def stable_step(self, speed: float) -> float:

@@ -113,7 +113,14 @@ def describe_range(f: dataclasses.Field) -> str:
     return f"{md['lo']:g} {lo_sign} {f.name} <= {md['hi']:g}{unit}"
 
 
-def _check_value(f: dataclasses.Field, value) -> None:
+def check_value(name: str, value) -> None:
+    """Check one parameter's value against its type and range alone (no cross-parameter checks)."""
+    if name not in PARAMETERS:
+        raise ParameterError(name, f"unknown parameter; known: {', '.join(PARAMETERS)}")
+    _check_field(PARAMETERS[name], value)
+
+
+def _check_field(f: dataclasses.Field, value) -> None:
     md = f.metadata
     if f.type == "str":
         if not isinstance(value, str):
@@ -135,7 +142,7 @@ def _check_value(f: dataclasses.Field, value) -> None:
 def validate(scene: Scene) -> None:
     """Check every parameter against its range and the scene as a whole; raise ParameterError."""
     for f in dataclasses.fields(scene):
-        _check_value(f, getattr(scene, f.name))
+        _check_field(f, getattr(scene, f.name))
     half_drop = 0.5 * scene.length * abs(math.sin(math.radians(scene.initial_tilt)))
     lowest = scene.initial_height - half_drop - 0.5 * scene.thickness
     if lowest <= scene.floor_level:

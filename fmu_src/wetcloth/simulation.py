@@ -53,11 +53,14 @@ class Simulation:
         self._speed = 0.0  # m/s, fastest particle of the current state
         self._calm_time = 0.0  # s of simulated time spent within SLEEP_DISTANCE of _anchor
         self._anchor = self.state.pos.copy()
+        self._unchecked_time = 0.0  # s simulated since stillness was last checked
+        self._exchanging = False  # whether water went in or out since then
         self.sleeping = False
         self.steps = 0  # accepted internal steps
         self.rejected_steps = 0  # steps redone with a smaller size (adaptive mode)
 
-    _DYNAMIC = ("_next_step", "_speed", "_calm_time", "sleeping", "steps", "rejected_steps")
+    _DYNAMIC = ("_next_step", "_speed", "_calm_time", "_unchecked_time", "_exchanging", "sleeping", "steps",
+                "rejected_steps")
 
     def snapshot(self) -> dict:
         """Everything that evolves (state arrays, inputs, step control, sleep): for ``restore``."""
@@ -92,6 +95,7 @@ class Simulation:
     def _wake(self) -> None:
         self.sleeping = False
         self._calm_time = 0.0
+        self._anchor[...] = self.state.pos
 
     # ----------------------------------------------------------------- stepping
     @property
@@ -153,14 +157,21 @@ class Simulation:
         return False
 
     def _maybe_sleep(self, h: float, exchanging: bool) -> None:
-        """Fall asleep after SLEEP_AFTER s still, with no water exchange (velocities then zero)."""
+        """Fall asleep after SLEEP_AFTER s still, with no water exchange (velocities then zero).
+
+        Stillness is checked every SLEEP_AFTER / 20 s of simulated time, not at every step."""
         if not self.skip_idle_work:
             return
-        if exchanging or largest_deviation(self.state.pos, self._anchor) > SLEEP_DISTANCE:
+        self._exchanging = self._exchanging or exchanging
+        self._unchecked_time += h
+        if self._unchecked_time < SLEEP_AFTER / 20:
+            return
+        if self._exchanging or largest_deviation(self.state.pos, self._anchor) > SLEEP_DISTANCE:
             self._anchor[...] = self.state.pos
             self._calm_time = 0.0
-            return
-        self._calm_time += h
+        else:
+            self._calm_time += self._unchecked_time
+        self._unchecked_time, self._exchanging = 0.0, False
         if self._calm_time >= SLEEP_AFTER:
             self.sleeping = True
             self.state.vel[...] = 0.0

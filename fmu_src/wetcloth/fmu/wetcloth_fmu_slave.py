@@ -71,7 +71,7 @@ wetcloth = _import_wetcloth(_MANIFEST)
 from wetcloth.errors import BlowUpError, ParameterError  # noqa: E402
 from wetcloth.fmu.description import extend_model_description, make_variable  # noqa: E402
 from wetcloth.fmu.vocabulary import MESH_FORMATS, MODEL_NAME, variable_specs  # noqa: E402
-from wetcloth.scene import PARAMETERS, _check_value, from_dict, read_scene_file  # noqa: E402
+from wetcloth.scene import check_value, from_dict, read_scene_file  # noqa: E402
 from wetcloth.simulation import Simulation  # noqa: E402
 
 SPECS = variable_specs()
@@ -154,7 +154,7 @@ class WetCloth(Fmi2Slave):
         spec = SPEC[name]
         if spec.scene:
             try:
-                _check_value(PARAMETERS[name], value)
+                check_value(name, value)
             except ParameterError as exc:
                 return self._reject(name, str(exc))
         elif name == "mesh_format" and value not in MESH_FORMATS:

@@ -1,0 +1,95 @@
+"""Reference scenes for accuracy: run a case at 30 Hz and measure its error against a reference.
+
+Shared by ``bench/work_precision.py`` (which computes the converged references and stores them)
+and the accuracy tests (which check the default settings against the stored references).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from wetcloth.scene import Scene, load_scene
+from wetcloth.simulation import Simulation
+
+SAMPLE_RATE = 30.0  # Hz: how often outputs and inputs are exchanged, as an FMU master would
+GRID = dict(nx=15, ny=21)
+REFERENCE_STEP = 5e-6  # s, symplectic Euler: converged (halving it moves the centroid < 5 um)
+
+
+@dataclass
+class Case:
+    name: str
+    scene: Scene
+    duration: float  # s
+    water_level: Callable[[float], float] | None = None  # t (s) -> m, or None for a constant level
+
+
+def cases() -> list[Case]:
+    """A tilted towel landing; a towel soaking up water almost at once and sinking; a floating towel
+    carried up by water rising 3 cm in 1 s."""
+    towel = load_scene(**GRID)
+    return [
+        Case("landing", towel, 3.0),
+        Case("sinking", towel.replace(absorption_rate=20.0, initial_height=0.05), 4.0),
+        Case("rising_water", towel.replace(absorption_capacity=0.0, absorption_rate=0.0, initial_height=0.02,
+                                           initial_tilt=0.0), 3.0,
+             water_level=lambda t: 0.03 * min(max(t - 1.0, 0.0), 1.0)),
+    ]
+
+
+@dataclass
+class Trajectory:
+    centroid: np.ndarray  # (T, 3) m
+    positions: np.ndarray  # (T, n, 3) m
+    wet_mass: np.ndarray  # (T,) kg
+    seconds: float  # wall time
+    steps: int
+
+
+def simulate(case: Case, **settings) -> Trajectory:
+    """Run a case with integrator settings, exchanging inputs and outputs at SAMPLE_RATE."""
+    sim = Simulation(case.scene.replace(**settings))
+    frames = int(round(case.duration * SAMPLE_RATE))
+    centroid, positions, wet_mass = [], [], []
+    start = time.perf_counter()
+    for _ in range(frames):
+        if case.water_level is not None:
+            sim.set_inputs(water_level=case.water_level(sim.time))
+        sim.advance(1.0 / SAMPLE_RATE)
+        out = sim.outputs()
+        centroid.append([out["centroid_x"], out["centroid_y"], out["centroid_z"]])
+        positions.append(sim.positions)
+        wet_mass.append(out["wet_mass"])
+    seconds = time.perf_counter() - start
+    return Trajectory(np.array(centroid), np.array(positions), np.array(wet_mass), seconds, sim.steps)
+
+
+def errors(run: Trajectory, ref: Trajectory) -> dict[str, float]:
+    """Centroid error (max over samples, m), vertex RMS error (m), wet-mass error (max relative)."""
+    return {
+        "centroid_error": float(np.abs(run.centroid - ref.centroid).max()),
+        "vertex_rms_error": float(np.sqrt(((run.positions - ref.positions) ** 2).sum(axis=2).mean())),
+        "wet_mass_error": float(np.abs(run.wet_mass / ref.wet_mass - 1).max()),
+    }
+
+
+def store_reference(references: dict[str, Trajectory], path: Path) -> None:
+    """Save reference trajectories (float32 positions keep the file small: 1e-8 m resolution)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    arrays = {}
+    for name, ref in references.items():
+        arrays[f"{name}/centroid"] = ref.centroid
+        arrays[f"{name}/positions"] = ref.positions.astype(np.float32)
+        arrays[f"{name}/wet_mass"] = ref.wet_mass
+    np.savez_compressed(path, **arrays)
+
+
+def load_reference(path: Path, name: str) -> Trajectory:
+    with np.load(path) as data:
+        return Trajectory(data[f"{name}/centroid"], data[f"{name}/positions"].astype(np.float64),
+                          data[f"{name}/wet_mass"], float("nan"), 0)
