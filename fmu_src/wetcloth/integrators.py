@@ -36,8 +36,9 @@ class Integrator:
                 target[: n - off] += per_spring[: n - off]
                 target[off:] += per_spring[: n - off]
         dry = model.dry_mass
+        stiffest = 1.0 + max(model.scene.wet_stiffness_factor, 0.0)  # a saturated, stiffened cloth
         # Gershgorin: the eigenvalues of M^-1 K are at most 2 * sum_j k_ij / m_i.
-        self.omega_squared = 2.0 * float(np.max(stiffness_sum / dry))
+        self.omega_squared = 2.0 * stiffest * float(np.max(stiffness_sum / dry))
         self.damping_rate = 2.0 * float(np.max(damping_sum / dry))
 
     def _drag_rate(self, speed: float) -> float:
@@ -45,7 +46,8 @@ class Integrator:
         sc = self.model.scene
         if sc.drag_model == "stokes":
             return float(np.max(self.model.stokes_coefficient / self.model.dry_mass))
-        return (sc.water_density * (sc.drag_normal + sc.drag_tangential) * speed + sc.drag_linear) / sc.areal_density
+        relative = speed + math.hypot(sc.current_x, sc.current_y)  # the water's speed past the cloth, at most
+        return (sc.water_density * (sc.drag_normal + sc.drag_tangential) * relative + sc.drag_linear) / sc.areal_density
 
     def stable_step(self, speed: float) -> float:
         """Largest step (s) for which the scheme is linearly stable with particles up to ``speed`` (m/s)."""
@@ -66,7 +68,9 @@ class ExplicitEuler(Integrator):
         # and on pure damping for h < 2 m / c.  Undamped springs it can never hold.
         topo = model.topology
         springs = topo.spring_stiffness > 0
-        limit = float((topo.spring_damping[springs] / topo.spring_stiffness[springs]).min()) if springs.any() else math.inf
+        stiffest = 1.0 + max(model.scene.wet_stiffness_factor, 0.0)
+        limit = (float((topo.spring_damping[springs] / topo.spring_stiffness[springs]).min()) / stiffest
+                 if springs.any() else math.inf)
         if self.omega_squared > 0:
             # Below 0.1/omega an unstable mode grows by at most 0.5% a step: the damping is then too
             # weak to matter, and a smaller limit would only stall (damping -> 0 gives h -> 0).

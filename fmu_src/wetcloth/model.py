@@ -53,6 +53,25 @@ class Model:
         self.volume = scene.thickness * area
         self.stokes_coefficient = 6.0 * math.pi * np.sqrt(area / math.pi) * scene.water_viscosity
         self.floor_z = scene.floor_level + 0.5 * scene.thickness
+        self.capacity = scene.absorption_capacity * self.dry_mass  # kg of water each particle holds at most
+        self._set_wicking(scene)
+
+    def _set_wicking(self, scene: Scene) -> None:
+        """Conductances (kg/s per unit saturation difference) of the axis neighbours' links, and the
+        sub-steps (s) that keep wicking's explicit update within the maximum principle."""
+        topo = self.topology
+        structural = [f for f, name in enumerate(topo.spring_family_names) if name.startswith("structural")]
+        self.wick_offsets = topo.spring_offset[structural]
+        # Finite volumes: flux = D * (water per area at saturation) * d(sat)/dl * strip width.
+        self.wick_conductance = (scene.wicking_rate * scene.absorption_capacity * scene.areal_density
+                                 * topo.spring_shape[structural])
+        links = np.zeros(topo.n)
+        for offset, shape in zip(self.wick_offsets, topo.spring_shape[structural]):
+            links[: topo.n - offset] += shape[: topo.n - offset]
+            links[offset:] += shape[: topo.n - offset]
+        # new sat_i = sat_i + dt sum_j g_ij (sat_j - sat_i) / Q_i is a weighted mean while dt <= Q_i / sum g_ij
+        with np.errstate(divide="ignore"):
+            self.wick_step_limit = float(np.min(topo.area / (scene.wicking_rate * links)))
 
     def mass(self, water: np.ndarray) -> np.ndarray:
         """Particle masses (kg): dry fabric plus absorbed water."""
@@ -62,6 +81,17 @@ class Model:
         """Fill ``self.s`` from heights ``z``; return the largest submerged fraction."""
         sc = self.scene
         return submerged_fractions(z, sc.water_level, sc.thickness, sc.buoyancy_model == "smooth", self.s)
+
+    def wetness_active(self) -> bool:
+        """Whether wetness-dependent stiffness needs the saturation this step."""
+        return self.scene.wet_stiffness_factor != 0.0 and self.scene.absorption_capacity > 0.0
+
+    def _update_saturation(self, water: np.ndarray) -> None:
+        if self.wetness_active():
+            np.divide(water, self.capacity, out=self.saturation)
+
+    def _wet_factor(self) -> float:
+        return self.scene.wet_stiffness_factor if self.wetness_active() else 0.0
 
     def _springs(self):
         t = self.topology
@@ -74,7 +104,9 @@ class Model:
         force[:2] = 0.0
         np.multiply(self.mass(water), -GRAVITY, out=force[2])
         if self.topology.spring_offset.size:
-            spring_forces(*self._springs(), sc.damping_model == "projected", 0.0, self.saturation, pos, vel, force, self._buf)
+            self._update_saturation(water)
+            spring_forces(*self._springs(), sc.damping_model == "projected", self._wet_factor(), self.saturation, pos,
+                          vel, force, self._buf)
         if self.touches_water(pos[2]) > 0.0 or not self.skip_idle_work:
             self._water_forces(pos, vel, force, h=None)
         return force
@@ -94,8 +126,9 @@ class Model:
         self.diag[...] = 0.0
         self.blocks[...] = 0.0
         if self.topology.spring_offset.size:
+            self._update_saturation(water)
             spring_forces_and_blocks(
-                *self._springs(), sc.damping_model == "projected", 0.0, self.saturation, pos, vel, h,
+                *self._springs(), sc.damping_model == "projected", self._wet_factor(), self.saturation, pos, vel, h,
                 force, self.rhs, self.diag, self.direction, self.along, self.across, self._buf,
             )
         if self.touches_water(pos[2]) > 0.0 or not self.skip_idle_work:
@@ -107,18 +140,19 @@ class Model:
         s = self.s
         buoyancy(s, self.volume, sc.water_density, GRAVITY, force)
         if sc.drag_model == "stokes":
-            stokes_drag(s, self.stokes_coefficient, 0.0, 0.0, vel, force)
+            stokes_drag(s, self.stokes_coefficient, sc.current_x, sc.current_y, vel, force)
             if h is not None:
                 self.blocks[:3] += h * self.stokes_coefficient * s
         elif h is None:
             face_drag(
                 self.topology.nx, self.topology.ny, pos, vel, s, sc.water_density, sc.drag_normal,
-                sc.drag_tangential, sc.drag_linear, 0.0, 0.0, force, self._cells, self.skip_idle_work,
+                sc.drag_tangential, sc.drag_linear, sc.current_x, sc.current_y, force, self._cells, self.skip_idle_work,
             )
         else:
             face_drag_and_blocks(
                 self.topology.nx, self.topology.ny, pos, vel, s, sc.water_density, sc.drag_normal,
-                sc.drag_tangential, sc.drag_linear, 0.0, 0.0, h, force, self.blocks, self._cells, self.skip_idle_work,
+                sc.drag_tangential, sc.drag_linear, sc.current_x, sc.current_y, h, force, self.blocks, self._cells,
+                self.skip_idle_work,
             )
         if h is not None and sc.buoyancy_model == "smooth":
             # dF_z/dz = -rho g V / thickness inside the surface slab (0 < s < 1).

@@ -76,6 +76,17 @@ class Scene:
     absorption_rate: float = _param(
         0.15, "1/s", "initial uptake rate, kg water per kg dry fabric per s (Buras I)", 0.0, 1e4, fmu=INPUT
     )
+    # --- beyond the thesis (MODEL.md section 5): each off at 0 and then skipped
+    wicking_rate: float = _param(
+        0.0, "m2/s", "diffusion constant of water through the fabric, driven by saturation; 0 = off", 0.0, 1.0
+    )
+    drying_rate: float = _param(0.0, "1/s", "fraction of its water a particle in air loses per second; 0 = off", 0.0, 100.0)
+    wet_stiffness_factor: float = _param(
+        0.0, "-", "stiffness scales by 1 + factor * saturation (negative softens); 0 = off", -0.9, 10.0
+    )
+    current_x: float = _param(0.0, "m/s", "water velocity along x, which the drag acts relative to", -10.0, 10.0, fmu=INPUT)
+    current_y: float = _param(0.0, "m/s", "water velocity along y, which the drag acts relative to", -10.0, 10.0, fmu=INPUT)
+    initial_saturation: float = _param(0.0, "-", "absorbed water at t = 0, as a fraction of the capacity", 0.0, 1.0)
     # --- initial state and surroundings
     initial_height: float = _param(0.1, "m", "z of the cloth's centre at t = 0 (cloth at rest)", -1e4, 1e4)
     initial_tilt: float = _param(10.0, "deg", "rotation about the x axis at t = 0; 90 is vertical", -90.0, 90.0)

@@ -8,7 +8,7 @@ import numpy as np
 
 from wetcloth.errors import BlowUpError, ParameterError
 from wetcloth.integrators import make_integrator
-from wetcloth.kernels.absorption import absorb
+from wetcloth.kernels.absorption import absorb, dry, wick
 from wetcloth.kernels.floor import floor_contact
 from wetcloth.kernels.integration import largest_deviation, speed_and_finiteness
 from wetcloth.model import Model
@@ -53,6 +53,7 @@ class Simulation:
         self._speed = 0.0  # m/s, fastest particle of the current state
         self._calm_time = 0.0  # s of simulated time spent within SLEEP_DISTANCE of _anchor
         self._anchor = self.state.pos.copy()
+        self._wick_buffer = np.zeros((6, self.model.topology.n))
         self._unchecked_time = 0.0  # s simulated since stillness was last checked
         self._exchanging = False  # whether water went in or out since then
         self.sleeping = False
@@ -144,17 +145,29 @@ class Simulation:
         self._maybe_sleep(h, exchanging)
 
     def _finish_step(self, trial: State, h: float) -> bool:
-        """Floor contact, then water uptake over the step (exact exponential update).
-
-        Returns whether any particle's water changed."""
+        """Floor contact, then the water's exchanges over the step: uptake where the cloth touches
+        water (exact exponential update), drying in air, wicking between neighbours.  Each is
+        skipped when its rate is zero.  Returns whether any particle's water changed."""
         scene, model = self.scene, self.model
         floor_contact(model.floor_z, scene.floor_friction, trial.pos, trial.vel)
         trial.water[...] = self.state.water
-        if scene.absorption_capacity > 0.0 and scene.absorption_rate > 0.0:
-            if model.touches_water(trial.pos[2]) > 0.0:
-                decay = math.exp(-scene.absorption_rate * h / scene.absorption_capacity)
-                return absorb(model.s, model.dry_mass, scene.absorption_capacity, decay, trial.water, trial.vel) > 0
-        return False
+        absorbing = scene.absorption_capacity > 0.0 and scene.absorption_rate > 0.0
+        if not (absorbing or scene.drying_rate > 0.0 or scene.wicking_rate > 0.0):
+            return False
+        model.touches_water(trial.pos[2])
+        exchanged = 0
+        if absorbing:
+            decay = math.exp(-scene.absorption_rate * h / scene.absorption_capacity)
+            exchanged += absorb(model.s, model.dry_mass, scene.absorption_capacity, decay, trial.water, trial.vel)
+        if scene.drying_rate > 0.0:
+            exchanged += dry(model.s, math.exp(-scene.drying_rate * h), trial.water)
+        if scene.wicking_rate > 0.0 and scene.absorption_capacity > 0.0:
+            substeps = max(1, math.ceil(h / model.wick_step_limit))
+            moved = wick(model.wick_offsets, model.wick_conductance, model.capacity, model.dry_mass, substeps, h,
+                         trial.water, trial.vel, self._wick_buffer)
+            trial.vel *= model.free
+            exchanged += moved > 0.0
+        return exchanged > 0
 
     def _maybe_sleep(self, h: float, exchanging: bool) -> None:
         """Fall asleep after SLEEP_AFTER s still, with no water exchange (velocities then zero).

@@ -35,11 +35,13 @@ class State:
 
 
 def initial_state(scene: Scene, topo: Topology) -> State:
-    """The cloth at rest, flat, centred over the origin at ``initial_height``, tilted about x."""
+    """The cloth at rest, flat, centred over the origin at ``initial_height``, tilted about x, holding
+    ``initial_saturation`` of its capacity of water."""
     tilt = math.radians(scene.initial_tilt)
     x, y = topo.rest_xy
     pos = np.empty((3, topo.n))
     pos[0] = x
     pos[1] = y * math.cos(tilt)
     pos[2] = scene.initial_height + y * math.sin(tilt)
-    return State(time=0.0, pos=pos, vel=np.zeros((3, topo.n)), water=np.zeros(topo.n))
+    water = scene.initial_saturation * scene.absorption_capacity * scene.areal_density * topo.area
+    return State(time=0.0, pos=pos, vel=np.zeros((3, topo.n)), water=water)

@@ -30,6 +30,7 @@ class Topology:
     spring_tension_only: np.ndarray  # (F,) bool: True for structural and shear springs
     spring_stiffness: np.ndarray  # (F, n) N/m, zero where a family has no spring
     spring_damping: np.ndarray  # (F, n) N s/m
+    spring_shape: np.ndarray  # (F, n) strip area / rest length^2 (-): stiffness = modulus * shape
     spring_family_names: tuple[str, ...]
     triangles: np.ndarray  # (m, 3) int64, counter-clockwise seen from +z in the rest sheet
     pinned: np.ndarray  # (n,) bool
@@ -76,7 +77,7 @@ def build_topology(scene: Scene) -> Topology:
         ("bend_x", 2, 2 * dx, 2 * dx * dy * wr, col < nx - 2, False, True),
         ("bend_y", 2 * nx, 2 * dy, 2 * dy * dx * wc, row < ny - 2, False, True),
     ]
-    names, offsets, rests, tension, ks, cs = [], [], [], [], [], []
+    names, offsets, rests, tension, ks, cs, shapes = [], [], [], [], [], [], []
     for name, offset, rest, strip_area, exists, tension_only, bending in families:
         modulus = scene.bend_stiffness if bending else scene.stretch_stiffness
         if modulus == 0.0 or not exists.any():
@@ -87,6 +88,7 @@ def build_topology(scene: Scene) -> Topology:
         tension.append(tension_only)
         ks.append(np.where(exists, modulus * strip_area / rest**2, 0.0))
         cs.append(np.where(exists, scene.damping * strip_area / rest**2, 0.0))
+        shapes.append(np.where(exists, strip_area / rest**2, 0.0))
 
     quads = (col < nx - 1) & (row < ny - 1)
     a = np.flatnonzero(quads)
@@ -105,6 +107,7 @@ def build_topology(scene: Scene) -> Topology:
         spring_tension_only=np.array(tension, dtype=np.bool_),
         spring_stiffness=np.array(ks, dtype=np.float64).reshape(len(ks), n),
         spring_damping=np.array(cs, dtype=np.float64).reshape(len(cs), n),
+        spring_shape=np.array(shapes, dtype=np.float64).reshape(len(shapes), n),
         spring_family_names=tuple(names),
         triangles=triangles.astype(np.int64),
         pinned=_pinned_mask(scene.pinned_edge, col, row, nx, ny),
