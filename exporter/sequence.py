@@ -144,6 +144,13 @@ class FrameSequence:
         return self.directory / frame_file_name(self.prefix, number, self.format, self.digits)
 
     # ------------------------------------------------------------------ writing
+    def resume_after(self, frames_written: int) -> None:
+        """Continue a run restored to an earlier (or later) point: the next frame written is
+        ``frames_written + 1``, replacing any file of that number."""
+        if not (isinstance(frames_written, int) and frames_written >= 0):
+            raise ExportError(f"frames_written must be a whole number >= 0, got {frames_written!r}")
+        self.frame_count = frames_written
+
     def on_frame(self, index: int, sim) -> None:
         """Runner callback: write ``sim``'s cloth as frame ``index + 1`` (index 0 is t = 0)."""
         if index != self.frame_count:

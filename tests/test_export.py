@@ -426,3 +426,20 @@ def test_cli_exports_frames(tmp_path):
     manifest = json.loads((out / "frames.json").read_text())
     assert (manifest["frame_count"], manifest["fps"], manifest["writer"]) == (3, 10.0, "meshio")
     assert manifest["scene"]["nx"] == 5
+
+
+def test_a_restored_run_resumes_its_frames_after_the_restored_frame(tmp_path):
+    """resume_after(n): the next frame is n + 1 and replaces the file the abandoned branch wrote."""
+    scene = wetcloth.load_scene(nx=3, ny=3)
+    sim = wetcloth.Simulation(scene)
+    sequence = open_sequence(tmp_path / "frames", fps=30, scene=scene)
+    for _ in range(3):
+        sequence.write_frame(sim.positions, sim.wetness)
+    moved = sim.positions + 1.0
+    sequence.resume_after(1)
+    written = sequence.write_frame(moved, sim.wetness)
+    sequence.close()
+    assert written.name == "cloth_0002.ply" and sequence.frame_count == 2
+    np.testing.assert_allclose(trimesh.load(written, process=False).vertices, moved.astype(np.float32))
+    with pytest.raises(ExportError, match="frames_written"):
+        sequence.resume_after(-1)

@@ -51,9 +51,10 @@ class Trajectory:
     steps: int
 
 
-def simulate(case: Case, **settings) -> Trajectory:
-    """Run a case with integrator settings, exchanging inputs and outputs at SAMPLE_RATE."""
-    sim = Simulation(case.scene.replace(**settings))
+def simulate(case: Case, skip_idle_work: bool = True, **settings) -> Trajectory:
+    """Run a case with integrator settings, exchanging inputs and outputs at SAMPLE_RATE.
+    References pass ``skip_idle_work=False``: they compute every step, asleep or not."""
+    sim = Simulation(case.scene.replace(**settings), skip_idle_work=skip_idle_work)
     frames = int(round(case.duration * SAMPLE_RATE))
     centroid, positions, wet_mass = [], [], []
     start = time.perf_counter()

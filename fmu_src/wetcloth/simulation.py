@@ -15,8 +15,16 @@ from wetcloth.model import Model
 from wetcloth.scene import INPUT, PARAMETERS, Scene, load_scene
 from wetcloth.state import State, initial_state
 
-#: Names of the outputs, as the FMU publishes them.
-OUTPUT_NAMES = ("centroid_x", "centroid_y", "centroid_z", "depth", "wet_mass", "water_mass")
+#: The outputs (MODEL.md section 7), as the FMU publishes them: name -> (unit, meaning).
+OUTPUTS = {
+    "centroid_x": ("m", "mass-weighted mean particle position, x"),
+    "centroid_y": ("m", "mass-weighted mean particle position, y"),
+    "centroid_z": ("m", "mass-weighted mean particle position, z (z is up)"),
+    "depth": ("m", "water_level - centroid_z; positive below the surface"),
+    "wet_mass": ("kg", "dry mass plus absorbed water"),
+    "water_mass": ("kg", "absorbed water"),
+}
+OUTPUT_NAMES = tuple(OUTPUTS)
 
 #: Speed (m/s) beyond which the state counts as exploded: far above any fall in a tank.
 BLOW_UP_SPEED = 1.0e3

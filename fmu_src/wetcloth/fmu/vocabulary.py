@@ -5,7 +5,7 @@ String, floats Real; fields whose metadata says ``fmu="input"`` are continuous R
 others fixed parameters.  Unit, description, start value and range come from the field metadata,
 so parameters added to the Scene later appear in the FMU without touching this package.
 Two FMU-only parameters (``mesh_output_dir``, ``mesh_format``) and the six outputs of
-``wetcloth.OUTPUT_NAMES`` complete the interface.
+``wetcloth.simulation.OUTPUTS`` complete the interface.
 """
 
 from __future__ import annotations
@@ -17,24 +17,13 @@ from dataclasses import dataclass
 from typing import Any, Iterable
 
 from wetcloth.scene import INPUT, PARAMETERS, describe_range
-from wetcloth.simulation import OUTPUT_NAMES
+from wetcloth.simulation import OUTPUTS
 
 #: Model name and FMI model identifier (binary and FMU file name).
 MODEL_NAME = "WetCloth"
 
 #: Mesh formats the unit can write at every communication point.
 MESH_FORMATS = ("ply", "obj")
-
-#: Units and meanings of the outputs (MODEL.md section 7, INTERFACE.md), in ``OUTPUT_NAMES`` order.
-OUTPUTS = {
-    "centroid_x": ("m", "mass-weighted mean particle position, x"),
-    "centroid_y": ("m", "mass-weighted mean particle position, y"),
-    "centroid_z": ("m", "mass-weighted mean particle position, z (z is up)"),
-    "depth": ("m", "water_level - centroid_z; positive below the surface"),
-    "wet_mass": ("kg", "dry mass plus absorbed water"),
-    "water_mass": ("kg", "absorbed water"),
-}
-
 
 @dataclass(frozen=True)
 class VariableSpec:
@@ -95,8 +84,6 @@ def variable_specs(fields: Iterable[dataclasses.Field] | None = None) -> list[Va
         VariableSpec("mesh_format", "String", "parameter", "fixed",
                      "mesh format of the frames (allowed: one of 'ply', 'obj')", start="ply", scene=False),
     ]
-    if tuple(OUTPUTS) != tuple(OUTPUT_NAMES):
-        raise RuntimeError(f"wetcloth.OUTPUT_NAMES {OUTPUT_NAMES} and the FMU's outputs {tuple(OUTPUTS)} differ")
     specs += [VariableSpec(n, "Real", "output", "continuous", doc, unit=u, scene=False) for n, (u, doc) in OUTPUTS.items()]
     return specs
 

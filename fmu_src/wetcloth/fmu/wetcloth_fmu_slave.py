@@ -265,7 +265,7 @@ class WetCloth(Fmi2Slave):
             else:
                 Path(directory).mkdir(parents=True, exist_ok=True)
                 sequence = FrameSequence(Path(directory), fmt, "trimesh", fps, scene=self.sim.scene)
-                sequence.frame_count = self._frame
+                sequence.resume_after(self._frame)
         except Exception as exc:
             self._reject("mesh_output_dir", f"parameter 'mesh_output_dir': cannot write {fmt} frames into "
                                             f"{directory!r}: {exc}", "no step is taken")
@@ -305,7 +305,7 @@ class WetCloth(Fmi2Slave):
         self._frame = state["frame"]
         self.sim = copy.deepcopy(state["sim"])  # the snapshot stays reusable
         if self._sequence is not None:
-            self._sequence.frame_count = self._frame  # rolled back: the next frames overwrite later ones
+            self._sequence.resume_after(self._frame)  # rolled back: the next frames overwrite later ones
         self._preview = None
         self._outputs = None
 
