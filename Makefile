@@ -39,9 +39,12 @@ demo: $(STAMP)
 test: $(STAMP) $(BLENDER_STAMP)
 	WETCLOTH_REQUIRE_BLENDER=1 $(BIN)/python -m pytest -q
 
+# The quicker benchmarks; docs/benchmarks.md lists every one with its command.
 bench: $(STAMP)
 	$(BIN)/python bench/step_speed.py
+	$(BIN)/python bench/skip_gains.py
 	$(BIN)/python bench/export_speed.py
+	$(BIN)/python bench/fmu_overhead.py
 
 clean:
 	rm -rf out build .pytest_cache

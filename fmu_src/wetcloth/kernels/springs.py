@@ -30,6 +30,15 @@ def add_to_both_ends(b, off, out, sign):
         second[k] += sign * values[k]
 
 
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _pair_views(off, pos, vel, saturation):
+    """Views of positions, velocities and saturations at every spring's first and second ends."""
+    m = pos.shape[1] - off
+    return (pos[0, :m], pos[1, :m], pos[2, :m], pos[0, off:], pos[1, off:], pos[2, off:],
+            vel[0, :m], vel[1, :m], vel[2, :m], vel[0, off:], vel[1, off:], vel[2, off:],
+            saturation[:m], saturation[off:])
+
+
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def _tension(off, l0, tension_only, projected, kf, cf, wet_factor, saturation, pos, vel, t):
     """t[k] (N/m): spring k's force on its first end is ``t[k] * (x_i - x_j)`` (plus thesis damping).
@@ -38,11 +47,7 @@ def _tension(off, l0, tension_only, projected, kf, cf, wet_factor, saturation, p
     projected damping ``-c ((v_i - v_j) . d) / L^2``; stiffness scaled by ``1 + wet_factor * sat``.
     """
     m = pos.shape[1] - off
-    xi, yi, zi = pos[0, :m], pos[1, :m], pos[2, :m]
-    xj, yj, zj = pos[0, off:], pos[1, off:], pos[2, off:]
-    vxi, vyi, vzi = vel[0, :m], vel[1, :m], vel[2, :m]
-    vxj, vyj, vzj = vel[0, off:], vel[1, off:], vel[2, off:]
-    si, sj = saturation[:m], saturation[off:]
+    xi, yi, zi, xj, yj, zj, vxi, vyi, vzi, vxj, vyj, vzj, si, sj = _pair_views(off, pos, vel, saturation)
     damp = 1.0 if projected else 0.0
     floor = 0.0 if tension_only else -math.inf
     for k in range(m):
@@ -96,11 +101,7 @@ def _blocks(off, l0, tension_only, projected, kf, cf, wet_factor, saturation, po
     ``u`` (3, n), the system-matrix block ``along u u^T + across (I - u u^T)`` and the relative
     velocity along the spring ``rate``."""
     m = pos.shape[1] - off
-    xi, yi, zi = pos[0, :m], pos[1, :m], pos[2, :m]
-    xj, yj, zj = pos[0, off:], pos[1, off:], pos[2, off:]
-    vxi, vyi, vzi = vel[0, :m], vel[1, :m], vel[2, :m]
-    vxj, vyj, vzj = vel[0, off:], vel[1, off:], vel[2, off:]
-    si, sj = saturation[:m], saturation[off:]
+    xi, yi, zi, xj, yj, zj, vxi, vyi, vzi, vxj, vyj, vzj, si, sj = _pair_views(off, pos, vel, saturation)
     ux, uy, uz = u[0], u[1], u[2]
     damp_along = 1.0 if projected else 0.0
     damp_across = 0.0 if projected else 1.0
