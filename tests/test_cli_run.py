@@ -1,6 +1,8 @@
 """``wetcloth run``: outputs as CSV and a plot, overrides, and clear errors."""
 
 import csv
+import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -33,3 +35,22 @@ def test_console_script_is_installed(tmp_path):
     result = subprocess.run([str(exe), "run", "--set", "colour=blue"], capture_output=True, text=True, cwd=tmp_path)
     assert result.returncode == 2
     assert "unknown parameter" in result.stderr and "colour" in result.stderr
+
+
+def test_blow_up_keeps_the_good_outputs_and_frames(tmp_path, capsys):
+    """Fixed steps far beyond explicit Euler's limit blow up within 0.1 s: the command fails with the
+    guard's message, yet the outputs of every frame before the blow-up are written (finite), and
+    frames.json counts the frames on disk and marks the sequence incomplete."""
+    csv_path, frames = tmp_path / "o.csv", tmp_path / "frames"
+    code = main(["run", "--duration", "1", "--set", "integrator=explicit_euler", "--set", "tolerance=0",
+                 "--set", "max_step=0.01", "--set", "nx=9", "--set", "ny=9", "--csv", str(csv_path),
+                 "--plot", str(tmp_path / "p.png"), "--export", str(frames), "--no-progress"])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "Last good time" in err and "outputs up to t =" in err
+    rows = list(csv.DictReader(open(csv_path)))
+    assert 0 < len(rows) < 30
+    assert all(math.isfinite(float(value)) for row in rows for value in row.values())
+    manifest = json.loads((frames / "frames.json").read_text())
+    assert manifest["complete"] is False
+    assert manifest["frame_count"] == len(rows) == len(list(frames.glob("cloth_*.ply")))

@@ -11,6 +11,7 @@ from typing import Callable
 import numpy as np
 from tqdm.auto import tqdm
 
+from wetcloth.errors import BlowUpError
 from wetcloth.scene import Scene
 from wetcloth.simulation import OUTPUT_NAMES, Simulation
 
@@ -78,6 +79,7 @@ def run(
     """Simulate ``scene`` for ``duration`` s; record outputs at ``fps`` and ``snapshots`` cloth shapes.
 
     ``on_frame(index, sim)`` is called at every frame (index 0 at t = 0), for exporters.
+    A blow-up raises ``BlowUpError`` with the frames recorded so far as its ``partial_result``.
     A progress bar (tqdm, simulated seconds) shows when ``progress`` is True, or by default for
     runs longer than ``PROGRESS_AFTER`` seconds.
     """
@@ -89,7 +91,11 @@ def run(
     with tqdm(total=float(duration), unit="sim s", disable=not show, desc="simulating",
               bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} sim s [{elapsed}<{remaining}]") as bar:
         for index, t in enumerate(times):
-            sim.advance(t - sim.time)
+            try:
+                sim.advance(t - sim.time)
+            except BlowUpError as exc:
+                exc.partial_result = result  # every frame up to the last good one
+                raise
             result.rows.append({"time": float(t), **sim.outputs()})
             if index in snapshot_frames:
                 result.snapshots.append(Snapshot(float(t), sim.positions, sim.wetness))

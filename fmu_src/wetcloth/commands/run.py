@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
+from wetcloth.errors import BlowUpError
 from wetcloth.runner import run
 from wetcloth.scene import load_scene, read_scene_file
 
@@ -42,20 +44,39 @@ def main(args) -> int:
     scene = load_scene(args.scene, **dict(args.overrides))
     duration = args.duration if args.duration is not None else float(run_table.get("duration", DEFAULT_DURATION))
     fps = args.fps if args.fps is not None else float(run_table.get("fps", DEFAULT_FPS))
-    on_frame, finish = None, None
+    title = f"{args.scene or 'towel'}: {duration:g} s"
+    sequence = None
     if args.export is not None:
         from wetcloth.exporter import open_sequence  # only needed when exporting
 
+        # Opened (and the directory checked) before any simulating.
         sequence = open_sequence(args.export, fmt=args.format, writer=args.writer, fps=fps, scene=scene)
-        on_frame, finish = sequence.on_frame, sequence.close
-    result = run(scene, duration, fps, on_frame=on_frame, progress=False if args.no_progress else None)
-    if finish is not None:
-        finish()
-    csv_path = result.write_csv(args.csv)
-    from wetcloth.plotting import plot_run
-
-    plot_path = plot_run(result, args.plot, title=f"{args.scene or 'towel'}: {duration:g} s")
+    try:
+        result = run(scene, duration, fps, on_frame=sequence.on_frame if sequence else None,
+                     progress=False if args.no_progress else None)
+    except BlowUpError as exc:
+        # Keep what was good: the frames already written and the outputs up to the last good frame.
+        if sequence is not None:
+            sequence.close(complete=False)
+        partial = exc.partial_result
+        if partial is not None and partial.rows:
+            written = _write_outputs(partial, args, title + f" (stopped at {partial.rows[-1]['time']:g} s)")
+            print(f"the run stopped early; outputs up to t = {partial.rows[-1]['time']:g} s are in {written}",
+                  file=sys.stderr)
+        raise
+    if sequence is not None:
+        sequence.close()
     last = result.rows[-1]
     print(f"simulated {duration:g} s: depth {last['depth'] * 100:.2f} cm, wet mass {last['wet_mass'] * 1000:.1f} g")
-    print(f"wrote {csv_path} and {plot_path}" + (f"; meshes in {args.export}" if args.export else ""))
+    written = _write_outputs(result, args, title)
+    print(f"wrote {written}" + (f"; meshes in {args.export}" if args.export else ""))
     return 0
+
+
+def _write_outputs(result, args, title: str) -> str:
+    """Write the outputs CSV and the plot of ``result``; return their paths as text."""
+    from wetcloth.plotting import plot_run
+
+    csv_path = result.write_csv(args.csv)
+    plot_path = plot_run(result, args.plot, title=title)
+    return f"{csv_path} and {plot_path}"
