@@ -53,6 +53,44 @@ def test_every_scene_field_is_a_variable_with_its_metadata(md):
             assert float(v.min) == meta["lo"] and float(v.max) == meta["hi"], name
 
 
+#: INTERFACE.md's promise, written out here rather than derived from the Scene, so that a renamed
+#: variable or a changed unit fails: name -> (FMI type, causality, FMI unit or None).
+INTERFACE = {
+    "water_level": ("Real", "input", "m"), "water_density": ("Real", "input", "kg/m3"),
+    "absorption_capacity": ("Real", "input", "kg/kg"), "absorption_rate": ("Real", "input", "1/s"),
+    "centroid_x": ("Real", "output", "m"), "centroid_y": ("Real", "output", "m"),
+    "centroid_z": ("Real", "output", "m"), "depth": ("Real", "output", "m"),
+    "wet_mass": ("Real", "output", "kg"), "water_mass": ("Real", "output", "kg"),
+    "nx": ("Integer", "parameter", None), "ny": ("Integer", "parameter", None),
+    "width": ("Real", "parameter", "m"), "length": ("Real", "parameter", "m"),
+    "areal_density": ("Real", "parameter", "kg/m2"), "thickness": ("Real", "parameter", "m"),
+    "stretch_stiffness": ("Real", "parameter", "N/m"), "bend_stiffness": ("Real", "parameter", "N/m"),
+    "damping": ("Real", "parameter", "N.s/m"), "water_viscosity": ("Real", "parameter", "Pa.s"),
+    "drag_model": ("String", "parameter", None), "drag_normal": ("Real", "parameter", None),
+    "drag_tangential": ("Real", "parameter", None), "drag_linear": ("Real", "parameter", "N.s/m3"),
+    "buoyancy_model": ("String", "parameter", None), "initial_height": ("Real", "parameter", "m"),
+    "initial_tilt": ("Real", "parameter", "deg"), "floor_level": ("Real", "parameter", "m"),
+    "integrator": ("String", "parameter", None), "tolerance": ("Real", "parameter", None),
+    "max_step": ("Real", "parameter", "s"), "mesh_output_dir": ("String", "parameter", None),
+    "mesh_format": ("String", "parameter", None),
+}
+
+
+def test_interface_md_variables_keep_their_names_types_and_units(md):
+    variables = {v.name: v for v in md.modelVariables}
+    for name, (fmi_type, causality, unit) in INTERFACE.items():
+        v = variables[name]
+        assert (v.type, v.causality, v.unit) == (fmi_type, causality, unit), name
+        assert v.description, name
+        if causality != "output":
+            assert v.start is not None, name
+        if fmi_type != "String":
+            assert causality == "output" or (v.min is not None and v.max is not None), name
+    assert variables["nx"].min == variables["ny"].min == "2"  # INTERFACE.md: Integer, >= 2
+    assert (variables["drag_model"].start, variables["mesh_format"].start) == ("face", "ply")
+    assert variables["mesh_output_dir"].start == ""  # "" = off
+
+
 def test_outputs_and_mesh_parameters(md):
     variables = {v.name: v for v in md.modelVariables}
     for name in OUTPUT_NAMES:
@@ -200,6 +238,30 @@ def test_unit_refuses_a_wetcloth_whose_variables_differ(fmu, tmp_path):
     assert done.returncode == 0, done.stderr[-3000:]
     assert "RAISED" in done.stdout
     assert "rebuild it with `wetcloth build-fmu`" in done.stdout + done.stderr
+
+
+CHILD_OTHER_SOURCES = r"""
+import json, sys, fmpy
+from pathlib import Path
+import wetcloth  # the host's wetcloth, imported before the unit loads
+directory = Path(fmpy.extract(sys.argv[1]))
+manifest = directory / "resources" / "wetcloth_fmu_manifest.json"
+data = json.loads(manifest.read_text())
+data["files"]["simulation.py"] = "0" * 64  # as if the FMU had been built from other sources
+manifest.write_text(json.dumps(data))
+res = fmpy.simulate_fmu(str(directory), stop_time=0.1, output_interval=0.1, start_values={"nx": 5, "ny": 5})
+print(json.dumps({"file": sys.modules["wetcloth"].__file__, "rows": len(res)}))
+"""
+
+
+def test_unit_warns_when_it_runs_an_imported_wetcloth_of_other_sources(fmu, tmp_path):
+    """One wetcloth per process: the unit runs the one imported, and says so when it differs."""
+    done = subprocess.run([sys.executable, "-c", CHILD_OTHER_SOURCES, str(fmu)], capture_output=True, text=True,
+                          timeout=300, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr[-3000:]
+    result = __import__("json").loads(done.stdout.strip().splitlines()[-1])
+    assert result["file"] == wetcloth.__file__ and result["rows"] == 2
+    assert "whose sources differ from the copy the FMU was built with" in done.stderr
 
 
 def test_an_fmu_older_than_the_sources_is_stale(fmu, tmp_path):

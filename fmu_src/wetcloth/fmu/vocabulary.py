@@ -22,8 +22,10 @@ from wetcloth.simulation import OUTPUTS
 #: Model name and FMI model identifier (binary and FMU file name).
 MODEL_NAME = "WetCloth"
 
-#: Mesh formats the unit can write at every communication point.
+#: Mesh formats the unit can write at every communication point, and how messages name them.
 MESH_FORMATS = ("ply", "obj")
+MESH_FORMAT_RANGE = "one of " + ", ".join(repr(f) for f in MESH_FORMATS)
+
 
 @dataclass(frozen=True)
 class VariableSpec:
@@ -82,7 +84,7 @@ def variable_specs(fields: Iterable[dataclasses.Field] | None = None) -> list[Va
         VariableSpec("mesh_output_dir", "String", "parameter", "fixed",
                      "folder for one mesh frame per communication point; empty = no meshes", start="", scene=False),
         VariableSpec("mesh_format", "String", "parameter", "fixed",
-                     "mesh format of the frames (allowed: one of 'ply', 'obj')", start="ply", scene=False),
+                     f"mesh format of the frames (allowed: {MESH_FORMAT_RANGE})", start="ply", scene=False),
     ]
     specs += [VariableSpec(n, "Real", "output", "continuous", doc, unit=u, scene=False) for n, (u, doc) in OUTPUTS.items()]
     return specs

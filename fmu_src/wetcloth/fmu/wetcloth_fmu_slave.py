@@ -3,7 +3,8 @@
 
 Which Python runs this: pythonfmu's binary does not link a Python library; it uses the
 interpreter of the process that loads the FMU (fmpy, libcosimpy, any Python master).  That
-interpreter must have wetcloth's dependencies (numpy, numba; trimesh for mesh frames).
+interpreter must have wetcloth's dependencies (numpy, numba; for mesh frames also trimesh,
+scipy, matplotlib and meshio).
 wetcloth itself travels inside the FMU (``resources/wetcloth``): when the host's own wetcloth is
 the very same source (same file digests, e.g. the project's ``.venv``), that one is imported so
 numba's compiled-kernel cache is reused; otherwise the bundled copy is.
@@ -49,9 +50,18 @@ def _same_sources(package_dir: Path, files: dict[str, str]) -> bool:
 
 
 def _import_wetcloth(manifest: dict | None):
-    """Import wetcloth: the host's copy if already imported or identical to the bundle, else the bundle."""
+    """Import wetcloth: the host's copy if already imported or identical to the bundle, else the bundle.
+
+    A process holds one wetcloth: one already imported is used as it is, with a warning when its
+    sources differ from the bundle's.
+    """
     if "wetcloth" in sys.modules or manifest is None:
-        return importlib.import_module("wetcloth")
+        module = importlib.import_module("wetcloth")
+        if manifest is not None and not _same_sources(Path(module.__file__).parent, manifest["files"]):
+            LOG.warning("this WetCloth.fmu runs the wetcloth already imported in this process (%s), whose sources "
+                        "differ from the copy the FMU was built with; results may differ from that build's",
+                        Path(module.__file__).parent)
+        return module
     saved = list(sys.path)
     try:
         sys.path[:] = [p for p in saved if Path(p or ".").resolve() != HERE]
@@ -70,7 +80,7 @@ wetcloth = _import_wetcloth(_MANIFEST)
 
 from wetcloth.errors import BlowUpError, ParameterError  # noqa: E402
 from wetcloth.fmu.description import extend_model_description, make_variable  # noqa: E402
-from wetcloth.fmu.vocabulary import MESH_FORMATS, MODEL_NAME, variable_specs  # noqa: E402
+from wetcloth.fmu.vocabulary import MESH_FORMAT_RANGE, MESH_FORMATS, MODEL_NAME, variable_specs  # noqa: E402
 from wetcloth.scene import check_value, from_dict, read_scene_file  # noqa: E402
 from wetcloth.simulation import Simulation  # noqa: E402
 
@@ -87,6 +97,9 @@ if _MANIFEST is not None and _MANIFEST["variables"] != [s.name for s in SPECS]:
 STATE_FORMAT = "wetcloth-fmu-state/1"
 #: Relative tolerance when matching the master's communication time with the unit's time.
 TIME_TOLERANCE = 1e-9
+#: Key of the pending error of parameters that pass one by one but not together (fixed after
+#: initialization, so no setter clears it).
+INVALID_SCENE = "scene"
 
 
 def _default_experiment() -> DefaultExperiment:
@@ -158,15 +171,15 @@ class WetCloth(Fmi2Slave):
             except ParameterError as exc:
                 return self._reject(name, str(exc))
         elif name == "mesh_format" and value not in MESH_FORMATS:
-            return self._reject(name, f"parameter 'mesh_format': {value!r} is not allowed; allowed: one of "
-                                      + ", ".join(repr(f) for f in MESH_FORMATS))
+            return self._reject(name, f"parameter 'mesh_format': {value!r} is not allowed; "
+                                      f"allowed: {MESH_FORMAT_RANGE}")
         if self._initialized:
             if spec.causality != "input":
-                if value != self._values[name]:
-                    self._reject(name, f"parameter '{name}' is fixed once the unit is initialized; only the inputs "
-                                       + ", ".join(s.name for s in SPECS if s.causality == "input") + " may change")
-                return
-            if value != self._values[name]:
+                if value != self._values[name]:  # its own value is accepted (and clears a refused change)
+                    return self._reject(name, f"parameter '{name}' is fixed once the unit is initialized; only the "
+                                              "inputs " + ", ".join(s.name for s in SPECS if s.causality == "input")
+                                              + " may change")
+            elif value != self._values[name]:
                 try:
                     self.sim.set_inputs(**{name: value})
                 except ParameterError as exc:
@@ -206,7 +219,7 @@ class WetCloth(Fmi2Slave):
         try:
             self.sim = Simulation(from_dict(self._scene_values()))
         except ParameterError as exc:
-            self._reject(exc.name, str(exc), "the parameters do not form a valid scene; the unit will not step")
+            self._reject(INVALID_SCENE, str(exc), "the parameters do not form a valid scene; the unit will not step")
             self.sim = self._preview_simulation()  # last accepted configuration: outputs stay defined
 
     def do_step(self, current_time: float, step_size: float) -> bool:
