@@ -35,13 +35,17 @@ FRAME_WRITERS: dict[tuple[str, str], Callable[[Path, Frame], None]] = {
 }
 MANIFEST = "frames.json"
 LOADER = "load_in_blender.py"
-#: Files that show a directory already holds a run's frames: any ``name_0001.ply``-like frame, a
-#: USD file, a manifest or a loader.
-_FRAME_FILE = re.compile(r"^.+_\d{4,}\.(ply|obj)$")
+#: Least zero-padding of frame numbers (the public naming: ``cloth_0001.ply``).
+MIN_DIGITS = 4
+#: A frame is written as ``<name>.part`` and then renamed, so no reader sees half a frame.
+PARTIAL = ".part"
+#: Files that show a directory already holds a run's frames: any ``name_0001.ply``-like frame (or
+#: one an interrupted run left half-written), a USD file, a manifest or a loader.
+_FRAME_FILE = re.compile(r"^.+_\d{4,}\.(ply|obj)(\.part)?$")
 _PREFIX = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
-def frame_file_name(prefix: str, number: int, fmt: str, digits: int = 4) -> str:
+def frame_file_name(prefix: str, number: int, fmt: str, digits: int = MIN_DIGITS) -> str:
     """``cloth_0001.ply``: the file of frame ``number`` (1-based), zero-padded to ``digits`` or more."""
     return f"{prefix}_{number:0{digits}d}.{fmt}"
 
@@ -110,7 +114,7 @@ class FrameSequence:
     """
 
     def __init__(self, directory: Path, fmt: str, writer: str, fps: float, scene=None,
-                 triangles=None, uv=None, prefix: str = "cloth", digits: int = 4):
+                 triangles=None, uv=None, prefix: str = "cloth", digits: int = MIN_DIGITS):
         self.directory = directory
         self.format = fmt
         self.writer = "usd-core" if fmt == "usd" else writer
@@ -192,8 +196,10 @@ class FrameSequence:
         if self._usd is not None:
             self._usd.write(number, frame)
         else:
+            partial = path.with_name(path.name + PARTIAL)
             try:
-                FRAME_WRITERS[(self.format, self.writer)](path, frame)
+                FRAME_WRITERS[(self.format, self.writer)](partial, frame)
+                os.replace(partial, path)
             except OSError as exc:
                 raise ExportError(f"cannot write frame {path}: {exc.strerror or exc}") from None
         self.frame_count = number
@@ -279,7 +285,7 @@ class FrameSequence:
 
 
 def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: float = 30.0, scene=None, *,
-                  triangles=None, uv=None, prefix: str = "cloth", digits: int = 4,
+                  triangles=None, uv=None, prefix: str = "cloth", digits: int = MIN_DIGITS,
                   overwrite: bool = False) -> FrameSequence:
     """Start a frame sequence in ``directory``, checked now: ExportError if it cannot be used.
 
@@ -287,12 +293,14 @@ def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: flo
     obj; usd is always written by usd-core); fps: frames per second of the sequence (1/s);
     scene: the Scene, recorded in frames.json and used for the triangles and UVs when frames come
     from ``write_frame`` rather than ``on_frame``; triangles (m, 3) and uv (n, 2) in 0..1: the
-    same without a scene; prefix: file names ``<prefix>_0001.<fmt>``; digits: least zero-padding;
+    same without a scene; prefix: file names ``<prefix>_0001.<fmt>``; digits: least zero-padding (4 to 12);
     overwrite: delete an earlier run's frames in the directory instead of refusing it.
 
     The directory is created if missing.  Refused up front: a path that is a file, a directory
     that cannot be created or written, and one that already holds frames (``*_0001.ply``-like
-    files, a ``.usd``, ``frames.json`` or ``load_in_blender.py``) unless ``overwrite``.
+    files, a ``.usd``, ``frames.json`` or ``load_in_blender.py``) unless ``overwrite``.  Each frame
+    file appears whole (written under a ``.part`` name, then renamed): a run stopped midway leaves
+    only complete frames.
     """
     if fmt not in FORMATS:
         raise ExportError(f"unknown mesh format {fmt!r}; choose one of {', '.join(FORMATS)}")
@@ -302,8 +310,8 @@ def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: flo
         raise ExportError(f"fps must be a finite number > 0, got {fps!r}")
     if not _PREFIX.match(prefix):
         raise ExportError(f"file prefix {prefix!r} must be letters, digits, '.', '_' or '-' (no path)")
-    if not (isinstance(digits, int) and 1 <= digits <= 12):
-        raise ExportError(f"digits must be a whole number from 1 to 12, got {digits!r}")
+    if not (isinstance(digits, int) and MIN_DIGITS <= digits <= 12):
+        raise ExportError(f"digits must be a whole number from {MIN_DIGITS} to 12, got {digits!r}")
     if directory is None or str(directory) == "":
         raise ExportError("no export directory given")
     directory = Path(directory)

@@ -120,14 +120,18 @@ def test_ply_writers_write_identical_properties(exported):
             assert_array_equal(a[name], b[name], err_msg=name)
 
 
-def test_ply_header_is_binary_with_wetness_and_colours(exported):
+def test_ply_header_is_binary_with_normals_wetness_and_colours(exported):
+    """Binary; float normals, float ``wetness``, 8-bit RGBA (``uchar``; meshio spells it ``uint8``)."""
     for writer in WRITERS:
         head = (exported.root / f"ply_{writer}" / "cloth_0001.ply").read_bytes()[:800]
-        header = head.split(b"end_header")[0].decode()
-        assert "format binary_little_endian 1.0" in header
-        assert "property float wetness" in header
-        for colour in ("red", "green", "blue", "alpha"):
-            assert f" {colour}\n" in header and ("uchar" in header or "uint8" in header)
+        lines = head.split(b"end_header")[0].decode().splitlines()
+        assert "format binary_little_endian 1.0" in lines
+        vertex = lines[lines.index(f"element vertex {len(exported.uv)}") + 1:]
+        vertex = vertex[:next(k for k, line in enumerate(vertex) if line.startswith("element"))]
+        types = {line.split()[2]: line.split()[1].replace("uint8", "uchar") for line in vertex}
+        assert types == {**dict.fromkeys(["x", "y", "z", "nx", "ny", "nz"], "float"),
+                         **dict.fromkeys(["red", "green", "blue", "alpha"], "uchar"),
+                         **dict.fromkeys(["wetness", "s", "t"], "float")}, writer
 
 
 # ------------------------------------------------------------------------------------------ OBJ
@@ -303,6 +307,33 @@ def test_sequence_refuses_out_of_order_frames_changed_topology_and_writes_after_
         sequence.write_frame(sim.positions, sim.wetness)
 
 
+def test_a_frame_interrupted_while_written_leaves_no_half_frame(tmp_path, monkeypatch):
+    """A run stopped inside a write (Ctrl-C) leaves only whole frames: Blender's importer fails on
+    half a PLY.  The leftover ``.part`` file marks the directory as used; ``overwrite`` removes it."""
+    import wetcloth.exporter.sequence as sequence_module
+
+    scene = wetcloth.load_scene(nx=3, ny=3)
+    sim = wetcloth.Simulation(scene)
+    sequence = open_sequence(tmp_path / "f", fps=30, scene=scene)
+    sequence.write_frame(sim.positions, sim.wetness)
+
+    def interrupted(path, frame):
+        Path(path).write_bytes(b"ply\nformat binary_little_endian 1.0\nelement vert")
+        raise KeyboardInterrupt
+
+    monkeypatch.setitem(sequence_module.FRAME_WRITERS, ("ply", "trimesh"), interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        sequence.write_frame(sim.positions, sim.wetness)
+    assert sorted(p.name for p in (tmp_path / "f").iterdir()) == [
+        "cloth_0001.ply", "cloth_0002.ply.part", "frames.json", "load_in_blender.py"]
+    assert len(trimesh.load(tmp_path / "f" / "cloth_0001.ply", process=False).vertices) == 9
+    (tmp_path / "f" / "cloth_0001.ply").unlink()
+    with pytest.raises(ExportError, match=r"already holds .*cloth_0002\.ply\.part"):
+        open_sequence(tmp_path / "f", fps=30)
+    open_sequence(tmp_path / "f", fps=30, overwrite=True).close()
+    assert sorted(p.name for p in (tmp_path / "f").iterdir()) == ["frames.json", "load_in_blender.py"]
+
+
 def test_memory_does_not_grow_with_the_number_of_frames(tmp_path):
     """Streaming: 40 more frames of a 32 x 32 cloth (40 kB of arrays each) add < 40 kB in all."""
     scene = wetcloth.load_scene(nx=32, ny=32)
@@ -389,6 +420,7 @@ def test_a_directory_that_cannot_be_written_is_refused(tmp_path, monkeypatch):
     (dict(writer="pyvista"), "unknown mesh writer 'pyvista'"),
     (dict(fps=0.0), "fps must be"),
     (dict(prefix="../x"), "prefix"),
+    (dict(digits=3), "digits must be a whole number from 4"),
 ])
 def test_bad_options_are_refused(tmp_path, kwargs, message):
     with pytest.raises(ExportError, match=message):
