@@ -122,10 +122,6 @@ class Unit:
         self.fmu.freeInstance()
 
 
-def direct_outputs(sim: wetcloth.Simulation) -> dict[str, float]:
-    return sim.outputs()
-
-
 def assert_same_outputs(a: dict, b: dict, rtol: float = 1e-12, atol: float = 1e-15) -> None:
     """Equal to round-off: the unit runs the same arithmetic as the direct simulation."""
     for name in OUTPUT_NAMES:

@@ -143,8 +143,9 @@ def documentation_html(specs: list[VariableSpec]) -> str:
         cells = (s.name, s.causality, s.type, unit, start, _range(s), s.description)
         rows.append("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in cells) + "</tr>")
     template = Template((DOCS / "index.html.in").read_text(encoding="utf-8"))
+    inputs = ", ".join(f"<code>{s.name}</code>" for s in specs if s.causality == "input")
     return template.substitute(
-        model=MODEL_NAME, version=html.escape(wetcloth.__version__), rows="\n".join(rows),
+        model=MODEL_NAME, version=html.escape(wetcloth.__version__), rows="\n".join(rows), inputs=inputs,
         python=f"{sys.version_info.major}.{sys.version_info.minor}",
     )
 

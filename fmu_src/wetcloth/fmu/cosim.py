@@ -8,7 +8,7 @@ import numpy as np
 
 from wetcloth.fmu.builder import DEFAULT_OUT, build_fmu, is_stale
 from wetcloth.runner import RunResult, Snapshot
-from wetcloth.scene import from_dict, read_scene_file
+from wetcloth.scene import PARAMETERS, load_scene, read_scene_file
 from wetcloth.simulation import OUTPUT_NAMES
 
 DEFAULT_DEMO_DIR = Path("out") / "demo"
@@ -79,8 +79,7 @@ def demo(out: str | Path = DEFAULT_DEMO_DIR, fmu: str | Path = DEFAULT_OUT, dura
     frames = out / "frames"
     values = {"mesh_output_dir": str(frames.resolve()), "mesh_format": "ply"} | dict(start_values or {})
     outputs = simulate(fmu, duration, fps, values, progress=progress)
-    scene_values = {k: v for k, v in preset.items() if k not in ("description", "run")}
-    scene = from_dict(scene_values | {k: v for k, v in values.items() if k in scene_values})
+    scene = load_scene(None, **{k: v for k, v in values.items() if k in PARAMETERS})
     result = run_result(outputs, scene, fps, frames)
     csv_path = result.write_csv(out / "outputs.csv")
     from wetcloth.plotting import plot_run
