@@ -13,6 +13,9 @@ It needs no add-on.  What it builds:
 * material ``wetcloth wetness``: a Principled BSDF that darkens and turns glossier with ``wetness``;
 * the scene's frame range (1 .. frame count) and frame rate (the sequence's fps).
 
+In a new, unsaved file Blender's untouched default cube is deleted first (the cloth would be
+hidden inside it); nothing else in the scene is touched.
+
 Everything lives in the .blend file: save it and it plays again when reopened, with no script
 (the modifier does the work, no frame-change handler).  A USD sequence (``<prefix>.usd``) is
 instead imported with Blender's USD importer, which plays it through a Mesh Sequence Cache
@@ -299,6 +302,21 @@ def make_material(name="wetcloth wetness"):
     return material
 
 
+def remove_default_cube():
+    """Delete Blender's untouched startup cube (2 m, at the origin) from a new, unsaved file: the
+    cloth, half a metre wide at z = 0, would sit hidden inside it.  A saved file is left alone."""
+    cube = bpy.data.objects.get("Cube")
+    if bpy.data.filepath or cube is None or cube.type != "MESH" or cube.modifiers:
+        return
+    if len(cube.data.vertices) != 8 or cube.location.length > 0 or tuple(cube.dimensions) != (2.0, 2.0, 2.0):
+        return
+    mesh = cube.data
+    bpy.data.objects.remove(cube)
+    if mesh.users == 0:
+        bpy.data.meshes.remove(mesh)
+    print("wetcloth: removed Blender's default cube (the cloth would be hidden inside it)")
+
+
 def set_timeline(fps, first_frame, frame_count):
     scene = bpy.context.scene
     whole = max(1, round(fps))
@@ -319,6 +337,7 @@ def load_usd(directory, manifest, name):
     if len(meshes) != 1:
         raise RuntimeError(f"importing {path} gave {len(meshes)} mesh objects, expected 1")
     ob = meshes[0]
+    ob.name = name
     ob.data.materials.append(make_material())
     frame_count = manifest.get("frame_count") or bpy.context.scene.frame_end
     set_timeline(float(manifest.get("fps", SETTINGS["fps"])), SETTINGS["first_frame"], frame_count)
@@ -332,6 +351,7 @@ def load(directory=None, name=None):
     name = name or SETTINGS["prefix"]
     fps = float(manifest.get("fps", SETTINGS["fps"]))
     first_frame = SETTINGS["first_frame"]
+    remove_default_cube()
     if SETTINGS["format"] == "usd":
         return load_usd(directory, manifest, name)
     files = frame_files(directory, SETTINGS["prefix"], SETTINGS["format"])

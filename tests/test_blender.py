@@ -73,7 +73,7 @@ def blender(tmp_path_factory):
         sequence.close()
     (root / "work").mkdir()
     spec = {"sequences": {name: str(root / name) for name in SEQUENCES}, "frames": LOOK_AT, "work": str(root / "work"),
-            "render": ["ply_trimesh", "usd"]}
+            "render": ["ply_trimesh", "usd"], "startup": ["ply_trimesh", "usd"]}
     (root / "spec.json").write_text(json.dumps(spec))
     done = subprocess.run([str(python), str(PROBE), str(root / "spec.json"), str(root / "result.json")],
                           capture_output=True, text=True, timeout=600)
@@ -156,6 +156,16 @@ def test_saved_blend_plays_again_without_the_script(blender, name):
     reopened = sequence_report(blender, name)["reopened"]
     assert (reopened["frame_start"], reopened["frame_end"]) == (1, FRAMES)
     check_frames(reopened["frames"], blender.states, SEQUENCES[name][0])
+
+
+@pytest.mark.parametrize("name", ["ply_trimesh", "usd"])
+def test_loader_in_the_startup_scene_removes_only_the_default_cube(blender, name):
+    """``blender --python load_in_blender.py`` starts from the startup scene, whose 2 m cube would
+    hide the cloth: in a new file the loader deletes it (camera and light stay); a saved file keeps it."""
+    startup = sequence_report(blender, name)["startup"]
+    cloth = ["cloth"] if name == "usd" else ["cloth", "cloth trajectories"]
+    assert startup["new_file"] == ["Camera", "Light"] + cloth
+    assert startup["saved_file"] == ["Camera", "Cube", "Light"] + cloth
 
 
 def test_usd_opens_and_animates_with_wetness(blender):

@@ -3,13 +3,15 @@
     .venv-blender/bin/python tests/blender/probe.py SPEC.json RESULT.json
 
 SPEC: {"sequences": {name: directory}, "frames": [frame numbers to look at], "work": directory,
-       "render": [names of sequences to render]}.
+       "render": [names of sequences to render], "startup": [names to load into the startup scene]}.
 For every sequence it reports, as JSON (the assertions are in tests/test_blender.py):
   "import": PLY frames through bpy.ops.wm.ply_import (vertex/face counts, attributes, positions, wetness);
   "loader": the scene after running the sequence's load_in_blender.py as Blender's --python would
             (timeline, modifiers, material, and at each frame the evaluated positions and wetness);
   "reopened": the same frames after saving the .blend and opening it again, with no script run;
-  "render": (if asked) Cycles renders of the reopened scene at the first and last looked-at frame.
+  "render": (if asked) Cycles renders of the reopened scene at the first and last looked-at frame;
+  "startup": (if asked) the scene's objects after the loader ran in Blender's startup scene (cube,
+             camera, light), once as a new file and once saved as a .blend first.
 """
 
 import json
@@ -138,7 +140,19 @@ def cloth_object():
     return meshes[0]
 
 
-def probe(name, directory, numbers, work, render=False):
+def startup_objects(loader, work, name):
+    """Object names after running the loader in the startup scene: a new file, then a saved one."""
+    out = {}
+    for case in ("new_file", "saved_file"):
+        bpy.ops.wm.read_factory_settings()
+        if case == "saved_file":
+            bpy.ops.wm.save_as_mainfile(filepath=os.path.join(work, f"{name}_startup.blend"))
+        runpy.run_path(loader, run_name="__main__")
+        out[case] = sorted(ob.name for ob in bpy.context.scene.objects)
+    return out
+
+
+def probe(name, directory, numbers, work, render=False, startup=False):
     result = {}
     if os.path.exists(os.path.join(directory, "cloth_0001.ply")):
         result["import"] = import_ply_frames(directory, numbers[:2])
@@ -152,6 +166,8 @@ def probe(name, directory, numbers, work, render=False):
     result["reopened"] = scene_summary(cloth_object(), numbers)
     if render:
         result["render"] = render_frames([numbers[0], numbers[-1]], work, name)
+    if startup:
+        result["startup"] = startup_objects(os.path.join(directory, "load_in_blender.py"), work, name)
     return result
 
 
@@ -162,7 +178,8 @@ def main(spec_path, result_path):
     for name, directory in spec["sequences"].items():
         try:
             results["sequences"][name] = probe(name, directory, spec["frames"], spec["work"],
-                                               render=name in spec.get("render", []))
+                                               render=name in spec.get("render", []),
+                                               startup=name in spec.get("startup", []))
         except Exception:
             results["sequences"][name] = {"error": traceback.format_exc()}
     with open(result_path, "w") as fh:
