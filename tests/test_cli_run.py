@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from wetcloth.cli import main
 from wetcloth.simulation import OUTPUT_NAMES
 
@@ -54,3 +56,40 @@ def test_blow_up_keeps_the_good_outputs_and_frames(tmp_path, capsys):
     manifest = json.loads((frames / "frames.json").read_text())
     assert manifest["complete"] is False
     assert manifest["frame_count"] == len(rows) == len(list(frames.glob("cloth_*.ply")))
+
+
+def test_unwritable_outputs_are_refused_before_simulating(tmp_path, capsys, monkeypatch):
+    """A --csv path that is a directory is refused at once, naming the option; nothing is simulated."""
+    import wetcloth.commands.run as run_command
+
+    def no_simulating(*args, **kwargs):
+        raise AssertionError("simulated before checking the outputs")
+
+    monkeypatch.setattr(run_command, "run", no_simulating)
+    code = main(["run", "--csv", str(tmp_path), "--plot", str(tmp_path / "p.png")])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "--csv" in err and str(tmp_path) in err
+    assert not (tmp_path / "p.png").exists()
+
+
+def test_interrupted_run_closes_its_frame_sequence(tmp_path, monkeypatch):
+    """Ctrl-C mid-run: frames.json still counts the frames on disk and says the sequence is incomplete."""
+    import wetcloth.commands.run as run_command
+    from wetcloth.runner import run as real_run
+
+    def interrupted(*args, on_frame, **kwargs):
+        def frame(index, sim):
+            if index == 3:
+                raise KeyboardInterrupt
+            on_frame(index, sim)
+        return real_run(*args, on_frame=frame, **kwargs)
+
+    monkeypatch.setattr(run_command, "run", interrupted)
+    frames = tmp_path / "frames"
+    with pytest.raises(KeyboardInterrupt):
+        main(["run", "--duration", "1", "--set", "nx=5", "--set", "ny=5", "--export", str(frames),
+              "--csv", str(tmp_path / "o.csv"), "--plot", str(tmp_path / "p.png"), "--no-progress"])
+    manifest = json.loads((frames / "frames.json").read_text())
+    assert manifest["complete"] is False
+    assert manifest["frame_count"] == 3 == len(list(frames.glob("cloth_*.ply")))

@@ -45,20 +45,21 @@ def main(args) -> int:
     duration = args.duration if args.duration is not None else float(run_table.get("duration", DEFAULT_DURATION))
     fps = args.fps if args.fps is not None else float(run_table.get("fps", DEFAULT_FPS))
     title = f"{args.scene or 'towel'}: {duration:g} s"
+    # Every output is checked before any simulating: a run is not thrown away at its end.
+    _check_writable(args.csv, "--csv")
+    _check_writable(args.plot, "--plot")
     sequence = None
     if args.export is not None:
         from wetcloth.exporter import open_sequence  # only needed when exporting
 
-        # Opened (and the directory checked) before any simulating.
         sequence = open_sequence(args.export, fmt=args.format, writer=args.writer, fps=fps, scene=scene)
     try:
         result = run(scene, duration, fps, on_frame=sequence.on_frame if sequence else None,
                      progress=False if args.no_progress else None)
-    except BlowUpError as exc:
-        # Keep what was good: the frames already written and the outputs up to the last good frame.
+    except BaseException as exc:  # a blow-up, Ctrl-C, a full disk: keep what was good
         if sequence is not None:
-            sequence.close(complete=False)
-        partial = exc.partial_result
+            sequence.close(complete=False)  # frames.json counts the frames on disk; USD saved
+        partial = exc.partial_result if isinstance(exc, BlowUpError) else None
         if partial is not None and partial.rows:
             written = _write_outputs(partial, args, title + f" (stopped at {partial.rows[-1]['time']:g} s)")
             print(f"the run stopped early; outputs up to t = {partial.rows[-1]['time']:g} s are in {written}",
@@ -80,3 +81,16 @@ def _write_outputs(result, args, title: str) -> str:
     csv_path = result.write_csv(args.csv)
     plot_path = plot_run(result, args.plot, title=title)
     return f"{csv_path} and {plot_path}"
+
+
+def _check_writable(path: Path, option: str) -> None:
+    """Refuse an output file that cannot be written (ValueError naming the option), leaving no trace."""
+    existed = path.exists()
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(path, "a"):
+            pass
+    except OSError as exc:
+        raise ValueError(f"{option} {path}: cannot write there ({exc.strerror or exc})") from None
+    if not existed:
+        path.unlink()
