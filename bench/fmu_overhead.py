@@ -4,7 +4,7 @@
 
 Direct: ``Simulation.advance`` to each communication point, then ``outputs()``.  FMU: the same
 scene through WetCloth.fmu in fmpy's ``FMU2Slave`` (ctypes, pythonfmu's C++ and back into
-Python), per communication point ``fmi2SetReal`` of the four inputs, ``fmi2DoStep`` and
+Python), per communication point ``fmi2SetReal`` of every input, ``fmi2DoStep`` and
 ``fmi2GetReal`` of the six outputs, as a master with connected inputs does.  Also timed:
 ``fmpy.simulate_fmu`` end to end (extraction, instantiation, recorder).
 
