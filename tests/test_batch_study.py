@@ -160,6 +160,7 @@ def test_invalid_values_parse_and_fail_per_run_not_up_front():
 
 @pytest.mark.parametrize("data, key, match", [
     (dict(axes={"absorbtion_rate": [0.1]}), "axes.absorbtion_rate", "unknown parameter 'absorbtion_rate'; known: nx, ny"),
+    (dict(axes={"mesh_format": ["ply", "obj"]}), "axes.mesh_format", "'mesh_format' is an FMU-only parameter, not a scene"),
     (dict(axes={"absorption_rate": ["fast"]}), "axes.absorption_rate", r"takes a number \(0 <= absorption_rate <= 10000 1/s\)"),
     (dict(axes={"drag_model": [1.0]}), "axes.drag_model", "takes a string"),
     (dict(axes={"absorption_rate": [0.1, 0.1]}), "axes.absorption_rate", "repeated values"),

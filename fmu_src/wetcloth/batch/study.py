@@ -128,8 +128,15 @@ def _check_type(name: str, value, where: str) -> None:
 
 
 def _check_name(name: str, where: str) -> None:
-    if name not in PARAMETERS:
-        raise StudyError(where, f"unknown parameter {name!r}; known: {', '.join(PARAMETERS)}")
+    if name in PARAMETERS:
+        return
+    from wetcloth.fmu.vocabulary import variable_specs
+
+    if any(v.name == name and v.causality == "parameter" for v in variable_specs()):  # mesh_output_dir, mesh_format
+        raise StudyError(where, f"{name!r} is an FMU-only parameter, not a scene parameter: a study varies scene "
+                                "parameters and records metrics; to keep the meshes of a run, run its scene with "
+                                "'wetcloth run --export DIR'")
+    raise StudyError(where, f"unknown parameter {name!r}; known: {', '.join(PARAMETERS)}")
 
 
 def _range_values(name: str, spec: dict) -> tuple:
