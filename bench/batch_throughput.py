@@ -51,17 +51,12 @@ def on_cluster(study, workers: int, repeat: int) -> tuple[float, float, float, f
     """(cluster start-up s, first run on every worker s, wall-clock s of the study on the warm
     cluster of ``workers`` processes (best of ``repeat``), mean wall-clock s of one run inside its
     worker in that repeat, and the runs' CPU share: CPU time / wall-clock time)."""
-    import logging
-
-    from distributed import Client, LocalCluster
-
-    from wetcloth.batch import run_study
+    from wetcloth.batch import dask_client, run_study
     from wetcloth.batch.engines import execute
-    from wetcloth.batch.runner import LOCAL_HTTP, _task
+    from wetcloth.batch.runner import _task
 
     start = time.perf_counter()
-    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=LOCAL_HTTP,
-                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+    with dask_client(workers=workers) as client:  # the local cluster 'wetcloth batch' starts
         client.wait_for_workers(workers)
         startup = time.perf_counter() - start
         start = time.perf_counter()

@@ -1,10 +1,16 @@
 """Batch studies on a local Dask cluster of 2 worker processes (shared by the tests of this module)."""
 
+import io
 import logging
 import math
 import os
+import re
 import signal
+import socket
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import matplotlib.image
 import numpy as np
@@ -12,7 +18,8 @@ import pandas as pd
 import pytest
 
 import wetcloth
-from wetcloth.batch import Study, compute_metrics, read_table, run_study
+from wetcloth.batch import Study, compute_metrics, dask_client, read_table, run_study
+from wetcloth.batch import runner as batch_runner
 from wetcloth.batch.results import write_table
 from wetcloth.runner import run
 from wetcloth.scene import from_dict
@@ -20,6 +27,7 @@ from wetcloth.scene import from_dict
 distributed = pytest.importorskip("distributed")
 
 SMALL = dict(nx=5, ny=5)
+DOCS = Path(__file__).resolve().parents[1] / "docs" / "batch.md"
 
 
 @pytest.fixture(scope="module")
@@ -85,13 +93,27 @@ def test_invalid_values_and_failing_runs_are_rows_with_their_error(client):
     assert good["status"] == "ok" and pd.isna(good["error"]) and np.isfinite(good["final_wet_mass"])
 
 
-def test_rerun_skips_what_is_done_and_resumes_by_parameters(client, tmp_path):
+def test_progress_bar_shows_runs_done_failed_and_time_left(client, capsys):
+    study = small_study(duration=2.0, axes={"absorption_rate": [-1.0, 0.5, 1.0]})
+    run_study(study, client=client, progress=True)
+    bar = capsys.readouterr().err.split("\r")[-1]  # the bar's last state
+    # runs done of all, [elapsed<time left], and how many of the done ones failed
+    assert re.search(r"\b3/3 \[\d\d:\d\d<\d\d:\d\d, .*ok 2, failed 1\]", bar), bar
+
+
+def test_rerun_skips_what_is_done_and_resumes_by_parameters(client, tmp_path, monkeypatch):
     out = tmp_path / "r.parquet"
     study = small_study(duration=5.0, axes={"absorption_rate": [0.5, 1.0], "initial_tilt": [0.0, 30.0]})
     first = run_study(study, out, client=client)
     assert (first.ran, first.skipped) == (4, 0)
     stamp = out.stat().st_mtime_ns
-    again = run_study(study, out, client=client)
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("a finished study needs no cluster")
+
+    monkeypatch.setattr(batch_runner, "dask_client", no_cluster)
+    again = run_study(study, out, workers=2)
+    monkeypatch.undo()
     assert (again.ran, again.skipped) == (0, 4)  # a second invocation runs nothing new
     assert out.stat().st_mtime_ns == stamp  # and leaves the table alone
     pd.testing.assert_frame_equal(again.table, first.table)
@@ -208,7 +230,46 @@ def test_cli_starts_and_stops_its_own_local_cluster(tmp_path, capsys):
     assert time.perf_counter() - before < 60
 
 
-def test_bad_workers_and_study_errors_are_reported_by_the_cli(tmp_path, capsys):
+def test_local_cluster_one_single_threaded_process_per_core_stopped_on_exit():
+    from dask.system import CPU_COUNT  # the cores this process may use
+
+    with dask_client() as c:
+        workers = c.scheduler_info()["workers"].values()
+        assert len(workers) == CPU_COUNT and all(w["nthreads"] == 1 for w in workers)
+        pids = set(c.run(os.getpid).values())
+    assert len(pids) == CPU_COUNT and os.getpid() not in pids  # processes of their own ...
+    for pid in pids:  # ... gone once the study's client closes
+        with pytest.raises(ProcessLookupError):
+            os.kill(pid, 0)
+
+
+def test_ctrl_c_saves_finished_runs_and_stops_quietly(tmp_path):
+    study_file = tmp_path / "long.toml"
+    study_file.write_text('scene = "thesis_fast"\nduration = 60.0\n[base]\nnx = 9\nny = 9\n'
+                          '[axes]\nabsorption_rate = { start = 0.1, stop = 2.0, num = 20 }\n')
+    out = tmp_path / "long.parquet"
+    # a terminal's Ctrl-C: SIGINT to every process of the foreground group (the command and its workers)
+    proc = subprocess.Popen([sys.executable, "-m", "wetcloth.cli", "batch", str(study_file), "--workers", "2",
+                             "--out", str(out), "--no-progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        deadline = time.monotonic() + 120
+        while not out.exists() and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.1)  # the first results are saved
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, err
+    assert err.strip() == (f"wetcloth batch: interrupted; the finished runs are in {out}: "
+                           "run the same command again to resume")  # no tracebacks from the workers
+    saved = read_table(out)
+    assert 0 < len(saved) < 20 and (saved["status"] == "ok").all()
+
+
+def test_bad_workers_and_study_errors_are_reported_by_the_cli(tmp_path, capsys, monkeypatch):
     from wetcloth.cli import main
 
     study_file = tmp_path / "bad.toml"
@@ -219,6 +280,29 @@ def test_bad_workers_and_study_errors_are_reported_by_the_cli(tmp_path, capsys):
     good.write_text('scene = "thesis_fast"\nduration = 2.0\n[axes]\nabsorption_rate = [0.5]\n')
     assert main(["batch", str(good), "--workers", "0", "--out", str(tmp_path / "x.parquet")]) == 2
     assert "workers must be a whole number >= 1, got 0" in capsys.readouterr().err
+    with socket.socket() as s:  # a port nothing listens on
+        s.bind(("127.0.0.1", 0))
+        address = "tcp://127.0.0.1:%d" % s.getsockname()[1]
+    monkeypatch.setattr(batch_runner, "SCHEDULER_TIMEOUT", 1.0)
+    assert main(["batch", str(good), "--scheduler", address, "--out", str(tmp_path / "x.parquet")]) == 2
+    assert f"wetcloth batch: error: Timed out trying to connect to {address}" in capsys.readouterr().err
+
+
+def test_docs_worked_example_runs_as_written_and_prints_its_documented_output(client, tmp_path, monkeypatch, capsys):
+    section = DOCS.read_text().split("A worked example", 1)[1]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    documented = re.search(r"Its output.*?```\n(.*?)```", section, re.S).group(1).splitlines()
+    study = wetcloth.study
+    monkeypatch.setattr(wetcloth, "study", lambda spec, **options: study(spec, **options, client=client))  # this module's 2 workers
+    monkeypatch.chdir(tmp_path)
+    exec(compile(code, str(DOCS), "exec"), {"__name__": "__main__"})
+    printed = capsys.readouterr().out.splitlines()
+    assert (tmp_path / "sweep.parquet").exists()
+    assert printed[0] == documented[0] and printed[-1] == documented[-1]  # header, and the summary line
+    # the documented numbers are what the code computes now: 1e-4 is far above round-off differences
+    # between machines and far below what a change of the model moves (0.06 % to 0.3 % in the last one)
+    as_table = lambda lines: pd.read_csv(io.StringIO("\n".join(lines[:-1])), sep=r"\s+")
+    pd.testing.assert_frame_equal(as_table(printed), as_table(documented), rtol=1e-4, atol=0)
 
 
 @pytest.fixture(scope="module")

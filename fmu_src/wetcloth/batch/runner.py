@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import logging
 import math
-import os
+import signal
 import time
 import uuid
 from contextlib import contextmanager
@@ -30,6 +30,7 @@ from wetcloth.scene import from_dict
 
 FLUSH_INTERVAL = 2.0  # s between writes of the results table while a study runs
 LOCAL_HTTP = "127.0.0.1:0"  # the local cluster's dashboard / HTTP address: any free port, loopback only
+SCHEDULER_TIMEOUT = 60.0  # s to connect to a scheduler, and then for the workers asked for to connect
 
 
 @dataclass
@@ -65,14 +66,16 @@ def _check_workers(workers) -> int | None:
 
 
 @contextmanager
-def dask_client(client=None, scheduler: str | None = None, workers: int | None = None, timeout: float = 60.0):
-    """A Dask client: ``client`` as given; one connected to ``scheduler`` (waiting for ``workers``);
-    or a local cluster of ``workers`` single-threaded processes (default one per core) that
-    starts here and stops on exit."""
+def dask_client(client=None, scheduler: str | None = None, workers: int | None = None, timeout: float | None = None):
+    """A Dask client: ``client`` as given; one connected to ``scheduler`` (waiting for ``workers``;
+    ``timeout`` s each, default ``SCHEDULER_TIMEOUT``); or a local cluster of ``workers``
+    single-threaded processes (default one per core) that starts here and stops on exit."""
     workers = _check_workers(workers)
+    timeout = SCHEDULER_TIMEOUT if timeout is None else timeout
     if client is not None:
         yield client
         return
+    from dask.system import CPU_COUNT  # the cores this process may use (affinity and cgroup limits)
     from distributed import Client, LocalCluster
 
     if scheduler:
@@ -81,11 +84,18 @@ def dask_client(client=None, scheduler: str | None = None, workers: int | None =
                 c.wait_for_workers(workers, timeout=timeout)
             yield c
         return
-    n = workers or os.cpu_count() or 1
     # the scheduler always serves HTTP: on a free port of this machine only, not on 8787 of every interface
-    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=LOCAL_HTTP,
-                      silence_logs=logging.ERROR) as cluster, Client(cluster, set_as_default=False) as c:
+    with LocalCluster(n_workers=workers or CPU_COUNT, threads_per_worker=1, processes=True,
+                      dashboard_address=LOCAL_HTTP, silence_logs=logging.ERROR, preload=[__name__]) as cluster, \
+            Client(cluster, set_as_default=False) as c:
         yield c
+
+
+def dask_setup(worker) -> None:
+    """Preload of the local cluster's workers (Dask calls it in each worker process as it starts):
+    ignore SIGINT.  Ctrl-C in a terminal reaches every process of the group; this process then
+    cancels the runs and stops the workers, which would otherwise each print a traceback."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _task(run: Run, study: Study) -> dict[str, Any]:
@@ -150,13 +160,13 @@ def run_study(
             write_table(combined(), out)
             last_flush = time.monotonic()
 
-    bar = tqdm(total=len(todo), desc=study.name, unit="run", disable=not progress, dynamic_ncols=True)
+    bar = tqdm(total=len(todo), desc=study.name, unit="run", disable=not (progress and todo), dynamic_ncols=True)
 
     def record(run: Run, result: dict[str, Any]) -> None:
         row = full_row(run, study, result)
         new_rows.append(row)
         counts[row["status"]] += 1
-        bar.set_postfix_str(f"done {counts[OK]}, failed {counts[ERROR]}", refresh=False)
+        bar.set_postfix_str(f"ok {counts[OK]}, failed {counts[ERROR]}", refresh=False)  # runs done: the bar's count
         bar.update(1)
         if on_result is not None:
             on_result(row)
@@ -178,15 +188,11 @@ def run_study(
         bar.close()
         flush(force=True)
     table = combined()
-    if out is not None and new_rows:
-        by_key = table.set_index(KEY, drop=False)
-        ordered = [k for k in (r.key for r in runs)]
-        others = table[~table[KEY].isin(study_keys)]
-        table = normalise(pd.concat([others, by_key.loc[ordered]], ignore_index=True), study.axis_names)
-        write_table(table, out)
-    mine = table[table[KEY].isin(study_keys)].set_index(KEY, drop=False).loc[[r.key for r in runs]]
+    mine = normalise(table.set_index(KEY, drop=False).loc[[r.key for r in runs]], study.axis_names)  # in run order
+    if out is not None and new_rows:  # other studies' rows first, then this study's in run order
+        write_table(normalise(pd.concat([table[~table[KEY].isin(study_keys)], mine]), study.axis_names), out)
     return StudyReport(
-        study=study, table=normalise(mine, study.axis_names), total=len(runs), skipped=len(runs) - len(todo),
+        study=study, table=mine, total=len(runs), skipped=len(runs) - len(todo),
         ran=len(new_rows), ok=counts[OK], failed=counts[ERROR], elapsed=time.perf_counter() - start, out=out,
     )
 
