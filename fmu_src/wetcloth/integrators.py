@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from wetcloth.kernels.integration import euler_update, solve_pcg
+from wetcloth.kernels.integration import euler_update, invert_blocks, solve_pcg
 from wetcloth.model import GRAVITY, Model
 from wetcloth.state import State
 
@@ -69,8 +69,9 @@ class ExplicitEuler(Integrator):
         topo = model.topology
         springs = topo.spring_stiffness > 0
         stiffest = 1.0 + max(model.scene.wet_stiffness_factor, 0.0)
-        limit = (float((topo.spring_damping[springs] / topo.spring_stiffness[springs]).min()) / stiffest
-                 if springs.any() else math.inf)
+        with np.errstate(over="ignore"):  # a vanishing stiffness (say 1e-320 N/m) limits nothing: inf
+            limit = (float((topo.spring_damping[springs] / topo.spring_stiffness[springs]).min()) / stiffest
+                     if springs.any() else math.inf)
         if self.omega_squared > 0:
             # Below 0.1/omega an unstable mode grows by at most 0.5% a step: the damping is then too
             # weak to matter, and a smaller limit would only stall (damping -> 0 gives h -> 0).
@@ -128,6 +129,8 @@ class ImplicitEuler(Integrator):
         self._rhs = np.zeros(shape)
         self._dv = np.zeros(shape)
         self._scratch = [np.zeros(shape) for _ in range(5)]
+        self._blocks = np.zeros((6, model.topology.n))  # the system's 3x3 diagonal blocks
+        self._inverse = np.zeros((6, model.topology.n))  # their inverses: the preconditioner
         self.last_iterations = 0
 
     def stable_step(self, speed: float) -> float:
@@ -139,13 +142,16 @@ class ImplicitEuler(Integrator):
         mass = m.mass(state.water)
         np.multiply(force, h, out=self._rhs)
         self._rhs += m.rhs
-        diag = m.diag + m.blocks[:3] + mass
+        blocks = self._blocks
+        np.add(m.diagonal_blocks, m.blocks, out=blocks)
+        blocks[:3] += mass
+        invert_blocks(blocks, self._inverse)
         dv = self._dv
-        np.divide(self._rhs, mass, out=dv)  # first guess: the explicit step
+        np.divide(self._rhs, mass, out=dv)  # first guess: the explicit step (solve_pcg improves on it)
         dv *= m.free
         topo = m.topology
         self.last_iterations, _ = solve_pcg(
-            topo.spring_offset, m.direction, m.along, m.across, mass, m.blocks, diag, m.free,
+            topo.spring_offset, m.direction, m.along, m.across, mass, m.blocks, self._inverse, m.free,
             self._rhs, dv, *self._scratch, self.CG_TOLERANCE, self.CG_MAX_ITERATIONS,
         )
         np.add(state.vel, dv, out=out.vel)

@@ -36,7 +36,7 @@ class Model:
         self.along = np.zeros((families, n))
         self.across = np.zeros((families, n))
         self.blocks = np.zeros((6, n))
-        self.diag = np.zeros((3, n))
+        self.diagonal_blocks = np.zeros((6, n))
         self.rhs = np.zeros((3, n))
         self.scene = scene
 
@@ -115,21 +115,21 @@ class Model:
         """Forces as ``forces``, plus the pieces of the backward-Euler system for step ``h`` (s).
 
         Leaves in ``self.rhs`` the term ``h^2 K v``, in ``self.blocks`` the per-particle
-        symmetric blocks (drag, buoyancy) of ``-h C - h^2 K``, in ``self.diag`` the springs'
-        diagonal, and per-spring blocks in ``self.direction``, ``self.along``, ``self.across``.
+        symmetric blocks (drag, buoyancy) of ``-h C - h^2 K``, in ``self.diagonal_blocks`` the springs'
+        part of the system's 3x3 diagonal blocks, and per-spring blocks in ``self.direction``, ``self.along``, ``self.across``.
         """
         sc = self.scene
         force = self.force
         force[:2] = 0.0
         np.multiply(self.mass(water), -GRAVITY, out=force[2])
         self.rhs[...] = 0.0
-        self.diag[...] = 0.0
+        self.diagonal_blocks[...] = 0.0
         self.blocks[...] = 0.0
         if self.topology.spring_offset.size:
             self._update_saturation(water)
             spring_forces_and_blocks(
                 *self._springs(), sc.damping_model == "projected", self._wet_factor(), self.saturation, pos, vel, h,
-                force, self.rhs, self.diag, self.direction, self.along, self.across, self._buf,
+                force, self.rhs, self.diagonal_blocks, self.direction, self.along, self.across, self._buf,
             )
         if self.touches_water(pos[2]) > 0.0 or not self.skip_idle_work:
             self._water_forces(pos, vel, force, h=h)

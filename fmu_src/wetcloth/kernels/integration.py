@@ -74,18 +74,87 @@ def _dot(a, b):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def solve_pcg(offsets, direction, along, across, mass, blocks, diag, free, b, x, r, z, p, ap, buf, rtol, max_iterations):
-    """Solve ``A x = b`` by Jacobi-preconditioned conjugate gradients; ``x`` holds the first guess.
+def invert_blocks(blocks, inverse):
+    """Invert symmetric 3x3 blocks (6, n: xx, yy, zz, xy, xz, yz) into ``inverse`` (same layout).
 
-    ``A`` as in ``_system_matvec``; ``diag`` (3, n) is its diagonal.  Stops when the residual
-    norm falls below ``rtol * |b|``.  Returns (iterations, relative residual).
-    """
+    A block that is not positive definite (a pinned particle's, whose rows are zero) gets the
+    identity, so the preconditioner stays defined; its residual is zero anyway."""
+    for i in range(blocks.shape[1]):
+        a, b, c = blocks[0, i], blocks[1, i], blocks[2, i]
+        d, e, f = blocks[3, i], blocks[4, i], blocks[5, i]
+        c11 = b * c - f * f
+        c22 = a * c - e * e
+        c33 = a * b - d * d
+        c12 = e * f - d * c
+        c13 = d * f - b * e
+        c23 = d * e - a * f
+        det = a * c11 + d * c12 + e * c13
+        if not det > 0.0:
+            c11, c22, c33, c12, c13, c23, det = 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0
+        scale = 1.0 / det
+        inverse[0, i] = c11 * scale
+        inverse[1, i] = c22 * scale
+        inverse[2, i] = c33 * scale
+        inverse[3, i] = c12 * scale
+        inverse[4, i] = c13 * scale
+        inverse[5, i] = c23 * scale
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def apply_block_inverse(inverse, r, z):
+    """z = B^-1 r with B^-1 the (6, n) inverted diagonal blocks."""
+    for i in range(r.shape[1]):
+        rx, ry, rz = r[0, i], r[1, i], r[2, i]
+        z[0, i] = inverse[0, i] * rx + inverse[3, i] * ry + inverse[4, i] * rz
+        z[1, i] = inverse[3, i] * rx + inverse[1, i] * ry + inverse[5, i] * rz
+        z[2, i] = inverse[4, i] * rx + inverse[5, i] * ry + inverse[2, i] * rz
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _combine_first_guesses(offsets, direction, along, across, mass, blocks, inverse, free, b, x, r, z, p, ap, buf):
+    """Replace the first guess ``x`` by the combination ``c1 x + c2 B^-1 b`` that minimises the energy
+    ``x.A x / 2 - b.x`` (what conjugate gradients minimise), and leave its residual in ``r``.
+
+    The given guess (the explicit step) is right for smooth motion, which the springs barely
+    resist; the block-Jacobi solve ``B^-1 b`` is right for stiff, local motion.  Their best
+    combination is at least as good as either, for two products with ``A``."""
     n = b.shape[1]
-    _system_matvec(offsets, direction, along, across, mass, blocks, free, x, ap, buf)
+    apply_block_inverse(inverse, b, z)
     for c in range(3):
         for i in range(n):
-            r[c, i] = free[i] * b[c, i] - ap[c, i]
-            z[c, i] = r[c, i] / diag[c, i]
+            z[c, i] *= free[i]
+    _system_matvec(offsets, direction, along, across, mass, blocks, free, x, ap, buf)
+    _system_matvec(offsets, direction, along, across, mass, blocks, free, z, p, buf)
+    a11, a12, a22 = _dot(x, ap), _dot(x, p), _dot(z, p)
+    b1, b2 = _dot(b, x), _dot(b, z)
+    det = a11 * a22 - a12 * a12
+    if det > 1e-12 * a11 * a22:
+        c1, c2 = (b1 * a22 - b2 * a12) / det, (a11 * b2 - a12 * b1) / det
+    elif a22 > 0.0:  # the two guesses are (nearly) parallel: the best multiple of the second
+        c1, c2 = 0.0, b2 / a22
+    else:  # no force at all
+        c1, c2 = 0.0, 0.0
+    for c in range(3):
+        for i in range(n):
+            x[c, i] = c1 * x[c, i] + c2 * z[c, i]
+            r[c, i] = free[i] * b[c, i] - c1 * ap[c, i] - c2 * p[c, i]
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def solve_pcg(offsets, direction, along, across, mass, blocks, inverse, free, b, x, r, z, p, ap, buf, rtol,
+              max_iterations):
+    """Solve ``A x = b`` by block-Jacobi-preconditioned conjugate gradients from a first guess.
+
+    ``A`` as in ``_system_matvec``; ``inverse`` (6, n) holds the inverses of its 3x3 diagonal blocks
+    (``invert_blocks``).  ``x`` holds a first guess, which is improved by
+    ``_combine_first_guesses`` before iterating.  Stops when the residual norm falls below
+    ``rtol * |b|``.  Returns (iterations, relative residual).
+    """
+    n = b.shape[1]
+    _combine_first_guesses(offsets, direction, along, across, mass, blocks, inverse, free, b, x, r, z, p, ap, buf)
+    apply_block_inverse(inverse, r, z)
+    for c in range(3):
+        for i in range(n):
             p[c, i] = z[c, i]
     b_norm = math.sqrt(_dot(b, b))
     if b_norm == 0.0:
@@ -103,7 +172,7 @@ def solve_pcg(offsets, direction, along, across, mass, blocks, diag, free, b, x,
             for i in range(n):
                 x[c, i] += alpha * p[c, i]
                 r[c, i] -= alpha * ap[c, i]
-                z[c, i] = r[c, i] / diag[c, i]
+        apply_block_inverse(inverse, r, z)
         rz_new = _dot(r, z)
         beta = rz_new / rz
         rz = rz_new

@@ -15,6 +15,8 @@ from numba import njit
 from wetcloth.kernels import FASTMATH
 
 _TINY_LENGTH = 1e-12  # m; below this a spring has no direction
+#: Components (row, column) of the six slots of a symmetric 3x3 block: xx, yy, zz, xy, xz, yz.
+_BLOCK_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
@@ -130,14 +132,15 @@ def _blocks(off, l0, tension_only, projected, kf, cf, wet_factor, saturation, po
 @njit(cache=True, fastmath=FASTMATH)
 def spring_forces_and_blocks(
     offsets, rest, tension_only, stiffness, damping, projected, wet_factor, saturation,
-    pos, vel, h, force, rhs, diag, direction, along, across, buf,
+    pos, vel, h, force, rhs, diagonal_blocks, direction, along, across, buf,
 ):
     """Forces as ``spring_forces`` plus what one backward-Euler Newton step needs.
 
     With step ``h`` (s), each spring's block of the system matrix ``M - h C - h^2 K`` is
     ``along * u u^T + across * (I - u u^T)`` (kg; ``u`` its unit direction, stored in
-    ``direction`` (F, 3, n)).  Adds ``h^2 K v`` to ``rhs`` and each block's diagonal to ``diag``
-    at both ends (the Jacobi preconditioner).  ``buf`` is (4, n) scratch.
+    ``direction`` (F, 3, n)).  Adds ``h^2 K v`` to ``rhs`` and each block to ``diagonal_blocks``
+    (6, n: xx, yy, zz, xy, xz, yz) at both ends: the matrix's 3x3 diagonal blocks, from which the
+    block-Jacobi preconditioner is made.  ``buf`` is (4, n) scratch.
     """
     n = pos.shape[1]
     t, rate, scratch, value = buf[0], buf[1], buf[2], buf[3]
@@ -168,10 +171,14 @@ def spring_forces_and_blocks(
             for k in range(m):
                 scratch[k] = t[k] * uc[k]
             add_to_both_ends(scratch, off, rhs[c], -1.0)
-            # Jacobi diagonal: the block's diagonal, at both ends
+        # The spring's block, at both ends: across on the diagonal plus (along - across) u u^T.
+        for slot in range(6):
+            a, b = _BLOCK_PAIRS[slot]
+            ua, ub = u[a], u[b]
+            iso = 1.0 if slot < 3 else 0.0
             for k in range(m):
-                scratch[k] = ac[k] + (al[k] - ac[k]) * uc[k] * uc[k]
-            add_to_both_ends(scratch, off, diag[c], 1.0)
+                scratch[k] = iso * ac[k] + (al[k] - ac[k]) * ua[k] * ub[k]
+            add_to_both_ends(scratch, off, diagonal_blocks[slot], 1.0)
 
 
 @njit(cache=True, fastmath=FASTMATH)
