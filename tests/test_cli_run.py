@@ -93,3 +93,12 @@ def test_interrupted_run_closes_its_frame_sequence(tmp_path, monkeypatch):
     manifest = json.loads((frames / "frames.json").read_text())
     assert manifest["complete"] is False
     assert manifest["frame_count"] == 3 == len(list(frames.glob("cloth_*.ply")))
+
+
+def test_an_operating_system_error_is_one_clear_line(tmp_path, capsys):
+    """Any command: an OSError (here a file standing where a folder must be) is a one-line error, exit 2."""
+    (tmp_path / "afile").write_text("")
+    code = main(["build-fmu", "--out", str(tmp_path / "afile" / "WetCloth.fmu")])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("wetcloth build-fmu: error:") and "afile" in err and "Traceback" not in err

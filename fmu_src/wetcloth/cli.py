@@ -33,7 +33,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
-    except (ParameterError, BlowUpError, FileNotFoundError, ValueError) as exc:
+    except (ParameterError, BlowUpError, OSError, ValueError) as exc:  # a clear line, not a traceback
         print(f"wetcloth {args.command}: error: {exc}", file=sys.stderr)
         return 2
 
