@@ -119,7 +119,7 @@ class ImplicitEuler(Integrator):
     name = "implicit_euler"
     implicit = True
     #: Conjugate gradients stop at this residual relative to the right-hand side: on the towel
-    #: this moves the centroid by ~0.01 mm against a 1e-8 solve (bench/work_precision.py).
+    #: this moves the centroid by 0.02 mm against a 1e-8 solve (docs/benchmarks.md, Simulator step).
     CG_TOLERANCE = 1e-4
     CG_MAX_ITERATIONS = 500
 
