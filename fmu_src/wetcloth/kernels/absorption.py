@@ -10,7 +10,7 @@ from wetcloth.kernels import FASTMATH
 SATURATED = 1e-12
 
 
-@njit(cache=True, fastmath=FASTMATH)
+@njit(cache=True, nogil=True, fastmath=FASTMATH)
 def absorb(s, dry_mass, capacity, decay, water, vel):
     """Advance absorbed water (kg) of particles touching water (``s > 0``) by one step.
 
@@ -37,7 +37,7 @@ def absorb(s, dry_mass, capacity, decay, water, vel):
     return active
 
 
-@njit(cache=True, fastmath=FASTMATH)
+@njit(cache=True, nogil=True, fastmath=FASTMATH)
 def dry(s, keep, water):
     """Particles in air (``s == 0``) keep the fraction ``keep = exp(-drying_rate h)`` of their water.
 
@@ -51,7 +51,7 @@ def dry(s, keep, water):
     return drying
 
 
-@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
 def _saturation_flux(off, conductance, saturation, dt, flux):
     """flux[k] (kg): water moving over dt from spring k's second end into its first."""
     m = saturation.shape[0] - off
@@ -61,7 +61,7 @@ def _saturation_flux(off, conductance, saturation, dt, flux):
         flux[k] = dt * g[k] * (sj[k] - si[k])
 
 
-@njit(cache=True, fastmath=FASTMATH)
+@njit(cache=True, nogil=True, fastmath=FASTMATH)
 def wick(offsets, conductance, capacity, dry_mass, substeps, h, water, vel, buf):
     """Diffuse water between axis neighbours over ``h`` s in ``substeps`` explicit sub-steps.
 

@@ -9,7 +9,7 @@ from numba import njit
 from wetcloth.kernels import FASTMATH
 
 
-@njit(cache=True, fastmath=FASTMATH)
+@njit(cache=True, nogil=True, fastmath=FASTMATH)
 def floor_contact(z_min, friction, pos, vel):
     """Keep particle centres at or above ``z_min`` (m); stop their fall and apply friction.
 

@@ -15,7 +15,7 @@ from numba import njit
 from wetcloth.kernels import FASTMATH
 
 
-@njit(cache=True, fastmath=FASTMATH)
+@njit(cache=True, nogil=True, fastmath=FASTMATH)
 def submerged_fractions(z, water_level, thickness, smooth, s):
     """Write each particle's submerged fraction (0..1) into ``s``; return the largest."""
     top = 0.0
@@ -30,7 +30,7 @@ def submerged_fractions(z, water_level, thickness, smooth, s):
     return top
 
 
-@njit(cache=True, fastmath=FASTMATH)
+@njit(cache=True, nogil=True, fastmath=FASTMATH)
 def buoyancy(s, volume, density, gravity, force):
     """Add Archimedes' upward force ``rho g V s`` (eq. 3.4, corrected) to ``force[2]``."""
     fz = force[2]
@@ -39,7 +39,7 @@ def buoyancy(s, volume, density, gravity, force):
         fz[i] += scale * volume[i] * s[i]
 
 
-@njit(cache=True, fastmath=FASTMATH)
+@njit(cache=True, nogil=True, fastmath=FASTMATH)
 def stokes_drag(s, coefficient, current_x, current_y, vel, force):
     """Add ``-6 pi a eta s (v - v_water)`` (eq. 3.5); ``coefficient`` is 6 pi a eta (N s/m)."""
     for i in range(s.shape[0]):
@@ -49,7 +49,7 @@ def stokes_drag(s, coefficient, current_x, current_y, vel, force):
         force[2, i] -= c * vel[2, i]
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
+@njit(cache=True, nogil=True, fastmath=FASTMATH, inline="always")
 def _triangle(k, a, b, c, density, c_normal, c_tangential, c_linear, current_x, current_y):
     """Drag on triangle k of a row and its Jacobian coefficients.
 
@@ -93,7 +93,7 @@ def _triangle(k, a, b, c, density, c_normal, c_tangential, c_linear, current_x, 
     return fx, fy, fz, nx, ny, nz, 2.0 * kn, 2.0 * kt, kl
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
+@njit(cache=True, nogil=True, fastmath=FASTMATH, inline="always")
 def _corner(pos, vel, s, start, count):
     """Views (x, y, z, vx, vy, vz, s) of ``count`` particles from index ``start``."""
     stop = start + count
@@ -101,7 +101,7 @@ def _corner(pos, vel, s, start, count):
             vel[0, start:stop], vel[1, start:stop], vel[2, start:stop], s[start:stop])
 
 
-@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
 def _gather_cells(t1, t2, nx, out, scale):
     """out[v] += scale * (the values of the six triangles around particle v)."""
     n = out.shape[0]
@@ -112,7 +112,7 @@ def _gather_cells(t1, t2, nx, out, scale):
         out[v] += scale * (a1[v] + b1[v] + d1[v] + a2[v] + d2[v] + c2[v])
 
 
-@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
 def _drag_row(k_count, a, b, c, density, c_normal, c_tangential, c_linear, current_x, current_y, out, blocks_wanted):
     """Triangles (a[k], b[k], c[k]) of one row: force and, if wanted, Jacobian blocks into ``out`` (9, k)."""
     fx_, fy_, fz_ = out[0], out[1], out[2]
@@ -134,7 +134,7 @@ def _drag_row(k_count, a, b, c, density, c_normal, c_tangential, c_linear, curre
             yz[k] = diff * nyy * nzz
 
 
-@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
 def _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells,
                blocks_wanted, skip_dry_rows):
     """Fill ``cells`` (2, 9, n + nx + 1) with both triangles' force and, if wanted, Jacobian blocks
@@ -156,7 +156,7 @@ def _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, c
         _drag_row(w, a, d, c, density, c_normal, c_tangential, c_linear, current_x, current_y, cells[1, :, lo:hi], blocks_wanted)
 
 
-@njit(cache=True, fastmath=FASTMATH)
+@njit(cache=True, nogil=True, fastmath=FASTMATH)
 def face_drag(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, force, cells,
               skip_dry_rows=True):
     """Add the face-model drag (MODEL.md section 4) to ``force``; ``cells`` is (2, 9, n + nx + 1) scratch."""
@@ -166,7 +166,7 @@ def face_drag(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, cu
         _gather_cells(cells[0, comp], cells[1, comp], nx, force[comp], 1.0 / 3.0)
 
 
-@njit(cache=True, fastmath=FASTMATH)
+@njit(cache=True, nogil=True, fastmath=FASTMATH)
 def face_drag_and_blocks(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, h, force,
                          blocks, cells, skip_dry_rows=True):
     """Face drag as ``face_drag``, plus ``h`` times its lumped velocity Jacobian added to ``blocks``.
