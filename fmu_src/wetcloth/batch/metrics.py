@@ -35,7 +35,7 @@ METRICS: dict[str, Metric] = {m.name: m for m in (
            "first time the absorbed water reaches 90% of its final amount; NaN if no water is absorbed"),
 )}
 
-#: Recorded when a study does not say (the four metrics the issue asks for).
+#: Recorded when a study does not say which metrics it wants.
 DEFAULT_METRICS = ("time_to_sink", "final_depth", "final_wet_mass", "time_to_90_wet_mass")
 
 
