@@ -69,9 +69,6 @@ def main(args) -> int:
         print(f"wetcloth batch: interrupted; the finished runs are in {out}: run the same command again to resume",
               file=sys.stderr)
         return 130
-    except OSError as exc:  # the scheduler unreachable, its workers too few, the table not writable
-        print(f"wetcloth batch: error: {exc}", file=sys.stderr)
-        return 2
     table = report.table
     print(report.summary())
     written = [str(out)]
