@@ -263,8 +263,12 @@ def test_ctrl_c_saves_finished_runs_and_stops_quietly(tmp_path):
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == 130, err
-    assert err.strip() == (f"wetcloth batch: interrupted; the finished runs are in {out}: "
-                           "run the same command again to resume")  # no tracebacks from the workers
+    # The line that matters, and no tracebacks from the workers.  Other lines may follow from the
+    # interpreter's shutdown on some machines (multiprocessing's resource tracker warns of semaphores
+    # that the SIGINT-ed workers left behind), which are not the command's to control.
+    assert (f"wetcloth batch: interrupted; the finished runs are in {out}: "
+            "run the same command again to resume") in err.splitlines(), err
+    assert "Traceback" not in err, err
     saved = read_table(out)
     assert 0 < len(saved) < 20 and (saved["status"] == "ok").all()
 
