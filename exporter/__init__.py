@@ -6,12 +6,22 @@
     sequence.close()                                         # frames.json; finishes a .usd
 
 One module per format and writer (``ply_trimesh``, ``ply_meshio``, ``obj_trimesh``, ``obj_meshio``,
-``usd``) behind ``open_sequence``; all write the same :class:`Frame`.  Beside the frames go
-``frames.json`` (fps, frame count, units, scene parameters) and ``load_in_blender.py``.
+``usd``) behind ``open_sequence``; all write the same :class:`Frame`, with quads (one per grid cell)
+or triangles.  Beside the frames go ``frames.json`` (fps, frame count, units, scene parameters, the
+Blender import options) and ``load_in_blender.py``.
 """
 
 from wetcloth.exporter.errors import ExportError
-from wetcloth.exporter.frame import COLORMAP, Frame, make_frame, sheet_uv, wetness_colors, wetness_lut
+from wetcloth.exporter.frame import (
+    COLORMAP,
+    FACES,
+    Frame,
+    make_frame,
+    quads_from_triangles,
+    sheet_uv,
+    wetness_colors,
+    wetness_lut,
+)
 from wetcloth.exporter.sequence import (
     FORMATS,
     LOADER,

@@ -2,6 +2,8 @@
 
 All writers (PLY and OBJ through trimesh or meshio, USD through usd-core) take a :class:`Frame`, so
 they write the same numbers: the normals, UVs and colours are computed here once, not per writer.
+The faces they write are the simulation's triangles or, by default, quads: one per grid cell, made
+of the cell's two triangles (:func:`quads_from_triangles`).
 """
 
 from __future__ import annotations
@@ -17,6 +19,8 @@ from wetcloth.exporter.errors import ExportError
 COLORMAP = "Blues"
 #: Entries of the colour look-up table: wetness w gets entry round(w * (LUT_SIZE - 1)).
 LUT_SIZE = 256
+#: Face kinds a sequence can be written with; quads (one per grid cell) are the default.
+FACES = ("quads", "triangles")
 
 
 @lru_cache(maxsize=1)
@@ -57,13 +61,47 @@ def vertex_normals(positions: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     return np.asarray(mesh.vertex_normals, dtype=np.float32)
 
 
+def quads_from_triangles(triangles: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    """Quads (m / 2, 4) int64 made of the triangles (m, 3) taken in pairs that share their longest edge.
+
+    The longest edge is measured in the rest sheet (``uv``, (n, 2)): on the simulation's grid it is
+    each cell's diagonal, so every cell becomes one quad.  Quad (a, b, c, d) is the triangles
+    (a, b, c) and (c, d, a), both as counter-clockwise as the triangles were: splitting it along
+    a-c (as trimesh and most readers triangulate quads) gives the simulation's triangles back.
+    Quads come in the order of their first triangle.  Raises ExportError if the triangles do not
+    pair up this way (a mesh that is not a triangulated grid).
+    """
+    triangles = np.asarray(triangles, dtype=np.int64)
+    uv = np.asarray(uv, dtype=np.float64)
+    edge = np.stack([uv[triangles[:, (k + 1) % 3]] - uv[triangles[:, k]] for k in range(3)], axis=1)
+    longest = np.argmax(np.einsum("mkj,mkj->mk", edge, edge), axis=1)  # edge k runs from corner k to k + 1
+    # each triangle rotated so that its longest edge runs from its corner 2 to its corner 0
+    rolled = triangles[np.arange(len(triangles))[:, None], (longest[:, None] + 1 + np.arange(3)) % 3]
+    # the longest edge as one number, the same for both of its directions
+    diagonal = np.minimum(rolled[:, 0], rolled[:, 2]) * (int(triangles.max(initial=0)) + 1) + np.maximum(
+        rolled[:, 0], rolled[:, 2])
+    order = np.argsort(diagonal, kind="stable")
+    first, second = order[0::2], order[1::2]  # pairs of equal diagonals, the lower triangle index first
+    paired = (len(triangles) > 0 and len(triangles) % 2 == 0
+              and (rolled[first, 0] == rolled[second, 2]).all()  # the same edge, run in opposite directions
+              and (rolled[first, 2] == rolled[second, 0]).all()
+              and (np.diff(diagonal[first]) != 0).all())  # and no third triangle shares it
+    if not paired:
+        raise ExportError("the triangles do not pair into quads (two per grid cell, sharing the cell's "
+                          "diagonal); write them with faces='triangles'")
+    quads = np.column_stack([rolled[first, 0], rolled[first, 1], rolled[first, 2], rolled[second, 1]])
+    return quads[np.argsort(first)]
+
+
 @dataclass(frozen=True)
 class Frame:
     """The cloth at one time, ready to write.
 
     positions (n, 3) float32 m; normals (n, 3) float32 unit; uv (n, 2) float32 0..1;
     wetness (n,) float32 0..1 (absorbed water over capacity); colors (n, 4) uint8 sRGBA of the
-    wetness; triangles (m, 3) int32, counter-clockwise seen from +z in the rest sheet.
+    wetness; triangles (m, 3) int32, counter-clockwise seen from +z in the rest sheet (the normals
+    are theirs); faces (k, 3) or (k, 4) int32: what the writers write, the triangles or quads made
+    of them; velocities (n, 3) float32 m/s, or None where the frame has none.
     """
 
     positions: np.ndarray
@@ -72,20 +110,32 @@ class Frame:
     wetness: np.ndarray
     colors: np.ndarray
     triangles: np.ndarray
+    faces: np.ndarray
+    velocities: np.ndarray | None = None
 
     @property
     def vertex_count(self) -> int:
         return len(self.positions)
 
 
-def make_frame(positions, wetness, triangles, uv) -> Frame:
-    """Check and convert one frame's data: positions (n, 3) m, wetness (n,) 0..1, triangles (m, 3), uv (n, 2).
+def _check_indices(name: str, faces: np.ndarray, corners: tuple[int, ...], n: int) -> None:
+    if faces.ndim != 2 or faces.shape[1] not in corners or not np.issubdtype(faces.dtype, np.integer):
+        shape = " or ".join(f"(m, {k})" for k in corners)
+        raise ExportError(f"{name} must be integers of shape {shape}, got {faces.dtype} {faces.shape}")
+    if faces.size and (faces.min() < 0 or faces.max() >= n):
+        raise ExportError(f"{name} index vertices outside 0..{n - 1}")
+
+
+def make_frame(positions, wetness, triangles, uv, faces=None, velocities=None) -> Frame:
+    """Check and convert one frame's data: positions (n, 3) m, wetness (n,) 0..1, triangles (m, 3),
+    uv (n, 2); faces (k, 3 or 4) to write instead of the triangles (e.g. their quads); velocities (n, 3) m/s.
 
     Raises ExportError naming the array when a shape or value is wrong.
     """
     positions = np.asarray(positions, dtype=np.float64)
     wetness = np.asarray(wetness, dtype=np.float64)
     triangles = np.asarray(triangles)
+    faces = triangles if faces is None else np.asarray(faces)
     uv = np.asarray(uv, dtype=np.float32)
     n = len(positions)
     if positions.ndim != 2 or positions.shape[1] != 3 or n == 0:
@@ -96,12 +146,17 @@ def make_frame(positions, wetness, triangles, uv) -> Frame:
         raise ExportError(f"wetness must have shape ({n},) like the positions, got {wetness.shape}")
     if not np.isfinite(wetness).all() or wetness.min() < 0.0 or wetness.max() > 1.0:
         raise ExportError("wetness must be finite and within 0..1")
-    if triangles.ndim != 2 or triangles.shape[1] != 3 or not np.issubdtype(triangles.dtype, np.integer):
-        raise ExportError(f"triangles must be integers of shape (m, 3), got {triangles.dtype} {triangles.shape}")
-    if triangles.size and (triangles.min() < 0 or triangles.max() >= n):
-        raise ExportError(f"triangles index vertices outside 0..{n - 1}")
+    _check_indices("triangles", triangles, (3,), n)
+    _check_indices("faces", faces, (3, 4), n)
     if uv.shape != (n, 2):
         raise ExportError(f"uv must have shape ({n}, 2), got {uv.shape}")
+    if velocities is not None:
+        velocities = np.asarray(velocities, dtype=np.float64)
+        if velocities.shape != (n, 3):
+            raise ExportError(f"velocities must have shape ({n}, 3) like the positions, got {velocities.shape}")
+        if not np.isfinite(velocities).all():
+            raise ExportError("velocities contain non-finite values; the frame cannot be written")
+        velocities = velocities.astype(np.float32)
     return Frame(
         positions=positions.astype(np.float32),
         normals=vertex_normals(positions, triangles),
@@ -109,4 +164,6 @@ def make_frame(positions, wetness, triangles, uv) -> Frame:
         wetness=wetness.astype(np.float32),
         colors=wetness_colors(wetness),
         triangles=triangles.astype(np.int32),
+        faces=faces.astype(np.int32),
+        velocities=velocities,
     )

@@ -1,6 +1,7 @@
 """OBJ frames through meshio, with what Blender needs added: the same content as ``obj_trimesh``.
 
-meshio's OBJ writer writes ``v``, ``vn`` (point_data ``obj:vn``), ``vt`` (``obj:vt``) and ``f a b c``.
+meshio's OBJ writer writes ``v``, ``vn`` (point_data ``obj:vn``), ``vt`` (``obj:vt``) and ``f a b c``
+(``f a b c d`` for quads).
 It has no vertex colours and its faces do not reference the normals and UVs, so Blender would
 drop both.  This module writes through meshio and then adds the colours to the ``v`` lines
 (``v x y z r g b``, as trimesh and Blender's importer have it) and turns each face corner ``a``
@@ -16,6 +17,7 @@ import meshio
 
 from wetcloth.exporter.frame import Frame
 from wetcloth.exporter.obj_trimesh import DIGITS
+from wetcloth.exporter.ply_meshio import CELL_TYPES
 
 
 def _corner(token: str) -> str:
@@ -26,7 +28,7 @@ def obj_text(frame: Frame) -> str:
     """The frame as OBJ text (positions, colours, normals, UVs, faces)."""
     mesh = meshio.Mesh(
         frame.positions,
-        [("triangle", frame.triangles)],
+        [(CELL_TYPES[frame.faces.shape[1]], frame.faces)],
         point_data={"obj:vn": frame.normals, "obj:vt": frame.uv},
     )
     buffer = io.StringIO()

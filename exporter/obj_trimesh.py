@@ -1,5 +1,7 @@
 """OBJ frames through trimesh: ``v x y z r g b`` (colour of the wetness), ``vn``, ``vt`` and ``f v/vt/vn``.
 
+Faces are the frame's triangles or quads (``f a/a/a b/b/b c/c/c d/d/d``).
+
 OBJ cannot carry a custom scalar, so wetness travels only as the vertex colour (Blender's OBJ
 importer reads ``v x y z r g b`` into a colour attribute; the loader turns it back into wetness).
 No material library is written: the frames reference none.
@@ -9,6 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import trimesh
 from trimesh.exchange.obj import export_obj
 from trimesh.visual.texture import TextureVisuals
@@ -35,11 +38,27 @@ class UVColorVisuals(TextureVisuals):
         return "vertex"
 
 
+class PolygonTrimesh(trimesh.Trimesh):
+    """A Trimesh that keeps faces of four corners as they are, for trimesh's OBJ exporter.
+
+    ``Trimesh`` triangulates quads as they are assigned; the OBJ exporter itself writes each face
+    row with as many corners as it has.  Only for writing: trimesh's geometry functions expect triangles.
+    """
+
+    @property
+    def faces(self) -> np.ndarray:
+        return self._data["faces"]
+
+    @faces.setter
+    def faces(self, values) -> None:
+        self._data["faces"] = np.asanyarray(values, dtype=np.int64)
+
+
 def obj_text(frame: Frame) -> str:
     """The frame as OBJ text (positions, colours, normals, UVs, faces; no material library)."""
-    mesh = trimesh.Trimesh(
+    mesh = PolygonTrimesh(
         vertices=frame.positions,
-        faces=frame.triangles,
+        faces=frame.faces,
         vertex_normals=frame.normals,
         visual=UVColorVisuals(frame.uv, frame.colors),
         process=False,

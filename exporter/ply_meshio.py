@@ -2,7 +2,7 @@
 
 meshio writes every one-dimensional ``point_data`` array as a PLY vertex property of its dtype,
 in insertion order, so the normals, colours, wetness and UV go in as named columns:
-x y z nx ny nz red green blue alpha wetness s t.
+x y z nx ny nz red green blue alpha wetness s t.  Faces are meshio ``triangle`` or ``quad`` cells.
 """
 
 from __future__ import annotations
@@ -12,6 +12,9 @@ from pathlib import Path
 import meshio
 
 from wetcloth.exporter.frame import Frame
+
+#: meshio's cell type for faces of 3 and 4 corners.
+CELL_TYPES = {3: "triangle", 4: "quad"}
 
 
 def point_data(frame: Frame) -> dict:
@@ -27,5 +30,6 @@ def point_data(frame: Frame) -> dict:
 
 def write(path: Path, frame: Frame) -> None:
     """Write ``frame`` as one binary PLY file at ``path``."""
-    mesh = meshio.Mesh(frame.positions, [("triangle", frame.triangles)], point_data=point_data(frame))
+    cells = [(CELL_TYPES[frame.faces.shape[1]], frame.faces)]
+    mesh = meshio.Mesh(frame.positions, cells, point_data=point_data(frame))
     meshio.write(path, mesh, file_format="ply", binary=True)

@@ -19,8 +19,9 @@ from typing import Any, Callable
 import numpy as np
 
 from wetcloth.exporter import obj_meshio, obj_trimesh, ply_meshio, ply_trimesh
+from wetcloth.exporter.blender_options import MAX_FRAME, OPTIONS, blender_options
 from wetcloth.exporter.errors import ExportError
-from wetcloth.exporter.frame import COLORMAP, Frame, make_frame, sheet_uv, wetness_lut
+from wetcloth.exporter.frame import COLORMAP, FACES, Frame, make_frame, quads_from_triangles, sheet_uv, wetness_lut
 
 #: Mesh formats; ``usd`` is one animated file, the others one file per frame.
 FORMATS = ("ply", "obj", "usd")
@@ -46,7 +47,7 @@ _PREFIX = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
 def frame_file_name(prefix: str, number: int, fmt: str, digits: int = MIN_DIGITS) -> str:
-    """``cloth_0001.ply``: the file of frame ``number`` (1-based), zero-padded to ``digits`` or more."""
+    """``cloth_0001.ply``: the file of frame ``number``, zero-padded to ``digits`` or more."""
     return f"{prefix}_{number:0{digits}d}.{fmt}"
 
 
@@ -109,12 +110,13 @@ class FrameSequence:
     """Frames of one run written into one directory.  Use ``open_sequence`` to make one.
 
     ``on_frame(index, sim)`` is the runner's callback (index 0, the state at t = 0, becomes
-    ``<prefix>_0001``); ``write_frame(positions, wetness)`` is the same for arrays.
-    ``close()`` finishes the sequence.  Also a context manager.
+    ``<prefix>_0001``, or the file of ``first_frame``); ``write_frame(positions, wetness)`` is the
+    same for arrays.  ``close()`` finishes the sequence.  Also a context manager.
     """
 
     def __init__(self, directory: Path, fmt: str, writer: str, fps: float, scene=None,
-                 triangles=None, uv=None, prefix: str = "cloth", digits: int = MIN_DIGITS):
+                 triangles=None, uv=None, prefix: str = "cloth", digits: int = MIN_DIGITS,
+                 faces: str = "quads", first_frame: int = 1, blender: dict | None = None):
         self.directory = directory
         self.format = fmt
         self.writer = "usd-core" if fmt == "usd" else writer
@@ -122,10 +124,14 @@ class FrameSequence:
         self.scene = scene
         self.prefix = prefix
         self.digits = digits
+        self.faces = faces
+        self.first_frame = first_frame
+        self.blender = blender_options(blender, first_frame)
         self.frame_count = 0
         self.closed = False
         self._triangles = None if triangles is None else np.asarray(triangles)
         self._uv = None if uv is None else np.asarray(uv, dtype=np.float32)
+        self._faces: np.ndarray | None = None  # what is written: the triangles or their quads
         self._first_time: float | None = None
         self._last_time: float | None = None
         self._shape: tuple[int, int] | None = None
@@ -142,7 +148,7 @@ class FrameSequence:
         return self.directory / f"{self.prefix}.usd"
 
     def frame_path(self, number: int) -> Path:
-        """File of frame ``number`` (1-based); for USD, the one USD file."""
+        """File of frame ``number`` (``first_frame`` is the first); for USD, the one USD file."""
         if self.format == "usd":
             return self.usd_path
         return self.directory / frame_file_name(self.prefix, number, self.format, self.digits)
@@ -150,13 +156,13 @@ class FrameSequence:
     # ------------------------------------------------------------------ writing
     def resume_after(self, frames_written: int) -> None:
         """Continue a run restored to an earlier (or later) point: the next frame written is
-        ``frames_written + 1``, replacing any file of that number."""
+        ``first_frame + frames_written``, replacing any file of that number."""
         if not (isinstance(frames_written, int) and frames_written >= 0):
             raise ExportError(f"frames_written must be a whole number >= 0, got {frames_written!r}")
         self.frame_count = frames_written
 
     def on_frame(self, index: int, sim) -> None:
-        """Runner callback: write ``sim``'s cloth as frame ``index + 1`` (index 0 is t = 0)."""
+        """Runner callback: write ``sim``'s cloth as frame ``first_frame + index`` (index 0 is t = 0)."""
         if index != self.frame_count:
             raise ExportError(
                 f"frame index {index} arrived but {self.frame_count} was expected next: frames are "
@@ -165,9 +171,10 @@ class FrameSequence:
         if self._triangles is None:
             self._triangles = sim.triangles
             self._uv = sheet_uv(sim.model.topology.rest_xy)
-        self.write_frame(sim.positions, sim.wetness, time=sim.time)
+        self.write_frame(sim.positions, sim.wetness, time=sim.time, velocities=sim.velocities)
 
-    def _topology(self) -> tuple[np.ndarray, np.ndarray]:
+    def _topology(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The triangles, the faces to write (the triangles or their quads) and the UVs."""
         if self._triangles is None:
             if self.scene is None:
                 raise ExportError("write_frame needs the cloth's triangles: pass scene= or triangles= and uv=")
@@ -178,20 +185,24 @@ class FrameSequence:
             self._uv = sheet_uv(topology.rest_xy)
         if self._uv is None:
             raise ExportError("write_frame needs UVs with the triangles: pass uv= (n, 2) in 0..1")
-        return self._triangles, self._uv
+        if self._faces is None:
+            self._faces = (quads_from_triangles(self._triangles, self._uv) if self.faces == "quads"
+                           else self._triangles)
+        return self._triangles, self._faces, self._uv
 
-    def write_frame(self, positions, wetness, time: float | None = None) -> Path:
-        """Write the next frame: positions (n, 3) m, wetness (n,) 0..1, at ``time`` s; returns its file."""
+    def write_frame(self, positions, wetness, time: float | None = None, velocities=None) -> Path:
+        """Write the next frame: positions (n, 3) m, wetness (n,) 0..1, at ``time`` s, with the
+        velocities (n, 3) m/s if given (the USD file keeps them for motion blur); returns its file."""
         if self.closed:
             raise ExportError(f"the frame sequence in {self.directory} is closed")
-        triangles, uv = self._topology()
+        triangles, faces, uv = self._topology()
         count = len(np.asarray(positions))
         if count != len(uv):
             raise ExportError(f"frame {self.frame_count + 1} has {count} vertices, the cloth {len(uv)}: "
                               "the topology is fixed")
-        frame = make_frame(positions, wetness, triangles, uv)
-        self._shape = (frame.vertex_count, len(frame.triangles))
-        number = self.frame_count + 1
+        frame = make_frame(positions, wetness, triangles, uv, faces=faces, velocities=velocities)
+        self._shape = (frame.vertex_count, len(frame.faces))
+        number = self.first_frame + self.frame_count
         path = self.frame_path(number)
         if self._usd is not None:
             self._usd.write(number, frame)
@@ -202,8 +213,8 @@ class FrameSequence:
                 os.replace(partial, path)
             except OSError as exc:
                 raise ExportError(f"cannot write frame {path}: {exc.strerror or exc}") from None
-        self.frame_count = number
-        time = float(number - 1) / self.fps if time is None else float(time)
+        self.frame_count += 1
+        time = float(number - self.first_frame) / self.fps if time is None else float(time)
         if self._first_time is None:
             self._first_time = time
         self._last_time = time
@@ -224,13 +235,14 @@ class FrameSequence:
             "writer": self.writer,
             "files": files,
             "prefix": self.prefix,
-            "first_frame": 1,
+            "first_frame": self.first_frame,
             "frame_count": self.frame_count,
             "complete": complete,
             "fps": self.fps,
             "first_time": self._first_time,
             "last_time": self._last_time,
             "vertex_count": vertices,
+            "faces": self.faces,
             "face_count": faces,
             "units": {"length": "m", "time": "s", "wetness": "1 (absorbed water over capacity, 0 to 1)"},
             "up_axis": "Z",
@@ -239,8 +251,10 @@ class FrameSequence:
                 "color": f"RGBA 8-bit sRGB: matplotlib '{COLORMAP}' colour map of wetness",
                 "normals": "unit vertex normals of each frame",
                 "uv": "rest-sheet coordinates scaled to 0..1",
+                "velocities": "USD only: the points' velocities in m/s, time-sampled (for motion blur)",
             },
             "colormap": COLORMAP,
+            "blender": self.blender,
             "scene": self.scene.to_dict() if self.scene is not None else None,
         }
 
@@ -254,7 +268,10 @@ class FrameSequence:
             "format": self.format,
             "prefix": self.prefix,
             "fps": self.fps,
-            "first_frame": 1,
+            "first_frame": self.first_frame,
+            "thickness": self.scene.thickness if self.scene is not None else None,
+            "options": self.blender,
+            "option_table": OPTIONS,
             "directory": str(self.directory.resolve()),
             "manifest": MANIFEST,
             "usd_file": self.usd_path.name,
@@ -286,7 +303,8 @@ class FrameSequence:
 
 def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: float = 30.0, scene=None, *,
                   triangles=None, uv=None, prefix: str = "cloth", digits: int = MIN_DIGITS,
-                  overwrite: bool = False) -> FrameSequence:
+                  overwrite: bool = False, faces: str = "quads", first_frame: int = 1,
+                  blender: dict | None = None) -> FrameSequence:
     """Start a frame sequence in ``directory``, checked now: ExportError if it cannot be used.
 
     fmt: ``ply`` (binary, default), ``obj`` or ``usd``; writer: ``trimesh`` or ``meshio`` (ply and
@@ -294,7 +312,11 @@ def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: flo
     scene: the Scene, recorded in frames.json and used for the triangles and UVs when frames come
     from ``write_frame`` rather than ``on_frame``; triangles (m, 3) and uv (n, 2) in 0..1: the
     same without a scene; prefix: file names ``<prefix>_0001.<fmt>``; digits: least zero-padding (4 to 12);
-    overwrite: delete an earlier run's frames in the directory instead of refusing it.
+    overwrite: delete an earlier run's frames in the directory instead of refusing it;
+    faces: ``quads`` (default: one per grid cell, made of its two triangles) or ``triangles``;
+    first_frame: number of the first frame (file ``<prefix>_0001``, USD time code 1 by default);
+    blender: options of ``load_in_blender.py`` (see ``blender_options.OPTIONS``: solidify,
+    subdivision, smooth, material, first_frame, timeline), recorded in frames.json.
 
     The directory is created if missing.  Refused up front: a path that is a file, a directory
     that cannot be created or written, and one that already holds frames (``*_0001.ply``-like
@@ -312,12 +334,17 @@ def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: flo
         raise ExportError(f"file prefix {prefix!r} must be letters, digits, '.', '_' or '-' (no path)")
     if not (isinstance(digits, int) and MIN_DIGITS <= digits <= 12):
         raise ExportError(f"digits must be a whole number from {MIN_DIGITS} to 12, got {digits!r}")
+    if faces not in FACES:
+        raise ExportError(f"unknown faces {faces!r}; choose one of {', '.join(FACES)}")
+    if not (isinstance(first_frame, int) and not isinstance(first_frame, bool) and 0 <= first_frame <= MAX_FRAME):
+        raise ExportError(f"first_frame must be a whole number from 0 to {MAX_FRAME}, got {first_frame!r}")
+    blender_options(blender, first_frame)  # checked before the directory is touched
     if directory is None or str(directory) == "":
         raise ExportError("no export directory given")
     directory = Path(directory)
     _check_directory(directory, overwrite)
     sequence = FrameSequence(directory, fmt, writer, fps, scene=scene, triangles=triangles, uv=uv,
-                             prefix=prefix, digits=digits)
+                             prefix=prefix, digits=digits, faces=faces, first_frame=first_frame, blender=blender)
     sequence.write_manifest(complete=False)  # also proves the directory is writable
     sequence.write_loader()
     return sequence

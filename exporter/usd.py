@@ -1,10 +1,13 @@
-"""One animated USD file through usd-core: time-sampled points and a ``wetness`` primvar.
+"""One animated USD file through usd-core: time-sampled points, velocities and a ``wetness`` primvar.
 
 The stage (``DIR/<prefix>.usd``, binary crate) holds a mesh ``/wetcloth/<prefix>`` whose topology
-and UVs (``primvars:st``) are written once, and whose ``points``, ``normals``, ``extent``,
-``primvars:wetness`` (float, vertex) and ``primvars:displayColor`` (linear RGB of the wetness colour
-map) are time-sampled, one sample per frame at time code = frame number (1, 2, ...), with
-``timeCodesPerSecond = fps``.  Units: metres (``metersPerUnit = 1``), z up.
+(quads or triangles) and UVs (``primvars:st``) are written once, and whose ``points``,
+``velocities``, ``normals``, ``extent``, ``primvars:wetness`` (float, vertex) and
+``primvars:displayColor`` (linear RGB of the wetness colour map) are time-sampled, one sample per
+frame at time code = frame number (first frame 1 unless chosen otherwise), with
+``timeCodesPerSecond = fps``.  Units: metres (``metersPerUnit = 1``), z up; ``velocities`` in
+metres per second, as USD defines them (stage units per second, whatever timeCodesPerSecond is),
+which renderers use for motion blur.
 
 Streaming: the layer is saved every ``SAVE_EVERY`` frames.  A crate file appends on save and then
 reads the saved samples back from disk on demand, so memory stays flat however many frames come.
@@ -41,15 +44,16 @@ class UsdSequence:
         self.metadata = metadata or {}
         self.stage: Usd.Stage | None = None
         self.mesh: UsdGeom.Mesh | None = None
+        self.first_time_code: int | None = None
         self.last_time_code = 0
 
-    def _create(self, frame: Frame) -> None:
+    def _create(self, time_code: int, frame: Frame) -> None:
         stage = Usd.Stage.CreateNew(str(self.path))
         UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
         UsdGeom.SetStageMetersPerUnit(stage, 1.0)
         stage.SetTimeCodesPerSecond(self.fps)
         stage.SetFramesPerSecond(self.fps)
-        stage.SetStartTimeCode(1)
+        stage.SetStartTimeCode(time_code)
         root = UsdGeom.Xform.Define(stage, "/wetcloth")
         stage.SetDefaultPrim(root.GetPrim())
         if self.metadata:
@@ -57,8 +61,9 @@ class UsdSequence:
         mesh = UsdGeom.Mesh.Define(stage, f"/wetcloth/{self.name}")
         mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
         mesh.CreateDoubleSidedAttr(True)
-        mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(frame.triangles), 3, dtype=np.int32)))
-        mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(frame.triangles.reshape(-1).copy()))
+        faces = frame.faces
+        mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(faces), faces.shape[1], dtype=np.int32)))
+        mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(faces.reshape(-1).copy()))
         mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
         primvars = UsdGeom.PrimvarsAPI(mesh)
         st = primvars.CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex)
@@ -66,27 +71,30 @@ class UsdSequence:
         self._wetness = primvars.CreatePrimvar("wetness", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex)
         self._color = mesh.CreateDisplayColorPrimvar(UsdGeom.Tokens.vertex)
         self.stage, self.mesh = stage, mesh
+        self.first_time_code = time_code
 
     def write(self, time_code: int, frame: Frame) -> None:
-        """Add ``frame`` as the samples at ``time_code`` (the frame number, 1-based)."""
+        """Add ``frame`` as the samples at ``time_code`` (the frame number)."""
         if self.stage is None:
-            self._create(frame)
+            self._create(time_code, frame)
         mesh = self.mesh
         points = np.ascontiguousarray(frame.positions)
         mesh.GetPointsAttr().Set(Vt.Vec3fArray.FromNumpy(points), time_code)
+        if frame.velocities is not None:
+            mesh.GetVelocitiesAttr().Set(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(frame.velocities)), time_code)
         mesh.GetNormalsAttr().Set(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(frame.normals)), time_code)
         lo, hi = points.min(axis=0), points.max(axis=0)
         mesh.GetExtentAttr().Set(Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]), time_code)
         self._wetness.Set(Vt.FloatArray.FromNumpy(np.ascontiguousarray(frame.wetness)), time_code)
         self._color.Set(Vt.Vec3fArray.FromNumpy(srgb_to_linear(frame.colors)), time_code)
         self.last_time_code = time_code
-        if time_code % SAVE_EVERY == 0:
+        if (time_code - self.first_time_code + 1) % SAVE_EVERY == 0:
             self.save()
 
     def save(self) -> None:
         """Save what has been written so far (end time code = the last frame)."""
         if self.stage is not None:
-            self.stage.SetEndTimeCode(max(1, self.last_time_code))
+            self.stage.SetEndTimeCode(max(self.first_time_code, self.last_time_code))
             self.stage.GetRootLayer().Save()
 
     def close(self) -> None:
