@@ -1,17 +1,24 @@
-"""Load a wetcloth frame sequence into Blender (4.2 or newer) as one animated object.
+"""Load a wetcloth frame sequence into Blender (4.2 or newer) as one animated, render-ready object.
 
 Run it inside Blender, either
-    blender --python load_in_blender.py            (a new scene with the cloth), or
-    Text editor > Open > load_in_blender.py > Run Script.
+    blender --python load_in_blender.py                         (a new scene with the cloth),
+    blender shot.blend --python load_in_blender.py -- --subdivision 2 --first-frame 1001
+                                                                (options after "--", see --help), or
+    Text editor > Open > load_in_blender.py > Run Script,
+or from Python inside Blender: ``runpy.run_path("load_in_blender.py")["load"](subdivision=2)``.
 It needs no add-on.  What it builds:
 
-* object ``<prefix>`` (e.g. ``cloth``): the cloth mesh with its UV map, smooth shaded, whose
-  geometry-nodes modifier ``wetcloth sequence`` moves every vertex to the current frame's
-  position and stores the float attribute ``wetness`` (0 dry .. 1 saturated) on it;
+* object ``<prefix>`` (e.g. ``cloth``): the cloth mesh (quads or triangles, as exported) with its
+  UV map, whose geometry-nodes modifier ``wetcloth sequence`` moves every vertex to the current
+  frame's position and stores the float attribute ``wetness`` (0 dry .. 1 saturated) on it
+  (between frames, e.g. for motion blur, both are interpolated linearly);
+* then, as the options say (defaults in ``frames.json``, key ``blender``): a Subdivision Surface
+  modifier, a Solidify modifier as thick as the cloth (times a factor), smooth shading, and the
+  material ``wetcloth wetness``, a Principled BSDF that darkens and turns glossier with ``wetness``;
 * object ``<prefix> trajectories`` (hidden): one curve per cloth vertex with a point per frame,
   the cache the modifier reads (positions and ``wetness``; 16 bytes per vertex and frame);
-* material ``wetcloth wetness``: a Principled BSDF that darkens and turns glossier with ``wetness``;
-* the scene's frame range (1 .. frame count) and frame rate (the sequence's fps).
+* the scene's frame range and frame rate: set to the sequence's in a new file, kept in a saved
+  one (option ``timeline``); the sequence starts at its own first frame (option ``first_frame``).
 
 In a new, unsaved file Blender's untouched default cube is deleted first (the cloth would be
 hidden inside it); nothing else in the scene is touched.
@@ -19,16 +26,19 @@ hidden inside it); nothing else in the scene is touched.
 Everything lives in the .blend file: save it and it plays again when reopened, with no script
 (the modifier does the work, no frame-change handler).  A USD sequence (``<prefix>.usd``) is
 instead imported with Blender's USD importer, which plays it through a Mesh Sequence Cache
-modifier; the script then adds the material.
+modifier and reads the velocities into the attribute ``velocity`` (Cycles' motion blur uses it);
+the script then adds the same modifiers and material.
 
 For OBJ frames the wetness comes back from the vertex colour (OBJ cannot carry a custom float):
 the colour is matched to the exporter's colour table, so it is exact to 1/255.
 """
 
+import argparse
 import glob
 import json
 import os
 import re
+import sys
 import time
 
 import bpy
@@ -39,6 +49,56 @@ SETTINGS: dict = {}  # filled in by the exporter
 DRY_COLOR = (0.80, 0.77, 0.70, 1.0)  # linear RGB of the dry fabric (linen)
 WET_COLOR = (0.30, 0.28, 0.25, 1.0)  # the same fabric soaked: darker
 DRY_ROUGHNESS, WET_ROUGHNESS = 0.9, 0.45
+
+
+# ---------------------------------------------------------------------------- options
+def check_option(name, value):
+    """``value`` as option ``name`` takes it (the exporter's table, SETTINGS["option_table"]), or ValueError."""
+    table = SETTINGS["option_table"]
+    if name not in table:
+        raise ValueError(f"unknown option {name!r}; the options are {', '.join(table)}")
+    spec = table[name]
+    kind = spec["kind"]
+    if kind == "bool":
+        if not isinstance(value, bool):
+            raise ValueError(f"option {name} must be true or false, got {value!r}")
+    elif kind == "choice":
+        if value not in spec["choices"]:
+            raise ValueError(f"option {name} must be one of {', '.join(spec['choices'])}, got {value!r}")
+    elif (isinstance(value, bool) or not isinstance(value, int if kind == "int" else (int, float))
+          or not spec["min"] <= value <= spec["max"]):
+        raise ValueError(f"option {name} must be {'a whole number' if kind == 'int' else 'a number'} "
+                         f"from {spec['min']:g} to {spec['max']:g}, got {value!r}")
+    return value
+
+
+def resolve_options(manifest, overrides):
+    """The options in force: the exporter's, then those in frames.json (key ``blender``), then ``overrides``."""
+    options = dict(SETTINGS["options"])
+    for source in (manifest.get("blender") or {}, overrides):
+        for name, value in source.items():
+            options[name] = check_option(name, value)
+    return options
+
+
+def command_line_options(argv):
+    """Options given after ``--`` on Blender's command line, e.g. ``-- --subdivision 2 --no-solidify``."""
+    if "--" not in argv:
+        return {}
+    parser = argparse.ArgumentParser(prog="blender --python load_in_blender.py --",
+                                     description="Load a wetcloth frame sequence; defaults from frames.json.")
+    for name, spec in SETTINGS["option_table"].items():
+        flag = "--" + name.replace("_", "-")
+        if spec["kind"] == "bool":
+            parser.add_argument(flag, dest=name, action=argparse.BooleanOptionalAction, default=None, help=spec["help"])
+        else:
+            kind = {"float": float, "int": int, "choice": str}[spec["kind"]]
+            parser.add_argument(flag, dest=name, type=kind, choices=spec.get("choices"), default=None,
+                                help=spec["help"])
+    parser.add_argument("--no-solidify", dest="solidify", action="store_const", const=0.0,
+                        help="no Solidify modifier (same as --solidify 0)")
+    given = parser.parse_args(argv[argv.index("--") + 1:])
+    return {name: value for name, value in vars(given).items() if value is not None}
 
 
 # ---------------------------------------------------------------------------- finding the frames
@@ -132,11 +192,11 @@ def wetness_from_colors(rgba_linear):
 
 
 def read_frames(files):
-    """Positions (N, n, 3) and wetness (N, n) of every frame, plus the first frame's triangles (m, 3)
-    and corner UVs (3 m, 2)."""
+    """Positions (N, n, 3) and wetness (N, n) of every frame, plus the first frame's faces (m, 3 or 4)
+    and corner UVs (3 m or 4 m, 2)."""
     count = len(files)
     positions = wetness = None
-    triangles = uv = None
+    faces = uv = None
     started = time.time()
     for k, path in enumerate(files):
         ob = import_mesh_file(path)
@@ -149,9 +209,9 @@ def read_frames(files):
             mesh.loops.foreach_get("vertex_index", corners)
             sizes = np.empty(len(mesh.polygons), dtype=np.int32)
             mesh.polygons.foreach_get("loop_total", sizes)
-            if (sizes != 3).any():
-                raise RuntimeError(f"{path}: expected triangles only")
-            triangles = corners.reshape(-1, 3)
+            if not (sizes == sizes[0]).all() or sizes[0] not in (3, 4):
+                raise RuntimeError(f"{path}: expected triangles only or quads only")
+            faces = corners.reshape(-1, int(sizes[0]))
             if mesh.uv_layers:
                 uv = np.empty(len(mesh.loops) * 2, dtype=np.float32)
                 mesh.uv_layers[0].data.foreach_get("uv", uv)
@@ -172,7 +232,7 @@ def read_frames(files):
         bpy.data.meshes.remove(mesh)
         if count > 50 and (k + 1) % max(1, count // 10) == 0:
             print(f"wetcloth: read {k + 1}/{count} frames ({time.time() - started:.1f} s)")
-    return positions, wetness, triangles, uv
+    return positions, wetness, faces, uv
 
 
 # ---------------------------------------------------------------------------- building the object
@@ -191,14 +251,13 @@ def make_trajectories(name, positions, wetness):
     return ob
 
 
-def make_cloth_mesh(name, first_positions, triangles, uv):
-    """The display mesh: first frame's vertices, the triangles, the UV map, smooth shading."""
+def make_cloth_mesh(name, first_positions, faces, uv):
+    """The display mesh: first frame's vertices, the faces, the UV map."""
     mesh = bpy.data.meshes.new(name)
-    mesh.from_pydata(first_positions.tolist(), [], triangles.tolist())
+    mesh.from_pydata(first_positions.tolist(), [], faces.tolist())
     if uv is not None:
         layer = mesh.uv_layers.new(name="UVMap")
         layer.data.foreach_set("uv", uv.ravel())
-    mesh.polygons.foreach_set("use_smooth", np.ones(len(mesh.polygons), dtype=bool))
     mesh.update()
     return mesh
 
@@ -211,65 +270,95 @@ def _node(tree, kind, x, y, **props):
     return node
 
 
+def _math(tree, operation, x, y, a, b=None):
+    """A float Math node computing ``a <operation> b``; a and b are sockets or numbers."""
+    node = _node(tree, "ShaderNodeMath", x, y, operation=operation)
+    for socket, value in zip(node.inputs, (a, b)):
+        if value is None:
+            continue
+        if isinstance(value, (int, float)):
+            socket.default_value = float(value)
+        else:
+            tree.links.new(value, socket)
+    return node.outputs[0]
+
+
 def make_sequence_nodes(name, trajectories, frame_count, first_frame):
-    """Geometry nodes: at scene frame f, vertex i takes point (f - first_frame) of trajectory i."""
+    """Geometry nodes: at scene frame f, vertex i sits between points k and k + 1 of trajectory i,
+    where f - first_frame = k + t (0 <= t < 1), at (1 - t) of the way; likewise its wetness.
+
+    At whole frames (t = 0) that is point k exactly; before the first frame and after the last, the
+    first and last points.  Between frames (Cycles evaluates them for deformation motion blur) the
+    cloth moves in a straight line from one frame to the next.
+    """
     tree = bpy.data.node_groups.new(name, "GeometryNodeTree")
     tree.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
     tree.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
     link = tree.links.new
-    group_in = _node(tree, "NodeGroupInput", -1400, 0)
-    group_out = _node(tree, "NodeGroupOutput", 800, 0)
+    group_in = _node(tree, "NodeGroupInput", -1600, 0)
+    group_out = _node(tree, "NodeGroupOutput", 1000, 0)
 
-    # frame index k = clamp(floor(frame - first_frame), 0, frame_count - 1)
-    scene_time = _node(tree, "GeometryNodeInputSceneTime", -1400, -400)
-    shift = _node(tree, "ShaderNodeMath", -1200, -400, operation="SUBTRACT")
-    shift.inputs[1].default_value = float(first_frame)
-    floor = _node(tree, "ShaderNodeMath", -1040, -400, operation="FLOOR")
-    upper = _node(tree, "ShaderNodeMath", -880, -400, operation="MINIMUM")
-    upper.inputs[1].default_value = float(frame_count - 1)
-    lower = _node(tree, "ShaderNodeMath", -720, -400, operation="MAXIMUM")
-    lower.inputs[1].default_value = 0.0
-    link(scene_time.outputs["Frame"], shift.inputs[0])
-    link(shift.outputs[0], floor.inputs[0])
-    link(floor.outputs[0], upper.inputs[0])
-    link(upper.outputs[0], lower.inputs[0])
+    # s = frame - first_frame; k = clamp(floor(s), 0, N - 1); next = min(k + 1, N - 1); t = clamp(s - k, 0, 1)
+    scene_time = _node(tree, "GeometryNodeInputSceneTime", -1600, -400)
+    s = _math(tree, "SUBTRACT", -1400, -400, scene_time.outputs["Frame"], first_frame)
+    k = _math(tree, "MAXIMUM", -1000, -400,
+              _math(tree, "MINIMUM", -1100, -400, _math(tree, "FLOOR", -1250, -400, s), frame_count - 1), 0.0)
+    following = _math(tree, "MINIMUM", -850, -550, _math(tree, "ADD", -1000, -550, k, 1.0), frame_count - 1)
+    t = _node(tree, "ShaderNodeMath", -850, -250, operation="SUBTRACT", use_clamp=True)
+    link(s, t.inputs[0])
+    link(k, t.inputs[1])
+    t = t.outputs[0]
 
-    info = _node(tree, "GeometryNodeObjectInfo", -1200, -700, transform_space="ORIGINAL")
+    info = _node(tree, "GeometryNodeObjectInfo", -1400, -800, transform_space="ORIGINAL")
     info.inputs["Object"].default_value = trajectories
-    # the global index of point k of each curve, evaluated on the curve domain (integers only)
-    points_of_curve = _node(tree, "GeometryNodePointsOfCurve", -560, -400)
-    link(lower.outputs[0], points_of_curve.inputs["Sort Index"])
-    vertex_index = _node(tree, "GeometryNodeInputIndex", -560, -700)
+    vertex_index = _node(tree, "GeometryNodeInputIndex", -700, -800).outputs["Index"]
+    # the global index of point k (and k + 1) of each curve, evaluated on the curve domain (integers only)
+    point_index = []
+    for row, sort_index in enumerate((k, following)):
+        points_of_curve = _node(tree, "GeometryNodePointsOfCurve", -700, -400 - 150 * row)
+        link(sort_index, points_of_curve.inputs["Sort Index"])
+        point_index.append(points_of_curve.outputs["Point Index"])
 
-    geometry = group_in.outputs[0]
-    x = -300
-    fields = [
-        ("FLOAT_VECTOR", _node(tree, "GeometryNodeInputPosition", x - 300, 200).outputs[0], None),
-        ("FLOAT", None, "wetness"),
-    ]
-    for data_type, value, attribute in fields:
-        if value is None:
-            named = _node(tree, "GeometryNodeInputNamedAttribute", x - 300, 200, data_type=data_type)
-            named.inputs["Name"].default_value = attribute
-            value = named.outputs["Attribute"]
-        at_point = _node(tree, "GeometryNodeFieldAtIndex", x - 100, 200, data_type=data_type, domain="POINT")
-        link(points_of_curve.outputs["Point Index"], at_point.inputs["Index"])
+    def sample(value, data_type, index, x, y):
+        """``value`` of point ``index`` of the curve whose index is the cloth vertex's."""
+        at_point = _node(tree, "GeometryNodeFieldAtIndex", x, y, data_type=data_type, domain="POINT")
+        link(index, at_point.inputs["Index"])
         link(value, at_point.inputs["Value"])
-        sample = _node(tree, "GeometryNodeSampleIndex", x + 100, 200, data_type=data_type, domain="CURVE")
-        link(info.outputs["Geometry"], sample.inputs["Geometry"])
-        link(at_point.outputs["Value"], sample.inputs["Value"])
-        link(vertex_index.outputs["Index"], sample.inputs["Index"])
-        if attribute is None:
-            setter = _node(tree, "GeometryNodeSetPosition", x + 300, 0)
-            link(sample.outputs["Value"], setter.inputs["Position"])
-        else:
-            setter = _node(tree, "GeometryNodeStoreNamedAttribute", x + 300, 0, data_type=data_type, domain="POINT")
-            setter.inputs["Name"].default_value = attribute
-            link(sample.outputs["Value"], setter.inputs["Value"])
-        link(geometry, setter.inputs["Geometry"])
-        geometry = setter.outputs["Geometry"]
-        x += 350
-    link(geometry, group_out.inputs[0])
+        sampled = _node(tree, "GeometryNodeSampleIndex", x + 180, y, data_type=data_type, domain="CURVE")
+        link(info.outputs["Geometry"], sampled.inputs["Geometry"])
+        link(at_point.outputs["Value"], sampled.inputs["Value"])
+        link(vertex_index, sampled.inputs["Index"])
+        return sampled.outputs["Value"]
+
+    # position: p_k + (p_next - p_k) * t, exactly p_k at t = 0 and where p_next = p_k
+    position = _node(tree, "GeometryNodeInputPosition", -500, 300).outputs[0]
+    here, there = (sample(position, "FLOAT_VECTOR", index, -300, 300 - 150 * row)
+                   for row, index in enumerate(point_index))
+    step = _node(tree, "ShaderNodeVectorMath", 100, 300, operation="SUBTRACT")
+    link(there, step.inputs[0])
+    link(here, step.inputs[1])
+    scaled = _node(tree, "ShaderNodeVectorMath", 250, 300, operation="SCALE")
+    link(step.outputs["Vector"], scaled.inputs[0])
+    link(t, scaled.inputs["Scale"])
+    moved = _node(tree, "ShaderNodeVectorMath", 400, 300, operation="ADD")
+    link(here, moved.inputs[0])
+    link(scaled.outputs["Vector"], moved.inputs[1])
+    set_position = _node(tree, "GeometryNodeSetPosition", 600, 0)
+    link(group_in.outputs[0], set_position.inputs["Geometry"])
+    link(moved.outputs["Vector"], set_position.inputs["Position"])
+
+    # wetness: w_k + (w_next - w_k) * t
+    named = _node(tree, "GeometryNodeInputNamedAttribute", -500, -100, data_type="FLOAT")
+    named.inputs["Name"].default_value = "wetness"
+    wet_here, wet_there = (sample(named.outputs["Attribute"], "FLOAT", index, -300, -100 - 150 * row)
+                           for row, index in enumerate(point_index))
+    wet = _math(tree, "ADD", 400, -100, wet_here,
+                _math(tree, "MULTIPLY", 250, -100, _math(tree, "SUBTRACT", 100, -100, wet_there, wet_here), t))
+    store = _node(tree, "GeometryNodeStoreNamedAttribute", 800, 0, data_type="FLOAT", domain="POINT")
+    store.inputs["Name"].default_value = "wetness"
+    link(set_position.outputs["Geometry"], store.inputs["Geometry"])
+    link(wet, store.inputs["Value"])
+    link(store.outputs["Geometry"], group_out.inputs[0])
     return tree
 
 
@@ -317,60 +406,113 @@ def remove_default_cube():
     print("wetcloth: removed Blender's default cube (the cloth would be hidden inside it)")
 
 
-def set_timeline(fps, first_frame, frame_count):
+def add_render_modifiers(ob, options, thickness):
+    """After the sequence: Subdivision Surface, then Solidify as thick as the cloth (centred on the
+    simulated sheet, which is its middle surface); smooth or flat shading."""
+    if options["subdivision"] > 0:
+        subdivision = ob.modifiers.new("Subdivision", "SUBSURF")
+        subdivision.levels = subdivision.render_levels = options["subdivision"]
+    if options["solidify"] > 0:
+        if thickness:
+            solidify = ob.modifiers.new("Solidify", "SOLIDIFY")
+            solidify.thickness = options["solidify"] * thickness
+            solidify.offset = 0.0
+            solidify.use_even_offset = True
+            solidify.use_quality_normals = True
+        else:
+            print("wetcloth: frames.json gives no cloth thickness (no scene); no Solidify modifier")
+    if options["smooth"]:
+        ob.data.shade_smooth()
+    else:
+        ob.data.shade_flat()
+
+
+def apply_timeline(mode, fps, first_frame, frame_count):
+    """Set the scene's fps and frame range to the sequence's ('set', or 'auto' in a new file), or keep
+    them ('keep', or 'auto' in a saved file) and say where they differ from the sequence."""
     scene = bpy.context.scene
-    whole = max(1, round(fps))
-    scene.render.fps = whole
-    scene.render.fps_base = whole / fps
-    scene.frame_start = first_frame
-    scene.frame_end = first_frame + max(frame_count, 1) - 1
-    scene.frame_set(first_frame)
+    last_frame = first_frame + max(frame_count, 1) - 1
+    if mode == "set" or (mode == "auto" and not bpy.data.filepath):
+        whole = max(1, round(fps))
+        scene.render.fps = whole
+        scene.render.fps_base = whole / fps
+        scene.frame_start = first_frame
+        scene.frame_end = last_frame
+        scene.frame_set(first_frame)
+        return
+    scene_fps = scene.render.fps / scene.render.fps_base
+    if abs(scene_fps - fps) > 1e-6 * fps:
+        print(f"wetcloth: the scene plays at {scene_fps:g} fps, the sequence was written at {fps:g} fps: "
+              "it plays faster or slower than simulated (option timeline=set sets the scene's fps)")
+    if scene.frame_start > first_frame or scene.frame_end < last_frame:
+        print(f"wetcloth: the sequence covers frames {first_frame}..{last_frame}, the scene's range is "
+              f"{scene.frame_start}..{scene.frame_end} (kept)")
+
+
+def finish(ob, options, manifest, fps, first_frame, frame_count):
+    """What both kinds of sequence get: the render modifiers, shading, material and timeline."""
+    add_render_modifiers(ob, options, (manifest.get("scene") or {}).get("thickness"))
+    if options["material"]:
+        ob.data.materials.append(make_material())
+    apply_timeline(options["timeline"], fps, first_frame, frame_count)
 
 
 # ---------------------------------------------------------------------------- entry points
-def load_usd(directory, manifest, name):
+def load_usd(directory, manifest, name, options, fps):
+    """Import ``<prefix>.usd`` (played by a Mesh Sequence Cache modifier), shifted to the option's first frame."""
     path = os.path.join(directory, SETTINGS["usd_file"])
+    scene = bpy.context.scene
+    kept_range = scene.frame_start, scene.frame_end
     before = set(bpy.data.objects)
     bpy.ops.wm.usd_import(filepath=path, set_frame_range=True, read_mesh_attributes=True,
                           read_mesh_colors=True, read_mesh_uvs=True, import_materials=False)
+    stage_range = scene.frame_start, scene.frame_end  # the stage's time codes, which the importer sets
+    scene.frame_start, scene.frame_end = kept_range
     meshes = [ob for ob in bpy.data.objects if ob not in before and ob.type == "MESH"]
     if len(meshes) != 1:
         raise RuntimeError(f"importing {path} gave {len(meshes)} mesh objects, expected 1")
     ob = meshes[0]
     ob.name = name
-    ob.data.materials.append(make_material())
-    frame_count = manifest.get("frame_count") or bpy.context.scene.frame_end
-    set_timeline(float(manifest.get("fps", SETTINGS["fps"])), SETTINGS["first_frame"], frame_count)
+    first_frame = options["first_frame"]
+    cache = next(modifier for modifier in ob.modifiers if modifier.type == "MESH_SEQUENCE_CACHE")
+    cache.cache_file.frame_offset = first_frame - stage_range[0]  # subtracted from the scene frame
+    frame_count = manifest.get("frame_count") or stage_range[1] - stage_range[0] + 1
+    finish(ob, options, manifest, fps, first_frame, frame_count)
     return ob
 
 
-def load(directory=None, name=None):
-    """Build the animated cloth from the frames in ``directory`` (default: beside this script)."""
+def load(directory=None, name=None, **options):
+    """Build the animated cloth from the frames in ``directory`` (default: beside this script).
+
+    ``options`` change those of frames.json (key ``blender``): solidify (factor on the cloth's
+    thickness, 0: none), subdivision (levels, 0: none), smooth (bool), material (bool),
+    first_frame (scene frame of the sequence's first frame), timeline ('auto', 'set' or 'keep').
+    """
     directory = directory or script_directory() or SETTINGS["directory"]
     manifest = read_manifest(directory)
+    options = resolve_options(manifest, options)
     name = name or SETTINGS["prefix"]
     fps = float(manifest.get("fps", SETTINGS["fps"]))
-    first_frame = SETTINGS["first_frame"]
+    first_frame = options["first_frame"]
     remove_default_cube()
     if SETTINGS["format"] == "usd":
-        return load_usd(directory, manifest, name)
+        return load_usd(directory, manifest, name, options, fps)
     files = frame_files(directory, SETTINGS["prefix"], SETTINGS["format"])
     if not files:
         raise RuntimeError(f"no {SETTINGS['prefix']}_NNNN.{SETTINGS['format']} frames in {directory}")
     started = time.time()
-    positions, wetness, triangles, uv = read_frames(files)
+    positions, wetness, faces, uv = read_frames(files)
     trajectories = make_trajectories(f"{name} trajectories", positions, wetness)
-    mesh = make_cloth_mesh(name, positions[0], triangles, uv)
+    mesh = make_cloth_mesh(name, positions[0], faces, uv)
     ob = bpy.data.objects.new(name, mesh)
     bpy.context.scene.collection.objects.link(ob)
     modifier = ob.modifiers.new("wetcloth sequence", "NODES")
     modifier.node_group = make_sequence_nodes("wetcloth sequence", trajectories, len(files), first_frame)
-    mesh.materials.append(make_material())
-    set_timeline(fps, first_frame, len(files))
+    finish(ob, options, manifest, fps, first_frame, len(files))
     print(f"wetcloth: {len(files)} frames of {positions.shape[1]} vertices from {directory} "
-          f"as object '{ob.name}' at {fps:g} fps ({time.time() - started:.1f} s)")
+          f"as object '{ob.name}' at {fps:g} fps from frame {first_frame} ({time.time() - started:.1f} s)")
     return ob
 
 
 if __name__ == "__main__":
-    load()
+    load(**command_line_options(sys.argv))

@@ -269,7 +269,6 @@ class FrameSequence:
             "prefix": self.prefix,
             "fps": self.fps,
             "first_frame": self.first_frame,
-            "thickness": self.scene.thickness if self.scene is not None else None,
             "options": self.blender,
             "option_table": OPTIONS,
             "directory": str(self.directory.resolve()),

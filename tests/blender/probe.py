@@ -2,13 +2,19 @@
 
     .venv-blender/bin/python tests/blender/probe.py SPEC.json RESULT.json
 
-SPEC: {"sequences": {name: directory}, "frames": [frame numbers to look at], "work": directory,
-       "render": [names of sequences to render], "startup": [names to load into the startup scene]}.
-For every sequence it reports, as JSON (the assertions are in tests/test_blender.py):
-  "import": PLY frames through bpy.ops.wm.ply_import (vertex/face counts, attributes, positions, wetness);
-  "loader": the scene after running the sequence's load_in_blender.py as Blender's --python would
-            (timeline, modifiers, material, and at each frame the evaluated positions and wetness);
-  "reopened": the same frames after saving the .blend and opening it again, with no script run;
+SPEC: {"work": directory, "jobs": {name: job}}; a job is
+  {"directory": the sequence, "frames": [scene frames to look at],
+   "options": keywords for the loader's load(...), or "argv": options for its command line (after "--"),
+   "scene": {"fps": .., "frame_start": .., "frame_end": ..} to load into a saved .blend with these
+            settings instead of a new file,
+   "import": bool, "reopen": bool, "render": bool, "startup": bool, "subframe": bool}.
+For every job it reports, as JSON (the assertions are in tests/test_blender.py):
+  "import": (if asked) PLY frames through bpy.ops.wm.ply_import (counts, attributes, positions, wetness);
+  "loader": the scene after running the sequence's load_in_blender.py (timeline, modifiers, material,
+            the cloth's own faces and shading, and at each frame the evaluated mesh: positions,
+            wetness, velocities, attributes);
+  "subframe": (if asked) the evaluated positions halfway between the first two looked-at frames;
+  "reopened": (if asked) the same frames after saving the .blend and opening it again, no script run;
   "render": (if asked) Cycles renders of the reopened scene at the first and last looked-at frame;
   "startup": (if asked) the scene's objects after the loader ran in Blender's startup scene (cube,
              camera, light), once as a new file and once saved as a .blend first.
@@ -28,12 +34,12 @@ def attributes(mesh):
     return {a.name: [a.domain, a.data_type] for a in mesh.attributes if not a.name.startswith(".")}
 
 
-def float_attribute(mesh, name):
+def point_attribute(mesh, name, width):
     if name not in mesh.attributes:
         return None
-    values = np.empty(len(mesh.vertices), dtype=np.float32)
-    mesh.attributes[name].data.foreach_get("value", values)
-    return values.tolist()
+    values = np.empty(len(mesh.vertices) * width, dtype=np.float32)
+    mesh.attributes[name].data.foreach_get("value" if width == 1 else "vector", values)
+    return values.reshape(-1, width).tolist() if width > 1 else values.tolist()
 
 
 def positions(mesh):
@@ -46,10 +52,13 @@ def describe_mesh(mesh):
     return {
         "vertices": len(mesh.vertices),
         "faces": len(mesh.polygons),
+        "corners": sorted({p.loop_total for p in mesh.polygons}),
+        "smooth": sorted({p.use_smooth for p in mesh.polygons}),
         "attributes": attributes(mesh),
         "uv_maps": [layer.name for layer in mesh.uv_layers],
         "positions": positions(mesh),
-        "wetness": float_attribute(mesh, "wetness"),
+        "wetness": point_attribute(mesh, "wetness", 1),
+        "velocity": point_attribute(mesh, "velocity", 3),
     }
 
 
@@ -65,16 +74,12 @@ def import_ply_frames(directory, numbers):
     return out
 
 
-def evaluated_frames(ob, numbers):
-    scene = bpy.context.scene
-    out = []
-    for number in numbers:
-        scene.frame_set(number)
-        evaluated = ob.evaluated_get(bpy.context.evaluated_depsgraph_get())
-        mesh = evaluated.to_mesh()
-        out.append({"frame": number, **describe_mesh(mesh)})
-        evaluated.to_mesh_clear()
-    return out
+def evaluated(ob, number, subframe=0.0):
+    bpy.context.scene.frame_set(number, subframe=subframe)
+    mesh_object = ob.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    described = describe_mesh(mesh_object.to_mesh())
+    mesh_object.to_mesh_clear()
+    return {"frame": number + subframe, **described}
 
 
 def material_uses_wetness(ob):
@@ -90,6 +95,11 @@ def material_uses_wetness(ob):
     return False
 
 
+def describe_modifier(modifier):
+    settings = {"SUBSURF": ("levels", "render_levels"), "SOLIDIFY": ("thickness", "offset")}.get(modifier.type, ())
+    return {"type": modifier.type, **{name: getattr(modifier, name) for name in settings}}
+
+
 def scene_summary(ob, numbers):
     scene = bpy.context.scene
     return {
@@ -97,10 +107,12 @@ def scene_summary(ob, numbers):
         "fps": scene.render.fps / scene.render.fps_base,
         "frame_start": scene.frame_start,
         "frame_end": scene.frame_end,
-        "modifiers": [m.type for m in ob.modifiers],
+        "modifiers": [describe_modifier(m) for m in ob.modifiers],
         "materials": [slot.material.name for slot in ob.material_slots if slot.material],
         "material_uses_wetness": material_uses_wetness(ob),
-        "frames": evaluated_frames(ob, numbers),
+        "own_mesh": {key: value for key, value in describe_mesh(ob.data).items()
+                     if key in ("vertices", "faces", "corners", "smooth")},
+        "frames": [evaluated(ob, number) for number in numbers],
     }
 
 
@@ -140,48 +152,70 @@ def cloth_object():
     return meshes[0]
 
 
-def startup_objects(loader, work, name):
+def run_loader(loader, options=None, argv=None):
+    """The loader as ``blender --python load_in_blender.py [-- argv]`` runs it, or its load(**options)."""
+    if options is not None:
+        runpy.run_path(loader)["load"](**options)
+        return
+    saved_argv = sys.argv
+    sys.argv = ["blender", "--python", loader] + (["--"] + argv if argv is not None else [])
+    try:
+        runpy.run_path(loader, run_name="__main__")
+    finally:
+        sys.argv = saved_argv
+
+
+def startup_objects(loader, work, name, job):
     """Object names after running the loader in the startup scene: a new file, then a saved one."""
     out = {}
     for case in ("new_file", "saved_file"):
         bpy.ops.wm.read_factory_settings()
         if case == "saved_file":
             bpy.ops.wm.save_as_mainfile(filepath=os.path.join(work, f"{name}_startup.blend"))
-        runpy.run_path(loader, run_name="__main__")
+        run_loader(loader, job.get("options"), job.get("argv"))
         out[case] = sorted(ob.name for ob in bpy.context.scene.objects)
     return out
 
 
-def probe(name, directory, numbers, work, render=False, startup=False):
+def probe(name, job, work):
+    directory, numbers = job["directory"], job["frames"]
+    loader = os.path.join(directory, "load_in_blender.py")
     result = {}
-    if os.path.exists(os.path.join(directory, "cloth_0001.ply")):
+    if job.get("import"):
         result["import"] = import_ply_frames(directory, numbers[:2])
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    runpy.run_path(os.path.join(directory, "load_in_blender.py"), run_name="__main__")
-    result["loader"] = scene_summary(cloth_object(), numbers)
-    blend = os.path.join(work, f"{name}.blend")
-    bpy.ops.wm.save_as_mainfile(filepath=blend)
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    bpy.ops.wm.open_mainfile(filepath=blend)
-    result["reopened"] = scene_summary(cloth_object(), numbers)
-    if render:
+    if "scene" in job:  # a saved file with its own frame rate and range
+        scene = bpy.context.scene
+        scene.render.fps, scene.frame_start, scene.frame_end = (job["scene"][key] for key in
+                                                                ("fps", "frame_start", "frame_end"))
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.join(work, f"{name}_shot.blend"))
+    run_loader(loader, job.get("options"), job.get("argv"))
+    cloth = cloth_object()
+    result["loader"] = scene_summary(cloth, numbers)
+    if job.get("subframe"):
+        result["subframe"] = evaluated(cloth, numbers[0], subframe=0.5)
+    if job.get("reopen") or job.get("render"):
+        blend = os.path.join(work, f"{name}.blend")
+        bpy.ops.wm.save_as_mainfile(filepath=blend)
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        bpy.ops.wm.open_mainfile(filepath=blend)
+        result["reopened"] = scene_summary(cloth_object(), numbers)
+    if job.get("render"):
         result["render"] = render_frames([numbers[0], numbers[-1]], work, name)
-    if startup:
-        result["startup"] = startup_objects(os.path.join(directory, "load_in_blender.py"), work, name)
+    if job.get("startup"):
+        result["startup"] = startup_objects(loader, work, name, job)
     return result
 
 
 def main(spec_path, result_path):
     with open(spec_path) as fh:
         spec = json.load(fh)
-    results = {"blender": bpy.app.version_string, "sequences": {}}
-    for name, directory in spec["sequences"].items():
+    results = {"blender": bpy.app.version_string, "jobs": {}}
+    for name, job in spec["jobs"].items():
         try:
-            results["sequences"][name] = probe(name, directory, spec["frames"], spec["work"],
-                                               render=name in spec.get("render", []),
-                                               startup=name in spec.get("startup", []))
+            results["jobs"][name] = probe(name, job, spec["work"])
         except Exception:
-            results["sequences"][name] = {"error": traceback.format_exc()}
+            results["jobs"][name] = {"error": traceback.format_exc()}
     with open(result_path, "w") as fh:
         json.dump(results, fh)
 
