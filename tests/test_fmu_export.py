@@ -37,7 +37,9 @@ def test_one_ply_frame_per_communication_point_matching_the_direct_run(fmu, tmp_
         positions, wetness, triangles = read_frame(path)
         np.testing.assert_allclose(positions, sim.positions, atol=FLOAT32_M)
         np.testing.assert_allclose(wetness, sim.wetness, atol=1e-6)
-        assert np.array_equal(triangles, sim.triangles)
+        # the frames hold quads (the export default), which trimesh triangulates on loading: the
+        # simulation's triangles, some starting at another corner (orientation: tests/test_export.py)
+        assert np.array_equal(np.sort(triangles, axis=1), np.sort(sim.triangles, axis=1))
     manifest = json.loads((frames / "frames.json").read_text())  # written when the unit terminates
     assert manifest["frame_count"] == len(result) and manifest["fps"] == pytest.approx(10.0)
 

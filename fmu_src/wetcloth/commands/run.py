@@ -33,6 +33,12 @@ def add_parser(sub) -> None:
     p.add_argument("--export", type=Path, metavar="DIR", help="write one mesh per frame into DIR")
     p.add_argument("--format", default="ply", choices=["ply", "obj", "usd"], help="mesh format (default ply)")
     p.add_argument("--writer", default="trimesh", choices=["trimesh", "meshio"], help="mesh writer (default trimesh)")
+    p.add_argument("--faces", default="quads", choices=["quads", "triangles"],
+                   help="mesh faces: one quad per grid cell or two triangles (default quads)")
+    p.add_argument("--first-frame", type=int, default=1, metavar="N",
+                   help="number of the first frame: file <prefix>_N, USD time code N, Blender frame N (default 1)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an earlier export in DIR (one described by its own frames.json)")
     p.add_argument("--csv", type=Path, default=Path("out/run/outputs.csv"), help="outputs CSV (default out/run/outputs.csv)")
     p.add_argument("--plot", type=Path, default=Path("out/run/plot.png"), help="plot PNG (default out/run/plot.png)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -52,7 +58,8 @@ def main(args) -> int:
     if args.export is not None:
         from wetcloth.exporter import open_sequence  # only needed when exporting
 
-        sequence = open_sequence(args.export, fmt=args.format, writer=args.writer, fps=fps, scene=scene)
+        sequence = open_sequence(args.export, fmt=args.format, writer=args.writer, fps=fps, scene=scene,
+                                 faces=args.faces, first_frame=args.first_frame, overwrite=args.overwrite)
     try:
         result = run(scene, duration, fps, on_frame=sequence.on_frame if sequence else None,
                      progress=False if args.no_progress else None)
