@@ -1,13 +1,18 @@
-"""Exporter speed: frames written per second for a 64 x 64 cloth, each format and writer.
+"""Exporter speed: frames written per second for a 64 x 64 cloth, each format, writer and kind of face.
 
     .venv/bin/python bench/export_speed.py [--grid 64] [--frames 60] [--repeats 3] [--blender]
 
 1. Simulates the default towel on a grid x grid mesh for a short while at 30 fps and times the
    simulation per frame (the yardstick: the exporter must not dominate a ``wetcloth run``).
-2. Writes those frames (cycled up to --frames) through every format and writer, streaming into a
-   fresh directory, best of --repeats runs; reports frames/s, ms/frame, MB/frame and the share of
-   a run's time (simulation + export) that the export takes.
-3. With --blender (needs .venv-blender), times ``load_in_blender.py`` on the PLY and USD sequences.
+2. Writes those frames (positions, wetness and velocities, cycled up to --frames) through every
+   format and writer: with quads and velocities (what ``wetcloth run`` writes now; only USD stores
+   the velocities) and with triangles and no velocities (the exporter before both), and USD also
+   with triangles and velocities; streaming into a fresh directory, best of --repeats runs, the
+   cases interleaved so that a busy machine slows them alike.  Reports frames/s, ms/frame,
+   MB/frame, the share of a run's time (simulation + export) that the export takes, and each
+   case's time against triangles without velocities.
+3. With --blender (needs .venv-blender), times ``load_in_blender.py`` (its default, render-ready
+   options) on the PLY and USD sequences with quads.
 
 Prints a Markdown table and writes bench/results/export_speed.json.
 """
@@ -32,31 +37,38 @@ from wetcloth.exporter import open_sequence
 from wetcloth.runner import run
 
 ROOT = Path(__file__).resolve().parents[1]
-CASES = [("ply", "trimesh"), ("ply", "meshio"), ("obj", "trimesh"), ("obj", "meshio"), ("usd", "usd-core")]
+#: (format, writer, faces, velocities given to write_frame, as wetcloth run gives them; only USD
+#: stores them): quads with velocities is the exporter now, triangles without them the exporter
+#: before quads and velocities (the baseline); for USD also triangles with velocities.
+CASES = [(fmt, writer, faces, velocities)
+         for fmt, writer in [("ply", "trimesh"), ("ply", "meshio"), ("obj", "trimesh"), ("obj", "meshio"),
+                             ("usd", "usd-core")]
+         for faces, velocities in (("quads", True), ("triangles", False))] + [("usd", "usd-core", "triangles", True)]
 FPS = 30.0
 
 
 def simulate(grid: int, duration: float):
-    """Frames (positions, wetness) of the towel on a grid x grid mesh, and the simulation's s/frame."""
+    """Frames (positions, wetness, velocities) of the towel on a grid x grid mesh, and the simulation's s/frame."""
     scene = wetcloth.load_scene(nx=grid, ny=grid)
     run(scene, 1.0 / FPS, FPS, progress=False)  # compile the kernels outside the timing
     frames = []
     started = time.perf_counter()
     run(scene, duration, FPS, progress=False,
-        on_frame=lambda i, sim: frames.append((sim.positions, sim.wetness)))
+        on_frame=lambda i, sim: frames.append((sim.positions, sim.wetness, sim.velocities)))
     elapsed = time.perf_counter() - started
     return scene, frames, elapsed / len(frames)
 
 
-def write_frames(scene, frames, fmt, writer, count, directory):
+def write_frames(scene, frames, case, count, directory):
     """Seconds to write ``count`` frames (cycling ``frames``) and close; bytes written."""
+    fmt, writer, faces, with_velocities = case
     shutil.rmtree(directory, ignore_errors=True)
     started = time.perf_counter()
     sequence = open_sequence(directory, fmt=fmt, writer="trimesh" if writer == "usd-core" else writer,
-                             fps=FPS, scene=scene)
+                             fps=FPS, scene=scene, faces=faces)
     for k in range(count):
-        positions, wetness = frames[k % len(frames)]
-        sequence.write_frame(positions, wetness)
+        positions, wetness, velocities = frames[k % len(frames)]
+        sequence.write_frame(positions, wetness, velocities=velocities if with_velocities else None)
     sequence.close()
     elapsed = time.perf_counter() - started
     size = sum(p.stat().st_size for p in Path(directory).iterdir() if p.suffix in (".ply", ".obj", ".usd"))
@@ -91,15 +103,22 @@ def main(argv=None) -> int:
     n = args.grid * args.grid
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for fmt, writer in CASES:
-            directory = Path(tmp) / f"{fmt}_{writer}"
-            best, size = min(write_frames(scene, frames, fmt, writer, args.frames, directory)
-                             for _ in range(args.repeats))
+        directories = {case: Path(tmp) / "_".join(map(str, case)) for case in CASES}
+        times = {case: [] for case in CASES}
+        for _ in range(args.repeats):  # interleaved: a busy machine slows every case alike
+            for case in CASES:
+                times[case].append(write_frames(scene, frames, case, args.frames, directories[case]))
+        for case in CASES:
+            fmt, writer, faces, with_velocities = case
+            best, size = min(times[case])
+            baseline = min(times[(fmt, writer, "triangles", False)])[0]
             per_frame = best / args.frames
-            row = {"format": fmt, "writer": writer, "frames_per_s": 1.0 / per_frame, "ms_per_frame": 1e3 * per_frame,
-                   "mb_per_frame": size / args.frames / 1e6, "share_of_run": per_frame / (per_frame + sim_seconds)}
-            if args.blender and (fmt, writer) in (("ply", "trimesh"), ("usd", "usd-core")):
-                row["blender_load_s"] = blender_load_seconds(directory)
+            row = {"format": fmt, "writer": writer, "faces": faces, "velocities": with_velocities,
+                   "frames_per_s": 1.0 / per_frame, "ms_per_frame": 1e3 * per_frame,
+                   "mb_per_frame": size / args.frames / 1e6, "share_of_run": per_frame / (per_frame + sim_seconds),
+                   "against_triangles": best / baseline}
+            if args.blender and faces == "quads" and (fmt, writer) in (("ply", "trimesh"), ("usd", "usd-core")):
+                row["blender_load_s"] = blender_load_seconds(directories[case])
             rows.append(row)
 
     result = {
@@ -113,12 +132,13 @@ def main(argv=None) -> int:
 
     print(f"{args.grid}x{args.grid} cloth ({n} vertices), {args.frames} frames, best of {args.repeats}; "
           f"simulation {1e3 * sim_seconds:.1f} ms per frame at {FPS:g} fps")
-    print("| format | writer | frames/s | ms/frame | MB/frame | share of a run |" +
-          (" Blender load (s) |" if args.blender else ""))
-    print("|---|---|---:|---:|---:|---:|" + ("---:|" if args.blender else ""))
+    print("| format | writer | faces | velocities | frames/s | ms/frame | MB/frame | share of a run | "
+          "time against triangles |" + (" Blender load (s) |" if args.blender else ""))
+    print("|---|---|---|---|---:|---:|---:|---:|---:|" + ("---:|" if args.blender else ""))
     for r in rows:
-        line = (f"| {r['format']} | {r['writer']} | {r['frames_per_s']:.0f} | {r['ms_per_frame']:.1f} | "
-                f"{r['mb_per_frame']:.2f} | {100 * r['share_of_run']:.0f} % |")
+        line = (f"| {r['format']} | {r['writer']} | {r['faces']} | {'yes' if r['velocities'] else '-'} | "
+                f"{r['frames_per_s']:.0f} | {r['ms_per_frame']:.1f} | {r['mb_per_frame']:.2f} | "
+                f"{100 * r['share_of_run']:.0f} % | {r['against_triangles']:.2f}x |")
         if args.blender:
             load = r.get("blender_load_s")
             line += f" {load:.1f} |" if load is not None else " |"

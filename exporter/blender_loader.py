@@ -75,9 +75,13 @@ def check_option(name, value):
 def resolve_options(manifest, overrides):
     """The options in force: the exporter's, then those in frames.json (key ``blender``), then ``overrides``."""
     options = dict(SETTINGS["options"])
-    for source in (manifest.get("blender") or {}, overrides):
+    for where, source in ((f"{SETTINGS['manifest']} (key 'blender'): ", manifest.get("blender") or {}),
+                          ("", overrides)):
         for name, value in source.items():
-            options[name] = check_option(name, value)
+            try:
+                options[name] = check_option(name, value)
+            except ValueError as exc:
+                raise ValueError(where + str(exc)) from None
     return options
 
 
@@ -97,8 +101,14 @@ def command_line_options(argv):
                                 help=spec["help"])
     parser.add_argument("--no-solidify", dest="solidify", action="store_const", const=0.0,
                         help="no Solidify modifier (same as --solidify 0)")
-    given = parser.parse_args(argv[argv.index("--") + 1:])
-    return {name: value for name, value in vars(given).items() if value is not None}
+    given = {name: value for name, value in vars(parser.parse_args(argv[argv.index("--") + 1:])).items()
+             if value is not None}
+    for name, value in given.items():
+        try:
+            check_option(name, value)
+        except ValueError as exc:
+            parser.error(str(exc))  # usage and the one-line reason, exit status 2
+    return given
 
 
 # ---------------------------------------------------------------------------- finding the frames
