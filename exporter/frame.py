@@ -71,8 +71,11 @@ def quads_from_triangles(triangles: np.ndarray, uv: np.ndarray) -> np.ndarray:
     Quads come in the order of their first triangle.  Raises ExportError if the triangles do not
     pair up this way (a mesh that is not a triangulated grid).
     """
-    triangles = np.asarray(triangles, dtype=np.int64)
     uv = np.asarray(uv, dtype=np.float64)
+    if uv.ndim != 2 or uv.shape[1] != 2:
+        raise ExportError(f"uv must have shape (n, 2), got {uv.shape}")
+    _check_indices("triangles", np.asarray(triangles), (3,), len(uv))
+    triangles = np.asarray(triangles, dtype=np.int64)
     edge = np.stack([uv[triangles[:, (k + 1) % 3]] - uv[triangles[:, k]] for k in range(3)], axis=1)
     longest = np.argmax(np.einsum("mkj,mkj->mk", edge, edge), axis=1)  # edge k runs from corner k to k + 1
     # each triangle rotated so that its longest edge runs from its corner 2 to its corner 0
