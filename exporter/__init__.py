@@ -28,13 +28,16 @@ from wetcloth.exporter.sequence import (
     MANIFEST,
     WRITERS,
     FrameSequence,
+    check_directory,
     frame_file_name,
     open_sequence,
     previous_run_files,
+    resume_sequence,
+    sequence_files,
 )
 
 __all__ = [
     "COLORMAP", "ExportError", "FORMATS", "Frame", "FrameSequence", "LOADER", "MANIFEST", "WRITERS",
-    "frame_file_name", "make_frame", "open_sequence", "previous_run_files", "sheet_uv", "wetness_colors",
-    "wetness_lut",
+    "check_directory", "frame_file_name", "make_frame", "open_sequence", "previous_run_files", "resume_sequence",
+    "sequence_files", "sheet_uv", "wetness_colors", "wetness_lut",
 ]

@@ -61,27 +61,90 @@ def previous_run_files(directory: Path) -> list[Path]:
     )
 
 
-def _check_directory(directory: Path, overwrite: bool) -> None:
-    """Create ``directory`` if needed and make sure no other run's frames are in it; else ExportError."""
+def _read_manifest(directory: Path) -> dict | None:
+    """The ``frames.json`` in ``directory`` if this exporter wrote it (a JSON object naming the
+    generator, a valid prefix and format), else None."""
+    try:
+        manifest = json.loads((directory / MANIFEST).read_text())
+    except (OSError, ValueError):
+        return None
+    if not (isinstance(manifest, dict) and manifest.get("generator") == "wetcloth.exporter"
+            and manifest.get("format") in FORMATS and isinstance(manifest.get("prefix"), str)
+            and _PREFIX.match(manifest["prefix"])):
+        return None
+    return manifest
+
+
+def _own_file_pattern(prefix: str, fmt: str) -> re.Pattern:
+    """Names of the files a sequence of ``prefix`` and ``fmt`` writes: its frames (or its USD file),
+    a frame left half-written (``.part``), ``frames.json``, the loader and their temporary copies."""
+    media = re.escape(f"{prefix}.usd") if fmt == "usd" else rf"{re.escape(prefix)}_\d{{{MIN_DIGITS},}}\.{fmt}"
+    side = "|".join(re.escape(name) for name in (MANIFEST, LOADER))
+    return re.compile(rf"^(?:(?:{media})(?:{re.escape(PARTIAL)})?|(?:{side})(?:\.tmp)?)$")
+
+
+def sequence_files(directory: str | Path) -> list[Path]:
+    """The files of the sequence that ``directory``'s own ``frames.json`` describes (frames, USD,
+    manifest, loader, half-written leftovers); empty if no frames.json of this exporter is there."""
+    directory = Path(directory)
+    manifest = _read_manifest(directory)
+    if manifest is None:
+        return []
+    own = _own_file_pattern(manifest["prefix"], manifest["format"])
+    return sorted(p for p in directory.iterdir() if p.is_file() and own.match(p.name))
+
+
+def _listing(paths: list[Path]) -> str:
+    return ", ".join(p.name for p in paths[:3]) + (f" and {len(paths) - 3} more" if len(paths) > 3 else "")
+
+
+def check_directory(directory: str | Path, overwrite: bool = False, exclusive: bool = False) -> list[Path]:
+    """May a new sequence be written into ``directory``?  Returns the files it would replace; changes nothing.
+
+    ExportError if the path is a file, or if the directory holds another run's frames (frame-like
+    files ``*_0001.ply``, a ``.usd``, ``frames.json`` or ``load_in_blender.py``) and ``overwrite``
+    is off.  With ``overwrite``, only the sequence that the directory's own ``frames.json``
+    describes is replaced: any other frame-like file (another tool's, or frames of another
+    prefix or format) is refused, never deleted.  ``exclusive`` refuses every file that is not
+    part of that sequence (the FMU's ``mesh_output_dir``: a folder that belongs to the unit).
+    """
+    directory = Path(directory)
     if directory.exists() and not directory.is_dir():
         raise ExportError(f"export directory {directory} is an existing file, not a directory")
+    try:
+        taken = previous_run_files(directory)
+        own = sequence_files(directory) if directory.is_dir() else []
+        present = sorted(directory.iterdir()) if exclusive and directory.is_dir() else taken
+    except OSError as exc:
+        raise ExportError(f"cannot read export directory {directory}: {exc.strerror or exc}") from None
+    if taken and not overwrite:
+        raise ExportError(f"export directory {directory} already holds another run's frames ({_listing(taken)}); "
+                          "choose a new directory or delete them first")
+    foreign = [p for p in present if p not in own]
+    if foreign:
+        whose = ("files that are not part of the frame sequence its frames.json describes" if own
+                 else "files this exporter did not write (no frames.json of wetcloth's describes them)")
+        raise ExportError(f"export directory {directory} holds {whose} ({_listing(foreign)}); it replaces only "
+                          "its own sequence: choose a new directory or move them first")
+    return own
+
+
+def _make_directory(directory: Path) -> None:
     try:
         directory.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise ExportError(f"cannot create export directory {directory}: {exc.strerror or exc}") from None
-    try:
-        taken = previous_run_files(directory)
-    except OSError as exc:
-        raise ExportError(f"cannot read export directory {directory}: {exc.strerror or exc}") from None
-    if taken and not overwrite:
-        shown = ", ".join(p.name for p in taken[:3]) + (f" and {len(taken) - 3} more" if len(taken) > 3 else "")
-        raise ExportError(
-            f"export directory {directory} already holds another run's frames ({shown}); "
-            "choose a new directory or delete them first"
-        )
-    for path in taken:
+
+
+def _frame_number(name: str) -> int:
+    """The frame number in a frame file name such as ``cloth_0012.ply`` (or ``.ply.part``)."""
+    return int(re.search(r"_(\d+)\.[a-z]+(?:\.part)?$", name).group(1))
+
+
+def _remove(paths: list[Path]) -> None:
+    for path in paths:
         try:
-            path.unlink()
+            path.unlink(missing_ok=True)
         except OSError as exc:
             raise ExportError(f"cannot remove the old frame {path}: {exc.strerror or exc}") from None
 
@@ -129,6 +192,7 @@ class FrameSequence:
         self.blender = blender_options(blender, first_frame)
         self.frame_count = 0
         self.closed = False
+        self.replaced: list[str] = []  # files of an earlier sequence that open_sequence replaced
         self._triangles = None if triangles is None else np.asarray(triangles)
         self._uv = None if uv is None else np.asarray(uv, dtype=np.float32)
         self._faces: np.ndarray | None = None  # what is written: the triangles or their quads
@@ -155,11 +219,20 @@ class FrameSequence:
 
     # ------------------------------------------------------------------ writing
     def resume_after(self, frames_written: int) -> None:
-        """Continue a run restored to an earlier (or later) point: the next frame written is
-        ``first_frame + frames_written``, replacing any file of that number."""
-        if not (isinstance(frames_written, int) and frames_written >= 0):
+        """Continue a run restored to an earlier (or later) point (an FMU rollback): the next frame
+        written is ``first_frame + frames_written``.  Frame files after it belong to the abandoned
+        branch and are removed, so the folder and frames.json keep describing one run."""
+        if not (isinstance(frames_written, int) and not isinstance(frames_written, bool) and frames_written >= 0):
             raise ExportError(f"frames_written must be a whole number >= 0, got {frames_written!r}")
+        if self.format != "usd":
+            _remove([p for p in self._frame_files() if _frame_number(p.name) >= self.first_frame + frames_written])
         self.frame_count = frames_written
+
+    def _frame_files(self) -> list[Path]:
+        """This sequence's frame files on disk (and half-written ones)."""
+        own = _own_file_pattern(self.prefix, self.format)
+        return [p for p in self.directory.iterdir() if own.match(p.name) and p.name not in (MANIFEST, LOADER)
+                and not p.name.endswith(".tmp")]
 
     def on_frame(self, index: int, sim) -> None:
         """Runner callback: write ``sim``'s cloth as frame ``first_frame + index`` (index 0 is t = 0)."""
@@ -302,7 +375,7 @@ class FrameSequence:
 
 def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: float = 30.0, scene=None, *,
                   triangles=None, uv=None, prefix: str = "cloth", digits: int = MIN_DIGITS,
-                  overwrite: bool = False, faces: str = "quads", first_frame: int = 1,
+                  overwrite: bool = False, exclusive: bool = False, faces: str = "quads", first_frame: int = 1,
                   blender: dict | None = None) -> FrameSequence:
     """Start a frame sequence in ``directory``, checked now: ExportError if it cannot be used.
 
@@ -311,17 +384,20 @@ def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: flo
     scene: the Scene, recorded in frames.json and used for the triangles and UVs when frames come
     from ``write_frame`` rather than ``on_frame``; triangles (m, 3) and uv (n, 2) in 0..1: the
     same without a scene; prefix: file names ``<prefix>_0001.<fmt>``; digits: least zero-padding (4 to 12);
-    overwrite: delete an earlier run's frames in the directory instead of refusing it;
+    overwrite: replace the earlier sequence that the directory's own frames.json describes instead
+    of refusing it (never other files); exclusive: refuse a directory holding any file that is not
+    part of that sequence (``sequence.replaced`` lists the files replaced);
     faces: ``quads`` (default: one per grid cell, made of its two triangles) or ``triangles``;
     first_frame: number of the first frame (file ``<prefix>_0001``, USD time code 1 by default);
     blender: options of ``load_in_blender.py`` (see ``blender_options.OPTIONS``: solidify,
     subdivision, smooth, material, first_frame, timeline), recorded in frames.json.
 
-    The directory is created if missing.  Refused up front: a path that is a file, a directory
-    that cannot be created or written, and one that already holds frames (``*_0001.ply``-like
-    files, a ``.usd``, ``frames.json`` or ``load_in_blender.py``) unless ``overwrite``.  Each frame
-    file appears whole (written under a ``.part`` name, then renamed): a run stopped midway leaves
-    only complete frames.
+    The directory is created if missing.  Refused up front (see ``check_directory``): a path that
+    is a file, a directory that cannot be created or written, and one that already holds frames
+    (``*_0001.ply``-like files, a ``.usd``, ``frames.json`` or ``load_in_blender.py``) unless
+    ``overwrite`` and they are the sequence its frames.json describes.  Each frame file appears
+    whole (written under a ``.part`` name, then renamed): a run stopped midway leaves only
+    complete frames.
     """
     if fmt not in FORMATS:
         raise ExportError(f"unknown mesh format {fmt!r}; choose one of {', '.join(FORMATS)}")
@@ -341,9 +417,41 @@ def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: flo
     if directory is None or str(directory) == "":
         raise ExportError("no export directory given")
     directory = Path(directory)
-    _check_directory(directory, overwrite)
+    replaced = check_directory(directory, overwrite, exclusive)
+    _make_directory(directory)
+    _remove(replaced)
     sequence = FrameSequence(directory, fmt, writer, fps, scene=scene, triangles=triangles, uv=uv,
                              prefix=prefix, digits=digits, faces=faces, first_frame=first_frame, blender=blender)
+    sequence.replaced = [p.name for p in replaced]
     sequence.write_manifest(complete=False)  # also proves the directory is writable
     sequence.write_loader()
+    return sequence
+
+
+def resume_sequence(directory, frames_written: int, fmt: str = "ply", writer: str = "trimesh", fps: float = 30.0,
+                    scene=None, *, prefix: str = "cloth", digits: int = MIN_DIGITS, faces: str = "quads",
+                    first_frame: int = 1, blender: dict | None = None) -> FrameSequence:
+    """Continue, in a new process, the sequence in ``directory`` after ``frames_written`` frames
+    (an FMU state restored from bytes): the next frame is ``first_frame + frames_written``.
+
+    The directory's own frames.json must describe a sequence of this ``prefix`` and ``fmt`` whose
+    first ``frames_written`` frames are on disk; frames after them are removed (the abandoned
+    branch).  The other arguments are those ``open_sequence`` took.  ExportError otherwise.
+    """
+    directory = Path(directory)
+    manifest = _read_manifest(directory) if directory.is_dir() else None
+    if manifest is None or (manifest["prefix"], manifest["format"]) != (prefix, fmt):
+        raise ExportError(f"cannot resume frames in {directory}: no frames.json of a {fmt} sequence "
+                          f"'{prefix}_*' written by this exporter is there")
+    sequence = FrameSequence(directory, fmt, writer, fps, scene=scene, prefix=prefix, digits=digits, faces=faces,
+                             first_frame=first_frame, blender=blender)
+    missing = [path.name for path in map(sequence.frame_path, range(first_frame, first_frame + frames_written))
+               if not path.is_file()]
+    if missing:
+        raise ExportError(f"cannot resume frames in {directory} after {frames_written} frames: "
+                          f"{_listing([Path(name) for name in missing])} missing")
+    sequence.resume_after(frames_written)
+    first_time = manifest.get("first_time")
+    sequence._first_time = float(first_time) if isinstance(first_time, (int, float)) and frames_written else None
+    sequence.write_manifest(complete=False)
     return sequence
