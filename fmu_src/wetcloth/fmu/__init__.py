@@ -1,14 +1,31 @@
-"""WetCloth.fmu: the FMI 2.0 co-simulation unit around ``wetcloth.Simulation`` (built with pythonfmu).
+"""WetCloth FMUs: co-simulation units around ``wetcloth.Simulation`` (FMI 2.0 with pythonfmu, FMI 3.0
+with pythonfmu3), and co-simulating them through fmpy.
 
     from wetcloth.fmu import build_fmu, demo
-    build_fmu("models/WetCloth.fmu")      # write the unit
+    build_fmu()                           # models/WetCloth.fmu, FMI 2.0
+    build_fmu(fmi_version=3)              # models/WetCloth3.fmu, FMI 3.0 with the mesh as array outputs
     demo("out/demo")                      # co-simulate the towel through fmpy: frames, CSV, plot
 
-The slave script ``wetcloth_fmu_slave.py`` imports ``wetcloth.fmu.vocabulary`` and
-``wetcloth.fmu.description`` inside the FMU, so this package imports nothing heavy up front.
+Inside a unit, ``wetcloth_fmu_slave.py`` (or ``wetcloth_fmu3_slave.py``) runs the bootstrap
+(``bootstrap.py``: which wetcloth, a quick start), then the unit class of ``fmi2.py`` (``fmi3.py``),
+both thin adapters of ``unit.py``.  This package imports nothing heavy up front.  docs/fmi.md is
+the user's guide.
 """
 
-__all__ = ["build_fmu", "demo", "simulate"]
+from pathlib import Path
+
+__all__ = ["MODEL_NAME", "build_fmu", "default_fmu_path", "demo", "simulate"]
+
+#: Model name and FMI model identifier (binary name) of both units.
+MODEL_NAME = "WetCloth"
+
+
+def default_fmu_path(fmi_version: int = 2) -> Path:
+    """Where ``wetcloth build-fmu`` writes a unit and where the demo and batch studies look for it:
+    ``models/WetCloth.fmu`` (FMI 2.0) or ``models/WetCloth3.fmu`` (FMI 3.0), relative to the current folder."""
+    if fmi_version not in (2, 3):
+        raise ValueError(f"FMI version must be 2 or 3, got {fmi_version!r}")
+    return Path("models") / f"{MODEL_NAME}{'' if fmi_version == 2 else fmi_version}.fmu"
 
 
 def __getattr__(name):

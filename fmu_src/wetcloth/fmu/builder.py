@@ -1,20 +1,23 @@
-"""Build ``WetCloth.fmu`` with pythonfmu, extended at its seams.
+"""Build ``WetCloth.fmu`` (FMI 2.0, pythonfmu) or ``WetCloth3.fmu`` (FMI 3.0, pythonfmu3), extended at their seams.
 
-pythonfmu's ``FmuBuilder`` packs the slave script, project files and a documentation folder;
-``WetClothBuilder`` adds the FMU's ``model.png``.  ``build_fmu`` stages what the unit needs:
+pythonfmu's and pythonfmu3's ``FmuBuilder`` pack the slave script, project files and a
+documentation folder; ``build_fmu`` stages what the unit needs:
 
-* the slave script ``wetcloth_fmu_slave.py`` (a project-unique module name);
-* a copy of the wetcloth package with its scene presets (``resources/wetcloth``), so the FMU runs
-  with any Python that has wetcloth's dependencies, and a manifest of the copy's file digests and
-  of the variable names, by which the slave picks the host's identical wetcloth (keeping numba's
-  kernel cache) and refuses a wetcloth whose variables differ from the model description;
-* ``documentation/index.html``, generated from the same variable list as the model description.
+* the slave script (``wetcloth_fmu_slave.py`` or ``wetcloth_fmu3_slave.py``, project-unique
+  module names) and the bootstrap ``wetcloth_fmu_bootstrap.py`` (``bootstrap.py``);
+* a copy of the wetcloth package with its scene presets and exporter (``resources/wetcloth``), so
+  the FMU runs with any Python that has wetcloth's dependencies;
+* a manifest: the copy's file digests (by which the bootstrap picks the host's identical wetcloth
+  or a per-user cached copy of its own), the variable names (a wetcloth whose variables differ
+  from the model description is refused) and the requirements (named when one is missing);
+* ``documentation/index.html``, generated from the same variable list as the model description,
+  and the icon (``model.png``; FMI 3.0: ``terminalsAndIcons/icon.png``).
 """
 
 from __future__ import annotations
 
-import hashlib
 import html
+import importlib.metadata
 import importlib.util
 import json
 import os
@@ -25,26 +28,26 @@ import zipfile
 from pathlib import Path
 from string import Template
 
-from pythonfmu import FmuBuilder
-
 import wetcloth
-from wetcloth.fmu.vocabulary import MODEL_NAME, VariableSpec, fmi_unit_name, variable_specs
+from wetcloth.fmu import MODEL_NAME, default_fmu_path
+from wetcloth.fmu.bootstrap import MANIFEST_NAME, bundle_digest, digest
+from wetcloth.fmu.vocabulary import VariableSpec, fmi_unit_name, variable_specs
 
 HERE = Path(__file__).resolve().parent
-SLAVE_SCRIPT = HERE / "wetcloth_fmu_slave.py"
-MANIFEST_NAME = "wetcloth_fmu_manifest.json"
+SLAVE_SCRIPTS = {2: HERE / "wetcloth_fmu_slave.py", 3: HERE / "wetcloth_fmu3_slave.py"}
+#: The bootstrap's module name inside the FMU (beside the slave script, importable before wetcloth).
+BOOTSTRAP_MODULE = "wetcloth_fmu_bootstrap"
 DOCS = HERE / "docs"
-DEFAULT_OUT = Path("models") / f"{MODEL_NAME}.fmu"
+#: Where the icon goes in the archive, by FMI version.
+ICON_PATH = {2: "model.png", 3: "terminalsAndIcons/icon.png"}
 
-#: FMI co-simulation capabilities written into ``modelDescription.xml``.
-CAPABILITIES = dict(
-    canHandleVariableCommunicationStepSize=True,
-    canGetAndSetFMUstate=True,
-    canSerializeFMUstate=True,
-    canBeInstantiatedOnlyOncePerProcess=False,
-    canInterpolateInputs=False,
-    needsExecutionTool=True,  # a Python interpreter with numpy and numba, see documentation/index.html
-)
+#: FMI co-simulation capabilities written into ``modelDescription.xml``, by FMI version.
+CAPABILITIES = {
+    2: dict(canHandleVariableCommunicationStepSize=True, canGetAndSetFMUstate=True, canSerializeFMUstate=True,
+            canBeInstantiatedOnlyOncePerProcess=False, canInterpolateInputs=False, needsExecutionTool=True),
+    3: dict(canHandleVariableCommunicationStepSize=True, canGetAndSetFMUState=True, canSerializeFMUState=True,
+            canBeInstantiatedOnlyOncePerProcess=False, needsExecutionTool=True),
+}  # needsExecutionTool: a Python interpreter with numpy and numba, see documentation/index.html
 
 #: Subpackages of wetcloth the unit uses that an editable install keeps outside the package folder.
 MAPPED_SUBPACKAGES = ("presets", "exporter")
@@ -52,19 +55,6 @@ MAPPED_SUBPACKAGES = ("presets", "exporter")
 PRESET_PATTERNS = ("*.toml", "__init__.py")
 
 _SKIP = shutil.ignore_patterns("__pycache__", "*.pyc", "*.nbi", "*.nbc")
-
-
-class WetClothBuilder(FmuBuilder):
-    """pythonfmu's builder, plus the FMU's icon ``model.png`` at the archive root (FMI 2.0, 2.3)."""
-
-    @staticmethod
-    def build_FMU(script_file, dest=".", project_files=set(), documentation_folder=None, newargs=None,
-                  icon=None, **options) -> Path:
-        path = FmuBuilder.build_FMU(script_file, dest, project_files, documentation_folder, newargs, **options)
-        if icon is not None:
-            with zipfile.ZipFile(path, "a") as archive:
-                archive.write(icon, arcname="model.png")
-        return Path(path)
 
 
 def package_dir() -> Path:
@@ -107,25 +97,27 @@ def is_stale(fmu: str | Path) -> bool:
     return any(p.stat().st_mtime > built for p in source_files())
 
 
-def _digest(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def _stage_package(stage: Path) -> dict[str, str]:
-    """Copy wetcloth with its mapped subpackages into ``stage``; digests of the package folder's files.
-
-    The digests cover the package folder only: the slave compares them with the host's wetcloth
-    folder before importing anything, when the mapped subpackages cannot be located yet.
-    """
+def _stage_package(stage: Path) -> tuple[dict[str, str], dict[str, str]]:
+    """Copy wetcloth with its mapped subpackages into ``stage``; digests of the package folder's own
+    files (compared with a host's wetcloth folder) and of every bundled file."""
     bundle = stage / "wetcloth"
     shutil.copytree(package_dir(), bundle, ignore=_SKIP)
-    files = {p.relative_to(bundle).as_posix(): _digest(p) for p in sorted(bundle.rglob("*")) if p.is_file()}
+    package_files = {p.relative_to(bundle).as_posix(): digest(p) for p in _files(bundle)}
     for sub, location in _mapped_subpackages().items():
         for p in _files(location, PRESET_PATTERNS if sub == "presets" else ("*",)):
             target = bundle / sub / p.relative_to(location)
             target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(p, target)
-    return files
+    bundle_files = {p.relative_to(bundle).as_posix(): digest(p) for p in _files(bundle)}
+    return package_files, bundle_files
+
+
+def _requirements() -> list[str]:
+    """wetcloth's installed requirements (named when a host lacks one), without the extras."""
+    try:
+        return [r for r in importlib.metadata.requires("wetcloth") or [] if "extra ==" not in r]
+    except importlib.metadata.PackageNotFoundError:
+        return []
 
 
 def _range(spec: VariableSpec) -> str:
@@ -134,51 +126,79 @@ def _range(spec: VariableSpec) -> str:
     return f"{spec.min:g} .. {spec.max:g}"
 
 
-def documentation_html(specs: list[VariableSpec]) -> str:
+def documentation_html(specs: list[VariableSpec], fmi_version: int = 2) -> str:
     """``documentation/index.html``: what the unit models, its variables and what it needs to run."""
     rows = []
     for s in specs:
         unit = fmi_unit_name(s.unit) or ""
         start = "" if s.start is None else repr(s.start) if s.type == "String" else f"{s.start:g}"
-        cells = (s.name, s.causality, s.type, unit, start, _range(s), s.description)
+        shape = f" [{', '.join(map(str, s.dimensions))}]" if s.dimensions else ""
+        cells = (s.name + shape, s.causality, s.type, unit, start, _range(s), s.description)
         rows.append("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in cells) + "</tr>")
     template = Template((DOCS / "index.html.in").read_text(encoding="utf-8"))
     inputs = ", ".join(f"<code>{s.name}</code>" for s in specs if s.causality == "input")
+    arrays = ", ".join(f"<code>{s.name}</code> [{', '.join(map(str, s.dimensions))}]" for s in specs if s.dimensions)
     return template.substitute(
         model=MODEL_NAME, version=html.escape(wetcloth.__version__), rows="\n".join(rows), inputs=inputs,
-        python=f"{sys.version_info.major}.{sys.version_info.minor}",
+        python=f"{sys.version_info.major}.{sys.version_info.minor}", fmi=f"{fmi_version}.0",
+        api=f"fmi{fmi_version}", icon="../" + ICON_PATH[fmi_version],
+        builder={2: '<a href="https://github.com/NTNU-IHB/PythonFMU">pythonfmu</a>',
+                 3: '<a href="https://github.com/StephenSmith25/PythonFMU3">pythonfmu3</a>'}[fmi_version],
+        arrays="" if not arrays else (f"<li>The cloth mesh of the current step comes as array outputs: {arrays} "
+                                      "(vertex <code>row * nx + col</code>, as in the exported frames); their "
+                                      "sizes are the structural parameters <code>nx</code> and <code>ny</code>.</li>"),
     )
 
 
-def build_fmu(out: str | Path = DEFAULT_OUT) -> Path:
-    """Build the FMI 2.0 co-simulation unit ``WetCloth.fmu`` at ``out``; return its path."""
-    out = Path(out)
+def _pythonfmu_builder(fmi_version: int):
+    """pythonfmu's (FMI 2.0) or pythonfmu3's (FMI 3.0) ``FmuBuilder``."""
+    if fmi_version == 2:
+        from pythonfmu import FmuBuilder
+    else:
+        from pythonfmu3 import FmuBuilder
+    return FmuBuilder
+
+
+def build_fmu(out: str | Path | None = None, fmi_version: int = 2) -> Path:
+    """Build the co-simulation unit (FMI ``fmi_version`` 2 or 3) at ``out`` (default
+    ``default_fmu_path(fmi_version)``); return its path."""
+    if fmi_version not in SLAVE_SCRIPTS:
+        raise ValueError(f"FMI version must be one of {sorted(SLAVE_SCRIPTS)}, got {fmi_version!r}")
+    out = Path(default_fmu_path(fmi_version) if out is None else out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    specs = variable_specs()
-    cached = "wetcloth_fmu_slave" in sys.modules
+    specs = variable_specs(fmi_version=fmi_version)
+    slave = SLAVE_SCRIPTS[fmi_version]
+    cached = slave.stem in sys.modules
     with tempfile.TemporaryDirectory(prefix="wetcloth_fmu_") as tmp:
         stage = Path(tmp)
-        script = stage / "src" / SLAVE_SCRIPT.name
-        script.parent.mkdir()
-        shutil.copy2(SLAVE_SCRIPT, script)
-        files = _stage_package(stage / "src")
-        manifest = stage / "src" / MANIFEST_NAME
-        manifest.write_text(json.dumps(
-            {"wetcloth_version": wetcloth.__version__, "variables": [s.name for s in specs], "files": files},
-            indent=1))
+        source = stage / "src"
+        source.mkdir()
+        script = source / slave.name
+        shutil.copy2(slave, script)
+        bootstrap = source / f"{BOOTSTRAP_MODULE}.py"
+        shutil.copy2(HERE / "bootstrap.py", bootstrap)
+        package_files, bundle_files = _stage_package(source)
+        manifest = source / MANIFEST_NAME
+        manifest.write_text(json.dumps({
+            "wetcloth_version": wetcloth.__version__, "fmi_version": fmi_version,
+            "variables": [s.name for s in specs], "requires": _requirements(),
+            "bundle_digest": bundle_digest(bundle_files), "package_files": package_files,
+            "bundle_files": bundle_files}, indent=1))
         docs = stage / "documentation"
         docs.mkdir()
-        (docs / "index.html").write_text(documentation_html(specs), encoding="utf-8")
+        (docs / "index.html").write_text(documentation_html(specs, fmi_version), encoding="utf-8")
         saved_path = list(sys.path)
         try:
-            built = WetClothBuilder.build_FMU(
-                script, dest=stage / f"{MODEL_NAME}.fmu", project_files=[stage / "src" / "wetcloth", manifest],
-                documentation_folder=docs, icon=DOCS / "model.png", **CAPABILITIES,
-            )
+            built = Path(_pythonfmu_builder(fmi_version).build_FMU(
+                script, dest=stage / "fmu", project_files=[source / "wetcloth", manifest, bootstrap],
+                documentation_folder=docs, **CAPABILITIES[fmi_version]))
         finally:
-            sys.path[:] = saved_path  # pythonfmu puts the script's folder first on sys.path
+            sys.path[:] = saved_path  # the builders put the script's folder first on sys.path
             if not cached:
-                sys.modules.pop("wetcloth_fmu_slave", None)  # let each loaded FMU import its own script
+                sys.modules.pop(slave.stem, None)  # let each loaded FMU import its own script
+                sys.modules.pop(BOOTSTRAP_MODULE, None)
+        with zipfile.ZipFile(built, "a") as archive:
+            archive.write(DOCS / "model.png", arcname=ICON_PATH[fmi_version])
         tmp_out = out.with_name(out.name + ".tmp")
         shutil.copyfile(built, tmp_out)
         os.replace(tmp_out, out)

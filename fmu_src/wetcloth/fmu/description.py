@@ -1,4 +1,4 @@
-"""What pythonfmu 0.7 leaves out of ``modelDescription.xml``, added at its seams.
+"""What pythonfmu 0.7 leaves out of the FMI 2.0 ``modelDescription.xml``, added at its seams (FMI 3.0: ``description3.py``).
 
 pythonfmu writes each variable's causality, variability, start and description, and the
 ``ModelStructure/Outputs`` list, but no units, no ranges and no ``InitialUnknowns``.  Here:
@@ -18,14 +18,7 @@ from xml.etree.ElementTree import Element, SubElement
 from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Variability
 from pythonfmu.variables import Integer, Real, ScalarVariable, String
 
-from wetcloth.fmu.vocabulary import VariableSpec, fmi_unit_name, units_of
-
-#: Inputs whose change shows in an output at once, without a step (direct feedthrough).
-FEEDTHROUGH = {"depth": ("water_level",)}
-
-
-def _number(value) -> str:
-    return str(int(value)) if isinstance(value, int) else repr(float(value))
+from wetcloth.fmu.vocabulary import FEEDTHROUGH, VariableSpec, units_of, xml_attributes
 
 
 class _WithAttributes:
@@ -60,14 +53,7 @@ _CLASSES = {"Real": RealVariable, "Integer": IntegerVariable, "String": StringVa
 
 def make_variable(spec: VariableSpec, getter: Callable, setter: Callable | None) -> ScalarVariable:
     """The pythonfmu variable of a spec, reading and writing through ``getter``/``setter``."""
-    attributes = {}
-    unit = fmi_unit_name(spec.unit)
-    if spec.type == "Real" and unit is not None:
-        attributes["unit"] = unit
-    if spec.min is not None:
-        attributes["min"] = _number(spec.min)
-    if spec.max is not None:
-        attributes["max"] = _number(spec.max)
+    attributes = xml_attributes(spec)
     initial = {"exact": Fmi2Initial.exact, "calculated": Fmi2Initial.calculated}.get(spec.initial)
     return _CLASSES[spec.type](
         spec.name,

@@ -1,11 +1,12 @@
-"""The FMU's variables, generated from the ``Scene`` fields: one vocabulary for scene files and FMI.
+"""The FMU's variables, generated from the ``Scene`` fields: one vocabulary for scene files, FMI 2.0 and 3.0.
 
 Every ``Scene`` field becomes an FMU variable of the same name: ints are FMI Integer, strings
 String, floats Real; fields whose metadata says ``fmu="input"`` are continuous Real inputs, the
 others fixed parameters.  Unit, description, start value and range come from the field metadata,
 so parameters added to the Scene later appear in the FMU without touching this package.
 Two FMU-only parameters (``mesh_output_dir``, ``mesh_format``) and the six outputs of
-``wetcloth.simulation.OUTPUTS`` complete the interface.
+``wetcloth.simulation.OUTPUTS`` complete the interface; the FMI 3.0 unit adds the mesh of every
+step as array outputs (``MESH_OUTPUTS``), dimensioned by the grid parameters ``ny`` and ``nx``.
 """
 
 from __future__ import annotations
@@ -16,15 +17,22 @@ import re
 from dataclasses import dataclass
 from typing import Any, Iterable
 
-from wetcloth.scene import INPUT, PARAMETERS, describe_range
+from wetcloth.errors import ParameterError
+from wetcloth.fmu import MODEL_NAME
+from wetcloth.scene import INPUT, PARAMETERS, check_value, describe_range
 from wetcloth.simulation import OUTPUTS
-
-#: Model name and FMI model identifier (binary and FMU file name).
-MODEL_NAME = "WetCloth"
 
 #: Mesh formats the unit can write at every communication point, and how messages name them.
 MESH_FORMATS = ("ply", "obj")
 MESH_FORMAT_RANGE = "one of " + ", ".join(repr(f) for f in MESH_FORMATS)
+
+#: The FMI 3.0 unit's array outputs: the cloth mesh of the current step, in the vertex order of the
+#: exported frames (vertex ``row * nx + col``): name -> (unit, meaning, dimensions; a name is the
+#: grid parameter holding that size).  ``Simulation`` has a property of each name.
+MESH_OUTPUTS = {
+    "positions": ("m", "vertex positions x, y, z; vertex row * nx + col (z is up)", ("ny", "nx", 3)),
+    "wetness": ("-", "saturation of each vertex, absorbed water over capacity (0 to 1)", ("ny", "nx")),
+}
 
 
 @dataclass(frozen=True)
@@ -41,6 +49,7 @@ class VariableSpec:
     min: float | int | None = None
     max: float | int | None = None
     scene: bool = True  # a Scene field (else an FMU-only parameter or an output)
+    dimensions: tuple[str | int, ...] = ()  # array outputs: sizes, or names of the parameters holding them
 
     @property
     def initial(self) -> str | None:
@@ -76,18 +85,41 @@ def scene_spec(f: dataclasses.Field) -> VariableSpec:
     )
 
 
-def variable_specs(fields: Iterable[dataclasses.Field] | None = None) -> list[VariableSpec]:
-    """All FMU variables in value-reference order: Scene fields, mesh parameters, outputs."""
+#: Inputs whose change shows in an output at once, without a step (direct feedthrough).
+FEEDTHROUGH = {"depth": ("water_level",)}
+
+#: The FMU-only parameters: name -> (start, meaning).
+FMU_PARAMETERS = {
+    "mesh_output_dir": ("", "folder for one mesh frame per communication point, written only by this unit "
+                            "(a folder holding other files is refused); empty = no meshes"),
+    "mesh_format": ("ply", f"mesh format of the frames (allowed: {MESH_FORMAT_RANGE})"),
+}
+
+
+def variable_specs(fields: Iterable[dataclasses.Field] | None = None, fmi_version: int = 2) -> list[VariableSpec]:
+    """All FMU variables in value-reference order: Scene fields, mesh parameters, outputs (and, for
+    FMI 3.0, the mesh array outputs)."""
     fields = PARAMETERS.values() if fields is None else fields
     specs = [scene_spec(f) for f in fields]
-    specs += [
-        VariableSpec("mesh_output_dir", "String", "parameter", "fixed",
-                     "folder for one mesh frame per communication point; empty = no meshes", start="", scene=False),
-        VariableSpec("mesh_format", "String", "parameter", "fixed",
-                     f"mesh format of the frames (allowed: {MESH_FORMAT_RANGE})", start="ply", scene=False),
-    ]
+    specs += [VariableSpec(name, "String", "parameter", "fixed", doc, start=start, scene=False)
+              for name, (start, doc) in FMU_PARAMETERS.items()]
     specs += [VariableSpec(n, "Real", "output", "continuous", doc, unit=u, scene=False) for n, (u, doc) in OUTPUTS.items()]
+    if fmi_version == 3:
+        specs += [VariableSpec(n, "Real", "output", "continuous", doc, unit=u, scene=False, dimensions=dims)
+                  for n, (u, doc, dims) in MESH_OUTPUTS.items()]
     return specs
+
+
+def check_variable(name: str, value) -> None:
+    """Check one parameter or input value on its own (type and range); ParameterError naming the range."""
+    if name == "mesh_format":
+        if value not in MESH_FORMATS:
+            raise ParameterError(name, f"{value!r} is not allowed; allowed: {MESH_FORMAT_RANGE}")
+    elif name == "mesh_output_dir":
+        if not isinstance(value, str):
+            raise ParameterError(name, f"expected a folder path, got {value!r}")
+    else:
+        check_value(name, value)
 
 
 # ----------------------------------------------------------------------------------- units
@@ -117,6 +149,24 @@ class Unit:
     name: str
     exponents: tuple[tuple[str, int], ...]
     factor: float = 1.0
+
+
+def _number_text(value) -> str:
+    """A range bound as model-description text: an int as is, a float exactly (repr)."""
+    return str(int(value)) if isinstance(value, int) else repr(float(value))
+
+
+def xml_attributes(spec: VariableSpec) -> dict[str, str]:
+    """A variable's ``unit`` (Reals), ``min`` and ``max`` as model-description attributes (FMI 2.0 and 3.0)."""
+    attributes = {}
+    unit = fmi_unit_name(spec.unit)
+    if spec.type == "Real" and unit is not None:
+        attributes["unit"] = unit
+    if spec.min is not None:
+        attributes["min"] = _number_text(spec.min)
+    if spec.max is not None:
+        attributes["max"] = _number_text(spec.max)
+    return attributes
 
 
 def fmi_unit_name(unit: str) -> str | None:

@@ -1,0 +1,177 @@
+"""Which wetcloth a WetCloth FMU runs, found quickly and explained (the FMU's ``wetcloth_fmu_bootstrap.py``).
+
+The builder copies this file to the FMU's ``resources/`` under that name; the slave script calls
+``load_wetcloth`` before it imports anything of wetcloth.  Standard library only: it runs before
+the host is known to have wetcloth's dependencies.
+
+pythonfmu's binary runs the slave in the Python of the process that loads the FMU (fmpy,
+libcosimpy, any Python master).  One wetcloth per process:
+
+1. a wetcloth already imported there is used, with a warning if its sources differ from the FMU's;
+2. else the host's installed wetcloth, if its sources are the FMU's (same SHA-256 digests);
+3. else the copy inside the FMU, from a per-user folder named by the digest of all its files
+   (``~/.cache/wetcloth/fmu/<digest>``, or ``$WETCLOTH_FMU_CACHE``), copied there once.
+
+Why 3: numba caches compiled kernels in ``__pycache__`` beside their source, under a name keyed
+by the source folder's path (``numba.core.caching``: index of the file's path and, since numba
+0.61, its content hash; older numba its mtime).  Each extraction of the FMU is a new temporary
+folder with new mtimes, so the kernels compiled again at every start (14-17 s).  The digest-named
+copy keeps one path and one set of mtimes per FMU content: after the first start, its kernels load.
+
+A dependency the host's Python lacks is named in an ImportError and in Python's logging (stderr
+unless the host configured logging), also while the master's FMI logging is off.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import importlib.util
+import json
+import logging
+import os
+import shutil
+import sys
+import tempfile
+from pathlib import Path
+
+LOG = logging.getLogger("wetcloth.fmu")
+#: Written by the builder into the FMU's resources: digests of the bundled wetcloth, variable names...
+MANIFEST_NAME = "wetcloth_fmu_manifest.json"
+#: Environment variable naming the per-user folder of unpacked wetcloth copies.
+CACHE_VARIABLE = "WETCLOTH_FMU_CACHE"
+
+_LOADED: dict[str, object] = {}  # resources folder -> the wetcloth module it runs
+
+
+def digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def bundle_digest(files: dict[str, str]) -> str:
+    """One digest of a bundle from its files' relative paths and digests."""
+    return hashlib.sha256(json.dumps(sorted(files.items())).encode()).hexdigest()
+
+
+def _same_files(folder: Path, files: dict[str, str]) -> bool:
+    try:
+        return all(digest(folder / rel) == value for rel, value in files.items())
+    except OSError:
+        return False
+
+
+def cache_root() -> Path:
+    """The per-user folder of unpacked wetcloth copies."""
+    if os.environ.get(CACHE_VARIABLE):
+        return Path(os.environ[CACHE_VARIABLE])
+    if sys.platform == "win32":
+        base = Path(os.environ.get("LOCALAPPDATA") or Path.home() / "AppData" / "Local")
+    elif sys.platform == "darwin":
+        base = Path.home() / "Library" / "Caches"
+    else:
+        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return base / "wetcloth" / "fmu"
+
+
+def cached_copy(bundle: Path, files: dict[str, str]) -> Path | None:
+    """A folder holding ``bundle`` (a ``wetcloth`` package folder) at a path that depends only on its
+    contents, copied there if needed; None (logged) if the per-user folder cannot be used."""
+    home = cache_root() / bundle_digest(files)[:24]
+    if _same_files(home / "wetcloth", files):
+        return home
+    try:
+        home.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+        staging = Path(tempfile.mkdtemp(prefix=".incoming-", dir=home.parent))
+        shutil.copytree(bundle, staging / "wetcloth", ignore=shutil.ignore_patterns("__pycache__"))
+        try:
+            os.rename(staging, home)  # atomic: another process may have won the race, which is as good
+        except OSError:
+            shutil.rmtree(staging, ignore_errors=True)
+    except OSError as exc:
+        LOG.warning("WetCloth FMU: cannot keep its wetcloth in %s (%s); numba compiles its kernels at every start",
+                    home, exc)
+        return None
+    if not _same_files(home / "wetcloth", files):
+        LOG.warning("WetCloth FMU: %s holds other files than the FMU's wetcloth; using the FMU's copy "
+                    "(numba compiles its kernels at every start); delete that folder to fix this", home)
+        return None
+    return home
+
+
+def _path_without(resources: Path) -> list[str]:
+    return [p for p in sys.path if Path(p or ".").resolve() != resources]
+
+
+def _host_wetcloth(resources: Path, package_files: dict[str, str]) -> bool:
+    """Whether an installed wetcloth (outside the FMU) has the FMU's package sources."""
+    saved = list(sys.path)
+    try:
+        sys.path[:] = _path_without(resources)
+        spec = importlib.util.find_spec("wetcloth")
+    finally:
+        sys.path[:] = saved
+    return bool(spec and spec.submodule_search_locations) and _same_files(
+        Path(next(iter(spec.submodule_search_locations))), package_files)
+
+
+def _import(path: list[str]):
+    """``import wetcloth`` with ``path`` as ``sys.path`` (restored afterwards)."""
+    saved = list(sys.path)
+    try:
+        sys.path[:] = path
+        return importlib.import_module("wetcloth")
+    finally:
+        sys.path[:] = saved
+
+
+def missing_dependency(exc: ModuleNotFoundError, requires: list[str]) -> ImportError:
+    """An ImportError (also logged) naming the module the host's Python lacks and how to install it."""
+    wanted = next((r for r in requires if r.split(";")[0].replace("-", "_").lower().startswith(
+        (exc.name or "").split(".")[0].lower())), exc.name)
+    message = (f"WetCloth FMU cannot start: the Python that loads it ({sys.executable}, Python "
+               f"{sys.version_info.major}.{sys.version_info.minor}) has no module {exc.name!r}. Install it there: "
+               f"{sys.executable} -m pip install '{wanted}'  (docs/fmi.md lists what the unit needs)")
+    LOG.error("%s", message)
+    return ImportError(message, name=exc.name)
+
+
+def load_wetcloth(resources: Path):
+    """The wetcloth module this FMU runs (see the module docstring), imported if needed."""
+    resources = resources.resolve()
+    if str(resources) in _LOADED:
+        return _LOADED[str(resources)]
+    manifest_path = resources / MANIFEST_NAME
+    manifest = json.loads(manifest_path.read_text()) if manifest_path.exists() else None
+    try:
+        if "wetcloth" in sys.modules or manifest is None:
+            module = importlib.import_module("wetcloth")
+            package = Path(module.__file__).parent
+            if manifest is not None and not _same_files(package, manifest["package_files"]):
+                LOG.warning("this WetCloth FMU runs the wetcloth already imported in this process (%s), whose "
+                            "sources differ from the copy the FMU was built with; results may differ from that "
+                            "build's", package)
+        elif _host_wetcloth(resources, manifest["package_files"]):
+            module = _import(_path_without(resources))
+        else:
+            home = cached_copy(resources / "wetcloth", manifest["bundle_files"])
+            module = _import([str(home or resources)] + _path_without(resources))
+    except ModuleNotFoundError as exc:
+        if exc.name and exc.name.split(".")[0] == "wetcloth":
+            raise
+        raise missing_dependency(exc, manifest["requires"] if manifest else []) from None
+    if manifest is not None:
+        _check_variables(module, manifest)
+    _LOADED[str(resources)] = module
+    return module
+
+
+def _check_variables(module, manifest: dict) -> None:
+    """Refuse a wetcloth whose FMU variables differ from those the model description lists."""
+    from wetcloth.fmu.vocabulary import variable_specs
+
+    names = [s.name for s in variable_specs(fmi_version=manifest["fmi_version"])]
+    if names != manifest["variables"]:
+        message = (f"this WetCloth FMU was built for the variables {manifest['variables']}, but the wetcloth imported "
+                   f"from {Path(module.__file__).parent} defines {names}; rebuild it with `wetcloth build-fmu`")
+        LOG.error("%s", message)
+        raise RuntimeError(message)

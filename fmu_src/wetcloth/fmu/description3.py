@@ -1,0 +1,91 @@
+"""The FMI 3.0 variables and ``modelDescription.xml`` of WetCloth3.fmu, from the shared vocabulary (pythonfmu3).
+
+The FMI 2.0 types map to FMI 3.0 ones: Real -> Float64, String -> String, Integer -> Int32, except
+that an Integer parameter that sizes an array output (``nx``, ``ny``) is a UInt64 structural
+parameter, as FMI 3.0 requires of a ``Dimension``'s variable.  pythonfmu3 writes causality,
+variability, start, units and the model structure; here each variable also gets ``min``/``max``
+and the outputs their direct-feedthrough dependencies.
+"""
+
+from __future__ import annotations
+
+from typing import Callable, Sequence
+from xml.etree.ElementTree import Element
+
+from pythonfmu3 import Dimension, Float64, Int32, String, UInt64, Unit
+from pythonfmu3.enums import Fmi3Causality, Fmi3Initial, Fmi3Variability
+from pythonfmu3.variables import ModelVariable
+
+from wetcloth.fmu.vocabulary import FEEDTHROUGH, VariableSpec, units_of, xml_attributes
+
+
+class _WithAttributes:
+    """Mixin for pythonfmu3 variables: extra attributes (min, max) on the variable's element."""
+
+    def __init__(self, name: str, attributes: dict[str, str], **kwargs):
+        super().__init__(name, **kwargs)
+        self.attributes = attributes
+
+    def to_xml(self) -> Element:
+        node = super().to_xml()
+        for key, value in self.attributes.items():
+            node.set(key, value)
+        return node
+
+
+class Float64Variable(_WithAttributes, Float64):
+    """A pythonfmu3 ``Float64`` (scalar or array) with range."""
+
+
+class Int32Variable(_WithAttributes, Int32):
+    """A pythonfmu3 ``Int32`` with range."""
+
+
+class UInt64Variable(_WithAttributes, UInt64):
+    """A pythonfmu3 ``UInt64`` with range (a structural parameter)."""
+
+
+class StringVariable(_WithAttributes, String):
+    """A pythonfmu3 ``String``."""
+
+
+def dimension_sources(specs: Sequence[VariableSpec]) -> set[str]:
+    """Names of the parameters that size array variables: FMI 3.0 structural parameters."""
+    return {d for spec in specs for d in spec.dimensions if isinstance(d, str)}
+
+
+def make_variable(spec: VariableSpec, getter: Callable, setter: Callable | None,
+                  value_references: dict[str, int], structural: set[str]) -> ModelVariable:
+    """The pythonfmu3 variable of a spec (``value_references`` of the variables its dimensions name)."""
+    attributes = xml_attributes(spec)
+    unit = attributes.pop("unit", None)
+    causality = spec.causality
+    kwargs = dict(variability=Fmi3Variability[spec.variability], description=spec.description,
+                  initial={"exact": Fmi3Initial.exact, "calculated": Fmi3Initial.calculated}.get(spec.initial),
+                  getter=getter, setter=setter)
+    if spec.type == "String":
+        return StringVariable(spec.name, attributes, causality=Fmi3Causality[causality], start=spec.start, **kwargs)
+    if spec.type == "Integer":
+        cls = UInt64Variable if spec.name in structural else Int32Variable
+        causality = "structuralParameter" if spec.name in structural else causality
+        return cls(spec.name, attributes, causality=Fmi3Causality[causality], start=spec.start, **kwargs)
+    dimensions = [Dimension(start=str(d)) if isinstance(d, int) else Dimension(valueReference=str(value_references[d]))
+                  for d in spec.dimensions]
+    return Float64Variable(spec.name, attributes, causality=Fmi3Causality[causality], start=spec.start, unit=unit,
+                           dimensions=dimensions, **kwargs)
+
+
+def units(specs: Sequence[VariableSpec]) -> list[Unit]:
+    """pythonfmu3 unit definitions (SI base-unit exponents) of the units the variables use."""
+    return [Unit(u.name, factor=u.factor, **dict(u.exponents)) for u in units_of(specs)]
+
+
+def extend_model_description(root: Element, specs: Sequence[VariableSpec]) -> Element:
+    """Add the outputs' direct-feedthrough dependencies to pythonfmu3's ModelStructure (in place)."""
+    value_reference = {spec.name: str(i) for i, spec in enumerate(specs)}
+    name_of = {vr: name for name, vr in value_reference.items()}
+    for output in root.find("ModelStructure").findall("Output"):
+        sources = FEEDTHROUGH.get(name_of[output.get("valueReference")], ())
+        output.set("dependencies", " ".join(value_reference[s] for s in sources))
+        output.set("dependenciesKind", " ".join("dependent" for _ in sources))
+    return root

@@ -1,0 +1,125 @@
+"""Keep a unit and its host alive: fixes of pythonfmu's binaries (FMI 2.0 and 3.0), made at their Python seam.
+
+1. pythonfmu and pythonfmu3 turn a Python exception in any slave method into an FMI Fatal status,
+   the only way such a method can report an error (``fmi2SetReal``, ``fmi2ExitInitializationMode``,
+   the FMU-state calls...).  On the way, their C++ ``handle_py_exception`` releases the instance's
+   references to its Python objects (the slave, its class and its log queue) but keeps using the
+   pointers: the next call on that instance used freed memory and the host crashed (seen: a
+   ``doStep`` after two refused ``fmi2DeSerializeFMUstate``).  Each wrapped entry point gives those
+   objects one reference back before the exception leaves Python.  An instance that has reported
+   an error therefore stays in memory until the process ends (a bounded leak on error paths
+   only), and every later call on it works.  The class-level state decoders
+   (``_fmu_state_from_bytes``, ``_fmu_state_to_bytes``) cannot know which instance called them,
+   so their errors do this for every live instance.
+2. pythonfmu's ``findClass`` (FMI 2.0) runs the slave script again in the script module's
+   namespace at every instantiation, then releases a reference to that namespace it never took
+   (``Py_DECREF`` of ``PyModule_GetDict``'s borrowed result): after a few instances the namespace
+   was freed while the module still used it.  The script calls ``hold_script_namespace(globals())``
+   on every run, giving that reference back.
+3. At process exit both binaries release their interpreter helper (``PyState``) twice: its static
+   ``shared_ptr`` is destroyed by the exit handlers, then the library's destructor assigns to the
+   destroyed pointer, which corrupted the heap ("corrupted double-linked list", exit status 134)
+   in about one exit in two.  ``release_at_exit`` has Python's own exit call the binary's
+   ``finalizePythonInterpreter`` first, while the pointer is alive; the later calls then find it
+   empty.  Only in a Python host: where the binary started the interpreter itself, its exit path
+   must run as written.
+
+The references given back in 1 and 2 are real reference counts (``Py_IncRef``), not objects held in
+a list: the binary has already dropped them, and a list released at interpreter shutdown would
+drop them a second time.
+"""
+
+from __future__ import annotations
+
+import atexit
+import ctypes
+import functools
+import inspect
+import os
+import sys
+import weakref
+from pathlib import Path
+
+_incref = ctypes.pythonapi.Py_IncRef
+_incref.argtypes = [ctypes.py_object]
+_incref.restype = None
+
+#: Every slave instance alive in this process (for errors of the class-level decoders).
+_LIVE: weakref.WeakSet = weakref.WeakSet()
+#: Binaries whose ``finalizePythonInterpreter`` runs at Python's exit, by path.
+_RELEASED: dict[str, ctypes.CDLL] = {}
+
+
+def _give_back(instances) -> None:
+    """One reference to each object the binary drops after an exception of ``instance`` (see 1.)."""
+    for instance in instances:
+        for obj in (instance, instance.log_queue, type(instance)):
+            _incref(obj)
+
+
+def hold_script_namespace(namespace: dict) -> None:
+    """Give pythonfmu's ``findClass`` the reference to the slave script's namespace it releases (see 2.)."""
+    _incref(namespace)
+
+
+def register(instance) -> None:
+    """Note a new slave instance (called from its ``__init__``) and arrange for its binary's exit (see 3.)."""
+    _LIVE.add(instance)
+    if instance.resources:
+        release_at_exit(Path(instance.resources).parent / "binaries", type(instance).__name__)
+
+
+def release_at_exit(binaries: Path, model_identifier: str) -> None:
+    """Have Python's exit call ``finalizePythonInterpreter`` of the loaded binary in ``binaries`` (see 3.)."""
+    if not sys.orig_argv or os.name != "posix":  # the binary started this interpreter, or Windows (DllMain)
+        return
+    for path in binaries.glob(f"*/{model_identifier}.*"):
+        key = str(path.resolve())
+        if key in _RELEASED:
+            continue
+        try:  # RTLD_NOLOAD: only the copy this process has loaded
+            library = ctypes.CDLL(key, mode=os.RTLD_NOLOAD | os.RTLD_LAZY)
+            finalize = library.finalizePythonInterpreter
+        except (OSError, AttributeError):
+            continue
+        finalize.argtypes, finalize.restype = [], None
+        _RELEASED[key] = library
+        atexit.register(finalize)
+
+
+def guard(cls, methods: tuple[str, ...], class_methods: tuple[str, ...]):
+    """Wrap ``cls``'s entry points in place: ``methods`` are called on an instance,
+    ``class_methods`` (static or class methods) on the class; returns ``cls``."""
+    for name in methods:
+        setattr(cls, name, _instance_entry(getattr(cls, name)))
+    for name in class_methods:
+        found = inspect.getattr_static(cls, name)
+        if isinstance(found, classmethod):
+            setattr(cls, name, classmethod(_class_entry(found.__func__)))
+        else:
+            setattr(cls, name, staticmethod(_class_entry(getattr(found, "__func__", found))))
+    return cls
+
+
+def _instance_entry(method):
+    @functools.wraps(method)
+    def entry(self, *args):
+        try:
+            return method(self, *args)
+        except BaseException:
+            _give_back([self])
+            raise
+
+    return entry
+
+
+def _class_entry(function):
+    @functools.wraps(function)
+    def entry(*args):
+        try:
+            return function(*args)
+        except BaseException:
+            _give_back(list(_LIVE))
+            raise
+
+    return entry

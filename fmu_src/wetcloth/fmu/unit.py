@@ -1,0 +1,339 @@
+"""What a WetCloth unit does, whatever its FMI version: a thin adapter over ``wetcloth.Simulation``.
+
+``WetClothUnit`` is mixed into the FMI 2.0 and 3.0 slave classes (``fmi2.py``, ``fmi3.py``), which
+only translate between FMI calls and these methods.  The rules it applies live elsewhere: single
+values are checked by ``vocabulary.check_variable`` (the scene's ranges), whole scenes by
+``scene.from_dict``, input changes during a run by ``Simulation.set_inputs``, the output folder by
+the exporter (``check_directory``, ``open_sequence``, ``resume_sequence``), and FMU states are
+``Simulation.snapshot()``/``restore`` through ``checkpoint.py``.
+
+Errors: a refused value is logged (FMI log and Python logging, so it shows with FMI logging off
+too) and stays pending; a pending refusal or an invalid scene makes ``start`` raise (the master
+then gets an error status from initialization); during a run a pending refusal discards every step
+until a valid value arrives.  Every message names the variable and its allowed range.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+from wetcloth.errors import ParameterError
+from wetcloth.fmu import checkpoint
+from wetcloth.fmu.checkpoint import Checkpoint, StateError
+from wetcloth.fmu.vocabulary import check_variable, variable_specs
+from wetcloth.scene import from_dict, read_scene_file
+from wetcloth.simulation import Simulation
+
+#: Errors also go to Python's logging (stderr unless the host configures logging): pythonfmu
+#: forwards FMI log messages only while the master has logging switched on.
+LOG = logging.getLogger("wetcloth.fmu")
+#: Relative tolerance when matching the master's communication time with the unit's time.
+TIME_TOLERANCE = 1e-9
+#: Outcomes of a step the unit takes or declines, mapped to FMI statuses by the slaves (a call the
+#: master must not make raises UnitError).
+OK, DISCARD = "ok", "discard"
+
+
+class UnitError(RuntimeError):
+    """The master asked for something the unit refuses (the message says what and why)."""
+
+
+def default_run() -> tuple[float, float]:
+    """Stop time (s) and communication step (s) of the default experiment: the towel preset's [run]."""
+    run = read_scene_file(None).get("run", {})
+    return float(run.get("duration", 90.0)), 1.0 / float(run.get("fps", 30.0))
+
+
+class WetClothUnit:
+    """One unit's values, simulation and frames.  Mixed into a pythonfmu slave class, which sets
+    ``FMI_VERSION`` and ``LOG_STATUS`` (FMI status of 'error' and 'warning' log messages)."""
+
+    FMI_VERSION: int
+    LOG_STATUS: dict
+
+    def _start_unit(self) -> None:
+        """Set up the unit's own state (called from the slave's ``__init__``)."""
+        self.specs = {spec.name: spec for spec in variable_specs(fmi_version=self.FMI_VERSION)}
+        self.values = {name: spec.start for name, spec in self.specs.items() if spec.causality != "output"}
+        self.refused: dict[str, str] = {}  # variable -> why its value was refused (pending)
+        self.initialized = False
+        self.terminated = False
+        self.start_time = 0.0  # s, the master's time at the simulation's t = 0
+        self._clock_set = False  # by fmi2SetupExperiment, else (FMI 3.0) by the first doStep
+        self.sim: Simulation | None = None  # from initialization on
+        self._preview: Simulation | None = None  # the initial state of the current values, before that
+        self.frames = 0  # mesh frames written
+        self.sequence = None  # the exporter's frame sequence, opened at the first step
+
+    # ------------------------------------------------------------------ logging
+    def _report(self, level: str, message: str) -> None:
+        """Log through FMI (shown while the master's logging is on) and Python's logging."""
+        self.log(message, self.LOG_STATUS[level])
+        getattr(LOG, level)("%s: %s", self.instance_name, message)
+
+    # ------------------------------------------------------------------ variables
+    def value(self, name: str):
+        return self.values[name]
+
+    def set_value(self, name: str, value) -> None:
+        """Take a parameter or input value, or refuse it: logged, the old value kept, the refusal pending."""
+        try:
+            if not self.initialized:
+                check_variable(name, value)
+                self._preview = None
+            elif value != self.values[name]:  # an unchanged value changes nothing (and clears a refusal)
+                if not self.specs[name].scene:
+                    raise ParameterError(name, "is fixed once the unit is initialized")
+                self.sim.set_inputs(**{name: value})  # the simulation owns which parameters may change
+        except ParameterError as exc:
+            self.refused[name] = str(exc)
+            self._report("error", f"{exc} (value refused: {name} stays {self.values[name]!r})")
+            return
+        self.values[name] = value
+        self.refused.pop(name, None)
+
+    def _simulation(self) -> Simulation:
+        """The running simulation, or before initialization the initial state of the current values
+        (the defaults while they do not form a valid scene)."""
+        if self.sim is not None:
+            return self.sim
+        if self._preview is None:
+            try:
+                self._preview = Simulation(from_dict(self._scene_values()))
+            except ParameterError:
+                self._preview = Simulation(from_dict({n: s.start for n, s in self.specs.items() if s.scene}))
+        return self._preview
+
+    def output(self, name: str):
+        """An output: a scalar of ``Simulation.outputs()``, or an array output as a flat list."""
+        sim = self._simulation()
+        if self.specs[name].dimensions:
+            return getattr(sim, name).ravel().tolist()
+        return sim.outputs()[name]
+
+    def _scene_values(self) -> dict:
+        return {name: value for name, value in self.values.items() if self.specs[name].scene}
+
+    # ------------------------------------------------------------------ life cycle
+    def setup_experiment(self, start_time, stop_time=None, tolerance=None):  # pythonfmu's call
+        self.start_time, self._clock_set = float(start_time), True
+
+    def start(self) -> None:
+        """Build the simulation from the parameters and start values; UnitError (logged, naming the
+        parameter and its range) if any was refused, they do not form a scene, or the mesh folder is taken."""
+        problems = list(self.refused.values())
+        try:
+            scene = from_dict(self._scene_values())
+        except ParameterError as exc:
+            scene = None
+            problems.append(str(exc))
+        directory = self.values["mesh_output_dir"]
+        if directory:
+            from wetcloth.exporter import ExportError, check_directory
+
+            try:
+                check_directory(directory, overwrite=True, exclusive=True)
+            except ExportError as exc:
+                problems.append(f"parameter 'mesh_output_dir': {exc}")
+        if problems:
+            message = "initialization refused: " + "; ".join(dict.fromkeys(problems))
+            self._report("error", message)
+            raise UnitError(message)
+        self.sim = Simulation(scene)
+        self._preview = None
+        self.initialized = True
+
+    def step(self, current_time: float, step_size: float) -> str:
+        """Advance from ``current_time`` by ``step_size`` s: OK, or DISCARD (the unit stays at
+        ``current_time``, message logged); UnitError (logged) for a call the master must not make."""
+        if not (math.isfinite(current_time) and math.isfinite(step_size) and step_size >= 0.0):
+            self._refuse_call(f"doStep needs a finite communication point and a finite step size >= 0 s, "
+                              f"got t = {current_time!r} s, step {step_size!r} s")
+        if self.terminated:
+            self._refuse_call(f"doStep at t = {current_time:g} s after fmiTerminate: the run is over")
+        if not self.initialized:
+            self._refuse_call("doStep before the unit was initialized")
+        if self.refused:
+            for message in self.refused.values():
+                self._report("error", f"step refused at t = {current_time:g} s: {message}")
+            return DISCARD
+        sim = self.sim
+        if not self._clock_set:  # pythonfmu3 does not pass fmi3EnterInitializationMode's start time on
+            self.start_time, self._clock_set = current_time - sim.time, True
+        now = self.start_time + sim.time
+        if abs(current_time - now) > TIME_TOLERANCE * max(1.0, abs(now)):
+            return self._refuse_step(DISCARD, f"doStep from t = {current_time!r} s, but the unit is at t = {now!r} s; "
+                                              "restore an FMU state to go back in time")
+        if self.values["mesh_output_dir"] and not self._frames_ready(step_size):
+            return DISCARD
+        before = sim.snapshot()
+        try:
+            sim.advance(max(0.0, current_time + step_size - self.start_time - sim.time))
+            if self.sequence is not None:
+                self.sequence.on_frame(self.frames, sim)
+                self.frames += 1
+        except Exception as exc:  # a blow-up, a full disk...: never let it reach the master as a crash
+            sim.restore(before)
+            return self._refuse_step(DISCARD, f"step from t = {current_time:g} s by {step_size:g} s failed: "
+                                              f"{type(exc).__name__}: {exc} The unit stays at t = {current_time:g} s "
+                                              "with its last good outputs.")
+        return OK
+
+    def _refuse_step(self, outcome: str, message: str) -> str:
+        self._report("error", message)
+        return outcome
+
+    def _refuse_call(self, message: str) -> None:
+        self._report("error", message)
+        raise UnitError(message)
+
+    def _frames_ready(self, step_size: float) -> bool:
+        """Open the frame sequence at the first step (or continue it after a restored state) and
+        write the frame of the current state if none is written; False (logged, pending) if the
+        folder cannot be used."""
+        from wetcloth.exporter import ExportError, open_sequence, resume_sequence
+
+        directory, fmt = self.values["mesh_output_dir"], self.values["mesh_format"]
+        try:
+            if self.sequence is None:
+                fps = 1.0 / (step_size if step_size > 0 else default_run()[1])
+                options = dict(fmt=fmt, writer="trimesh", fps=fps, scene=self.sim.scene)
+                if self.frames == 0:
+                    self.sequence = open_sequence(directory, overwrite=True, exclusive=True, **options)
+                    if self.sequence.replaced:
+                        self._report("warning", f"mesh_output_dir: replaced the earlier frame sequence in {directory} "
+                                                f"({len(self.sequence.replaced)} files: "
+                                                f"{', '.join(self.sequence.replaced)})")
+                else:
+                    self.sequence = resume_sequence(directory, self.frames, **options)
+            if self.frames == 0:
+                self.sequence.on_frame(0, self.sim)
+                self.frames = 1
+        except (ExportError, OSError, ImportError) as exc:
+            self.refused["mesh_output_dir"] = f"parameter 'mesh_output_dir': cannot write {fmt} frames into {directory!r}: {exc}"
+            self._report("error", f"{self.refused['mesh_output_dir']} (no step taken)")
+            return False
+        return True
+
+    def finish(self) -> None:
+        """End the run: the frame sequence is closed (frames.json complete); a second call does nothing."""
+        if self.terminated:
+            self._report("warning", "fmiTerminate called again: the run had already ended; nothing done")
+            return
+        self.terminated = True
+        if self.sequence is not None:
+            self.sequence.close()
+            self.sequence = None
+
+    # ------------------------------------------------------------------ pythonfmu's and pythonfmu3's calls
+    def exit_initialization_mode(self):
+        self.start()
+
+    def terminate(self):
+        self.finish()
+
+    def _get_fmu_state(self) -> Checkpoint:
+        return self.capture()
+
+    def _set_fmu_state(self, state) -> None:
+        try:
+            self.restore(state)
+        except StateError as exc:
+            self._report("error", f"FMU state refused, the unit is unchanged: {exc}")
+            raise
+
+    @staticmethod
+    def _fmu_state_to_bytes(state) -> bytes:
+        if not isinstance(state, Checkpoint):
+            raise StateError(f"not a WetCloth FMU state: a {type(state).__name__}")
+        return checkpoint.to_bytes(state)
+
+    @classmethod
+    def _fmu_state_from_bytes(cls, data: bytes) -> Checkpoint:
+        """A state read from bytes, refused at once (StateError, logged) unless this unit wrote it
+        and it fits a simulation of its scene."""
+        try:
+            names = {s.name for s in variable_specs(fmi_version=cls.FMI_VERSION) if s.causality != "output"}
+            return validated(checkpoint.from_bytes(data), names)
+        except StateError as exc:
+            LOG.error("serialized FMU state refused: %s", exc)
+            raise
+
+    # ------------------------------------------------------------------ FMU state
+    def capture(self) -> Checkpoint:
+        """The whole unit's state: values, refusals, clock, frame count and the simulation's snapshot."""
+        sim = self.sim
+        return Checkpoint(values=dict(self.values), refused=dict(self.refused), initialized=self.initialized,
+                          start_time=self.start_time, frames=self.frames, scene=sim.scene if sim else None,
+                          leaves=checkpoint.leaves_of(sim.snapshot()) if sim else {})
+
+    def restore(self, state) -> None:
+        """Return to a checkpoint (of this or another instance of this unit); StateError, nothing
+        changed, if it is not one or does not fit."""
+        sim = self._checked_simulation(state)
+        if sim is not None:
+            sim.restore(checkpoint.snapshot_from(state.leaves, state.scene, sim.snapshot()))
+        self._rewind_frames(state)
+        self.values, self.refused = dict(state.values), dict(state.refused)
+        self.initialized, self.start_time, self.frames = state.initialized, state.start_time, state.frames
+        self._clock_set = self._clock_set or state.initialized
+        self.sim, self._preview = sim, None
+
+    def _rewind_frames(self, state: Checkpoint) -> None:
+        """After a rollback the open sequence continues after the state's frames (later ones were the
+        abandoned branch); a sequence of another folder or format is closed (the next step resumes)."""
+        from wetcloth.exporter import ExportError
+
+        if self.sequence is None:
+            return
+        mesh = ("mesh_output_dir", "mesh_format")
+        try:
+            if all(state.values[k] == self.values[k] for k in mesh):
+                return self.sequence.resume_after(state.frames)
+        except ExportError as exc:
+            self._report("warning", f"mesh_output_dir: {exc}")
+        self.sequence.close(complete=False)
+        self.sequence = None
+
+    def _checked_simulation(self, state) -> Simulation | None:
+        """The simulation ``state`` restores into (this unit's if it runs the same scene, else a new
+        one), after checking ``state`` against it and against this unit's variables."""
+        if not isinstance(state, Checkpoint):
+            raise StateError(f"not a WetCloth FMU state: a {type(state).__name__}")
+        unit_check(state, set(self.values))
+        if not state.initialized:
+            return None
+        same = self.sim is not None and checkpoint.scene_id(self.sim.scene) == checkpoint.scene_id(state.scene)
+        sim = self.sim if same else Simulation(state.scene)
+        checkpoint.check_leaves(state.leaves, checkpoint.leaves_of(sim.snapshot()))
+        return sim
+
+
+def unit_check(state: Checkpoint, names: set[str]) -> None:
+    """StateError unless the checkpoint's variables are ``names`` with valid values, consistent with its scene."""
+    if set(state.values) != names:
+        raise StateError(f"the state is of a unit with other variables (missing {sorted(names - set(state.values))}, "
+                         f"unknown {sorted(set(state.values) - names)})")
+    try:
+        for name, value in state.values.items():
+            check_variable(name, value)
+    except ParameterError as exc:
+        raise StateError(f"the state holds an invalid value: {exc}") from None
+    if not set(state.refused) <= names:
+        raise StateError("the state refuses variables this unit does not have")
+    if state.initialized:
+        if state.scene is None:
+            raise StateError("the state of an initialized unit has no scene")
+        scene = state.scene.to_dict()
+        if any(scene[name] != value for name, value in state.values.items() if name in scene):
+            raise StateError("the state's variable values differ from its simulation's scene")
+
+
+def validated(state: Checkpoint, names: set[str]) -> Checkpoint:
+    """``state`` after every check ``restore`` makes, against a simulation of its own scene (for
+    states read from bytes, refused at once rather than when set)."""
+    unit_check(state, names)
+    if state.initialized:
+        checkpoint.check_leaves(state.leaves, checkpoint.leaves_of(Simulation(state.scene).snapshot()))
+    return state
