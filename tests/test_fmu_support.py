@@ -1,4 +1,5 @@
-"""Shared helpers of the WetCloth.fmu tests: one FMU build per test process, an fmpy instance driver.
+"""Shared helpers of the WetCloth FMU tests: one build of each unit per test process, an fmpy instance
+driver, a child-process runner.
 
 Importable from the other ``test_fmu_*`` files (pytest puts ``tests/`` on ``sys.path``); it also
 checks that the helpers themselves drive the unit.
@@ -6,9 +7,11 @@ checks that the helpers themselves drive the unit.
 
 from __future__ import annotations
 
+import json
 import math
+import subprocess
+import sys
 import tempfile
-from ctypes import byref
 from pathlib import Path
 
 import numpy as np
@@ -22,24 +25,36 @@ SMALL = {"nx": 9, "ny": 9}
 _BUILT: dict[str, Path] = {}
 
 
-def built_fmu() -> Path:
-    """WetCloth.fmu built from the current sources, once per test process."""
-    if "fmu" not in _BUILT:
+def built_fmu(fmi_version: int = 2) -> Path:
+    """WetCloth.fmu (FMI 2.0) or WetCloth3.fmu (FMI 3.0) built from the current sources, once per test process."""
+    key = f"fmu{fmi_version}"
+    if key not in _BUILT:
         from wetcloth.fmu.builder import build_fmu
 
         folder = Path(tempfile.mkdtemp(prefix="wetcloth_fmu_test_"))
-        _BUILT["fmu"] = build_fmu(folder / "WetCloth.fmu")
-    return _BUILT["fmu"]
+        _BUILT[key] = build_fmu(folder / ("WetCloth.fmu" if fmi_version == 2 else "WetCloth3.fmu"), fmi_version)
+    return _BUILT[key]
 
 
-def extracted_fmu() -> tuple[Path, object]:
+def extracted_fmu(fmi_version: int = 2) -> tuple[Path, object]:
     """The unit extracted once per process, and its model description (fmpy)."""
-    if "dir" not in _BUILT:
+    key = f"dir{fmi_version}"
+    if key not in _BUILT:
         from fmpy import extract, read_model_description
 
-        _BUILT["dir"] = Path(extract(str(built_fmu())))
-        _BUILT["md"] = read_model_description(str(built_fmu()))
-    return _BUILT["dir"], _BUILT["md"]
+        _BUILT[key] = Path(extract(str(built_fmu(fmi_version))))
+        _BUILT[f"md{fmi_version}"] = read_model_description(str(built_fmu(fmi_version)))
+    return _BUILT[key], _BUILT[f"md{fmi_version}"]
+
+
+def run_child(code: str, *args, cwd=None, env=None, timeout: float = 300, stdin: str | None = None) -> tuple:
+    """Run Python ``code`` in a child process (so that a crash of the FMU's host fails a test, not the
+    suite); its JSON lines (``print(json.dumps(...))``) and the completed process."""
+    done = subprocess.run([sys.executable, "-c", code, *map(str, args)], capture_output=True, text=True,
+                          timeout=timeout, cwd=cwd, env=env, input=stdin)
+    assert done.returncode == 0, f"the child master failed ({done.returncode}):\n{done.stderr[-4000:]}"
+    records = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
+    return records, done
 
 
 class Unit:

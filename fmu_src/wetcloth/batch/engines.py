@@ -1,14 +1,13 @@
 """One run of a study, as a Dask task: simulate a scene, compute its metrics, never raise.
 
 Two engines give the output time series: ``python`` (``wetcloth.runner.run``, the default) and
-``fmu`` (``models/WetCloth.fmu`` co-simulated through ``fmpy.simulate_fmu``).  An exception in a
+``fmu`` (``models/WetCloth.fmu`` co-simulated through fmpy by ``wetcloth.fmu.cosim.simulate``).  An exception in a
 run becomes a result with status ``error`` and the exception's text, so the study goes on.
 """
 
 from __future__ import annotations
 
 import os
-import threading
 import time
 import traceback
 from pathlib import Path
@@ -31,44 +30,12 @@ def python_series(params: dict[str, Any], duration: float, sample_rate: float) -
     return {name: result.column(name) for name in SERIES}
 
 
-_extracted: dict[tuple[str, float], tuple[str, Any]] = {}
-_extract_lock = threading.Lock()
-
-
-def _unpacked_fmu(path: str):
-    """The FMU unzipped once per worker process (and again if the file changes): (dir, model description)."""
-    import fmpy
-
-    path = os.path.abspath(path)
-    if not os.path.exists(path):
-        raise FileNotFoundError(f"FMU {path!r} not found: build it with 'wetcloth build-fmu'")
-    stamp = (path, os.path.getmtime(path))
-    with _extract_lock:
-        if stamp not in _extracted:
-            unzipdir = fmpy.extract(path)
-            _extracted[stamp] = (unzipdir, fmpy.read_model_description(unzipdir))
-        return _extracted[stamp]
-
-
 def fmu_series(params: dict[str, Any], duration: float, sample_rate: float, fmu: str) -> dict[str, np.ndarray]:
-    """Outputs of the FMU (fmpy co-simulation, communication step 1/``sample_rate`` s)."""
-    import fmpy
+    """Outputs of the FMU (fmpy co-simulation, communication step 1/``sample_rate`` s); a run the unit
+    stops early raises (a blow-up as BlowUpError), as the Python engine does."""
+    from wetcloth.fmu.cosim import simulate
 
-    unzipdir, description = _unpacked_fmu(fmu)
-    variables = {v.name for v in description.modelVariables}
-    missing = [name for name in params if name not in variables]
-    if missing:
-        raise ValueError(f"the FMU {fmu} has no variable {missing[0]!r}: rebuild it with 'wetcloth build-fmu'")
-    result = fmpy.simulate_fmu(
-        unzipdir,
-        model_description=description,
-        fmi_type="CoSimulation",
-        start_time=0.0,
-        stop_time=duration,
-        output_interval=1.0 / sample_rate,
-        start_values=dict(params),
-        output=[name for name in SERIES if name != "time"],
-    )
+    result = simulate(fmu, duration, sample_rate, params, output=[name for name in SERIES if name != "time"])
     return {name: np.asarray(result[name], float) for name in SERIES}
 
 
@@ -107,6 +74,6 @@ def execute(task: dict[str, Any]) -> dict[str, Any]:
 
 
 def fmu_path_or_default(path: str) -> str:
-    from wetcloth.batch.study import default_fmu_path
+    from wetcloth.fmu import default_fmu_path
 
-    return str(Path(path)) if path else default_fmu_path()
+    return str(Path(path or default_fmu_path()).resolve())

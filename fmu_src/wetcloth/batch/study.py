@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from wetcloth.batch.metrics import DEFAULT_METRICS, METRICS
-from wetcloth.scene import PARAMETERS, RESERVED_KEYS, coerce, describe_range, preset_dir, read_scene_file, resolve_scene_path
+from wetcloth.scene import PARAMETERS, RESERVED_KEYS, coerce, describe_range, read_scene_file, resolve_scene_path
 
 ENGINES = ("python", "fmu")
 DISTRIBUTIONS = ("uniform", "loguniform", "normal", "integers", "choice")
@@ -61,8 +61,10 @@ class StudyError(ValueError):
 
 
 def default_fmu_path() -> str:
-    """``models/WetCloth.fmu``, where ``wetcloth build-fmu`` writes it."""
-    return str(preset_dir() / "WetCloth.fmu")
+    """``models/WetCloth.fmu``, where ``wetcloth build-fmu`` writes it (``wetcloth.fmu.default_fmu_path``)."""
+    from wetcloth.fmu import default_fmu_path as fmu_path
+
+    return str(fmu_path())
 
 
 @dataclass(frozen=True)

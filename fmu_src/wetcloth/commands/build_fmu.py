@@ -1,4 +1,4 @@
-"""``wetcloth build-fmu``: write the FMI 2.0 co-simulation unit ``WetCloth.fmu``."""
+"""``wetcloth build-fmu``: write the co-simulation unit, ``WetCloth.fmu`` (FMI 2.0) or ``WetCloth3.fmu`` (FMI 3.0)."""
 
 from __future__ import annotations
 
@@ -6,16 +6,21 @@ from pathlib import Path
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("build-fmu", help="build the FMI 2.0 co-simulation unit WetCloth.fmu",
-                       description="Build WetCloth.fmu (FMI 2.0 co-simulation, pythonfmu) from wetcloth's sources.")
-    p.add_argument("--out", type=Path, default=Path("models/WetCloth.fmu"),
-                   help="where to write the FMU (default models/WetCloth.fmu)")
+    from wetcloth.fmu import default_fmu_path
+
+    p = sub.add_parser("build-fmu", help="build the co-simulation unit WetCloth.fmu (FMI 2.0) or WetCloth3.fmu (FMI 3.0)",
+                       description="Build WetCloth.fmu (FMI 2.0 co-simulation, pythonfmu) or, with --fmi 3, "
+                                   "WetCloth3.fmu (FMI 3.0 co-simulation with the mesh as array outputs, pythonfmu3) "
+                                   "from wetcloth's sources.")
+    p.add_argument("--out", type=Path, help=f"where to write the FMU (default {default_fmu_path(2)}, "
+                                            f"with --fmi 3 {default_fmu_path(3)})")
+    p.add_argument("--fmi", type=int, choices=(2, 3), default=2, help="FMI version (default 2)")
     p.set_defaults(func=main)
 
 
 def main(args) -> int:
     from wetcloth.fmu.builder import build_fmu
 
-    path = build_fmu(args.out)
+    path = build_fmu(args.out, fmi_version=args.fmi)
     print(f"wrote {path} ({path.stat().st_size / 1e6:.1f} MB)")
     return 0

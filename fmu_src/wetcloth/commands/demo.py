@@ -6,13 +6,15 @@ from pathlib import Path
 
 
 def add_parser(sub) -> None:
+    from wetcloth.fmu import default_fmu_path
+
     p = sub.add_parser("demo", help="co-simulate the default towel through WetCloth.fmu",
-                       description="Build models/WetCloth.fmu if missing or older than the sources, co-simulate "
+                       description="Build the unit (models/WetCloth.fmu) if missing or older than the sources, co-simulate "
                                    "the default towel through fmpy for the preset's duration, and write PLY "
                                    "frames, outputs.csv and plot.png.")
     p.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder (default out/demo)")
-    p.add_argument("--fmu", type=Path, default=Path("models/WetCloth.fmu"),
-                   help="the unit to use, built there if needed (default models/WetCloth.fmu)")
+    p.add_argument("--fmu", type=Path, default=default_fmu_path(),
+                   help=f"the unit to use, built there if needed (default {default_fmu_path()})")
     p.add_argument("--duration", type=float, help="simulated time, s (default: the towel preset's [run] duration)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=main)

@@ -8,8 +8,6 @@ input) returns False: fmi2Discard, and the unit stays at its last good state.
 
 from __future__ import annotations
 
-import functools
-
 from pythonfmu import DefaultExperiment, Fmi2Slave
 from pythonfmu.enums import Fmi2Status
 
@@ -43,11 +41,7 @@ class Fmi2Unit(WetClothUnit, Fmi2Slave):
         self._start_unit()
         guard.register(self)
         for name, spec in self.specs.items():
-            if spec.causality == "output":
-                self.register_variable(make_variable(spec, functools.partial(self.output, name), None))
-            else:
-                self.register_variable(make_variable(spec, functools.partial(self.value, name),
-                                                     functools.partial(self.set_value, name)))
+            self.register_variable(make_variable(spec, *self.accessors(name)))
 
     def to_xml(self, model_options=dict()):
         return extend_model_description(super().to_xml(model_options), list(self.specs.values()))

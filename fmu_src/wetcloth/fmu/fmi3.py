@@ -9,8 +9,6 @@ status (fmi3Fatal); ``guard`` keeps the instance usable afterwards.  pythonfmu3 
 
 from __future__ import annotations
 
-import functools
-
 from pythonfmu3 import DefaultExperiment, Fmi3Slave, Fmi3Status, Fmi3StepResult
 
 import wetcloth
@@ -45,11 +43,7 @@ class Fmi3Unit(WetClothUnit, Fmi3Slave):
         references = {spec.name: i for i, spec in enumerate(specs)}
         structural = description3.dimension_sources(specs)
         for name, spec in self.specs.items():
-            if spec.causality == "output":
-                getter, setter = functools.partial(self.output, name), None
-            else:
-                getter, setter = functools.partial(self.value, name), functools.partial(self.set_value, name)
-            self.register_variable(description3.make_variable(spec, getter, setter, references, structural))
+            self.register_variable(description3.make_variable(spec, *self.accessors(name), references, structural))
 
     def to_xml(self, model_options=dict()):
         return description3.extend_model_description(super().to_xml(model_options), list(self.specs.values()))

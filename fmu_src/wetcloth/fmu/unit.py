@@ -15,6 +15,7 @@ until a valid value arrives.  Every message names the variable and its allowed r
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 
@@ -55,7 +56,7 @@ class WetClothUnit:
     def _start_unit(self) -> None:
         """Set up the unit's own state (called from the slave's ``__init__``)."""
         self.specs = {spec.name: spec for spec in variable_specs(fmi_version=self.FMI_VERSION)}
-        self.values = {name: spec.start for name, spec in self.specs.items() if spec.causality != "output"}
+        self.values = {name: spec.start for name, spec in self.specs.items() if spec.causality in ("parameter", "input")}
         self.refused: dict[str, str] = {}  # variable -> why its value was refused (pending)
         self.initialized = False
         self.terminated = False
@@ -73,6 +74,12 @@ class WetClothUnit:
         getattr(LOG, level)("%s: %s", self.instance_name, message)
 
     # ------------------------------------------------------------------ variables
+    def accessors(self, name: str) -> tuple:
+        """The getter and setter (None for outputs) through which pythonfmu reads and writes variable ``name``."""
+        if name in self.values:
+            return functools.partial(self.value, name), functools.partial(self.set_value, name)
+        return functools.partial(self.output, name), None
+
     def value(self, name: str):
         return self.values[name]
 
@@ -106,8 +113,10 @@ class WetClothUnit:
         return self._preview
 
     def output(self, name: str):
-        """An output: a scalar of ``Simulation.outputs()``, or an array output as a flat list."""
+        """An output: a scalar of ``Simulation.outputs()``, an array output as a flat list, or the time (s)."""
         sim = self._simulation()
+        if self.specs[name].causality == "independent":
+            return self.start_time + sim.time
         if self.specs[name].dimensions:
             return getattr(sim, name).ravel().tolist()
         return sim.outputs()[name]
@@ -254,7 +263,7 @@ class WetClothUnit:
         """A state read from bytes, refused at once (StateError, logged) unless this unit wrote it
         and it fits a simulation of its scene."""
         try:
-            names = {s.name for s in variable_specs(fmi_version=cls.FMI_VERSION) if s.causality != "output"}
+            names = {s.name for s in variable_specs(fmi_version=cls.FMI_VERSION) if s.causality in ("parameter", "input")}
             return validated(checkpoint.from_bytes(data), names)
         except StateError as exc:
             LOG.error("serialized FMU state refused: %s", exc)

@@ -41,7 +41,7 @@ class VariableSpec:
 
     name: str
     type: str
-    causality: str  # "input", "parameter" or "output"
+    causality: str  # "input", "parameter", "output" or (FMI 3.0's time) "independent"
     variability: str  # "continuous" or "fixed"
     description: str
     unit: str = "-"  # the Scene's unit text; "-" is dimensionless (no FMI unit)
@@ -107,6 +107,8 @@ def variable_specs(fields: Iterable[dataclasses.Field] | None = None, fmi_versio
     if fmi_version == 3:
         specs += [VariableSpec(n, "Real", "output", "continuous", doc, unit=u, scene=False, dimensions=dims)
                   for n, (u, doc, dims) in MESH_OUTPUTS.items()]
+        specs.append(VariableSpec("time", "Real", "independent", "continuous", "simulation time (the FMI 3.0 "
+                                  "independent variable)", unit="s", scene=False))
     return specs
 
 
