@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
+import os
 import subprocess
 import sys
 import zipfile
@@ -12,7 +14,7 @@ from xml.etree import ElementTree
 import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
-from test_fmu_support import built_fmu
+from test_fmu_support import built_fmu, run_child
 
 import wetcloth
 from wetcloth.fmu.description import extend_model_description, make_variable
@@ -104,7 +106,7 @@ def test_outputs_and_mesh_parameters(md):
     for name, start in (("mesh_output_dir", ""), ("mesh_format", "ply")):
         v = variables[name]
         assert (v.type, v.causality, v.variability, v.start) == ("String", "parameter", "fixed", start)
-    assert len(md.modelVariables) == len(PARAMETERS) + 2 + len(OUTPUT_NAMES)
+    assert len(md.modelVariables) == len(PARAMETERS) + 2 + len(OUTPUT_NAMES)  # FMI 2.0: no arrays, no time
 
 
 def test_units_carry_si_base_exponents(md):
@@ -141,6 +143,7 @@ def test_archive_holds_documentation_icon_and_bundled_wetcloth(fmu):
     assert "numba" in doc and "interpreter" in doc  # what the unit needs to run
     assert icon.startswith(b"\x89PNG\r\n\x1a\n")
     for path in ("resources/wetcloth/simulation.py", "resources/wetcloth/presets/towel.toml",
+                 "resources/wetcloth_fmu_bootstrap.py", "resources/wetcloth_fmu_manifest.json",
                  "resources/wetcloth/exporter/__init__.py", "resources/wetcloth/fmu/vocabulary.py",
                  "binaries/linux64/WetCloth.so"):
         assert path in names, path
@@ -199,22 +202,55 @@ sys.meta_path[:] = [f for f in sys.meta_path if "editable" not in getattr(f, "__
 sys.path[:] = [p for p in sys.path if "fmu_src" not in p]
 import fmpy
 res = fmpy.simulate_fmu(sys.argv[1], stop_time=0.2, output_interval=0.1, start_values={"nx": 5, "ny": 5})
-wetcloth = sys.modules["wetcloth"]
-print(json.dumps({"file": wetcloth.__file__, "depth": float(res["depth"][-1])}))
+from numba.core.registry import CPUDispatcher
+kernels = [f for name, m in list(sys.modules.items()) if name.startswith("wetcloth.")
+           for f in vars(m).values() if isinstance(f, CPUDispatcher)]
+print(json.dumps({"file": sys.modules["wetcloth"].__file__, "depth": float(res["depth"][-1]),
+                  "compiled": sum(sum(k.stats.cache_misses.values()) for k in kernels),
+                  "loaded": sum(sum(k.stats.cache_hits.values()) for k in kernels)}))
 """
 
 
-def test_unit_runs_its_bundled_wetcloth_where_none_is_installed(fmu, tmp_path):
-    """A Python with numpy and numba but no wetcloth runs the copy inside the FMU."""
-    done = subprocess.run([sys.executable, "-c", CHILD_BUNDLED, str(fmu)], capture_output=True, text=True,
-                          timeout=300, cwd=tmp_path)
-    assert done.returncode == 0, done.stderr[-3000:]
-    result = __import__("json").loads(done.stdout.strip().splitlines()[-1])
-    assert "/resources/wetcloth/" in result["file"]
+def test_a_fresh_extract_runs_the_bundled_wetcloth_and_loads_the_kernels_compiled_before(fmu, tmp_path):
+    """A Python with numpy and numba but no wetcloth runs the copy inside the FMU, from a per-user folder
+    named by the bundle's digest.  The first start compiles the numba kernels there; a second start,
+    from a new extraction of the same FMU (a new temporary folder), loads them all and compiles none
+    (the start time itself is measured in bench/fmu_start.py, not here)."""
+    env = dict(os.environ, WETCLOTH_FMU_CACHE=str(tmp_path / "cache"))
+    runs = [run_child(CHILD_BUNDLED, fmu, cwd=tmp_path, env=env)[0][-1] for _ in range(2)]
+    manifest = json.loads(zipfile.ZipFile(fmu).read("resources/wetcloth_fmu_manifest.json"))
+    home = tmp_path / "cache" / manifest["bundle_digest"][:24] / "wetcloth"
+    assert runs[0]["file"] == runs[1]["file"] == str(home / "__init__.py")
+    # (a kernel called only from other kernels is compiled with them but never loaded on its own)
+    assert runs[0]["compiled"] > 0 and runs[1]["compiled"] == 0 and runs[1]["loaded"] > 0
+    assert list(home.rglob("*.nbi")), "numba's cache index lies beside the copied sources"
     sim = wetcloth.Simulation(wetcloth.Scene(nx=5, ny=5))
     sim.advance(0.1)
     sim.advance(0.1)
-    assert math.isclose(result["depth"], sim.outputs()["depth"], rel_tol=1e-12, abs_tol=1e-15)
+    for run in runs:
+        assert math.isclose(run["depth"], sim.outputs()["depth"], rel_tol=1e-12, abs_tol=1e-15)
+
+
+CHILD_NO_NUMBA = r"""
+import importlib.abc, sys
+class NoNumba(importlib.abc.MetaPathFinder):  # a host Python without numba
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] == "numba":
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+sys.meta_path.insert(0, NoNumba())
+import fmpy
+try:
+    fmpy.simulate_fmu(sys.argv[1], stop_time=0.1)  # FMI logging off
+except Exception as exc:
+    print("RAISED", exc)
+"""
+
+
+def test_a_host_without_a_dependency_is_told_which_one_with_logging_off(fmu, tmp_path):
+    _, done = run_child(CHILD_NO_NUMBA, fmu, cwd=tmp_path,
+                        env=dict(os.environ, WETCLOTH_FMU_CACHE=str(tmp_path / "cache")))
+    assert "RAISED" in done.stdout
+    assert "has no module 'numba'" in done.stderr and "-m pip install 'numba>=" in done.stderr, done.stderr
 
 
 CHILD_MISMATCH = r"""
@@ -247,7 +283,7 @@ import wetcloth  # the host's wetcloth, imported before the unit loads
 directory = Path(fmpy.extract(sys.argv[1]))
 manifest = directory / "resources" / "wetcloth_fmu_manifest.json"
 data = json.loads(manifest.read_text())
-data["files"]["simulation.py"] = "0" * 64  # as if the FMU had been built from other sources
+data["package_files"]["simulation.py"] = "0" * 64  # as if the FMU had been built from other sources
 manifest.write_text(json.dumps(data))
 res = fmpy.simulate_fmu(str(directory), stop_time=0.1, output_interval=0.1, start_values={"nx": 5, "ny": 5})
 print(json.dumps({"file": sys.modules["wetcloth"].__file__, "rows": len(res)}))

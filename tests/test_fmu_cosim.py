@@ -12,6 +12,7 @@ from fmpy.simulation import Input
 from test_fmu_support import SMALL, Unit, assert_same_outputs, built_fmu
 
 import wetcloth
+from wetcloth.fmu.cosim import CoSimulationError, simulate
 from wetcloth.simulation import OUTPUT_NAMES
 
 
@@ -190,3 +191,36 @@ def test_a_run_may_start_at_any_time(fmu):
     for name in OUTPUT_NAMES:
         # Communication points 10 + k/10 carry rounding of order 1e-15 s: round-off in the outputs.
         np.testing.assert_allclose(late[name], early[name], rtol=1e-9, atol=1e-12)
+
+
+# ------------------------------------------------------------------ the fmpy wrapper and the batch engine
+#: A cloth that explodes at 0.06 s (fixed explicit steps far above the stable step of 1e6 N/m).
+BLOW_UP = SMALL | {"integrator": "explicit_euler", "tolerance": 0.0, "max_step": 0.01, "stretch_stiffness": 1e6,
+                   "damping": 0.0}
+
+
+def test_the_wrapper_raises_a_blow_up_as_blow_up_error(fmu):
+    """fmpy alone ends such a run quietly at 0.05 s; the wrapper raises with the unit's reason."""
+    with pytest.raises(wetcloth.BlowUpError, match="exploded .*stopped at t = 0.05 s of 1 s") as info:
+        simulate(fmu, 1.0, 20.0, BLOW_UP)
+    assert info.value.last_good_time == pytest.approx(0.05)
+
+
+def test_the_wrapper_raises_a_refused_start_value_with_its_name_and_range(fmu):
+    with pytest.raises(CoSimulationError, match=r"fmi2ExitInitializationMode .*'integrator': 'rk4' is not allowed"):
+        simulate(fmu, 0.1, 10.0, SMALL | {"integrator": "rk4"})
+    with pytest.raises(ValueError, match="no variable 'colour'"):
+        simulate(fmu, 0.1, 10.0, {"colour": 1.0})
+
+
+def test_the_fmu_batch_engine_records_a_blow_up_as_a_failure_like_the_python_engine(fmu):
+    """Issue 13, defect 1: the FMU engine recorded this run as 'ok', with metrics of a series that ended
+    at the blow-up; both engines now record the same BlowUpError."""
+    from wetcloth.batch.engines import ERROR, execute
+
+    task = dict(key="k", params=BLOW_UP, duration=1.0, sample_rate=20.0, sink_depth=0.05,
+                metrics=["final_depth"], fmu=fmu)
+    rows = {engine: execute(task | {"engine": engine}) for engine in ("python", "fmu")}
+    for engine, row in rows.items():
+        assert row["status"] == ERROR and row["error"].startswith("BlowUpError: "), (engine, row)
+        assert "final_depth" not in row, engine

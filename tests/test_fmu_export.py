@@ -1,10 +1,12 @@
-"""Mesh frames from the FMU (one per communication point, through wetcloth.exporter) and the demo."""
+"""Mesh frames from the FMU (one per communication point, through wetcloth.exporter), the folder that belongs
+to the unit, and the demo."""
 
 from __future__ import annotations
 
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import fmpy
 import numpy as np
@@ -12,6 +14,7 @@ import pytest
 from test_fmu_support import SMALL, Unit, built_fmu
 
 import wetcloth
+from wetcloth.exporter import ExportError, check_directory, open_sequence, sequence_files
 from wetcloth.fmu.cosim import read_frame
 from wetcloth.simulation import OUTPUT_NAMES
 
@@ -52,7 +55,7 @@ def test_obj_frames_and_a_rerun_replaces_the_old_frames(fmu, tmp_path):
     assert sorted(f.name for f in frames.glob("cloth_*")) == ["cloth_0001.obj", "cloth_0002.obj"]
 
 
-def test_a_rolled_back_run_rewrites_its_frames(tmp_path):
+def test_a_rolled_back_run_rewrites_its_frames_and_drops_the_abandoned_ones(tmp_path):
     frames = tmp_path / "frames"
     unit = Unit(SMALL | {"mesh_output_dir": str(frames)})
     try:
@@ -68,13 +71,104 @@ def test_a_rolled_back_run_rewrites_its_frames(tmp_path):
         unit.step(0.1)
     finally:
         unit.close()
-    assert sorted(f.name for f in frames.glob("cloth_*.ply"))[:3] == [f"cloth_{k:04d}.ply" for k in (1, 2, 3)]
+    assert sorted(f.name for f in frames.glob("cloth_*")) == [f"cloth_{k:04d}.ply" for k in (1, 2, 3)]
     sim = wetcloth.Simulation(wetcloth.Scene(**SMALL))
     sim.advance(0.1)
     sim.advance(0.1)
     positions, _, _ = read_frame(frames / "cloth_0003.ply")
     np.testing.assert_allclose(positions, sim.positions, atol=FLOAT32_M)  # the rolled-back path's frame
     assert json.loads((frames / "frames.json").read_text())["frame_count"] == 3
+
+
+def test_a_state_restored_in_a_new_instance_continues_the_frames(tmp_path):
+    """fmi2DeSerializeFMUstate in a fresh instance: its frames go on after the state's frame count."""
+    frames = tmp_path / "frames"
+    first = Unit(SMALL | {"mesh_output_dir": str(frames)}, name="first")
+    try:
+        first.step(0.1)  # frames 1 (t = 0) and 2
+        saved = first.fmu.serializeFMUstate(first.fmu.getFMUstate())
+        first.step(0.1)
+        first.step(0.1)  # frames 3 and 4: a branch the master abandons
+    finally:
+        first.close()
+    second = Unit(SMALL | {"mesh_output_dir": str(frames)}, name="second")
+    try:
+        state = second.fmu.deSerializeFMUstate(saved)
+        second.fmu.setFMUstate(state)
+        second.fmu.freeFMUstate(state)
+        second.time = 0.1
+        assert second.step(0.1) == 0
+    finally:
+        second.close()
+    assert sorted(f.name for f in frames.glob("cloth_*")) == [f"cloth_{k:04d}.ply" for k in (1, 2, 3)]
+    assert json.loads((frames / "frames.json").read_text())["frame_count"] == 3
+
+
+def snapshot_of(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
+
+
+def test_a_folder_with_files_the_unit_did_not_write_is_refused_and_left_alone(fmu, tmp_path):
+    """The folder of the issue: another tool's USD, PLY and OBJ frames.  Initialization fails (fmpy
+    raises) naming mesh_output_dir; not one file is touched."""
+    folder = tmp_path / "assets"
+    folder.mkdir()
+    for name in ("hero_asset.usd", "render_0001.ply", "scan_00042.obj", "notes.txt"):
+        (folder / name).write_bytes(f"{name}: not mine".encode())
+    before = snapshot_of(folder)
+    with pytest.raises(Exception, match="fmi2ExitInitializationMode"):
+        fmpy.simulate_fmu(fmu, stop_time=0.1, output_interval=0.1, start_values=SMALL | {"mesh_output_dir": str(folder)})
+    assert snapshot_of(folder) == before
+    # An unrelated file alone is refused as well: the folder must belong to the unit.
+    (other := tmp_path / "other").mkdir()
+    (other / "notes.txt").write_text("keep me")
+    with pytest.raises(Exception, match="fmi2ExitInitializationMode"):
+        fmpy.simulate_fmu(fmu, stop_time=0.1, output_interval=0.1, start_values=SMALL | {"mesh_output_dir": str(other)})
+    assert snapshot_of(other) == {"notes.txt": b"keep me"}
+
+
+def test_a_sequence_the_unit_wrote_is_replaced_and_the_replacement_logged(tmp_path):
+    frames = tmp_path / "frames"
+    values = SMALL | {"mesh_output_dir": str(frames)}
+    for steps in (3, 1):
+        unit = Unit(values)
+        try:
+            for _ in range(steps):
+                assert unit.step(0.1) == 0
+        finally:
+            unit.close()
+    warnings = [text for status, text in unit.messages if status == 1]
+    assert len(warnings) == 1 and "replaced the earlier frame sequence" in warnings[0]
+    for name in ("cloth_0001.ply", "cloth_0004.ply", "frames.json", "load_in_blender.py"):
+        assert name in warnings[0]
+    assert sorted(p.name for p in frames.iterdir()) == ["cloth_0001.ply", "cloth_0002.ply", "frames.json",
+                                                         "load_in_blender.py"]
+
+
+# ------------------------------------------------------------------ the exporter's rule behind it
+def test_overwrite_replaces_only_the_sequence_its_frames_json_describes(tmp_path):
+    """``overwrite`` (the CLI's too) replaces an earlier sequence of this exporter, never other files:
+    a folder that also holds another tool's frame-like files is refused untouched; unrelated files
+    stay unless ``exclusive``."""
+    scene = wetcloth.Scene(nx=3, ny=3)
+    sim = wetcloth.Simulation(scene)
+    with open_sequence(tmp_path, fps=10, scene=scene) as sequence:
+        sequence.write_frame(sim.positions, sim.wetness)
+    assert [p.name for p in sequence_files(tmp_path)] == ["cloth_0001.ply", "frames.json", "load_in_blender.py"]
+    (tmp_path / "notes.txt").write_text("keep me")
+    assert [p.name for p in check_directory(tmp_path, overwrite=True)] == [
+        "cloth_0001.ply", "frames.json", "load_in_blender.py"]
+    with pytest.raises(ExportError, match=r"not part of the frame sequence .*notes\.txt"):
+        check_directory(tmp_path, overwrite=True, exclusive=True)
+    (tmp_path / "render_0001.ply").write_bytes(b"another tool's")
+    before = snapshot_of(tmp_path)
+    with pytest.raises(ExportError, match=r"render_0001\.ply"):
+        open_sequence(tmp_path, fps=10, scene=scene, overwrite=True)
+    assert snapshot_of(tmp_path) == before
+    (tmp_path / "render_0001.ply").unlink()
+    (tmp_path / "frames.json").write_text('{"generator": "someone else"}')
+    with pytest.raises(ExportError, match="did not write"):
+        open_sequence(tmp_path, fps=10, scene=scene, overwrite=True)
 
 
 def test_demo_command_writes_frames_csv_and_plot(fmu, tmp_path):
