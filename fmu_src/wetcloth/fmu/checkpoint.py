@@ -1,4 +1,4 @@
-"""The FMU state of one unit (``fmi2GetFMUstate``) and its byte format (``fmi2SerializeFMUstate``).
+"""An FMU state of one unit (``fmi2GetFMUstate``), its bytes (``fmi2SerializeFMUstate``), the checks before restoring it.
 
 A ``Checkpoint`` holds what the unit needs to continue exactly: its variable values, the values
 it refused, whether it was initialized, the start time, the frame counter and the leaves of
@@ -36,7 +36,9 @@ from typing import Any
 import numpy as np
 
 from wetcloth.errors import ParameterError
+from wetcloth.fmu.vocabulary import check_variable
 from wetcloth.scene import INPUT, PARAMETERS, Scene, from_dict
+from wetcloth.simulation import Simulation
 
 MAGIC = b"wetcloth-fmu-state\n"
 VERSION = 1
@@ -131,6 +133,37 @@ def check_leaves(leaves: dict[str, Any], live: dict[str, Any]) -> None:
 def _describe(value) -> str:
     kind = _kind(value)
     return f"an array of {kind[1]} {kind[2]}" if kind[0] == "array" else f"a {kind[0]}"
+
+
+# ------------------------------------------------------------------------------------ fit to a unit
+def fitting_simulation(state, names: set[str], sim: Simulation | None = None) -> Simulation | None:
+    """The simulation ``state`` restores into (``sim`` if it runs the same scene, else a new one; None
+    before initialization), after checking that ``state`` is a Checkpoint of a unit with the variables
+    ``names``, holding valid values consistent with its scene, and leaves that fit that simulation's
+    snapshot; StateError otherwise."""
+    if not isinstance(state, Checkpoint):
+        raise StateError(f"not a WetCloth FMU state: a {type(state).__name__}")
+    if set(state.values) != names:
+        raise StateError(f"the state is of a unit with other variables (missing {sorted(names - set(state.values))}, "
+                         f"unknown {sorted(set(state.values) - names)})")
+    try:
+        for name, value in state.values.items():
+            check_variable(name, value)
+    except ParameterError as exc:
+        raise StateError(f"the state holds an invalid value: {exc}") from None
+    if not set(state.refused) <= names:
+        raise StateError("the state refuses variables this unit does not have")
+    if not state.initialized:
+        return None
+    if state.scene is None:
+        raise StateError("the state of an initialized unit has no scene")
+    scene = state.scene.to_dict()
+    if any(scene[name] != value for name, value in state.values.items() if name in scene):
+        raise StateError("the state's variable values differ from its simulation's scene")
+    if sim is None or scene_id(sim.scene) != scene_id(state.scene):
+        sim = Simulation(state.scene)
+    check_leaves(state.leaves, leaves_of(sim.snapshot()))
+    return sim
 
 
 # ------------------------------------------------------------------------------------ bytes

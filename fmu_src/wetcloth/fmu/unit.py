@@ -172,8 +172,9 @@ class WetClothUnit:
             self.start_time, self._clock_set = current_time - sim.time, True
         now = self.start_time + sim.time
         if abs(current_time - now) > TIME_TOLERANCE * max(1.0, abs(now)):
-            return self._refuse_step(DISCARD, f"doStep from t = {current_time!r} s, but the unit is at t = {now!r} s; "
-                                              "restore an FMU state to go back in time")
+            self._report("error", f"doStep from t = {current_time!r} s, but the unit is at t = {now!r} s; "
+                                  "restore an FMU state to go back in time")
+            return DISCARD
         if self.values["mesh_output_dir"] and not self._frames_ready(step_size):
             return DISCARD
         before = sim.snapshot()
@@ -184,14 +185,11 @@ class WetClothUnit:
                 self.frames += 1
         except Exception as exc:  # a blow-up, a full disk...: never let it reach the master as a crash
             sim.restore(before)
-            return self._refuse_step(DISCARD, f"step from t = {current_time:g} s by {step_size:g} s failed: "
-                                              f"{type(exc).__name__}: {exc} The unit stays at t = {current_time:g} s "
-                                              "with its last good outputs.")
+            self._report("error", f"step from t = {current_time:g} s by {step_size:g} s failed: "
+                                  f"{type(exc).__name__}: {exc} The unit stays at t = {current_time:g} s "
+                                  "with its last good outputs.")
+            return DISCARD
         return OK
-
-    def _refuse_step(self, outcome: str, message: str) -> str:
-        self._report("error", message)
-        return outcome
 
     def _refuse_call(self, message: str) -> None:
         self._report("error", message)
@@ -263,8 +261,10 @@ class WetClothUnit:
         """A state read from bytes, refused at once (StateError, logged) unless this unit wrote it
         and it fits a simulation of its scene."""
         try:
-            names = {s.name for s in variable_specs(fmi_version=cls.FMI_VERSION) if s.causality in ("parameter", "input")}
-            return validated(checkpoint.from_bytes(data), names)
+            state = checkpoint.from_bytes(data)
+            checkpoint.fitting_simulation(state, {s.name for s in variable_specs(fmi_version=cls.FMI_VERSION)
+                                                  if s.causality in ("parameter", "input")})
+            return state
         except StateError as exc:
             LOG.error("serialized FMU state refused: %s", exc)
             raise
@@ -280,7 +280,7 @@ class WetClothUnit:
     def restore(self, state) -> None:
         """Return to a checkpoint (of this or another instance of this unit); StateError, nothing
         changed, if it is not one or does not fit."""
-        sim = self._checked_simulation(state)
+        sim = checkpoint.fitting_simulation(state, set(self.values), self.sim)
         if sim is not None:
             sim.restore(checkpoint.snapshot_from(state.leaves, state.scene, sim.snapshot()))
         self._rewind_frames(state)
@@ -304,45 +304,3 @@ class WetClothUnit:
             self._report("warning", f"mesh_output_dir: {exc}")
         self.sequence.close(complete=False)
         self.sequence = None
-
-    def _checked_simulation(self, state) -> Simulation | None:
-        """The simulation ``state`` restores into (this unit's if it runs the same scene, else a new
-        one), after checking ``state`` against it and against this unit's variables."""
-        if not isinstance(state, Checkpoint):
-            raise StateError(f"not a WetCloth FMU state: a {type(state).__name__}")
-        unit_check(state, set(self.values))
-        if not state.initialized:
-            return None
-        same = self.sim is not None and checkpoint.scene_id(self.sim.scene) == checkpoint.scene_id(state.scene)
-        sim = self.sim if same else Simulation(state.scene)
-        checkpoint.check_leaves(state.leaves, checkpoint.leaves_of(sim.snapshot()))
-        return sim
-
-
-def unit_check(state: Checkpoint, names: set[str]) -> None:
-    """StateError unless the checkpoint's variables are ``names`` with valid values, consistent with its scene."""
-    if set(state.values) != names:
-        raise StateError(f"the state is of a unit with other variables (missing {sorted(names - set(state.values))}, "
-                         f"unknown {sorted(set(state.values) - names)})")
-    try:
-        for name, value in state.values.items():
-            check_variable(name, value)
-    except ParameterError as exc:
-        raise StateError(f"the state holds an invalid value: {exc}") from None
-    if not set(state.refused) <= names:
-        raise StateError("the state refuses variables this unit does not have")
-    if state.initialized:
-        if state.scene is None:
-            raise StateError("the state of an initialized unit has no scene")
-        scene = state.scene.to_dict()
-        if any(scene[name] != value for name, value in state.values.items() if name in scene):
-            raise StateError("the state's variable values differ from its simulation's scene")
-
-
-def validated(state: Checkpoint, names: set[str]) -> Checkpoint:
-    """``state`` after every check ``restore`` makes, against a simulation of its own scene (for
-    states read from bytes, refused at once rather than when set)."""
-    unit_check(state, names)
-    if state.initialized:
-        checkpoint.check_leaves(state.leaves, checkpoint.leaves_of(Simulation(state.scene).snapshot()))
-    return state
