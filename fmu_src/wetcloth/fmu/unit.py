@@ -66,6 +66,7 @@ class WetClothUnit:
         self._preview: Simulation | None = None  # the initial state of the current values, before that
         self.frames = 0  # mesh frames written
         self.sequence = None  # the exporter's frame sequence, opened at the first step
+        self._read: dict = {}  # outputs read since the state last changed (a master reads each one by one)
 
     # ------------------------------------------------------------------ logging
     def _report(self, level: str, message: str) -> None:
@@ -99,6 +100,7 @@ class WetClothUnit:
             return
         self.values[name] = value
         self.refused.pop(name, None)
+        self._read.clear()
 
     def _simulation(self) -> Simulation:
         """The running simulation, or before initialization the initial state of the current values
@@ -114,12 +116,12 @@ class WetClothUnit:
 
     def output(self, name: str):
         """An output: a scalar of ``Simulation.outputs()``, an array output as a flat list, or the time (s)."""
-        sim = self._simulation()
-        if self.specs[name].causality == "independent":
-            return self.start_time + sim.time
-        if self.specs[name].dimensions:
-            return getattr(sim, name).ravel().tolist()
-        return sim.outputs()[name]
+        if not self._read:
+            sim = self._simulation()
+            self._read.update(sim.outputs(), time=self.start_time + sim.time)
+        if name not in self._read:  # an array output
+            self._read[name] = getattr(self._simulation(), name).ravel().tolist()
+        return self._read[name]
 
     def _scene_values(self) -> dict:
         return {name: value for name, value in self.values.items() if self.specs[name].scene}
@@ -127,6 +129,7 @@ class WetClothUnit:
     # ------------------------------------------------------------------ life cycle
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):  # pythonfmu's call
         self.start_time, self._clock_set = float(start_time), True
+        self._read.clear()
 
     def start(self) -> None:
         """Build the simulation from the parameters and start values; UnitError (logged, naming the
@@ -151,6 +154,7 @@ class WetClothUnit:
             raise UnitError(message)
         self.sim = Simulation(scene)
         self._preview = None
+        self._read.clear()
         self.initialized = True
 
     def step(self, current_time: float, step_size: float) -> str:
@@ -170,6 +174,7 @@ class WetClothUnit:
         sim = self.sim
         if not self._clock_set:  # pythonfmu3 does not pass fmi3EnterInitializationMode's start time on
             self.start_time, self._clock_set = current_time - sim.time, True
+            self._read.clear()
         now = self.start_time + sim.time
         if abs(current_time - now) > TIME_TOLERANCE * max(1.0, abs(now)):
             self._report("error", f"doStep from t = {current_time!r} s, but the unit is at t = {now!r} s; "
@@ -178,6 +183,7 @@ class WetClothUnit:
         if self.values["mesh_output_dir"] and not self._frames_ready(step_size):
             return DISCARD
         before = sim.snapshot()
+        self._read.clear()
         try:
             sim.advance(max(0.0, current_time + step_size - self.start_time - sim.time))
             if self.sequence is not None:
@@ -288,6 +294,7 @@ class WetClothUnit:
         self.initialized, self.start_time, self.frames = state.initialized, state.start_time, state.frames
         self._clock_set = self._clock_set or state.initialized
         self.sim, self._preview = sim, None
+        self._read.clear()
 
     def _rewind_frames(self, state: Checkpoint) -> None:
         """After a rollback the open sequence continues after the state's frames (later ones were the
