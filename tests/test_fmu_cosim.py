@@ -4,14 +4,17 @@ any communication step is accurate, MODEL.md section 8 holds through the unit, i
 from __future__ import annotations
 
 import math
+import re
+from pathlib import Path
 
 import fmpy
 import numpy as np
 import pytest
 from fmpy.simulation import Input
-from test_fmu_support import SMALL, Unit, assert_same_outputs, built_fmu
+from test_fmu_support import SMALL, Unit, assert_same_outputs, built_fmu, run_child
 
 import wetcloth
+from wetcloth.fmu import default_fmu_path
 from wetcloth.fmu.cosim import CoSimulationError, simulate
 from wetcloth.simulation import OUTPUT_NAMES
 
@@ -224,3 +227,39 @@ def test_the_fmu_batch_engine_records_a_blow_up_as_a_failure_like_the_python_eng
     for engine, row in rows.items():
         assert row["status"] == ERROR and row["error"].startswith("BlowUpError: "), (engine, row)
         assert "final_depth" not in row, engine
+
+
+# ------------------------------------------------------------------ docs/fmi.md
+DOCS = Path(__file__).resolve().parents[1] / "docs" / "fmi.md"
+
+
+def python_blocks() -> list[str]:
+    return re.findall(r"```python\n(.*?)```", DOCS.read_text(), re.S)
+
+
+def test_docs_fmi_md_names_every_variable_of_both_units():
+    from wetcloth.fmu.vocabulary import variable_specs
+
+    text = DOCS.read_text()
+    for spec in variable_specs(fmi_version=3):
+        assert f"`{spec.name}`" in text, spec.name
+
+
+def test_docs_fmi_md_examples_run_as_written(tmp_path, monkeypatch, capsys):
+    """The fmpy example (a time-varying input), the FMI 3.0 mesh example and, in a child process as in
+    test_fmu_libcosim.py, the libcosimpy example, each with the units at their default paths."""
+    import shutil
+
+    (tmp_path / "models").mkdir()
+    for version in (2, 3):
+        shutil.copy(built_fmu(version), tmp_path / default_fmu_path(version))
+    monkeypatch.chdir(tmp_path)
+    fmpy_example, mesh_example, libcosim_example = python_blocks()
+    exec(compile(fmpy_example, str(DOCS), "exec"), {})
+    last = capsys.readouterr().out.splitlines()[-1]  # fmpy warns first of the inputs the signal leaves alone
+    assert re.fullmatch(r"t = 6 s: centroid at z = 0\.0\d\d m, \d+ g of water absorbed", last), last
+    namespace = {}
+    exec(compile(mesh_example, str(DOCS), "exec"), namespace)
+    assert namespace["result"]["positions"].shape == (31, 13, 9, 3)
+    assert namespace["result"]["wetness"].shape == (31, 13, 9)
+    run_child(libcosim_example + "\nprint(depth)\n", cwd=tmp_path)
