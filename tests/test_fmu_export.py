@@ -11,7 +11,7 @@ from pathlib import Path
 import fmpy
 import numpy as np
 import pytest
-from test_fmu_support import SMALL, Unit, built_fmu
+from test_fmu_support import SMALL, Unit, built_fmu, extracted_fmu, run_child
 
 import wetcloth
 from wetcloth.exporter import ExportError, check_directory, open_sequence, sequence_files
@@ -102,6 +102,31 @@ def test_a_state_restored_in_a_new_instance_continues_the_frames(tmp_path):
         second.close()
     assert sorted(f.name for f in frames.glob("cloth_*")) == [f"cloth_{k:04d}.ply" for k in (1, 2, 3)]
     assert json.loads((frames / "frames.json").read_text())["frame_count"] == 3
+
+
+CHILD_TERMINATE = r"""
+import json, sys
+from pathlib import Path
+sys.path.insert(0, sys.argv[2])
+import fmpy, test_fmu_support as support
+support._BUILT["dir2"], support._BUILT["md2"] = Path(sys.argv[3]), fmpy.read_model_description(sys.argv[3])
+frames = Path(sys.argv[1])
+unit = support.Unit(support.SMALL | {"mesh_output_dir": str(frames)})
+unit.step(0.1)
+unit._call(unit.fmu.terminate)
+manifest = (frames / "frames.json").read_text()
+statuses = [unit.step(0.1), unit._call(unit.fmu.terminate)]
+print(json.dumps({"statuses": statuses, "same_manifest": (frames / "frames.json").read_text() == manifest,
+                  "files": sorted(p.name for p in frames.iterdir())}))
+"""
+
+
+def test_after_terminate_no_frame_is_written_and_frames_json_stays(tmp_path):
+    records, _ = run_child(CHILD_TERMINATE, tmp_path / "frames", Path(__file__).parent, extracted_fmu()[0])
+    record = records[-1]
+    assert record["statuses"] == [4, 0]  # doStep refused (pythonfmu: Fatal), the second terminate does nothing
+    assert record["same_manifest"]
+    assert record["files"] == ["cloth_0001.ply", "cloth_0002.ply", "frames.json", "load_in_blender.py"]
 
 
 def snapshot_of(folder: Path) -> dict[str, bytes]:

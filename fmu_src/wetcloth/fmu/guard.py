@@ -66,7 +66,7 @@ def register(instance) -> None:
     """Note a new slave instance (called from its ``__init__``) and arrange for its binary's exit (see 3.)."""
     _LIVE.add(instance)
     if instance.resources:
-        release_at_exit(Path(instance.resources).parent / "binaries", type(instance).__name__)
+        release_at_exit(Path(instance.resources).parent / "binaries", instance.modelName)
 
 
 def release_at_exit(binaries: Path, model_identifier: str) -> None:
