@@ -14,6 +14,8 @@ be shared), runs interleaved, the best of ``--repeat``; instantiation is outside
 from __future__ import annotations
 
 import argparse
+import atexit
+import shutil
 import sys
 import tempfile
 import time
@@ -98,10 +100,11 @@ def main(argv=None) -> int:
     if args.grid:
         scene = scene.replace(nx=args.grid[0], ny=args.grid[1])
     work = Path(tempfile.mkdtemp(prefix="wetcloth_bench_fmu3_"))
+    atexit.register(shutil.rmtree, work, ignore_errors=True)
     units = {}
     for fmi in (2, 3):
         path = str(build_fmu(work / f"WetCloth{fmi}.fmu", fmi_version=fmi))
-        units[fmi] = (extract(path), read_model_description(path))
+        units[fmi] = (extract(path, unzipdir=str(work / f"unit{fmi}")), read_model_description(path))
     direct(scene, 0.5, args.rate, True)  # warm numba's kernels
     cases = {
         "direct run": lambda: direct(scene, args.duration, args.rate, False),

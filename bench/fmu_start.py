@@ -59,7 +59,12 @@ def main(argv=None) -> int:
     parser.add_argument("--repeat", type=int, default=3, help="starts per figure; the best counts (default 3)")
     parser.add_argument("--fmi", type=int, choices=(2, 3), default=2, help="FMI version of the unit (default 2)")
     args = parser.parse_args(argv)
-    work = Path(tempfile.mkdtemp(prefix="wetcloth_bench_start_"))
+    with tempfile.TemporaryDirectory(prefix="wetcloth_bench_start_") as folder:
+        return report(Path(folder), args)
+
+
+def report(work: Path, args) -> int:
+    """Build the unit in ``work``, time its starts, print the table."""
     fmu = build_fmu(work / ("WetCloth.fmu" if args.fmi == 2 else "WetCloth3.fmu"), fmi_version=args.fmi)
     blocked = work / "a_file"
     blocked.write_text("not a folder")
