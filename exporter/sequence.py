@@ -2,15 +2,18 @@
 
 ``open_sequence`` checks the directory at once (before any simulating) and writes ``frames.json``
 (marked incomplete) and ``load_in_blender.py`` there; every ``on_frame`` / ``write_frame`` then
-writes one file and keeps nothing of it in memory; ``close()`` rewrites ``frames.json`` with the
-frame count and, for USD, finishes the ``.usd`` file.
+writes one file and keeps nothing of it in memory; ``close()`` rewrites ``frames.json`` marked
+complete and, for USD, finishes the ``.usd`` file.
+
+Every file appears whole or not at all (``wetcloth.files.whole_file``), and ``frames.json`` stays
+true to the frame files on disk: it is rewritten after each frame file, and a frame that it cannot
+count (a full disk) is removed again.
 """
 
 from __future__ import annotations
 
 import json
 import math
-import os
 import pprint
 import re
 from pathlib import Path
@@ -22,6 +25,8 @@ from wetcloth.exporter import obj_meshio, obj_trimesh, ply_meshio, ply_trimesh
 from wetcloth.exporter.blender_options import MAX_FRAME, OPTIONS, blender_options
 from wetcloth.exporter.errors import ExportError
 from wetcloth.exporter.frame import COLORMAP, FACES, Frame, make_frame, quads_from_triangles, sheet_uv, wetness_lut
+from wetcloth.files import whole_file
+from wetcloth.files import write_text as write_whole_text
 
 #: Mesh formats; ``usd`` is one animated file, the others one file per frame.
 FORMATS = ("ply", "obj", "usd")
@@ -150,11 +155,9 @@ def _remove(paths: list[Path]) -> None:
 
 
 def _write_text(path: Path, text: str) -> None:
-    """Write a small text file via a temporary name, so a reader never sees half of it."""
-    tmp = path.with_name(path.name + ".tmp")
+    """Write a small text file whole or not at all; ExportError with the operating system's reason."""
     try:
-        tmp.write_text(text)
-        os.replace(tmp, path)
+        write_whole_text(path, text)
     except OSError as exc:
         raise ExportError(f"cannot write {path.name} in export directory {path.parent}: {exc.strerror or exc}") from None
 
@@ -280,17 +283,25 @@ class FrameSequence:
         if self._usd is not None:
             self._usd.write(number, frame)
         else:
-            partial = path.with_name(path.name + PARTIAL)
             try:
-                FRAME_WRITERS[(self.format, self.writer)](partial, frame)
-                os.replace(partial, path)
+                with whole_file(path, PARTIAL) as partial:
+                    FRAME_WRITERS[(self.format, self.writer)](partial, frame)
             except OSError as exc:
                 raise ExportError(f"cannot write frame {path}: {exc.strerror or exc}") from None
+        before = (self.frame_count, self._first_time, self._last_time)
         self.frame_count += 1
         time = float(number - self.first_frame) / self.fps if time is None else float(time)
         if self._first_time is None:
             self._first_time = time
         self._last_time = time
+        if self._usd is None:
+            try:
+                self.write_manifest(complete=False)
+            except ExportError as exc:  # frames.json cannot count this frame: take the frame back
+                path.unlink(missing_ok=True)
+                self.frame_count, self._first_time, self._last_time = before
+                raise ExportError(f"cannot write frame {path}: {MANIFEST} could not count it ({exc}); "
+                                  f"removed it, {MANIFEST} counts the {self.frame_count} frames before") from None
         return path
 
     # ------------------------------------------------------------------ side files
@@ -358,13 +369,25 @@ class FrameSequence:
 
     # ------------------------------------------------------------------ closing
     def close(self, complete: bool = True) -> None:
-        """Finish: the USD file (if any) and ``frames.json`` with the frame count.  Idempotent."""
+        """Finish: the USD file (if any) and ``frames.json`` with the frame count.  Idempotent.
+
+        ``complete=False`` (a run stopped early) keeps the manifest marked incomplete."""
         if self.closed:
             return
         self.closed = True
+        failure = None  # the USD file's, reported before the manifest's
         if self._usd is not None:
-            self._usd.close()
-        self.write_manifest(complete=complete)
+            try:
+                self._usd.close()
+            except Exception as exc:
+                failure = exc
+        try:
+            self.write_manifest(complete=complete)
+        except ExportError:
+            if failure is None:
+                raise
+        if failure is not None:
+            raise failure
 
     def __enter__(self) -> "FrameSequence":
         return self

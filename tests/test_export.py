@@ -337,8 +337,9 @@ def test_sequence_refuses_out_of_order_frames_changed_topology_and_writes_after_
 
 
 def test_a_frame_interrupted_while_written_leaves_no_half_frame(tmp_path, monkeypatch):
-    """A run stopped inside a write (Ctrl-C) leaves only whole frames: Blender's importer fails on
-    half a PLY.  The leftover ``.part`` file marks the directory as used; ``overwrite`` removes it."""
+    """A run stopped inside a write (Ctrl-C) leaves only whole frames (Blender's importer fails on
+    half a PLY) and no debris; a ``.part`` file that a killed process left marks the directory as
+    used, and ``overwrite`` removes it."""
     import wetcloth.exporter.sequence as sequence_module
 
     scene = wetcloth.load_scene(nx=3, ny=3)
@@ -353,10 +354,12 @@ def test_a_frame_interrupted_while_written_leaves_no_half_frame(tmp_path, monkey
     monkeypatch.setitem(sequence_module.FRAME_WRITERS, ("ply", "trimesh"), interrupted)
     with pytest.raises(KeyboardInterrupt):
         sequence.write_frame(sim.positions, sim.wetness)
-    assert sorted(p.name for p in (tmp_path / "f").iterdir()) == [
-        "cloth_0001.ply", "cloth_0002.ply.part", "frames.json", "load_in_blender.py"]
+    assert sorted(p.name for p in (tmp_path / "f").iterdir()) == ["cloth_0001.ply", "frames.json", "load_in_blender.py"]
     assert len(trimesh.load(tmp_path / "f" / "cloth_0001.ply", process=False).vertices) == 9
-    (tmp_path / "f" / "cloth_0001.ply").unlink()
+    assert json.loads((tmp_path / "f" / "frames.json").read_text())["frame_count"] == 1
+    (tmp_path / "f" / "cloth_0001.ply").rename(tmp_path / "f" / "cloth_0002.ply.part")  # as a killed run leaves it
+    (tmp_path / "f" / "frames.json").unlink()
+    (tmp_path / "f" / "load_in_blender.py").unlink()
     with pytest.raises(ExportError, match=r"already holds .*cloth_0002\.ply\.part"):
         open_sequence(tmp_path / "f", fps=30)
     open_sequence(tmp_path / "f", fps=30, overwrite=True).close()

@@ -2,6 +2,7 @@
 
 import dataclasses
 import math
+import re
 
 import pytest
 
@@ -37,15 +38,18 @@ def test_thesis_cases_are_what_model_md_says():
     assert all(load_scene(n).initial_tilt != 0 for n in PRESETS), "one edge must land first"
 
 
-def test_overrides_and_text_values():
+def test_overrides_apply_and_numbers_take_their_parameters_type():
     sc = load_scene("thesis_fast", nx=33, initial_tilt=10.0)
     assert (sc.nx, sc.initial_tilt) == (33, 10.0)
-    assert from_dict({"nx": "17", "width": "0.25", "drag_model": "stokes"}).nx == 17
     assert isinstance(load_scene(width=1).width, float)
+    assert load_scene(nx=9.0).nx == 9 and isinstance(Scene(nx=9.0).nx, int)  # a whole float is a whole number
 
 
-def test_unknown_parameter_is_refused_with_the_known_names():
-    with pytest.raises(wetcloth.ParameterError, match="'colour'.*unknown parameter.*known: nx, ny"):
+def test_unknown_parameter_suggests_the_nearest_names():
+    with pytest.raises(wetcloth.ParameterError, match=r"'absorbtion_rate': unknown parameter; did you mean "
+                                                      r"'absorption_rate'\?$"):
+        load_scene(absorbtion_rate=0.1)
+    with pytest.raises(wetcloth.ParameterError, match=r"'colour': unknown parameter \(there are 34; 'wetcloth params'"):
         load_scene(colour="blue")
 
 
@@ -90,5 +94,82 @@ def test_missing_scene_file_lists_the_presets(tmp_path):
 def test_broken_toml_names_the_file(tmp_path):
     path = tmp_path / "bad.toml"
     path.write_text("nx = = 3")
-    with pytest.raises(ValueError, match="bad.toml"):
+    with pytest.raises(ValueError, match="scene file '.*bad.toml': not valid TOML"):
         load_scene(path)
+
+
+def test_binary_or_unreadable_scene_file_is_named(tmp_path):
+    binary = tmp_path / "towel.png"
+    binary.write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00")
+    with pytest.raises(ValueError, match=r"scene file '.*towel.png': not a text \(TOML\) file: byte 0x89"):
+        load_scene(binary)
+    with pytest.raises(ValueError, match=f"scene file '{tmp_path}': cannot be read: Is a directory"):
+        load_scene(tmp_path)
+
+
+def test_a_scene_file_with_several_mistakes_reports_all_of_them_at_once(tmp_path):
+    """Unknown names (with the nearest ones), wrong types, out of range, [run] mistakes: one error,
+    one line each, naming the file."""
+    path = tmp_path / "three.toml"
+    path.write_text('widht = 0.5\nnx = 3.5\nthickness = -1.0\n[run]\nduraton = 1.0\nfps = "fast"\n')
+    with pytest.raises(wetcloth.ConfigError) as info:
+        load_scene(path)
+    assert str(info.value).splitlines() == [
+        f"scene file {path}: 5 mistakes",
+        "  parameter 'widht': unknown parameter; did you mean 'width'?",
+        "  parameter 'nx': expected a whole number, got 3.5; allowed: 2 <= nx <= 1024",
+        "  parameter 'thickness': -1.0 is out of range; allowed: 0 < thickness <= 1 m",
+        "  [run] 'duraton': unknown run setting; did you mean 'duration'?",
+        "  [run] 'fps': expected a number, got 'fast'; allowed: 0 < fps <= 10000 1/s",
+    ]
+
+
+@pytest.mark.parametrize("text, message", [
+    ("run = 5\n", "setting 'run': must be the table [run]"),
+    ('[run]\nduration = "abc"\n', "[run] 'duration': expected a number, got 'abc'; allowed: 0 < duration <= 1e+06 s"),
+    ("duration = 3.0\n", "parameter 'duration': is a run setting: put it in the [run] table"),
+    ("description = 3\n", "parameter 'description': must be text"),
+])
+def test_run_table_and_other_keys_are_checked(tmp_path, text, message):
+    path = tmp_path / "s.toml"
+    path.write_text(text)
+    with pytest.raises(wetcloth.ConfigError) as info:
+        load_scene(path)
+    assert str(info.value) == f"scene file {path}: {message}" or str(info.value).startswith(f"scene file {path}: {message}")
+
+
+def test_one_type_rule_for_every_source(tmp_path):
+    """Scene files, Python overrides, --set and studies: text is no number (one message everywhere),
+    and nx = 3.0 is the whole number 3."""
+    from wetcloth.batch import Study
+    from wetcloth.scene import parse_text
+
+    refused = "expected a number, got '0.5' (text: write the number without quotes)"
+    path = tmp_path / "text.toml"
+    path.write_text('width = "0.5"\n')
+    for attempt in (lambda: load_scene(path), lambda: load_scene(width="0.5"),
+                    lambda: Study.from_dict({"duration": 1.0, "base": {"width": "0.5"}}),
+                    lambda: Study.from_dict({"duration": 1.0, "axes": {"width": ["0.5"]}})):
+        with pytest.raises(ValueError, match=re.escape(refused)):
+            attempt()
+    with pytest.raises(ValueError, match="expected a number, got '\"0.5\"'"):  # --set width='"0.5"'
+        parse_text("width", '"0.5"')
+    path.write_text("nx = 3.0\n")
+    study = Study.from_dict({"duration": 1.0, "base": {"nx": 3.0}, "axes": {"ny": [3.0]}})
+    assert load_scene(path).nx == load_scene(nx=3.0).nx == parse_text("nx", "3.0") == study.runs()[0].params["nx"] == 3
+    assert study.runs()[0].params["ny"] == 3 and parse_text("width", "0.5") == 0.5
+
+
+def test_run_settings_one_rule(tmp_path):
+    """Given > the scene file's [run] > the defaults, for the command line and for studies alike."""
+    from wetcloth import run_settings
+    from wetcloth.batch import Study
+
+    assert run_settings.resolve(None) == run_settings.RunSettings(10.0, 30.0)
+    assert run_settings.resolve({"duration": 90.0}) == run_settings.RunSettings(90.0, 30.0)
+    assert run_settings.resolve({"duration": 90.0, "fps": 10}, duration=5.0) == run_settings.RunSettings(5.0, 10.0)
+    bare = tmp_path / "bare.toml"
+    bare.write_text("nx = 5\n")
+    assert Study.from_dict({"scene": str(bare)}).duration == run_settings.DEFAULTS["duration"]
+    assert Study.from_dict({"scene": "thesis_fast"}).duration == 90.0  # thesis_fast.toml [run]
+    assert Study.from_dict({"scene": "thesis_fast", "duration": 5}).duration == 5.0

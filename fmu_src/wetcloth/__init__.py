@@ -6,7 +6,7 @@
     sim.outputs()
 """
 
-from wetcloth.errors import BlowUpError, ParameterError
+from wetcloth.errors import BlowUpError, ConfigError, ParameterError
 from wetcloth.scene import Scene, load_scene
 from wetcloth.simulation import OUTPUT_NAMES, Simulation
 
@@ -15,7 +15,7 @@ def study(study, **options):
     """Run a batch study on Dask and return its results as a pandas DataFrame, one row per run.
 
     A thin wrapper so that ``import wetcloth`` does not import dask: see
-    :func:`wetcloth.batch.study` for the arguments (a study file, dict or ``Study``;
+    :func:`wetcloth.batch.execution.study` for the arguments (a study file, dict or ``Study``;
     ``scheduler``, ``workers``, ``out``, ``engine`` ...) and ``docs/batch.md``.
     """
     from wetcloth.batch import study as _study
@@ -23,5 +23,5 @@ def study(study, **options):
     return _study(study, **options)
 
 
-__all__ = ["BlowUpError", "OUTPUT_NAMES", "ParameterError", "Scene", "Simulation", "load_scene", "study"]
+__all__ = ["BlowUpError", "ConfigError", "OUTPUT_NAMES", "ParameterError", "Scene", "Simulation", "load_scene", "study"]
 __version__ = "0.1.0"

@@ -6,11 +6,14 @@ import argparse
 import importlib
 import sys
 
-from wetcloth.errors import BlowUpError, ParameterError
+import wetcloth
+from wetcloth.commands.common import FAILED, INTERRUPTED
+from wetcloth.errors import BlowUpError
 
 #: Modules that each add one subcommand: ``add_parser(subparsers)`` sets ``func(args) -> int``.
 COMMAND_MODULES = (
     "wetcloth.commands.run",
+    "wetcloth.commands.params",
     "wetcloth.commands.build_fmu",
     "wetcloth.commands.demo",
     "wetcloth.commands.batch",
@@ -22,6 +25,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="wetcloth",
         description="Cloth that meets water: simulate, co-simulate (FMI 2.0) and export to Blender.",
     )
+    parser.add_argument("--version", action="version", version=f"wetcloth {wetcloth.__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMAND_MODULES:
         importlib.import_module(name).add_parser(sub)
@@ -33,9 +37,12 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
-    except (ParameterError, BlowUpError, OSError, ValueError) as exc:  # a clear line, not a traceback
+    except (BlowUpError, OSError, ValueError) as exc:  # a clear line, not a traceback
         print(f"wetcloth {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+        return FAILED
+    except KeyboardInterrupt:  # Ctrl-C where a command has nothing of its own to save
+        print(f"wetcloth {args.command}: interrupted", file=sys.stderr)
+        return INTERRUPTED
 
 
 if __name__ == "__main__":

@@ -1,12 +1,136 @@
-"""Errors wetcloth raises for users: each names what went wrong and how to fix it."""
+"""Errors wetcloth raises for users: each names what went wrong and how to fix it.
+
+A config source (a scene file, ``--set``, Python overrides, a study) is checked whole: every
+mistake found is collected (:class:`Mistakes`) and reported at once, one line each.
+"""
+
+from __future__ import annotations
+
+import difflib
+from typing import Iterable
 
 
-class ParameterError(ValueError):
-    """A scene parameter is unknown, of the wrong type or out of its allowed range."""
+class ConfigError(ValueError):
+    """One or more mistakes of one config source, all reported at once.
 
-    def __init__(self, name: str, message: str):
-        super().__init__(f"parameter '{name}': {message}")
-        self.name = name
+    ``problems`` holds ``(label, name, message)`` for each mistake (label: 'parameter', 'study',
+    '[run]' ...); ``source`` says where they were found (e.g. 'scene file models/towel.toml').
+    """
+
+    label = "setting"
+
+    def __init__(self, name: str, message: str, label: str | None = None):
+        super().__init__(name, message)
+        self.problems = [(label or self.label, name, message)]
+        self.source: str | None = None
+
+    @property
+    def name(self) -> str:
+        """The (first) parameter or key in question."""
+        return self.problems[0][1]
+
+    def __str__(self) -> str:
+        lines = [f"{label} '{name}': {message}" for label, name, message in self.problems]
+        head = f"{self.source}: " if self.source else ""
+        if len(lines) == 1:
+            return head + lines[0]
+        return f"{head}{len(lines)} mistakes\n" + "\n".join("  " + line for line in lines)
+
+    @classmethod
+    def merged(cls, errors: Iterable["ConfigError"], source: str | None = None) -> "ConfigError":
+        """One error of class ``cls`` carrying every problem of ``errors``, found in ``source``."""
+        merged = cls.__new__(cls)
+        ValueError.__init__(merged)
+        merged.problems = [p for e in errors for p in e.problems]
+        merged.source = source
+        return merged
+
+    def __reduce__(self):  # picklable (Dask sends exceptions between processes)
+        return _rebuild, (type(self), self.problems, self.source)
+
+
+def _rebuild(cls, problems, source):
+    error = cls.__new__(cls)
+    ValueError.__init__(error)
+    error.problems, error.source = problems, source
+    return error
+
+
+class ParameterError(ConfigError):
+    """A scene parameter is unknown, of the wrong type or out of its allowed range (or several are)."""
+
+    label = "parameter"
+
+
+class StudyError(ConfigError):
+    """A batch study file or study dict is malformed; the message names the key and what is allowed."""
+
+    label = "study"
+
+    @property
+    def key(self) -> str:
+        return self.name
+
+
+class Mistakes:
+    """Collects the mistakes of one config source, so that all of them are reported at once.
+
+        mistakes = Mistakes("scene file x.toml")
+        with mistakes.collect():
+            check(...)               # a ConfigError here is kept, and checking goes on
+        mistakes.raise_if_any()
+    """
+
+    def __init__(self, source: str | None = None):
+        self.source = source
+        self.errors: list[ConfigError] = []
+
+    def add(self, error: ConfigError) -> None:
+        self.errors.append(error)
+
+    def collect(self):
+        return _Collector(self)
+
+    def __bool__(self) -> bool:
+        return bool(self.errors)
+
+    def raise_if_any(self) -> None:
+        """Raise every mistake found: one error as it is (with the source), several as one error of
+        their common class (ConfigError if they differ)."""
+        if not self.errors:
+            return
+        if len(self.errors) == 1 and self.source is None:
+            raise self.errors[0]
+        kinds = {type(e) for e in self.errors}
+        cls = kinds.pop() if len(kinds) == 1 else ConfigError
+        raise cls.merged(self.errors, self.source)
+
+
+class _Collector:
+    def __init__(self, mistakes: Mistakes):
+        self.mistakes = mistakes
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        if exc_type is not None and issubclass(exc_type, ConfigError):
+            self.mistakes.add(exc)
+            return True
+        return False
+
+
+def did_you_mean(name: str, known: Iterable[str], what: str = "parameter") -> str:
+    """'unknown parameter; did you mean 'width'?': the nearest known names (difflib ratio >= 0.6 and
+    within 0.1 of the best), else how to list them."""
+    known = list(known)
+    scores = {k: difflib.SequenceMatcher(None, name, k).ratio() for k in known}
+    best = max(scores.values(), default=0.0)
+    close = sorted((k for k, r in scores.items() if r >= max(0.6, best - 0.1)), key=scores.get, reverse=True)[:3]
+    if close:
+        return f"unknown {what}; did you mean " + " or ".join(repr(c) for c in close) + "?"
+    return f"unknown {what} (there are {len(known)}; 'wetcloth params' lists them)" if len(known) > 12 \
+        else f"unknown {what}; known: {', '.join(known)}"
 
 
 class BlowUpError(RuntimeError):

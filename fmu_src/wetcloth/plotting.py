@@ -11,11 +11,14 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
+from wetcloth.files import whole_file  # noqa: E402
+
 WETNESS_CMAP = "YlGnBu"
 
 
 def plot_run(result, path: str | Path, title: str | None = None) -> Path:
-    """Write a figure: depth, wet mass and water mass against time, and the run's snapshots."""
+    """Write a figure (whole or not at all): depth, wet mass and water mass against time, and the
+    run's snapshots."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     shots = result.snapshots
@@ -50,8 +53,11 @@ def plot_run(result, path: str | Path, title: str | None = None) -> Path:
     if shots:
         fig.colorbar(sm, ax=fig.axes[-1], shrink=0.6, label="wetness (saturation)")
     fig.suptitle(title or "wetcloth run")
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    try:
+        with whole_file(path) as tmp:
+            fig.savefig(tmp, dpi=90, format=path.suffix.lstrip(".") or "png")
+    finally:
+        plt.close(fig)
     return path
 
 

@@ -2,21 +2,21 @@
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import math
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
-from tqdm.auto import tqdm
 
-from wetcloth.errors import BlowUpError
+from wetcloth.files import whole_file
+from wetcloth.progress import Watcher, time_bar
+from wetcloth.run_settings import check_frames
 from wetcloth.scene import Scene
 from wetcloth.simulation import OUTPUT_NAMES, Simulation
-
-#: Runs whose simulated duration exceeds this many seconds get a progress bar by default.
-PROGRESS_AFTER = 2.0
 
 
 @dataclass
@@ -42,10 +42,10 @@ class RunResult:
         return np.array([row[name] for row in self.rows])
 
     def write_csv(self, path: str | Path) -> Path:
-        """Write the outputs as CSV (header: time and the output names, SI units)."""
+        """Write the outputs as CSV (header: time and the output names, SI units), whole or not at all."""
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        with open(path, "w", newline="") as fh:
+        with whole_file(path) as tmp, open(tmp, "w", newline="") as fh:
             writer = csv.DictWriter(fh, fieldnames=["time", *OUTPUT_NAMES])
             writer.writeheader()
             writer.writerows(self.rows)
@@ -55,12 +55,22 @@ class RunResult:
 FrameCallback = Callable[[int, Simulation], None]
 
 
+class CostWarning(UserWarning):
+    """A run is estimated to take long; the message names cheaper settings."""
+
+
+def warn_cost(message: str) -> None:
+    """The default ``warn`` of :func:`run`: a :class:`CostWarning`."""
+    warnings.warn(message, CostWarning, stacklevel=2)
+
+
 def frame_times(duration: float, fps: float) -> np.ndarray:
     """Frame times 0, 1/fps, ... up to ``duration`` (s); the last frame lands on ``duration``."""
     if not (fps > 0 and math.isfinite(fps)):
         raise ValueError(f"fps must be a finite number > 0, got {fps!r}")
     if not (duration >= 0 and math.isfinite(duration)):
         raise ValueError(f"duration must be a finite number >= 0 s, got {duration!r}")
+    check_frames(duration, fps)
     count = int(math.floor(duration * fps + 1e-9))
     times = np.arange(count + 1) / fps
     if duration - times[-1] > 1e-9:
@@ -74,32 +84,49 @@ def run(
     fps: float = 30.0,
     on_frame: FrameCallback | None = None,
     snapshots: int = 4,
-    progress: bool | None = None,
+    progress: bool = True,
+    warn: Callable[[str], None] | None = warn_cost,
 ) -> RunResult:
     """Simulate ``scene`` for ``duration`` s; record outputs at ``fps`` and ``snapshots`` cloth shapes.
 
     ``on_frame(index, sim)`` is called at every frame (index 0 at t = 0), for exporters.
-    A blow-up raises ``BlowUpError`` with the frames recorded so far as its ``partial_result``.
-    A progress bar (tqdm, simulated seconds) shows when ``progress`` is True, or by default for
-    runs longer than ``PROGRESS_AFTER`` seconds.
+    Whatever stops the run early (a ``BlowUpError``, Ctrl-C's ``KeyboardInterrupt``, a failed
+    ``on_frame``) is raised with the frames recorded so far as its ``partial_result``.
+    ``progress``: a bar of simulated seconds, moving by wall-clock time, once the run has taken
+    a second.  ``warn(message)`` is called once, a few seconds in, if the run is estimated to take
+    more than ``wetcloth.advice.WARN_AFTER`` (None: no estimate).
     """
-    sim = Simulation(scene)
     times = frame_times(duration, fps)
+    sim = Simulation(scene)
     snapshot_frames = set(np.linspace(0, len(times) - 1, snapshots).round().astype(int).tolist()) if snapshots else set()
     result = RunResult(scene=scene, fps=fps, triangles=sim.triangles)
-    show = duration > PROGRESS_AFTER if progress is None else progress
-    with tqdm(total=float(duration), unit="sim s", disable=not show, desc="simulating",
-              bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} sim s [{elapsed}<{remaining}]") as bar:
-        for index, t in enumerate(times):
+    with time_bar(duration, enabled=progress) as bar:
+        watching = progress or warn is not None
+        with Watcher(sim, bar, _cost_check(sim, duration, warn)) if watching else contextlib.nullcontext():
             try:
-                sim.advance(t - sim.time)
-            except BlowUpError as exc:
+                for index, t in enumerate(times):
+                    sim.advance(t - sim.time)
+                    result.rows.append({"time": float(t), **sim.outputs()})
+                    if index in snapshot_frames:
+                        result.snapshots.append(Snapshot(float(t), sim.positions, sim.wetness))
+                    if on_frame is not None:
+                        on_frame(index, sim)
+            except BaseException as exc:
                 exc.partial_result = result  # every frame up to the last good one
                 raise
-            result.rows.append({"time": float(t), **sim.outputs()})
-            if index in snapshot_frames:
-                result.snapshots.append(Snapshot(float(t), sim.positions, sim.wetness))
-            if on_frame is not None:
-                on_frame(index, sim)
-            bar.update(float(t) - bar.n)
+        bar.update(float(duration) - bar.n)
     return result
+
+
+def _cost_check(sim: Simulation, duration: float, warn: Callable[[str], None] | None):
+    """The Watcher callback that warns when the rest of the run is estimated to take long (None: none)."""
+    if warn is None:
+        return None
+    from wetcloth.advice import cost_warning
+
+    def check(sample) -> None:
+        message = cost_warning(sim.scene, duration, sample, sim.integrator.stable_step(0.0))
+        if message is not None:
+            warn(message)
+
+    return check

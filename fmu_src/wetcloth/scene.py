@@ -8,6 +8,7 @@ variables and as batch-study axes.  Units are SI.
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -15,7 +16,9 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from wetcloth.errors import ParameterError
+from wetcloth.errors import ConfigError, Mistakes, ParameterError, did_you_mean
+from wetcloth.run_settings import SETTINGS as RUN_SETTINGS
+from wetcloth.run_settings import check_run_table
 
 #: FMU causality of a scene parameter: changeable at every communication point,
 #: or fixed at instantiation.
@@ -124,36 +127,72 @@ def describe_range(f: dataclasses.Field) -> str:
     return f"{md['lo']:g} {lo_sign} {f.name} <= {md['hi']:g}{unit}"
 
 
-def check_value(name: str, value) -> None:
-    """Check one parameter's value against its type and range alone (no cross-parameter checks)."""
+def _field(name: str) -> dataclasses.Field:
     if name not in PARAMETERS:
-        raise ParameterError(name, f"unknown parameter; known: {', '.join(PARAMETERS)}")
-    _check_field(PARAMETERS[name], value)
+        raise ParameterError(name, did_you_mean(name, PARAMETERS))
+    return PARAMETERS[name]
 
 
-def _check_field(f: dataclasses.Field, value) -> None:
-    md = f.metadata
+def normalise(name: str, value):
+    """``value`` in the type of parameter ``name``, by the one rule of every source (scene files,
+    ``--set``, Python, studies, the FMU): a string parameter takes a string; a number parameter a
+    number (never text or a boolean), a whole-number one also a float that is whole (3.0 -> 3)."""
+    f = _field(name)
     if f.type == "str":
         if not isinstance(value, str):
-            raise ParameterError(f.name, f"expected a string, got {value!r}; allowed: {describe_range(f)}")
-        if value not in md["choices"]:
-            raise ParameterError(f.name, f"{value!r} is not allowed; allowed: {describe_range(f)}")
-        return
+            raise ParameterError(name, f"expected a string, got {value!r}; allowed: {describe_range(f)}")
+        return value
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ParameterError(f.name, f"expected a number, got {value!r}; allowed: {describe_range(f)}")
-    if f.type == "int" and not isinstance(value, int):
-        raise ParameterError(f.name, f"expected a whole number, got {value!r}; allowed: {describe_range(f)}")
+        hint = " (text: write the number without quotes)" if isinstance(value, str) else ""
+        raise ParameterError(name, f"expected a number, got {value!r}{hint}; allowed: {describe_range(f)}")
+    if f.type == "int":
+        if isinstance(value, float) and not value.is_integer():
+            raise ParameterError(name, f"expected a whole number, got {value!r}; allowed: {describe_range(f)}")
+        return int(value)
+    return float(value)
+
+
+def check_value(name: str, value):
+    """One parameter's value, normalised and checked against its range alone (no cross-parameter checks)."""
+    value = normalise(name, value)
+    f = PARAMETERS[name]
+    md = f.metadata
+    if f.type == "str":
+        if value not in md["choices"]:
+            close = difflib.get_close_matches(value, md["choices"], n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise ParameterError(name, f"{value!r} is not allowed{hint}; allowed: {describe_range(f)}")
+        return value
     if not math.isfinite(value):
-        raise ParameterError(f.name, f"{value!r} is not a finite number; allowed: {describe_range(f)}")
+        raise ParameterError(name, f"{value!r} is not a finite number; allowed: {describe_range(f)}")
     below = value <= md["lo"] if md["lo_open"] else value < md["lo"]
     if below or value > md["hi"]:
-        raise ParameterError(f.name, f"{value!r} is out of range; allowed: {describe_range(f)}")
+        raise ParameterError(name, f"{value!r} is out of range; allowed: {describe_range(f)}")
+    return value
+
+
+def parse_text(name: str, text: str):
+    """A parameter's value from text (``--set name=text``): the number it spells for a number
+    parameter (then the same rule as a TOML value: ``nx=3.0`` is 3), the text for a string one."""
+    f = _field(name)
+    if f.type == "str":
+        return text
+    for kind in (int, float):
+        try:
+            return normalise(name, kind(text.strip()))
+        except ValueError:
+            continue
+    raise ParameterError(name, f"expected a number, got {text!r}; allowed: {describe_range(f)}")
 
 
 def validate(scene: Scene) -> None:
-    """Check every parameter against its range and the scene as a whole; raise ParameterError."""
-    for f in dataclasses.fields(scene):
-        _check_field(f, getattr(scene, f.name))
+    """Check every parameter against its range and the scene as a whole, normalising the values
+    (3.0 -> 3 for nx, 1 -> 1.0 for width); raise ParameterError with every mistake found."""
+    mistakes = Mistakes()
+    for name in PARAMETERS:
+        with mistakes.collect():
+            object.__setattr__(scene, name, check_value(name, getattr(scene, name)))
+    mistakes.raise_if_any()
     half_drop = 0.5 * scene.length * abs(math.sin(math.radians(scene.initial_tilt)))
     lowest = scene.initial_height - half_drop - 0.5 * scene.thickness
     if lowest <= scene.floor_level:
@@ -164,30 +203,17 @@ def validate(scene: Scene) -> None:
         )
 
 
-def coerce(name: str, value):
-    """Convert a value given as text or TOML into the type of parameter ``name``."""
-    if name not in PARAMETERS:
-        raise ParameterError(name, f"unknown parameter; known: {', '.join(PARAMETERS)}")
-    f = PARAMETERS[name]
-    if isinstance(value, str) and f.type != "str":
-        text = value.strip()
-        try:
-            value = int(text) if f.type == "int" else float(text)
-        except ValueError:
-            raise ParameterError(name, f"expected a number, got {value!r}; allowed: {describe_range(f)}") from None
-    elif f.type == "float" and isinstance(value, int) and not isinstance(value, bool):
-        value = float(value)
-    elif f.type == "int" and isinstance(value, float) and value.is_integer():
-        value = int(value)
-    return value
-
-
 def from_dict(values: dict[str, Any]) -> Scene:
-    """A validated Scene from a mapping of parameter names to values (text or typed)."""
-    return Scene(**{name: coerce(name, value) for name, value in values.items()})
+    """A validated Scene from a mapping of parameter names to values (every mistake at once)."""
+    mistakes = Mistakes()
+    for name in values:
+        with mistakes.collect():
+            _field(name)
+    mistakes.raise_if_any()
+    return Scene(**values)
 
 
-#: Keys of a scene file that are not scene parameters.
+#: Keys of a scene file that are not scene parameters: a description and the ``[run]`` table.
 RESERVED_KEYS = ("description", "run")
 
 
@@ -210,14 +236,40 @@ def resolve_scene_path(path: str | Path | None) -> Path:
     raise FileNotFoundError(f"scene file {str(path)!r} not found (presets: {names})")
 
 
-def read_scene_file(path: str | Path | None) -> dict[str, Any]:
-    """The raw contents of a scene file, with its ``[run]`` table (duration, fps) if any."""
-    resolved = resolve_scene_path(path)
-    with open(resolved, "rb") as fh:
-        try:
+def read_toml(path: Path, what: str = "scene file") -> dict[str, Any]:
+    """A TOML file's contents; a ConfigError naming the file (``what``: 'scene file', 'study file')
+    if it cannot be read or parsed."""
+    try:
+        with open(path, "rb") as fh:
             return tomllib.load(fh)
-        except tomllib.TOMLDecodeError as exc:
-            raise ValueError(f"scene file {resolved}: {exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        message = f"not valid TOML: {exc}"
+    except UnicodeDecodeError as exc:
+        message = f"not a text (TOML) file: byte {exc.object[exc.start]:#04x} at position {exc.start} is not UTF-8"
+    except OSError as exc:
+        message = f"cannot be read: {exc.strerror or exc}"
+    raise ConfigError(str(path), message, label=what)
+
+
+def read_scene_file(path: str | Path | None) -> dict[str, Any]:
+    """A scene file's contents, checked whole: parameters (normalised), ``description`` and the
+    ``[run]`` table (see ``wetcloth.run_settings``).  A ConfigError names the file and every mistake."""
+    resolved = resolve_scene_path(path)
+    data = read_toml(resolved)
+    mistakes = Mistakes(f"scene file {resolved}")
+    for key, value in list(data.items()):
+        with mistakes.collect():
+            if key == "run":
+                data[key] = check_run_table(value)
+            elif key == "description":
+                if not isinstance(value, str):
+                    raise ParameterError(key, f"must be text, got {value!r}")
+            elif key in RUN_SETTINGS:
+                raise ParameterError(key, f"is a run setting: put it in the [run] table ({key} = {value!r} under [run])")
+            else:
+                data[key] = check_value(key, value)
+    mistakes.raise_if_any()
+    return data
 
 
 def load_scene(path: str | Path | None = None, **overrides) -> Scene:

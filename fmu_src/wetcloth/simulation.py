@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from wetcloth.advice import blow_up_advice
 from wetcloth.errors import BlowUpError, ParameterError
 from wetcloth.integrators import make_integrator
 from wetcloth.kernels.absorption import absorb, dry, wick
@@ -209,8 +210,8 @@ class Simulation:
         raise BlowUpError(
             f"the cloth state {what} in the step from t = {self.state.time:.6g} s to {trial.time:.6g} s "
             f"(step {h:.3g} s, integrator {scene.integrator!r}). Likely cause: the step is too large for "
-            f"stretch_stiffness = {scene.stretch_stiffness:g} N/m; use integrator 'implicit_euler', a "
-            f"smaller max_step or a tolerance > 0. Last good time: {self.state.time:.6g} s.",
+            f"stretch_stiffness = {scene.stretch_stiffness:g} N/m; {blow_up_advice(scene)}. "
+            f"Last good time: {self.state.time:.6g} s.",
             last_good_time=self.state.time,
         )
 

@@ -3,18 +3,24 @@
     import wetcloth
     table = wetcloth.study("models/studies/sink_map.toml", out="out/batch/sink_map.parquet", workers=2)
 
+Modules: ``spec`` (the study: ``Study``, ``load_study``), ``axes`` (lists, ranges, random draws),
+``plot_spec`` and ``plots``, ``metrics``, ``engines`` (one run), ``cluster`` (the Dask client),
+``execution`` (running a study, the results table's safe points), ``results`` (the table).
 See ``docs/batch.md`` for the study file, the ``wetcloth batch`` command and this API.
 """
 
-from wetcloth.batch.engines import execute
+from wetcloth.batch.cluster import dask_client
+from wetcloth.batch.engines import ENGINES, execute
+from wetcloth.batch.execution import StudyReport, as_study, run_study, study
 from wetcloth.batch.metrics import DEFAULT_METRICS, METRICS, compute_metrics, first_crossing
+from wetcloth.batch.plot_spec import PlotSpec, parse_plot_spec
 from wetcloth.batch.plots import heatmap_data, line_data, plot
 from wetcloth.batch.results import read_table, write_csv, write_table
-from wetcloth.batch.runner import StudyReport, as_study, dask_client, run_study, study
-from wetcloth.batch.study import PlotSpec, Run, Study, StudyError, default_fmu_path, load_study, parse_plot_spec
+from wetcloth.batch.spec import Run, Study, default_fmu_path, load_study
+from wetcloth.errors import StudyError
 
 __all__ = [
-    "DEFAULT_METRICS", "METRICS", "PlotSpec", "Run", "Study", "StudyError", "StudyReport", "as_study",
-    "compute_metrics", "dask_client", "default_fmu_path", "execute", "first_crossing", "heatmap_data", "line_data", "load_study",
-    "parse_plot_spec", "plot", "read_table", "run_study", "study", "write_csv", "write_table",
+    "DEFAULT_METRICS", "ENGINES", "METRICS", "PlotSpec", "Run", "Study", "StudyError", "StudyReport", "as_study",
+    "compute_metrics", "dask_client", "default_fmu_path", "execute", "first_crossing", "heatmap_data", "line_data",
+    "load_study", "parse_plot_spec", "plot", "read_table", "run_study", "study", "write_csv", "write_table",
 ]

@@ -17,6 +17,8 @@ import numpy as np
 
 from wetcloth.batch.metrics import SERIES, compute_metrics
 
+#: The engines a study may run on.
+ENGINES = ("python", "fmu")
 OK = "ok"
 ERROR = "error"
 
@@ -26,7 +28,7 @@ def python_series(params: dict[str, Any], duration: float, sample_rate: float) -
     from wetcloth.runner import run
     from wetcloth.scene import from_dict
 
-    result = run(from_dict(params), duration, sample_rate, snapshots=0, progress=False)
+    result = run(from_dict(params), duration, sample_rate, snapshots=0, progress=False, warn=None)
     return {name: result.column(name) for name in SERIES}
 
 

@@ -13,7 +13,8 @@ import numpy as np
 import pandas as pd
 
 from wetcloth.batch.metrics import METRICS
-from wetcloth.batch.study import PlotSpec
+from wetcloth.files import whole_file
+from wetcloth.batch.plot_spec import PlotSpec
 from wetcloth.scene import PARAMETERS
 
 
@@ -76,7 +77,8 @@ def plot(table: pd.DataFrame, spec: PlotSpec, path: str | Path, study=None) -> P
         else:
             _heatmap(fig, ax, table, spec)
             ax.set_title(f"{title}{spec.metric} over {spec.x} x {spec.y}")
-        fig.savefig(path, dpi=110)
+        with whole_file(path) as tmp:
+            fig.savefig(tmp, dpi=110, format="png")
     finally:
         plt.close(fig)
     return path

@@ -1,4 +1,4 @@
-"""The results table: one row per run, keyed by ``run_key``; Parquet on disk, written atomically.
+"""The results table: one row per run, keyed by ``run_key``; Parquet on disk, written whole or not at all.
 
 Columns, in order: ``run_key``; the study's axes; the metrics (``sank`` after ``time_to_sink``);
 ``status`` ('ok' or 'error'), ``error`` (the message, or empty), ``run_time`` (s of wall-clock time
@@ -9,13 +9,13 @@ in the worker), ``cpu_time`` (s of CPU time of the run), ``worker``; the run set
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Any, Iterable
 
 import pandas as pd
 
 from wetcloth.batch.metrics import METRICS
+from wetcloth.files import whole_file
 from wetcloth.scene import PARAMETERS
 
 KEY = "run_key"
@@ -85,18 +85,19 @@ def read_table(path: str | Path) -> pd.DataFrame:
 
 
 def write_table(table: pd.DataFrame, path: str | Path) -> Path:
-    """Write ``table`` as Parquet, atomically: a reader (or a crash) never sees half a file."""
+    """Write ``table`` as Parquet, whole or not at all: a reader, a crash or a full disk never sees
+    half a file, and a failed write leaves the previous table as it was."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    table.to_parquet(tmp, index=False)
-    os.replace(tmp, path)
+    with whole_file(path) as tmp, open(tmp, "wb") as fh:
+        table.to_parquet(fh, index=False)
     return path
 
 
 def write_csv(table: pd.DataFrame, path: str | Path) -> Path:
-    """Write ``table`` as CSV (NaN as empty cells)."""
+    """Write ``table`` as CSV (NaN as empty cells), whole or not at all."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    table.to_csv(path, index=False)
+    with whole_file(path) as tmp, open(tmp, "w", newline="") as fh:
+        table.to_csv(fh, index=False)
     return path

@@ -5,7 +5,11 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-ENGINES = ("python", "fmu")
+from wetcloth.batch.engines import ENGINES
+from wetcloth.commands.common import INTERRUPTED, path_argument
+
+#: Where results go without --out: <study name>.parquet in this folder.
+DEFAULT_OUT_DIR = Path("out/batch")
 
 
 def add_parser(sub) -> None:
@@ -19,19 +23,19 @@ def add_parser(sub) -> None:
             "already in it. See docs/batch.md."
         ),
     )
-    p.add_argument("study", help="study TOML file (see docs/batch.md and models/studies/)")
+    p.add_argument("study", type=path_argument, help="study TOML file (see docs/batch.md and models/studies/)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="address of a running Dask scheduler, e.g. tcp://host:8786")
     p.add_argument("--workers", type=int, metavar="N",
                    help="local cluster: number of worker processes (default: one per core); "
                         "with --scheduler: wait until N workers are connected")
-    p.add_argument("--out", type=Path, metavar="FILE",
+    p.add_argument("--out", type=path_argument, metavar="FILE",
                    help="results table, Parquet (default: out/batch/<study name>.parquet)")
-    p.add_argument("--csv", type=Path, metavar="FILE", help="also write the results as CSV")
+    p.add_argument("--csv", type=path_argument, metavar="FILE", help="also write the results as CSV")
     p.add_argument("--engine", choices=ENGINES, help="simulate with the Python simulator (default) or the FMU through fmpy")
-    p.add_argument("--fmu", type=Path, metavar="PATH", help="FMU for --engine fmu (default: models/WetCloth.fmu)")
+    p.add_argument("--fmu", type=path_argument, metavar="PATH", help="FMU for --engine fmu (default: models/WetCloth.fmu)")
     p.add_argument("--plot", action="append", default=[], metavar="METRIC:AXIS[,AXIS2]",
                    help="plot a metric against one axis, or as a heatmap over two axes (repeatable)")
-    p.add_argument("--plot-dir", type=Path, metavar="DIR", help="where plots go (default: beside the results table)")
+    p.add_argument("--plot-dir", type=path_argument, metavar="DIR", help="where plots go (default: beside the results table)")
     p.add_argument("--retry-errors", action="store_true", help="run again the runs recorded with status 'error'")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=main)
@@ -53,7 +57,7 @@ def main(args) -> int:
             print(f"building {build_fmu(default)}")
     plot_specs = [batch.parse_plot_spec(text) for text in args.plot]
     study.check_plots(plot_specs)
-    out = args.out if args.out is not None else Path("out/batch") / f"{study.name}.parquet"
+    out = args.out if args.out is not None else DEFAULT_OUT_DIR / f"{study.name}.parquet"  # the name is a plain file name
     if out.suffix.lower() == ".csv":
         raise ValueError(f"--out {out} is the Parquet results table; give --csv FILE for a CSV copy")
     try:
@@ -68,7 +72,7 @@ def main(args) -> int:
     except KeyboardInterrupt:
         print(f"wetcloth batch: interrupted; the finished runs are in {out}: run the same command again to resume",
               file=sys.stderr)
-        return 130
+        return INTERRUPTED
     table = report.table
     print(report.summary())
     written = [str(out)]

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from pathlib import Path
+from wetcloth.commands.common import path_argument
 
 
 def add_parser(sub) -> None:
@@ -12,7 +12,7 @@ def add_parser(sub) -> None:
                        description="Build WetCloth.fmu (FMI 2.0 co-simulation, pythonfmu) or, with --fmi 3, "
                                    "WetCloth3.fmu (FMI 3.0 co-simulation with the mesh as array outputs, pythonfmu3) "
                                    "from wetcloth's sources.")
-    p.add_argument("--out", type=Path, help=f"where to write the FMU (default {default_fmu_path(2)}, "
+    p.add_argument("--out", type=path_argument, help=f"where to write the FMU (default {default_fmu_path(2)}, "
                                             f"with --fmi 3 {default_fmu_path(3)})")
     p.add_argument("--fmi", type=int, choices=(2, 3), default=2, help="FMI version (default 2)")
     p.set_defaults(func=main)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from wetcloth.commands.common import path_argument
+
 
 def add_parser(sub) -> None:
     from wetcloth.fmu import default_fmu_path
@@ -12,8 +14,8 @@ def add_parser(sub) -> None:
                        description="Build the unit (models/WetCloth.fmu) if missing or older than the sources, co-simulate "
                                    "the default towel through fmpy for the preset's duration, and write PLY "
                                    "frames, outputs.csv and plot.png.")
-    p.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder (default out/demo)")
-    p.add_argument("--fmu", type=Path, default=default_fmu_path(),
+    p.add_argument("--out", type=path_argument, default=Path("out/demo"), help="output folder (default out/demo)")
+    p.add_argument("--fmu", type=path_argument, default=default_fmu_path(),
                    help=f"the unit to use, built there if needed (default {default_fmu_path()})")
     p.add_argument("--duration", type=float, help="simulated time, s (default: the towel preset's [run] duration)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

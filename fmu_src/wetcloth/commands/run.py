@@ -1,4 +1,8 @@
-"""``wetcloth run``: simulate a scene, write its outputs as CSV and a plot, optionally export meshes."""
+"""``wetcloth run``: simulate a scene, write its outputs as CSV and a plot, optionally export meshes.
+
+Whatever stops a run early (a blow-up, Ctrl-C, a full disk) the outputs of the frames computed
+so far are written, and an export's ``frames.json`` counts the frames on disk.
+"""
 
 from __future__ import annotations
 
@@ -6,13 +10,13 @@ import argparse
 import sys
 from pathlib import Path
 
-from wetcloth.errors import BlowUpError
+from tqdm.auto import tqdm
+
+from wetcloth import run_settings
+from wetcloth.commands.common import FAILED, INTERRUPTED, path_argument
+from wetcloth.errors import BlowUpError, Mistakes
 from wetcloth.runner import run
-from wetcloth.scene import load_scene, read_scene_file
-
-DEFAULT_DURATION = 10.0  # s, when neither the command line nor the scene file's [run] table says
-DEFAULT_FPS = 30.0
-
+from wetcloth.scene import load_scene, parse_text, read_scene_file
 
 def parse_assignment(text: str) -> tuple[str, str]:
     """'name=value' from ``--set``."""
@@ -24,13 +28,16 @@ def parse_assignment(text: str) -> tuple[str, str]:
 
 def add_parser(sub) -> None:
     p = sub.add_parser("run", help="simulate a scene and write its outputs",
-                       description="Simulate a scene (default: the towel) and write CSV outputs and a plot.")
+                       description="Simulate a scene (default: the towel) and write CSV outputs and a plot. "
+                                   "'wetcloth params' lists the parameters.")
     p.add_argument("scene", nargs="?", default=None, help="scene TOML file or preset name (default: towel)")
-    p.add_argument("--duration", type=float, help="simulated time, s (default: the scene file's [run] duration)")
-    p.add_argument("--fps", type=float, help="output frames per second (default: the scene file's, or 30)")
+    p.add_argument("--duration", type=float,
+                   help=f"simulated time, s (default: the scene file's [run] duration, else {run_settings.DEFAULTS['duration']:g})")
+    p.add_argument("--fps", type=float,
+                   help=f"output frames per second (default: the scene file's [run] fps, else {run_settings.DEFAULTS['fps']:g})")
     p.add_argument("--set", dest="overrides", action="append", default=[], type=parse_assignment,
                    metavar="NAME=VALUE", help="override a scene parameter (repeatable)")
-    p.add_argument("--export", type=Path, metavar="DIR", help="write one mesh per frame into DIR")
+    p.add_argument("--export", type=path_argument, metavar="DIR", help="write one mesh per frame into DIR")
     p.add_argument("--format", default="ply", choices=["ply", "obj", "usd"], help="mesh format (default ply)")
     p.add_argument("--writer", default="trimesh", choices=["trimesh", "meshio"], help="mesh writer (default trimesh)")
     p.add_argument("--faces", default="quads", choices=["quads", "triangles"],
@@ -39,18 +46,31 @@ def add_parser(sub) -> None:
                    help="number of the first frame: file <prefix>_N, USD time code N, Blender frame N (default 1)")
     p.add_argument("--overwrite", action="store_true",
                    help="replace an earlier export in DIR (one described by its own frames.json)")
-    p.add_argument("--csv", type=Path, default=Path("out/run/outputs.csv"), help="outputs CSV (default out/run/outputs.csv)")
-    p.add_argument("--plot", type=Path, default=Path("out/run/plot.png"), help="plot PNG (default out/run/plot.png)")
+    p.add_argument("--csv", type=path_argument, default=Path("out/run/outputs.csv"),
+                   help="outputs CSV (default out/run/outputs.csv)")
+    p.add_argument("--plot", type=path_argument, default=Path("out/run/plot.png"),
+                   help="plot PNG (default out/run/plot.png)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=main)
 
 
+def scene_and_settings(args):
+    """The scene (file, then ``--set``) and the run settings (options, then the file's [run]);
+    every mistake of the command line reported at once."""
+    mistakes = Mistakes("--set")
+    overrides = {}
+    for name, text in args.overrides:
+        with mistakes.collect():
+            overrides[name] = parse_text(name, text)
+    mistakes.raise_if_any()
+    scene = load_scene(args.scene, **overrides)
+    settings = run_settings.resolve(read_scene_file(args.scene).get("run"), duration=args.duration, fps=args.fps)
+    return scene, settings
+
+
 def main(args) -> int:
-    run_table = read_scene_file(args.scene).get("run", {})
-    scene = load_scene(args.scene, **dict(args.overrides))
-    duration = args.duration if args.duration is not None else float(run_table.get("duration", DEFAULT_DURATION))
-    fps = args.fps if args.fps is not None else float(run_table.get("fps", DEFAULT_FPS))
-    title = f"{args.scene or 'towel'}: {duration:g} s"
+    scene, settings = scene_and_settings(args)
+    title = f"{args.scene or 'towel'}: {settings.duration:g} s"
     # Every output is checked before any simulating: a run is not thrown away at its end.
     _check_writable(args.csv, "--csv")
     _check_writable(args.plot, "--plot")
@@ -58,36 +78,63 @@ def main(args) -> int:
     if args.export is not None:
         from wetcloth.exporter import open_sequence  # only needed when exporting
 
-        sequence = open_sequence(args.export, fmt=args.format, writer=args.writer, fps=fps, scene=scene,
+        sequence = open_sequence(args.export, fmt=args.format, writer=args.writer, fps=settings.fps, scene=scene,
                                  faces=args.faces, first_frame=args.first_frame, overwrite=args.overwrite)
+    stop = None
     try:
-        result = run(scene, duration, fps, on_frame=sequence.on_frame if sequence else None,
-                     progress=False if args.no_progress else None)
-    except BaseException as exc:  # a blow-up, Ctrl-C, a full disk: keep what was good
-        if sequence is not None:
-            sequence.close(complete=False)  # frames.json counts the frames on disk; USD saved
-        partial = exc.partial_result if isinstance(exc, BlowUpError) else None
-        if partial is not None and partial.rows:
-            written = _write_outputs(partial, args, title + f" (stopped at {partial.rows[-1]['time']:g} s)")
-            print(f"the run stopped early; outputs up to t = {partial.rows[-1]['time']:g} s are in {written}",
-                  file=sys.stderr)
-        raise
+        result = run(scene, settings.duration, settings.fps, on_frame=sequence.on_frame if sequence else None,
+                     progress=not args.no_progress, warn=_warn)
+    except (Exception, KeyboardInterrupt) as exc:  # a blow-up, Ctrl-C, a full disk: keep what was good
+        result, stop = getattr(exc, "partial_result", None), exc
+    problems = []  # what could not be written; never hides why the run stopped
     if sequence is not None:
-        sequence.close()
-    last = result.rows[-1]
-    print(f"simulated {duration:g} s: depth {last['depth'] * 100:.2f} cm, wet mass {last['wet_mass'] * 1000:.1f} g")
-    written = _write_outputs(result, args, title)
-    print(f"wrote {written}" + (f"; meshes in {args.export}" if args.export else ""))
-    return 0
+        try:
+            sequence.close(complete=stop is None)  # frames.json counts the frames on disk; USD saved
+        except (OSError, ValueError) as exc:
+            problems.append(str(exc))
+    written = []
+    if result is not None and result.rows:
+        last = result.rows[-1]["time"]
+        written = _write_outputs(result, args, title if stop is None else f"{title} (stopped at {last:g} s)", problems)
+    kept = " and ".join(written)
+    if sequence is not None and sequence.frame_count:
+        kept += f"{'; ' if kept else ''}{sequence.frame_count} frames in {sequence.directory}"
+    trouble = "".join(f"; {p}" for p in problems)
+    if stop is None:
+        last = result.rows[-1]
+        print(f"simulated {settings.duration:g} s: depth {last['depth'] * 100:.2f} cm, "
+              f"wet mass {last['wet_mass'] * 1000:.1f} g")
+        if problems:
+            print(f"wetcloth run: error: {trouble[2:]}" + (f"; written: {kept}" if kept else ""), file=sys.stderr)
+            return FAILED
+        print(f"wrote {kept}")
+        return 0
+    so_far = f"outputs up to t = {result.rows[-1]['time']:g} s are in {kept}" if written else "no outputs written"
+    if isinstance(stop, KeyboardInterrupt):
+        print(f"wetcloth run: interrupted; {so_far}{trouble}", file=sys.stderr)
+        return INTERRUPTED
+    if not isinstance(stop, (BlowUpError, OSError, ValueError)):
+        raise stop  # not a user's problem: a bug, with its traceback (the outputs are saved)
+    print(f"wetcloth run: error: {stop}\nthe run stopped early; {so_far}{trouble}", file=sys.stderr)
+    return FAILED
 
 
-def _write_outputs(result, args, title: str) -> str:
-    """Write the outputs CSV and the plot of ``result``; return their paths as text."""
+def _warn(message: str) -> None:
+    tqdm.write(f"wetcloth run: warning: {message}", file=sys.stderr)
+
+
+def _write_outputs(result, args, title: str, problems: list[str]) -> list[str]:
+    """Write the outputs CSV and the plot of ``result`` (each whole or not at all); return the
+    paths written, and add what failed to ``problems``."""
     from wetcloth.plotting import plot_run
 
-    csv_path = result.write_csv(args.csv)
-    plot_path = plot_run(result, args.plot, title=title)
-    return f"{csv_path} and {plot_path}"
+    written = []
+    for path, write in ((args.csv, result.write_csv), (args.plot, lambda p: plot_run(result, p, title=title))):
+        try:
+            written.append(str(write(path)))
+        except OSError as exc:
+            problems.append(f"cannot write {path}: {exc.strerror or exc}")
+    return written
 
 
 def _check_writable(path: Path, option: str) -> None:

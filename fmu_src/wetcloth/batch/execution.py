@@ -1,21 +1,19 @@
-"""Run a study on Dask: a local cluster of processes by default, or any running scheduler.
+"""Run a study's runs on Dask and keep the results table: submission, results, safe points.
 
-Each run is one ``Client.submit`` task (``wetcloth.batch.engines.execute``).  A worker that dies
-mid-run is replaced (its Nanny restarts it) and the scheduler reruns its tasks elsewhere, up to
-Dask's ``distributed.scheduler.allowed-failures`` times; past that, the run is recorded as an
-error (``KilledWorker``) and the study goes on.  Results are written to the Parquet table at
-safe points (every ``flush_interval`` s and at the end, also when interrupted), and a rerun skips
-the runs whose ``run_key`` is already in the table.
+Each run is one ``Client.submit`` task (``wetcloth.batch.engines.execute``) on the client of
+``wetcloth.batch.cluster.dask_client``.  A worker that dies mid-run is replaced (its Nanny restarts
+it) and the scheduler reruns its tasks elsewhere, up to Dask's
+``distributed.scheduler.allowed-failures`` times; past that, the run is recorded as an error
+(``KilledWorker``) and the study goes on.  Results are written to the Parquet table at safe points
+(every ``flush_interval`` s and at the end, also when interrupted), whole or not at all, and a
+rerun skips the runs whose ``run_key`` is already in the table.
 """
 
 from __future__ import annotations
 
-import logging
 import math
-import signal
 import time
 import uuid
-from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
@@ -23,14 +21,13 @@ from typing import Any, Callable
 import pandas as pd
 from tqdm.auto import tqdm
 
+from wetcloth.batch import cluster
 from wetcloth.batch.engines import ERROR, OK, execute, fmu_path_or_default
-from wetcloth.batch.results import KEY, make_table, normalise, read_table, full_row, write_table
-from wetcloth.batch.study import Run, Study, load_study
+from wetcloth.batch.results import KEY, full_row, make_table, normalise, read_table, write_table
+from wetcloth.batch.spec import Run, Study, load_study
 from wetcloth.scene import from_dict
 
 FLUSH_INTERVAL = 2.0  # s between writes of the results table while a study runs
-LOCAL_HTTP = "127.0.0.1:0"  # the local cluster's dashboard / HTTP address: any free port, loopback only
-SCHEDULER_TIMEOUT = 60.0  # s to connect to a scheduler, and then for the workers asked for to connect
 
 
 @dataclass
@@ -55,47 +52,6 @@ class StudyReport:
         if self.ran:
             text += f", in {self.elapsed:.1f} s ({60.0 * self.ran / max(self.elapsed, 1e-9):.0f} runs/min)"
         return text
-
-
-def _check_workers(workers) -> int | None:
-    if workers is None:
-        return None
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise ValueError(f"workers must be a whole number >= 1, got {workers!r}")
-    return workers
-
-
-@contextmanager
-def dask_client(client=None, scheduler: str | None = None, workers: int | None = None, timeout: float | None = None):
-    """A Dask client: ``client`` as given; one connected to ``scheduler`` (waiting for ``workers``;
-    ``timeout`` s each, default ``SCHEDULER_TIMEOUT``); or a local cluster of ``workers``
-    single-threaded processes (default one per core) that starts here and stops on exit."""
-    workers = _check_workers(workers)
-    timeout = SCHEDULER_TIMEOUT if timeout is None else timeout
-    if client is not None:
-        yield client
-        return
-    from dask.system import CPU_COUNT  # the cores this process may use (affinity and cgroup limits)
-    from distributed import Client, LocalCluster
-
-    if scheduler:
-        with Client(scheduler, set_as_default=False, timeout=timeout) as c:
-            if workers:
-                c.wait_for_workers(workers, timeout=timeout)
-            yield c
-        return
-    # the scheduler always serves HTTP: on a free port of this machine only, not on 8787 of every interface
-    with LocalCluster(n_workers=workers or CPU_COUNT, threads_per_worker=1, processes=True,
-                      dashboard_address=LOCAL_HTTP, silence_logs=logging.ERROR, preload=[__name__]) as cluster, \
-            Client(cluster, set_as_default=False) as c:
-        yield c
-
-
-def dask_setup(worker) -> None:
-    """Preload of the local cluster's workers (Dask calls it in each worker process as it starts):
-    ignore SIGINT.  Ctrl-C in a terminal reaches every process of the group; this process then
-    cancels the runs and stops the workers, which would otherwise each print a traceback."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _task(run: Run, study: Study) -> dict[str, Any]:
@@ -134,7 +90,7 @@ def run_study(
     ``retry_errors`` runs again the runs recorded as errors.  ``on_result(row)`` is called in
     this process after each run is recorded.  Returns a :class:`StudyReport`.
     """
-    _check_workers(workers)
+    cluster.check_workers(workers)
     start = time.perf_counter()
     runs = study.runs()
     out = Path(out) if out is not None else None
@@ -157,8 +113,15 @@ def run_study(
     def flush(force: bool = False) -> None:
         nonlocal last_flush
         if out is not None and new_rows and (force or time.monotonic() - last_flush >= flush_interval):
-            write_table(combined(), out)
+            save(combined())
             last_flush = time.monotonic()
+
+    def save(table: pd.DataFrame) -> None:
+        try:
+            write_table(table, out)
+        except OSError as exc:  # a full disk: the table on disk stays whole, as it was
+            raise OSError(f"cannot save the results table {out} ({exc.strerror or exc}): it is left as it was; "
+                          f"the {len(new_rows)} runs finished now are not in it") from None
 
     bar = tqdm(total=len(todo), desc=study.name, unit="run", disable=not (progress and todo), dynamic_ncols=True)
 
@@ -190,7 +153,7 @@ def run_study(
     table = combined()
     mine = normalise(table.set_index(KEY, drop=False).loc[[r.key for r in runs]], study.axis_names)  # in run order
     if out is not None and new_rows:  # other studies' rows first, then this study's in run order
-        write_table(normalise(pd.concat([table[~table[KEY].isin(study_keys)], mine]), study.axis_names), out)
+        save(normalise(pd.concat([table[~table[KEY].isin(study_keys)], mine]), study.axis_names))
     return StudyReport(
         study=study, table=mine, total=len(runs), skipped=len(runs) - len(todo),
         ran=len(new_rows), ok=counts[OK], failed=counts[ERROR], elapsed=time.perf_counter() - start, out=out,
@@ -200,7 +163,7 @@ def run_study(
 def _run_on_dask(tasks: list[Run], study: Study, record, *, client, scheduler, workers) -> None:
     from distributed import as_completed
 
-    with dask_client(client, scheduler, workers) as c:
+    with cluster.dask_client(client, scheduler, workers) as c:
         tag = uuid.uuid4().hex[:8]  # one submission's keys never collide with an earlier one's
         futures = {c.submit(execute, _task(run, study), key=f"wetcloth-{run.key}-{tag}", pure=False): run
                    for run in tasks}

@@ -1,0 +1,214 @@
+"""A study's axes: lists, ranges and random draws over scene parameters, and the points they span.
+
+An axis is a list of values, a range (``{start, stop, num [, log]}`` or ``{start, stop, step}``,
+stop included) or a random distribution (``{random = KIND, ...}``).  The points of a study are the
+Cartesian product of the grid axes (lists and ranges, in order, the last varying fastest),
+crossed with ``samples`` joint draws of the random axes (seeded, so a rerun draws the same).
+No study may span more than ``MAX_RUNS`` points: the count is checked before any is made.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from wetcloth.errors import ConfigError, StudyError, did_you_mean
+from wetcloth.scene import PARAMETERS, normalise
+
+DISTRIBUTIONS = ("uniform", "loguniform", "normal", "integers", "choice")
+#: Random kinds and the keys each takes.
+DISTRIBUTION_KEYS = {"uniform": ("low", "high"), "loguniform": ("low", "high"), "normal": ("mean", "std"),
+                     "integers": ("low", "high"), "choice": ("values",)}
+RANGE_KEYS = ("start", "stop", "num", "step", "log")
+SIGNIFICANT_DIGITS = 12  # range values are rounded to this many digits, so 0.1 from a range equals 0.1 from a list
+#: Most runs one study may have (and so values one axis may have): 100 000 runs of 1 s each keep
+#: two cores busy for 14 hours.
+MAX_RUNS = 100_000
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One study axis: grid ``values``, or a random ``distribution`` (a dict) drawn ``samples`` times."""
+
+    name: str
+    values: tuple = ()
+    distribution: dict | None = None
+
+    @property
+    def is_random(self) -> bool:
+        return self.distribution is not None
+
+
+def _round(value: float) -> float:
+    return float(f"{value:.{SIGNIFICANT_DIGITS}g}")
+
+
+def is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def check_count(key: str, what: str, count: float) -> None:
+    """Refuse more than ``MAX_RUNS`` of something (values of an axis, draws, runs), naming the bound."""
+    if count > MAX_RUNS:
+        raise StudyError(key, f"{what} {count:.3g}; at most {MAX_RUNS} runs per study: split the study or "
+                              "take coarser axes")
+
+
+def check_name(name: str, where: str) -> None:
+    """``name`` must be a scene parameter (the FMU's own parameters are not)."""
+    if name in PARAMETERS:
+        return
+    from wetcloth.fmu.vocabulary import variable_specs
+
+    if any(v.name == name and v.causality == "parameter" for v in variable_specs()):  # mesh_output_dir, mesh_format
+        raise StudyError(where, f"{name!r} is an FMU-only parameter, not a scene parameter: a study varies scene "
+                                "parameters and records metrics; to keep the meshes of a run, run its scene with "
+                                "'wetcloth run --export DIR'")
+    raise StudyError(where, f"{name!r}: " + did_you_mean(name, PARAMETERS))
+
+
+def typed(name: str, value, where: str):
+    """``value`` in parameter ``name``'s type, by the scene's one rule (``wetcloth.scene.normalise``);
+    ranges are checked per run."""
+    try:
+        return normalise(name, value)
+    except ConfigError as exc:
+        raise StudyError(where, exc.problems[0][2]) from None
+
+
+def _range_values(name: str, spec: dict) -> tuple:
+    """Values of a range table ``{start, stop, num [, log]}`` or ``{start, stop, step}`` (stop included)."""
+    where = f"axes.{name}"
+    if unknown := sorted(set(spec) - set(RANGE_KEYS)):
+        raise StudyError(where, f"unknown key(s) {unknown}; a range has start, stop and num (or step), optional log")
+    if not {"start", "stop"} <= set(spec) or ("num" in spec) == ("step" in spec):
+        raise StudyError(where, "a range needs start, stop and exactly one of num or step")
+    start, stop = spec["start"], spec["stop"]
+    if not (is_number(start) and is_number(stop) and math.isfinite(start) and math.isfinite(stop)):
+        raise StudyError(where, f"start and stop must be finite numbers, got {start!r}, {stop!r}")
+    if "num" in spec:
+        num = spec["num"]
+        if not (is_number(num) and float(num).is_integer() and num >= 1):
+            raise StudyError(where, f"num must be a whole number >= 1, got {num!r}")
+        check_count(where, "num is", num)
+        num = int(num)
+        log = spec.get("log", False)
+        if not isinstance(log, bool):
+            raise StudyError(where, f"log must be true or false, got {log!r}")
+        if log:
+            if start <= 0 or stop <= 0:
+                raise StudyError(where, f"a log range needs start > 0 and stop > 0, got {start!r}, {stop!r}")
+            values = np.geomspace(start, stop, num) if num > 1 else np.array([start], float)
+        else:
+            values = np.linspace(start, stop, num)
+    else:
+        if "log" in spec:
+            raise StudyError(where, "log goes with num, not with step")
+        step = spec["step"]
+        if not is_number(step) or not math.isfinite(step) or step == 0 or (stop - start) * step < 0:
+            raise StudyError(where, f"step must be a finite number, non-zero, from start toward stop; got {step!r}")
+        count = math.floor((stop - start) / step + 1e-9) + 1
+        check_count(where, f"step {step:g} from {start:g} to {stop:g} gives", count)
+        values = start + step * np.arange(count)
+    if PARAMETERS[name].type == "int":
+        if not all(float(v).is_integer() for v in np.round(values, 9)):
+            raise StudyError(where, f"{name} takes whole numbers; this range gives {values.tolist()}")
+        return tuple(int(round(v)) for v in values)
+    return tuple(_round(float(v)) for v in values)
+
+
+def _parse_distribution(name: str, spec: dict) -> dict:
+    """A random axis ``{random = KIND, ...}``: uniform/loguniform (low, high), normal (mean, std),
+    integers (low, high; both included), choice (values)."""
+    where = f"axes.{name}"
+    kind = spec.get("random")
+    if kind not in DISTRIBUTION_KEYS:
+        raise StudyError(where, f"random must be one of {', '.join(DISTRIBUTIONS)}, got {kind!r}")
+    needs = DISTRIBUTION_KEYS[kind]
+    keys = set(spec) - {"random"}
+    if keys != set(needs):
+        raise StudyError(where, f"random = {kind!r} takes exactly {', '.join(needs)}; got {sorted(keys)}")
+    if kind == "choice":
+        values = spec["values"]
+        if not isinstance(values, list) or not values:
+            raise StudyError(where, "choice needs a non-empty list of values")
+        return {"random": kind, "values": [typed(name, v, where) for v in values]}
+    if PARAMETERS[name].type == "str":
+        raise StudyError(where, f"{name} is a string parameter: use random = 'choice'")
+    a, b = (spec[k] for k in needs)
+    if not (is_number(a) and is_number(b) and math.isfinite(a) and math.isfinite(b)):
+        raise StudyError(where, f"{', '.join(needs)} must be finite numbers, got {a!r}, {b!r}")
+    if kind in ("uniform", "loguniform", "integers") and not a < b:
+        raise StudyError(where, f"needs low < high, got {a!r}, {b!r}")
+    if kind == "loguniform" and a <= 0:
+        raise StudyError(where, f"loguniform needs low > 0, got {a!r}")
+    if kind == "normal" and not b > 0:
+        raise StudyError(where, f"normal needs std > 0, got {b!r}")
+    if kind == "integers" and not (isinstance(a, int) and isinstance(b, int)):
+        raise StudyError(where, f"integers needs whole-number low and high, got {a!r}, {b!r}")
+    if PARAMETERS[name].type == "int" and kind != "integers":
+        raise StudyError(where, f"{name} takes whole numbers: use random = 'integers' or 'choice'")
+    return dict(spec)
+
+
+def parse_axis(name: str, spec) -> Axis:
+    """An axis from its study-file entry: a list, a range table, a random table or one value."""
+    where = f"axes.{name}"
+    check_name(name, where)
+    if isinstance(spec, list):
+        if not spec:
+            raise StudyError(where, "an axis needs at least one value")
+        check_count(where, "the list has", len(spec))
+        values = tuple(typed(name, v, where) for v in spec)
+    elif isinstance(spec, dict) and "random" in spec:
+        return Axis(name, distribution=_parse_distribution(name, spec))
+    elif isinstance(spec, dict):
+        if PARAMETERS[name].type == "str":
+            raise StudyError(where, f"{name} is a string parameter: give a list of values")
+        values = _range_values(name, spec)
+    else:
+        values = (typed(name, spec, where),)
+    if len(set(values)) != len(values):
+        raise StudyError(where, f"repeated values in {list(values)}: each run is keyed by its parameters")
+    return Axis(name, values=values)
+
+
+def _draw(axis: Axis, rng: np.random.Generator, samples: int) -> list:
+    d = axis.distribution
+    kind = d["random"]
+    if kind == "uniform":
+        values = rng.uniform(d["low"], d["high"], samples)
+    elif kind == "loguniform":
+        values = np.exp(rng.uniform(math.log(d["low"]), math.log(d["high"]), samples))
+    elif kind == "normal":
+        values = rng.normal(d["mean"], d["std"], samples)
+    elif kind == "integers":
+        return [int(v) for v in rng.integers(d["low"], d["high"], samples, endpoint=True)]
+    else:  # choice
+        return [d["values"][i] for i in rng.integers(0, len(d["values"]), samples)]
+    return [float(v) for v in values]
+
+
+def point_count(axes: tuple[Axis, ...], samples: int) -> int:
+    """How many points ``points`` gives (before identical runs are merged)."""
+    grid = math.prod(len(a.values) for a in axes if not a.is_random)
+    return grid * (samples if any(a.is_random for a in axes) else 1)
+
+
+def points(axes: tuple[Axis, ...], samples: int, seed: int) -> list[dict[str, Any]]:
+    """Axis coordinates of every run: grid axes crossed, then crossed with the random draws."""
+    grid = [a for a in axes if not a.is_random]
+    random_axes = [a for a in axes if a.is_random]
+    grid_points = [dict(zip([a.name for a in grid], combo)) for combo in itertools.product(*(a.values for a in grid))]
+    if random_axes:
+        rng = np.random.default_rng(seed)
+        draws = {a.name: _draw(a, rng, samples) for a in random_axes}
+        drawn = [{name: draws[name][i] for name in draws} for i in range(samples)]
+    else:
+        drawn = [{}]
+    order = [a.name for a in axes]
+    return [{n: (g | s)[n] for n in order} for g in grid_points for s in drawn]

@@ -1,0 +1,131 @@
+"""The Dask client a study runs on: a given client, a running scheduler, or a local cluster.
+
+The local cluster (one single-threaded worker process per core, each under a Nanny) starts and
+stops with :func:`dask_client`.  Its worker processes ignore Ctrl-C (a terminal's SIGINT reaches
+every process of the group; this process stops them).  SIGINT is held back while it starts, so a
+Ctrl-C then is taken once it is up, and it is stopped whole: no process is left behind.  And it
+refuses to start from the top level of a script without a ``__main__`` guard, which its worker
+processes would re-import and so start the study again, each.
+"""
+
+from __future__ import annotations
+
+import ast
+import logging
+import signal
+import sys
+import threading
+import traceback
+from contextlib import ExitStack, contextmanager
+from pathlib import Path
+
+LOCAL_HTTP = "127.0.0.1:0"  # the local cluster's dashboard / HTTP address: any free port, loopback only
+SCHEDULER_TIMEOUT = 60.0  # s to connect to a scheduler, and then for the workers asked for to connect
+
+
+class MainGuardMissing(SystemExit):
+    """A script starts a local cluster at its top level, outside ``if __name__ == "__main__":``.
+
+    A SystemExit with the one line to read, rather than the hundreds of lines of the worker
+    processes failing to start (they re-import the script)."""
+
+
+def check_workers(workers) -> int | None:
+    if workers is None:
+        return None
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"workers must be a whole number >= 1, got {workers!r}")
+    return workers
+
+
+@contextmanager
+def dask_client(client=None, scheduler: str | None = None, workers: int | None = None, timeout: float | None = None):
+    """A Dask client: ``client`` as given; one connected to ``scheduler`` (waiting for ``workers``;
+    ``timeout`` s each, default ``SCHEDULER_TIMEOUT``); or a local cluster of ``workers``
+    single-threaded processes (default one per core) that starts here and stops on exit."""
+    workers = check_workers(workers)
+    timeout = SCHEDULER_TIMEOUT if timeout is None else timeout
+    if client is not None:
+        yield client
+        return
+    from dask.system import CPU_COUNT  # the cores this process may use (affinity and cgroup limits)
+    from distributed import Client, LocalCluster
+
+    if scheduler:
+        with Client(scheduler, set_as_default=False, timeout=timeout) as c:
+            if workers:
+                c.wait_for_workers(workers, timeout=timeout)
+            yield c
+        return
+    check_main_guard()
+    with ExitStack() as stack:
+        with sigint_held():  # each part is registered for closing before a held Ctrl-C is let through
+            # the scheduler always serves HTTP: on a free port of this machine only, not on 8787 of every interface
+            cluster = stack.enter_context(LocalCluster(
+                n_workers=workers or CPU_COUNT, threads_per_worker=1, processes=True, dashboard_address=LOCAL_HTTP,
+                silence_logs=logging.ERROR, preload=[__name__]))
+            c = stack.enter_context(Client(cluster, set_as_default=False))
+        yield c
+
+
+def dask_setup(worker) -> None:
+    """Preload of the local cluster's workers (Dask calls it in each worker process as it starts):
+    ignore SIGINT.  Ctrl-C in a terminal reaches every process of the group; this process then
+    cancels the runs and stops the workers, which would otherwise each print a traceback."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@contextmanager
+def sigint_held():
+    """Hold SIGINT back in this block (main thread only); one that came is raised on leaving it.
+
+    Threads and processes started inside inherit the held signal: the cluster's event-loop thread
+    and its worker processes (these ignore it for good, see ``dask_setup``)."""
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, before)
+
+
+def check_main_guard() -> None:
+    """Refuse (``MainGuardMissing``) to start a local cluster from the top level of the ``__main__``
+    script outside an ``if __name__ == "__main__":`` block: the worker processes re-import the
+    script, which would start the cluster again in each of them."""
+    main = sys.modules.get("__main__")
+    path = getattr(main, "__file__", None)
+    if not path or not str(path).endswith(".py"):
+        return  # an interactive session, python -c, a notebook: nothing is re-imported
+    frame = next((f for f, _ in traceback.walk_stack(None)
+                  if f.f_globals is main.__dict__ and f.f_code.co_name == "<module>"), None)
+    if frame is None:
+        return  # not called while the script's top level runs
+    try:
+        tree = ast.parse(Path(path).read_text(encoding="utf-8"), path)
+    except (OSError, SyntaxError, ValueError):
+        return
+    if not _guarded(tree, frame.f_lineno):
+        raise MainGuardMissing(
+            f"wetcloth: {path}, line {frame.f_lineno}, starts a local Dask cluster at the script's top level; its "
+            f"worker processes re-import the script and would start it again: put that code under "
+            f"'if __name__ == \"__main__\":'")
+
+
+def _guarded(tree: ast.Module, line: int) -> bool:
+    """Whether ``line`` of the module runs only when it is the main script: inside the block of a
+    top-level ``if __name__ == "__main__":`` (or the ``else`` of ``!=``)."""
+    for node in tree.body:
+        if not isinstance(node, ast.If):
+            continue
+        for c in (n for n in ast.walk(node.test) if isinstance(n, ast.Compare) and len(n.ops) == 1):
+            operands = (c.left, *c.comparators)
+            if not (any(isinstance(n, ast.Name) and n.id == "__name__" for n in operands)
+                    and any(isinstance(n, ast.Constant) and n.value == "__main__" for n in operands)):
+                continue
+            block = node.body if isinstance(c.ops[0], ast.Eq) else node.orelse if isinstance(c.ops[0], ast.NotEq) else []
+            if block and block[0].lineno <= line <= block[-1].end_lineno:
+                return True
+    return False

@@ -1,0 +1,333 @@
+"""A batch study: a base scene, axes over its parameters, run settings and the metrics to record.
+
+A study file is TOML (see ``docs/batch.md`` and ``models/studies/``)::
+
+    description = "time to sink over capacity x rate"
+    scene = "thesis_fast"          # base scene: preset name or scene TOML (relative to this file)
+    duration = 60.0                # s of simulated time per run
+    sample_rate = 10.0             # Hz: outputs are sampled at this rate for the metrics
+    sink_depth = 0.05              # m: 'sunk' once the centroid is more than this below the surface
+    metrics = ["time_to_sink", "final_depth", "final_wet_mass", "time_to_90_wet_mass"]
+
+    [base]                         # parameter overrides shared by every run
+    nx = 9
+    ny = 9
+
+    [axes]                         # one axis per parameter: a list, a range or a random draw
+    absorption_capacity = [1.0, 2.0, 3.8]
+    absorption_rate = { start = 0.05, stop = 0.5, num = 4 }
+
+The runs are the points of the axes (``wetcloth.batch.axes``).  Every run is keyed by all its
+parameter values and run settings (``run_key``), so a rerun can skip what is done.  A study is
+checked whole when it is made: every mistake is reported at once, each naming its key.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from wetcloth import run_settings
+from wetcloth.batch.axes import Axis, check_count, check_name, parse_axis, point_count, points, typed
+from wetcloth.batch.engines import ENGINES
+from wetcloth.batch.metrics import DEFAULT_METRICS, METRICS
+from wetcloth.batch.plot_spec import PlotSpec, plot_specs
+from wetcloth.errors import ConfigError, Mistakes, StudyError, did_you_mean
+from wetcloth.scene import PARAMETERS, RESERVED_KEYS, read_scene_file, read_toml, resolve_scene_path
+
+DEFAULT_SAMPLE_RATE = 10.0  # Hz
+DEFAULT_SINK_DEPTH = 0.05  # m
+
+#: Keys allowed at the top level of a study file.
+STUDY_KEYS = (
+    "name", "description", "scene", "duration", "sample_rate", "sink_depth", "metrics", "engine", "fmu",
+    "seed", "samples", "base", "axes", "plot",
+)
+#: A study's name names its output files (``out/batch/<name>.parquet``): one file name, no folder.
+_PLAIN_NAME = re.compile(r"^[^/\\\x00]+$")
+
+
+def default_fmu_path() -> str:
+    """``models/WetCloth.fmu``, where ``wetcloth build-fmu`` writes it (``wetcloth.fmu.default_fmu_path``)."""
+    from wetcloth.fmu import default_fmu_path as fmu_path
+
+    return str(fmu_path())
+
+
+def run_key(params: dict[str, Any], settings: dict[str, Any]) -> str:
+    """A short, stable hash of a run's full parameter values and run settings."""
+    text = json.dumps({"params": params, "settings": settings}, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+@dataclass(frozen=True)
+class Run:
+    """One run of a study: its key, its full parameter values and its coordinates on the axes."""
+
+    key: str
+    params: dict[str, Any]
+    point: dict[str, Any]
+
+
+def _positive(key: str, value, allow_zero: bool = False, most: float = math.inf) -> float:
+    ok = (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+          and (value >= 0 if allow_zero else value > 0) and value <= most)
+    if not ok:
+        bound = f" and <= {most:g}" if math.isfinite(most) else ""
+        raise StudyError(key, f"must be a finite number {'>= 0' if allow_zero else '> 0'}{bound}, got {value!r}")
+    return float(value)
+
+
+def _whole(key: str, value) -> int:
+    if not isinstance(value, int) or isinstance(value, bool) or value < 0:
+        raise StudyError(key, f"must be a whole number >= 0, got {value!r}")
+    return value
+
+
+def _check_name(name) -> str:
+    if not (isinstance(name, str) and _PLAIN_NAME.match(name) and name.strip(" .")):
+        raise StudyError("name", f"{name!r} must be a plain file name (no folder, not '.' or '..'): it names "
+                                 "the study's output files, which stay in their folder (give --out to choose it)")
+    return name
+
+
+def _check_metrics(metrics) -> tuple[str, ...]:
+    if not isinstance(metrics, (list, tuple)) or not metrics:
+        raise StudyError("metrics", f"give a list of at least one of: {', '.join(METRICS)}; got {metrics!r}")
+    mistakes = Mistakes()
+    for m in metrics:
+        if m not in METRICS:
+            mistakes.add(StudyError("metrics", f"{m!r}: " + did_you_mean(str(m), METRICS, "metric")))
+    mistakes.raise_if_any()
+    if len(set(metrics)) != len(metrics):
+        raise StudyError("metrics", f"repeated metric in {list(metrics)}")
+    return tuple(metrics)
+
+
+def _check_engine(engine) -> str:
+    if engine not in ENGINES:
+        raise StudyError("engine", f"{engine!r} is not allowed; allowed: {', '.join(ENGINES)}")
+    return engine
+
+
+#: The checks of a study's own settings: field -> check(value) returning the value to keep.
+_SETTING_CHECKS = {
+    "name": _check_name,
+    "duration": lambda v: _positive("duration", v, most=run_settings.SETTINGS["duration"].hi),
+    "sample_rate": lambda v: _positive("sample_rate", v, most=run_settings.SETTINGS["fps"].hi),
+    "sink_depth": lambda v: _positive("sink_depth", v, allow_zero=True),
+    "metrics": _check_metrics,
+    "engine": _check_engine,
+    "seed": lambda v: _whole("seed", v),
+    "samples": lambda v: _whole("samples", v),
+}
+
+
+def _check_settings(values: dict[str, Any], mistakes: Mistakes) -> dict[str, Any]:
+    """Each of a study's own settings in ``values`` checked alone (mistakes collected); the checked values."""
+    checked = {}
+    for key, value in values.items():
+        with mistakes.collect():
+            checked[key] = _SETTING_CHECKS[key](value)
+    return checked
+
+
+@dataclass(frozen=True)
+class Study:
+    """A parsed, validated study.  Build it with :func:`load_study` or :meth:`Study.from_dict`."""
+
+    name: str
+    duration: float  # s
+    scene_values: dict[str, Any] = field(default_factory=dict)  # the base scene file's parameters
+    base: dict[str, Any] = field(default_factory=dict)  # overrides shared by every run
+    axes: tuple[Axis, ...] = ()
+    sample_rate: float = DEFAULT_SAMPLE_RATE  # Hz
+    sink_depth: float = DEFAULT_SINK_DEPTH  # m
+    metrics: tuple[str, ...] = DEFAULT_METRICS
+    engine: str = "python"
+    fmu: str = ""  # FMU path for engine 'fmu'; "" = models/WetCloth.fmu
+    seed: int = 0
+    samples: int = 0
+    plots: tuple[PlotSpec, ...] = ()
+    description: str = ""
+    scene: str = ""  # where the base scene came from (for messages)
+
+    def __post_init__(self):
+        mistakes = Mistakes()
+        checked = _check_settings({key: getattr(self, key) for key in _SETTING_CHECKS}, mistakes)
+        mistakes.raise_if_any()
+        for key, value in checked.items():
+            object.__setattr__(self, key, value)
+        self._check_together()
+
+    # ---- construction
+    @classmethod
+    def from_dict(cls, data: dict[str, Any], base_dir: str | Path | None = None, name: str | None = None,
+                  source: str | None = None) -> "Study":
+        """A study from the contents of a study file (relative scene paths resolve from ``base_dir``);
+        ``source`` (e.g. 'study file x.toml') heads the error listing every mistake."""
+        if not isinstance(data, dict):
+            raise StudyError("study", f"expected a table of settings, got {type(data).__name__}")
+        mistakes = Mistakes(source)
+        for key in data:
+            if key not in STUDY_KEYS:
+                mistakes.add(StudyError(key, did_you_mean(key, STUDY_KEYS, "key")))
+        scene_path, scene_file = None, {}
+        with mistakes.collect():
+            scene_path, scene_file = _scene_file(data.get("scene"), base_dir)
+        base = {}
+        with mistakes.collect():
+            base = _base(data.get("base", {}), mistakes)
+        axes = []
+        with mistakes.collect():
+            table = data.get("axes", {})
+            if not isinstance(table, dict):
+                raise StudyError("axes", "must be a table of parameter = values")
+            for key, spec in table.items():
+                with mistakes.collect():
+                    axes.append(parse_axis(key, spec))
+        plots = ()
+        with mistakes.collect():
+            plots = plot_specs(data.get("plot", []))
+        # run settings: the study's, else the scene file's [run] table, else the defaults (one rule)
+        duration = data.get("duration", run_settings.resolve(scene_file.get("run")).duration)
+        settings = dict(name=data.get("name", name or "study"), duration=duration,
+                        sample_rate=data.get("sample_rate", DEFAULT_SAMPLE_RATE),
+                        sink_depth=data.get("sink_depth", DEFAULT_SINK_DEPTH),
+                        metrics=data.get("metrics", list(DEFAULT_METRICS)), engine=data.get("engine", "python"),
+                        seed=data.get("seed", 0), samples=data.get("samples", 0))
+        settings = _check_settings(settings, mistakes)
+        for key in ("description", "fmu"):
+            if not isinstance(data.get(key, ""), str):
+                mistakes.add(StudyError(key, f"must be text, got {data[key]!r}"))
+        mistakes.raise_if_any()
+        try:
+            return cls(
+                **settings,
+                description=data.get("description", ""),
+                scene=str(scene_path),
+                scene_values={k: v for k, v in scene_file.items() if k not in RESERVED_KEYS},
+                base=base,
+                axes=tuple(axes),
+                fmu=str(_resolve_relative(data["fmu"], base_dir)) if "fmu" in data else "",
+                plots=plots,
+            )
+        except ConfigError as exc:  # what the parts are wrong about together
+            mistakes.add(exc)
+            mistakes.raise_if_any()
+
+    def replace(self, **changes) -> "Study":
+        """A copy with some settings changed (validated)."""
+        return dataclasses.replace(self, **changes)
+
+    def _check_together(self) -> None:
+        """What the axes, [base], samples and plots must agree on (every mistake at once)."""
+        mistakes = Mistakes()
+        names = self.axis_names
+        if len(set(names)) != len(names):
+            mistakes.add(StudyError("axes", f"repeated axis in {names}"))
+        for both in (n for n in names if n in self.base):
+            mistakes.add(StudyError(f"axes.{both}", "is also set in [base]: set it in one place"))
+        has_random = any(a.is_random for a in self.axes)
+        if has_random and self.samples < 1:
+            mistakes.add(StudyError("samples", "random axes need samples >= 1 (the number of joint draws)"))
+        if self.samples and not has_random:
+            mistakes.add(StudyError("samples", "is only for random axes ({random = ...}); there are none"))
+        with mistakes.collect():
+            check_count("samples" if has_random else "axes", "the axes span", point_count(self.axes, self.samples))
+        with mistakes.collect():
+            run_settings.check_frames(self.duration, self.sample_rate, "sample_rate")
+        with mistakes.collect():
+            self.check_plots(self.plots)
+        mistakes.raise_if_any()
+
+    def check_plots(self, specs) -> None:
+        """Each plot names a recorded metric and one or two axes of this study."""
+        names = self.axis_names
+        for spec in specs:
+            if spec.metric not in self.metrics:
+                raise StudyError("plot", f"metric {spec.metric!r} is not recorded; recorded: {', '.join(self.metrics)}")
+            for axis in (spec.x, spec.y):
+                if axis is not None and axis not in names:
+                    raise StudyError("plot", f"{axis!r} is not an axis of this study; axes: {', '.join(names) or 'none'}")
+            if spec.y is not None and spec.y == spec.x:
+                raise StudyError("plot", f"a heatmap needs two different axes, got {spec.x!r} twice")
+
+    # ---- the runs
+    @property
+    def axis_names(self) -> list[str]:
+        return [a.name for a in self.axes]
+
+    @property
+    def settings(self) -> dict[str, Any]:
+        """Run settings that, with the parameters, determine a run's result."""
+        return dict(duration=self.duration, sample_rate=self.sample_rate, sink_depth=self.sink_depth,
+                    engine=self.engine, metrics=sorted(self.metrics))
+
+    def points(self) -> list[dict[str, Any]]:
+        """Axis coordinates of every run (see ``wetcloth.batch.axes.points``)."""
+        return points(self.axes, self.samples, self.seed)
+
+    def base_params(self) -> dict[str, Any]:
+        """Every parameter's value before the axes: defaults, then the scene file, then [base]."""
+        defaults = {name: f.default for name, f in PARAMETERS.items()}
+        return defaults | self.scene_values | self.base
+
+    def runs(self) -> list[Run]:
+        """Every run of the study in order; identical runs (repeated random draws) appear once."""
+        base = self.base_params()
+        settings = self.settings
+        out, seen = [], set()
+        for point in self.points():
+            params = base | point
+            key = run_key(params, settings)
+            if key not in seen:
+                seen.add(key)
+                out.append(Run(key, params, point))
+        return out
+
+
+def _base(table, mistakes: Mistakes) -> dict[str, Any]:
+    """The [base] table: parameter = value, each typed (ranges are checked per run)."""
+    if not isinstance(table, dict):
+        raise StudyError("base", "must be a table of parameter = value")
+    base = {}
+    for key, value in table.items():
+        with mistakes.collect():
+            check_name(key, f"base.{key}")
+            base[key] = typed(key, value, f"base.{key}")
+    return base
+
+
+def _resolve_relative(ref: str, base_dir) -> Path:
+    path = Path(ref)
+    if not path.is_absolute() and base_dir is not None and (Path(base_dir) / path).exists():
+        return Path(base_dir) / path
+    return path
+
+
+def _scene_file(ref, base_dir) -> tuple[Path, dict[str, Any]]:
+    """The base scene's path and its contents (checked)."""
+    if ref is not None and not isinstance(ref, str):
+        raise StudyError("scene", f"must be a preset name or a scene TOML path, got {ref!r}")
+    path = resolve_scene_path(None if ref is None else _resolve_relative(ref, base_dir))
+    try:
+        return path, read_scene_file(path)
+    except ConfigError as exc:
+        raise StudyError("scene", str(exc).replace("\n", ";")) from None
+
+
+def load_study(path: str | Path) -> "Study":
+    """Read and validate a study TOML file: every mistake at once, naming the file."""
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"study file {str(path)!r} not found")
+    data = read_toml(path, "study file")
+    return Study.from_dict(data, base_dir=path.parent, name=path.stem, source=f"study file {path}")
+

@@ -1,0 +1,19 @@
+"""What the subcommands share: argument types and exit statuses."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+#: Exit status of a command refused or failed for a reason it names (a bad option, a full disk).
+FAILED = 2
+#: Exit status of a command stopped by Ctrl-C (128 + SIGINT, as shells report it).
+INTERRUPTED = 130
+
+
+def path_argument(text: str) -> Path:
+    """A file or folder path given on the command line; an empty one is refused (it would mean
+    the current folder, which no option means)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("needs a path, got an empty string")
+    return Path(text)

@@ -1,0 +1,62 @@
+"""``wetcloth params``: every scene parameter and run setting with its unit, range, default and meaning."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import textwrap
+
+from wetcloth import run_settings
+from wetcloth.scene import PARAMETERS, RESERVED_KEYS, describe_range, read_scene_file
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("params", help="list the parameters: unit, range, default, meaning",
+                       description="List every scene parameter and [run] setting: its value in SCENE (default: "
+                                   "the towel), default, unit, allowed range and meaning. The names are the same "
+                                   "in scene files, --set, Python, the FMU and batch studies.")
+    p.add_argument("scene", nargs="?", default=None, help="scene TOML file or preset name (default: towel)")
+    p.add_argument("--json", action="store_true", help="print JSON (a list of objects) for scripts")
+    p.set_defaults(func=main)
+
+
+def rows(scene: str | None) -> list[dict]:
+    """One dict per parameter, then per [run] setting: name, table, value, default, unit, range, min,
+    max, choices, fmu (causality in the FMU) and doc."""
+    data = read_scene_file(scene)
+    values = {k: v for k, v in data.items() if k not in RESERVED_KEYS}
+    out = []
+    for name, f in PARAMETERS.items():
+        md = f.metadata
+        out.append(dict(name=name, table="", value=values.get(name, f.default), default=f.default, unit=md["unit"],
+                        range=describe_range(f), min=md["lo"], min_exclusive=bool(md["lo_open"]), max=md["hi"],
+                        choices=list(md["choices"]) or None, fmu=md["fmu"], doc=md["doc"]))
+    run_table = run_settings.resolve(data.get("run"))
+    for name, s in run_settings.SETTINGS.items():
+        out.append(dict(name=name, table="run", value=getattr(run_table, name), default=s.default, unit=s.unit,
+                        range=run_settings.describe(s), min=s.lo, min_exclusive=True, max=s.hi, choices=None,
+                        fmu=None, doc=s.doc))
+    return out
+
+
+def main(args) -> int:
+    table = rows(args.scene)
+    if args.json:
+        print(json.dumps(table, indent=1))
+        return 0
+    heads = ("name", "value", "default", "unit", "meaning; allowed values")
+    cells = [(("[run] " if r["table"] else "") + r["name"], _text(r["value"]), _text(r["default"]), r["unit"],
+              f"{r['doc']}; {r['range']}") for r in table]
+    widths = [max(len(h), *(len(c[i]) for c in cells)) for i, h in enumerate(heads[:-1])]
+    indent = sum(widths) + 2 * len(widths)
+    room = max(shutil.get_terminal_size((120, 24)).columns - indent, 30)
+    for cell in [heads, *cells]:
+        meaning = textwrap.wrap(cell[-1], room) or [""]
+        print("  ".join(c.ljust(w) for c, w in zip(cell, widths)) + "  " + meaning[0])
+        for more in meaning[1:]:
+            print(" " * indent + more)
+    return 0
+
+
+def _text(value) -> str:
+    return repr(value) if isinstance(value, str) else f"{value:g}"
