@@ -12,7 +12,8 @@ import pytest
 import wetcloth
 from wetcloth.batch import StudyError, Study, compute_metrics, first_crossing, heatmap_data, line_data, load_study
 from wetcloth.batch.results import make_table, read_table, write_table
-from wetcloth.batch.study import parse_plot_spec
+from wetcloth.batch import parse_plot_spec
+from wetcloth.batch.axes import MAX_RUNS
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDIES = sorted((ROOT / "models" / "studies").glob("*.toml"))
@@ -159,10 +160,10 @@ def test_invalid_values_parse_and_fail_per_run_not_up_front():
 
 
 @pytest.mark.parametrize("data, key, match", [
-    (dict(axes={"absorbtion_rate": [0.1]}), "axes.absorbtion_rate", "unknown parameter 'absorbtion_rate'; known: nx, ny"),
+    (dict(axes={"absorbtion_rate": [0.1]}), "axes.absorbtion_rate", "'absorbtion_rate': unknown parameter; did you mean 'absorption_rate'"),
     (dict(axes={"mesh_format": ["ply", "obj"]}), "axes.mesh_format", "'mesh_format' is an FMU-only parameter, not a scene"),
-    (dict(axes={"absorption_rate": ["fast"]}), "axes.absorption_rate", r"takes a number \(0 <= absorption_rate <= 10000 1/s\)"),
-    (dict(axes={"drag_model": [1.0]}), "axes.drag_model", "takes a string"),
+    (dict(axes={"absorption_rate": ["fast"]}), "axes.absorption_rate", r"expected a number, got 'fast' .*; allowed: 0 <= absorption_rate <= 10000 1/s"),
+    (dict(axes={"drag_model": [1.0]}), "axes.drag_model", "expected a string"),
     (dict(axes={"absorption_rate": [0.1, 0.1]}), "axes.absorption_rate", "repeated values"),
     (dict(axes={"absorption_rate": []}), "axes.absorption_rate", "at least one value"),
     (dict(axes={"absorption_rate": {"start": 0.1, "stop": 0.2}}), "axes.absorption_rate", "exactly one of num or step"),
@@ -171,11 +172,11 @@ def test_invalid_values_parse_and_fail_per_run_not_up_front():
     (dict(axes={"absorption_rate": {"random": "uniform", "low": 0.1, "high": 0.5}}), "samples", "need samples >= 1"),
     (dict(samples=4), "samples", "only for random axes"),
     (dict(base={"nx": 5}, axes={"nx": [5, 7]}), "axes.nx", "also set in"),
-    (dict(metrics=["time_to_sink", "sink_time"]), "metrics", "unknown metric 'sink_time'; known: time_to_sink"),
+    (dict(metrics=["time_to_sink", "sink_tme"]), "metrics", "'sink_tme': unknown metric; did you mean 'sink_time'|'sink_tme': unknown metric; known: time_to_sink"),
     (dict(engine="modelica"), "engine", "allowed: python, fmu"),
     (dict(duration=-1.0), "duration", "finite number > 0"),
     (dict(sample_rate=0), "sample_rate", "finite number > 0"),
-    (dict(sweep={}), "sweep", "unknown key; allowed: name, description"),
+    (dict(colour={}), "colour", "unknown key; known: name, description"),
     (dict(plot=[{"metric": "final_depth", "x": "nx"}]), "plot", "not an axis of this study"),
 ])
 def test_bad_study_errors_name_the_key(data, key, match):
@@ -184,15 +185,65 @@ def test_bad_study_errors_name_the_key(data, key, match):
     assert info.value.key == key
 
 
-def test_duration_defaults_to_the_scene_files_run_table(tmp_path):
-    assert Study.from_dict({"scene": "thesis_fast"}).duration == 90.0  # thesis_fast.toml [run]
-    scene = tmp_path / "bare.toml"
-    scene.write_text("nx = 5\n")
-    with pytest.raises(StudyError, match="duration"):
-        Study.from_dict({"scene": "bare.toml"}, base_dir=tmp_path)
+def test_scene_path_relative_to_the_study_file(tmp_path):
+    (tmp_path / "bare.toml").write_text("nx = 5\n")
     study = tmp_path / "s.toml"
-    study.write_text('scene = "bare.toml"\nduration = 2.0\n')  # a scene path relative to the study file
+    study.write_text('scene = "bare.toml"\nduration = 2.0\n')
     assert load_study(study).runs()[0].params["nx"] == 5
+
+
+@pytest.mark.parametrize("name", ["../../x", "/tmp/x", "..", "a/b", "a\\b", ""])
+def test_a_study_name_cannot_leave_the_output_folder(name):
+    with pytest.raises(StudyError, match="must be a plain file name"):
+        make(name=name)
+
+
+def test_cli_refuses_a_study_whose_name_leaves_the_output_folder(tmp_path, monkeypatch, capsys):
+    from wetcloth.cli import main
+
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    for name in ("../../escaped", str(tmp_path / "absolute")):
+        (work / "s.toml").write_text(f'name = "{name}"\nscene = "thesis_fast"\nduration = 1.0\n'
+                                     '[axes]\nabsorption_rate = [-1.0]\n')  # a run that needs no cluster
+        assert main(["batch", "s.toml", "--no-progress"]) == 2
+        assert "study file s.toml: study 'name':" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["s.toml", "work"]  # nothing written anywhere
+
+
+@pytest.mark.parametrize("data, key, match", [
+    (dict(axes={"absorption_rate": {"start": 0.1, "stop": 1.0, "num": 100_000_000}}), "axes.absorption_rate",
+     f"num is 1e[+]08; at most {MAX_RUNS} runs per study"),
+    (dict(axes={"absorption_rate": {"start": 0.1, "stop": 1.0, "num": 1e8}}), "axes.absorption_rate", "num is 1e[+]08"),
+    (dict(axes={"absorption_rate": {"start": 0.0, "stop": 1.0, "step": 1e-12}}), "axes.absorption_rate",
+     "step 1e-12 from 0 to 1 gives 1e[+]12; at most"),
+    (dict(samples=100_000_000, axes={"absorption_rate": {"random": "uniform", "low": 0.1, "high": 0.5}}), "samples",
+     "the axes span 1e[+]08; at most"),
+    (dict(axes={"absorption_rate": {"start": 0.1, "stop": 1.0, "num": 1000}, "initial_tilt": {"start": 0, "stop": 90, "num": 1000}}),
+     "axes", "the axes span 1e[+]06; at most"),
+    (dict(duration=1e6, sample_rate=1000.0), "sample_rate", "1e[+]06 s at 1000 frames/s is 1e[+]09 frames; at most 200000"),
+])
+def test_work_beyond_sane_bounds_is_refused_naming_the_bound(data, key, match):
+    """Refused at once (no values are made: 1e12 values would not fit in memory)."""
+    with pytest.raises(StudyError, match=match) as info:
+        make(**data)
+    assert info.value.key == key
+
+
+def test_every_mistake_of_a_study_file_at_once(tmp_path):
+    path = tmp_path / "typos.toml"
+    path.write_text('scene = "thesis_fast"\nduraton = 5.0\nmetrics = ["time_to_snk"]\n'
+                    '[base]\nnx = "9"\n[axes]\nabsorbtion_rate = [0.1]\n')
+    with pytest.raises(StudyError) as info:
+        load_study(path)
+    assert str(info.value).splitlines() == [
+        f"study file {path}: 4 mistakes",
+        "  study 'duraton': unknown key; did you mean 'duration'?",
+        "  study 'base.nx': expected a number, got '9' (text: write the number without quotes); allowed: 2 <= nx <= 1024",
+        "  study 'axes.absorbtion_rate': 'absorbtion_rate': unknown parameter; did you mean 'absorption_rate'?",
+        "  study 'metrics': 'time_to_snk': unknown metric; did you mean 'time_to_sink'?",
+    ]
 
 
 def test_plot_specs():

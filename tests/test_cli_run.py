@@ -1,15 +1,23 @@
-"""``wetcloth run``: outputs as CSV and a plot, overrides, and clear errors."""
+"""``wetcloth run``: outputs as CSV and a plot, overrides, clear errors, and runs stopped early
+(blow-up, Ctrl-C, a full disk) keeping what they computed; ``params`` and ``--version``."""
 
 import csv
 import json
 import math
+import os
+import re
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
+import full_disk
 import pytest
 
+import wetcloth
 from wetcloth.cli import main
+from wetcloth.runner import run
 from wetcloth.simulation import OUTPUT_NAMES
 
 
@@ -73,26 +81,161 @@ def test_unwritable_outputs_are_refused_before_simulating(tmp_path, capsys, monk
     assert not (tmp_path / "p.png").exists()
 
 
-def test_interrupted_run_closes_its_frame_sequence(tmp_path, monkeypatch):
-    """Ctrl-C mid-run: frames.json still counts the frames on disk and says the sequence is incomplete."""
-    import wetcloth.commands.run as run_command
-    from wetcloth.runner import run as real_run
+def _frames_on_disk(frames: Path) -> int:
+    return len(list(frames.glob("cloth_*.ply")))
 
-    def interrupted(*args, on_frame, **kwargs):
-        def frame(index, sim):
-            if index == 3:
-                raise KeyboardInterrupt
-            on_frame(index, sim)
-        return real_run(*args, on_frame=frame, **kwargs)
 
-    monkeypatch.setattr(run_command, "run", interrupted)
-    frames = tmp_path / "frames"
-    with pytest.raises(KeyboardInterrupt):
-        main(["run", "--duration", "1", "--set", "nx=5", "--set", "ny=5", "--export", str(frames),
-              "--csv", str(tmp_path / "o.csv"), "--plot", str(tmp_path / "p.png"), "--no-progress"])
+def test_ctrl_c_keeps_the_outputs_and_prints_one_line(tmp_path):
+    """A terminal's Ctrl-C (SIGINT to the process group) mid-run: exit 130, one line naming what was
+    kept, no traceback; the CSV and plot of the frames computed are written, frames.json counts the
+    frames on disk."""
+    frames, csv_path, plot_path = tmp_path / "frames", tmp_path / "o.csv", tmp_path / "p.png"
+    proc = subprocess.Popen([sys.executable, "-m", "wetcloth.cli", "run", "--duration", "60", "--set", "nx=9",
+                             "--set", "ny=9", "--export", str(frames), "--csv", str(csv_path), "--plot", str(plot_path),
+                             "--no-progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        deadline = time.monotonic() + 60
+        while _frames_on_disk(frames) < 5 and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("wetcloth run: interrupted; outputs up to t = "), err
+    assert str(csv_path) in lines[0] and str(plot_path) in lines[0] and f"frames in {frames}" in lines[0]
     manifest = json.loads((frames / "frames.json").read_text())
-    assert manifest["complete"] is False
-    assert manifest["frame_count"] == 3 == len(list(frames.glob("cloth_*.ply")))
+    assert manifest["complete"] is False and manifest["frame_count"] == _frames_on_disk(frames) >= 5
+    rows = list(csv.DictReader(open(csv_path)))
+    assert len(rows) >= manifest["frame_count"] and float(rows[-1]["time"]) < 60
+    assert plot_path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("disk", full_disk.DISKS)
+def test_a_full_disk_keeps_files_whole_and_the_manifest_true(tmp_path, disk):
+    """The export folder is a disk of 64 kB: it fills up after a few frames.  The real error is shown,
+    every file is whole or absent, no temporary files are left, frames.json counts the frames on disk,
+    and the CSV and plot of the frames computed are written (they go to another disk)."""
+    csv_path, plot_path = tmp_path / "o.csv", tmp_path / "p.png"
+    found = full_disk.run(disk, tmp_path, 64 * 1024, f"""
+        import contextlib, io, json, trimesh
+        from wetcloth.cli import main
+
+        err = io.StringIO()
+        with contextlib.redirect_stderr(err):
+            code = main(["run", "thesis_fast", "--duration", "3", "--fps", "10", "--set", "nx=5", "--set", "ny=5",
+                         "--export", str(DISK / "frames"), "--csv", {str(csv_path)!r}, "--plot", {str(plot_path)!r},
+                         "--no-progress"])
+        frames = DISK / "frames"
+        vertices = [len(trimesh.load(p, process=False).vertices) for p in sorted(frames.glob("cloth_*.ply"))]
+        print(json.dumps(dict(code=code, err=err.getvalue(), names=sorted(p.name for p in frames.iterdir()),
+                              vertices=vertices, manifest=json.loads((frames / "frames.json").read_text()))))
+    """)
+    err = found["err"]
+    assert found["code"] == 2 and "Traceback" not in err, err
+    assert err.startswith("wetcloth run: error: cannot write ") and "No space left on device" in err.splitlines()[0], err
+    assert not [n for n in found["names"] if n.endswith((".part", ".tmp"))], found["names"]
+    assert 0 < len(found["vertices"]) < 31 and set(found["vertices"]) == {25}  # whole frames only
+    assert found["manifest"]["frame_count"] == len(found["vertices"]) and found["manifest"]["complete"] is False
+    rows = list(csv.DictReader(open(csv_path)))
+    assert len(rows) >= len(found["vertices"]) and f"outputs up to t = {float(rows[-1]['time']):g} s" in err
+    assert plot_path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_work_beyond_sane_bounds_is_refused_naming_the_bound(tmp_path, capsys):
+    for options, bound in ((["--fps", "1e9"], "0 < fps <= 10000 1/s"),
+                           (["--duration", "1e5", "--fps", "1000"], "at most 200000 per run")):
+        assert main(["run", *options, "--csv", str(tmp_path / "o.csv"), "--plot", str(tmp_path / "p.png")]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and bound in err, err
+
+
+def test_a_run_that_would_take_hours_is_warned_about_with_cheaper_settings(tmp_path):
+    """A fabric of 1e-9 kg/m2 holds explicit Euler to steps of 1e-11 s: the warning comes a few seconds
+    in (from a timed sample of the run itself), names the cheaper settings, and Ctrl-C then stops it."""
+    proc = subprocess.Popen([sys.executable, "-m", "wetcloth.cli", "run", "--duration", "10", "--set",
+                             "areal_density=1e-9", "--set", "integrator=explicit_euler", "--set", "nx=5", "--set", "ny=5",
+                             "--csv", str(tmp_path / "o.csv"), "--plot", str(tmp_path / "p.png"), "--no-progress"],
+                            stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        warning = proc.stderr.readline()  # blocks until the warning (or the end)
+        os.killpg(proc.pid, signal.SIGINT)
+        proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert warning.startswith("wetcloth run: warning: this run will take about "), warning
+    assert re.search(r"steps of 1\.\de-11 s", warning), warning
+    assert "integrator 'implicit_euler'" in warning and "areal_density = 1e-09 kg/m2" in warning, warning
+    assert "a shorter duration (now 10 s)" in warning and proc.returncode == 130
+
+
+def test_cost_advice_names_the_expensive_settings_and_never_what_is_set():
+    from wetcloth.advice import cheaper_settings, estimate_cost
+    from wetcloth.progress import Sample
+
+    big = wetcloth.Scene(nx=1000, ny=1000)
+    cost = estimate_cost(big, 10.0, Sample(elapsed=8.0, steps=0, simulated=0.0, time=0.0), stable_step=1e-7)
+    assert not cost.exact and cost.steps == pytest.approx(1e8) and cost.seconds == pytest.approx(8e8)
+    advice = "; ".join(cheaper_settings(big, cost, 10.0, 1e-7))
+    assert "fewer particles (nx x ny = 1000 x 1000 = 1e+06" in advice and "integrator 'implicit_euler'" in advice
+    implicit = wetcloth.Scene(nx=1000, ny=1000, integrator="implicit_euler")
+    assert "implicit_euler" not in "; ".join(cheaper_settings(implicit, cost, 10.0, math.inf))
+
+
+def test_blow_up_advice_never_suggests_what_is_already_set():
+    from wetcloth.advice import blow_up_advice
+
+    sim = wetcloth.Simulation(wetcloth.load_scene(nx=3, ny=3, integrator="implicit_euler", tolerance=1e-4))
+    sim.state.vel[2, 0] = 1e9  # as if exploded: the guard refuses the next step
+    with pytest.raises(wetcloth.BlowUpError) as info:
+        sim.advance(0.01)
+    message = str(info.value)
+    assert "use a smaller max_step (now 0.01 s) or a smaller tolerance (now 0.0001)." in message, message
+    assert "'implicit_euler' (stable" not in message and "tolerance > 0" not in message
+    explicit = wetcloth.Scene(integrator="explicit_euler", tolerance=0.0)
+    assert blow_up_advice(explicit) == ("use integrator 'implicit_euler' (stable at any step), a smaller max_step "
+                                        "(now 0.01 s) or a tolerance > 0 (steps adapted to an error bound)")
+
+
+def test_progress_moves_by_wall_time_within_a_frame(tmp_path, capfd, monkeypatch):
+    """One frame every 5 s of simulated time: the bar still moves while the frame is computed."""
+    from wetcloth import progress
+
+    monkeypatch.setattr(progress, "SHOW_AFTER", 0.0)
+    monkeypatch.setattr(progress, "POLL", 0.01)
+    run(wetcloth.load_scene("thesis_fast", nx=9, ny=9), duration=5.0, fps=0.2, progress=True, warn=None)
+    states = re.findall(r"\| (\d+\.\d)/5\.0 sim s", capfd.readouterr().err)
+    assert any(0.0 < float(n) < 5.0 for n in states), states
+
+
+def test_empty_paths_are_refused(capsys):
+    for option in ("--export", "--csv", "--plot"):
+        with pytest.raises(SystemExit) as info:
+            main(["run", option, ""])
+        assert info.value.code == 2
+        assert f"argument {option}: needs a path, got an empty string" in capsys.readouterr().err
+
+
+def test_version_and_params(capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["--version"])
+    assert info.value.code == 0 and capsys.readouterr().out == f"wetcloth {wetcloth.__version__}\n"
+    assert main(["params", "thesis_sink", "--json"]) == 0
+    rows = {r["name"]: r for r in json.loads(capsys.readouterr().out)}
+    assert len(rows) == len(wetcloth.scene.PARAMETERS) + 2  # and duration, fps of [run]
+    assert rows["thickness"] == dict(name="thickness", table="", value=0.0004, default=0.002, unit="m",
+                                     range="0 < thickness <= 1 m", min=0.0, min_exclusive=True, max=1.0, choices=None,
+                                     fmu="parameter", doc=wetcloth.scene.PARAMETERS["thickness"].metadata["doc"])
+    assert rows["duration"]["table"] == "run" and rows["integrator"]["choices"] == list(wetcloth.scene.INTEGRATORS)
+    assert main(["params"]) == 0
+    table = capsys.readouterr().out.splitlines()
+    assert table[0].split()[:4] == ["name", "value", "default", "unit"]
+    assert any(re.match(r"thickness +0\.002 +0\.002 +m +envelope thickness", line) for line in table), table
 
 
 def test_an_operating_system_error_is_one_clear_line(tmp_path, capsys):

@@ -437,12 +437,12 @@ def test_a_file_in_the_way_is_refused(tmp_path):
 
 def test_a_directory_that_cannot_be_written_is_refused(tmp_path, monkeypatch):
     """Where the first write fails (here: as if permission were denied), open_sequence says so."""
-    import wetcloth.exporter.sequence as sequence_module
+    import wetcloth.files
 
     def denied(src, dst):
         raise PermissionError(13, "Permission denied")
 
-    monkeypatch.setattr(sequence_module.os, "replace", denied)
+    monkeypatch.setattr(wetcloth.files.os, "replace", denied)
     with pytest.raises(ExportError, match=r"cannot write frames.json in export directory .*ro: Permission denied"):
         open_sequence(tmp_path / "ro", fps=30)
 

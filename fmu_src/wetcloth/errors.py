@@ -120,17 +120,16 @@ class _Collector:
         return False
 
 
-def did_you_mean(name: str, known: Iterable[str], what: str = "parameter") -> str:
+def did_you_mean(name: str, known: Iterable[str], what: str = "parameter", listing: str | None = None) -> str:
     """'unknown parameter; did you mean 'width'?': the nearest known names (difflib ratio >= 0.6 and
-    within 0.1 of the best), else how to list them."""
+    within 0.1 of the best), else ``listing`` (where to find the names) or the names themselves."""
     known = list(known)
     scores = {k: difflib.SequenceMatcher(None, name, k).ratio() for k in known}
     best = max(scores.values(), default=0.0)
     close = sorted((k for k, r in scores.items() if r >= max(0.6, best - 0.1)), key=scores.get, reverse=True)[:3]
     if close:
         return f"unknown {what}; did you mean " + " or ".join(repr(c) for c in close) + "?"
-    return f"unknown {what} (there are {len(known)}; 'wetcloth params' lists them)" if len(known) > 12 \
-        else f"unknown {what}; known: {', '.join(known)}"
+    return f"unknown {what} ({listing})" if listing else f"unknown {what}; known: {', '.join(known)}"
 
 
 class BlowUpError(RuntimeError):

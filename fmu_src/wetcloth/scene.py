@@ -115,6 +115,7 @@ class Scene:
 
 
 PARAMETERS: dict[str, dataclasses.Field] = {f.name: f for f in dataclasses.fields(Scene)}
+PARAMETER_LISTING = f"there are {len(PARAMETERS)}; 'wetcloth params' lists them"
 
 
 def describe_range(f: dataclasses.Field) -> str:
@@ -129,7 +130,7 @@ def describe_range(f: dataclasses.Field) -> str:
 
 def _field(name: str) -> dataclasses.Field:
     if name not in PARAMETERS:
-        raise ParameterError(name, did_you_mean(name, PARAMETERS))
+        raise ParameterError(name, did_you_mean(name, PARAMETERS, listing=PARAMETER_LISTING))
     return PARAMETERS[name]
 
 

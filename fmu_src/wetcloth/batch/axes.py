@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from wetcloth.errors import ConfigError, StudyError, did_you_mean
-from wetcloth.scene import PARAMETERS, normalise
+from wetcloth.scene import PARAMETER_LISTING, PARAMETERS, normalise
 
 DISTRIBUTIONS = ("uniform", "loguniform", "normal", "integers", "choice")
 #: Random kinds and the keys each takes.
@@ -68,7 +68,7 @@ def check_name(name: str, where: str) -> None:
         raise StudyError(where, f"{name!r} is an FMU-only parameter, not a scene parameter: a study varies scene "
                                 "parameters and records metrics; to keep the meshes of a run, run its scene with "
                                 "'wetcloth run --export DIR'")
-    raise StudyError(where, f"{name!r}: " + did_you_mean(name, PARAMETERS))
+    raise StudyError(where, f"{name!r}: " + did_you_mean(name, PARAMETERS, listing=PARAMETER_LISTING))
 
 
 def typed(name: str, value, where: str):

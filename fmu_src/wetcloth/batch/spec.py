@@ -241,8 +241,10 @@ class Study:
             mistakes.add(StudyError("samples", "is only for random axes ({random = ...}); there are none"))
         with mistakes.collect():
             check_count("samples" if has_random else "axes", "the axes span", point_count(self.axes, self.samples))
-        with mistakes.collect():
+        try:
             run_settings.check_frames(self.duration, self.sample_rate, "sample_rate")
+        except run_settings.RunSettingError as exc:
+            mistakes.add(StudyError("sample_rate", exc.problems[0][2]))
         with mistakes.collect():
             self.check_plots(self.plots)
         mistakes.raise_if_any()
