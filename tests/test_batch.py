@@ -274,21 +274,22 @@ def test_ctrl_c_saves_finished_runs_and_stops_quietly(tmp_path):
     assert 0 < len(saved) < 20 and (saved["status"] == "ok").all()
 
 
-def _processes() -> dict[int, tuple[int, int]]:
-    """Every process of this machine: pid -> (parent pid, session id), from /proc."""
+def _processes() -> dict[int, tuple[int, int, str]]:
+    """Every process of this machine: pid -> (parent pid, session id, command line), from /proc."""
     found = {}
     for stat in Path("/proc").glob("[0-9]*/stat"):
         try:
             fields = stat.read_text().rsplit(")", 1)[1].split()
+            command = (stat.parent / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
         except OSError:  # gone meanwhile
             continue
-        found[int(stat.parent.name)] = (int(fields[1]), int(fields[3]))
+        found[int(stat.parent.name)] = (int(fields[1]), int(fields[3]), command)
     return found
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc to see the processes")
 def test_ctrl_c_while_the_local_cluster_starts_is_one_line_and_leaves_no_process(tmp_path):
-    """SIGINT to the command's process group as soon as it has started its first child process (the
+    """SIGINT to the command's process group as soon as it has started its first worker process (the
     local cluster is starting): exit 130, no traceback, and every process of its session is gone."""
     study_file = tmp_path / "s.toml"
     study_file.write_text('scene = "thesis_fast"\nduration = 2.0\n[base]\nnx = 5\nny = 5\n'
@@ -300,8 +301,8 @@ def test_ctrl_c_while_the_local_cluster_starts_is_one_line_and_leaves_no_process
     try:
         deadline = time.monotonic() + 60
         while proc.poll() is None and time.monotonic() < deadline:
-            if any(parent == proc.pid for parent, _ in _processes().values()):
-                break
+            if any(parent == proc.pid and "spawn_main" in command for parent, _, command in _processes().values()):
+                break  # a worker process is starting
             time.sleep(0.01)
         os.killpg(proc.pid, signal.SIGINT)
         _, err = proc.communicate(timeout=60)
@@ -311,9 +312,9 @@ def test_ctrl_c_while_the_local_cluster_starts_is_one_line_and_leaves_no_process
     assert proc.returncode == 130, err
     assert "wetcloth batch: interrupted" in err and "Traceback" not in err, err
     deadline = time.monotonic() + 10  # the session's processes (workers, resource tracker) end with it
-    while [p for p, (_, session) in _processes().items() if session == proc.pid] and time.monotonic() < deadline:
+    while [p for p, (_, session, _) in _processes().items() if session == proc.pid] and time.monotonic() < deadline:
         time.sleep(0.1)
-    assert not [p for p, (_, session) in _processes().items() if session == proc.pid]
+    assert not [p for p, (_, session, _) in _processes().items() if session == proc.pid]
 
 
 def test_a_script_without_a_main_guard_gets_one_line_saying_what_to_add(tmp_path):

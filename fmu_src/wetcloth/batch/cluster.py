@@ -17,6 +17,7 @@ import sys
 import threading
 import traceback
 from contextlib import ExitStack, contextmanager
+from multiprocessing import resource_tracker
 from pathlib import Path
 
 LOCAL_HTTP = "127.0.0.1:0"  # the local cluster's dashboard / HTTP address: any free port, loopback only
@@ -84,6 +85,9 @@ def sigint_held():
     if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
         yield
         return
+    # multiprocessing's resource tracker, when it first starts, unblocks SIGINT in the thread that
+    # starts it (the cluster's event loop, whose threads start the workers): start it before.
+    resource_tracker.ensure_running()
     before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
