@@ -32,7 +32,7 @@ def serial(study, repeat: int) -> tuple[float, float]:
     """(wall-clock s to run every scene in this process, no Dask, after one warm-up run, best of
     ``repeat``; CPU share: CPU time / wall-clock time of the runs)."""
     from wetcloth.batch.engines import execute
-    from wetcloth.batch.runner import _task
+    from wetcloth.batch.execution import _task
 
     runs = study.runs()
     execute(_task(runs[0], study))  # warm-up: numba kernels loaded
@@ -53,7 +53,7 @@ def on_cluster(study, workers: int, repeat: int) -> tuple[float, float, float, f
     worker in that repeat, and the runs' CPU share: CPU time / wall-clock time)."""
     from wetcloth.batch import dask_client, run_study
     from wetcloth.batch.engines import execute
-    from wetcloth.batch.runner import _task
+    from wetcloth.batch.execution import _task
 
     start = time.perf_counter()
     with dask_client(workers=workers) as client:  # the local cluster 'wetcloth batch' starts
