@@ -6,7 +6,6 @@ on implicit_euler), each with its current value.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -111,11 +110,11 @@ def cost_warning(scene: Scene, duration: float, sample: Sample, stable_step: flo
             f"{_duration(cost.per_step)} each); cheaper: " + "; ".join(cheaper_settings(scene, cost, duration, stable_step)))
 
 
+_UNITS = (("years", 3.15e7), ("days", 86400.0), ("h", 3600.0), ("min", 60.0), ("s", 1.0), ("ms", 1e-3), ("µs", 1e-6))
+
+
 def _duration(seconds: float) -> str:
-    """'3.2 h', '12 min', '45 s', '150 µs'."""
-    for unit, size in (("years", 3.15e7), ("days", 86400.0), ("h", 3600.0), ("min", 60.0), ("s", 1.0)):
-        if seconds >= size:
-            return f"{seconds / size:.2g} {unit}"
-    if seconds >= 1e-3:
-        return f"{seconds * 1e3:.2g} ms"
-    return f"{seconds * 1e6:.2g} µs" if seconds > 0 and math.isfinite(seconds) else f"{seconds:g} s"
+    """'3.2 h', '174 days', '45 s', '150 µs'."""
+    unit, size = next(((u, size) for u, size in _UNITS if seconds >= size), _UNITS[-1])
+    value = seconds / size
+    return f"{value:.0f} {unit}" if value >= 10 else f"{value:.2g} {unit}"

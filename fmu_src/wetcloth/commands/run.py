@@ -70,7 +70,6 @@ def scene_and_settings(args):
 
 def main(args) -> int:
     scene, settings = scene_and_settings(args)
-    title = f"{args.scene or 'towel'}: {settings.duration:g} s"
     # Every output is checked before any simulating: a run is not thrown away at its end.
     _check_writable(args.csv, "--csv")
     _check_writable(args.plot, "--plot")
@@ -86,30 +85,19 @@ def main(args) -> int:
                      progress=not args.no_progress, warn=_warn)
     except (Exception, KeyboardInterrupt) as exc:  # a blow-up, Ctrl-C, a full disk: keep what was good
         result, stop = getattr(exc, "partial_result", None), exc
-    problems = []  # what could not be written; never hides why the run stopped
-    if sequence is not None:
-        try:
-            sequence.close(complete=stop is None)  # frames.json counts the frames on disk; USD saved
-        except (OSError, ValueError) as exc:
-            problems.append(str(exc))
-    written = []
-    if result is not None and result.rows:
-        last = result.rows[-1]["time"]
-        written = _write_outputs(result, args, title if stop is None else f"{title} (stopped at {last:g} s)", problems)
-    kept = " and ".join(written)
-    if sequence is not None and sequence.frame_count:
-        kept += f"{'; ' if kept else ''}{sequence.frame_count} frames in {sequence.directory}"
+    problems: list[str] = []  # what could not be written; reported after why the run stopped
+    kept = _keep(result, sequence, args, f"{args.scene or 'towel'}: {settings.duration:g} s", stop is None, problems)
     trouble = "".join(f"; {p}" for p in problems)
     if stop is None:
         last = result.rows[-1]
         print(f"simulated {settings.duration:g} s: depth {last['depth'] * 100:.2f} cm, "
               f"wet mass {last['wet_mass'] * 1000:.1f} g")
         if problems:
-            print(f"wetcloth run: error: {trouble[2:]}" + (f"; written: {kept}" if kept else ""), file=sys.stderr)
+            print(f"wetcloth run: error: {trouble[2:]}; written: {kept or 'nothing'}", file=sys.stderr)
             return FAILED
         print(f"wrote {kept}")
         return 0
-    so_far = f"outputs up to t = {result.rows[-1]['time']:g} s are in {kept}" if written else "no outputs written"
+    so_far = f"outputs up to t = {result.rows[-1]['time']:g} s are in {kept}" if kept else "nothing was written"
     if isinstance(stop, KeyboardInterrupt):
         print(f"wetcloth run: interrupted; {so_far}{trouble}", file=sys.stderr)
         return INTERRUPTED
@@ -119,22 +107,33 @@ def main(args) -> int:
     return FAILED
 
 
-def _warn(message: str) -> None:
-    tqdm.write(f"wetcloth run: warning: {message}", file=sys.stderr)
-
-
-def _write_outputs(result, args, title: str, problems: list[str]) -> list[str]:
-    """Write the outputs CSV and the plot of ``result`` (each whole or not at all); return the
-    paths written, and add what failed to ``problems``."""
+def _keep(result, sequence, args, title: str, complete: bool, problems: list[str]) -> str:
+    """Close the frame sequence (frames.json counts the frames on disk) and write the outputs CSV
+    and plot of ``result``, each whole or not at all; what was kept, as text ('' for nothing).
+    What could not be written is added to ``problems``."""
     from wetcloth.plotting import plot_run
 
-    written = []
-    for path, write in ((args.csv, result.write_csv), (args.plot, lambda p: plot_run(result, p, title=title))):
+    frames = ""
+    if sequence is not None:  # first: the manifest must come true, the rest is written if there is room
         try:
-            written.append(str(write(path)))
-        except OSError as exc:
-            problems.append(f"cannot write {path}: {exc.strerror or exc}")
-    return written
+            sequence.close(complete=complete)
+        except (OSError, ValueError) as exc:
+            problems.append(str(exc))
+        frames = f"{sequence.frame_count} frames in {sequence.directory}" if sequence.frame_count else ""
+    kept = []
+    if result is not None and result.rows:
+        if not complete:
+            title += f" (stopped at {result.rows[-1]['time']:g} s)"
+        for path, write in ((args.csv, result.write_csv), (args.plot, lambda p: plot_run(result, p, title=title))):
+            try:
+                kept.append(str(write(path)))
+            except OSError as exc:
+                problems.append(f"cannot write {path}: {exc.strerror or exc}")
+    return "; ".join(filter(None, [" and ".join(kept), frames]))
+
+
+def _warn(message: str) -> None:
+    tqdm.write(f"wetcloth run: warning: {message}", file=sys.stderr)
 
 
 def _check_writable(path: Path, option: str) -> None:
