@@ -16,8 +16,9 @@ from wetcloth.batch.metrics import DEFAULT_METRICS, METRICS, compute_metrics, fi
 from wetcloth.batch.plot_spec import PlotSpec, parse_plot_spec
 from wetcloth.batch.plots import heatmap_data, line_data, plot
 from wetcloth.batch.results import read_table, write_csv, write_table
-from wetcloth.batch.spec import Run, Study, default_fmu_path, load_study
+from wetcloth.batch.spec import Run, Study, load_study
 from wetcloth.errors import StudyError
+from wetcloth.fmu import default_fmu_path
 
 __all__ = [
     "DEFAULT_METRICS", "ENGINES", "METRICS", "PlotSpec", "Run", "Study", "StudyError", "StudyReport", "as_study",

@@ -53,13 +53,6 @@ STUDY_KEYS = (
 _PLAIN_NAME = re.compile(r"^[^/\\\x00]+$")
 
 
-def default_fmu_path() -> str:
-    """``models/WetCloth.fmu``, where ``wetcloth build-fmu`` writes it (``wetcloth.fmu.default_fmu_path``)."""
-    from wetcloth.fmu import default_fmu_path as fmu_path
-
-    return str(fmu_path())
-
-
 def run_key(params: dict[str, Any], settings: dict[str, Any]) -> str:
     """A short, stable hash of a run's full parameter values and run settings."""
     text = json.dumps({"params": params, "settings": settings}, sort_keys=True, default=str)
