@@ -70,8 +70,12 @@ def main(args) -> int:
             retry_errors=args.retry_errors,
         )
     except KeyboardInterrupt:
-        print(f"wetcloth batch: interrupted; the finished runs are in {out}: run the same command again to resume",
-              file=sys.stderr)
+        if out.exists():
+            print(f"wetcloth batch: interrupted; the finished runs are in {out}: run the same command again to resume",
+                  file=sys.stderr)
+        else:
+            print("wetcloth batch: interrupted before any run was saved: run the same command again to start",
+                  file=sys.stderr)
         return INTERRUPTED
     table = report.table
     print(report.summary())
