@@ -39,17 +39,13 @@ class ConfigError(ValueError):
     @classmethod
     def merged(cls, errors: Iterable["ConfigError"], source: str | None = None) -> "ConfigError":
         """One error of class ``cls`` carrying every problem of ``errors``, found in ``source``."""
-        merged = cls.__new__(cls)
-        ValueError.__init__(merged)
-        merged.problems = [p for e in errors for p in e.problems]
-        merged.source = source
-        return merged
+        return _made(cls, [p for e in errors for p in e.problems], source)
 
     def __reduce__(self):  # picklable (Dask sends exceptions between processes)
-        return _rebuild, (type(self), self.problems, self.source)
+        return _made, (type(self), self.problems, self.source)
 
 
-def _rebuild(cls, problems, source):
+def _made(cls, problems: list[tuple[str, str, str]], source: str | None) -> ConfigError:
     error = cls.__new__(cls)
     ValueError.__init__(error)
     error.problems, error.source = problems, source
@@ -90,9 +86,6 @@ class Mistakes:
 
     def collect(self):
         return _Collector(self)
-
-    def __bool__(self) -> bool:
-        return bool(self.errors)
 
     def raise_if_any(self) -> None:
         """Raise every mistake found: one error as it is (with the source), several as one error of
