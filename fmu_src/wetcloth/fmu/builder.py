@@ -20,7 +20,6 @@ import html
 import importlib.metadata
 import importlib.util
 import json
-import os
 import shutil
 import sys
 import tempfile
@@ -29,6 +28,7 @@ from pathlib import Path
 from string import Template
 
 import wetcloth
+from wetcloth.files import whole_file
 from wetcloth.fmu import MODEL_NAME, default_fmu_path
 from wetcloth.fmu.bootstrap import MANIFEST_NAME, bundle_digest, digest
 from wetcloth.fmu.vocabulary import VariableSpec, fmi_unit_name, variable_specs
@@ -199,7 +199,6 @@ def build_fmu(out: str | Path | None = None, fmi_version: int = 2) -> Path:
                 sys.modules.pop(BOOTSTRAP_MODULE, None)
         with zipfile.ZipFile(built, "a") as archive:
             archive.write(DOCS / "model.png", arcname=ICON_PATH[fmi_version])
-        tmp_out = out.with_name(out.name + ".tmp")
-        shutil.copyfile(built, tmp_out)
-        os.replace(tmp_out, out)
+        with whole_file(out) as tmp_out:
+            shutil.copyfile(built, tmp_out)
     return out

@@ -19,8 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
+from wetcloth import run_settings
 from wetcloth.errors import BlowUpError
 from wetcloth.fmu import default_fmu_path
+from wetcloth.progress import time_bar
 from wetcloth.runner import RunResult, Snapshot
 from wetcloth.scene import PARAMETERS, load_scene, read_scene_file
 from wetcloth.simulation import OUTPUT_NAMES
@@ -86,7 +88,6 @@ def simulate(fmu: str | Path, duration: float, fps: float, start_values: dict | 
     """
     import fmpy
     from fmpy.fmi1 import FMICallException
-    from tqdm.auto import tqdm
 
     start_values = dict(start_values or {})
     folder, description = unpacked(fmu)
@@ -101,8 +102,7 @@ def simulate(fmu: str | Path, duration: float, fps: float, start_values: dict | 
         if status >= 2:
             errors.append(message.decode("utf-8", "replace") if isinstance(message, bytes) else str(message))
 
-    with tqdm(total=float(duration), unit="sim s", disable=not progress, desc=f"co-simulating {Path(fmu).name}",
-              bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} sim s [{elapsed}<{remaining}]") as bar:
+    with time_bar(duration, desc=f"co-simulating {Path(fmu).name}", enabled=progress) as bar:
 
         def step_finished(time, recorder):
             bar.update(float(time) - bar.n)
@@ -168,10 +168,8 @@ def demo(out: str | Path = DEFAULT_DEMO_DIR, fmu: str | Path | None = None, dura
     out, fmu = Path(out), Path(default_fmu_path() if fmu is None else fmu)
     if is_stale(fmu):
         build_fmu(fmu)
-    preset = read_scene_file(None)
-    run = preset.get("run", {})
-    duration = float(run.get("duration", 90.0)) if duration is None else float(duration)
-    fps = float(run.get("fps", 30.0))
+    run = run_settings.resolve(read_scene_file(None).get("run"), duration=duration)
+    duration, fps = run.duration, run.fps
     frames = out / "frames"
     values = {"mesh_output_dir": str(frames.resolve()), "mesh_format": "ply"} | dict(start_values or {})
     outputs = simulate(fmu, duration, fps, values, progress=progress)

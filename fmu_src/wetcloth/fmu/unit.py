@@ -19,6 +19,7 @@ import functools
 import logging
 import math
 
+from wetcloth import run_settings
 from wetcloth.errors import ParameterError
 from wetcloth.fmu import checkpoint
 from wetcloth.fmu.checkpoint import Checkpoint, StateError
@@ -42,8 +43,8 @@ class UnitError(RuntimeError):
 
 def default_run() -> tuple[float, float]:
     """Stop time (s) and communication step (s) of the default experiment: the towel preset's [run]."""
-    run = read_scene_file(None).get("run", {})
-    return float(run.get("duration", 90.0)), 1.0 / float(run.get("fps", 30.0))
+    run = run_settings.resolve(read_scene_file(None).get("run"))
+    return run.duration, 1.0 / run.fps
 
 
 class WetClothUnit:
