@@ -18,22 +18,15 @@ from xml.etree.ElementTree import Element, SubElement
 from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Variability
 from pythonfmu.variables import Integer, Real, ScalarVariable, String
 
-from wetcloth.fmu.vocabulary import FEEDTHROUGH, VariableSpec, units_of, xml_attributes
+from wetcloth.fmu.vocabulary import FEEDTHROUGH, VariableSpec, WithAttributes, units_of, xml_attributes
 
 
-class _WithAttributes:
-    """Mixin for pythonfmu variables: extra attributes (unit, min, max) on the type element."""
+class _WithAttributes(WithAttributes):
+    """FMI 2.0 keeps unit, min and max on the variable's type element (``<Real unit=...>``)."""
 
-    def __init__(self, name: str, attributes: dict[str, str], **kwargs):
-        super().__init__(name, **kwargs)
-        self.attributes = attributes
-
-    def to_xml(self) -> Element:
-        node = super().to_xml()
-        type_node = node[0]
-        for key, value in self.attributes.items():
-            type_node.set(key, value)
-        return node
+    @staticmethod
+    def attribute_element(node):
+        return node[0]
 
 
 class RealVariable(_WithAttributes, Real):

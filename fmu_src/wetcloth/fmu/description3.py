@@ -16,36 +16,22 @@ from pythonfmu3 import Dimension, Float64, Int32, String, UInt64, Unit
 from pythonfmu3.enums import Fmi3Causality, Fmi3Initial, Fmi3Variability
 from pythonfmu3.variables import ModelVariable
 
-from wetcloth.fmu.vocabulary import FEEDTHROUGH, VariableSpec, units_of, xml_attributes
+from wetcloth.fmu.vocabulary import FEEDTHROUGH, VariableSpec, WithAttributes, units_of, xml_attributes
 
 
-class _WithAttributes:
-    """Mixin for pythonfmu3 variables: extra attributes (min, max) on the variable's element."""
-
-    def __init__(self, name: str, attributes: dict[str, str], **kwargs):
-        super().__init__(name, **kwargs)
-        self.attributes = attributes
-
-    def to_xml(self) -> Element:
-        node = super().to_xml()
-        for key, value in self.attributes.items():
-            node.set(key, value)
-        return node
-
-
-class Float64Variable(_WithAttributes, Float64):
+class Float64Variable(WithAttributes, Float64):
     """A pythonfmu3 ``Float64`` (scalar or array) with range."""
 
 
-class Int32Variable(_WithAttributes, Int32):
+class Int32Variable(WithAttributes, Int32):
     """A pythonfmu3 ``Int32`` with range."""
 
 
-class UInt64Variable(_WithAttributes, UInt64):
+class UInt64Variable(WithAttributes, UInt64):
     """A pythonfmu3 ``UInt64`` with range (a structural parameter)."""
 
 
-class StringVariable(_WithAttributes, String):
+class StringVariable(WithAttributes, String):
     """A pythonfmu3 ``String``."""
 
 

@@ -171,6 +171,27 @@ def xml_attributes(spec: VariableSpec) -> dict[str, str]:
     return attributes
 
 
+class WithAttributes:
+    """Mixin for pythonfmu and pythonfmu3 variables: extra XML attributes (unit, min, max) that the
+    libraries do not write.  ``attribute_element`` picks the element that carries them."""
+
+    def __init__(self, name: str, attributes: dict[str, str], **kwargs):
+        super().__init__(name, **kwargs)
+        self.attributes = attributes
+
+    @staticmethod
+    def attribute_element(node):
+        """FMI 3.0: the variable's own element."""
+        return node
+
+    def to_xml(self):
+        node = super().to_xml()
+        element = self.attribute_element(node)
+        for key, value in self.attributes.items():
+            element.set(key, value)
+        return node
+
+
 def fmi_unit_name(unit: str) -> str | None:
     """The FMI/Modelica name of a scene unit ('N s/m' -> 'N.s/m'); None for dimensionless '-'."""
     if unit in ("-", ""):
