@@ -170,7 +170,7 @@ def test_invalid_values_parse_and_fail_per_run_not_up_front():
     (dict(axes={"absorption_rate": {"start": 0.1, "stop": 0.2, "step": -0.1}}), "axes.absorption_rate", "step must be"),
     (dict(axes={"absorption_rate": {"random": "gauss", "mean": 1, "std": 1}}), "axes.absorption_rate", "random must be one of"),
     (dict(axes={"absorption_rate": {"random": "uniform", "low": 0.1, "high": 0.5}}), "samples", "need samples >= 1"),
-    (dict(samples=4), "samples", "only for random axes"),
+    (dict(samples=4), "samples", "only for sampled axes"),
     (dict(base={"nx": 5}, axes={"nx": [5, 7]}), "axes.nx", "also set in"),
     (dict(metrics=["time_to_sink", "sink_tme"]), "metrics", "'sink_tme': unknown metric; did you mean 'sink_time'|'sink_tme': unknown metric; known: time_to_sink"),
     (dict(engine="modelica"), "engine", "allowed: python, fmu"),

@@ -106,14 +106,14 @@ def cost_warning(scene: Scene, duration: float, sample: Sample, stable_step: flo
     if cost.seconds <= WARN_AFTER:
         return None
     about = "at least" if not cost.exact else "about"
-    return (f"this run will take {about} {_duration(cost.seconds)} ({cost.steps:.2g} steps of {cost.step:.2g} s, "
-            f"{_duration(cost.per_step)} each); cheaper: " + "; ".join(cheaper_settings(scene, cost, duration, stable_step)))
+    return (f"this run will take {about} {format_duration(cost.seconds)} ({cost.steps:.2g} steps of {cost.step:.2g} s, "
+            f"{format_duration(cost.per_step)} each); cheaper: " + "; ".join(cheaper_settings(scene, cost, duration, stable_step)))
 
 
 _UNITS = (("years", 3.15e7), ("days", 86400.0), ("h", 3600.0), ("min", 60.0), ("s", 1.0), ("ms", 1e-3), ("µs", 1e-6))
 
 
-def _duration(seconds: float) -> str:
+def format_duration(seconds: float) -> str:
     """'3.2 h', '174 days', '45 s', '150 µs'."""
     unit, size = next(((u, size) for u, size in _UNITS if seconds >= size), _UNITS[-1])
     value = seconds / size

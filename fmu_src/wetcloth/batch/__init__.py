@@ -3,9 +3,11 @@
     import wetcloth
     table = wetcloth.study("models/studies/sink_map.toml", out="out/batch/sink_map.parquet", workers=2)
 
-Modules: ``spec`` (the study: ``Study``, ``load_study``), ``axes`` (lists, ranges, random draws),
+Modules: ``spec`` (the study: ``Study``, ``load_study``), ``axes`` (lists, ranges, bounds, random,
+Latin-hypercube and Sobol' points), ``sensitivity`` (Sobol' and Morris designs and indices, SALib),
 ``plot_spec`` and ``plots``, ``metrics``, ``engines`` (one run), ``cluster`` (the Dask client),
-``execution`` (running a study, the results table's safe points), ``results`` (the table).
+``execution`` (running a study, the results table's safe points), ``results`` (the table),
+``preview`` (a study's runs and their estimated time, without running them).
 See ``docs/batch.md`` for the study file, the ``wetcloth batch`` command and this API.
 """
 
@@ -14,14 +16,16 @@ from wetcloth.batch.engines import ENGINES, execute
 from wetcloth.batch.execution import StudyReport, as_study, run_study, study
 from wetcloth.batch.metrics import DEFAULT_METRICS, METRICS, compute_metrics, first_crossing
 from wetcloth.batch.plot_spec import PlotSpec, parse_plot_spec
-from wetcloth.batch.plots import heatmap_data, line_data, plot
+from wetcloth.batch.plots import heatmap_data, line_data, plot, plot_sensitivity
 from wetcloth.batch.results import read_table, write_csv, write_table
+from wetcloth.batch.sensitivity import SensitivityResult, SensitivitySpec, format_indices, sensitivity_indices
 from wetcloth.batch.spec import Run, Study, load_study
 from wetcloth.errors import StudyError
 from wetcloth.fmu import default_fmu_path
 
 __all__ = [
-    "DEFAULT_METRICS", "ENGINES", "METRICS", "PlotSpec", "Run", "Study", "StudyError", "StudyReport", "as_study",
-    "compute_metrics", "dask_client", "default_fmu_path", "execute", "first_crossing", "heatmap_data", "line_data",
-    "load_study", "parse_plot_spec", "plot", "read_table", "run_study", "study", "write_csv", "write_table",
+    "DEFAULT_METRICS", "ENGINES", "METRICS", "PlotSpec", "Run", "SensitivityResult", "SensitivitySpec", "Study",
+    "StudyError", "StudyReport", "as_study", "compute_metrics", "dask_client", "default_fmu_path", "execute",
+    "first_crossing", "format_indices", "heatmap_data", "line_data", "load_study", "parse_plot_spec", "plot",
+    "plot_sensitivity", "read_table", "run_study", "sensitivity_indices", "study", "write_csv", "write_table",
 ]

@@ -1,10 +1,12 @@
-"""A study's axes: lists, ranges and random draws over scene parameters, and the points they span.
+"""A study's axes: lists, ranges and sampled axes over scene parameters, and the points they span.
 
 An axis is a list of values, a range (``{start, stop, num [, log]}`` or ``{start, stop, step}``,
-stop included) or a random distribution (``{random = KIND, ...}``).  The points of a study are the
-Cartesian product of the grid axes (lists and ranges, in order, the last varying fastest),
-crossed with ``samples`` joint draws of the random axes (seeded, so a rerun draws the same).
-No study may span more than ``MAX_RUNS`` points: the count is checked before any is made.
+stop included), or a sampled axis: bounds (``{low, high [, log]}``) or a distribution
+(``{random = KIND, ...}``).  The points of a study are the Cartesian product of the grid axes
+(lists and ranges, in order, the last varying fastest), crossed with ``samples`` joint points of
+the sampled axes, placed by the study's ``sampling``: independent random draws, a Latin
+hypercube or a scrambled Sobol' sequence (``scipy.stats.qmc``), all seeded, so a rerun makes the
+same points.  No study may span more than ``MAX_RUNS`` points: the count is checked before any is made.
 """
 
 from __future__ import annotations
@@ -24,6 +26,10 @@ DISTRIBUTIONS = ("uniform", "loguniform", "normal", "integers", "choice")
 DISTRIBUTION_KEYS = {"uniform": ("low", "high"), "loguniform": ("low", "high"), "normal": ("mean", "std"),
                      "integers": ("low", "high"), "choice": ("values",)}
 RANGE_KEYS = ("start", "stop", "num", "step", "log")
+BOUNDS_KEYS = ("low", "high", "log")
+#: How the joint points of the sampled axes are placed: independent draws (numpy), a Latin
+#: hypercube or a scrambled Sobol' sequence (scipy.stats.qmc).
+SAMPLINGS = ("random", "lhs", "sobol")
 SIGNIFICANT_DIGITS = 12  # range values are rounded to this many digits, so 0.1 from a range equals 0.1 from a list
 #: Most runs one study may have (and so values one axis may have): 100 000 runs of 1 s each keep
 #: two cores busy for 14 hours.
@@ -32,7 +38,8 @@ MAX_RUNS = 100_000
 
 @dataclass(frozen=True)
 class Axis:
-    """One study axis: grid ``values``, or a random ``distribution`` (a dict) drawn ``samples`` times."""
+    """One study axis: grid ``values``, or a sampled axis's ``distribution`` (a dict: ``random`` =
+    its kind and that kind's keys), sampled ``samples`` times."""
 
     name: str
     values: tuple = ()
@@ -155,8 +162,31 @@ def _parse_distribution(name: str, spec: dict) -> dict:
     return dict(spec)
 
 
+def _bounds_distribution(name: str, spec: dict) -> dict:
+    """A bounds table ``{low, high [, log]}`` as the distribution it means: uniform between the bounds
+    (``log = true``: uniform in the logarithm); ``integers`` (both bounds included) for a whole-number
+    parameter."""
+    where = f"axes.{name}"
+    if unknown := sorted(set(spec) - set(BOUNDS_KEYS)):
+        raise StudyError(where, f"unknown key(s) {unknown}; bounds are low and high, optional log")
+    if not {"low", "high"} <= set(spec):
+        raise StudyError(where, "bounds need both low and high")
+    log = spec.get("log", False)
+    if not isinstance(log, bool):
+        raise StudyError(where, f"log must be true or false, got {log!r}")
+    if PARAMETERS[name].type == "str":
+        raise StudyError(where, f"{name} is a string parameter: give a list of values or random = 'choice'")
+    if PARAMETERS[name].type == "int":
+        if log:
+            raise StudyError(where, f"{name} takes whole numbers: bounds of a whole-number parameter take no log")
+        kind = "integers"
+    else:
+        kind = "loguniform" if log else "uniform"
+    return _parse_distribution(name, {"random": kind, "low": spec["low"], "high": spec["high"]})
+
+
 def parse_axis(name: str, spec) -> Axis:
-    """An axis from its study-file entry: a list, a range table, a random table or one value."""
+    """An axis from its study-file entry: a list, a range table, a bounds or random table, or one value."""
     where = f"axes.{name}"
     check_name(name, where)
     if isinstance(spec, list):
@@ -166,6 +196,8 @@ def parse_axis(name: str, spec) -> Axis:
         values = tuple(typed(name, v, where) for v in spec)
     elif isinstance(spec, dict) and "random" in spec:
         return Axis(name, distribution=_parse_distribution(name, spec))
+    elif isinstance(spec, dict) and {"low", "high"} & set(spec):
+        return Axis(name, distribution=_bounds_distribution(name, spec))
     elif isinstance(spec, dict):
         if PARAMETERS[name].type == "str":
             raise StudyError(where, f"{name} is a string parameter: give a list of values")
@@ -193,22 +225,66 @@ def _draw(axis: Axis, rng: np.random.Generator, samples: int) -> list:
     return [float(v) for v in values]
 
 
+def from_unit(axis: Axis, u) -> list:
+    """The values of sampled ``axis`` at unit coordinates ``u`` (each in [0, 1]): its inverse
+    cumulative distribution, so points spread evenly in the unit cube (a Latin hypercube, a Sobol'
+    sequence, a sensitivity design) spread by the axis's distribution.  ``integers`` and ``choice``
+    split [0, 1] into equal parts, one per value (u = 1 is the last value)."""
+    d = axis.distribution
+    kind = d["random"]
+    u = np.asarray(u, float)
+    if kind in ("integers", "choice"):
+        options = list(range(d["low"], d["high"] + 1)) if kind == "integers" else d["values"]
+        index = np.minimum((u * len(options)).astype(int), len(options) - 1)
+        return [options[i] for i in index]
+    if kind == "uniform":
+        values = d["low"] + u * (d["high"] - d["low"])
+    elif kind == "loguniform":
+        values = d["low"] * (d["high"] / d["low"]) ** u
+    else:  # normal: u = 0 or 1 would be -inf or +inf; the open interval keeps every value finite
+        from scipy.stats import norm
+
+        values = d["mean"] + d["std"] * norm.ppf(np.clip(u, np.nextafter(0.0, 1.0), np.nextafter(1.0, 0.0)))
+    return [float(v) for v in values]
+
+
+def unit_points(sampling: str, dimensions: int, samples: int, seed: int) -> np.ndarray:
+    """``samples`` points of the unit cube of ``dimensions`` dimensions (rows), seeded: a Latin
+    hypercube (``lhs``) or a scrambled Sobol' sequence (``sobol``; ``samples`` a power of 2 keeps
+    its balance, and the first n points of a longer sequence are the n-point sequence)."""
+    from scipy.stats import qmc
+
+    if sampling == "lhs":
+        return qmc.LatinHypercube(dimensions, rng=seed).random(samples)
+    if sampling == "sobol":
+        return qmc.Sobol(dimensions, scramble=True, rng=seed).random(samples)
+    raise ValueError(f"sampling {sampling!r} has no unit points; known: lhs, sobol")
+
+
 def point_count(axes: tuple[Axis, ...], samples: int) -> int:
     """How many points ``points`` gives (before identical runs are merged)."""
     grid = math.prod(len(a.values) for a in axes if not a.is_random)
     return grid * (samples if any(a.is_random for a in axes) else 1)
 
 
-def points(axes: tuple[Axis, ...], samples: int, seed: int) -> list[dict[str, Any]]:
-    """Axis coordinates of every run: grid axes crossed, then crossed with the random draws."""
+def sampled_points(axes: list[Axis], samples: int, seed: int, sampling: str = "random") -> list[dict[str, Any]]:
+    """``samples`` joint points of the sampled ``axes``: independent draws from
+    ``numpy.random.default_rng(seed)`` (``random``, axis by axis), or a seeded Latin hypercube or
+    Sobol' sequence mapped through each axis's distribution (``from_unit``)."""
+    if sampling == "random":
+        rng = np.random.default_rng(seed)
+        columns = {a.name: _draw(a, rng, samples) for a in axes}
+    else:
+        unit = unit_points(sampling, len(axes), samples, seed)
+        columns = {a.name: from_unit(a, unit[:, j]) for j, a in enumerate(axes)}
+    return [{name: columns[name][i] for name in columns} for i in range(samples)]
+
+
+def points(axes: tuple[Axis, ...], samples: int, seed: int, sampling: str = "random") -> list[dict[str, Any]]:
+    """Axis coordinates of every run: grid axes crossed, then crossed with the sampled points."""
     grid = [a for a in axes if not a.is_random]
     random_axes = [a for a in axes if a.is_random]
     grid_points = [dict(zip([a.name for a in grid], combo)) for combo in itertools.product(*(a.values for a in grid))]
-    if random_axes:
-        rng = np.random.default_rng(seed)
-        draws = {a.name: _draw(a, rng, samples) for a in random_axes}
-        drawn = [{name: draws[name][i] for name in draws} for i in range(samples)]
-    else:
-        drawn = [{}]
+    drawn = sampled_points(random_axes, samples, seed, sampling) if random_axes else [{}]
     order = [a.name for a in axes]
     return [{n: (g | s)[n] for n in order} for g in grid_points for s in drawn]

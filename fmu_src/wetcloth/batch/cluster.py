@@ -19,6 +19,7 @@ import traceback
 from contextlib import ExitStack, contextmanager
 from multiprocessing import resource_tracker
 from pathlib import Path
+from typing import Callable
 
 LOCAL_HTTP = "127.0.0.1:0"  # the local cluster's dashboard / HTTP address: any free port, loopback only
 SCHEDULER_TIMEOUT = 60.0  # s to connect to a scheduler, and then for the workers asked for to connect
@@ -39,11 +40,26 @@ def check_workers(workers) -> int | None:
     return workers
 
 
+def dashboard_line(client) -> str:
+    """'Dask dashboard: http://127.0.0.1:40123/status' for the cluster of ``client``, or a line saying
+    its scheduler reports none (a scheduler started without its HTTP server)."""
+    try:
+        link = client.dashboard_link
+    except KeyError:  # the scheduler lists no 'dashboard' service
+        link = None
+    if not link:
+        return f"Dask dashboard: none (the scheduler at {client.scheduler.address} reports no dashboard address)"
+    return f"Dask dashboard: {link}"
+
+
 @contextmanager
-def dask_client(client=None, scheduler: str | None = None, workers: int | None = None, timeout: float | None = None):
+def dask_client(client=None, scheduler: str | None = None, workers: int | None = None, timeout: float | None = None,
+                announce: Callable[[str], None] | None = None):
     """A Dask client: ``client`` as given; one connected to ``scheduler`` (waiting for ``workers``;
     ``timeout`` s each, default ``SCHEDULER_TIMEOUT``); or a local cluster of ``workers``
-    single-threaded processes (default one per core) that starts here and stops on exit."""
+    single-threaded processes (default one per core) that starts here and stops on exit.
+    ``announce(line)`` is given the dashboard's address (``dashboard_line``) once the client is
+    connected to a scheduler or a local cluster started here."""
     workers = check_workers(workers)
     timeout = SCHEDULER_TIMEOUT if timeout is None else timeout
     if client is not None:
@@ -54,6 +70,8 @@ def dask_client(client=None, scheduler: str | None = None, workers: int | None =
 
     if scheduler:
         with Client(scheduler, set_as_default=False, timeout=timeout) as c:
+            if announce is not None:
+                announce(dashboard_line(c))
             if workers:
                 c.wait_for_workers(workers, timeout=timeout)
             yield c
@@ -66,6 +84,8 @@ def dask_client(client=None, scheduler: str | None = None, workers: int | None =
                 n_workers=workers or CPU_COUNT, threads_per_worker=1, processes=True, dashboard_address=LOCAL_HTTP,
                 silence_logs=logging.ERROR, preload=[__name__]))
             c = stack.enter_context(Client(cluster, set_as_default=False))
+        if announce is not None:
+            announce(dashboard_line(c))
         yield c
 
 

@@ -12,6 +12,7 @@ rerun skips the runs whose ``run_key`` is already in the table.
 from __future__ import annotations
 
 import math
+import sys
 import time
 import uuid
 from dataclasses import dataclass
@@ -71,6 +72,21 @@ def as_study(spec, name: str | None = None) -> Study:
     raise TypeError(f"a study is a Study, a study TOML path or a dict, got {type(spec).__name__}")
 
 
+def without_retried(existing: pd.DataFrame, runs: list[Run], retry_errors: bool) -> pd.DataFrame:
+    """The rows of ``existing`` that count as done for ``runs``: all, or with ``retry_errors`` all but
+    the runs' error rows (those are run again)."""
+    if not (retry_errors and len(existing)):
+        return existing
+    return existing[~(existing[KEY].isin({r.key for r in runs}) & (existing["status"] == ERROR))]
+
+
+def runs_to_do(runs: list[Run], existing: pd.DataFrame, retry_errors: bool = False) -> list[Run]:
+    """The ``runs`` a study still has to run: not in the ``existing`` table (or recorded as errors,
+    with ``retry_errors``)."""
+    done = set(without_retried(existing, runs, retry_errors)[KEY])
+    return [r for r in runs if r.key not in done]
+
+
 def run_study(
     study: Study,
     out: str | Path | None = None,
@@ -82,13 +98,16 @@ def run_study(
     retry_errors: bool = False,
     flush_interval: float = FLUSH_INTERVAL,
     on_result: Callable[[dict[str, Any]], None] | None = None,
+    announce: Callable[[str], None] | None = None,
 ) -> StudyReport:
     """Run every run of ``study`` not yet in the table at ``out`` (Parquet; None = keep in memory).
 
     Runs go to ``client``, else to the cluster at ``scheduler``, else to a local cluster of
     ``workers`` processes started for this call (only if there is something to run).
     ``retry_errors`` runs again the runs recorded as errors.  ``on_result(row)`` is called in
-    this process after each run is recorded.  Returns a :class:`StudyReport`.
+    this process after each run is recorded; ``announce(line)`` is given the Dask dashboard's
+    address when this call connects to a scheduler or starts a local cluster.  Returns a
+    :class:`StudyReport`.
     """
     cluster.check_workers(workers)
     start = time.perf_counter()
@@ -96,10 +115,8 @@ def run_study(
     out = Path(out) if out is not None else None
     existing = read_table(out) if out is not None else make_table([])
     study_keys = {r.key for r in runs}
-    if retry_errors and len(existing):
-        existing = existing[~(existing[KEY].isin(study_keys) & (existing["status"] == ERROR))]
-    done = set(existing[KEY])
-    todo = [r for r in runs if r.key not in done]
+    existing = without_retried(existing, runs, retry_errors)
+    todo = runs_to_do(runs, existing)
     new_rows: list[dict[str, Any]] = []
     counts = {OK: 0, ERROR: 0}
     last_flush = time.monotonic()
@@ -146,7 +163,8 @@ def run_study(
             else:
                 tasks.append(run)
         if tasks:
-            _run_on_dask(tasks, study, record, client=client, scheduler=scheduler, workers=workers)
+            _run_on_dask(tasks, study, record, client=client, scheduler=scheduler, workers=workers,
+                         announce=None if announce is None else lambda line: _beside(announce, line))
     finally:
         bar.close()
         flush(force=True)
@@ -160,10 +178,16 @@ def run_study(
     )
 
 
-def _run_on_dask(tasks: list[Run], study: Study, record, *, client, scheduler, workers) -> None:
+def _beside(announce: Callable[[str], None], line: str) -> None:
+    """``announce(line)`` with the progress bar cleared first and drawn again after, not overwritten."""
+    with tqdm.external_write_mode(file=sys.stderr):  # the bar writes to stderr
+        announce(line)
+
+
+def _run_on_dask(tasks: list[Run], study: Study, record, *, client, scheduler, workers, announce) -> None:
     from distributed import as_completed
 
-    with cluster.dask_client(client, scheduler, workers) as c:
+    with cluster.dask_client(client, scheduler, workers, announce=announce) as c:
         tag = uuid.uuid4().hex[:8]  # one submission's keys never collide with an earlier one's
         futures = {c.submit(execute, _task(run, study), key=f"wetcloth-{run.key}-{tag}", pure=False): run
                    for run in tasks}
@@ -201,10 +225,15 @@ def study(
     (a Parquet path) results are saved as they come and a rerun skips the runs already there.
     Runs go to ``client``, or the Dask scheduler at ``scheduler``, or a local cluster of
     ``workers`` processes (default one per core).  ``engine``: 'python' (default) or 'fmu'.
+    ``progress``: a progress bar, and the Dask dashboard's address on stderr when a cluster is used.
     """
     s = as_study(spec)
     changes = {k: v for k, v in dict(engine=engine, fmu=None if fmu is None else str(fmu)).items() if v is not None}
     if changes:
         s = s.replace(**changes)
     return run_study(s, out, client=client, scheduler=scheduler, workers=workers, progress=progress,
-                     retry_errors=retry_errors).table
+                     retry_errors=retry_errors, announce=_to_stderr if progress else None).table
+
+
+def _to_stderr(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)

@@ -122,3 +122,56 @@ def _heatmap(fig, ax, table: pd.DataFrame, spec: PlotSpec) -> None:
             ax.text(j, i, "never", ha="center", va="center", fontsize=7, color="0.3")
         elif small:
             ax.text(j, i, f"{v:.3g}", ha="center", va="center", fontsize=7, color="k" if image.norm(v) > 0.6 else "w")
+
+
+def plot_sensitivity(result, path: str | Path, study=None) -> Path:
+    """A bar chart of a :class:`~wetcloth.batch.sensitivity.SensitivityResult` to a PNG at ``path``:
+    one panel per analysed metric, its factors from most to least influential; Sobol: S1 and ST
+    side by side, Morris: mu* and sigma, with the confidence intervals as error bars.  A metric
+    without indices gets a panel that says why."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    sobol = result.spec.method == "sobol"
+    width = max(6.4, 1.8 + 0.9 * len(result.factors))
+    fig, axes = plt.subplots(len(result.metrics), 1, figsize=(width, 0.4 + 2.9 * len(result.metrics)),
+                             constrained_layout=True, squeeze=False)
+    try:
+        for ax, metric in zip(axes[:, 0], result.metrics):
+            ax.set_title(f"{_label(metric)}", fontsize=10)
+            if metric in result.problems:
+                _no_indices(ax, result.problems[metric])
+                continue
+            frame = result.indices[result.indices["metric"] == metric].sort_values("rank")
+            bars = (("S1", "S1_conf", "first order S1"), ("ST", "ST_conf", "total ST")) if sobol else \
+                (("mu_star", "mu_star_conf", "mu*"), ("sigma", None, "sigma"))
+            x = np.arange(len(frame))
+            for i, (column, conf, label) in enumerate(bars):
+                ax.bar(x + (i - 0.5) * 0.38, frame[column], 0.38, label=label, color=f"C{i}",
+                       yerr=None if conf is None else frame[conf], capsize=3, error_kw=dict(lw=1))
+            ax.set_xticks(x, [n.replace("_", " ") for n in frame["parameter"]], fontsize=8)
+            ax.axhline(0.0, color="0.3", lw=0.6)
+            ax.set_ylabel("share of variance" if sobol else f"{METRICS[metric].unit} over the range")
+            ax.grid(axis="y", alpha=0.3)
+            ax.legend(fontsize=8)
+        level = f"{100 * result.spec.conf_level:g}%"
+        title = f"{study.name}: " if study is not None else ""
+        fig.suptitle(f"{title}{result.spec.describe(len(result.factors))}; error bars: {level} confidence", fontsize=10)
+        with whole_file(path) as tmp:
+            fig.savefig(tmp, dpi=110, format="png")
+    finally:
+        plt.close(fig)
+    return path
+
+
+def _no_indices(ax, problem: str) -> None:
+    import textwrap
+
+    short = problem if len(problem) <= 450 else problem[:450] + " ... (the rest: the command's output)"
+    ax.text(0.5, 0.5, textwrap.fill(short, 110), ha="center", va="center", fontsize=7, color="C3",
+            transform=ax.transAxes)
+    ax.set_axis_off()

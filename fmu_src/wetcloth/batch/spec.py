@@ -13,13 +13,14 @@ A study file is TOML (see ``docs/batch.md`` and ``models/studies/``)::
     nx = 9
     ny = 9
 
-    [axes]                         # one axis per parameter: a list, a range or a random draw
+    [axes]                         # one axis per parameter: a list, a range, bounds or a random draw
     absorption_capacity = [1.0, 2.0, 3.8]
     absorption_rate = { start = 0.05, stop = 0.5, num = 4 }
 
-The runs are the points of the axes (``wetcloth.batch.axes``).  Every run is keyed by all its
-parameter values and run settings (``run_key``), so a rerun can skip what is done.  A study is
-checked whole when it is made: every mistake is reported at once, each naming its key.
+The runs are the points of the axes (``wetcloth.batch.axes``), or, for a study with a
+``[sensitivity]`` table, the points of its design (``wetcloth.batch.sensitivity``).  Every run is
+keyed by all its parameter values and run settings (``run_key``), so a rerun can skip what is
+done.  A study is checked whole when it is made: every mistake is reported at once, each naming its key.
 """
 
 from __future__ import annotations
@@ -33,11 +34,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from wetcloth import run_settings
-from wetcloth.batch.axes import Axis, check_count, check_name, parse_axis, point_count, points, typed
+from wetcloth.batch.axes import (SAMPLINGS, Axis, check_count, check_name, from_unit, parse_axis, point_count,
+                                 points, typed)
 from wetcloth.batch.engines import ENGINES
 from wetcloth.batch.metrics import DEFAULT_METRICS, METRICS
 from wetcloth.batch.plot_spec import PlotSpec, plot_specs
+from wetcloth.batch.sensitivity import SensitivitySpec, check_factors, design, parse_sensitivity
 from wetcloth.errors import ConfigError, Mistakes, StudyError, did_you_mean
 from wetcloth.scene import PARAMETERS, RESERVED_KEYS, read_scene_file, read_toml, resolve_scene_path
 
@@ -47,7 +52,7 @@ DEFAULT_SINK_DEPTH = 0.05  # m
 #: Keys allowed at the top level of a study file.
 STUDY_KEYS = (
     "name", "description", "scene", "duration", "sample_rate", "sink_depth", "metrics", "engine", "fmu",
-    "seed", "samples", "base", "axes", "plot",
+    "seed", "samples", "sampling", "base", "axes", "plot", "sensitivity",
 )
 #: A study's name names its output files (``out/batch/<name>.parquet``): one file name, no folder.
 _PLAIN_NAME = re.compile(r"^[^/\\\x00]+$")
@@ -109,6 +114,12 @@ def _check_engine(engine) -> str:
     return engine
 
 
+def _check_sampling(sampling) -> str:
+    if sampling not in SAMPLINGS:
+        raise StudyError("sampling", f"{sampling!r} is not allowed; allowed: {', '.join(SAMPLINGS)}")
+    return sampling
+
+
 #: The checks of a study's own settings: field -> check(value) returning the value to keep.
 _SETTING_CHECKS = {
     "name": _check_name,
@@ -119,6 +130,7 @@ _SETTING_CHECKS = {
     "engine": _check_engine,
     "seed": lambda v: _whole("seed", v),
     "samples": lambda v: _whole("samples", v),
+    "sampling": _check_sampling,
 }
 
 
@@ -147,6 +159,8 @@ class Study:
     fmu: str = ""  # FMU path for engine 'fmu'; "" = models/WetCloth.fmu
     seed: int = 0
     samples: int = 0
+    sampling: str = "random"  # how the sampled axes' points are placed: random, lhs or sobol
+    sensitivity: SensitivitySpec | None = None  # a sensitivity design instead of grid and samples
     plots: tuple[PlotSpec, ...] = ()
     description: str = ""
     scene: str = ""  # where the base scene came from (for messages)
@@ -188,13 +202,18 @@ class Study:
         plots = ()
         with mistakes.collect():
             plots = plot_specs(data.get("plot", []))
+        sensitivity = None
+        if "sensitivity" in data:
+            with mistakes.collect():
+                sensitivity = parse_sensitivity(data["sensitivity"])
         # run settings: the study's, else the scene file's [run] table, else the defaults (one rule)
         duration = data.get("duration", run_settings.resolve(scene_file.get("run")).duration)
         settings = dict(name=data.get("name", name or "study"), duration=duration,
                         sample_rate=data.get("sample_rate", DEFAULT_SAMPLE_RATE),
                         sink_depth=data.get("sink_depth", DEFAULT_SINK_DEPTH),
                         metrics=data.get("metrics", list(DEFAULT_METRICS)), engine=data.get("engine", "python"),
-                        seed=data.get("seed", 0), samples=data.get("samples", 0))
+                        seed=data.get("seed", 0), samples=data.get("samples", 0),
+                        sampling=data.get("sampling", "random"))
         settings = _check_settings(settings, mistakes)
         for key in ("description", "fmu"):
             if not isinstance(data.get(key, ""), str):
@@ -210,6 +229,7 @@ class Study:
                 axes=tuple(axes),
                 fmu=str(_resolve_relative(data["fmu"], base_dir)) if "fmu" in data else "",
                 plots=plots,
+                sensitivity=sensitivity,
             )
         except ConfigError as exc:  # what the parts are wrong about together
             mistakes.add(exc)
@@ -227,13 +247,10 @@ class Study:
             mistakes.add(StudyError("axes", f"repeated axis in {names}"))
         for both in (n for n in names if n in self.base):
             mistakes.add(StudyError(f"axes.{both}", "is also set in [base]: set it in one place"))
-        has_random = any(a.is_random for a in self.axes)
-        if has_random and self.samples < 1:
-            mistakes.add(StudyError("samples", "random axes need samples >= 1 (the number of joint draws)"))
-        if self.samples and not has_random:
-            mistakes.add(StudyError("samples", "is only for random axes ({random = ...}); there are none"))
-        with mistakes.collect():
-            check_count("samples" if has_random else "axes", "the axes span", point_count(self.axes, self.samples))
+        if self.sensitivity is not None:
+            self._check_sensitivity(mistakes)
+        else:
+            self._check_sampling(mistakes)
         try:
             run_settings.check_frames(self.duration, self.sample_rate, "sample_rate")
         except run_settings.RunSettingError as exc:
@@ -241,6 +258,43 @@ class Study:
         with mistakes.collect():
             self.check_plots(self.plots)
         mistakes.raise_if_any()
+
+    def _check_sampling(self, mistakes: Mistakes) -> None:
+        """Sampled axes need samples; lhs and sobol need sampled axes, sobol a power of 2 of samples."""
+        has_random = any(a.is_random for a in self.axes)
+        if has_random and self.samples < 1:
+            mistakes.add(StudyError("samples", "sampled axes ({low, high} or {random = ...}) need samples >= 1 "
+                                               "(the number of joint points)"))
+        if self.samples and not has_random:
+            mistakes.add(StudyError("samples", "is only for sampled axes ({low, high} or {random = ...}); there are none"))
+        if self.sampling != "random" and not has_random:
+            mistakes.add(StudyError("sampling", f"{self.sampling!r} places the points of sampled axes ({{low, high}} or "
+                                                "{random = ...}); there are none"))
+        if self.sampling == "sobol" and self.samples > 1 and self.samples & (self.samples - 1):
+            lower = 1 << (self.samples.bit_length() - 1)
+            mistakes.add(StudyError("samples", f"sampling = 'sobol' needs a power of 2 (the balance of Sobol' points), "
+                                               f"got {self.samples}: take {lower} or {2 * lower}"))
+        with mistakes.collect():
+            check_count("samples" if has_random else "axes", "the axes span", point_count(self.axes, self.samples))
+
+    def _check_sensitivity(self, mistakes: Mistakes) -> None:
+        """A sensitivity design places every run: its factors are the (sampled) axes, and it needs
+        neither samples nor sampling; it analyses recorded metrics."""
+        spec = self.sensitivity
+        if self.samples:
+            mistakes.add(StudyError("samples", "the [sensitivity] design places the runs: give its size as "
+                                               "[sensitivity] samples (sobol) or trajectories (morris)"))
+        if self.sampling != "random":
+            mistakes.add(StudyError("sampling", "the [sensitivity] design places the runs: leave sampling out"))
+        with mistakes.collect():
+            check_factors(spec, self.axes)
+        for metric in spec.metrics:
+            if metric not in self.metrics:
+                mistakes.add(StudyError("sensitivity.metrics", f"{metric!r} is not recorded; recorded: "
+                                                               f"{', '.join(self.metrics)}"))
+        with mistakes.collect():
+            check_count("sensitivity", f"the {spec.method} design of {len(self.axes)} factors has",
+                        spec.run_count(len(self.axes)))
 
     def check_plots(self, specs) -> None:
         """Each plot names a recorded metric and one or two axes of this study."""
@@ -265,9 +319,30 @@ class Study:
         return dict(duration=self.duration, sample_rate=self.sample_rate, sink_depth=self.sink_depth,
                     engine=self.engine, metrics=sorted(self.metrics))
 
+    def design(self) -> np.ndarray:
+        """A sensitivity study's design in the unit cube: one row per point, one column per axis."""
+        if self.sensitivity is None:
+            raise ValueError(f"study {self.name!r} has no [sensitivity] table, so no design")
+        return design(self.sensitivity, self.axis_names, self.seed)
+
     def points(self) -> list[dict[str, Any]]:
-        """Axis coordinates of every run (see ``wetcloth.batch.axes.points``)."""
-        return points(self.axes, self.samples, self.seed)
+        """Axis coordinates of every point: the design's rows mapped through each axis's
+        distribution, or the grid crossed with the sampled points (``wetcloth.batch.axes.points``)."""
+        if self.sensitivity is None:
+            return points(self.axes, self.samples, self.seed, self.sampling)
+        unit = self.design()
+        columns = [from_unit(axis, unit[:, j]) for j, axis in enumerate(self.axes)]
+        return [dict(zip(self.axis_names, row)) for row in zip(*columns)]
+
+    def _point_runs(self) -> list[Run]:
+        """One run per point, in point order (coinciding points give the same run twice)."""
+        base = self.base_params()
+        settings = self.settings
+        return [Run(run_key(base | point, settings), base | point, point) for point in self.points()]
+
+    def point_keys(self) -> list[str]:
+        """The run key of every point, in point order (a key repeats where points coincide)."""
+        return [r.key for r in self._point_runs()]
 
     def base_params(self) -> dict[str, Any]:
         """Every parameter's value before the axes: defaults, then the scene file, then [base]."""
@@ -275,17 +350,9 @@ class Study:
         return defaults | self.scene_values | self.base
 
     def runs(self) -> list[Run]:
-        """Every run of the study in order; identical runs (repeated random draws) appear once."""
-        base = self.base_params()
-        settings = self.settings
-        out, seen = [], set()
-        for point in self.points():
-            params = base | point
-            key = run_key(params, settings)
-            if key not in seen:
-                seen.add(key)
-                out.append(Run(key, params, point))
-        return out
+        """Every run of the study in order; identical runs (repeated draws, coinciding design
+        points) appear once."""
+        return list({r.key: r for r in self._point_runs()}.values())  # in order of first occurrence
 
 
 def _base(table, mistakes: Mistakes) -> dict[str, Any]:

@@ -1,4 +1,6 @@
-"""``wetcloth batch``: run a parameter study on Dask (a local cluster by default), one table row per run."""
+"""``wetcloth batch``: run a parameter study on Dask (a local cluster by default), one table row per run;
+with a ``[sensitivity]`` table, also its sensitivity indices; with ``--dry-run``, only its run list
+and an estimate of their time."""
 
 from __future__ import annotations
 
@@ -10,6 +12,8 @@ from wetcloth.commands.common import INTERRUPTED, path_argument
 
 #: Where results go without --out: <study name>.parquet in this folder.
 DEFAULT_OUT_DIR = Path("out/batch")
+#: Exit status of a sensitivity study that ran but could not compute every metric's indices.
+INCOMPLETE = 1
 
 
 def add_parser(sub) -> None:
@@ -20,7 +24,8 @@ def add_parser(sub) -> None:
             "Run every scene of a study file on Dask: with no --scheduler a local cluster of processes "
             "(one per core, or --workers N) starts and stops by itself; with --scheduler the study runs "
             "on that cluster. Results go to a Parquet table, one row per run; a rerun skips the runs "
-            "already in it. See docs/batch.md."
+            "already in it. A study with a [sensitivity] table also writes its sensitivity indices "
+            "(<table>_sensitivity.csv) and their bar plot. See docs/batch.md."
         ),
     )
     p.add_argument("study", type=path_argument, help="study TOML file (see docs/batch.md and models/studies/)")
@@ -38,6 +43,9 @@ def add_parser(sub) -> None:
     p.add_argument("--plot-dir", type=path_argument, metavar="DIR", help="where plots go (default: beside the results table)")
     p.add_argument("--retry-errors", action="store_true", help="run again the runs recorded with status 'error'")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--dry-run", action="store_true",
+                   help="list the runs (done, failed, to run) and estimate their time from short timed runs "
+                        "in this process; start no cluster, run nothing")
     p.set_defaults(func=main)
 
 
@@ -60,6 +68,8 @@ def main(args) -> int:
     out = args.out if args.out is not None else DEFAULT_OUT_DIR / f"{study.name}.parquet"  # the name is a plain file name
     if out.suffix.lower() == ".csv":
         raise ValueError(f"--out {out} is the Parquet results table; give --csv FILE for a CSV copy")
+    if args.dry_run:
+        return dry_run(study, out, args)
     try:
         report = batch.run_study(
             study,
@@ -68,6 +78,7 @@ def main(args) -> int:
             workers=args.workers,
             progress=not args.no_progress,
             retry_errors=args.retry_errors,
+            announce=lambda line: print(line, file=sys.stderr, flush=True),
         )
     except KeyboardInterrupt:
         if out.exists():
@@ -85,5 +96,41 @@ def main(args) -> int:
     plot_dir = args.plot_dir if args.plot_dir is not None else out.parent
     for spec in [*study.plots, *plot_specs]:
         written.append(str(batch.plot(table, spec, plot_dir / spec.filename(study.name), study=study)))
+    status = 0
+    if study.sensitivity is not None:
+        result = batch.sensitivity_indices(study, table)
+        print(batch.format_indices(result))
+        written.append(str(batch.write_csv(result.indices, out.with_name(f"{out.stem}_sensitivity.csv"))))
+        written.append(str(batch.plot_sensitivity(result, plot_dir / f"{study.name}_sensitivity.png", study=study)))
+        for metric, problem in result.problems.items():
+            print(f"wetcloth batch: {metric}: {problem}", file=sys.stderr)
+        status = INCOMPLETE if result.problems else 0
     print("wrote " + ", ".join(written))
+    return status
+
+
+def dry_run(study, out: Path, args) -> int:
+    """Print the runs of ``study`` (done, failed or to run by the table at ``out``) and an estimate of
+    their time; run nothing, start no cluster."""
+    from wetcloth.batch import preview, read_table
+
+    existing = read_table(out)
+    listing = preview.run_listing(study, existing, args.retry_errors)
+    counts = listing["state"].value_counts()
+    how = study.sensitivity.describe(len(study.axes)) if study.sensitivity is not None else (
+        f"{study.sampling} sampling" if any(a.is_random for a in study.axes) else "grid")
+    print(f"{study.name}: {len(listing)} runs ({how}); in {out}: {counts.get('done', 0)} done, "
+          f"{counts.get('failed', 0)} failed{' (kept: --retry-errors runs them again)' if counts.get('failed') else ''}; "
+          f"{counts.get('to run', 0)} to run")
+    print(preview.format_listing(listing))
+    todo = [r for r, state in zip(study.runs(), listing["state"]) if state == "to run"]
+    if args.workers is not None:
+        workers = args.workers
+    elif args.scheduler is None:
+        from dask.system import CPU_COUNT  # as the local cluster would count them
+
+        workers = CPU_COUNT
+    else:
+        workers = None  # a remote cluster's workers are not asked for in a dry run
+    print(preview.format_estimate(preview.estimate_time(study, todo), workers))
     return 0

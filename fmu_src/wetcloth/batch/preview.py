@@ -1,0 +1,157 @@
+"""What a study would do, without doing it (``wetcloth batch --dry-run``): its runs, each marked done,
+failed or to run by the results table, and an estimate of their time.
+
+The estimate times a few of the runs still to do in this process, each for up to ``PROBE_BUDGET`` s
+of wall-clock time from its start (after one untimed frame that loads the kernels), and extrapolates
+each to its duration at the pace it had (``wetcloth.advice.estimate_cost``).  It starts no cluster.
+The pace of a run's first seconds is not always that of the rest (a towel that sinks moves more),
+so it is an estimate, not a promise.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from wetcloth.batch.engines import OK
+from wetcloth.batch.execution import runs_to_do
+from wetcloth.batch.results import KEY
+from wetcloth.batch.spec import Run, Study
+
+#: s of wall-clock time each probe run is timed for, at most.
+PROBE_BUDGET = 1.0
+#: Runs timed for the estimate, at most (spread over the runs to do).
+PROBES = 3
+#: Rows of the run listing shown whole; a longer listing shows its head and tail.
+SHOWN_ROWS = 30
+
+
+def run_listing(study: Study, existing: pd.DataFrame, retry_errors: bool = False) -> pd.DataFrame:
+    """One row per run of ``study``, in run order: ``run`` (1, 2, ...), the axis values, and ``state``:
+    'done' (in ``existing`` and ok), 'failed' (recorded as an error: kept, unless ``retry_errors``)
+    or 'to run'."""
+    runs = study.runs()
+    status = dict(zip(existing[KEY], existing["status"])) if len(existing) else {}
+    todo = {r.key for r in runs_to_do(runs, existing, retry_errors)}
+    rows = []
+    for i, r in enumerate(runs, 1):
+        state = "to run" if r.key in todo else "done" if status[r.key] == OK else "failed"
+        rows.append({"run": i, **r.point, "state": state})
+    return pd.DataFrame(rows, columns=["run", *study.axis_names, "state"])
+
+
+@dataclass(frozen=True)
+class Probe:
+    """One timed run: ``seconds`` of wall-clock time estimated for the whole run, from ``simulated``
+    s of it timed over ``elapsed`` s (``error``: why it could not be timed)."""
+
+    run: Run
+    seconds: float = float("nan")
+    simulated: float = 0.0
+    elapsed: float = 0.0
+    error: str | None = None
+
+
+def probe(run: Run, study: Study, budget: float = PROBE_BUDGET) -> Probe:
+    """Time ``run`` in this process for up to ``budget`` s from its start, and extrapolate to its duration."""
+    from wetcloth.advice import estimate_cost
+    from wetcloth.progress import Sample
+    from wetcloth.scene import from_dict
+    from wetcloth.simulation import Simulation
+
+    chunk = min(1.0 / study.sample_rate, 0.05, study.duration)  # s simulated between two looks at the clock
+    try:
+        scene = from_dict(run.params)
+        Simulation(scene).advance(chunk)  # loads (or compiles) the kernels this scene needs: not timed
+        sim = Simulation(scene)
+        start = time.perf_counter()
+        while sim.time < study.duration and time.perf_counter() - start < budget:
+            sim.advance(min(chunk, study.duration - sim.time))
+        elapsed = time.perf_counter() - start
+    except Exception as exc:  # a run that cannot be timed is left out of the estimate, and said so
+        return Probe(run, error=f"{type(exc).__name__}: {exc}")
+    # time = 0: the cost of the whole run at the pace of the timed part
+    cost = estimate_cost(scene, study.duration, Sample(elapsed, sim.steps, sim.time, 0.0), sim.integrator.stable_step(0.0))
+    return Probe(run, cost.seconds, sim.time, elapsed)
+
+
+@dataclass(frozen=True)
+class TimeEstimate:
+    """The estimated time of ``runs`` runs from ``probes``: ``per_run`` s (the probes' mean; NaN if
+    no probe could be timed) and ``compute`` s in all (per_run x runs).  ``refused``: runs left out,
+    since a value out of range refuses them before they reach a worker (they cost nothing)."""
+
+    runs: int
+    probes: tuple[Probe, ...]
+    refused: int = 0
+
+    @property
+    def timed(self) -> list[Probe]:
+        return [p for p in self.probes if p.error is None]
+
+    @property
+    def per_run(self) -> float:
+        return float(np.mean([p.seconds for p in self.timed])) if self.timed else float("nan")
+
+    @property
+    def compute(self) -> float:
+        return self.per_run * self.runs
+
+    def wall(self, workers: int) -> float:
+        """s of wall-clock time on ``workers`` single-threaded workers (runs spread evenly)."""
+        return self.per_run * int(np.ceil(self.runs / workers))
+
+
+def estimate_time(study: Study, runs: list[Run], probes: int = PROBES, budget: float = PROBE_BUDGET) -> TimeEstimate:
+    """Time up to ``probes`` of ``runs`` (spread evenly over them) for ``budget`` s each: see :class:`TimeEstimate`."""
+    from wetcloth.scene import from_dict
+
+    def valid(run: Run) -> bool:
+        try:
+            from_dict(run.params)
+        except ValueError:
+            return False
+        return True
+
+    costly = [r for r in runs if valid(r)]
+    if not costly:
+        return TimeEstimate(0, (), refused=len(runs))
+    picks = sorted(set(np.linspace(0, len(costly) - 1, min(probes, len(costly))).round().astype(int)))
+    return TimeEstimate(len(costly), tuple(probe(costly[i], study, budget) for i in picks), len(runs) - len(costly))
+
+
+def format_listing(listing: pd.DataFrame, shown: int = SHOWN_ROWS) -> str:
+    """The run listing as text: whole up to ``shown`` rows, else its head and tail."""
+    if len(listing) <= shown:
+        return listing.to_string(index=False)
+    head, tail = shown * 2 // 3, shown // 3
+    lines = listing.to_string(index=False).splitlines()
+    return "\n".join([*lines[:head + 1], f"  ... {len(listing) - head - tail} more runs ...", *lines[-tail:]])
+
+
+def format_estimate(estimate: TimeEstimate, workers: int | None, budget: float = PROBE_BUDGET) -> str:
+    """'estimated time: about 1.4 s per run x 512 runs = 12 min of computing; about 6 min on 2 workers (...)'."""
+    from wetcloth.advice import format_duration
+
+    refused = (f"{estimate.refused} run{'s' if estimate.refused > 1 else ''} with a value out of range will be "
+               "refused at once" if estimate.refused else "")
+    if estimate.runs == 0:
+        return "estimated time: nothing to run" + (f" ({refused})" if refused else "")
+    failed = [p for p in estimate.probes if p.error is not None]
+    notes = "; ".join([*(f"run {p.run.key} could not be timed ({p.error.splitlines()[0]})" for p in failed),
+                       *([refused] if refused else [])])
+    if not estimate.timed:
+        return f"estimated time: none: {notes}"
+    spread = [p.seconds for p in estimate.timed]
+    timed = (f"{len(spread)} of the runs timed in this process for up to {budget:g} s each"
+             + (f", {format_duration(min(spread))} to {format_duration(max(spread))} per run" if len(spread) > 1 else ""))
+    text = (f"estimated time: about {format_duration(estimate.per_run)} per run x {estimate.runs} runs = "
+            f"{format_duration(estimate.compute)} of computing")
+    if workers:
+        text += f"; about {format_duration(estimate.wall(workers))} on {workers} worker{'s' if workers > 1 else ''}"
+    else:
+        text += "; divide by the number of workers of the cluster"
+    return text + f" ({timed}{'; ' + notes if notes else ''})"
