@@ -159,7 +159,7 @@ def plot_sensitivity(result, path: str | Path, study=None) -> Path:
             ax.grid(axis="y", alpha=0.3)
             ax.legend(fontsize=8)
         level = f"{100 * result.spec.conf_level:g}%"
-        title = f"{study.name}: " if study is not None else ""
+        title = f"{study.name}\n" if study is not None else ""
         fig.suptitle(f"{title}{result.spec.describe(len(result.factors))}; error bars: {level} confidence", fontsize=10)
         with whole_file(path) as tmp:
             fig.savefig(tmp, dpi=110, format="png")
