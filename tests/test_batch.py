@@ -204,8 +204,9 @@ def test_cli_on_a_scheduler_writes_table_csv_and_plots(client, tmp_path, capsys)
     argv = ["batch", str(study_file), "--scheduler", client.scheduler.address, "--workers", "2",
             "--out", str(out), "--csv", str(csv), "--plot", "final_wet_mass:absorption_rate", "--no-progress"]
     assert main(argv) == 0
-    printed = capsys.readouterr().out
+    printed, err = capsys.readouterr()
     assert "cli_study: 4 runs; ran 4: 4 ok, 0 failed" in printed
+    assert f"Dask dashboard: {client.dashboard_link}" in err.splitlines()  # the scheduler's, as it reports it
     table = read_table(out)
     assert len(table) == 4 and (table["status"] == "ok").all()
     assert pd.read_csv(csv)["run_key"].tolist() == table["run_key"].tolist()
@@ -232,12 +233,19 @@ def test_cli_starts_and_stops_its_own_local_cluster(tmp_path, capsys):
 
 
 def test_local_cluster_one_single_threaded_process_per_core_stopped_on_exit():
+    """... and it announces its dashboard: a page served on loopback while the cluster runs."""
+    from urllib.request import urlopen
+
     from dask.system import CPU_COUNT  # the cores this process may use
 
-    with dask_client() as c:
+    lines = []
+    with dask_client(announce=lines.append) as c:
         workers = c.scheduler_info()["workers"].values()
         assert len(workers) == CPU_COUNT and all(w["nthreads"] == 1 for w in workers)
         pids = set(c.run(os.getpid).values())
+        assert re.fullmatch(r"Dask dashboard: http://127\.0\.0\.1:\d+/status", lines[0]), lines
+        with urlopen(lines[0].split(": ", 1)[1], timeout=30) as page:  # bokeh installed: the real dashboard
+            assert page.status == 200 and b"<title>Dask" in page.read()
     assert len(pids) == CPU_COUNT and os.getpid() not in pids  # processes of their own ...
     for pid in pids:  # ... gone once the study's client closes
         with pytest.raises(ProcessLookupError):
@@ -454,3 +462,41 @@ def test_fmu_engine_without_the_fmu_records_why(client, tmp_path):
     table = wetcloth.study(study, client=client)
     assert table["status"].tolist() == ["error"]
     assert "none.fmu' not found: build it with 'wetcloth build-fmu'" in table["error"][0]
+
+
+def test_towel_sensitivity_example_runs_end_to_end_on_dask(client, tmp_path, capsys):
+    """A tiny version of models/studies/towel_sink_sensitivity.toml (2 base samples: 16 runs of a 4 x 5
+    towel, its bounds and 60 s, in which every run sinks): the design runs as Dask tasks, and the
+    command writes the results table, the indices (every factor ranked for every metric) and their
+    bar plot; the same command again runs nothing and gives the same indices."""
+    import tomllib
+
+    from wetcloth.cli import main
+
+    text = (DOCS.parents[1] / "models" / "studies" / "towel_sink_sensitivity.toml").read_text()
+    tiny, changed = re.subn(r"(?m)^nx = 5\nny = 7$|^samples = 64 ", lambda m: "nx = 4\nny = 5" if m[0].startswith("nx")
+                            else "samples = 2 ", text)
+    assert changed == 2
+    example = tomllib.loads(tiny)
+    study_file = tmp_path / "towel_tiny.toml"
+    study_file.write_text(tiny)
+    out = tmp_path / "res" / "towel_tiny.parquet"
+    argv = ["batch", str(study_file), "--scheduler", client.scheduler.address, "--out", str(out), "--no-progress"]
+    assert main(argv) == 0, capsys.readouterr().err
+    printed = capsys.readouterr().out
+    assert "towel_tiny: 16 runs; ran 16: 16 ok, 0 failed" in printed
+    assert "sensitivity (sobol design: 2 base samples x (6 factors + 2) = 16 runs; +- 95% confidence):" in printed
+    table = read_table(out)
+    assert len(table) == 16 and (table["status"] == "ok").all() and table["sank"].all()
+    indices = pd.read_csv(out.with_name("towel_tiny_sensitivity.csv"))
+    factors = list(example["axes"])
+    assert list(indices["metric"].unique()) == example["metrics"]
+    for metric, frame in indices.groupby("metric"):
+        assert sorted(frame["parameter"]) == sorted(factors) and sorted(frame["rank"]) == list(range(1, 7))
+        assert np.isfinite(frame[["S1", "S1_conf", "ST", "ST_conf"]].to_numpy()).all()
+    image = matplotlib.image.imread(out.parent / "towel_tiny_sensitivity.png")
+    assert image.shape[0] > 600 and image.shape[1] > 500
+    assert main(argv) == 0
+    assert "16 already in" in capsys.readouterr().out
+    pd.testing.assert_frame_equal(pd.read_csv(out.with_name("towel_tiny_sensitivity.csv")), indices)
+

@@ -1,6 +1,7 @@
 """Batch studies without Dask: study files, run expansion and keys, metrics, results table, plot data."""
 
 import math
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -298,3 +299,93 @@ def test_importing_wetcloth_does_not_import_dask():
             "print(sorted(m for m in ('dask', 'distributed', 'pandas') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+# ---------------------------------------------------------------- --dry-run, sensitivity exit status, dashboard line
+
+
+def test_dry_run_lists_runs_done_failed_and_to_run_and_estimates_their_time(tmp_path, monkeypatch, capsys):
+    """Nothing runs and no cluster starts: the listing says which runs the table already holds, and
+    the estimate comes from short runs of the scene in this process (here whole 2 s runs)."""
+    from wetcloth.batch import cluster, preview
+    from wetcloth.cli import main
+
+    study_file = tmp_path / "dry.toml"
+    study_file.write_text('scene = "thesis_fast"\nduration = 2.0\n[base]\nnx = 5\nny = 5\n'
+                          '[axes]\nabsorption_rate = [-1.0, 0.5, 1.0, 2.0]\ninitial_tilt = [0.0, 30.0]\n')
+    out = tmp_path / "dry.parquet"
+    study = load_study(study_file)
+    runs = study.runs()
+    done = [dict(run_key=runs[2].key, status="ok", error=None), dict(run_key=runs[3].key, status="error", error="X: y")]
+    write_table(make_table(done), out)
+    stamp = out.stat().st_mtime_ns
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("a dry run starts no cluster")
+
+    monkeypatch.setattr(cluster, "dask_client", no_cluster)
+    assert main(["batch", str(study_file), "--out", str(out), "--workers", "2", "--dry-run"]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    assert printed[0] == (f"dry: 8 runs (grid); in {out}: 1 done, 1 failed (kept: --retry-errors runs them again); "
+                          "6 to run")
+    assert printed[1].split() == ["run", "absorption_rate", "initial_tilt", "state"]
+    assert [line.split()[-1] for line in printed[2:10]] == ["run", "run", "done", "failed", "run", "run", "run", "run"]
+    assert printed[4].split()[:3] == ["3", "0.5", "0.0"]
+    estimate = printed[10]
+    # 6 to run: 2 refused at once (absorption_rate = -1), 4 timed at the pace of 3 of them
+    assert re.fullmatch(r"estimated time: about \S+ \S+ per run x 4 runs = \S+ \S+ of computing; about \S+ \S+ on 2 "
+                        r"workers \(3 of the runs timed in this process for up to 1 s each, .*; 2 runs with a value out "
+                        r"of range will be refused at once\)", estimate), estimate
+    assert out.stat().st_mtime_ns == stamp and sorted(p.name for p in tmp_path.iterdir()) == ["dry.parquet", "dry.toml"]
+    # with --retry-errors the failed run is to run again
+    listing = preview.run_listing(study, read_table(out), retry_errors=True)
+    assert listing["state"].tolist() == ["to run"] * 2 + ["done"] + ["to run"] * 5
+
+
+def test_time_estimate_extrapolates_the_timed_part_of_a_run_to_its_duration():
+    """A run timed whole is estimated at the time it took; a run timed for one chunk (0.05 s of
+    simulated time: a budget of 0 s stops after the first) at that pace over its whole duration."""
+    from wetcloth.batch import preview
+
+    study = make(duration=1.0, base={"nx": 5, "ny": 5}, axes={"absorption_rate": [0.5, 1.0]})
+    whole = preview.estimate_time(study, study.runs(), budget=60.0)
+    assert whole.runs == 2 and len(whole.timed) == 2
+    for p in whole.timed:
+        assert p.simulated == pytest.approx(1.0) and p.seconds == pytest.approx(p.elapsed, rel=1e-9)
+    assert whole.per_run == pytest.approx(np.mean([p.elapsed for p in whole.timed]), rel=1e-9)
+    assert whole.compute == pytest.approx(2 * whole.per_run) and whole.wall(2) == pytest.approx(whole.per_run)
+    part = preview.estimate_time(study, study.runs()[:1], budget=0.0).timed[0]
+    assert part.simulated == pytest.approx(0.05) and part.seconds == pytest.approx(part.elapsed / 0.05, rel=1e-9)
+
+
+def test_sensitivity_study_whose_runs_all_fail_exits_1_naming_them(tmp_path, capsys):
+    """Values out of range fail every run before any worker is needed: the command reports which runs
+    the design misses, writes an empty indices table and a plot that says why, and exits 1."""
+    from wetcloth.cli import main
+
+    study_file = tmp_path / "sa.toml"
+    study_file.write_text('scene = "thesis_fast"\nduration = 1.0\nmetrics = ["final_depth"]\n'
+                          '[axes]\nthickness = { low = -2.0, high = -1.0 }\nabsorption_rate = { low = 0.1, high = 1.0 }\n'
+                          '[sensitivity]\nsamples = 2\n')
+    out = tmp_path / "sa.parquet"
+    assert main(["batch", str(study_file), "--out", str(out), "--no-progress"]) == 1
+    captured = capsys.readouterr()
+    assert "sa: 8 runs; ran 8: 0 ok, 8 failed" in captured.out
+    assert "  final_depth (m)\n    no indices: see below" in captured.out
+    message = captured.err.strip()
+    assert message.startswith("wetcloth batch: final_depth: no indices: the sobol design needs a value from each of "
+                              "its 8 runs, and 8 failed (after fixing the cause, --retry-errors runs them again): run ")
+    assert "ParameterError: parameter 'thickness': " in message and message.endswith("; and 5 more")
+    assert pd.read_csv(tmp_path / "sa_sensitivity.csv").empty and (tmp_path / "sa_sensitivity.png").exists()
+
+
+def test_dashboard_line_names_the_link_or_says_there_is_none():
+    from types import SimpleNamespace
+
+    from wetcloth.batch.cluster import dashboard_line
+
+    scheduler = SimpleNamespace(address="tcp://head:8786")
+    assert dashboard_line(SimpleNamespace(dashboard_link="http://head:8787/status", scheduler=scheduler)) == \
+        "Dask dashboard: http://head:8787/status"
+    assert dashboard_line(SimpleNamespace(dashboard_link=None, scheduler=scheduler)) == \
+        "Dask dashboard: none (the scheduler at tcp://head:8786 reports no dashboard address)"

@@ -68,8 +68,10 @@ def probe(run: Run, study: Study, budget: float = PROBE_BUDGET) -> Probe:
         Simulation(scene).advance(chunk)  # loads (or compiles) the kernels this scene needs: not timed
         sim = Simulation(scene)
         start = time.perf_counter()
-        while sim.time < study.duration and time.perf_counter() - start < budget:
+        while True:  # at least one chunk, then until the run ends or the budget is spent
             sim.advance(min(chunk, study.duration - sim.time))
+            if sim.time >= study.duration * (1 - 1e-12) or time.perf_counter() - start >= budget:
+                break
         elapsed = time.perf_counter() - start
     except Exception as exc:  # a run that cannot be timed is left out of the estimate, and said so
         return Probe(run, error=f"{type(exc).__name__}: {exc}")

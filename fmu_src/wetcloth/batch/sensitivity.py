@@ -44,6 +44,8 @@ SENSITIVITY_KEYS = ("method", "samples", "trajectories", "levels", "conf_level",
 _METHOD_KEYS = {"samples": "sobol", "trajectories": "morris", "levels": "morris"}
 #: Distributions a Morris design can step through: ordered and bounded (not normal, not choice).
 _MORRIS_KINDS = ("uniform", "loguniform", "integers")
+#: The indices each method gives per factor (``_conf``: half-width of the confidence interval).
+INDICES = {"sobol": ("S1", "S1_conf", "ST", "ST_conf"), "morris": ("mu_star", "mu_star_conf", "mu", "sigma")}
 #: Runs of a design not listed one by one in a message, past this many per kind of problem.
 _EXAMPLES = 3
 
@@ -219,14 +221,12 @@ def analyze(spec: SensitivitySpec, names: list[str], unit_design: np.ndarray, ou
 
         result = sobol.analyze(_problem(names), y, calc_second_order=False, num_resamples=spec.resamples,
                                conf_level=spec.conf_level, seed=_bootstrap_seed(seed))
-        keys = ("S1", "S1_conf", "ST", "ST_conf")
     else:
         from SALib.analyze import morris
 
         result = morris.analyze(_problem(names), np.asarray(unit_design, float), y, num_resamples=spec.resamples,
                                 conf_level=spec.conf_level, num_levels=spec.levels, seed=_bootstrap_seed(seed))
-        keys = ("mu_star", "mu_star_conf", "mu", "sigma")
-    return {k: np.asarray(result[k], float) for k in keys}
+    return {k: np.asarray(result[k], float) for k in INDICES[spec.method]}
 
 
 @dataclass
@@ -322,8 +322,9 @@ def sensitivity_indices(study: Study, table: pd.DataFrame) -> SensitivityResult:
             rows.append({"metric": metric, "unit": METRICS[metric].unit, "parameter": name, "rank": int(ranks[j])}
                         | {k: float(v[j]) for k, v in found.items()}
                         | {"method": spec.method, "runs": runs, "conf_level": spec.conf_level})
-    return SensitivityResult(spec=spec, factors=names, metrics=metrics, runs=runs, indices=pd.DataFrame(rows),
-                             problems=problems)
+    columns = ["metric", "unit", "parameter", "rank", *INDICES[spec.method], "method", "runs", "conf_level"]
+    return SensitivityResult(spec=spec, factors=names, metrics=metrics, runs=runs,
+                             indices=pd.DataFrame(rows, columns=columns), problems=problems)
 
 
 def format_indices(result: SensitivityResult) -> str:
