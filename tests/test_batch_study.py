@@ -371,11 +371,11 @@ def test_sensitivity_study_whose_runs_all_fail_exits_1_naming_them(tmp_path, cap
     assert main(["batch", str(study_file), "--out", str(out), "--no-progress"]) == 1
     captured = capsys.readouterr()
     assert "sa: 8 runs; ran 8: 0 ok, 8 failed" in captured.out
-    assert "  final_depth (m)\n    no indices: see below" in captured.out
-    message = captured.err.strip()
-    assert message.startswith("wetcloth batch: final_depth: no indices: the sobol design needs a value from each of "
-                              "its 8 runs, and 8 failed (after fixing the cause, --retry-errors runs them again): run ")
+    message = " ".join(captured.out.split("  final_depth (m)\n", 1)[1].split("\nwrote ")[0].split())  # unwrapped
+    assert message.startswith("no indices: the sobol design needs a value from each of its 8 runs, and 8 failed (after "
+                              "fixing the cause, --retry-errors runs them again): run ")
     assert "ParameterError: parameter 'thickness': " in message and message.endswith("; and 5 more")
+    assert captured.err.splitlines() == ["wetcloth batch: no sensitivity indices for final_depth (why: above)"]
     assert pd.read_csv(tmp_path / "sa_sensitivity.csv").empty and (tmp_path / "sa_sensitivity.png").exists()
 
 

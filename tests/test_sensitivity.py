@@ -167,10 +167,10 @@ def test_a_design_with_failed_missing_or_undefined_runs_gets_no_indices_and_name
     assert (f"1 failed (after fixing the cause, --retry-errors runs them again): run {runs[0].key} (" in depth
             and "): BlowUpError: the cloth state exploded at t = 1.2 s" in depth and "(more)" not in depth)
     sink = result.problems["time_to_sink"]
-    assert (f"1 have no value (NaN: it did not sink within duration = 60 s: a longer duration, or bounds within "
+    assert (f"1 has no value (NaN: it did not sink within duration = 60 s: a longer duration, or bounds within "
             f"which every run sinks): run {runs[1].key}") in sink
     text = format_indices(result)
-    assert "  time_to_sink (s)\n    no indices: see below" in text
+    assert "  time_to_sink (s)\n    no indices: the sobol design needs a value from each of its 40 runs, and" in text
     image = plot_sensitivity(result, tmp_path / "refused.png")  # a panel per metric, each saying why
     assert image.exists()
 

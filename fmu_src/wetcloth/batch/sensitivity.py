@@ -24,6 +24,7 @@ which runs, and why, instead of an estimate from a partial design.
 from __future__ import annotations
 
 import math
+import textwrap
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -160,8 +161,7 @@ def parse_sensitivity(table) -> SensitivitySpec:
             mistakes.add(StudyError(f"sensitivity.{key}", f"is for method = '{owner}'; method '{method}' takes "
                                                           f"{other} (see docs/batch.md)"))
     mistakes.raise_if_any()
-    values = {k: (list(v) if k == "metrics" and isinstance(v, tuple) else v) for k, v in table.items()}
-    return SensitivitySpec(**values)
+    return SensitivitySpec(**table)
 
 
 def check_factors(spec: SensitivitySpec, axes: tuple[Axis, ...]) -> None:
@@ -263,20 +263,17 @@ def _undefined_hint(metric: str, study: Study) -> str:
     return "the metric is undefined there (docs/batch.md, Metrics)"
 
 
-def design_outputs(study: Study, table: pd.DataFrame, metric: str) -> tuple[np.ndarray | None, str | None]:
-    """The metric of every design row of ``study`` from ``table`` (by run key), or None and why not:
-    the runs of the design that are not in the table, failed, or have no value, each named."""
-    from wetcloth.batch.results import KEY
-
-    keys = study.point_keys()
-    points = {r.key: r.point for r in study.runs()}
+def design_outputs(study: Study, by_key: pd.DataFrame, metric: str, keys: list[str],
+                   points: dict[str, dict]) -> tuple[np.ndarray | None, str | None]:
+    """The metric of every design row of ``study`` (whose run keys are ``keys``, in design order) from
+    the results table ``by_key`` (indexed by run key), or None and why not: the runs of the design
+    that are not in the table, failed, or have no value, each named with its ``points`` values."""
     unique = list(dict.fromkeys(keys))
-    by_key = table.drop_duplicates(KEY, keep="last").set_index(KEY)
     missing = [k for k in unique if k not in by_key.index]
     present = by_key.loc[[k for k in unique if k in by_key.index]]
     failed = present[present["status"] != "ok"]
-    values = present[metric].astype(float) if metric in present else None
-    undefined = [] if values is None else [k for k in present.index[present["status"] == "ok"] if not math.isfinite(values[k])]
+    values = present.reindex(columns=[metric])[metric].astype(float)  # all NaN if no run recorded it
+    undefined = [k for k in present.index[present["status"] == "ok"] if not math.isfinite(values[k])]
     parts = []
     if missing:
         parts.append(f"{len(missing)} not run yet (run the same command to run them): " + _examples(missing, points))
@@ -285,7 +282,8 @@ def design_outputs(study: Study, table: pd.DataFrame, metric: str) -> tuple[np.n
         parts.append(f"{len(failed)} failed (after fixing the cause, --retry-errors runs them again): "
                      + _examples(list(failed.index), points, errors))
     if undefined:
-        parts.append(f"{len(undefined)} have no value (NaN: {_undefined_hint(metric, study)}): "
+        parts.append(f"{len(undefined)} {'has' if len(undefined) == 1 else 'have'} no value "
+                     f"(NaN: {_undefined_hint(metric, study)}): "
                      + _examples(undefined, points))
     if parts:
         return None, (f"no indices: the {study.sensitivity.method} design needs a value from each of its "
@@ -301,16 +299,21 @@ def sensitivity_indices(study: Study, table: pd.DataFrame) -> SensitivityResult:
     ``[sensitivity] metrics``, default all recorded): see :class:`SensitivityResult`."""
     import pandas as pd
 
+    from wetcloth.batch.results import KEY
+
     spec = study.sensitivity
     if spec is None:
         raise ValueError(f"study {study.name!r} has no [sensitivity] table")
     names = study.axis_names
     unit = study.design()
-    runs = len(set(study.point_keys()))
+    keys = study.point_keys()
+    points = {r.key: r.point for r in study.runs()}
+    by_key = table.drop_duplicates(KEY, keep="last").set_index(KEY)
+    runs = len(points)
     metrics = list(spec.metrics or study.metrics)
     rows, problems = [], {}
     for metric in metrics:
-        y, problem = design_outputs(study, table, metric)
+        y, problem = design_outputs(study, by_key, metric, keys, points)
         if problem is not None:
             problems[metric] = problem
             continue
@@ -336,7 +339,7 @@ def format_indices(result: SensitivityResult) -> str:
         unit = METRICS[metric].unit
         lines.append(f"  {metric} ({unit})")
         if metric in result.problems:
-            lines.append("    " + result.problems[metric].split(":", 1)[0] + ": see below")
+            lines.extend(textwrap.wrap(result.problems[metric], 110, initial_indent="    ", subsequent_indent="      "))
             continue
         frame = result.indices[result.indices["metric"] == metric].sort_values("rank")
         width = max(len(n) for n in frame["parameter"])

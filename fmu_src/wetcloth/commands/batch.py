@@ -102,9 +102,9 @@ def main(args) -> int:
         print(batch.format_indices(result))
         written.append(str(batch.write_csv(result.indices, out.with_name(f"{out.stem}_sensitivity.csv"))))
         written.append(str(batch.plot_sensitivity(result, plot_dir / f"{study.name}_sensitivity.png", study=study)))
-        for metric, problem in result.problems.items():
-            print(f"wetcloth batch: {metric}: {problem}", file=sys.stderr)
-        status = INCOMPLETE if result.problems else 0
+        if result.problems:
+            print(f"wetcloth batch: no sensitivity indices for {', '.join(result.problems)} (why: above)", file=sys.stderr)
+            status = INCOMPLETE
     print("wrote " + ", ".join(written))
     return status
 
