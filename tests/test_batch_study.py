@@ -389,3 +389,15 @@ def test_dashboard_line_names_the_link_or_says_there_is_none():
         "Dask dashboard: http://head:8787/status"
     assert dashboard_line(SimpleNamespace(dashboard_link=None, scheduler=scheduler)) == \
         "Dask dashboard: none (the scheduler at tcp://head:8786 reports no dashboard address)"
+
+
+def test_every_study_snippet_of_the_docs_is_a_valid_study():
+    """The TOML blocks of docs/batch.md (the study file, lhs sampling, [sensitivity]) parse as studies."""
+    import tomllib
+
+    docs = (ROOT / "docs" / "batch.md").read_text()
+    blocks = re.findall(r"```toml\n(.*?)```", docs, re.S)
+    assert len(blocks) >= 3
+    for block in blocks:
+        study = Study.from_dict(tomllib.loads(block), name="docs")
+        assert study.runs()

@@ -11,8 +11,8 @@ gives per metric and factor:
 - ``sobol``: first-order and total indices ``S1``, ``ST`` (shares of the metric's variance) with
   the half-widths ``S1_conf``, ``ST_conf`` of their bootstrap confidence intervals.  Runs:
   ``samples * (factors + 2)`` (SALib's ``sample.sobol`` without second-order indices).
-- ``morris``: ``mu_star`` (mean absolute elementary effect: the metric's change, in its unit, when
-  the factor crosses its whole range in one step of the design) with ``mu_star_conf``, ``mu`` (its
+- ``morris``: ``mu_star`` (mean absolute elementary effect: the metric's change in one step of the
+  design, in its unit, scaled to the factor's whole range) with ``mu_star_conf``, ``mu`` (its
   signed mean) and ``sigma`` (spread of the effects: interactions or non-linearity).  Runs:
   ``trajectories * (factors + 1)``.
 
