@@ -3,7 +3,7 @@ stretch stiffness, and a sweep showing that the default adaptive mode never blow
 
     .venv/bin/python bench/stability.py [--quick]
 
-"Stable" is defined in ``wetcloth.stress``: no blow-up and kinetic energy within what the scene
+"Stable" is defined in ``tests/support/stress.py``: no blow-up and kinetic energy within what the scene
 could release.  Scene: a 9 x 9 towel dropped 10 cm onto water, 0.3 s.  Writes
 ``docs/stability.csv`` and the stability map ``docs/stability.png``.
 """
@@ -23,13 +23,14 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 import wetcloth  # noqa: E402
-from wetcloth.stress import stress_run  # noqa: E402
+import _paths  # noqa: E402,F401  (tests/ on sys.path for the oracles)
+from support.stress import stress_run  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "docs"
 BASE = dict(nx=9, ny=9)
 DURATION = 0.3  # s
 STIFFNESSES = [1e1, 1e2, 1e3, 1e4, 1e5, 1e6]  # N/m
-INTEGRATORS = ["explicit_euler", "symplectic_euler", "implicit_euler"]
+INTEGRATORS = ["explicit_euler", "symplectic_euler", "implicit_euler", "bdf2"]
 
 
 def largest_stable_step(integrator: str, stiffness: float, lo=1e-6, hi=0.05, rounds=8) -> float:

@@ -5,7 +5,7 @@ import numpy as np
 import wetcloth
 
 G = 9.81
-INTEGRATORS = ["explicit_euler", "symplectic_euler", "implicit_euler"]
+INTEGRATORS = ["explicit_euler", "symplectic_euler", "implicit_euler", "bdf2"]
 
 
 def mean_velocity(sim: wetcloth.Simulation) -> np.ndarray:

@@ -68,6 +68,7 @@ def test_stokes_terminal_velocity_and_time_constant(integrator):
     global error below (h / 2 tau) v_t on this relaxation; we allow h / tau.  Halving h must
     halve the error (first order).
     """
+    second_order = integrator == "bdf2"
     errors = []
     for steps_per_tau in (500, 1000):
         probe = wetcloth.Simulation(heavy_submerged_scene(nx=2, ny=2, drag_model="stokes"))
@@ -83,9 +84,10 @@ def test_stokes_terminal_velocity_and_time_constant(integrator):
             sim.advance(tau / 2)
             expected = -v_t * (1 - math.exp(-sim.time / tau))
             worst = max(worst, abs(mean_velocity(sim)[2] - expected) / v_t)
-        assert worst < h / tau, (steps_per_tau, worst)
+        assert worst < ((h / tau) ** 2 if second_order else h / tau), (steps_per_tau, worst)
         errors.append(worst)
-    assert 1.7 < errors[0] / errors[1] < 2.3, errors
+    ratio = 4.0 if second_order else 2.0
+    assert 0.85 * ratio < errors[0] / errors[1] < 1.15 * ratio, errors
 
 
 def _face_model_run(nx, integrator="implicit_euler", duration=2.0):
@@ -107,29 +109,39 @@ def _face_model_run(nx, integrator="implicit_euler", duration=2.0):
 def test_face_drag_terminal_velocity_broadside(integrator):
     """Face model, c_lin = 0: v(t) = v_t tanh(g' t / v_t), v_t = sqrt(2 g sum(m - rho V) / (rho C_n A)).
 
-    The analytic case assumes a rigid flat sheet whose drag shares match its masses.  The
-    discrete model gives each particle a third of its triangles' drag: exact inside the sheet,
-    but corners get 2/3 or 1/3 of their share, an error ~ 1/nx^2 of the total.  On 17 x 17 that
-    is ~0.2%; we allow 0.5%.  The adaptive steps' time error on the tanh transient is far smaller.
-    """
+    Drag is lumped with the particles' area weights, like mass and volume, so a flat sheet
+    translates rigidly and the discrete model is the analytic one exactly: only the time
+    integration errs.  Over the tanh transient (time constant v_t/g' ~ 20 ms) every scheme's
+    error stays below 0.5 % of v_t at its default settings."""
     worst, _, _ = _face_model_run(17, integrator=integrator)
     assert worst < 5e-3
 
 
+@pytest.mark.parametrize("integrator", INTEGRATORS)
+def test_flat_sheet_sinking_broadside_stays_flat(integrator):
+    """Uniform mass, buoyancy and drag per area: nothing bends the sheet, so it must fall flat.
+    With drag shared by triangle thirds (the corners' share wrong) it bowed by 2-4 cm in 2 s; with
+    the area weights of MODEL.md section 4 every particle has the same acceleration, and 1 mm
+    leaves room only for round-off."""
+    sim = wetcloth.Simulation(heavy_submerged_scene(nx=17, ny=13, integrator=integrator))
+    sim.advance(2.0)
+    assert mean_velocity(sim)[2] < -0.03, "it sinks"
+    assert np.ptp(sim.positions[:, 2]) < 1e-3
+
+
 def test_face_drag_converges_with_the_grid():
-    """Refining the grid (9, 17, 33) brings the terminal sinking speed ever closer to the analytic
-    one.  The corners' wrong drag share is a fraction ~1/nx^2 of the total, so each doubling of
-    nx must cut the error by well over 3 (4 in the limit); the speed's change between
-    refinements shrinks accordingly.  Measured at t = 0.5 s, 25 time constants v_t/g' in: the
-    time-stepping error of the transient is gone by then."""
-    results = [_face_model_run(nx, duration=0.5) for nx in (9, 17, 33)]
-    errors = [abs(v / -v_t - 1) for _, v, v_t in results]
-    speeds = [v for _, v, _ in results]
-    assert errors[0] > 3 * errors[1] > 9 * errors[2], errors
-    assert abs(speeds[2] - speeds[1]) < abs(speeds[1] - speeds[0]) / 3, speeds
+    """Refining the grid (9, 17, 33) changes the result less each time: a heavy sheet held by one
+    edge sinks and bends, and its centroid depth after 1 s moves by less between 17 and 33 than
+    between 9 and 17 (first order: about half)."""
+    depths = []
+    for nx in (9, 17, 33):
+        sim = wetcloth.Simulation(heavy_submerged_scene(nx=nx, ny=nx, pinned_edge="y_max"))
+        sim.advance(1.0)
+        depths.append(sim.outputs()["depth"])
+    assert abs(depths[2] - depths[1]) < 0.7 * abs(depths[1] - depths[0]), depths
 
 
-@pytest.mark.parametrize("integrator", ["symplectic_euler", "implicit_euler"])
+@pytest.mark.parametrize("integrator", ["symplectic_euler", "implicit_euler", "bdf2"])
 def test_floating_cloth_starts_to_sink_at_the_analytic_onset(integrator):
     """A flat cloth floating with every particle touching water absorbs as Buras says; it sinks
     once m0 (1 + C (1 - exp(-R t/C))) > rho V, i.e. at t_on = (C/R) ln(C / (1 + C - rho V/m0)).
@@ -140,8 +152,11 @@ def test_floating_cloth_starts_to_sink_at_the_analytic_onset(integrator):
     is below 5e-5 m/s.  After onset it goes under: more than 2 cm deep 5 s later.
     """
     C, R = 3.8, 0.15
+    # Backward Euler's first-order damping adds a lag of about its step times the sinking speed: with
+    # steps up to the default 0.1 s that is 7e-6 m, so its steps are held to 0.01 s here.
+    steps = dict(max_step=0.01) if integrator == "implicit_euler" else {}
     base = wetcloth.load_scene(nx=9, ny=9, initial_tilt=0.0, absorption_capacity=C, absorption_rate=R,
-                               integrator=integrator)
+                               integrator=integrator, **steps)
     scene = base.replace(initial_height=base.water_level - _floating_depth(base))
     sim = wetcloth.Simulation(scene)
     m0, volume = totals(sim)

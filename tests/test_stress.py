@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 
 import wetcloth
 from wetcloth.scene import PARAMETERS
-from wetcloth.stress import stress_run
+from support.stress import stress_run
 
 BASE = dict(nx=7, ny=7)
 DURATION = 0.3  # s: landing, the water jump at 0.15 s, and what follows
@@ -20,6 +20,7 @@ DURATION = 0.3  # s: landing, the water jump at 0.15 s, and what follows
     ("explicit_euler", [1e1, 1e4]),
     ("symplectic_euler", [1e1, 1e4, 1e6]),
     ("implicit_euler", [1e1, 1e4, 1e6]),
+    ("bdf2", [1e1, 1e4, 1e6]),
 ])
 def test_adaptive_mode_survives_the_stress_sweep(integrator, stiffnesses):
     """Stiffness 1e1..1e6 N/m, gauze to canvas, no to near-instant absorption, water jumping 5 cm
@@ -36,8 +37,10 @@ def test_adaptive_mode_survives_the_stress_sweep(integrator, stiffnesses):
 
 
 def test_fixed_steps_beyond_the_limit_are_caught_not_written():
-    """The stress check itself can fail: explicit Euler with fixed steps 10x its limit is unstable."""
-    scene = wetcloth.load_scene(**BASE, integrator="explicit_euler", tolerance=0.0, max_step=1e-3)
+    """The stress check itself can fail: explicit Euler with fixed steps 20x its limit is unstable.
+    (At 10x, 1 ms, it sits on the edge: steps of 0.86 ms, which the equal division of an output
+    interval into steps may give, let it pass.)"""
+    scene = wetcloth.load_scene(**BASE, integrator="explicit_euler", tolerance=0.0, max_step=2e-3)
     result = stress_run(scene, DURATION)
     assert not result.stable and result.reason
 
@@ -67,7 +70,7 @@ SCENES = st.fixed_dictionaries({
     "initial_tilt": _bounded("initial_tilt"),
     # Explicit Euler is left out: with little damping it is unstable at any step (MODEL.md 6 keeps it
     # as the thesis baseline only); the sweep above covers it with the default damping.
-    "integrator": st.sampled_from(["symplectic_euler", "implicit_euler"]),
+    "integrator": st.sampled_from(["symplectic_euler", "implicit_euler", "bdf2"]),
     "tolerance": _bounded("tolerance", 1e-5, 1e-2),
 })
 

@@ -1,8 +1,19 @@
-"""Time integrators: each advances the mechanics of a state by one step ``h`` into another state.
+"""Time integrators: their names, what their steps cost in stability, and their control settings.
 
-An integrator is built for one model (it keeps its scratch arrays) and called as
-``step(state, out, h)``; it returns ``max |v+ - v|`` (m/s), from which the step controller
-estimates the local error.  Absorption and the floor are applied afterwards by the simulation.
+The steps themselves are compiled (``wetcloth.kernels.stepping`` runs them in its loop):
+
+* ``explicit_euler``: the thesis scheme (eq. 3.8-3.9), ``v+ = v + h F/m``, ``x+ = x + h v``;
+* ``symplectic_euler``: ``v+ = v + h F/m``, then ``x+ = x + h v+``;
+* ``implicit_euler``: backward Euler, one linearised Newton step (Baraff and Witkin 1998);
+* ``bdf2``: the second-order backward differentiation formula with variable steps, Newton
+  iterations to a stated tolerance, and an embedded error estimate (``kernels/implicit.py``).
+
+With ``tolerance > 0`` the step adapts to a local position error of at most ``tolerance`` times the
+cloth's size per step, estimated as each scheme's first omitted term: ``h |v+ - v| / 2`` for the
+Euler schemes, the predictor-corrector difference for BDF2 (third order, so a tenfold tighter
+tolerance shrinks its steps about 2.2 times where the Euler schemes' shrink 3.2 times).  The
+explicit schemes' steps are also capped at their linear-stability limit, which on stiff cloth is
+far below what the tolerance allows: their runs then do not change with the tolerance.
 """
 
 from __future__ import annotations
@@ -11,64 +22,46 @@ import math
 
 import numpy as np
 
-from wetcloth.kernels.integration import euler_update, invert_blocks, solve_pcg
-from wetcloth.model import GRAVITY, Model
-from wetcloth.state import State
+from wetcloth.kernels import stepping
+from wetcloth.kernels.assembly import GRAVITY
+from wetcloth.model import Model
 
-#: Fraction of the linear-stability limit that explicit schemes may use.
-STABILITY_SAFETY = 0.9
+#: Name -> code of the compiled step loop.
+INTEGRATORS = {"explicit_euler": stepping.EXPLICIT_EULER, "symplectic_euler": stepping.SYMPLECTIC_EULER,
+               "implicit_euler": stepping.IMPLICIT_EULER, "bdf2": stepping.BDF2}
+#: Steps the controller will not go below (s); an error above tolerance is then accepted.
+SMALLEST_STEP = 1e-9
+#: Largest growth and shrink factors of the step between two steps.
+STEP_GROWTH, STEP_SHRINK = 2.0, 0.2
+#: Speed (m/s) beyond which the state counts as exploded: far above any fall in a tank.
+BLOW_UP_SPEED = 1.0e3
+#: BDF2's Newton iterations stop when the position correction is below this fraction of the
+#: local error allowed per step (or, with fixed steps, of 1e-5 times the cloth's size).
+NEWTON_FRACTION = 0.1
+FIXED_STEP_NEWTON_TOLERANCE = 1e-6
+#: A cloth whose particles all stay within SLEEP_DISTANCE (m) of where they were for SLEEP_AFTER
+#: seconds of simulated time, with no water going in or out, is asleep: time passes, nothing is
+#: computed.  Half a millimetre tolerates the slight jitter of a floating cloth (its heave mode is
+#: barely damped) and keeps a frozen cloth within the 1 mm accuracy the defaults aim for.
+SLEEP_DISTANCE, SLEEP_AFTER = 5e-4, 1.0
 
 
 class Integrator:
-    """Base: stability limits shared by the schemes, from Gershgorin bounds on the model."""
+    """One scheme for one model: its stability data (Gershgorin bounds) and control settings."""
 
-    name = ""
-    implicit = False
-
-    def __init__(self, model: Model):
+    def __init__(self, name: str, model: Model):
+        self.name = name
+        self.code = INTEGRATORS[name]
         self.model = model
         topo = model.topology
-        n = topo.n
-        stiffness_sum = np.zeros(n)
-        damping_sum = np.zeros(n)
-        for f, off in enumerate(topo.spring_offset):
-            for target, per_spring in ((stiffness_sum, topo.spring_stiffness[f]), (damping_sum, topo.spring_damping[f])):
-                target[: n - off] += per_spring[: n - off]
-                target[off:] += per_spring[: n - off]
         dry = model.dry_mass
         stiffest = 1.0 + max(model.scene.wet_stiffness_factor, 0.0)  # a saturated, stiffened cloth
         # Gershgorin: the eigenvalues of M^-1 K are at most 2 * sum_j k_ij / m_i.
-        self.omega_squared = 2.0 * stiffest * float(np.max(stiffness_sum / dry))
-        self.damping_rate = 2.0 * float(np.max(damping_sum / dry))
-
-    def _drag_rate(self, speed: float) -> float:
-        """Upper bound on the water drag's damping rate (1/s) for particle speeds up to ``speed`` (m/s)."""
-        sc = self.model.scene
-        if sc.drag_model == "stokes":
-            return float(np.max(self.model.stokes_coefficient / self.model.dry_mass))
-        relative = speed + math.hypot(sc.current_x, sc.current_y)  # the water's speed past the cloth, at most
-        return (sc.water_density * (sc.drag_normal + sc.drag_tangential) * relative + sc.drag_linear) / sc.areal_density
-
-    def stable_step(self, speed: float) -> float:
-        """Largest step (s) for which the scheme is linearly stable with particles up to ``speed`` (m/s)."""
-        raise NotImplementedError
-
-    def __call__(self, state: State, out: State, h: float) -> float:
-        raise NotImplementedError
-
-
-class ExplicitEuler(Integrator):
-    """The thesis scheme (eq. 3.8-3.9): ``v+ = v + h F/m``, ``x+ = x + h v`` with the old ``v``."""
-
-    name = "explicit_euler"
-
-    def __init__(self, model: Model):
-        super().__init__(model)
+        self.omega_squared = 2.0 * stiffest * float(np.max(topo.per_particle_sum(topo.spring_stiffness) / dry))
+        self.damping_rate = 2.0 * float(np.max(topo.per_particle_sum(topo.spring_damping) / dry))
         # Forward Euler on a damped spring is stable only for h < c/k (the disc |1 + h lambda| < 1),
         # and on pure damping for h < 2 m / c.  Undamped springs it can never hold.
-        topo = model.topology
         springs = topo.spring_stiffness > 0
-        stiffest = 1.0 + max(model.scene.wet_stiffness_factor, 0.0)
         with np.errstate(over="ignore"):  # a vanishing stiffness (say 1e-320 N/m) limits nothing: inf
             limit = (float((topo.spring_damping[springs] / topo.spring_stiffness[springs]).min()) / stiffest
                      if springs.any() else math.inf)
@@ -76,92 +69,35 @@ class ExplicitEuler(Integrator):
             # Below 0.1/omega an unstable mode grows by at most 0.5% a step: the damping is then too
             # weak to matter, and a smaller limit would only stall (damping -> 0 gives h -> 0).
             limit = max(limit, 0.1 / math.sqrt(self.omega_squared))
-        self._spring_limit = limit
+        self.spring_limit = limit
 
-    def stable_step(self, speed: float) -> float:
-        limit = self._spring_limit
-        gamma = self.damping_rate + self._drag_rate(speed)
-        if gamma > 0:
-            limit = min(limit, 2.0 / gamma)
-        return STABILITY_SAFETY * limit
+    @property
+    def implicit(self) -> bool:
+        return self.code in (stepping.IMPLICIT_EULER, stepping.BDF2)
 
-    def __call__(self, state: State, out: State, h: float) -> float:
-        m = self.model
-        force = m.forces(state.pos, state.vel, state.water)
-        return euler_update(state.pos, state.vel, force, m.dry_mass, state.water, m.free, h, False, out.pos, out.vel)
-
-
-class SymplecticEuler(ExplicitEuler):
-    """Semi-implicit Euler: ``v+ = v + h F/m``, then ``x+ = x + h v+``."""
-
-    name = "symplectic_euler"
-
-    def stable_step(self, speed: float) -> float:
-        # For x'' = -w^2 x - g x' the scheme is stable iff h < 4 / (g + sqrt(g^2 + 4 w^2)).
+    def control(self) -> stepping.Control:
+        """The loop's settings for the model's current scene."""
         sc = self.model.scene
-        omega2 = self.omega_squared + sc.water_density * GRAVITY / sc.areal_density
-        gamma = self.damping_rate + self._drag_rate(speed)
-        return STABILITY_SAFETY * 4.0 / (gamma + math.sqrt(gamma * gamma + 4.0 * omega2))
-
-    def __call__(self, state: State, out: State, h: float) -> float:
-        m = self.model
-        force = m.forces(state.pos, state.vel, state.water)
-        return euler_update(state.pos, state.vel, force, m.dry_mass, state.water, m.free, h, True, out.pos, out.vel)
-
-
-class ImplicitEuler(Integrator):
-    """Backward Euler, one Newton step, solved by conjugate gradients (Baraff and Witkin 1998).
-
-    Solves ``(M - h C - h^2 K) dv = h F + h^2 K v`` for the velocity change, then
-    ``x+ = x + h (v + dv)``.  Stable for any step; its accuracy is left to the step controller.
-    """
-
-    name = "implicit_euler"
-    implicit = True
-    #: Conjugate gradients stop at this residual relative to the right-hand side: on the towel
-    #: this moves the centroid by 0.02 mm against a 1e-8 solve (docs/benchmarks.md, Simulator step).
-    CG_TOLERANCE = 1e-4
-    CG_MAX_ITERATIONS = 500
-
-    def __init__(self, model: Model):
-        super().__init__(model)
-        shape = (3, model.topology.n)
-        self._rhs = np.zeros(shape)
-        self._dv = np.zeros(shape)
-        self._scratch = [np.zeros(shape) for _ in range(5)]
-        self._blocks = np.zeros((6, model.topology.n))  # the system's 3x3 diagonal blocks
-        self._inverse = np.zeros((6, model.topology.n))  # their inverses: the preconditioner
-        self.last_iterations = 0
+        size = max(sc.width, sc.length)
+        if sc.drag_model == "stokes":
+            drag_offset, drag_slope = float(np.max(self.model.stokes_coefficient / self.model.dry_mass)), 0.0
+        else:  # the water's speed past the cloth is at most a particle's speed plus the current's
+            drag_slope = sc.water_density * (sc.drag_normal + sc.drag_tangential) / sc.areal_density
+            drag_offset = drag_slope * math.hypot(sc.current_x, sc.current_y) + sc.drag_linear / sc.areal_density
+        allowed = sc.tolerance * size  # m of local position error per step
+        newton = NEWTON_FRACTION * allowed if allowed > 0 else FIXED_STEP_NEWTON_TOLERANCE * size
+        return stepping.Control(
+            integrator=self.code, tolerance=sc.tolerance, allowed=allowed, max_step=sc.max_step, newton_tolerance=newton,
+            omega_squared=self.omega_squared, buoyancy_omega_squared=sc.water_density * GRAVITY / sc.areal_density,
+            damping_rate=self.damping_rate, spring_limit=self.spring_limit, drag_rate_offset=drag_offset,
+            drag_rate_slope=drag_slope, smallest_step=SMALLEST_STEP, growth=STEP_GROWTH, shrink=STEP_SHRINK,
+            blow_up_speed=BLOW_UP_SPEED, sleep_distance=SLEEP_DISTANCE, sleep_after=SLEEP_AFTER,
+        )
 
     def stable_step(self, speed: float) -> float:
-        return math.inf
-
-    def __call__(self, state: State, out: State, h: float) -> float:
-        m = self.model
-        force = m.forces_and_blocks(state.pos, state.vel, state.water, h)
-        mass = m.mass(state.water)
-        np.multiply(force, h, out=self._rhs)
-        self._rhs += m.rhs
-        blocks = self._blocks
-        np.add(m.diagonal_blocks, m.blocks, out=blocks)
-        blocks[:3] += mass
-        invert_blocks(blocks, self._inverse)
-        dv = self._dv
-        np.divide(self._rhs, mass, out=dv)  # first guess: the explicit step (solve_pcg improves on it)
-        dv *= m.free
-        topo = m.topology
-        self.last_iterations, _ = solve_pcg(
-            topo.spring_offset, m.direction, m.along, m.across, mass, m.blocks, self._inverse, m.free,
-            self._rhs, dv, *self._scratch, self.CG_TOLERANCE, self.CG_MAX_ITERATIONS,
-        )
-        np.add(state.vel, dv, out=out.vel)
-        np.multiply(out.vel, h, out=out.pos)
-        out.pos += state.pos
-        return float(np.abs(dv).max())
-
-
-INTEGRATORS = {cls.name: cls for cls in (ExplicitEuler, SymplecticEuler, ImplicitEuler)}
+        """Largest step (s) for which the scheme is linearly stable with particles up to ``speed`` (m/s)."""
+        return stepping.stable_step(self.control(), speed)
 
 
 def make_integrator(name: str, model: Model) -> Integrator:
-    return INTEGRATORS[name](model)
+    return Integrator(name, model)

@@ -34,7 +34,7 @@ def _param(default, unit: str, doc: str, lo=None, hi=None, lo_open=False, choice
     )
 
 
-INTEGRATORS = ("explicit_euler", "symplectic_euler", "implicit_euler")
+INTEGRATORS = ("explicit_euler", "symplectic_euler", "implicit_euler", "bdf2")
 EDGES = ("none", "x_min", "x_max", "y_min", "y_max")
 
 
@@ -97,11 +97,13 @@ class Scene:
     floor_friction: float = _param(0.5, "-", "Coulomb friction coefficient of the floor", 0.0, 10.0)
     pinned_edge: str = _param("none", "-", "edge held fixed in space: none, x_min, x_max, y_min, y_max", choices=EDGES)
     # --- time integration
-    integrator: str = _param("symplectic_euler", "-", "time integrator; 'explicit_euler' is the thesis scheme", choices=INTEGRATORS)
+    integrator: str = _param(
+        "bdf2", "-", "time integrator: 'bdf2' (second order, implicit, steps set by the tolerance), "
+        "'implicit_euler', 'symplectic_euler', or 'explicit_euler' (the thesis scheme)", choices=INTEGRATORS)
     tolerance: float = _param(
-        1e-4, "-", "local position error per step relative to the cloth size; 0 = fixed steps", 0.0, 1.0
+        5e-6, "-", "local position error per step relative to the cloth size; 0 = fixed steps", 0.0, 1.0
     )
-    max_step: float = _param(0.01, "s", "largest internal time step", 0.0, 1.0, lo_open=True)
+    max_step: float = _param(0.1, "s", "largest internal time step", 0.0, 1.0, lo_open=True)
 
     def __post_init__(self):
         validate(self)

@@ -9,9 +9,11 @@ import numpy as np
 from wetcloth.advice import blow_up_advice
 from wetcloth.errors import BlowUpError, ParameterError
 from wetcloth.integrators import make_integrator
-from wetcloth.kernels.absorption import absorb, dry, wick
-from wetcloth.kernels.floor import floor_contact
-from wetcloth.kernels.integration import largest_deviation, speed_and_finiteness
+from wetcloth.kernels.implicit import CG_ITERATIONS, FACTORISATIONS, NEWTON_ITERATIONS, UNCONVERGED, make_solver
+from wetcloth.kernels.integration import speed_and_finiteness
+from wetcloth.kernels.plane import make_plane, refresh
+from wetcloth.kernels.stepping import (BLOWN_UP, CALM_TIME, CLOCK_SIZE, EXCHANGING, FAILED_STEP, LAST_STEP, NEXT_STEP,
+                                       REJECTED, SLEEPING, SPEED, STEPS, TIME, UNCHECKED_TIME, Buffers, advance)
 from wetcloth.model import Model
 from wetcloth.scene import INPUT, PARAMETERS, Scene, load_scene
 from wetcloth.state import State, initial_state
@@ -27,68 +29,112 @@ OUTPUTS = {
 }
 OUTPUT_NAMES = tuple(OUTPUTS)
 
-#: Speed (m/s) beyond which the state counts as exploded: far above any fall in a tank.
-BLOW_UP_SPEED = 1.0e3
-#: Steps the controller will not go below (s); an error above tolerance is then accepted.
-SMALLEST_STEP = 1e-9
-#: Largest growth and shrink factors of the step between two steps.
-STEP_GROWTH, STEP_SHRINK = 2.0, 0.2
-#: A cloth whose particles all stay within SLEEP_DISTANCE (m) of where they were for SLEEP_AFTER
-#: seconds of simulated time, with no water going in or out, is asleep: time passes, nothing is
-#: computed.  Half a millimetre tolerates the slight jitter of a floating cloth (its heave mode is
-#: barely damped) and keeps a frozen cloth within the 1 mm accuracy the defaults aim for.
-SLEEP_DISTANCE, SLEEP_AFTER = 5e-4, 1.0
+#: What a snapshot holds: the state buffers that carry over between steps (positions, velocities,
+#: water, BDF2's previous step, the sleep anchor), and the clock's slots (name, slot, type).
+_SNAPSHOT_ARRAYS = ("pos", "vel", "water", "prev_pos", "prev_vel", "prev_water", "anchor")
+_SNAPSHOT_CLOCK = (("time", TIME, float), ("next_step", NEXT_STEP, float), ("last_step", LAST_STEP, float),
+                   ("speed", SPEED, float), ("calm_time", CALM_TIME, float), ("unchecked_time", UNCHECKED_TIME, float),
+                   ("exchanging", EXCHANGING, bool), ("sleeping", SLEEPING, bool), ("steps", STEPS, int),
+                   ("rejected_steps", REJECTED, int))
+
 
 
 class Simulation:
     """A cloth on water, advanced in internal steps chosen by stability and ``tolerance``.
 
     The step size is not the caller's: ``advance(duration)`` takes as many internal steps as
-    the integrator needs, so any communication step (FMU, frame rate) gives accurate results.
-    With ``tolerance > 0`` (the default) steps adapt to a local error bound and never exceed the
-    explicit schemes' stability limit or ``max_step``; with ``tolerance = 0`` every step is
-    ``max_step``, the thesis's fixed-step scheme, and only the blow-up guard watches.
+    the integrator needs, in one compiled call, so any communication step (FMU, frame rate) gives
+    accurate results.  With ``tolerance > 0`` (the default) steps adapt to a local error bound and
+    never exceed the explicit schemes' stability limit or ``max_step``; with ``tolerance = 0``
+    every step is ``max_step``, and only the blow-up guard watches.
     """
 
     def __init__(self, scene: Scene | None = None, skip_idle_work: bool = True):
         """``skip_idle_work=False`` computes every kernel at every step (for benchmarks of the skips)."""
         scene = load_scene() if scene is None else scene
-        self.model = Model(scene, skip_idle_work=skip_idle_work)
-        self.state = initial_state(scene, self.model.topology)
-        self._trial = self.state.copy()
-        self.integrator = make_integrator(scene.integrator, self.model)
+        self.model = model = Model(scene, skip_idle_work=skip_idle_work)
+        topo = model.topology
+        start = initial_state(scene, topo)
+        self._buffers = Buffers(
+            pos=start.pos, vel=start.vel, water=start.water, trial_pos=start.pos.copy(),
+            trial_vel=start.vel.copy(), trial_water=start.water.copy(), prev_pos=start.pos.copy(),
+            prev_vel=start.vel.copy(), prev_water=start.water.copy(), anchor=start.pos.copy(),
+        )
+        self._clock = np.zeros(CLOCK_SIZE)
+        self._clock[NEXT_STEP] = scene.max_step
+        self.integrator = make_integrator(scene.integrator, model)
+        self._control = self.integrator.control()
+        self._solver = make_solver(topo.n)
+        self._plane = make_plane(topo.nx, topo.ny, topo.spring_offset, topo.spring_family_names,
+                                 topo.spring_stiffness)
         self.skip_idle_work = skip_idle_work
-        self._next_step = scene.max_step
-        self._speed = 0.0  # m/s, fastest particle of the current state
-        self._calm_time = 0.0  # s of simulated time spent within SLEEP_DISTANCE of _anchor
-        self._anchor = self.state.pos.copy()
-        self._wick_buffer = np.zeros((6, self.model.topology.n))
-        self._unchecked_time = 0.0  # s simulated since stillness was last checked
-        self._exchanging = False  # whether water went in or out since then
-        self.sleeping = False
-        self.steps = 0  # accepted internal steps
-        self.rejected_steps = 0  # steps redone with a smaller size (adaptive mode)
 
-    _DYNAMIC = ("_next_step", "_speed", "_calm_time", "_unchecked_time", "_exchanging", "sleeping", "steps",
-                "rejected_steps")
-
+    # ----------------------------------------------------------------- snapshots
     def snapshot(self) -> dict:
-        """Everything that evolves (state arrays, inputs, step control, sleep): for ``restore``."""
-        return {"state": self.state.copy(), "scene": self.scene, "anchor": self._anchor.copy()} | {
-            k: getattr(self, k) for k in self._DYNAMIC}
+        """Everything that evolves, as a flat dict of arrays and numbers plus ``"scene"``: the state,
+        the BDF2 history, the step control, sleep, and what the implicit solver's preconditioner was
+        last factored for (so that a restored run factors the same matrices and repeats bit for bit)."""
+        buf = self._buffers
+        plane = self._plane
+        values = {"scene": self.scene}
+        for key in _SNAPSHOT_ARRAYS:
+            values[key] = getattr(buf, key).copy()
+        values["preconditioner_mass"] = plane.reference_mass.copy()
+        values["preconditioner_scale"] = float(plane.reference[0])
+        values["preconditioner_factored"] = bool(plane.reference[1])
+        for key, slot, kind in _SNAPSHOT_CLOCK:
+            values[key] = kind(self._clock[slot])
+        return values
 
     def restore(self, snapshot: dict) -> None:
-        """Return to a ``snapshot`` of this simulation; the run continues exactly as it did from there."""
-        self.state.assign(snapshot["state"])
-        self._anchor[...] = snapshot["anchor"]
-        self.model.scene = snapshot["scene"]
-        for key in self._DYNAMIC:
-            setattr(self, key, snapshot[key])
+        """Return to a ``snapshot`` of this simulation; the run continues exactly as it did from there.
+
+        The snapshot is checked first (its keys, array shapes and types, and a scene that differs
+        from this one in inputs only); a ValueError names what does not fit, and nothing changes."""
+        self._check_snapshot(snapshot)
+        buf = self._buffers
+        for key in _SNAPSHOT_ARRAYS:
+            getattr(buf, key)[...] = snapshot[key]
+        for key, slot, _ in _SNAPSHOT_CLOCK:
+            self._clock[slot] = float(snapshot[key])
+        plane = self._plane
+        plane.reference[1] = 0.0
+        if snapshot["preconditioner_factored"]:
+            refresh(plane, self.model.topology.spring_offset, snapshot["preconditioner_mass"],
+                    snapshot["preconditioner_scale"])
+        self._set_scene(snapshot["scene"])
+
+    def _check_snapshot(self, snapshot: dict) -> None:
+        live = self.snapshot()
+        if not isinstance(snapshot, dict) or set(snapshot) != set(live):
+            keys = set(snapshot) if isinstance(snapshot, dict) else set()
+            raise ValueError(f"not a snapshot of this simulation: keys missing {sorted(set(live) - keys)}, "
+                             f"unknown {sorted(keys - set(live))}")
+        for key, value in live.items():
+            given = snapshot[key]
+            if isinstance(value, np.ndarray):
+                if not isinstance(given, np.ndarray) or given.shape != value.shape or given.dtype != value.dtype:
+                    got = f"{given.dtype} {given.shape}" if isinstance(given, np.ndarray) else type(given).__name__
+                    raise ValueError(f"snapshot {key!r}: expected a {value.dtype} array of shape {value.shape}, "
+                                     f"got {got}")
+            elif key == "scene":
+                if not isinstance(given, Scene):
+                    raise ValueError(f"snapshot 'scene': expected a Scene, got {type(given).__name__}")
+                fixed = [name for name, f in PARAMETERS.items() if f.metadata["fmu"] != INPUT
+                         and getattr(given, name) != getattr(value, name)]
+                if fixed:
+                    raise ValueError(f"snapshot of another scene: {', '.join(fixed)} differ (only inputs may)")
+            elif not isinstance(given, type(value)) or (isinstance(given, bool) and not isinstance(value, bool)):
+                raise ValueError(f"snapshot {key!r}: expected {type(value).__name__}, got {type(given).__name__}")
 
     # ----------------------------------------------------------------- parameters
     @property
     def scene(self) -> Scene:
         return self.model.scene
+
+    def _set_scene(self, scene: Scene) -> None:
+        self.model.scene = scene
+        self._control = self.integrator.control()
 
     def set_inputs(self, **values) -> None:
         """Change inputs (water level, density, absorption; see ``scene.INPUT``) from now on."""
@@ -99,120 +145,80 @@ class Simulation:
                 raise ParameterError(name, "is fixed once the simulation starts; only inputs may change")
         scene = self.scene.replace(**values)
         if scene != self.scene:
-            self.model.scene = scene
+            self._set_scene(scene)
             self._wake()
 
     def _wake(self) -> None:
-        self.sleeping = False
-        self._calm_time = 0.0
-        self._anchor[...] = self.state.pos
+        self._clock[SLEEPING] = 0.0
+        self._clock[CALM_TIME] = 0.0
+        self._buffers.anchor[...] = self._buffers.pos
 
     # ----------------------------------------------------------------- stepping
     @property
     def time(self) -> float:
         """Simulated time (s)."""
-        return self.state.time
+        return float(self._clock[TIME])
+
+    @property
+    def state(self) -> State:
+        """The current state (its arrays are the simulation's own: read them, or assign a State)."""
+        buf = self._buffers
+        return State(self.time, buf.pos, buf.vel, buf.water)
+
+    @state.setter
+    def state(self, state: State) -> None:
+        buf = self._buffers
+        buf.pos[...] = state.pos
+        buf.vel[...] = state.vel
+        buf.water[...] = state.water
+        self._clock[TIME] = state.time
+        self._clock[LAST_STEP] = 0.0  # a state from elsewhere: no history
+
+    @property
+    def steps(self) -> int:
+        """Accepted internal steps."""
+        return int(self._clock[STEPS])
+
+    @property
+    def rejected_steps(self) -> int:
+        """Steps redone with a smaller size (adaptive mode)."""
+        return int(self._clock[REJECTED])
+
+    @property
+    def sleeping(self) -> bool:
+        return bool(self._clock[SLEEPING])
+
+    @property
+    def solver_counts(self) -> dict[str, int]:
+        """Work of the implicit solves so far: Newton iterations, conjugate-gradient iterations,
+        preconditioner factorisations, and linear solves stopped at their iteration limit."""
+        c = self._solver.counters
+        return {"newton_iterations": int(c[NEWTON_ITERATIONS]), "cg_iterations": int(c[CG_ITERATIONS]),
+                "factorisations": int(c[FACTORISATIONS]), "unconverged_solves": int(c[UNCONVERGED])}
 
     def advance(self, duration: float) -> None:
         """Simulate ``duration`` seconds (>= 0) more."""
         if not (duration >= 0.0 and math.isfinite(duration)):
             raise ValueError(f"duration must be a finite number >= 0 s, got {duration!r}")
-        target = self.state.time + duration
-        while target - self.state.time > 1e-12 * max(1.0, abs(target)) and not self.sleeping:
-            self._step(target - self.state.time)
-        self.state.time = max(self.state.time, target)
+        model = self.model
+        start = self.time
+        status = advance(model.cloth, model.physics, self._control, model.work, self._solver, self._plane,
+                         self._buffers, self._clock, start + duration)
+        if status == BLOWN_UP:
+            self._blown_up(float(self._clock[FAILED_STEP]))
 
-    def _step(self, remaining: float) -> None:
-        """Take one accepted internal step of at most ``remaining`` seconds."""
-        scene = self.scene
-        state, trial = self.state, self._trial
-        adaptive = scene.tolerance > 0.0
-        allowed = scene.tolerance * max(scene.width, scene.length)  # m of local position error
-        while True:
-            if not adaptive:  # fixed steps of max_step, as the user asked: the blow-up guard watches
-                h = min(scene.max_step, remaining)
-                self.integrator(state, trial, h)
-                break
-            limit = min(scene.max_step, self.integrator.stable_step(self._speed))
-            planned = min(self._next_step, limit)
-            h = min(planned, remaining)
-            largest_dv = self.integrator(state, trial, h)
-            error = 0.5 * h * largest_dv  # |h (v+ - v)| / 2: first- against second-order position update
-            factor = 0.9 * math.sqrt(allowed / error) if error > 0.0 else STEP_GROWTH
-            if error <= allowed or h <= SMALLEST_STEP or not math.isfinite(error):
-                proposed = h * min(STEP_GROWTH, max(STEP_SHRINK, factor)) if math.isfinite(error) else h
-                # A step cut short by the end of the interval says nothing against the planned one.
-                self._next_step = max(proposed, planned) if h < planned and error <= allowed else proposed
-                break
-            self._next_step = max(SMALLEST_STEP, h * max(STEP_SHRINK, factor))
-            self.rejected_steps += 1
-        trial.time = state.time + h
-        exchanging = self._finish_step(trial, h)
-        self._guard(trial, h)
-        self.state, self._trial = trial, state
-        self.steps += 1
-        self._maybe_sleep(h, exchanging)
-
-    def _finish_step(self, trial: State, h: float) -> bool:
-        """Floor contact, then the water's exchanges over the step: uptake where the cloth touches
-        water (exact exponential update), drying in air, wicking between neighbours.  Each is
-        skipped when its rate is zero.  Returns whether any particle's water changed."""
-        scene, model = self.scene, self.model
-        floor_contact(model.floor_z, scene.floor_friction, trial.pos, trial.vel)
-        trial.water[...] = self.state.water
-        absorbing = scene.absorption_capacity > 0.0 and scene.absorption_rate > 0.0
-        if not (absorbing or scene.drying_rate > 0.0 or scene.wicking_rate > 0.0):
-            return False
-        model.touches_water(trial.pos[2])
-        exchanged = 0
-        if absorbing:
-            decay = math.exp(-scene.absorption_rate * h / scene.absorption_capacity)
-            exchanged += absorb(model.s, model.dry_mass, scene.absorption_capacity, decay, trial.water, trial.vel)
-        if scene.drying_rate > 0.0:
-            exchanged += dry(model.s, math.exp(-scene.drying_rate * h), trial.water)
-        if scene.wicking_rate > 0.0 and scene.absorption_capacity > 0.0:
-            substeps = max(1, math.ceil(h / model.wick_step_limit))
-            moved = wick(model.wick_offsets, model.wick_conductance, model.capacity, model.dry_mass, substeps, h,
-                         trial.water, trial.vel, self._wick_buffer)
-            trial.vel *= model.free
-            exchanged += moved > 0.0
-        return exchanged > 0
-
-    def _maybe_sleep(self, h: float, exchanging: bool) -> None:
-        """Fall asleep after SLEEP_AFTER s still, with no water exchange (velocities then zero).
-
-        Stillness is checked every SLEEP_AFTER / 20 s of simulated time, not at every step."""
-        if not self.skip_idle_work:
-            return
-        self._exchanging = self._exchanging or exchanging
-        self._unchecked_time += h
-        if self._unchecked_time < SLEEP_AFTER / 20:
-            return
-        if self._exchanging or largest_deviation(self.state.pos, self._anchor) > SLEEP_DISTANCE:
-            self._anchor[...] = self.state.pos
-            self._calm_time = 0.0
-        else:
-            self._calm_time += self._unchecked_time
-        self._unchecked_time, self._exchanging = 0.0, False
-        if self._calm_time >= SLEEP_AFTER:
-            self.sleeping = True
-            self.state.vel[...] = 0.0
-            self._speed = 0.0
-
-    def _guard(self, trial: State, h: float) -> None:
+    def _blown_up(self, h: float) -> None:
         """Refuse a non-finite or exploded state; the last good state stays current."""
-        speed, finite = speed_and_finiteness(trial.pos, trial.vel, trial.water)
-        if finite and speed < BLOW_UP_SPEED:
-            self._speed = speed
-            return
+        buf = self._buffers
+        speed, finite = speed_and_finiteness(buf.trial_pos, buf.trial_vel, buf.trial_water)
         scene = self.scene
         what = "became non-finite" if not finite else f"exploded (speed {speed:.3g} m/s)"
         raise BlowUpError(
-            f"the cloth state {what} in the step from t = {self.state.time:.6g} s to {trial.time:.6g} s "
+            f"the cloth state {what} in the step from t = {self.time:.6g} s to {self.time + h:.6g} s "
             f"(step {h:.3g} s, integrator {scene.integrator!r}). Likely cause: the step is too large for "
             f"stretch_stiffness = {scene.stretch_stiffness:g} N/m; {blow_up_advice(scene)}. "
-            f"Last good time: {self.state.time:.6g} s.",
-            last_good_time=self.state.time,
+            f"Last good time: {self.time:.6g} s.",
+            last_good_time=self.time,
         )
 
     # ----------------------------------------------------------------- results

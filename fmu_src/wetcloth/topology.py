@@ -39,6 +39,17 @@ class Topology:
     def n(self) -> int:
         return self.nx * self.ny
 
+    def per_particle_sum(self, per_spring: np.ndarray, offsets: np.ndarray | None = None) -> np.ndarray:
+        """Sum (n) over the springs touching each particle of a per-spring quantity (F, n), whose
+        families have ``offsets`` (default: all families, ``spring_offset``)."""
+        offsets = self.spring_offset if offsets is None else offsets
+        n = self.n
+        total = np.zeros(n)
+        for values, off in zip(per_spring, offsets):
+            total[: n - off] += values[: n - off]
+            total[off:] += values[: n - off]
+        return total
+
     @property
     def spring_count(self) -> int:
         """Number of actual springs (families' zero-stiffness slots not counted)."""

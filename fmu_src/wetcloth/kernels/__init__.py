@@ -1,10 +1,25 @@
-"""Numba kernels over flat (3, n) arrays, one module per force family.
+"""Numba kernels over flat (3, n) arrays, one module per force family, and the compiled step loop.
 
-Fast-math flags leave out ``nnan`` and ``ninf`` so that non-finite values still propagate
-and the blow-up guard sees them.  Every kernel is compiled with ``nogil=True``: a process that
-runs other Python threads beside the simulation (a Dask worker's event loop, a GUI) would
-otherwise take the GIL back and forth with it; in a Dask worker that cost 20 % of a run
-(docs/benchmarks.md, Batch studies).
+Every kernel is compiled by ``kernel``, with one set of options, stated here once:
+
+* ``cache=True``: compiled code is kept beside the sources, so a new process starts in a second.
+* ``nogil=True``: a process that runs other Python threads beside the simulation (a Dask worker's
+  event loop, a GUI) would otherwise take the GIL back and forth with it; in a Dask worker that
+  cost 20 % of a run (docs/benchmarks.md, Batch studies).
+* ``fastmath`` without ``nnan`` and ``ninf``: reassociation and fused multiply-add let LLVM
+  vectorise the loops, while non-finite values still propagate so that the blow-up guard sees them.
+* ``error_model="numpy"``: a division by zero gives inf or nan, as in NumPy, instead of raising;
+  without it every division carries a zero check that keeps its loop from vectorising.
 """
 
+from numba import njit
+
 FASTMATH = {"nsz", "arcp", "contract", "afn", "reassoc"}
+OPTIONS = dict(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
+
+
+def kernel(function=None, **extra):
+    """``@kernel`` or ``@kernel(inline="always")``: ``numba.njit`` with the options above."""
+    if function is None:
+        return njit(**OPTIONS, **extra)
+    return njit(**OPTIONS)(function)

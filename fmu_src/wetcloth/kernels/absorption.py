@@ -2,56 +2,116 @@
 
 from __future__ import annotations
 
-from numba import njit
+import math
 
-from wetcloth.kernels import FASTMATH
+from wetcloth.kernels import kernel
 
 #: A particle whose remaining uptake is below this fraction of its capacity counts as saturated.
 SATURATED = 1e-12
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
-def absorb(s, dry_mass, capacity, decay, water, vel):
-    """Advance absorbed water (kg) of particles touching water (``s > 0``) by one step.
+@kernel(inline="always")
+def contact_fraction(z_start, z_end, vz_start, vz_end, h, surface):
+    """Fraction of a step of ``h`` s (0..1) that a particle spends touching water, i.e. below
+    ``surface`` (m).  Its height over the step is the cubic Hermite curve through its start and end
+    heights (m) and vertical speeds (m/s): the crossing time is then accurate to the fourth order
+    in h, where a straight line between the ends would misplace it by a fraction of the step
+    whenever the particle brakes on the water."""
+    below_start = z_start < surface
+    below_end = z_end < surface
+    if below_start and below_end:
+        return 1.0
+    if not (below_start or below_end):
+        return 0.0
+    a, b = z_start - surface, z_end - surface
+    p0, p1 = h * vz_start, h * vz_end
+    crossing = a / (a - b)  # the straight line's crossing: the first guess
+    for _ in range(3):  # Newton on the Hermite cubic, kept inside the step
+        t = crossing
+        t2 = t * t
+        t3 = t2 * t
+        value = (2 * t3 - 3 * t2 + 1) * a + (t3 - 2 * t2 + t) * p0 + (3 * t2 - 2 * t3) * b + (t3 - t2) * p1
+        slope = (6 * t2 - 6 * t) * a + (3 * t2 - 4 * t + 1) * p0 + (6 * t - 6 * t2) * b + (3 * t2 - 2 * t) * p1
+        if slope == 0.0:
+            break
+        crossing = min(1.0, max(0.0, t - value / slope))
+    return 1.0 - crossing if below_end else crossing
 
-    ``dq/dt = I (1 - q/Q)`` over a step of length h is exactly
-    ``q+ = Q - (Q - q) * decay`` with ``decay = exp(-I h / Q) = exp(-rate h / capacity)``.
-    ``Q = capacity * dry_mass``.  Water arrives at rest: momentum is kept, so the particle
-    slows by ``m / m+``.  Returns the number of particles still absorbing.
+
+@kernel
+def uptake(z_start, z_end, vz_start, vz_end, surface, dry_mass, capacity, rate, h, water, out):
+    """Absorbed water (kg) after a step of ``h`` s, into ``out`` (may be ``water``).
+
+    A particle touches water while its centre is below ``surface`` (m; where its submerged fraction
+    becomes positive); over the step it moved from ``z_start`` to ``z_end`` with vertical speeds
+    ``vz_start`` to ``vz_end``, and it absorbs for the part of the step it spent below
+    (``contact_fraction``), so the moment of contact is not rounded to a whole step.  ``dq/dt = I (1 - q/Q)`` over a contact time t is exactly
+    ``q+ = Q - (Q - q) exp(-I t / Q)``, ``Q = capacity * dry_mass``, ``I / Q = rate / capacity``.
+    Returns the number of particles still absorbing.
     """
     active = 0
-    for i in range(s.shape[0]):
-        if s[i] <= 0.0:
+    full_decay = math.exp(-rate * h / capacity)
+    for i in range(water.shape[0]):
+        out[i] = water[i]
+        touching = contact_fraction(z_start[i], z_end[i], vz_start[i], vz_end[i], h, surface)
+        if touching <= 0.0:
             continue
         full = capacity * dry_mass[i]
         missing = full - water[i]
         if missing <= SATURATED * full:
             continue
         active += 1
-        new_water = full - missing * decay
-        scale = (dry_mass[i] + water[i]) / (dry_mass[i] + new_water)
-        water[i] = new_water
-        vel[0, i] *= scale
-        vel[1, i] *= scale
-        vel[2, i] *= scale
+        decay = full_decay if touching == 1.0 else math.exp(-rate * touching * h / capacity)
+        out[i] = full - missing * decay
     return active
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
-def dry(s, keep, water):
-    """Particles in air (``s == 0``) keep the fraction ``keep = exp(-drying_rate h)`` of their water.
+@kernel
+def uptake_timing_error(z_start, z_end, vz_start, vz_end, surface, dry_mass, capacity, rate, h, water):
+    """An estimate (kg, summed over particles) of the error in a step's uptake from where on its
+    path a particle met the surface: the difference between the uptake with the crossing timed on
+    the Hermite curve (``contact_fraction``) and on the straight line between the step's ends.  Only
+    particles that cross the surface during the step contribute."""
+    total = 0.0
+    for i in range(water.shape[0]):
+        if (z_start[i] < surface) == (z_end[i] < surface):
+            continue
+        full = capacity * dry_mass[i]
+        missing = full - water[i]
+        if missing <= SATURATED * full:
+            continue
+        curved = contact_fraction(z_start[i], z_end[i], vz_start[i], vz_end[i], h, surface)
+        straight = contact_fraction(z_start[i], z_end[i], 0.0, 0.0, 0.0, surface)
+        total += missing * abs(math.exp(-rate * straight * h / capacity) - math.exp(-rate * curved * h / capacity))
+    return total
 
-    The water leaves with the particle's velocity, which therefore does not change.  Returns the
-    number of particles that lost water."""
+
+@kernel
+def keep_momentum(mass_before, dry_mass, water, vel):
+    """Water arrives at rest: a particle whose mass went from ``mass_before`` to ``dry_mass + water``
+    (kg) keeps its momentum, so it slows by their ratio."""
+    for i in range(water.shape[0]):
+        scale = mass_before[i] / (dry_mass[i] + water[i])
+        vel[0, i] *= scale
+        vel[1, i] *= scale
+        vel[2, i] *= scale
+
+
+@kernel
+def dry(z_start, z_end, vz_start, vz_end, surface, rate, h, water):
+    """Particles keep ``exp(-rate t)`` of their water after t s in air (above ``surface``, m) during
+    the step (its path as in ``uptake``).  The water leaves with the particle's velocity, which therefore does not change.
+    Returns the number of particles that lost water."""
     drying = 0
-    for i in range(s.shape[0]):
-        if s[i] == 0.0 and water[i] > 0.0:
-            water[i] *= keep
+    for i in range(water.shape[0]):
+        in_air = 1.0 - contact_fraction(z_start[i], z_end[i], vz_start[i], vz_end[i], h, surface)
+        if in_air > 0.0 and water[i] > 0.0:
+            water[i] *= math.exp(-rate * in_air * h)
             drying += 1
     return drying
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
+@kernel
 def _saturation_flux(off, conductance, saturation, dt, flux):
     """flux[k] (kg): water moving over dt from spring k's second end into its first."""
     m = saturation.shape[0] - off
@@ -61,7 +121,7 @@ def _saturation_flux(off, conductance, saturation, dt, flux):
         flux[k] = dt * g[k] * (sj[k] - si[k])
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def wick(offsets, conductance, capacity, dry_mass, substeps, h, water, vel, buf):
     """Diffuse water between axis neighbours over ``h`` s in ``substeps`` explicit sub-steps.
 

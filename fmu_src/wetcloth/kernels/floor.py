@@ -4,12 +4,10 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
-from wetcloth.kernels import FASTMATH
+from wetcloth.kernels import kernel
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def floor_contact(z_min, friction, pos, vel):
     """Keep particle centres at or above ``z_min`` (m); stop their fall and apply friction.
 

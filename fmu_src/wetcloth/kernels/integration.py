@@ -4,13 +4,11 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
-from wetcloth.kernels import FASTMATH
+from wetcloth.kernels import kernel
 from wetcloth.kernels.springs import spring_matvec
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def euler_update(pos, vel, force, dry_mass, water, free, h, symplectic, out_pos, out_vel):
     """One Euler step: ``v+ = v + h F/m``; ``x+ = x + h v+`` (symplectic) or ``x + h v`` (explicit).
 
@@ -27,7 +25,7 @@ def euler_update(pos, vel, force, dry_mass, water, free, h, symplectic, out_pos,
     return largest
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def speed_and_finiteness(pos, vel, water):
     """(fastest particle's speed in m/s, whether every value is finite) of a state."""
     fastest = 0.0
@@ -39,7 +37,7 @@ def speed_and_finiteness(pos, vel, water):
     return math.sqrt(fastest), math.isfinite(total)
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def largest_deviation(pos, anchor):
     """Largest coordinate difference (m) between two (3, n) position arrays."""
     largest = 0.0
@@ -49,7 +47,7 @@ def largest_deviation(pos, anchor):
     return largest
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def _system_matvec(offsets, direction, along, across, mass, blocks, free, p, out, buf):
     """out = A p with A = M + per-particle blocks + spring blocks, rows of pinned particles zeroed."""
     n = p.shape[1]
@@ -64,7 +62,7 @@ def _system_matvec(offsets, direction, along, across, mass, blocks, free, p, out
             out[c, i] *= free[i]
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def _dot(a, b):
     total = 0.0
     for c in range(3):
@@ -73,7 +71,7 @@ def _dot(a, b):
     return total
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def invert_blocks(blocks, inverse):
     """Invert symmetric 3x3 blocks (6, n: xx, yy, zz, xy, xz, yz) into ``inverse`` (same layout).
 
@@ -100,7 +98,7 @@ def invert_blocks(blocks, inverse):
         inverse[5, i] = c23 * scale
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def apply_block_inverse(inverse, r, z):
     """z = B^-1 r with B^-1 the (6, n) inverted diagonal blocks."""
     for i in range(r.shape[1]):
@@ -110,7 +108,7 @@ def apply_block_inverse(inverse, r, z):
         z[2, i] = inverse[4, i] * rx + inverse[5, i] * ry + inverse[2, i] * rz
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def _combine_first_guesses(offsets, direction, along, across, mass, blocks, inverse, free, b, x, r, z, p, ap, buf):
     """Replace the first guess ``x`` by the combination ``c1 x + c2 B^-1 b`` that minimises the energy
     ``x.A x / 2 - b.x`` (what conjugate gradients minimise), and leave its residual in ``r``.
@@ -140,7 +138,7 @@ def _combine_first_guesses(offsets, direction, along, across, mass, blocks, inve
             r[c, i] = free[i] * b[c, i] - c1 * ap[c, i] - c2 * p[c, i]
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def solve_pcg(offsets, direction, along, across, mass, blocks, inverse, free, b, x, r, z, p, ap, buf, rtol,
               max_iterations):
     """Solve ``A x = b`` by block-Jacobi-preconditioned conjugate gradients from a first guess.

@@ -10,16 +10,14 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
-from wetcloth.kernels import FASTMATH
+from wetcloth.kernels import kernel
 
 _TINY_LENGTH = 1e-12  # m; below this a spring has no direction
 #: Components (row, column) of the six slots of a symmetric 3x3 block: xx, yy, zz, xy, xz, yz.
 _BLOCK_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
+@kernel
 def add_to_both_ends(b, off, out, sign):
     """out[i] += b[i] at each spring's first end and ``sign * b[i]`` at its second (i + off)."""
     m = out.shape[0] - off
@@ -32,7 +30,7 @@ def add_to_both_ends(b, off, out, sign):
         second[k] += sign * values[k]
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH, inline="always")
+@kernel(inline="always")
 def _pair_views(off, pos, vel, saturation):
     """Views of positions, velocities and saturations at every spring's first and second ends."""
     m = pos.shape[1] - off
@@ -41,7 +39,7 @@ def _pair_views(off, pos, vel, saturation):
             saturation[:m], saturation[off:])
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
+@kernel
 def _tension(off, l0, tension_only, projected, kf, cf, wet_factor, saturation, pos, vel, t):
     """t[k] (N/m): spring k's force on its first end is ``t[k] * (x_i - x_j)`` (plus thesis damping).
 
@@ -64,7 +62,7 @@ def _tension(off, l0, tension_only, projected, kf, cf, wet_factor, saturation, p
         t[k] = -(stiffness * stretch * inv + damp * cf[k] * rate * inv * inv)
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
+@kernel
 def _apply_pair_term(off, t, a, out, buf):
     """out += t[k] * (a_i - a_j) at each spring's first end and the opposite at its second."""
     m = a.shape[0] - off
@@ -74,7 +72,7 @@ def _apply_pair_term(off, t, a, out, buf):
     add_to_both_ends(buf, off, out, -1.0)
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def spring_forces(offsets, rest, tension_only, stiffness, damping, projected, wet_factor, saturation, pos, vel, force, buf):
     """Add tension (eq. 3.1) and damping (eq. 3.2) of every spring to ``force`` (N, (3, n)).
 
@@ -97,7 +95,7 @@ def spring_forces(offsets, rest, tension_only, stiffness, damping, projected, we
                 _apply_pair_term(off, negated, vel[c], force[c], scratch)
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
+@kernel
 def _blocks(off, l0, tension_only, projected, kf, cf, wet_factor, saturation, pos, vel, h, t, u, along, across, rate):
     """Per spring: force coefficient ``t`` (as ``_tension``, without thesis damping), unit direction
     ``u`` (3, n), the system-matrix block ``along u u^T + across (I - u u^T)`` and the relative
@@ -129,7 +127,7 @@ def _blocks(off, l0, tension_only, projected, kf, cf, wet_factor, saturation, po
         across[k] = damp_across * h * cf[k] + h2 * stiffness * stretch * inv * taut
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def spring_forces_and_blocks(
     offsets, rest, tension_only, stiffness, damping, projected, wet_factor, saturation,
     pos, vel, h, force, rhs, diagonal_blocks, direction, along, across, buf,
@@ -181,7 +179,7 @@ def spring_forces_and_blocks(
             add_to_both_ends(scratch, off, diagonal_blocks[slot], 1.0)
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def spring_matvec(offsets, direction, along, across, p, out, buf):
     """Add the springs' part of the system matrix times ``p`` ((3, n)) to ``out``; ``buf`` (4, n)."""
     n = p.shape[1]
@@ -202,7 +200,7 @@ def spring_matvec(offsets, direction, along, across, p, out, buf):
             add_to_both_ends(scratch, off, out[c], -1.0)
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
+@kernel
 def _projection(off, u, al, ac, p, proj):
     """proj[k] = (along - across) * (u . (p_i - p_j)) for each spring."""
     m = p.shape[1] - off

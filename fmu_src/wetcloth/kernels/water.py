@@ -1,21 +1,22 @@
 """Water forces (MODEL.md section 4): submerged fraction, buoyancy, Stokes drag and face drag.
 
 Face drag works per grid cell, each split into two triangles (i, i+1, i+nx+1) and
-(i, i+nx+1, i+nx), the same split as ``Topology.triangles``.  Per-triangle values go into
-buffers of length ``n + nx + 1`` (cell ``i`` at slot ``i + nx + 1``; slots of non-cells stay
-zero), and each particle gathers a third of its six triangles' values.
+(i, i+nx+1, i+nx), the same split as ``Topology.triangles``: two right triangles, with the right
+angle at i+1 and at i+nx.  Per-triangle values go into buffers of length ``n + nx + 1`` (cell
+``i`` at slot ``i + nx + 1``; slots of non-cells stay zero), and each particle gathers its share
+of its six triangles' values with the weights of its area (MODEL.md section 4): the right-angle
+corner 1/2, the other two 1/4 each.  These sum to the quarter-cell areas of ``Topology.area``, so
+a uniform load per area gives every particle the same acceleration.
 """
 
 from __future__ import annotations
 
 import math
 
-from numba import njit
-
-from wetcloth.kernels import FASTMATH
+from wetcloth.kernels import kernel
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def submerged_fractions(z, water_level, thickness, smooth, s):
     """Write each particle's submerged fraction (0..1) into ``s``; return the largest."""
     top = 0.0
@@ -30,7 +31,7 @@ def submerged_fractions(z, water_level, thickness, smooth, s):
     return top
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def buoyancy(s, volume, density, gravity, force):
     """Add Archimedes' upward force ``rho g V s`` (eq. 3.4, corrected) to ``force[2]``."""
     fz = force[2]
@@ -39,7 +40,7 @@ def buoyancy(s, volume, density, gravity, force):
         fz[i] += scale * volume[i] * s[i]
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def stokes_drag(s, coefficient, current_x, current_y, vel, force):
     """Add ``-6 pi a eta s (v - v_water)`` (eq. 3.5); ``coefficient`` is 6 pi a eta (N s/m)."""
     for i in range(s.shape[0]):
@@ -49,7 +50,7 @@ def stokes_drag(s, coefficient, current_x, current_y, vel, force):
         force[2, i] -= c * vel[2, i]
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH, inline="always")
+@kernel(inline="always")
 def _triangle(k, a, b, c, density, c_normal, c_tangential, c_linear, current_x, current_y):
     """Drag on triangle k of a row and its Jacobian coefficients.
 
@@ -93,7 +94,7 @@ def _triangle(k, a, b, c, density, c_normal, c_tangential, c_linear, current_x, 
     return fx, fy, fz, nx, ny, nz, 2.0 * kn, 2.0 * kt, kl
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH, inline="always")
+@kernel(inline="always")
 def _corner(pos, vel, s, start, count):
     """Views (x, y, z, vx, vy, vz, s) of ``count`` particles from index ``start``."""
     stop = start + count
@@ -101,18 +102,23 @@ def _corner(pos, vel, s, start, count):
             vel[0, start:stop], vel[1, start:stop], vel[2, start:stop], s[start:stop])
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
+@kernel
 def _gather_cells(t1, t2, nx, out, scale):
-    """out[v] += scale * (the values of the six triangles around particle v)."""
+    """out[v] += scale * (particle v's area-weighted share of the six triangles around it).
+
+    Particle v is corner a (weight 1/4) of both triangles of cell v, the right-angle corner b (1/2)
+    of cell v-1's first triangle, corner d (1/4) of both triangles of cell v-nx-1, and the
+    right-angle corner c (1/2) of cell v-nx's second triangle."""
     n = out.shape[0]
     pad = nx + 1
     a1, b1, d1 = t1[pad:pad + n], t1[pad - 1:pad - 1 + n], t1[:n]
     a2, d2, c2 = t2[pad:pad + n], t2[:n], t2[1:1 + n]
+    quarter, half = 0.25 * scale, 0.5 * scale
     for v in range(n):
-        out[v] += scale * (a1[v] + b1[v] + d1[v] + a2[v] + d2[v] + c2[v])
+        out[v] += quarter * (a1[v] + d1[v] + a2[v] + d2[v]) + half * (b1[v] + c2[v])
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
+@kernel
 def _drag_row(k_count, a, b, c, density, c_normal, c_tangential, c_linear, current_x, current_y, out, blocks_wanted):
     """Triangles (a[k], b[k], c[k]) of one row: force and, if wanted, Jacobian blocks into ``out`` (9, k)."""
     fx_, fy_, fz_ = out[0], out[1], out[2]
@@ -134,7 +140,7 @@ def _drag_row(k_count, a, b, c, density, c_normal, c_tangential, c_linear, curre
             yz[k] = diff * nyy * nzz
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
+@kernel
 def _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells,
                blocks_wanted, skip_dry_rows):
     """Fill ``cells`` (2, 9, n + nx + 1) with both triangles' force and, if wanted, Jacobian blocks
@@ -156,28 +162,28 @@ def _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, c
         _drag_row(w, a, d, c, density, c_normal, c_tangential, c_linear, current_x, current_y, cells[1, :, lo:hi], blocks_wanted)
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def face_drag(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, force, cells,
               skip_dry_rows=True):
     """Add the face-model drag (MODEL.md section 4) to ``force``; ``cells`` is (2, 9, n + nx + 1) scratch."""
     _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells, False,
                skip_dry_rows)
     for comp in range(3):
-        _gather_cells(cells[0, comp], cells[1, comp], nx, force[comp], 1.0 / 3.0)
+        _gather_cells(cells[0, comp], cells[1, comp], nx, force[comp], 1.0)
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@kernel
 def face_drag_and_blocks(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, h, force,
                          blocks, cells, skip_dry_rows=True):
     """Face drag as ``face_drag``, plus ``h`` times its lumped velocity Jacobian added to ``blocks``.
 
     ``blocks`` (6, n) holds symmetric 3x3 blocks as xx, yy, zz, xy, xz, yz.  Each triangle's
-    Jacobian goes one third to each of its particles (row-sum lumping: exact for a uniform
+    Jacobian goes to its particles with the force's weights (row-sum lumping: exact for a uniform
     velocity).  The tangential part uses its larger eigenvalue in every in-plane direction.
     """
     _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells, True,
                skip_dry_rows)
     for comp in range(3):
-        _gather_cells(cells[0, comp], cells[1, comp], nx, force[comp], 1.0 / 3.0)
+        _gather_cells(cells[0, comp], cells[1, comp], nx, force[comp], 1.0)
     for comp in range(6):
-        _gather_cells(cells[0, 3 + comp], cells[1, 3 + comp], nx, blocks[comp], h / 3.0)
+        _gather_cells(cells[0, 3 + comp], cells[1, 3 + comp], nx, blocks[comp], h)

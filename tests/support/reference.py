@@ -13,6 +13,36 @@ from wetcloth.model import GRAVITY, Model
 from wetcloth.state import State
 
 
+def _contact_fraction(z0, z1, v0, v1, h, surface):
+    """Fraction of a step each particle spends below ``surface``: its height is the cubic Hermite
+    curve through the step's end heights and speeds, whose crossing is found by Newton's method
+    from the straight line's (3 iterations, clamped to the step)."""
+    below0, below1 = z0 < surface, z1 < surface
+    a, b = z0 - surface, z1 - surface
+    p0, p1 = h * v0, h * v1
+    crossing = np.clip(np.divide(a, a - b, out=np.zeros_like(a), where=below0 != below1), 0.0, 1.0)
+    for _ in range(3):
+        t = crossing
+        value = (2 * t**3 - 3 * t**2 + 1) * a + (t**3 - 2 * t**2 + t) * p0 + (3 * t**2 - 2 * t**3) * b + (t**3 - t**2) * p1
+        slope = (6 * t**2 - 6 * t) * a + (3 * t**2 - 4 * t + 1) * p0 + (6 * t - 6 * t**2) * b + (3 * t**2 - 2 * t) * p1
+        step = np.divide(value, slope, out=np.zeros_like(value), where=slope != 0)
+        crossing = np.clip(t - step, 0.0, 1.0)
+    return np.where(below0 & below1, 1.0, np.where(below0 == below1, 0.0, np.where(below1, 1.0 - crossing, crossing)))
+
+
+def _corner_weights(rest_xy: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """(m, 3) share of each triangle's force per corner, the weights of the particles' areas
+    (MODEL.md section 4): 1/2 at the right angle of the rest sheet, 1/4 at the other two."""
+    corners = [rest_xy[:, triangles[:, k]] for k in range(3)]
+    weights = np.empty(triangles.shape, dtype=float)
+    for k in range(3):
+        e1 = corners[(k + 1) % 3] - corners[k]
+        e2 = corners[(k + 2) % 3] - corners[k]
+        right = np.abs((e1 * e2).sum(axis=0)) < 1e-9 * np.sqrt((e1 * e1).sum(axis=0) * (e2 * e2).sum(axis=0))
+        weights[:, k] = np.where(right, 0.5, 0.25)
+    return weights
+
+
 class NumpyReference:
     """Forces and one explicit-Euler step of a model, in NumPy (SI units)."""
 
@@ -35,6 +65,7 @@ class NumpyReference:
         self.k = np.concatenate(stiffness)
         self.c = np.concatenate(damping)
         self.tension_only = np.concatenate(tension_only)
+        self.corner_weights = _corner_weights(topo.rest_xy, topo.triangles)
 
     def _scatter(self, index: np.ndarray, values: np.ndarray) -> np.ndarray:
         """Sum (3, m) values into (3, n) at ``index``."""
@@ -81,7 +112,7 @@ class NumpyReference:
         q = 0.5 * sc.water_density * wet_area
         f = q * (sc.drag_normal * np.abs(un) * un * normal + sc.drag_tangential * ut_norm * ut)
         f += sc.drag_linear * wet_area * u
-        return sum(self._scatter(tri[:, k], f / 3.0) for k in range(3))
+        return sum(self._scatter(tri[:, k], f * self.corner_weights[:, k]) for k in range(3))
 
     def explicit_step(self, state: State, h: float) -> State:
         """One explicit-Euler step with floor contact and absorption, as ``Simulation`` takes it."""
@@ -99,10 +130,11 @@ class NumpyReference:
         vel[:2] *= keep
         water = state.water.copy()
         if sc.absorption_capacity > 0 and sc.absorption_rate > 0:
-            s = np.clip((sc.water_level - pos[2]) / sc.thickness + 0.5, 0.0, 1.0)
+            surface = sc.water_level + (0.5 * sc.thickness if sc.buoyancy_model == "smooth" else 0.0)
+            touching = _contact_fraction(state.pos[2], pos[2], state.vel[2], vel[2], h, surface)
             full = sc.absorption_capacity * model.dry_mass
-            decay = math.exp(-sc.absorption_rate * h / sc.absorption_capacity)
-            absorbing = (s > 0) & (full - water > 1e-12 * full)
+            decay = np.exp(-sc.absorption_rate * touching * h / sc.absorption_capacity)
+            absorbing = (touching > 0) & (full - water > 1e-12 * full)
             new_water = np.where(absorbing, full - (full - water) * decay, water)
             vel *= (model.dry_mass + water) / (model.dry_mass + new_water)
             water = new_water

@@ -1,0 +1,177 @@
+"""The preconditioner of the implicit solves: the cloth's in-plane stiffness, factored once.
+
+The system matrix of an implicit step, ``A = M - h C - h^2 K``, is dominated by the stretch springs,
+which are stiff along their own direction only: a flat cloth is stiff in its plane and soft across
+it.  In a frame (t1, t2, n) that follows the cloth's mean plane (t1 along its rows, n its normal)
+this preconditioner keeps that structure:
+
+* the t1 and t2 components each get a scalar band matrix ``M + h^2 L_c``, with ``L_c`` the graph
+  Laplacian of the springs weighted by their rest stiffness times the share of their direction in
+  that component (structural springs all in one, shear half in each).  These depend on neither
+  the positions nor the taut set, so they are factored (LAPACK's banded Cholesky) only when the
+  step's ``h`` or the masses have changed much (``REFACTOR_SCALE``, ``REFACTOR_CHANGE``), not at
+  every step;
+* the normal component gets the normal-normal entry of each particle's 3x3 diagonal block of A
+  (mass, drag, buoyancy, and whatever stiffness the springs have across the plane).
+
+The bands are ordered along the grid's shorter side, so their half-bandwidth is that side plus one.  Conjugate gradients on A with this preconditioner need a
+handful of iterations on a floating or sinking towel at 1/30 s steps, where the isotropic
+Laplacian of projective dynamics needed hundreds (docs/benchmarks.md, Simulator step).
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+import math
+
+import numpy as np
+
+from wetcloth.kernels import kernel
+from wetcloth.kernels.lapack import band_arguments, band_factor, band_solve
+
+#: Share of each stretch-spring family's stiffness in the t1 and t2 components.  The bending springs
+#: (1 % of the stretch stiffness in the presets) are left out: they would double the bandwidth
+#: (they reach two particles), and leaving them out did not change the iteration counts on the towel.
+_SHARE = {"structural_x": (1.0, 0.0), "structural_y": (0.0, 1.0), "shear_up_right": (0.5, 0.5),
+          "shear_up_left": (0.5, 0.5)}
+
+#: Refactor when (beta h)^2 has changed by more than the factor REFACTOR_SCALE (the step by more
+#: than 2x), or any particle's mass by more than REFACTOR_CHANGE, since the last factorisation.  An
+#: impact that shrinks and regrows the step over a few frames then costs a few factorisations, not
+#: one per step (on a 64 x 64 towel a factorisation costs as much as 20 CG iterations).
+REFACTOR_SCALE = 4.0
+REFACTOR_CHANGE = 0.25
+
+#: ``order`` (n) particle at each band position, ``rank`` (n) its inverse; ``weights`` (2, F, n) per spring, N/m, for t1, t2;
+#: ``bands`` (2, n, kd + 1) the factored band matrices; ``info`` (2, 7) LAPACK arguments;
+#: ``reference`` [factored scale (s^2), 1 if factored] and ``reference_mass`` (n) kg; ``frame``
+#: (3, 3) rows t1, t2, n; ``normal`` (n) the normal component's diagonal; ``local`` (3, n) scratch.
+Plane = namedtuple("Plane", "order rank weights bands info reference reference_mass frame normal local")
+
+
+def make_plane(grid_x: int, grid_y: int, offsets: np.ndarray, family_names: tuple, stiffness: np.ndarray) -> Plane:
+    """The preconditioner's arrays for a grid (row-major particles, ``grid_x`` per row)."""
+    n = grid_x * grid_y
+    col, row = np.arange(n) % grid_x, np.arange(n) // grid_x
+    if grid_x <= grid_y:
+        order, kd = np.arange(n), grid_x + 1
+    else:  # order along the columns: the shorter side
+        order, kd = (col * grid_y + row).argsort(), grid_y + 1
+    kd = min(kd, n - 1)
+    weights = np.zeros((2, len(offsets), n))
+    for f, name in enumerate(family_names):
+        for c in range(2):
+            weights[c, f] = _SHARE.get(name, (0.0, 0.0))[c] * stiffness[f]
+    info = np.stack([band_arguments(n, kd), band_arguments(n, kd)])
+    order = order.astype(np.int64)
+    rank = np.empty(n, dtype=np.int64)
+    rank[order] = np.arange(n)
+    return Plane(order=order, rank=rank, weights=weights, bands=np.zeros((2, n, kd + 1)), info=info,
+                 reference=np.zeros(2), reference_mass=np.zeros(n), frame=np.eye(3), normal=np.ones(n),
+                 local=np.zeros((3, n)))
+
+
+@kernel
+def refresh(plane, offsets, mass, scale):
+    """Factor ``M + scale L_c`` (scale = (beta h)^2, s^2) unless the factors in hand are close enough.
+    Returns 1 if it factored, 0 if not, -1 if a matrix was not positive definite."""
+    ref = plane.reference
+    if ref[1] == 1.0 and 1.0 / REFACTOR_SCALE <= scale / ref[0] <= REFACTOR_SCALE:
+        close = True
+        for i in range(mass.shape[0]):
+            if abs(mass[i] / plane.reference_mass[i] - 1.0) > REFACTOR_CHANGE:
+                close = False
+                break
+        if close:
+            return 0
+    n = mass.shape[0]
+    rank = plane.rank
+    for c in range(2):
+        band = plane.bands[c]
+        band[...] = 0.0
+        for k in range(n):
+            band[k, 0] = mass[plane.order[k]]
+        weights = plane.weights[c]
+        for f in range(offsets.shape[0]):
+            off = offsets[f]
+            for i in range(n - off):
+                w = scale * weights[f, i]
+                if w == 0.0:
+                    continue
+                a, b = rank[i], rank[i + off]
+                lo, hi = min(a, b), max(a, b)
+                band[lo, 0] += w
+                band[hi, 0] += w
+                band[lo, hi - lo] -= w
+        if band_factor(band, plane.info[c]) != 0:
+            ref[1] = 0.0
+            return -1
+    ref[0] = scale
+    ref[1] = 1.0
+    plane.reference_mass[...] = mass
+    return 1
+
+
+@kernel
+def follow_cloth(plane, grid_x, pos):
+    """Set the frame (t1, t2, n) from the mean direction of the rows and of the columns."""
+    n = pos.shape[1]
+    a = np.zeros(3)
+    b = np.zeros(3)
+    for i in range(n - 1):
+        if (i + 1) % grid_x != 0:
+            for c in range(3):
+                a[c] += pos[c, i + 1] - pos[c, i]
+    for i in range(n - grid_x):
+        for c in range(3):
+            b[c] += pos[c, i + grid_x] - pos[c, i]
+    normal = np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+    a_norm = math.sqrt(a[0] ** 2 + a[1] ** 2 + a[2] ** 2)
+    n_norm = math.sqrt(normal[0] ** 2 + normal[1] ** 2 + normal[2] ** 2)
+    frame = plane.frame
+    if not (n_norm > 1e-12 * a_norm * a_norm and a_norm > 0.0):  # crumpled past telling: the axes
+        frame[...] = 0.0
+        for c in range(3):
+            frame[c, c] = 1.0
+        return
+    for c in range(3):
+        frame[0, c] = a[c] / a_norm
+        frame[2, c] = normal[c] / n_norm
+    frame[1, 0] = frame[2, 1] * frame[0, 2] - frame[2, 2] * frame[0, 1]
+    frame[1, 1] = frame[2, 2] * frame[0, 0] - frame[2, 0] * frame[0, 2]
+    frame[1, 2] = frame[2, 0] * frame[0, 1] - frame[2, 1] * frame[0, 0]
+
+
+@kernel
+def set_normal_diagonal(plane, mass, diagonal_blocks, blocks):
+    """The normal component's diagonal: n^T B_i n for each particle's diagonal block B_i of A."""
+    nx_, ny_, nz_ = plane.frame[2, 0], plane.frame[2, 1], plane.frame[2, 2]
+    for i in range(mass.shape[0]):
+        xx = diagonal_blocks[0, i] + blocks[0, i]
+        yy = diagonal_blocks[1, i] + blocks[1, i]
+        zz = diagonal_blocks[2, i] + blocks[2, i]
+        xy = diagonal_blocks[3, i] + blocks[3, i]
+        xz = diagonal_blocks[4, i] + blocks[4, i]
+        yz = diagonal_blocks[5, i] + blocks[5, i]
+        plane.normal[i] = mass[i] + (xx * nx_ * nx_ + yy * ny_ * ny_ + zz * nz_ * nz_
+                                     + 2.0 * (xy * nx_ * ny_ + xz * nx_ * nz_ + yz * ny_ * nz_))
+
+
+@kernel
+def apply(plane, free, r, z):
+    """z = P^-1 r, rows of pinned particles zero."""
+    n = r.shape[1]
+    f = plane.frame
+    local = plane.local
+    for k in range(n):
+        i = plane.order[k]
+        for c in range(2):
+            local[c, k] = f[c, 0] * r[0, i] + f[c, 1] * r[1, i] + f[c, 2] * r[2, i]
+    band_solve(plane.bands[0], local[0], plane.info[0])
+    band_solve(plane.bands[1], local[1], plane.info[1])
+    for k in range(n):
+        i = plane.order[k]
+        normal = (f[2, 0] * r[0, i] + f[2, 1] * r[1, i] + f[2, 2] * r[2, i]) / plane.normal[i]
+        for c in range(3):
+            z[c, i] = free[i] * (f[0, c] * local[0, k] + f[1, c] * local[1, k] + f[2, c] * normal)
