@@ -79,7 +79,7 @@ SCENES = st.fixed_dictionaries({
 @given(values=SCENES)
 def test_random_valid_scenes_stay_finite_bounded_and_never_lose_water(values):
     """Any valid scene in the adaptive mode: finite state, kinetic energy within what the scene can
-    release (wetcloth.stress), and wet mass never decreasing."""
+    release (support/stress.py), and wet mass never decreasing."""
     try:
         scene = wetcloth.load_scene(**values, floor_level=-1.5)
     except wetcloth.ParameterError:

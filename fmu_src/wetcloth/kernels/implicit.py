@@ -171,6 +171,7 @@ def bdf2_step(cloth, phys, work, solver, plane, pos, vel, water, step_water, pre
             else:
                 hat_pos[c, i] = pos[c, i]
                 hat_vel[c, i] = (cloth.dry_mass[i] + water[i]) * vel[c, i] / mass[i]
+                predicted[c, i] = pos[c, i]
                 guess = hat_vel[c, i]
             out_vel[c, i] = guess * free[i]
     bh = beta * h
@@ -229,6 +230,6 @@ def bdf2_step(cloth, phys, work, solver, plane, pos, vel, water, step_water, pre
     difference = solver.r
     for c in range(3):
         for i in range(n):
-            difference[c, i] = mass[i] * (out_pos[c, i] - predicted[c, i])
+            difference[c, i] = free[i] * mass[i] * (out_pos[c, i] - predicted[c, i])
     plane_preconditioner.apply(plane, free, difference, solver.z)
     return (1.0 + w) / (2.0 + 3.0 * w) * _largest(solver.z), converged
