@@ -18,7 +18,7 @@ import time
 import numpy as np
 
 from wetcloth.batch.engines import python_series
-from wetcloth.batch.study import load_study
+from wetcloth.batch.spec import load_study
 from wetcloth.scene import preset_dir
 
 PREVIOUS = dict(integrator="symplectic_euler", tolerance=1e-4, max_step=0.01)

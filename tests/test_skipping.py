@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import wetcloth
+from wetcloth.state import State
 
 IN_AIR = dict(water_level=-5.0, floor_level=-1.0, initial_tilt=0.0, initial_height=-0.95)
 
@@ -97,13 +98,14 @@ def test_snapshot_and_restore_repeat_a_run_exactly():
 
 
 def test_snapshot_holds_numbers_and_arrays_only_and_repeats_bdf2_exactly():
-    """The snapshot contract: a flat dict of arrays, Python numbers and the scene.  BDF2's history
+    """The snapshot contract: a flat dict of arrays, Python numbers, the state (a dataclass of arrays)
+    and the scene.  BDF2's history
     (the previous state) and its preconditioner's factorisation come back, so the run repeats bit
     for bit after a restore, with an input changed in between."""
     sim = wetcloth.Simulation(wetcloth.load_scene(nx=6, ny=7, integrator="bdf2", absorption_rate=1.0))
     sim.advance(0.4)
     saved = sim.snapshot()
-    assert all(isinstance(v, (np.ndarray, float, int, bool, wetcloth.Scene)) for v in saved.values())
+    assert all(isinstance(v, (np.ndarray, float, int, bool, wetcloth.Scene, State)) for v in saved.values())
     assert "prev_pos" in saved and "preconditioner_mass" in saved
     runs = []
     for _ in range(2):

@@ -12,7 +12,7 @@ from wetcloth.integrators import make_integrator
 from wetcloth.kernels.implicit import CG_ITERATIONS, FACTORISATIONS, NEWTON_ITERATIONS, UNCONVERGED, make_solver
 from wetcloth.kernels.integration import speed_and_finiteness
 from wetcloth.kernels.plane import make_plane, refresh
-from wetcloth.kernels.stepping import (BLOWN_UP, CALM_TIME, CLOCK_SIZE, EXCHANGING, FAILED_STEP, LAST_STEP, NEXT_STEP,
+from wetcloth.kernels.stepping import (BLOWN_UP, PAUSED, CALM_TIME, CLOCK_SIZE, EXCHANGING, FAILED_STEP, LAST_STEP, NEXT_STEP,
                                        REJECTED, SLEEPING, SPEED, STEPS, TIME, UNCHECKED_TIME, Buffers, advance)
 from wetcloth.model import Model
 from wetcloth.scene import INPUT, PARAMETERS, Scene, load_scene
@@ -29,10 +29,13 @@ OUTPUTS = {
 }
 OUTPUT_NAMES = tuple(OUTPUTS)
 
-#: What a snapshot holds: the state buffers that carry over between steps (positions, velocities,
-#: water, BDF2's previous step, the sleep anchor), and the clock's slots (name, slot, type).
-_SNAPSHOT_ARRAYS = ("pos", "vel", "water", "prev_pos", "prev_vel", "prev_water", "anchor")
-_SNAPSHOT_CLOCK = (("time", TIME, float), ("next_step", NEXT_STEP, float), ("last_step", LAST_STEP, float),
+#: Particle-steps (steps times particles) that one compiled call takes at most before it returns.
+STEPS_PER_CALL = 2_000_000
+
+#: What a snapshot holds besides ``state`` and ``scene``: the buffers that carry over between steps
+#: (BDF2's previous step, the sleep anchor), and the clock's slots (name, slot, type).
+_SNAPSHOT_ARRAYS = ("prev_pos", "prev_vel", "prev_water", "anchor")
+_SNAPSHOT_CLOCK = (("next_step", NEXT_STEP, float), ("last_step", LAST_STEP, float),
                    ("speed", SPEED, float), ("calm_time", CALM_TIME, float), ("unchecked_time", UNCHECKED_TIME, float),
                    ("exchanging", EXCHANGING, bool), ("sleeping", SLEEPING, bool), ("steps", STEPS, int),
                    ("rejected_steps", REJECTED, int))
@@ -76,7 +79,7 @@ class Simulation:
         last factored for (so that a restored run factors the same matrices and repeats bit for bit)."""
         buf = self._buffers
         plane = self._plane
-        values = {"scene": self.scene}
+        values = {"scene": self.scene, "state": self.state.copy()}
         for key in _SNAPSHOT_ARRAYS:
             values[key] = getattr(buf, key).copy()
         values["preconditioner_mass"] = plane.reference_mass.copy()
@@ -93,6 +96,11 @@ class Simulation:
         from this one in inputs only); a ValueError names what does not fit, and nothing changes."""
         self._check_snapshot(snapshot)
         buf = self._buffers
+        state = snapshot["state"]
+        buf.pos[...] = state.pos
+        buf.vel[...] = state.vel
+        buf.water[...] = state.water
+        self._clock[TIME] = state.time
         for key in _SNAPSHOT_ARRAYS:
             getattr(buf, key)[...] = snapshot[key]
         for key, slot, _ in _SNAPSHOT_CLOCK:
@@ -112,7 +120,15 @@ class Simulation:
                              f"unknown {sorted(keys - set(live))}")
         for key, value in live.items():
             given = snapshot[key]
-            if isinstance(value, np.ndarray):
+            if key == "state":
+                if not isinstance(given, State):
+                    raise ValueError(f"snapshot 'state': expected a State, got {type(given).__name__}")
+                for name in ("pos", "vel", "water"):
+                    want, got = getattr(value, name), getattr(given, name)
+                    if not isinstance(got, np.ndarray) or got.shape != want.shape or got.dtype != want.dtype:
+                        raise ValueError(f"snapshot 'state.{name}': expected a {want.dtype} array of shape "
+                                         f"{want.shape}")
+            elif isinstance(value, np.ndarray):
                 if not isinstance(given, np.ndarray) or given.shape != value.shape or given.dtype != value.dtype:
                     got = f"{given.dtype} {given.shape}" if isinstance(given, np.ndarray) else type(given).__name__
                     raise ValueError(f"snapshot {key!r}: expected a {value.dtype} array of shape {value.shape}, "
@@ -201,9 +217,14 @@ class Simulation:
         if not (duration >= 0.0 and math.isfinite(duration)):
             raise ValueError(f"duration must be a finite number >= 0 s, got {duration!r}")
         model = self.model
-        start = self.time
-        status = advance(model.cloth, model.physics, self._control, model.work, self._solver, self._plane,
-                         self._buffers, self._clock, start + duration)
+        target = self.time + duration
+        # The compiled loop returns every STEPS_PER_CALL steps (fewer on large grids), so that Python
+        # sees Ctrl-C (and other signals) within a fraction of a second even when steps are tiny.
+        budget = max(1, STEPS_PER_CALL // model.topology.n)
+        status = PAUSED
+        while status == PAUSED:
+            status = advance(model.cloth, model.physics, self._control, model.work, self._solver, self._plane,
+                             self._buffers, self._clock, target, budget)
         if status == BLOWN_UP:
             self._blown_up(float(self._clock[FAILED_STEP]))
 

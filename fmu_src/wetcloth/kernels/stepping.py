@@ -31,7 +31,7 @@ TIME, NEXT_STEP, LAST_STEP, SPEED, CALM_TIME, UNCHECKED_TIME, EXCHANGING, SLEEPI
 CLOCK_SIZE = 11
 
 #: What ``advance`` returns.
-DONE, BLOWN_UP = 0, 1
+DONE, BLOWN_UP, PAUSED = 0, 1, 2
 
 #: Integrator and controller settings: ``tolerance`` (-), ``allowed`` local position error per step
 #: (m, 0 = fixed steps of ``max_step`` s); ``newton_tolerance`` (m); the explicit schemes' stability data:
@@ -234,11 +234,16 @@ def _step(cloth, phys, control, work, solver, plane, buf, clock, remaining):
 
 
 @kernel
-def advance(cloth, phys, control, work, solver, plane, buf, clock, target):
+def advance(cloth, phys, control, work, solver, plane, buf, clock, target, max_steps):
     """Step until ``clock[TIME]`` reaches ``target`` (s) or the cloth falls asleep (time then jumps to
-    ``target``).  Returns DONE, or BLOWN_UP with the last good state kept."""
+    ``target``).  Returns DONE; BLOWN_UP with the last good state kept; or PAUSED after
+    ``max_steps`` steps short of the target (call again to go on)."""
+    taken = 0
     while target - clock[TIME] > 1e-12 * max(1.0, abs(target)) and clock[SLEEPING] == 0.0:
+        if taken >= max_steps:
+            return PAUSED
         if _step(cloth, phys, control, work, solver, plane, buf, clock, target - clock[TIME]) != DONE:
             return BLOWN_UP
+        taken += 1
     clock[TIME] = max(clock[TIME], target)
     return DONE
