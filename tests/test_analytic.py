@@ -1,4 +1,4 @@
-"""The analytic cases of MODEL.md section 8, for every integrator where they apply."""
+"""The analytic cases of docs/model.md section 10, for every integrator where they apply."""
 
 import math
 
@@ -121,7 +121,7 @@ def test_face_drag_terminal_velocity_broadside(integrator):
 def test_flat_sheet_sinking_broadside_stays_flat(integrator):
     """Uniform mass, buoyancy and drag per area: nothing bends the sheet, so it must fall flat.
     With drag shared by triangle thirds (the corners' share wrong) it bowed by 2-4 cm in 2 s; with
-    the area weights of MODEL.md section 4 every particle has the same acceleration, and 1 mm
+    the area weights of docs/model.md section 4 every particle has the same acceleration, and 1 mm
     leaves room only for round-off."""
     sim = wetcloth.Simulation(heavy_submerged_scene(nx=17, ny=13, integrator=integrator))
     sim.advance(2.0)

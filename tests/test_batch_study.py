@@ -43,7 +43,7 @@ def test_first_crossing_interpolates_between_samples():
 
 
 def buras_series(duration=60.0, rate_hz=100.0, m0=0.1575, capacity=3.8, absorption=0.15, v=0.02, t_drop=10.0):
-    """Synthetic run: Buras uptake from t = 0 (MODEL.md section 8) and a centroid that floats at
+    """Synthetic run: Buras uptake from t = 0 (docs/model.md section 10) and a centroid that floats at
     1 mm until ``t_drop`` s, then goes down at ``v`` m/s."""
     t = np.arange(0.0, duration + 1e-9, 1.0 / rate_hz)
     water = m0 * capacity * (1 - np.exp(-absorption * t / capacity))

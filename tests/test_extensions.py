@@ -1,4 +1,4 @@
-"""Beyond the thesis (MODEL.md section 5): wicking, drying, wetness-dependent stiffness, currents."""
+"""Beyond the thesis (docs/model.md section 5): wicking, drying, wetness-dependent stiffness, currents."""
 
 import math
 

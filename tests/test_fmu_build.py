@@ -55,7 +55,7 @@ def test_every_scene_field_is_a_variable_with_its_metadata(md):
             assert float(v.min) == meta["lo"] and float(v.max) == meta["hi"], name
 
 
-#: INTERFACE.md's promise, written out here rather than derived from the Scene, so that a renamed
+#: docs/interface.md's promise, written out here rather than derived from the Scene, so that a renamed
 #: variable or a changed unit fails: name -> (FMI type, causality, FMI unit or None).
 INTERFACE = {
     "water_level": ("Real", "input", "m"), "water_density": ("Real", "input", "kg/m3"),
@@ -88,7 +88,7 @@ def test_interface_md_variables_keep_their_names_types_and_units(md):
             assert v.start is not None, name
         if fmi_type != "String":
             assert causality == "output" or (v.min is not None and v.max is not None), name
-    assert variables["nx"].min == variables["ny"].min == "2"  # INTERFACE.md: Integer, >= 2
+    assert variables["nx"].min == variables["ny"].min == "2"  # docs/interface.md: Integer, >= 2
     assert (variables["drag_model"].start, variables["mesh_format"].start) == ("face", "ply")
     assert variables["mesh_output_dir"].start == ""  # "" = off
 

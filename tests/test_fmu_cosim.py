@@ -1,5 +1,5 @@
 """Co-simulating WetCloth.fmu: equal to a direct Simulation, inputs act from their communication point,
-any communication step is accurate, MODEL.md section 8 holds through the unit, instances are separate."""
+any communication step is accurate, docs/model.md section 10 holds through the unit, instances are separate."""
 
 from __future__ import annotations
 
@@ -61,7 +61,7 @@ def test_simulate_fmu_with_varying_inputs_equals_a_direct_run(fmu):
 def test_a_rising_water_level_carries_a_floating_cloth_up(fmu):
     """No absorption, lighter than water: the cloth floats at depth t (s - 1/2) and rises with the water."""
     thickness, density = 0.002, 0.45
-    s = density / (1000.0 * thickness)  # MODEL.md 8: submerged fraction of a floating cloth
+    s = density / (1000.0 * thickness)  # docs/model.md section 10: submerged fraction of a floating cloth
     rest_depth = thickness * (s - 0.5)
     values = SMALL | dict(absorption_capacity=0.0, initial_tilt=0.0, initial_height=-rest_depth,
                           thickness=thickness, areal_density=density)
@@ -86,7 +86,7 @@ def test_a_rising_water_level_carries_a_floating_cloth_up(fmu):
 
 
 def heavy_submerged(**overrides) -> dict:
-    """MODEL.md 8, first case: a heavy flat cloth under water from t = 0 (every particle touches water)."""
+    """docs/model.md section 10, first case: a heavy flat cloth under water from t = 0 (every particle touches water)."""
     return SMALL | dict(areal_density=5.0, thickness=0.002, initial_height=-0.2, initial_tilt=0.0,
                         floor_level=-5.0, absorption_capacity=3.8, absorption_rate=0.15) | overrides
 

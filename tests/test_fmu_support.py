@@ -19,7 +19,7 @@ import numpy as np
 import wetcloth
 from wetcloth.simulation import OUTPUT_NAMES
 
-#: Small, fast scene used throughout: a 9 x 9 cloth (MODEL.md's coarsest refinement level).
+#: Small, fast scene used throughout: a 9 x 9 cloth (docs/model.md's coarsest refinement level).
 SMALL = {"nx": 9, "ny": 9}
 
 _BUILT: dict[str, Path] = {}

@@ -68,7 +68,7 @@ SCENES = st.fixed_dictionaries({
     "absorption_rate": _bounded("absorption_rate", 0.0, 100.0),
     "initial_height": _bounded("initial_height", -0.3, 0.3),
     "initial_tilt": _bounded("initial_tilt"),
-    # Explicit Euler is left out: with little damping it is unstable at any step (MODEL.md 6 keeps it
+    # Explicit Euler is left out: with little damping it is unstable at any step (docs/model.md section 7 keeps it
     # as the thesis baseline only); the sweep above covers it with the default damping.
     "integrator": st.sampled_from(["symplectic_euler", "implicit_euler", "bdf2"]),
     "tolerance": _bounded("tolerance", 1e-5, 1e-2),

@@ -1,4 +1,4 @@
-"""The four experiments of the thesis (MODEL.md section 1), and the one it could not reproduce."""
+"""The four experiments of the thesis (docs/model.md section 1), and the one it could not reproduce."""
 
 import math
 
@@ -13,7 +13,7 @@ COARSE = dict(nx=11, ny=15)
 
 
 def sink_onset(sim: wetcloth.Simulation) -> float:
-    """t_on = (C/R) ln(C / (1 + C - rho V/m0)): when the Buras wet mass reaches rho V (MODEL.md 8)."""
+    """t_on = (C/R) ln(C / (1 + C - rho V/m0)): when the Buras wet mass reaches rho V (docs/model.md section 10)."""
     sc = sim.scene
     m0, volume = totals(sim)
     C, R = sc.absorption_capacity, sc.absorption_rate

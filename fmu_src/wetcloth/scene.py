@@ -79,7 +79,7 @@ class Scene:
     absorption_rate: float = _param(
         0.15, "1/s", "initial uptake rate, kg water per kg dry fabric per s (Buras I)", 0.0, 1e4, fmu=INPUT
     )
-    # --- beyond the thesis (MODEL.md section 5): each off at 0 and then skipped
+    # --- beyond the thesis (docs/model.md section 5): each off at 0 and then skipped
     wicking_rate: float = _param(
         0.0, "m2/s", "diffusion constant of water through the fabric, driven by saturation; 0 = off", 0.0, 1.0
     )

@@ -18,7 +18,7 @@ from wetcloth.model import Model
 from wetcloth.scene import INPUT, PARAMETERS, Scene, load_scene
 from wetcloth.state import State, initial_state
 
-#: The outputs (MODEL.md section 7), as the FMU publishes them: name -> (unit, meaning).
+#: The outputs (docs/model.md section 8), as the FMU publishes them: name -> (unit, meaning).
 OUTPUTS = {
     "centroid_x": ("m", "mass-weighted mean particle position, x"),
     "centroid_y": ("m", "mass-weighted mean particle position, y"),
@@ -244,7 +244,7 @@ class Simulation:
 
     # ----------------------------------------------------------------- results
     def outputs(self) -> dict[str, float]:
-        """The FMU outputs (MODEL.md section 7): centroid (m), depth (m), wet and water mass (kg)."""
+        """The FMU outputs (docs/model.md section 8): centroid (m), depth (m), wet and water mass (kg)."""
         mass = self.model.mass(self.state.water)
         total = float(mass.sum())
         centroid = self.state.pos @ mass / total

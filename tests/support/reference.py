@@ -32,7 +32,7 @@ def _contact_fraction(z0, z1, v0, v1, h, surface):
 
 def _corner_weights(rest_xy: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """(m, 3) share of each triangle's force per corner, the weights of the particles' areas
-    (MODEL.md section 4): 1/2 at the right angle of the rest sheet, 1/4 at the other two."""
+    (docs/model.md section 4): 1/2 at the right angle of the rest sheet, 1/4 at the other two."""
     corners = [rest_xy[:, triangles[:, k]] for k in range(3)]
     weights = np.empty(triangles.shape, dtype=float)
     for k in range(3):

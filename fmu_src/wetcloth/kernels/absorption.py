@@ -1,4 +1,4 @@
-"""Water uptake (MODEL.md section 5): the Buras law, integrated exactly over a step."""
+"""Water uptake (docs/model.md section 5): the Buras law, integrated exactly over a step."""
 
 from __future__ import annotations
 

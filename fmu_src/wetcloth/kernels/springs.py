@@ -1,4 +1,4 @@
-"""Spring forces (MODEL.md section 3) and their Jacobians for the implicit integrator.
+"""Spring forces (docs/model.md section 3) and their Jacobians for the implicit integrator.
 
 A spring family joins particle ``i`` to ``i + offset``.  Kernels work on views: with
 ``m = n - offset``, ``a[:m]`` is every spring's first end and ``a[offset:]`` its second, so every

@@ -1,10 +1,10 @@
-"""Water forces (MODEL.md section 4): submerged fraction, buoyancy, Stokes drag and face drag.
+"""Water forces (docs/model.md section 4): submerged fraction, buoyancy, Stokes drag and face drag.
 
 Face drag works per grid cell, each split into two triangles (i, i+1, i+nx+1) and
 (i, i+nx+1, i+nx), the same split as ``Topology.triangles``: two right triangles, with the right
 angle at i+1 and at i+nx.  Per-triangle values go into buffers of length ``n + nx + 1`` (cell
 ``i`` at slot ``i + nx + 1``; slots of non-cells stay zero), and each particle gathers its share
-of its six triangles' values with the weights of its area (MODEL.md section 4): the right-angle
+of its six triangles' values with the weights of its area (docs/model.md section 4): the right-angle
 corner 1/2, the other two 1/4 each.  These sum to the quarter-cell areas of ``Topology.area``, so
 a uniform load per area gives every particle the same acceleration.
 """
@@ -165,7 +165,7 @@ def _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, c
 @kernel
 def face_drag(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, force, cells,
               skip_dry_rows=True):
-    """Add the face-model drag (MODEL.md section 4) to ``force``; ``cells`` is (2, 9, n + nx + 1) scratch."""
+    """Add the face-model drag (docs/model.md section 4) to ``force``; ``cells`` is (2, 9, n + nx + 1) scratch."""
     _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells, False,
                skip_dry_rows)
     for comp in range(3):
