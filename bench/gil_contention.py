@@ -24,7 +24,7 @@ DURATION = 30.0
 def one_run(scene) -> float:
     """Wall-clock seconds of one 30 s run sampled at 10 Hz."""
     start = time.perf_counter()
-    run(scene, DURATION, 10.0, snapshots=0, progress=False)
+    run(scene, DURATION, 10.0, shapes=0, progress=False)
     return time.perf_counter() - start
 
 
@@ -54,7 +54,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args()
     scene = wetcloth.load_scene("thesis_fast", **SCENE)
-    run(scene, 1.0, 10.0, snapshots=0, progress=False)  # load the compiled kernels
+    run(scene, 1.0, 10.0, shapes=0, progress=False)  # load the compiled kernels
     alone, beside = [], []
     for _ in range(args.repeat):  # interleaved, so that drifts in the machine's speed hit both
         alone.append(one_run(scene))

@@ -49,7 +49,7 @@ def small_study(name="t", duration=15.0, **data) -> Study:
 
 def direct_metrics(study: Study, params: dict) -> dict:
     """The metrics of one run computed in this process, without Dask."""
-    result = run(from_dict(params), study.duration, study.sample_rate, snapshots=0, progress=False)
+    result = run(from_dict(params), study.duration, study.sample_rate, shapes=0, progress=False)
     series = {name: result.column(name) for name in ("time", "depth", "wet_mass", "water_mass")}
     return compute_metrics(series, study.metrics, study.sink_depth)
 

@@ -252,3 +252,15 @@ def test_an_operating_system_error_is_one_clear_line(tmp_path, capsys):
     assert code == 2
     err = capsys.readouterr().err
     assert err.startswith("wetcloth build-fmu: error:") and "afile" in err and "Traceback" not in err
+
+
+def test_the_plotted_cloth_shapes_are_evenly_spread_frames_including_both_ends():
+    """``shapes`` frames of the run are kept for the plot: first, last and evenly between (frame
+    times are exact multiples of 1/fps, so the times compare exactly)."""
+    from wetcloth.runner import shape_frames
+    from wetcloth.scene import Scene
+
+    assert shape_frames(11, 3) == [0, 5, 10] and shape_frames(11, 0) == [] and shape_frames(2, 4) == [0, 1]
+    result = run(Scene(nx=4, ny=4), 1.0, 10.0, shapes=3, progress=False, warn=None)
+    assert [shape.time for shape in result.shapes] == [0.0, 0.5, 1.0]
+    assert all(shape.positions.shape == (16, 3) and shape.wetness.shape == (16,) for shape in result.shapes)

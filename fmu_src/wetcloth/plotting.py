@@ -1,4 +1,4 @@
-"""Plots of a run: depth and masses against time, and snapshots of the cloth coloured by wetness."""
+"""Plots of a run: depth and masses against time, and shapes of the cloth coloured by wetness."""
 
 from __future__ import annotations
 
@@ -18,10 +18,10 @@ WETNESS_CMAP = "YlGnBu"
 
 def plot_run(result, path: str | Path, title: str | None = None) -> Path:
     """Write a figure (whole or not at all): depth, wet mass and water mass against time, and the
-    run's snapshots."""
+    run's cloth shapes."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    shots = result.snapshots
+    shots = result.shapes
     fig = plt.figure(figsize=(4 * max(len(shots), 3), 8), constrained_layout=True)
     grid = fig.add_gridspec(2, max(len(shots), 3))
     t = result.column("time")

@@ -20,8 +20,9 @@ from wetcloth.simulation import OUTPUT_NAMES, Simulation
 
 
 @dataclass
-class Snapshot:
-    """The cloth at one time: positions (n, 3) m and wetness (n,) 0..1."""
+class ClothShape:
+    """The cloth at one time, as plotted: positions (n, 3) m and wetness (n,) 0..1.  (Not a
+    ``Simulation.snapshot``, which holds everything needed to resume a run.)"""
 
     time: float
     positions: np.ndarray
@@ -30,12 +31,12 @@ class Snapshot:
 
 @dataclass
 class RunResult:
-    """Outputs at every frame (``rows``: time then ``OUTPUT_NAMES``) and a few snapshots."""
+    """Outputs at every frame (``rows``: time then ``OUTPUT_NAMES``) and a few cloth shapes."""
 
     scene: Scene
     fps: float
     rows: list[dict[str, float]] = field(default_factory=list)
-    snapshots: list[Snapshot] = field(default_factory=list)
+    shapes: list[ClothShape] = field(default_factory=list)
     triangles: np.ndarray | None = None
 
     def column(self, name: str) -> np.ndarray:
@@ -78,16 +79,24 @@ def frame_times(duration: float, fps: float) -> np.ndarray:
     return times
 
 
+def shape_frames(frames: int, shapes: int) -> list[int]:
+    """Indices of ``shapes`` frames evenly spread over ``frames`` (first and last included), ascending."""
+    if frames <= 0 or shapes <= 0:
+        return []
+    return sorted(set(np.linspace(0, frames - 1, shapes).round().astype(int).tolist()))
+
+
 def run(
     scene: Scene,
     duration: float,
     fps: float = 30.0,
     on_frame: FrameCallback | None = None,
-    snapshots: int = 4,
+    shapes: int = 4,
     progress: bool = True,
     warn: Callable[[str], None] | None = warn_cost,
 ) -> RunResult:
-    """Simulate ``scene`` for ``duration`` s; record outputs at ``fps`` and ``snapshots`` cloth shapes.
+    """Simulate ``scene`` for ``duration`` s; record outputs at ``fps`` and ``shapes`` cloth shapes
+    (evenly spread frames, ``shape_frames``).
 
     ``on_frame(index, sim)`` is called at every frame (index 0 at t = 0), for exporters.
     Whatever stops the run early (a ``BlowUpError``, Ctrl-C's ``KeyboardInterrupt``, a failed
@@ -98,7 +107,7 @@ def run(
     """
     times = frame_times(duration, fps)
     sim = Simulation(scene)
-    snapshot_frames = set(np.linspace(0, len(times) - 1, snapshots).round().astype(int).tolist()) if snapshots else set()
+    plotted = shape_frames(len(times), shapes)
     result = RunResult(scene=scene, fps=fps, triangles=sim.triangles)
     with time_bar(duration, enabled=progress) as bar:
         watching = progress or warn is not None
@@ -107,8 +116,8 @@ def run(
                 for index, t in enumerate(times):
                     sim.advance(t - sim.time)
                     result.rows.append({"time": float(t), **sim.outputs()})
-                    if index in snapshot_frames:
-                        result.snapshots.append(Snapshot(float(t), sim.positions, sim.wetness))
+                    if index in plotted:
+                        result.shapes.append(ClothShape(float(t), sim.positions, sim.wetness))
                     if on_frame is not None:
                         on_frame(index, sim)
             except BaseException as exc:

@@ -28,7 +28,7 @@ def python_series(params: dict[str, Any], duration: float, sample_rate: float) -
     from wetcloth.runner import run
     from wetcloth.scene import from_dict
 
-    result = run(from_dict(params), duration, sample_rate, snapshots=0, progress=False, warn=None)
+    result = run(from_dict(params), duration, sample_rate, shapes=0, progress=False, warn=None)
     return {name: result.column(name) for name in SERIES}
 
 

@@ -23,13 +23,13 @@ from wetcloth import run_settings
 from wetcloth.errors import BlowUpError
 from wetcloth.fmu import default_fmu_path
 from wetcloth.progress import time_bar
-from wetcloth.runner import RunResult, Snapshot
+from wetcloth.runner import ClothShape, RunResult, shape_frames
 from wetcloth.scene import PARAMETERS, load_scene, read_scene_file
 from wetcloth.simulation import OUTPUT_NAMES
 
 DEFAULT_DEMO_DIR = Path("out") / "demo"
-#: Cloth snapshots in the demo plot, evenly spread over the run.
-SNAPSHOTS = 4
+#: Cloth shapes in the demo plot, evenly spread over the run.
+SHAPES = 4
 
 
 class CoSimulationError(RuntimeError):
@@ -141,16 +141,16 @@ def read_frame(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def run_result(outputs: np.ndarray, scene, fps: float, frames: Path | None = None,
-               snapshots: int = SNAPSHOTS) -> RunResult:
-    """A ``RunResult`` (as ``wetcloth.run`` makes) from fmpy outputs and, for snapshots, PLY frames."""
+               shapes: int = SHAPES) -> RunResult:
+    """A ``RunResult`` (as ``wetcloth.run`` makes) from fmpy outputs and, for its cloth shapes, PLY frames."""
     from wetcloth.exporter import frame_file_name
 
     rows = [{"time": float(row["time"]), **{name: float(row[name]) for name in OUTPUT_NAMES}} for row in outputs]
     result = RunResult(scene=scene, fps=fps, rows=rows)
-    if frames is not None and snapshots:
-        for index in sorted(set(np.linspace(0, len(rows) - 1, snapshots).round().astype(int).tolist())):
+    if frames is not None:
+        for index in shape_frames(len(rows), shapes):
             positions, wetness, triangles = read_frame(frames / frame_file_name("cloth", index + 1, "ply"))
-            result.snapshots.append(Snapshot(rows[index]["time"], positions, wetness))
+            result.shapes.append(ClothShape(rows[index]["time"], positions, wetness))
             result.triangles = triangles
     return result
 
