@@ -125,6 +125,14 @@ def did_you_mean(name: str, known: Iterable[str], what: str = "parameter", listi
     return f"unknown {what} ({listing})" if listing else f"unknown {what}; known: {', '.join(known)}"
 
 
+def check_choice(error: type[ConfigError], key: str, value, allowed: Iterable[str]) -> str:
+    """``value`` if it is one of ``allowed``, else ``error(key, ...)`` listing the allowed values."""
+    allowed = tuple(allowed)
+    if value not in allowed:
+        raise error(key, f"{value!r} is not allowed; allowed: {', '.join(allowed)}")
+    return value
+
+
 class BlowUpError(RuntimeError):
     """The state went non-finite or exploded; carries the last good time (s).
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 from pathlib import Path
 
 import matplotlib
@@ -16,13 +17,32 @@ from wetcloth.files import whole_file  # noqa: E402
 WETNESS_CMAP = "YlGnBu"
 
 
+@contextlib.contextmanager
+def figure_file(path: str | Path, dpi: int, **options):
+    """``with figure_file(path, dpi, **options) as fig``: a figure (``plt.figure(**options)``), written to ``path`` (format from its suffix, PNG without one) whole or not at all when the block
+    ends without error, and closed in any case."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig = plt.figure(**options)
+    try:
+        yield fig
+        with whole_file(path) as tmp:
+            fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".") or "png")
+    finally:
+        plt.close(fig)
+
+
 def plot_run(result, path: str | Path, title: str | None = None) -> Path:
     """Write a figure (whole or not at all): depth, wet mass and water mass against time, and the
     run's cloth shapes."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     shots = result.shapes
-    fig = plt.figure(figsize=(4 * max(len(shots), 3), 8), constrained_layout=True)
+    with figure_file(path, 90, figsize=(4 * max(len(shots), 3), 8), constrained_layout=True) as fig:
+        _draw_run(fig, result, title)
+    return Path(path)
+
+
+def _draw_run(fig, result, title: str | None) -> None:
+    shots = result.shapes
     grid = fig.add_gridspec(2, max(len(shots), 3))
     t = result.column("time")
 
@@ -53,12 +73,6 @@ def plot_run(result, path: str | Path, title: str | None = None) -> Path:
     if shots:
         fig.colorbar(sm, ax=fig.axes[-1], shrink=0.6, label="wetness (saturation)")
     fig.suptitle(title or "wetcloth run")
-    try:
-        with whole_file(path) as tmp:
-            fig.savefig(tmp, dpi=90, format=path.suffix.lstrip(".") or "png")
-    finally:
-        plt.close(fig)
-    return path
 
 
 def _draw_cloth(ax, shot, triangles, water_level, zlim):

@@ -35,6 +35,24 @@ METRICS: dict[str, Metric] = {m.name: m for m in (
            "first time the absorbed water reaches 90% of its final amount; NaN if no water is absorbed"),
 )}
 
+def check_metric_names(key: str, value, at_least_one: bool) -> tuple[str, ...]:
+    """``value`` (a list of metric names, each known and none repeated) as a tuple; else a
+    ``StudyError`` naming ``key`` and every unknown name, with the nearest known ones."""
+    from wetcloth.errors import Mistakes, StudyError, did_you_mean
+
+    if not isinstance(value, (list, tuple)) or (at_least_one and not value):
+        least = "at least one of" if at_least_one else "any of"
+        raise StudyError(key, f"give a list of {least}: {', '.join(METRICS)}; got {value!r}")
+    mistakes = Mistakes()
+    for m in value:
+        if m not in METRICS:
+            mistakes.add(StudyError(key, f"{m!r}: " + did_you_mean(str(m), METRICS, "metric")))
+    mistakes.raise_if_any()
+    if len(set(value)) != len(value):
+        raise StudyError(key, f"repeated metric in {list(value)}")
+    return tuple(value)
+
+
 #: Recorded when a study does not say which metrics it wants.
 DEFAULT_METRICS = ("time_to_sink", "final_depth", "final_wet_mass", "time_to_90_wet_mass")
 

@@ -13,7 +13,6 @@ import numpy as np
 import pandas as pd
 
 from wetcloth.batch.metrics import METRICS
-from wetcloth.files import whole_file
 from wetcloth.batch.plot_spec import PlotSpec
 from wetcloth.scene import PARAMETERS
 
@@ -61,27 +60,18 @@ def heatmap_data(table: pd.DataFrame, metric: str, x: str, y: str) -> tuple[pd.D
 
 def plot(table: pd.DataFrame, spec: PlotSpec, path: str | Path, study=None) -> Path:
     """Draw ``spec`` (a line if ``spec.y`` is None, else a heatmap) from ``table`` to a PNG at ``path``."""
-    import matplotlib
+    from wetcloth.plotting import figure_file
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     title = f"{study.name}: " if study is not None else ""
-    fig, ax = plt.subplots(figsize=(6.4, 4.8), constrained_layout=True)
-    try:
+    with figure_file(path, 110, figsize=(6.4, 4.8), constrained_layout=True) as fig:
+        ax = fig.subplots()
         if spec.y is None:
             _line(ax, table, spec)
             ax.set_title(f"{title}{spec.metric} vs {spec.x}")
         else:
             _heatmap(fig, ax, table, spec)
             ax.set_title(f"{title}{spec.metric} over {spec.x} x {spec.y}")
-        with whole_file(path) as tmp:
-            fig.savefig(tmp, dpi=110, format="png")
-    finally:
-        plt.close(fig)
-    return path
+    return Path(path)
 
 
 def _line(ax, table: pd.DataFrame, spec: PlotSpec) -> None:
@@ -129,18 +119,12 @@ def plot_sensitivity(result, path: str | Path, study=None) -> Path:
     one panel per analysed metric, its factors from most to least influential; Sobol: S1 and ST
     side by side, Morris: mu* and sigma, with the confidence intervals as error bars.  A metric
     without indices gets a panel that says why."""
-    import matplotlib
+    from wetcloth.plotting import figure_file
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     sobol = result.spec.method == "sobol"
     width = max(6.4, 1.8 + 0.9 * len(result.factors))
-    fig, axes = plt.subplots(len(result.metrics), 1, figsize=(width, 0.4 + 2.9 * len(result.metrics)),
-                             constrained_layout=True, squeeze=False)
-    try:
+    with figure_file(path, 110, figsize=(width, 0.4 + 2.9 * len(result.metrics)), constrained_layout=True) as fig:
+        axes = fig.subplots(len(result.metrics), 1, squeeze=False)
         for ax, metric in zip(axes[:, 0], result.metrics):
             ax.set_title(f"{_label(metric)}", fontsize=10)
             if metric in result.problems:
@@ -161,11 +145,7 @@ def plot_sensitivity(result, path: str | Path, study=None) -> Path:
         level = f"{100 * result.spec.conf_level:g}%"
         title = f"{study.name}\n" if study is not None else ""
         fig.suptitle(f"{title}{result.spec.describe(len(result.factors))}; error bars: {level} confidence", fontsize=10)
-        with whole_file(path) as tmp:
-            fig.savefig(tmp, dpi=110, format="png")
-    finally:
-        plt.close(fig)
-    return path
+    return Path(path)
 
 
 def _no_indices(ax, problem: str) -> None:

@@ -23,6 +23,7 @@ which runs, and why, instead of an estimate from a partial design.
 
 from __future__ import annotations
 
+import functools
 import math
 import textwrap
 from dataclasses import dataclass, field
@@ -30,8 +31,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from wetcloth.batch.metrics import METRICS
-from wetcloth.errors import Mistakes, StudyError, did_you_mean
+from wetcloth.batch.metrics import METRICS, check_metric_names
+from wetcloth.errors import Mistakes, StudyError, check_choice, did_you_mean
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -83,33 +84,14 @@ def _check_conf_level(value) -> float:
     return float(value)
 
 
-def _check_metrics(value) -> tuple[str, ...]:
-    if not isinstance(value, (list, tuple)):
-        raise StudyError("sensitivity.metrics", f"give a list of the study's metrics, got {value!r}")
-    mistakes = Mistakes()
-    for m in value:
-        if m not in METRICS:
-            mistakes.add(StudyError("sensitivity.metrics", f"{m!r}: " + did_you_mean(str(m), METRICS, "metric")))
-    mistakes.raise_if_any()
-    if len(set(value)) != len(value):
-        raise StudyError("sensitivity.metrics", f"repeated metric in {list(value)}")
-    return tuple(value)
-
-
-def _check_method(value) -> str:
-    if value not in METHODS:
-        raise StudyError("sensitivity.method", f"{value!r} is not a method; allowed: {', '.join(METHODS)}")
-    return value
-
-
 _CHECKS = {
-    "method": _check_method,
+    "method": functools.partial(check_choice, StudyError, "sensitivity.method", allowed=METHODS),
     "samples": _check_samples,
     "trajectories": lambda v: _whole_at_least("trajectories", v, 2),
     "levels": _check_levels,
     "conf_level": _check_conf_level,
     "resamples": lambda v: _whole_at_least("resamples", v, 10),
-    "metrics": _check_metrics,
+    "metrics": functools.partial(check_metric_names, "sensitivity.metrics", at_least_one=False),
 }
 
 

@@ -26,6 +26,7 @@ done.  A study is checked whole when it is made: every mistake is reported at on
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import json
 import math
@@ -40,10 +41,10 @@ from wetcloth import run_settings
 from wetcloth.batch.axes import (SAMPLINGS, Axis, check_count, check_name, from_unit, parse_axis, point_count,
                                  points, typed)
 from wetcloth.batch.engines import ENGINES
-from wetcloth.batch.metrics import DEFAULT_METRICS, METRICS
+from wetcloth.batch.metrics import DEFAULT_METRICS, check_metric_names
 from wetcloth.batch.plot_spec import PlotSpec, plot_specs
 from wetcloth.batch.sensitivity import SensitivitySpec, check_factors, design, parse_sensitivity
-from wetcloth.errors import ConfigError, Mistakes, StudyError, did_you_mean
+from wetcloth.errors import ConfigError, Mistakes, StudyError, check_choice, did_you_mean
 from wetcloth.scene import PARAMETERS, RESERVED_KEYS, read_scene_file, read_toml, resolve_scene_path
 
 DEFAULT_SAMPLE_RATE = 10.0  # Hz
@@ -95,42 +96,17 @@ def _check_name(name) -> str:
     return name
 
 
-def _check_metrics(metrics) -> tuple[str, ...]:
-    if not isinstance(metrics, (list, tuple)) or not metrics:
-        raise StudyError("metrics", f"give a list of at least one of: {', '.join(METRICS)}; got {metrics!r}")
-    mistakes = Mistakes()
-    for m in metrics:
-        if m not in METRICS:
-            mistakes.add(StudyError("metrics", f"{m!r}: " + did_you_mean(str(m), METRICS, "metric")))
-    mistakes.raise_if_any()
-    if len(set(metrics)) != len(metrics):
-        raise StudyError("metrics", f"repeated metric in {list(metrics)}")
-    return tuple(metrics)
-
-
-def _check_engine(engine) -> str:
-    if engine not in ENGINES:
-        raise StudyError("engine", f"{engine!r} is not allowed; allowed: {', '.join(ENGINES)}")
-    return engine
-
-
-def _check_sampling(sampling) -> str:
-    if sampling not in SAMPLINGS:
-        raise StudyError("sampling", f"{sampling!r} is not allowed; allowed: {', '.join(SAMPLINGS)}")
-    return sampling
-
-
 #: The checks of a study's own settings: field -> check(value) returning the value to keep.
 _SETTING_CHECKS = {
     "name": _check_name,
     "duration": lambda v: _positive("duration", v, most=run_settings.SETTINGS["duration"].hi),
     "sample_rate": lambda v: _positive("sample_rate", v, most=run_settings.SETTINGS["fps"].hi),
     "sink_depth": lambda v: _positive("sink_depth", v, allow_zero=True),
-    "metrics": _check_metrics,
-    "engine": _check_engine,
+    "metrics": functools.partial(check_metric_names, "metrics", at_least_one=True),
+    "engine": functools.partial(check_choice, StudyError, "engine", allowed=ENGINES),
     "seed": lambda v: _whole("seed", v),
     "samples": lambda v: _whole("samples", v),
-    "sampling": _check_sampling,
+    "sampling": functools.partial(check_choice, StudyError, "sampling", allowed=SAMPLINGS),
 }
 
 
