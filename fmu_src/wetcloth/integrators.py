@@ -87,7 +87,7 @@ class Integrator:
         allowed = sc.tolerance * size  # m of local position error per step
         newton = NEWTON_FRACTION * allowed if allowed > 0 else FIXED_STEP_NEWTON_TOLERANCE * size
         return stepping.Control(
-            integrator=self.code, tolerance=sc.tolerance, allowed=allowed, max_step=sc.max_step, newton_tolerance=newton,
+            scheme=stepping.SCHEMES[self.code], integrator=self.code, tolerance=sc.tolerance, allowed=allowed, max_step=sc.max_step, newton_tolerance=newton,
             omega_squared=self.omega_squared, buoyancy_omega_squared=sc.water_density * GRAVITY / sc.areal_density,
             damping_rate=self.damping_rate, spring_limit=self.spring_limit, drag_rate_offset=drag_offset,
             drag_rate_slope=drag_slope, smallest_step=SMALLEST_STEP, growth=STEP_GROWTH, shrink=STEP_SHRINK,

@@ -1,8 +1,10 @@
 """Numba kernels over flat (3, n) arrays, one module per force family, and the compiled step loop.
 
-Every kernel is compiled by ``kernel``, with one set of options, stated here once:
+Every kernel is compiled by ``kernel``, on its own (its callers call it, they do not copy it: see
+``compilation``), with one set of options, stated here once:
 
-* ``cache=True``: compiled code is kept beside the sources, so a new process starts in a second.
+* ``cache=True``: compiled code is kept beside the sources, so a new process starts in a second;
+  it is used only while every kernel source is as it was compiled (``compilation.KernelCache``).
 * ``nogil=True``: a process that runs other Python threads beside the simulation (a Dask worker's
   event loop, a GUI) would otherwise take the GIL back and forth with it; in a Dask worker that
   cost 20 % of a run (docs/benchmarks.md, Batch studies).
@@ -16,14 +18,14 @@ Every kernel is compiled by ``kernel``, with one set of options, stated here onc
   without it every division carries a zero check that keeps its loop from vectorising.
 """
 
-from numba import njit
+from wetcloth.kernels.compilation import compile_kernel
 
 FASTMATH = {"nsz"}
 OPTIONS = dict(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
 
 
 def kernel(function=None, **extra):
-    """``@kernel`` or ``@kernel(inline="always")``: ``numba.njit`` with the options above."""
+    """``@kernel`` or ``@kernel(inline="always")``: a numba-compiled function with the options above."""
     if function is None:
-        return njit(**OPTIONS, **extra)
-    return njit(**OPTIONS)(function)
+        return lambda f: compile_kernel(f, dict(OPTIONS, **extra))
+    return compile_kernel(function, OPTIONS)

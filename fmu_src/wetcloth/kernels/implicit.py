@@ -15,7 +15,7 @@ import numpy as np
 from wetcloth.kernels import kernel
 from wetcloth.kernels import plane as plane_preconditioner
 from wetcloth.kernels.assembly import forces_and_blocks
-from wetcloth.kernels.integration import _dot, _system_matvec, invert_blocks, solve_pcg
+from wetcloth.kernels.integration import _dot, copy, _system_matvec, invert_blocks, solve_pcg
 
 #: Scratch of the implicit steps, each (3, n) unless noted: ``mass`` (n) kg; ``rhs``, ``dv``,
 #: ``r``, ``z``, ``p``, ``ap`` of the linear solves; ``hat_pos``, ``hat_vel`` the BDF2 history
@@ -92,9 +92,9 @@ def _plane_pcg(cloth, work, solver, plane, b, x, rtol, floor, max_iterations):
     it got there)."""
     mass, r, z, p, ap = solver.mass, solver.r, solver.z, solver.p, solver.ap
     x[...] = 0.0
-    r[...] = b
+    copy(b, r)
     plane_preconditioner.apply(plane, cloth.free, r, z)
-    p[...] = z
+    copy(z, p)
     rz = _dot(r, z)
     accuracy = max(rtol * _largest(z), floor)
     iterations = 0
@@ -105,15 +105,18 @@ def _plane_pcg(cloth, work, solver, plane, b, x, rtol, floor, max_iterations):
         if not p_ap > 0.0:
             break
         alpha = rz / p_ap
-        x += alpha * p
-        r -= alpha * ap
+        for c in range(3):
+            for i in range(x.shape[1]):
+                x[c, i] += alpha * p[c, i]
+                r[c, i] -= alpha * ap[c, i]
         iterations += 1
         plane_preconditioner.apply(plane, cloth.free, r, z)
         rz_new = _dot(r, z)
         beta = rz_new / rz
         rz = rz_new
-        p *= beta
-        p += z
+        for c in range(3):
+            for i in range(x.shape[1]):
+                p[c, i] = z[c, i] + beta * p[c, i]
     return iterations, _largest(z) <= accuracy
 
 

@@ -48,6 +48,24 @@ def largest_deviation(pos, anchor):
 
 
 @kernel
+def copy(source, target):
+    """target[...] = source, for two C-contiguous arrays of the same shape (1-d or 2-d)."""
+    a = source.reshape(-1)
+    b = target.reshape(-1)
+    for k in range(a.shape[0]):
+        b[k] = a[k]
+
+
+@kernel
+def total(a):
+    """Sum of a 1-d array."""
+    s = 0.0
+    for k in range(a.shape[0]):
+        s += a[k]
+    return s
+
+
+@kernel
 def _system_matvec(offsets, direction, along, across, mass, blocks, free, p, out, buf):
     """out = A p with A = M + per-particle blocks + spring blocks, rows of pinned particles zeroed."""
     n = p.shape[1]

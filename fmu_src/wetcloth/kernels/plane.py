@@ -28,6 +28,7 @@ import math
 import numpy as np
 
 from wetcloth.kernels import kernel
+from wetcloth.kernels.integration import copy
 from wetcloth.kernels.lapack import band_arguments, band_factor, band_solve
 
 #: Share of each stretch-spring family's stiffness in the t1 and t2 components.  The bending springs
@@ -109,7 +110,7 @@ def refresh(plane, offsets, mass, scale):
             return -1
     ref[0] = scale
     ref[1] = 1.0
-    plane.reference_mass[...] = mass
+    copy(mass, plane.reference_mass)
     return 1
 
 

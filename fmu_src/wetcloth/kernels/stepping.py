@@ -12,15 +12,23 @@ from __future__ import annotations
 import math
 from collections import namedtuple
 
-from wetcloth.kernels import kernel
+from numba.extending import overload
+
+from wetcloth.kernels import OPTIONS, kernel
 from wetcloth.kernels.absorption import dry, keep_momentum, uptake, uptake_timing_error, wick
 from wetcloth.kernels.assembly import forces
 from wetcloth.kernels.floor import floor_contact
 from wetcloth.kernels.implicit import bdf2_step, implicit_euler_step
-from wetcloth.kernels.integration import euler_update, largest_deviation, speed_and_finiteness
+from wetcloth.kernels.integration import copy, euler_update, largest_deviation, speed_and_finiteness, total
 
 #: Integrator codes (``Control.integrator``).
 EXPLICIT_EULER, SYMPLECTIC_EULER, IMPLICIT_EULER, BDF2 = range(4)
+#: ``Control.scheme``: an empty marker whose type (not value) selects the compiled step (``take_step``).
+ExplicitSteps = namedtuple("ExplicitSteps", "")
+ImplicitEulerSteps = namedtuple("ImplicitEulerSteps", "")
+Bdf2Steps = namedtuple("Bdf2Steps", "")
+SCHEMES = {EXPLICIT_EULER: ExplicitSteps(), SYMPLECTIC_EULER: ExplicitSteps(), IMPLICIT_EULER: ImplicitEulerSteps(),
+           BDF2: Bdf2Steps()}
 
 #: Slots of ``clock`` (float64): simulated time (s); the controller's next step (s); the last
 #: accepted step (s; 0 when there is no history for BDF2 to use); the fastest particle's speed
@@ -33,12 +41,12 @@ CLOCK_SIZE = 11
 #: What ``advance`` returns.
 DONE, BLOWN_UP, PAUSED = 0, 1, 2
 
-#: Integrator and controller settings: ``tolerance`` (-), ``allowed`` local position error per step
+#: Integrator and controller settings: ``scheme`` (see SCHEMES), ``tolerance`` (-), ``allowed`` local position error per step
 #: (m, 0 = fixed steps of ``max_step`` s); ``newton_tolerance`` (m); the explicit schemes' stability data:
 #: ``omega_squared`` (1/s2, Gershgorin bound of the springs), ``buoyancy_omega_squared`` (1/s2),
 #: ``damping_rate`` (1/s), ``spring_limit`` (s, explicit Euler), drag rate ``drag_rate_offset +
 #: drag_rate_slope * speed`` (1/s); the sleep rule: ``sleep_distance`` (m) for ``sleep_after`` s.
-Control = namedtuple("Control", "integrator tolerance allowed max_step newton_tolerance omega_squared buoyancy_omega_squared "
+Control = namedtuple("Control", "scheme integrator tolerance allowed max_step newton_tolerance omega_squared buoyancy_omega_squared "
                                 "damping_rate spring_limit drag_rate_offset drag_rate_slope smallest_step growth "
                                 "shrink blow_up_speed sleep_distance sleep_after")
 #: State buffers: current and trial (pos, vel (3, n), water (n)), BDF2 history (the state before the
@@ -81,28 +89,32 @@ def _absorbing(phys):
 
 
 @kernel
-def _take_step(cloth, phys, control, work, solver, plane, buf, clock, h):
-    """The integrator's step of ``h`` s from the current state into the trial buffers; the particle
-    masses it used are left in ``solver.mass``.
-    Returns (local position error estimate m, order of that estimate, converged)."""
-    code = control.integrator
-    if code != BDF2:
-        for i in range(buf.water.shape[0]):
-            solver.mass[i] = cloth.dry_mass[i] + buf.water[i]
-    if code == EXPLICIT_EULER or code == SYMPLECTIC_EULER:
-        forces(cloth, phys, work, buf.pos, buf.vel, buf.water)
-        largest = euler_update(buf.pos, buf.vel, work.force, cloth.dry_mass, buf.water, cloth.free, h,
-                               code == SYMPLECTIC_EULER, buf.trial_pos, buf.trial_vel)
-        return 0.5 * h * largest, 1, True  # |h (v+ - v)| / 2: first- against second-order position update
-    if code == IMPLICIT_EULER:
-        largest = implicit_euler_step(cloth, phys, work, solver, buf.pos, buf.vel, buf.water, h, buf.trial_pos,
-                                      buf.trial_vel)
-        return 0.5 * h * largest, 1, True
+def _euler_step(cloth, phys, control, work, solver, plane, buf, clock, h):
+    """Explicit or symplectic Euler (``control.integrator``); see ``take_step``."""
+    for i in range(buf.water.shape[0]):
+        solver.mass[i] = cloth.dry_mass[i] + buf.water[i]
+    forces(cloth, phys, work, buf.pos, buf.vel, buf.water)
+    largest = euler_update(buf.pos, buf.vel, work.force, cloth.dry_mass, buf.water, cloth.free, h,
+                           control.integrator == SYMPLECTIC_EULER, buf.trial_pos, buf.trial_vel)
+    return 0.5 * h * largest, 1, True  # |h (v+ - v)| / 2: first- against second-order position update
+
+
+@kernel
+def _implicit_euler_step(cloth, phys, control, work, solver, plane, buf, clock, h):
+    """Backward Euler; see ``take_step``."""
+    largest = implicit_euler_step(cloth, phys, work, solver, buf.pos, buf.vel, buf.water, h, buf.trial_pos,
+                                  buf.trial_vel)
+    return 0.5 * h * largest, 1, True
+
+
+@kernel
+def _bdf2_step(cloth, phys, control, work, solver, plane, buf, clock, h):
+    """BDF2; see ``take_step``."""
     h_prev = clock[LAST_STEP]
     # BDF2 takes the forces and inertia at the end of the step, so it needs the water the cloth will
     # hold then: the uptake along the extrapolated path (the exact uptake follows the step).
     step_water = buf.trial_water
-    step_water[...] = buf.water
+    copy(buf.water, step_water)
     if _absorbing(phys):
         predicted, predicted_speed = solver.predicted[0], solver.predicted[1]  # scratch: z and v_z
         w = h / h_prev if h_prev > 0.0 else 0.0
@@ -118,6 +130,25 @@ def _take_step(cloth, phys, control, work, solver, plane, buf, clock, h):
     return error, 2 if h_prev > 0.0 else 1, converged
 
 
+#: The step of each family of schemes, by the type of ``Control.scheme``.
+_STEPS = {ExplicitSteps: _euler_step, ImplicitEulerSteps: _implicit_euler_step, Bdf2Steps: _bdf2_step}
+
+
+def take_step(scheme, cloth, phys, control, work, solver, plane, buf, clock, h):
+    """The integrator's step of ``h`` s from the current state into the trial buffers; the particle
+    masses it used are left in ``solver.mass``.  Returns (local position error estimate m, order of
+    that estimate, converged).  Compiled callers only: the step is chosen by the type of ``scheme``
+    when the loop is compiled, so only the schemes a run uses are ever compiled."""
+    raise NotImplementedError("take_step is called from compiled code only")
+
+
+@overload(take_step, jit_options=OPTIONS)
+def _take_step_of(scheme, cloth, phys, control, work, solver, plane, buf, clock, h):
+    step = _STEPS[scheme.instance_class]
+    return lambda scheme, cloth, phys, control, work, solver, plane, buf, clock, h: step(
+        cloth, phys, control, work, solver, plane, buf, clock, h)
+
+
 @kernel
 def _exchange_water(cloth, phys, work, buf, mass_used, h):
     """Floor contact, then uptake where the cloth touches water, drying in air, wicking between
@@ -125,7 +156,7 @@ def _exchange_water(cloth, phys, work, buf, mass_used, h):
     each particle's mass: the momentum it gave is kept as the uptake changes that mass.  Returns
     whether any particle's water changed."""
     floor_contact(phys.floor_z, phys.floor_friction, buf.trial_pos, buf.trial_vel)
-    buf.trial_water[...] = buf.water
+    copy(buf.water, buf.trial_water)
     absorbing = _absorbing(phys)
     if not (absorbing or phys.drying_rate > 0.0 or phys.wicking_rate > 0.0):
         return False
@@ -143,7 +174,8 @@ def _exchange_water(cloth, phys, work, buf, mass_used, h):
         moved = wick(cloth.wick_offsets, cloth.wick_conductance, cloth.capacity, cloth.dry_mass, substeps, h,
                      buf.trial_water, buf.trial_vel, work.wick_buffer)
         for c in range(3):
-            buf.trial_vel[c] *= cloth.free
+            for i in range(cloth.free.shape[0]):
+                buf.trial_vel[c, i] *= cloth.free[i]
         exchanged += moved > 0.0
     return exchanged > 0
 
@@ -160,7 +192,7 @@ def _maybe_sleep(control, phys, buf, clock, h, exchanging):
     if clock[UNCHECKED_TIME] < control.sleep_after / 20:
         return
     if clock[EXCHANGING] != 0.0 or largest_deviation(buf.pos, buf.anchor) > control.sleep_distance:
-        buf.anchor[...] = buf.pos
+        copy(buf.pos, buf.anchor)
         clock[CALM_TIME] = 0.0
     else:
         clock[CALM_TIME] += clock[UNCHECKED_TIME]
@@ -187,7 +219,7 @@ def _step(cloth, phys, control, work, solver, plane, buf, clock, remaining):
         # Equal steps to the end of the interval rather than a last sliver (and no extra step for an
         # interval a rounding error longer than a whole number of planned steps).
         h = remaining / max(1.0, math.ceil(remaining / planned - STEP_COUNT_SLACK))
-        error, order, converged = _take_step(cloth, phys, control, work, solver, plane, buf, clock, h)
+        error, order, converged = take_step(control.scheme, cloth, phys, control, work, solver, plane, buf, clock, h)
         if not converged and h > control.smallest_step:
             clock[NEXT_STEP] = max(control.smallest_step, 0.25 * h)
             clock[REJECTED] += 1
@@ -202,7 +234,7 @@ def _step(cloth, phys, control, work, solver, plane, buf, clock, remaining):
             water_error = uptake_timing_error(buf.pos[2], buf.trial_pos[2], buf.vel[2], buf.trial_vel[2],
                                               _surface(phys), cloth.dry_mass, phys.absorption_capacity,
                                               phys.absorption_rate, h, buf.water)
-            water_ratio = water_error / (control.tolerance * (cloth.dry_mass.sum() + buf.water.sum()))
+            water_ratio = water_error / (control.tolerance * (total(cloth.dry_mass) + total(buf.water)))
             if water_ratio > ratio:
                 ratio, order = water_ratio, 1
         finite = math.isfinite(ratio)
@@ -220,12 +252,12 @@ def _step(cloth, phys, control, work, solver, plane, buf, clock, remaining):
         clock[FAILED_STEP] = h
         return BLOWN_UP
     clock[SPEED] = speed
-    buf.prev_pos[...] = buf.pos
-    buf.prev_vel[...] = buf.vel
-    buf.prev_water[...] = buf.water
-    buf.pos[...] = buf.trial_pos
-    buf.vel[...] = buf.trial_vel
-    buf.water[...] = buf.trial_water
+    copy(buf.pos, buf.prev_pos)
+    copy(buf.vel, buf.prev_vel)
+    copy(buf.water, buf.prev_water)
+    copy(buf.trial_pos, buf.pos)
+    copy(buf.trial_vel, buf.vel)
+    copy(buf.trial_water, buf.water)
     clock[LAST_STEP] = h
     clock[TIME] += h
     clock[STEPS] += 1

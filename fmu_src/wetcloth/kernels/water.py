@@ -140,6 +140,15 @@ def _drag_row(k_count, a, b, c, density, c_normal, c_tangential, c_linear, curre
             yz[k] = diff * nyy * nzz
 
 
+@kernel(inline="always")
+def _dry(s, start, stop):
+    """Whether no particle from ``start`` to ``stop`` touches water."""
+    for i in range(start, stop):
+        if s[i] > 0.0:
+            return False
+    return True
+
+
 @kernel
 def _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells,
                blocks_wanted, skip_dry_rows):
@@ -150,7 +159,7 @@ def _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, c
     w = nx - 1
     for r in range(ny - 1):
         base = r * nx
-        if skip_dry_rows and s[base:base + 2 * nx].max() == 0.0:
+        if skip_dry_rows and _dry(s, base, base + 2 * nx):
             cells[:, :, pad + base:pad + base + w] = 0.0
             continue
         a = _corner(pos, vel, s, base, w)
