@@ -24,6 +24,8 @@ unless the host configured logging), also while the master's FMI logging is off.
 
 from __future__ import annotations
 
+import atexit
+import ctypes
 import hashlib
 import importlib
 import importlib.util
@@ -42,6 +44,7 @@ MANIFEST_NAME = "wetcloth_fmu_manifest.json"
 CACHE_VARIABLE = "WETCLOTH_FMU_CACHE"
 
 _LOADED: dict[str, object] = {}  # resources folder -> the wetcloth module it runs
+_RELEASED: dict[str, ctypes.CDLL] = {}  # binaries whose finalizePythonInterpreter runs at Python's exit
 
 
 def digest(path: Path) -> str:
@@ -135,9 +138,31 @@ def missing_dependency(exc: ModuleNotFoundError, requires: list[str]) -> ImportE
     return ImportError(message, name=exc.name)
 
 
+def release_at_exit(binaries: Path) -> None:
+    """Have Python's exit call ``finalizePythonInterpreter`` of each pythonfmu binary under
+    ``binaries`` that this process has loaded, before the binary's own exit handlers run (they
+    release its interpreter helper twice and corrupt the heap: ``wetcloth.fmu.guard``, item 3)."""
+    if not sys.orig_argv or os.name != "posix":  # the binary started this interpreter, or Windows (DllMain)
+        return
+    for path in sorted(binaries.glob("*/*")):
+        key = str(path.resolve())
+        if key in _RELEASED:
+            continue
+        try:  # RTLD_NOLOAD: only a library this process has loaded
+            library = ctypes.CDLL(key, mode=os.RTLD_NOLOAD | os.RTLD_LAZY)
+            finalize = library.finalizePythonInterpreter
+        except (OSError, AttributeError):
+            continue
+        finalize.argtypes, finalize.restype = [], None
+        _RELEASED[key] = library
+        atexit.register(finalize)
+
+
 def load_wetcloth(resources: Path):
-    """The wetcloth module this FMU runs (see the module docstring), imported if needed."""
+    """The wetcloth module this FMU runs (see the module docstring), imported if needed.  First
+    of all, the unit's binary is made to exit safely (``release_at_exit``), also when this fails."""
     resources = resources.resolve()
+    release_at_exit(resources.parent / "binaries")
     if str(resources) in _LOADED:
         return _LOADED[str(resources)]
     manifest_path = resources / MANIFEST_NAME

@@ -19,10 +19,11 @@
 3. At process exit both binaries release their interpreter helper (``PyState``) twice: its static
    ``shared_ptr`` is destroyed by the exit handlers, then the library's destructor assigns to the
    destroyed pointer, which corrupted the heap ("corrupted double-linked list", exit status 134)
-   in about one exit in two.  ``release_at_exit`` has Python's own exit call the binary's
-   ``finalizePythonInterpreter`` first, while the pointer is alive; the later calls then find it
-   empty.  Only in a Python host: where the binary started the interpreter itself, its exit path
-   must run as written.
+   in about one exit in two.  ``release_at_exit`` (in ``wetcloth.fmu.bootstrap``, so that it is in
+   place before anything of the unit can fail, even a refused instantiation) has Python's own
+   exit call the binary's ``finalizePythonInterpreter`` first, while the pointer is alive; the
+   later calls then find it empty.  Only in a Python host: where the binary started the
+   interpreter itself, its exit path must run as written.
 
 The references given back in 1 and 2 are real reference counts (``Py_IncRef``), not objects held in
 a list: the binary has already dropped them, and a list released at interpreter shutdown would
@@ -31,14 +32,10 @@ drop them a second time.
 
 from __future__ import annotations
 
-import atexit
 import ctypes
 import functools
 import inspect
-import os
-import sys
 import weakref
-from pathlib import Path
 
 _incref = ctypes.pythonapi.Py_IncRef
 _incref.argtypes = [ctypes.py_object]
@@ -46,8 +43,6 @@ _incref.restype = None
 
 #: Every slave instance alive in this process (for errors of the class-level decoders).
 _LIVE: weakref.WeakSet = weakref.WeakSet()
-#: Binaries whose ``finalizePythonInterpreter`` runs at Python's exit, by path.
-_RELEASED: dict[str, ctypes.CDLL] = {}
 
 
 def _give_back(instances) -> None:
@@ -63,28 +58,8 @@ def hold_script_namespace(namespace: dict) -> None:
 
 
 def register(instance) -> None:
-    """Note a new slave instance (called from its ``__init__``) and arrange for its binary's exit (see 3.)."""
+    """Note a new slave instance (called from its ``__init__``)."""
     _LIVE.add(instance)
-    if instance.resources:
-        release_at_exit(Path(instance.resources).parent / "binaries", instance.modelName)
-
-
-def release_at_exit(binaries: Path, model_identifier: str) -> None:
-    """Have Python's exit call ``finalizePythonInterpreter`` of the loaded binary in ``binaries`` (see 3.)."""
-    if not sys.orig_argv or os.name != "posix":  # the binary started this interpreter, or Windows (DllMain)
-        return
-    for path in binaries.glob(f"*/{model_identifier}.*"):
-        key = str(path.resolve())
-        if key in _RELEASED:
-            continue
-        try:  # RTLD_NOLOAD: only the copy this process has loaded
-            library = ctypes.CDLL(key, mode=os.RTLD_NOLOAD | os.RTLD_LAZY)
-            finalize = library.finalizePythonInterpreter
-        except (OSError, AttributeError):
-            continue
-        finalize.argtypes, finalize.restype = [], None
-        _RELEASED[key] = library
-        atexit.register(finalize)
 
 
 def guard(cls, methods: tuple[str, ...], class_methods: tuple[str, ...]):
