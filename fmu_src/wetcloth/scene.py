@@ -36,6 +36,7 @@ def _param(default, unit: str, doc: str, lo=None, hi=None, lo_open=False, choice
 
 INTEGRATORS = ("explicit_euler", "symplectic_euler", "implicit_euler", "bdf2")
 EDGES = ("none", "x_min", "x_max", "y_min", "y_max")
+SWITCH = ("on", "off")
 
 
 @dataclass(frozen=True)
@@ -95,6 +96,11 @@ class Scene:
     initial_tilt: float = _param(10.0, "deg", "rotation about the x axis at t = 0; 90 is vertical", -90.0, 90.0)
     floor_level: float = _param(-1.0, "m", "z of the tank floor", -1e4, 1e4)
     floor_friction: float = _param(0.5, "-", "Coulomb friction coefficient of the floor", 0.0, 10.0)
+    # --- self-collision (docs/model.md section 6.2)
+    self_collision: str = _param(
+        "on", "-", "'on': the cloth never passes through itself and keeps its layers a thickness apart; "
+        "'off' skips it (a cloth that cannot fold saves its small cost)", choices=SWITCH)
+    self_friction: float = _param(0.4, "-", "Coulomb friction coefficient between layers of the cloth", 0.0, 10.0)
     pinned_edge: str = _param("none", "-", "edge held fixed in space: none, x_min, x_max, y_min, y_max", choices=EDGES)
     # --- time integration
     integrator: str = _param(

@@ -9,6 +9,7 @@ import numpy as np
 from wetcloth.advice import blow_up_advice
 from wetcloth.errors import BlowUpError, ParameterError
 from wetcloth.integrators import make_integrator
+from wetcloth.kernels import self_contact
 from wetcloth.kernels.implicit import CG_ITERATIONS, FACTORISATIONS, NEWTON_ITERATIONS, UNCONVERGED, make_solver
 from wetcloth.kernels.integration import speed_and_finiteness
 from wetcloth.kernels.plane import make_plane, refresh
@@ -70,13 +71,15 @@ class Simulation:
         self._solver = make_solver(topo.n)
         self._plane = make_plane(topo.nx, topo.ny, topo.spring_offset, topo.spring_family_names,
                                  topo.spring_stiffness)
+        self._contact = self_contact.make_contact(topo, scene.self_collision == "on", scene.self_friction)
         self.skip_idle_work = skip_idle_work
 
     # ----------------------------------------------------------------- snapshots
     def snapshot(self) -> dict:
         """Everything that evolves, as a flat dict of arrays and numbers plus ``"scene"``: the state,
-        the BDF2 history, the step control, sleep, and what the implicit solver's preconditioner was
-        last factored for (so that a restored run factors the same matrices and repeats bit for bit)."""
+        the BDF2 history, the step control, sleep, what the implicit solver's preconditioner was
+        last factored for and what self-collision's candidate list was built from (so that a restored
+        run factors the same matrices, finds the same candidates and repeats bit for bit)."""
         buf = self._buffers
         plane = self._plane
         values = {"scene": self.scene, "state": self.state.copy()}
@@ -87,6 +90,7 @@ class Simulation:
         values["preconditioner_factored"] = bool(plane.reference[1])
         for key, slot, kind in _SNAPSHOT_CLOCK:
             values[key] = kind(self._clock[slot])
+        values.update(self_contact.snapshot(self._contact))
         return values
 
     def restore(self, snapshot: dict) -> None:
@@ -110,6 +114,7 @@ class Simulation:
         if snapshot["preconditioner_factored"]:
             refresh(plane, self.model.topology.spring_offset, snapshot["preconditioner_mass"],
                     snapshot["preconditioner_scale"])
+        self_contact.restore(self._contact, snapshot, self.scene.thickness)
         self._set_scene(snapshot["scene"])
 
     def _check_snapshot(self, snapshot: dict) -> None:
@@ -189,6 +194,7 @@ class Simulation:
         buf.water[...] = state.water
         self._clock[TIME] = state.time
         self._clock[LAST_STEP] = 0.0  # a state from elsewhere: no history
+        self_contact.invalidate(self._contact)  # nor a candidate list
 
     @property
     def steps(self) -> int:
@@ -212,6 +218,16 @@ class Simulation:
         return {"newton_iterations": int(c[NEWTON_ITERATIONS]), "cg_iterations": int(c[CG_ITERATIONS]),
                 "factorisations": int(c[FACTORISATIONS]), "unconverged_solves": int(c[UNCONVERGED])}
 
+    @property
+    def contact_counts(self) -> dict[str, int]:
+        """Work of self-collision so far: candidate lists built, steps that had candidates, passes
+        over them, pairs pushed apart, rounds of impact zones, and steps whose motion was undone (a
+        last resort); with the current list's point-triangle and edge-edge candidates."""
+        counts = dict(zip(("rebuilds", "busy_steps", "passes", "responses", "zone_rounds", "freezes"),
+                          (int(c) for c in self._contact.counters)))
+        counts["point_triangle_candidates"], counts["edge_edge_candidates"] = self_contact.candidate_counts(self._contact)
+        return counts
+
     def advance(self, duration: float) -> None:
         """Simulate ``duration`` seconds (>= 0) more."""
         if not (duration >= 0.0 and math.isfinite(duration)):
@@ -224,7 +240,7 @@ class Simulation:
         status = PAUSED
         while status == PAUSED:
             status = advance(model.cloth, model.physics, self._control, model.work, self._solver, self._plane,
-                             self._buffers, self._clock, target, budget)
+                             self._contact, self._buffers, self._clock, target, budget)
         if status == BLOWN_UP:
             self._blown_up(float(self._clock[FAILED_STEP]))
 

@@ -1,10 +1,10 @@
 """The step loop: one compiled call advances the cloth from one output time to the next.
 
-Each accepted step: the integrator's step (with step-size control), the floor, the water's
-exchanges over the step (uptake, drying, wicking), the blow-up guard, the multistep history, and
-the check for sleep.  Everything that evolves lives in arrays the caller owns (the state, the
-BDF2 history, the sleep anchor and ``clock``), so a snapshot of those arrays is a snapshot of the
-run and restoring it repeats the run bit for bit.
+Each accepted step: the integrator's step (with step-size control), the floor, self-collision, the
+water's exchanges over the step (uptake, drying, wicking), the blow-up guard, the multistep history,
+and the check for sleep.  Everything that evolves lives in arrays the caller owns (the state, the
+BDF2 history, the sleep anchor, ``clock`` and the self-collision stage's ``contact``), so a snapshot
+of those arrays is a snapshot of the run and restoring it repeats the run bit for bit.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from wetcloth.kernels.assembly import forces
 from wetcloth.kernels.floor import floor_contact
 from wetcloth.kernels.implicit import bdf2_step, implicit_euler_step
 from wetcloth.kernels.integration import copy, euler_update, largest_deviation, speed_and_finiteness, total
+from wetcloth.kernels.self_contact import resolve as self_collision
 
 #: Integrator codes (``Control.integrator``).
 EXPLICIT_EULER, SYMPLECTIC_EULER, IMPLICIT_EULER, BDF2 = range(4)
@@ -151,11 +152,10 @@ def _take_step_of(scheme, cloth, phys, control, work, solver, plane, buf, clock,
 
 @kernel
 def _exchange_water(cloth, phys, work, buf, mass_used, h):
-    """Floor contact, then uptake where the cloth touches water, drying in air, wicking between
-    neighbours; each skipped when its rate is zero.  ``mass_used`` (kg) is what the step took as
-    each particle's mass: the momentum it gave is kept as the uptake changes that mass.  Returns
-    whether any particle's water changed."""
-    floor_contact(phys.floor_z, phys.floor_friction, buf.trial_pos, buf.trial_vel)
+    """Uptake where the cloth touches water, drying in air, wicking between neighbours; each skipped
+    when its rate is zero.  ``mass_used`` (kg) is what the step took as each particle's mass: the
+    momentum it gave is kept as the uptake changes that mass.  Returns whether any particle's water
+    changed."""
     copy(buf.water, buf.trial_water)
     absorbing = _absorbing(phys)
     if not (absorbing or phys.drying_rate > 0.0 or phys.wicking_rate > 0.0):
@@ -206,7 +206,7 @@ def _maybe_sleep(control, phys, buf, clock, h, exchanging):
 
 
 @kernel
-def _step(cloth, phys, control, work, solver, plane, buf, clock, remaining):
+def _step(cloth, phys, control, work, solver, plane, contact, buf, clock, remaining):
     """Take one accepted step of at most ``remaining`` s.  Returns DONE or BLOWN_UP."""
     adaptive = control.allowed > 0.0
     while True:
@@ -246,6 +246,8 @@ def _step(cloth, phys, control, work, solver, plane, buf, clock, remaining):
             break
         clock[NEXT_STEP] = max(control.smallest_step, h * max(control.shrink, factor))
         clock[REJECTED] += 1
+    floor_contact(phys.floor_z, phys.floor_friction, buf.trial_pos, buf.trial_vel)
+    self_collision(contact, phys.thickness, phys.floor_z, solver.mass, cloth.free, buf.pos, buf.trial_pos, buf.trial_vel, h)
     exchanging = _exchange_water(cloth, phys, work, buf, solver.mass, h)
     speed, finite = speed_and_finiteness(buf.trial_pos, buf.trial_vel, buf.trial_water)
     if not (finite and speed < control.blow_up_speed):
@@ -266,7 +268,7 @@ def _step(cloth, phys, control, work, solver, plane, buf, clock, remaining):
 
 
 @kernel
-def advance(cloth, phys, control, work, solver, plane, buf, clock, target, max_steps):
+def advance(cloth, phys, control, work, solver, plane, contact, buf, clock, target, max_steps):
     """Step until ``clock[TIME]`` reaches ``target`` (s) or the cloth falls asleep (time then jumps to
     ``target``).  Returns DONE; BLOWN_UP with the last good state kept; or PAUSED after
     ``max_steps`` steps short of the target (call again to go on)."""
@@ -274,7 +276,7 @@ def advance(cloth, phys, control, work, solver, plane, buf, clock, target, max_s
     while target - clock[TIME] > 1e-12 * max(1.0, abs(target)) and clock[SLEEPING] == 0.0:
         if taken >= max_steps:
             return PAUSED
-        if _step(cloth, phys, control, work, solver, plane, buf, clock, target - clock[TIME]) != DONE:
+        if _step(cloth, phys, control, work, solver, plane, contact, buf, clock, target - clock[TIME]) != DONE:
             return BLOWN_UP
         taken += 1
     clock[TIME] = max(clock[TIME], target)

@@ -1,0 +1,260 @@
+"""Candidate pairs from a spatial hash, kept while the cloth's motion allows.
+
+A candidate list holds every point-triangle and edge-edge pair whose elements were closer than
+``reach = thickness + 2 margin`` at the *reference* positions it was built from.  While every
+particle stays within ``margin`` of its reference position, up to a translation common to all
+(the distances between elements do not see a common translation), no pair left out can come
+within ``thickness``: the list stays valid, and a cloth that only falls or drifts never rebuilds
+it.  Pairs of elements that share a particle, or that lie closer than ``thickness`` in the flat
+rest sheet (they touch by construction), are never candidates.  A sheet without folds has no
+candidates at all, and the step then costs one pass over the positions (``covers``).
+
+The list depends on the reference positions and the margin alone, so a run restored from a
+snapshot of those two rebuilds exactly the same list.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from wetcloth.kernels import kernel
+from wetcloth.kernels.self_contact.geometry import EDGE_EDGE, POINT_TRIANGLE, distance
+
+#: Slots of ``Contact.counters`` (int64): candidate lists built; steps that had candidates; passes
+#: over them; pairs pushed apart; rounds of impact zones; steps undone as a last resort.
+REBUILDS, BUSY_STEPS, PASSES, RESPONSES, ZONE_ROUNDS, FREEZES = range(6)
+COUNTERS = 6
+
+_FIRST_CAPACITY = 256
+_HASH_X, _HASH_Y, _HASH_Z = 73856093, 19349663, 83492791  # Teschner et al. 2003
+
+
+@kernel(inline="always")
+def point(x, i):
+    return (x[0, i], x[1, i], x[2, i])
+
+
+@kernel
+def covers(contact, x):
+    """Whether the candidate list is valid for positions ``x`` (3, n): each within the margin of its
+    reference position, once the mid-range of all displacements is taken out."""
+    margin = contact.margin[0]
+    if margin <= 0.0:
+        return False
+    ref = contact.reference
+    n = x.shape[1]
+    shift = np.empty(3)
+    for c in range(3):
+        lo, hi = math.inf, -math.inf
+        for i in range(n):
+            d = x[c, i] - ref[c, i]
+            lo = min(lo, d)
+            hi = max(hi, d)
+        shift[c] = 0.5 * (lo + hi)
+    limit = margin * margin
+    for i in range(n):
+        dx = x[0, i] - ref[0, i] - shift[0]
+        dy = x[1, i] - ref[1, i] - shift[1]
+        dz = x[2, i] - ref[2, i] - shift[2]
+        if dx * dx + dy * dy + dz * dz > limit:
+            return False
+    return True
+
+
+@kernel
+def rebuild_for_step(contact, thickness, x0, x1):
+    """A new list valid for the whole step from ``x0`` to ``x1``: the reference is the midpoint, the
+    margin the larger of ``Contact.least_margin`` and twice the step's largest motion (common
+    translation taken out), which leaves room for the next steps.  Returns False (and builds nothing)
+    if the step is not finite."""
+    n = x0.shape[1]
+    shift = np.empty(3)
+    for c in range(3):
+        lo, hi = math.inf, -math.inf
+        for i in range(n):
+            d = x1[c, i] - x0[c, i]
+            if not math.isfinite(d):
+                return False  # a blown-up step: the guard after this stage refuses it
+            lo = min(lo, d)
+            hi = max(hi, d)
+        shift[c] = 0.5 * (lo + hi)
+    largest = 0.0
+    for i in range(n):
+        dx = x1[0, i] - x0[0, i] - shift[0]
+        dy = x1[1, i] - x0[1, i] - shift[1]
+        dz = x1[2, i] - x0[2, i] - shift[2]
+        largest = max(largest, dx * dx + dy * dy + dz * dz)
+    for c in range(3):
+        for i in range(n):
+            contact.reference[c, i] = 0.5 * (x0[c, i] + x1[c, i])
+    build(contact, thickness, max(contact.least_margin, 2.0 * math.sqrt(largest)))
+    return True
+
+
+@kernel
+def _boxes(x, elements, lo, hi):
+    for e in range(elements.shape[0]):
+        for c in range(3):
+            a = math.inf
+            b = -math.inf
+            for k in range(elements.shape[1]):
+                v = x[c, elements[e, k]]
+                a = min(a, v)
+                b = max(b, v)
+            lo[c, e] = a
+            hi[c, e] = b
+
+
+@kernel(inline="always")
+def _cell(v, cell):
+    return np.int64(math.floor(v / cell))
+
+
+@kernel(inline="always")
+def _bucket(ix, iy, iz, mask):
+    return ((ix * _HASH_X) ^ (iy * _HASH_Y) ^ (iz * _HASH_Z)) & mask
+
+
+@kernel
+def _hash(lo, hi, pad, cell, mask):
+    """Spatial hash of boxes ``[lo - pad, hi + pad]`` (3, m): each box is listed in the bucket of every
+    cell it overlaps.  Returns (start (buckets + 1), items): bucket b holds items[start[b]:start[b+1]]."""
+    count = np.zeros(mask + 2, dtype=np.int64)
+    for e in range(lo.shape[1]):
+        for ix in range(_cell(lo[0, e] - pad, cell), _cell(hi[0, e] + pad, cell) + 1):
+            for iy in range(_cell(lo[1, e] - pad, cell), _cell(hi[1, e] + pad, cell) + 1):
+                for iz in range(_cell(lo[2, e] - pad, cell), _cell(hi[2, e] + pad, cell) + 1):
+                    count[_bucket(ix, iy, iz, mask) + 1] += 1
+    for b in range(mask + 1):
+        count[b + 1] += count[b]
+    start = count.copy()
+    items = np.empty(count[mask + 1], dtype=np.int64)
+    for e in range(lo.shape[1]):
+        for ix in range(_cell(lo[0, e] - pad, cell), _cell(hi[0, e] + pad, cell) + 1):
+            for iy in range(_cell(lo[1, e] - pad, cell), _cell(hi[1, e] + pad, cell) + 1):
+                for iz in range(_cell(lo[2, e] - pad, cell), _cell(hi[2, e] + pad, cell) + 1):
+                    b = _bucket(ix, iy, iz, mask)
+                    items[count[b]] = e
+                    count[b] += 1
+    return start, items
+
+
+@kernel
+def _buckets_for(entries):
+    """Hash mask: a power of two at least twice the entries, minus one."""
+    size = 1
+    while size < 2 * entries:
+        size *= 2
+    return size - 1
+
+
+@kernel
+def _append(pairs, count, a, b):
+    """Append (a, b) to a (2, capacity) array, doubling it when full; returns the array."""
+    if count == pairs.shape[1]:
+        grown = np.empty((2, 2 * pairs.shape[1]), dtype=np.int64)
+        grown[:, :count] = pairs[:, :count]
+        pairs = grown
+    pairs[0, count] = a
+    pairs[1, count] = b
+    return pairs
+
+
+@kernel(inline="always")
+def _inside(p, lo, hi, e, pad):
+    return (lo[0, e] - pad <= p[0] <= hi[0, e] + pad and lo[1, e] - pad <= p[1] <= hi[1, e] + pad
+            and lo[2, e] - pad <= p[2] <= hi[2, e] + pad)
+
+
+@kernel(inline="always")
+def _boxes_overlap(lo, hi, a, lo2, hi2, b, pad):
+    return (lo[0, a] <= hi2[0, b] + pad and lo2[0, b] - pad <= hi[0, a] and lo[1, a] <= hi2[1, b] + pad
+            and lo2[1, b] - pad <= hi[1, a] and lo[2, a] <= hi2[2, b] + pad and lo2[2, b] - pad <= hi[2, a])
+
+
+@kernel
+def _point_triangle_pairs(x, rest, triangles, lo, hi, reach, thickness, cell):
+    n = x.shape[1]
+    mask = _buckets_for(8 * triangles.shape[0])
+    start, items = _hash(lo, hi, reach, cell, mask)
+    seen = np.full(triangles.shape[0], -1, dtype=np.int64)
+    pairs = np.empty((2, _FIRST_CAPACITY), dtype=np.int64)
+    count = 0
+    for p in range(n):
+        xp = point(x, p)
+        b = _bucket(_cell(xp[0], cell), _cell(xp[1], cell), _cell(xp[2], cell), mask)
+        for k in range(start[b], start[b + 1]):
+            t = items[k]
+            if seen[t] == p:
+                continue
+            seen[t] = p
+            i, j, l = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+            if p == i or p == j or p == l or not _inside(xp, lo, hi, t, reach):
+                continue
+            if distance(POINT_TRIANGLE, xp, point(x, i), point(x, j), point(x, l)) >= reach:
+                continue
+            if distance(POINT_TRIANGLE, point(rest, p), point(rest, i), point(rest, j), point(rest, l)) < thickness:
+                continue
+            pairs = _append(pairs, count, p, t)
+            count += 1
+    return pairs[:, :count].copy()
+
+
+@kernel
+def _edge_edge_pairs(x, rest, edges, lo, hi, reach, thickness, cell):
+    m = edges.shape[0]
+    mask = _buckets_for(8 * m)
+    start, items = _hash(lo, hi, reach, cell, mask)
+    seen = np.full(m, -1, dtype=np.int64)
+    pairs = np.empty((2, _FIRST_CAPACITY), dtype=np.int64)
+    count = 0
+    for a in range(m):
+        i, j = edges[a, 0], edges[a, 1]
+        for ix in range(_cell(lo[0, a], cell), _cell(hi[0, a], cell) + 1):
+            for iy in range(_cell(lo[1, a], cell), _cell(hi[1, a], cell) + 1):
+                for iz in range(_cell(lo[2, a], cell), _cell(hi[2, a], cell) + 1):
+                    b = _bucket(ix, iy, iz, mask)
+                    for k in range(start[b], start[b + 1]):
+                        e = items[k]
+                        if e <= a or seen[e] == a:
+                            continue
+                        seen[e] = a
+                        u, v = edges[e, 0], edges[e, 1]
+                        if i == u or i == v or j == u or j == v or not _boxes_overlap(lo, hi, a, lo, hi, e, reach):
+                            continue
+                        if distance(EDGE_EDGE, point(x, i), point(x, j), point(x, u), point(x, v)) >= reach:
+                            continue
+                        if distance(EDGE_EDGE, point(rest, i), point(rest, j), point(rest, u), point(rest, v)) < thickness:
+                            continue
+                        pairs = _append(pairs, count, a, e)
+                        count += 1
+    return pairs[:, :count].copy()
+
+
+@kernel
+def build(contact, thickness, margin):
+    """Build the candidate lists from ``contact.reference`` for ``margin`` (m) and keep the margin."""
+    x = contact.reference
+    reach = thickness + 2.0 * margin
+    triangles, edges = contact.triangles, contact.edges
+    tri_lo = np.empty((3, triangles.shape[0]))
+    tri_hi = np.empty((3, triangles.shape[0]))
+    edge_lo = np.empty((3, edges.shape[0]))
+    edge_hi = np.empty((3, edges.shape[0]))
+    _boxes(x, triangles, tri_lo, tri_hi)
+    _boxes(x, edges, edge_lo, edge_hi)
+    # Cells as large as a typical triangle's box grown by the reach: a box then spans a few cells.
+    # (Cells of at least an eighth of the largest box: no box spans more than a few thousand cells.)
+    total = 0.0
+    largest = 0.0
+    for t in range(triangles.shape[0]):
+        extent = max(tri_hi[0, t] - tri_lo[0, t], tri_hi[1, t] - tri_lo[1, t], tri_hi[2, t] - tri_lo[2, t])
+        total += extent
+        largest = max(largest, extent)
+    cell = max(total / max(1, triangles.shape[0]), 0.125 * largest) + 2.0 * reach
+    contact.pairs[0] = _point_triangle_pairs(x, contact.rest, triangles, tri_lo, tri_hi, reach, thickness, cell)
+    contact.pairs[1] = _edge_edge_pairs(x, contact.rest, edges, edge_lo, edge_hi, reach, thickness, cell)
+    contact.margin[0] = margin
+    contact.counters[REBUILDS] += 1
