@@ -358,26 +358,31 @@ def _impact_zones(contact, thickness, floor_z, mass, free, x0, x1, v1, h, start)
 def resolve(contact, thickness, floor_z, mass, free, x0, x1, v1, h):
     """The self-collision stage of one step of ``h`` s from ``x0`` to ``x1`` (both (3, n), m; ``x1`` and
     the end velocities ``v1`` (m/s) are changed in place); ``mass`` (kg) per particle, ``free`` 1 for
-    moving particles.  Nothing to do, and one pass over the positions, while no pair is near."""
+    moving particles.  Nothing to do, and one pass over the positions, while no pair is near.
+
+    Returns whether it changed ``x1`` or ``v1``: the step's motion then has a kink that a multistep
+    integrator must not extrapolate (the caller restarts its history, as after a wake-up)."""
     if not contact.enabled:
-        return
+        return False
+    treated = contact.counters[RESPONSES] + contact.counters[ZONE_ROUNDS]
     for _ in range(ATTEMPTS):
         if not covers(contact, x1):
             if not rebuild_for_step(contact, thickness, x0, x1):
-                return
+                return False
         candidates = contact.pairs[POINT_TRIANGLE].shape[1] + contact.pairs[EDGE_EDGE].shape[1]
         if candidates == 0:
-            return
+            return contact.counters[RESPONSES] + contact.counters[ZONE_ROUNDS] != treated
         contact.counters[BUSY_STEPS] += 1
         start = np.empty(candidates)
         _start_distances(contact, x0, start)
         _settle(contact, thickness, floor_z, mass, free, x0, x1, v1, start)
         _impact_zones(contact, thickness, floor_z, mass, free, x0, x1, v1, h, start)
         if covers(contact, x1):
-            return
+            return contact.counters[RESPONSES] + contact.counters[ZONE_ROUNDS] != treated
     # The treatment kept moving particles beyond every list built for it: undo the step's motion.
     contact.counters[FREEZES] += 1
     for c in range(3):
         for i in range(x0.shape[1]):
             x1[c, i] = x0[c, i]
             v1[c, i] = 0.0
+    return True
