@@ -27,6 +27,9 @@ from wetcloth.kernels.self_contact.geometry import EDGE_EDGE, POINT_TRIANGLE, di
 REBUILDS, BUSY_STEPS, PASSES, RESPONSES, ZONE_ROUNDS, FREEZES = range(6)
 COUNTERS = 6
 
+#: A list whose margin is more than this many times what the current step needs is rebuilt (``too_loose``).
+LOOSE = 4.0
+
 _FIRST_CAPACITY = 256
 _HASH_X, _HASH_Y, _HASH_Z = 73856093, 19349663, 83492791  # Teschner et al. 2003
 
@@ -64,11 +67,9 @@ def covers(contact, x):
 
 
 @kernel
-def rebuild_for_step(contact, thickness, x0, x1):
-    """A new list valid for the whole step from ``x0`` to ``x1``: the reference is the midpoint, the
-    margin the larger of ``Contact.least_margin`` and twice the step's largest motion (common
-    translation taken out), which leaves room for the next steps.  Returns False (and builds nothing)
-    if the step is not finite."""
+def _step_motion(x0, x1):
+    """The largest displacement (m) of a particle over the step from ``x0`` to ``x1``, once the
+    mid-range of all displacements (a common translation) is taken out; NaN if the step is not finite."""
     n = x0.shape[1]
     shift = np.empty(3)
     for c in range(3):
@@ -76,7 +77,7 @@ def rebuild_for_step(contact, thickness, x0, x1):
         for i in range(n):
             d = x1[c, i] - x0[c, i]
             if not math.isfinite(d):
-                return False  # a blown-up step: the guard after this stage refuses it
+                return math.nan
             lo = min(lo, d)
             hi = max(hi, d)
         shift[c] = 0.5 * (lo + hi)
@@ -86,10 +87,40 @@ def rebuild_for_step(contact, thickness, x0, x1):
         dy = x1[1, i] - x0[1, i] - shift[1]
         dz = x1[2, i] - x0[2, i] - shift[2]
         largest = max(largest, dx * dx + dy * dy + dz * dz)
+    return math.sqrt(largest)
+
+
+@kernel(inline="always")
+def _margin_for(contact, motion):
+    """The margin of a list built for a step of ``motion`` (m): twice that, at least ``least_margin``."""
+    return max(contact.least_margin, 2.0 * motion)
+
+
+@kernel
+def too_loose(contact, x0, x1):
+    """Whether the list's margin is over LOOSE times what a list built for this step would get: a
+    list built for one violent step (a landing) would otherwise hold far-apart pairs for the rest
+    of the run.  Costs nothing while the margin is the least one (a cloth that never moved fast)."""
+    margin = contact.margin[0]
+    if margin <= LOOSE * contact.least_margin:
+        return False
+    motion = _step_motion(x0, x1)
+    return math.isfinite(motion) and margin > LOOSE * _margin_for(contact, motion)
+
+
+@kernel
+def rebuild_for_step(contact, thickness, x0, x1):
+    """A new list valid for the whole step from ``x0`` to ``x1``: the reference is the midpoint, the
+    margin the larger of ``Contact.least_margin`` and twice the step's largest motion (common
+    translation taken out), which leaves room for the next steps.  Returns False (and builds nothing)
+    if the step is not finite."""
+    motion = _step_motion(x0, x1)
+    if not math.isfinite(motion):
+        return False  # a blown-up step: the guard after this stage refuses it
     for c in range(3):
-        for i in range(n):
+        for i in range(x0.shape[1]):
             contact.reference[c, i] = 0.5 * (x0[c, i] + x1[c, i])
-    build(contact, thickness, max(contact.least_margin, 2.0 * math.sqrt(largest)))
+    build(contact, thickness, _margin_for(contact, motion))
     return True
 
 

@@ -25,7 +25,7 @@ import numpy as np
 
 from wetcloth.kernels import kernel
 from wetcloth.kernels.self_contact.broad_phase import (BUSY_STEPS, FREEZES, PASSES, RESPONSES, ZONE_ROUNDS, covers,
-                                                       point, rebuild_for_step)
+                                                       point, rebuild_for_step, too_loose)
 from wetcloth.kernels.self_contact.geometry import (CLEAR, EDGE_EDGE, POINT_TRIANGLE, closest, combine, distance,
                                                     motion_bound, time_of_contact)
 
@@ -366,7 +366,7 @@ def resolve(contact, thickness, floor_z, mass, free, x0, x1, v1, h):
         return False
     treated = contact.counters[RESPONSES] + contact.counters[ZONE_ROUNDS]
     for _ in range(ATTEMPTS):
-        if not covers(contact, x1):
+        if not covers(contact, x1) or too_loose(contact, x0, x1):
             if not rebuild_for_step(contact, thickness, x0, x1):
                 return False
         candidates = contact.pairs[POINT_TRIANGLE].shape[1] + contact.pairs[EDGE_EDGE].shape[1]
