@@ -61,15 +61,36 @@ def crossings(pos: np.ndarray, triangles: np.ndarray) -> int:
     return count
 
 
-def closest_layers(pos: np.ndarray, triangles: np.ndarray, reach: float) -> float:
-    """Smallest distance (m) between two particles not joined by a mesh edge, looked for up to
-    ``reach`` (m; ``inf`` if none is that close).  Particles of one layer keep about a grid spacing
-    between them, so a pair this close lies on two layers."""
-    joined = {tuple(e) for e in mesh_edges(triangles).tolist()}
-    pairs = cKDTree(pos).query_pairs(reach, output_type="ndarray")
-    apart = [d for (i, j), d in zip(pairs.tolist(), np.linalg.norm(pos[pairs[:, 0]] - pos[pairs[:, 1]], axis=1))
-             if (min(i, j), max(i, j)) not in joined]
-    return min(apart, default=np.inf)
+def point_triangle_distances(points: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Distance (m) from each point to the triangle (a, b, c) in the same row (all (k, 3)): to the
+    plane where the point projects inside the triangle, else to the nearest of its three sides."""
+    normal = np.cross(b - a, c - a)
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    height = np.einsum("ij,ij->i", points - a, normal)
+    foot = points - height[:, None] * normal
+    turns = [np.einsum("ij,ij->i", np.cross(v - u, foot - u), normal) for u, v in ((a, b), (b, c), (c, a))]
+    inside = (turns[0] >= 0) & (turns[1] >= 0) & (turns[2] >= 0)
+    sides = []
+    for u, v in ((a, b), (b, c), (c, a)):
+        along = np.clip(np.einsum("ij,ij->i", points - u, v - u) / np.einsum("ij,ij->i", v - u, v - u), 0.0, 1.0)
+        sides.append(np.linalg.norm(points - (u + along[:, None] * (v - u)), axis=1))
+    return np.minimum(np.where(inside, np.abs(height), np.inf), np.min(sides, axis=0))
+
+
+def layer_separation(pos: np.ndarray, triangles: np.ndarray, reach: float) -> float:
+    """Smallest distance (m) between a particle and a triangle that does not hold it, looked for up to
+    ``reach`` (m; ``inf`` if none is that close).  This bounds every distance between two particles not
+    joined by an edge (the second is a corner of such a triangle) and sees a particle resting on the
+    middle of a triangle of another layer, which particle pairs alone would miss."""
+    centroids = pos[triangles].mean(axis=1)
+    radius = np.linalg.norm(pos[triangles] - centroids[:, None], axis=2).max()
+    near = cKDTree(centroids).query_ball_point(pos, radius + reach)
+    rows = np.array([(p, t) for p, ts in enumerate(near) for t in ts if p not in triangles[t]]).reshape(-1, 2)
+    if not len(rows):
+        return np.inf
+    corners = triangles[rows[:, 1]]
+    distances = point_triangle_distances(pos[rows[:, 0]], pos[corners[:, 0]], pos[corners[:, 1]], pos[corners[:, 2]])
+    return float(distances.min())
 
 
 def test_the_checker_counts_a_sheet_through_a_sheet():
@@ -88,7 +109,7 @@ def test_the_checker_counts_a_sheet_through_a_sheet():
 # --------------------------------------------------------------------------- folding scenes
 
 #: The issue's edge-on drop: a saturated 15 x 21 towel tilted 80 degrees, lower edge already in a
-#: 0.6 m pool, folding over on the floor (its layers meet from 3.5 s).
+#: 0.6 m pool, folding over on the floor (its layers meet from 3.5 s and rest on each other from 4 s).
 EDGE_ON_POOL = dict(nx=15, ny=21, initial_tilt=80.0, initial_saturation=1.0, floor_level=-0.6, initial_height=-0.2)
 #: A towel dropped from 40 cm with a 45 degree tilt onto a floor in air (the water far below).
 TILTED_IN_AIR = dict(nx=15, ny=21, initial_tilt=45.0, water_level=-5.0, floor_level=0.0, initial_height=0.4)
@@ -112,11 +133,22 @@ def current_over_pin():
     return run_frames(CURRENT_OVER_PIN, 2.0)
 
 
-@pytest.mark.parametrize("values, duration", [(EDGE_ON_POOL, 5.0), (TILTED_IN_AIR, 1.5)], ids=["edge_on_pool", "tilted_in_air"])
-def test_dropped_towels_never_cross_themselves(values, duration):
-    sim, frames = run_frames(values, duration)
+@pytest.fixture(scope="module")
+def edge_on_pool():
+    return run_frames(EDGE_ON_POOL, 6.0)
+
+
+def test_towel_dropped_edge_on_into_a_pool_never_crosses_itself(edge_on_pool):
+    sim, frames = edge_on_pool
     assert [crossings(pos, sim.triangles) for pos in frames] == [0] * len(frames)
     assert sim.contact_counts["responses"] > 0  # the layers met: the stage had work
+
+
+def test_towel_dropped_at_45_degrees_in_air_never_crosses_itself():
+    """The towel lands on its lower edge and lies down; with this fabric (bend_stiffness 20 N/m) its
+    layers do not meet (this guards the stage's interplay with the floor, not the folds)."""
+    sim, frames = run_frames(TILTED_IN_AIR, 1.5)
+    assert [crossings(pos, sim.triangles) for pos in frames] == [0] * len(frames)
 
 
 def test_towel_folded_by_a_current_never_crosses_itself(current_over_pin):
@@ -127,25 +159,26 @@ def test_towel_folded_by_a_current_never_crosses_itself(current_over_pin):
 
 def test_the_current_scene_crosses_itself_without_the_stage():
     """The check above can fail: without the stage the same towel passes through itself."""
-    sim, frames = run_frames(CURRENT_OVER_PIN | {"self_collision": "off"}, 2.0, frame=0.5)
-    assert max(crossings(pos, sim.triangles) for pos in frames) > 10
+    sim, frames = run_frames(CURRENT_OVER_PIN | {"self_collision": "off"}, 2.0)
+    assert max(crossings(pos, sim.triangles) for pos in frames) > 20
     assert set(sim.contact_counts.values()) == {0}  # and the stage did nothing at all
 
 
-def test_folded_layers_stay_a_thickness_apart(current_over_pin):
-    """Layer separation >= 0.9 thickness between particles not joined by an edge, in the folded towel.
+def test_folded_layers_stay_a_thickness_apart(edge_on_pool):
+    """Layer separation >= 0.9 thickness once the edge-on towel lies folded on the floor (every frame
+    from 4.5 s; its layers meet from 3.5 s): between every particle and every triangle not holding it
+    (hence also between particles not joined by an edge), by the checker's own distance.
 
     The stage pushes every pair (a particle and a triangle, two edges) closer than 0.99 thickness
-    (``response.SLACK``) back to one thickness, and a particle's distance to another particle is at
-    least its distance to any triangle at that other particle which does not hold it (every particle
-    has one, unless the two are joined by an edge).  So once the settling passes find nothing left to
-    treat, every such pair is >= 0.99 thickness apart; 0.9 leaves room for a pair that the last
-    settling pass or an impact zone left closer while the layers were still moving.  That the pairs
-    are in contact at all is checked too: some lie within 1.5 thicknesses."""
-    sim, _ = current_over_pin
+    (``response.SLACK``) back to one thickness; once its settling passes find nothing left to treat,
+    every pair is >= 0.99 thickness apart.  0.9 leaves room for a pair that the last settling pass or
+    an impact zone left closer while the layers were still moving.  That the layers are in contact
+    at all is checked too: in every frame some pair lies within 1.5 thicknesses."""
+    sim, frames = edge_on_pool
     thickness = sim.scene.thickness
-    closest = closest_layers(sim.positions, sim.triangles, reach=3.0 * thickness)
-    assert 0.9 * thickness <= closest <= 1.5 * thickness
+    settled = frames[round(4.5 / 0.25) - 1:]
+    closest = [layer_separation(pos, sim.triangles, reach=3.0 * thickness) / thickness for pos in settled]
+    assert all(0.9 <= d <= 1.5 for d in closest), closest
 
 
 @settings(max_examples=4, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
@@ -163,8 +196,9 @@ def test_random_drops_never_cross_themselves(tilt, height, in_water):
 
 
 def test_a_sheet_without_folds_is_not_touched():
-    """The default towel (no folds) runs bit for bit as with the stage off: no candidate pair ever,
-    and one candidate list built for the whole run (its fall and drift are a common motion)."""
+    """The default towel (no folds) runs bit for bit as with the stage off: no candidate pair ever, and
+    a candidate list rebuilt for under 5 % of the steps (its fall and drift are a common motion that
+    keeps a list valid; only its flexing on landing makes new ones)."""
     values = dict(nx=11, ny=15)
     on, _ = run_frames(values, 2.0, frame=1.0)
     off, _ = run_frames(values | {"self_collision": "off"}, 2.0, frame=1.0)
@@ -172,7 +206,7 @@ def test_a_sheet_without_folds_is_not_touched():
     assert on.steps == off.steps
     counts = on.contact_counts
     assert counts["busy_steps"] == 0 and counts["point_triangle_candidates"] + counts["edge_edge_candidates"] == 0
-    assert counts["rebuilds"] <= 3
+    assert counts["rebuilds"] < 0.05 * on.steps
 
 
 def test_a_restored_snapshot_repeats_a_run_in_contact_bit_for_bit(current_over_pin):
