@@ -49,7 +49,7 @@ def test_unknown_parameter_suggests_the_nearest_names():
     with pytest.raises(wetcloth.ParameterError, match=r"'absorbtion_rate': unknown parameter; did you mean "
                                                       r"'absorption_rate'\?$"):
         load_scene(absorbtion_rate=0.1)
-    with pytest.raises(wetcloth.ParameterError, match=r"'colour': unknown parameter \(there are 34; 'wetcloth params'"):
+    with pytest.raises(wetcloth.ParameterError, match=rf"'colour': unknown parameter \(there are {len(wetcloth.scene.PARAMETERS)}; 'wetcloth params'"):
         load_scene(colour="blue")
 
 

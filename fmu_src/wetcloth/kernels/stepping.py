@@ -247,8 +247,8 @@ def _step(cloth, phys, control, work, solver, plane, contact, buf, clock, remain
         clock[NEXT_STEP] = max(control.smallest_step, h * max(control.shrink, factor))
         clock[REJECTED] += 1
     floor_contact(phys.floor_z, phys.floor_friction, buf.trial_pos, buf.trial_vel)
-    kinked = self_collision(contact, phys.thickness, phys.floor_z, solver.mass, cloth.free, buf.pos, buf.trial_pos,
-                            buf.trial_vel, h)
+    kinked = self_collision(contact, phys.thickness, phys.floor_z, control.blow_up_speed, solver.mass, cloth.free,
+                            buf.pos, buf.trial_pos, buf.trial_vel, h)
     exchanging = _exchange_water(cloth, phys, work, buf, solver.mass, h)
     speed, finite = speed_and_finiteness(buf.trial_pos, buf.trial_vel, buf.trial_water)
     if not (finite and speed < control.blow_up_speed):

@@ -355,10 +355,24 @@ def _impact_zones(contact, thickness, floor_z, mass, free, x0, x1, v1, h, start)
 
 
 @kernel
-def resolve(contact, thickness, floor_z, mass, free, x0, x1, v1, h):
+def _refused(x1, v1, blow_up_speed):
+    """Whether the step's blow-up guard will refuse it: a value not finite, or a particle at
+    ``blow_up_speed`` (m/s) or faster.  The stage leaves such a step alone, so that neither its
+    rigid zones nor its last resort hide a blow-up from the guard."""
+    limit = blow_up_speed * blow_up_speed
+    for i in range(x1.shape[1]):
+        v2 = v1[0, i] * v1[0, i] + v1[1, i] * v1[1, i] + v1[2, i] * v1[2, i]
+        if not (v2 < limit and math.isfinite(x1[0, i] + x1[1, i] + x1[2, i])):
+            return True
+    return False
+
+
+@kernel
+def resolve(contact, thickness, floor_z, blow_up_speed, mass, free, x0, x1, v1, h):
     """The self-collision stage of one step of ``h`` s from ``x0`` to ``x1`` (both (3, n), m; ``x1`` and
     the end velocities ``v1`` (m/s) are changed in place); ``mass`` (kg) per particle, ``free`` 1 for
-    moving particles.  Nothing to do, and one pass over the positions, while no pair is near.
+    moving particles.  Nothing to do, and one pass over the positions, while no pair is near.  A step
+    that the blow-up guard will refuse (``_refused``; checked only where there is work) is left alone.
 
     Returns whether it changed ``x1`` or ``v1``: the step's motion then has a kink that a multistep
     integrator must not extrapolate (the caller restarts its history, as after a wake-up)."""
@@ -367,11 +381,13 @@ def resolve(contact, thickness, floor_z, mass, free, x0, x1, v1, h):
     treated = contact.counters[RESPONSES] + contact.counters[ZONE_ROUNDS]
     for _ in range(ATTEMPTS):
         if not covers(contact, x1) or too_loose(contact, x0, x1):
-            if not rebuild_for_step(contact, thickness, x0, x1):
+            if _refused(x1, v1, blow_up_speed) or not rebuild_for_step(contact, thickness, x0, x1):
                 return False
         candidates = contact.pairs[POINT_TRIANGLE].shape[1] + contact.pairs[EDGE_EDGE].shape[1]
         if candidates == 0:
             return contact.counters[RESPONSES] + contact.counters[ZONE_ROUNDS] != treated
+        if _refused(x1, v1, blow_up_speed):
+            return False
         contact.counters[BUSY_STEPS] += 1
         start = np.empty(candidates)
         _start_distances(contact, x0, start)

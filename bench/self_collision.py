@@ -1,0 +1,98 @@
+"""What self-collision costs: each scene run with ``self_collision`` "off" and "on", alternately, in one process.
+
+    .venv/bin/python bench/self_collision.py [--repeat 5] [--skip-stability]
+
+* The default towel (``models/towel.toml``, 21 x 29, 20 s: it lands, floats and soaks, and never
+  folds): the stage only checks that its candidate list (empty) still holds.  Figure: the median
+  of the per-pair ratios on / off (the runs alternate, so a load change on a shared machine hits both).
+* The folding scenes of ``tests/test_self_collision.py`` (the edge-on drop into a pool, a towel
+  folded over its pinned edge by a current): wall time, steps and the most edge-triangle crossings
+  in any 0.25 s frame (the test's checker), without and with the stage.
+* The adaptive stability sweep of ``bench/stability.py`` (quick grid: 324 stressed runs, every
+  integrator) with the stage on, as it is by default; ``--skip-stability`` leaves it out.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+import wetcloth
+import _paths  # noqa: F401  (tests/ on sys.path)
+from stability import adaptive_sweep
+from test_self_collision import CURRENT_OVER_PIN, EDGE_ON_POOL, crossings
+
+FRAME = 0.25  # s
+
+
+def timed_run(values: dict, duration: float, count_crossings: bool = False) -> tuple[float, wetcloth.Simulation, int]:
+    """Wall time (s) of ``duration`` s in frames of FRAME s, the simulation, and the most crossings in
+    a frame (counted outside the timed part; 0 unless ``count_crossings``)."""
+    sim = wetcloth.Simulation(wetcloth.load_scene(**values))
+    spent, worst = 0.0, 0
+    for _ in range(round(duration / FRAME)):
+        start = time.perf_counter()
+        sim.advance(FRAME)
+        spent += time.perf_counter() - start
+        if count_crossings:
+            worst = max(worst, crossings(sim.positions, sim.triangles))
+    return spent, sim, worst
+
+
+def towel_overhead(repeat: int) -> None:
+    duration = 20.0
+    times = {"off": [], "on": []}
+    for _ in range(repeat):
+        for mode in ("off", "on"):
+            spent, sim, _ = timed_run({"self_collision": mode}, duration)
+            times[mode].append(spent)
+    ratios = [on / off for on, off in zip(times["on"], times["off"])]
+    counts = sim.contact_counts
+    print(f"default towel, {duration:g} s, {repeat} alternating pairs: off best {min(times['off']):.2f} s, "
+          f"on best {min(times['on']):.2f} s; on / off median {statistics.median(ratios):.3f} "
+          f"(pairs {', '.join(f'{r:.3f}' for r in ratios)}); {sim.steps} steps, {counts['rebuilds']} candidate lists "
+          f"built, {counts['busy_steps']} steps with candidates", flush=True)
+
+
+def folding_cost(repeat: int) -> None:
+    print("\n| scene | simulated | off: wall, steps, most crossings | on: wall, steps, most crossings | on / off |")
+    print("|---|---|---|---|---|")
+    for name, values, duration in (("edge-on drop into a 0.6 m pool (15 x 21)", EDGE_ON_POOL, 6.0),
+                                   ("folded over its pinned edge by a current (15 x 21)", CURRENT_OVER_PIN, 2.0)):
+        best, rows = {}, {}
+        for k in range(repeat):
+            for mode in ("off", "on"):
+                spent, sim, worst = timed_run(values | {"self_collision": mode}, duration, count_crossings=k == 0)
+                best[mode] = min(best.get(mode, spent), spent)
+                if k == 0:
+                    rows[mode] = (sim.steps, worst)
+        cells = [f"{best[m]:.2f} s, {rows[m][0]} steps, {rows[m][1]}" for m in ("off", "on")]
+        print(f"| {name} | {duration:g} s | {cells[0]} | {cells[1]} | {best['on'] / best['off']:.2f}x |", flush=True)
+
+
+def stability() -> None:
+    start = time.perf_counter()
+    rows = adaptive_sweep(quick=True)
+    failures = [r for r in rows if not r["stable"] or r["wet_mass_decreased"]]
+    print(f"\nstability sweep (bench/stability.py's adaptive mode, quick grid), self_collision on: "
+          f"{len(rows) - len(failures)} of {len(rows)} stressed runs stable with non-decreasing wet mass "
+          f"({time.perf_counter() - start:.0f} s)")
+    for r in failures:
+        print("  FAILED:", r)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=5, help="alternating off/on pairs (default 5)")
+    parser.add_argument("--skip-stability", action="store_true")
+    args = parser.parse_args()
+    wetcloth.Simulation(wetcloth.load_scene(nx=3, ny=3)).advance(0.01)  # compile the kernels first
+    towel_overhead(args.repeat)
+    folding_cost(max(1, args.repeat // 2))
+    if not args.skip_stability:
+        stability()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,123 @@
+"""Render docs/folded_towel.png: the saturated towel dropped edge-on into a pool, folded on the floor.
+
+    .venv/bin/python docs/render_folded_towel.py [--out docs/folded_towel.png] [--samples 32]
+
+Needs the Blender environment (``make .venv-blender/.installed``: bpy 5.0.1, Python 3.11).
+
+1. Simulates the edge-on drop of ``tests/test_self_collision.py`` (a saturated 15 x 21 towel tilted
+   80 degrees, its lower edge in a 0.6 m pool) for 6 s and exports it as USD at 2 fps, the same as
+   ``wetcloth run towel --duration 6 --fps 2 --set nx=15 --set ny=21 --set initial_tilt=80 --set
+   initial_saturation=1 --set floor_level=-0.6 --set initial_height=-0.2 --export DIR --format usd``.
+   By 4 s it lies folded on the floor, its layers resting a thickness apart (self-collision on).
+2. Runs itself again in Blender's Python: the sequence's ``load_in_blender.py`` with its defaults
+   (Subdivision, Solidify, smooth shading, the wetness material), a camera, a sun and the tank
+   floor; Cycles on the CPU, 480 x 270 pixels, denoised; the last frame (t = 6 s).
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+BLENDER_PYTHON = ROOT / ".venv-blender" / "bin" / "python"
+FPS = 2.0
+DURATION = 6.0  # s
+SCENE = dict(nx=15, ny=21, initial_tilt=80.0, initial_saturation=1.0, floor_level=-0.6, initial_height=-0.2)
+WIDTH, HEIGHT = 480, 270
+
+
+def export(directory: Path) -> None:
+    """The edge-on drop as a USD sequence (runs in the project's Python)."""
+    import wetcloth
+    from wetcloth.exporter import open_sequence
+    from wetcloth.runner import run
+
+    scene = wetcloth.load_scene("towel", **SCENE)
+    with open_sequence(directory, fmt="usd", fps=FPS, scene=scene) as sequence:
+        run(scene, DURATION, FPS, on_frame=sequence.on_frame, progress=False)
+
+
+def render(directory: Path, out: Path, samples: int) -> None:
+    """The last frame, rendered into ``out`` (runs in Blender's Python)."""
+    import runpy
+
+    import bpy
+    from mathutils import Vector
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    runpy.run_path(str(directory / "load_in_blender.py"))["load"]()  # the defaults an artist gets
+    scene = bpy.context.scene
+    cloth = next(o for o in scene.objects if o.type == "MESH")
+    scene.frame_set(scene.frame_end)
+    bpy.context.view_layer.update()
+    corners = [cloth.matrix_world @ Vector(c) for c in cloth.bound_box]
+    centre = sum(corners, Vector()) / 8.0
+
+    camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+    scene.collection.objects.link(camera)
+    camera.data.lens = 40.0
+    camera.location = centre + Vector((0.75, -0.65, 0.55))
+    camera.rotation_euler = (centre - camera.location).to_track_quat("-Z", "Y").to_euler()
+    scene.camera = camera
+    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
+    scene.collection.objects.link(sun)
+    sun.rotation_euler = (0.6, 0.2, 0.9)
+    sun.data.energy = 4.0
+    world = bpy.data.worlds.new("sky")
+    if bpy.app.version < (5, 0, 0):  # Blender 5 worlds always use nodes
+        world.use_nodes = True
+    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.25, 0.28, 0.32, 1.0)
+    scene.world = world
+    z = SCENE["floor_level"]
+    floor = bpy.data.meshes.new("floor")
+    floor.from_pydata([(-3, -3, z), (3, -3, z), (3, 3, z), (-3, 3, z)], [], [(0, 1, 2, 3)])
+    floor_object = bpy.data.objects.new("floor", floor)
+    scene.collection.objects.link(floor_object)
+    material = bpy.data.materials.new("tiles")
+    if bpy.app.version < (5, 0, 0):
+        material.use_nodes = True
+    bsdf = material.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (0.05, 0.12, 0.16, 1.0)
+    bsdf.inputs["Roughness"].default_value = 0.4
+    floor.materials.append(material)
+
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = samples
+    scene.cycles.use_denoising = True
+    scene.render.resolution_x, scene.render.resolution_y = WIDTH, HEIGHT
+    scene.view_settings.view_transform = "Standard"
+    scene.render.image_settings.file_format = "PNG"
+    scene.render.image_settings.color_mode = "RGB"
+    scene.render.image_settings.compression = 100
+    scene.render.filepath = str(out)
+    bpy.ops.render.render(write_still=True)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=ROOT / "docs" / "folded_towel.png", help="PNG to write")
+    parser.add_argument("--samples", type=int, default=32, help="Cycles samples per pixel (default 32)")
+    parser.add_argument("--in-blender", type=Path, metavar="SEQUENCE", help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.in_blender is not None:  # second stage, inside Blender's Python
+        render(args.in_blender, args.out.resolve(), args.samples)
+        return 0
+    if not BLENDER_PYTHON.exists():
+        print(f"{BLENDER_PYTHON} is missing: make .venv-blender/.installed", file=sys.stderr)
+        return 2
+    with tempfile.TemporaryDirectory() as tmp:
+        sequence = Path(tmp) / "towel"
+        export(sequence)
+        subprocess.run([str(BLENDER_PYTHON), __file__, "--in-blender", str(sequence), "--out", str(args.out.resolve()),
+                        "--samples", str(args.samples)], check=True)
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
