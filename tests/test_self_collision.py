@@ -43,22 +43,23 @@ def _volume(a, b, c, d):
 
 def crossings(pos: np.ndarray, triangles: np.ndarray) -> int:
     """Number of (edge, triangle) pairs without a shared particle where the edge passes through the
-    triangle; ``pos`` (n, 3) m."""
+    triangle; ``pos`` (n, 3) m.  Pairs are first narrowed to those whose bounding spheres (about the
+    edge's midpoint and the triangle's centroid) meet, which every crossing pair does."""
     edges = mesh_edges(triangles)
-    p, q = pos[edges[:, 0]], pos[edges[:, 1]]
-    a, b, c = pos[triangles[:, 0]], pos[triangles[:, 1]], pos[triangles[:, 2]]
-    edge_lo, edge_hi = np.minimum(p, q), np.maximum(p, q)
-    tri_lo, tri_hi = np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
-    count = 0
-    for t, corners in enumerate(triangles):
-        near = np.all((edge_lo <= tri_hi[t]) & (edge_hi >= tri_lo[t]), axis=1)
-        near &= ~np.isin(edges, corners).any(axis=1)
-        pe, qe = p[near], q[near]
-        side_p, side_q = _volume(a[t], b[t], c[t], pe), _volume(a[t], b[t], c[t], qe)
-        around = np.stack([_volume(pe, qe, a[t], b[t]), _volume(pe, qe, b[t], c[t]), _volume(pe, qe, c[t], a[t])])
-        inside = np.all(around > 0, axis=0) | np.all(around < 0, axis=0)
-        count += int(np.count_nonzero((side_p * side_q < 0) & inside))
-    return count
+    middles = pos[edges].mean(axis=1)
+    centroids = pos[triangles].mean(axis=1)
+    reach = (np.linalg.norm(pos[edges[:, 0]] - middles, axis=1).max()
+             + np.linalg.norm(pos[triangles] - centroids[:, None], axis=2).max())
+    near = cKDTree(middles).sparse_distance_matrix(cKDTree(centroids), reach, output_type="ndarray")
+    e, t = edges[near["i"]], triangles[near["j"]]
+    apart = ~(e[:, :, None] == t[:, None, :]).any(axis=(1, 2))
+    e, t = e[apart], t[apart]
+    p, q = pos[e[:, 0]], pos[e[:, 1]]
+    a, b, c = pos[t[:, 0]], pos[t[:, 1]], pos[t[:, 2]]
+    opposite = _volume(a, b, c, p) * _volume(a, b, c, q) < 0
+    around = np.stack([_volume(p, q, a, b), _volume(p, q, b, c), _volume(p, q, c, a)])
+    inside = np.all(around > 0, axis=0) | np.all(around < 0, axis=0)
+    return int(np.count_nonzero(opposite & inside))
 
 
 def point_triangle_distances(points: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -181,11 +182,22 @@ def test_folded_layers_stay_a_thickness_apart(edge_on_pool):
     assert all(0.9 <= d <= 1.5 for d in closest), closest
 
 
+@pytest.mark.parametrize("integrator", ["implicit_euler", "symplectic_euler", "explicit_euler"])
+def test_every_integrator_keeps_a_fold_from_crossing(integrator):
+    """A soft 11 x 15 towel (bend_stiffness 2 N/m) folded over its pinned edge by the current, 2 s:
+    with each of the other integrators it passes through itself without the stage (48 to 88
+    crossings in a frame, measured), and not with it."""
+    values = CURRENT_OVER_PIN | {"nx": 11, "ny": 15, "bend_stiffness": 2.0, "integrator": integrator}
+    sim, frames = run_frames(values, 2.0)
+    assert [crossings(pos, sim.triangles) for pos in frames] == [0] * len(frames)
+    assert sim.contact_counts["responses"] > 0
+
+
 @settings(max_examples=4, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
-@given(tilt=st.floats(20.0, 90.0), height=st.floats(0.3, 0.6), in_water=st.booleans())
+@given(tilt=st.floats(20.0, 90.0), height=st.floats(0.4, 1.5), in_water=st.booleans())
 def test_random_drops_never_cross_themselves(tilt, height, in_water):
     """A soft 11 x 15 towel (bend_stiffness 2 N/m: it folds on a coarse grid too) dropped at any tilt
-    from any height onto a floor, in air or into water 0.3 m deep; 1.5 s, a frame every 0.25 s."""
+    from 0.4 to 1.5 m onto a floor, in air or into water 0.3 m deep; 1.5 s, a frame every 0.25 s."""
     values = dict(nx=11, ny=15, bend_stiffness=2.0, initial_tilt=tilt, initial_height=height, floor_level=0.0,
                   water_level=0.3 if in_water else -5.0)
     sim, frames = run_frames(values, 1.5)
