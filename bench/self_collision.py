@@ -6,8 +6,8 @@
   folds): the stage only checks that its candidate list (empty) still holds.  Figure: the median
   of the per-pair ratios on / off (the runs alternate, so a load change on a shared machine hits both).
 * The folding scenes of ``tests/test_self_collision.py`` (the edge-on drop into a pool, a towel
-  folded over its pinned edge by a current): wall time, steps and the most edge-triangle crossings
-  in any 0.25 s frame (the test's checker), without and with the stage.
+  folded over its pinned edge by a current) and a crumpling one: wall time, steps and the most
+  edge-triangle crossings in any 0.25 s frame (the test's checker), without and with the stage.
 * The adaptive stability sweep of ``bench/stability.py`` (quick grid: 324 stressed runs, every
   integrator) with the stage on, as it is by default; ``--skip-stability`` leaves it out.
 """
@@ -24,6 +24,10 @@ from stability import adaptive_sweep
 from test_self_collision import CURRENT_OVER_PIN, EDGE_ON_POOL, crossings
 
 FRAME = 0.25  # s
+#: The worst case met: a soft towel (bend_stiffness 2 N/m) dropped upright onto a floor in air crumples
+#: into a pile of layers (a corner of the random drops of ``tests/test_self_collision.py``).
+CRUMPLED = dict(nx=11, ny=15, bend_stiffness=2.0, initial_tilt=90.0, initial_height=0.4, floor_level=0.0,
+                water_level=-5.0)
 
 
 def timed_run(values: dict, duration: float, count_crossings: bool = False) -> tuple[float, wetcloth.Simulation, int]:
@@ -59,7 +63,8 @@ def folding_cost(repeat: int) -> None:
     print("\n| scene | simulated | off: wall, steps, most crossings | on: wall, steps, most crossings | on / off |")
     print("|---|---|---|---|---|")
     for name, values, duration in (("edge-on drop into a 0.6 m pool (15 x 21)", EDGE_ON_POOL, 6.0),
-                                   ("folded over its pinned edge by a current (15 x 21)", CURRENT_OVER_PIN, 2.0)):
+                                   ("folded over its pinned edge by a current (15 x 21)", CURRENT_OVER_PIN, 2.0),
+                                   ("crumpled: soft towel dropped upright from 0.4 m in air (11 x 15)", CRUMPLED, 1.5)):
         best, rows = {}, {}
         for k in range(repeat):
             for mode in ("off", "on"):
