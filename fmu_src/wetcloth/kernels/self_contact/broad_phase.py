@@ -186,7 +186,9 @@ def _append(pairs, count, a, b):
     """Append (a, b) to a (2, capacity) array, doubling it when full; returns the array."""
     if count == pairs.shape[1]:
         grown = np.empty((2, 2 * pairs.shape[1]), dtype=np.int64)
-        grown[:, :count] = pairs[:, :count]
+        for k in range(count):  # element by element: a slice assignment's shape checks cost seconds of compiling
+            grown[0, k] = pairs[0, k]
+            grown[1, k] = pairs[1, k]
         pairs = grown
     pairs[0, count] = a
     pairs[1, count] = b
