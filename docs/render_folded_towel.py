@@ -16,14 +16,11 @@ Needs the Blender environment (``make .venv-blender/.installed``: bpy 5.0.1, Pyt
 
 from __future__ import annotations
 
-import argparse
-import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-BLENDER_PYTHON = ROOT / ".venv-blender" / "bin" / "python"
+import blender_stages
+from blender_stages import ROOT
 FPS = 2.0
 DURATION = 6.0  # s
 SCENE = dict(nx=15, ny=21, initial_tilt=80.0, initial_saturation=1.0, floor_level=-0.6, initial_height=-0.2)
@@ -98,26 +95,5 @@ def render(directory: Path, out: Path, samples: int) -> None:
     bpy.ops.render.render(write_still=True)
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=ROOT / "docs" / "folded_towel.png", help="PNG to write")
-    parser.add_argument("--samples", type=int, default=32, help="Cycles samples per pixel (default 32)")
-    parser.add_argument("--in-blender", type=Path, metavar="SEQUENCE", help=argparse.SUPPRESS)
-    args = parser.parse_args(argv)
-    if args.in_blender is not None:  # second stage, inside Blender's Python
-        render(args.in_blender, args.out.resolve(), args.samples)
-        return 0
-    if not BLENDER_PYTHON.exists():
-        print(f"{BLENDER_PYTHON} is missing: make .venv-blender/.installed", file=sys.stderr)
-        return 2
-    with tempfile.TemporaryDirectory() as tmp:
-        sequence = Path(tmp) / "towel"
-        export(sequence)
-        subprocess.run([str(BLENDER_PYTHON), __file__, "--in-blender", str(sequence), "--out", str(args.out.resolve()),
-                        "--samples", str(args.samples)], check=True)
-    print(f"wrote {args.out}")
-    return 0
-
-
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(blender_stages.main(__file__, __doc__.splitlines()[0], ROOT / "docs" / "folded_towel.png", export, render))
