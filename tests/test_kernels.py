@@ -179,3 +179,31 @@ def test_implicit_fixed_steps_of_a_communication_interval_stay_sane(stiffness, i
     sim.advance(2.0)
     assert abs(sim.outputs()["depth"]) < 0.02
     assert np.abs(sim.state.vel).max() < 0.5
+
+
+def test_band_solves_match_a_dense_solve():
+    """The preconditioner's band solves (kernels/lapack.py: LAPACK's factor, our column-by-column
+    solves of two systems side by side) against numpy.linalg.solve, for bands from 1 to the whole
+    matrix.  The matrices are shifted to eigenvalues of at least 1 and at most about 2 kd + 2, so
+    both solutions err by under n * kd * 1e-16 relative: 1e-12 leaves a wide margin."""
+    from wetcloth.kernels.lapack import band_arguments, band_factor, band_solve_two
+    rng = np.random.default_rng(11)
+    for n, kd in ((5, 1), (30, 29), (50, 7), (300, 22)):
+        bands, dense = np.zeros((2, n, kd + 1)), []
+        rows = np.zeros_like(bands)
+        for c in range(2):
+            a = np.zeros((n, n))
+            for d in range(kd + 1):
+                a[np.arange(d, n), np.arange(n - d)] = rng.uniform(-1, 1, size=n - d)
+            a = a + a.T
+            a += (1.0 - np.linalg.eigvalsh(a).min()) * np.eye(n)
+            dense.append(a)
+            for d in range(kd + 1):
+                bands[c, np.arange(n - d), d] = a[np.arange(d, n), np.arange(n - d)]
+            assert band_factor(bands[c], rows[c], band_arguments(n, kd)) == 0
+        b = rng.normal(size=(2, n))
+        x = b.copy()
+        band_solve_two(bands, rows, x)
+        for c in range(2):
+            expected = np.linalg.solve(dense[c], b[c])
+            np.testing.assert_allclose(x[c], expected, rtol=0, atol=1e-12 * np.abs(expected).max())

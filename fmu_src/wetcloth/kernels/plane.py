@@ -2,8 +2,8 @@
 
 The system matrix of an implicit step, ``A = M - h C - h^2 K``, is dominated by the stretch springs,
 which are stiff along their own direction only: a flat cloth is stiff in its plane and soft across
-it.  In a frame (t1, t2, n) that follows the cloth's mean plane (t1 along its rows, n its normal)
-this preconditioner keeps that structure:
+it.  In each particle's frame (t1, t2, n) that follows the cloth's surface there (t1 along its row,
+n its normal) this preconditioner keeps that structure:
 
 * the t1 and t2 components each get a scalar band matrix ``M + h^2 L_c``, with ``L_c`` the graph
   Laplacian of the springs weighted by their rest stiffness times the share of their direction in
@@ -29,7 +29,7 @@ import numpy as np
 
 from wetcloth.kernels import kernel
 from wetcloth.kernels.integration import copy
-from wetcloth.kernels.lapack import band_arguments, band_factor, band_solve
+from wetcloth.kernels.lapack import band_arguments, band_factor, band_solve_two
 
 #: Share of each stretch-spring family's stiffness in the t1 and t2 components.  The bending springs
 #: (1 % of the stretch stiffness in the presets) are left out: they would double the bandwidth
@@ -45,10 +45,12 @@ REFACTOR_SCALE = 4.0
 REFACTOR_CHANGE = 0.25
 
 #: ``order`` (n) particle at each band position, ``rank`` (n) its inverse; ``weights`` (2, F, n) per spring, N/m, for t1, t2;
-#: ``bands`` (2, n, kd + 1) the factored band matrices; ``info`` (2, 7) LAPACK arguments;
+#: ``bands`` (2, n, kd + 1) the factored band matrices and ``rows`` the same factors by rows
+#: (``lapack.band_factor``); ``info`` (2, 5) LAPACK arguments;
 #: ``reference`` [factored scale (s^2), 1 if factored] and ``reference_mass`` (n) kg; ``frame``
-#: (3, 3) rows t1, t2, n; ``normal`` (n) the normal component's diagonal; ``local`` (3, n) scratch.
-Plane = namedtuple("Plane", "order rank weights bands info reference reference_mass frame normal local")
+#: (3, 3, n) each particle's axes t1, t2, n; ``normal`` (n) the normal component's diagonal;
+#: ``local`` (3, n) scratch.
+Plane = namedtuple("Plane", "order rank weights bands rows info reference reference_mass frame normal local")
 
 
 def make_plane(grid_x: int, grid_y: int, offsets: np.ndarray, family_names: tuple, stiffness: np.ndarray) -> Plane:
@@ -68,8 +70,10 @@ def make_plane(grid_x: int, grid_y: int, offsets: np.ndarray, family_names: tupl
     order = order.astype(np.int64)
     rank = np.empty(n, dtype=np.int64)
     rank[order] = np.arange(n)
-    return Plane(order=order, rank=rank, weights=weights, bands=np.zeros((2, n, kd + 1)), info=info,
-                 reference=np.zeros(2), reference_mass=np.zeros(n), frame=np.eye(3), normal=np.ones(n),
+    return Plane(order=order, rank=rank, weights=weights, bands=np.zeros((2, n, kd + 1)),
+                 rows=np.zeros((2, n, kd + 1)), info=info,
+                 reference=np.zeros(2), reference_mass=np.zeros(n), frame=np.repeat(np.eye(3)[:, :, None], n, axis=2),
+                 normal=np.ones(n),
                  local=np.zeros((3, n)))
 
 
@@ -105,7 +109,7 @@ def refresh(plane, offsets, mass, scale):
                 band[lo, 0] += w
                 band[hi, 0] += w
                 band[lo, hi - lo] -= w
-        if band_factor(band, plane.info[c]) != 0:
+        if band_factor(band, plane.rows[c], plane.info[c]) != 0:
             ref[1] = 0.0
             return -1
     ref[0] = scale
@@ -116,39 +120,54 @@ def refresh(plane, offsets, mass, scale):
 
 @kernel
 def follow_cloth(plane, grid_x, pos):
-    """Set the frame (t1, t2, n) from the mean direction of the rows and of the columns."""
+    """Set each particle's frame (t1, t2, n): t1 along its row, n normal to its row and column
+    (central differences, one-sided at the edges), t2 = n x t1; the axes where that is degenerate."""
     n = pos.shape[1]
-    a = np.zeros(3)
-    b = np.zeros(3)
-    for i in range(n - 1):
-        if (i + 1) % grid_x != 0:
-            for c in range(3):
-                a[c] += pos[c, i + 1] - pos[c, i]
-    for i in range(n - grid_x):
-        for c in range(3):
-            b[c] += pos[c, i + grid_x] - pos[c, i]
-    normal = np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-    a_norm = math.sqrt(a[0] ** 2 + a[1] ** 2 + a[2] ** 2)
-    n_norm = math.sqrt(normal[0] ** 2 + normal[1] ** 2 + normal[2] ** 2)
     frame = plane.frame
-    if not (n_norm > 1e-12 * a_norm * a_norm and a_norm > 0.0):  # crumpled past telling: the axes
-        frame[...] = 0.0
-        for c in range(3):
-            frame[c, c] = 1.0
-        return
-    for c in range(3):
-        frame[0, c] = a[c] / a_norm
-        frame[2, c] = normal[c] / n_norm
-    frame[1, 0] = frame[2, 1] * frame[0, 2] - frame[2, 2] * frame[0, 1]
-    frame[1, 1] = frame[2, 2] * frame[0, 0] - frame[2, 0] * frame[0, 2]
-    frame[1, 2] = frame[2, 0] * frame[0, 1] - frame[2, 1] * frame[0, 0]
+    for i in range(n):
+        col = i % grid_x
+        right = i + 1 if col + 1 < grid_x else i
+        left = i - 1 if col > 0 else i
+        up = i + grid_x if i + grid_x < n else i
+        down = i - grid_x if i >= grid_x else i
+        ax = pos[0, right] - pos[0, left]
+        ay = pos[1, right] - pos[1, left]
+        az = pos[2, right] - pos[2, left]
+        bx = pos[0, up] - pos[0, down]
+        by = pos[1, up] - pos[1, down]
+        bz = pos[2, up] - pos[2, down]
+        cx = ay * bz - az * by
+        cy = az * bx - ax * bz
+        cz = ax * by - ay * bx
+        a_norm = math.sqrt(ax * ax + ay * ay + az * az)
+        c_norm = math.sqrt(cx * cx + cy * cy + cz * cz)
+        if not (c_norm > 1e-12 * a_norm * a_norm and a_norm > 0.0):  # crumpled past telling: the axes
+            for r in range(3):
+                for c in range(3):
+                    frame[r, c, i] = 1.0 if r == c else 0.0
+            continue
+        ax /= a_norm
+        ay /= a_norm
+        az /= a_norm
+        cx /= c_norm
+        cy /= c_norm
+        cz /= c_norm
+        frame[0, 0, i] = ax
+        frame[0, 1, i] = ay
+        frame[0, 2, i] = az
+        frame[2, 0, i] = cx
+        frame[2, 1, i] = cy
+        frame[2, 2, i] = cz
+        frame[1, 0, i] = cy * az - cz * ay
+        frame[1, 1, i] = cz * ax - cx * az
+        frame[1, 2, i] = cx * ay - cy * ax
 
 
 @kernel
 def set_normal_diagonal(plane, mass, diagonal_blocks, blocks):
     """The normal component's diagonal: n^T B_i n for each particle's diagonal block B_i of A."""
-    nx_, ny_, nz_ = plane.frame[2, 0], plane.frame[2, 1], plane.frame[2, 2]
     for i in range(mass.shape[0]):
+        nx_, ny_, nz_ = plane.frame[2, 0, i], plane.frame[2, 1, i], plane.frame[2, 2, i]
         xx = diagonal_blocks[0, i] + blocks[0, i]
         yy = diagonal_blocks[1, i] + blocks[1, i]
         zz = diagonal_blocks[2, i] + blocks[2, i]
@@ -168,11 +187,10 @@ def apply(plane, free, r, z):
     for k in range(n):
         i = plane.order[k]
         for c in range(2):
-            local[c, k] = f[c, 0] * r[0, i] + f[c, 1] * r[1, i] + f[c, 2] * r[2, i]
-    band_solve(plane.bands[0], local[0], plane.info[0])
-    band_solve(plane.bands[1], local[1], plane.info[1])
+            local[c, k] = f[c, 0, i] * r[0, i] + f[c, 1, i] * r[1, i] + f[c, 2, i] * r[2, i]
+    band_solve_two(plane.bands, plane.rows, local[:2])
     for k in range(n):
         i = plane.order[k]
-        normal = (f[2, 0] * r[0, i] + f[2, 1] * r[1, i] + f[2, 2] * r[2, i]) / plane.normal[i]
+        normal = (f[2, 0, i] * r[0, i] + f[2, 1, i] * r[1, i] + f[2, 2, i] * r[2, i]) / plane.normal[i]
         for c in range(3):
-            z[c, i] = free[i] * (f[0, c] * local[0, k] + f[1, c] * local[1, k] + f[2, c] * normal)
+            z[c, i] = free[i] * (f[0, c, i] * local[0, k] + f[1, c, i] * local[1, k] + f[2, c, i] * normal)
