@@ -94,12 +94,14 @@ def test_implicit_system_matches_finite_differences(damping_model):
     np.testing.assert_allclose(_matvec(model, state, p), expected, rtol=0, atol=1e-6 * np.abs(expected).max())
 
 
-def test_face_drag_velocity_jacobian_for_uniform_motion():
-    """Face drag's Jacobian is lumped (row sums: exact for a uniform velocity change) and its
-    tangential part rounded up to its larger eigenvalue; with C_t = 0 and a uniform direction
-    the block must equal the exact derivative.  Buoyancy's and the springs' position Jacobians
-    come in through h^2 dF/dx as always."""
-    scene = wetcloth.load_scene(nx=6, ny=7, initial_tilt=3.0, initial_height=0.0, drag_tangential=0.0,
+@pytest.mark.parametrize("drag_tangential", [0.0, 0.5])
+def test_face_drag_velocity_jacobian_for_uniform_motion(drag_tangential):
+    """Face drag's Jacobian is lumped (row sums: exact for a uniform velocity change), with the exact
+    derivative of the tangential part (|u_t| u_t: twice its coefficient along the slip, once across
+    it); along a uniform direction the block must equal the exact derivative, with and without
+    tangential drag.  Buoyancy's and the springs' position Jacobians come in through h^2 dF/dx as
+    always."""
+    scene = wetcloth.load_scene(nx=6, ny=7, initial_tilt=3.0, initial_height=0.0, drag_tangential=drag_tangential,
                                 drag_linear=7.0)
     model, state = disturbed_state(scene, seed=1)
     h = 2e-3

@@ -55,9 +55,11 @@ def _triangle(k, a, b, c, density, c_normal, c_tangential, c_linear, current_x, 
     """Drag on triangle k of a row and its Jacobian coefficients.
 
     ``a``, ``b``, ``c`` are the corners, each a tuple of views (x, y, z, vx, vy, vz, s) along the
-    row.  Returns (Fx, Fy, Fz, nx, ny, nz, k_normal, k_tangential, k_linear): the force (N), the
-    unit normal, and ``dF/du = k_normal n n^T + k_tangential (I - n n^T) + k_linear I`` (N s/m)
-    with ``u`` the water's velocity relative to the triangle.  Branch-free, so rows vectorise.
+    row.  Returns (Fx, Fy, Fz, normal_x, normal_y, normal_z, k_normal, k_tangential, k_linear,
+    slip_x, slip_y, slip_z, k_slip): the force (N), the unit normal n, and its Jacobian
+    ``dF/du = k_normal n n^T + k_tangential (I - n n^T) + k_linear I + k_slip s s^T`` (N s/m) with
+    ``u`` the water's velocity relative to the triangle and ``s`` its in-plane part (the slip).
+    Branch-free, so rows vectorise.
     """
     st = (a[6][k] + b[6][k] + c[6][k]) * (1.0 / 3.0)
     e1x = b[0][k] - a[0][k]
@@ -71,27 +73,28 @@ def _triangle(k, a, b, c, density, c_normal, c_tangential, c_linear, current_x, 
     cz = e1x * e2y - e1y * e2x
     twice_area = math.sqrt(cx * cx + cy * cy + cz * cz)
     inv = 1.0 / max(twice_area, 1e-300)
-    nx = cx * inv
-    ny = cy * inv
-    nz = cz * inv
+    normal_x = cx * inv
+    normal_y = cy * inv
+    normal_z = cz * inv
     wet_area = 0.5 * twice_area * st
     ux = current_x - (a[3][k] + b[3][k] + c[3][k]) * (1.0 / 3.0)
     uy = current_y - (a[4][k] + b[4][k] + c[4][k]) * (1.0 / 3.0)
     uz = -(a[5][k] + b[5][k] + c[5][k]) * (1.0 / 3.0)
-    un = ux * nx + uy * ny + uz * nz
-    utx = ux - un * nx
-    uty = uy - un * ny
-    utz = uz - un * nz
+    un = ux * normal_x + uy * normal_y + uz * normal_z
+    utx = ux - un * normal_x
+    uty = uy - un * normal_y
+    utz = uz - un * normal_z
     ut = math.sqrt(utx * utx + uty * uty + utz * utz)
     q = 0.5 * density * wet_area
     kn = q * c_normal * abs(un)
     kt = q * c_tangential * ut
     kl = c_linear * wet_area
-    fx = kn * un * nx + kt * utx + kl * ux
-    fy = kn * un * ny + kt * uty + kl * uy
-    fz = kn * un * nz + kt * utz + kl * uz
-    # d(|w| w)/dw has norm 2|w|: the Jacobian's coefficients are twice the force's.
-    return fx, fy, fz, nx, ny, nz, 2.0 * kn, 2.0 * kt, kl
+    fx = kn * un * normal_x + kt * utx + kl * ux
+    fy = kn * un * normal_y + kt * uty + kl * uy
+    fz = kn * un * normal_z + kt * utz + kl * uz
+    # d(|w| w)/dw = |w| I + w w^T / |w|: along w twice the force's coefficient, across it once.
+    return (fx, fy, fz, normal_x, normal_y, normal_z, 2.0 * kn, kt, kl, utx, uty, utz,
+            q * c_tangential / max(ut, 1e-300))
 
 
 @kernel(inline="always")
@@ -124,7 +127,7 @@ def _drag_row(k_count, a, b, c, density, c_normal, c_tangential, c_linear, curre
     fx_, fy_, fz_ = out[0], out[1], out[2]
     xx, yy, zz, xy, xz, yz = out[3], out[4], out[5], out[6], out[7], out[8]
     for k in range(k_count):
-        fx, fy, fz, nxx, nyy, nzz, kn, kt, kl = _triangle(
+        fx, fy, fz, normal_x, normal_y, normal_z, kn, kt, kl, sx, sy, sz, ks = _triangle(
             k, a, b, c, density, c_normal, c_tangential, c_linear, current_x, current_y)
         fx_[k] = fx
         fy_[k] = fy
@@ -132,12 +135,12 @@ def _drag_row(k_count, a, b, c, density, c_normal, c_tangential, c_linear, curre
         if blocks_wanted:
             diff = kn - kt
             iso = kt + kl
-            xx[k] = iso + diff * nxx * nxx
-            yy[k] = iso + diff * nyy * nyy
-            zz[k] = iso + diff * nzz * nzz
-            xy[k] = diff * nxx * nyy
-            xz[k] = diff * nxx * nzz
-            yz[k] = diff * nyy * nzz
+            xx[k] = iso + diff * normal_x * normal_x + ks * sx * sx
+            yy[k] = iso + diff * normal_y * normal_y + ks * sy * sy
+            zz[k] = iso + diff * normal_z * normal_z + ks * sz * sz
+            xy[k] = diff * normal_x * normal_y + ks * sx * sy
+            xz[k] = diff * normal_x * normal_z + ks * sx * sz
+            yz[k] = diff * normal_y * normal_z + ks * sy * sz
 
 
 @kernel(inline="always")
@@ -172,13 +175,21 @@ def _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, c
 
 
 @kernel
+def _drag_forces(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, force, cells,
+                 blocks_wanted, skip_dry_rows):
+    """Every cell's drag (and, if wanted, its Jacobian) into ``cells``; the forces gathered into ``force``."""
+    _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells,
+               blocks_wanted, skip_dry_rows)
+    for comp in range(3):
+        _gather_cells(cells[0, comp], cells[1, comp], nx, force[comp], 1.0)
+
+
+@kernel
 def face_drag(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, force, cells,
               skip_dry_rows=True):
     """Add the face-model drag (docs/model.md section 4) to ``force``; ``cells`` is (2, 9, n + nx + 1) scratch."""
-    _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells, False,
-               skip_dry_rows)
-    for comp in range(3):
-        _gather_cells(cells[0, comp], cells[1, comp], nx, force[comp], 1.0)
+    _drag_forces(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, force, cells,
+                 False, skip_dry_rows)
 
 
 @kernel
@@ -188,11 +199,9 @@ def face_drag_and_blocks(nx, ny, pos, vel, s, density, c_normal, c_tangential, c
 
     ``blocks`` (6, n) holds symmetric 3x3 blocks as xx, yy, zz, xy, xz, yz.  Each triangle's
     Jacobian goes to its particles with the force's weights (row-sum lumping: exact for a uniform
-    velocity).  The tangential part uses its larger eigenvalue in every in-plane direction.
+    velocity).
     """
-    _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells, True,
-               skip_dry_rows)
-    for comp in range(3):
-        _gather_cells(cells[0, comp], cells[1, comp], nx, force[comp], 1.0)
+    _drag_forces(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, force, cells,
+                 True, skip_dry_rows)
     for comp in range(6):
         _gather_cells(cells[0, 3 + comp], cells[1, 3 + comp], nx, blocks[comp], h)
