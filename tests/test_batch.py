@@ -445,16 +445,23 @@ def test_fmu_engine_through_fmpy_matches_the_python_engine(client, fmu_file):
     assert (fmu["engine"] == "fmu").all() and not set(fmu["run_key"]) & set(python["run_key"])
     # fmpy's communication times (sums of 0.1 s) differ from the runner's frame times (i / 10) by round-off,
     # which moves the adaptive integrator's step boundaries: positions then agree to its error control,
-    # tolerance x cloth size = 1e-4 x 0.7 m = 7e-5 m per step; absorption is an exact exponential update,
-    # so masses agree to round-off.
+    # tolerance x cloth size = 1e-4 x 0.7 m = 7e-5 m per step.  Absorption is an exact exponential update,
+    # but when it starts follows the positions: a depth error d moves a particle's crossing of the surface by
+    # d / v (this cloth goes down at ~3.9 cm/s when it crosses 5 cm; 0.03 m/s is used), so the uptake's
+    # times agree to d / 0.03 s, and its masses to the uptake over that time, at most absorption_rate
+    # (2 1/s here) times it, relative.  (Measured: at absorption_rate 2 the two step sequences leave the
+    # wet masses 1.2e-7 and the times to 90 % 6.5e-4 s apart.  With the preconditioner before issue 11b's
+    # the two runs happened to stay on one trajectory and the masses agreed to round-off.)
     depth_tol = 1e-4 * 0.7
+    time_tol = depth_tol / 0.03
     for name in ("final_depth", "max_depth"):
         np.testing.assert_allclose(fmu[name], python[name], rtol=0, atol=depth_tol)
-    for name in ("final_wet_mass", "final_water_mass", "time_to_90_wet_mass", "time_to_90_water_mass"):
-        np.testing.assert_allclose(fmu[name], python[name], rtol=1e-9)
+    for name in ("final_wet_mass", "final_water_mass"):
+        np.testing.assert_allclose(fmu[name], python[name], rtol=2.0 * time_tol)
+    for name in ("time_to_90_wet_mass", "time_to_90_water_mass"):
+        np.testing.assert_allclose(fmu[name], python[name], rtol=0, atol=time_tol)
     assert list(fmu["sank"]) == list(python["sank"]) == [False, True]
-    # a depth error d moves the sinking time by d / v; this cloth goes down at ~3.9 cm/s when it crosses 5 cm
-    assert fmu["time_to_sink"][1] == pytest.approx(python["time_to_sink"][1], abs=depth_tol / 0.03)
+    assert fmu["time_to_sink"][1] == pytest.approx(python["time_to_sink"][1], abs=time_tol)
 
 
 def test_fmu_engine_without_the_fmu_records_why(client, tmp_path):
