@@ -207,6 +207,16 @@ def _boxes_overlap(lo, hi, a, lo2, hi2, b, pad):
             and lo2[1, b] - pad <= hi[1, a] and lo[2, a] <= hi2[2, b] + pad and lo2[2, b] - pad <= hi[2, a])
 
 
+@kernel(inline="always")
+def _candidate(kind, x, rest, a, b, c, d, reach, thickness):
+    """Whether elements of particles (a | b, c, d) for POINT_TRIANGLE or (a, b | c, d) for EDGE_EDGE
+    are a candidate pair: within ``reach`` (m) now, and not already closer than ``thickness`` (m)
+    in the flat rest sheet (such neighbours are the fabric itself, not two layers)."""
+    if distance(kind, point(x, a), point(x, b), point(x, c), point(x, d)) >= reach:
+        return False
+    return distance(kind, point(rest, a), point(rest, b), point(rest, c), point(rest, d)) >= thickness
+
+
 @kernel
 def _point_triangle_pairs(x, rest, triangles, lo, hi, reach, thickness, cell):
     n = x.shape[1]
@@ -226,9 +236,7 @@ def _point_triangle_pairs(x, rest, triangles, lo, hi, reach, thickness, cell):
             i, j, l = triangles[t, 0], triangles[t, 1], triangles[t, 2]
             if p == i or p == j or p == l or not _inside(xp, lo, hi, t, reach):
                 continue
-            if distance(POINT_TRIANGLE, xp, point(x, i), point(x, j), point(x, l)) >= reach:
-                continue
-            if distance(POINT_TRIANGLE, point(rest, p), point(rest, i), point(rest, j), point(rest, l)) < thickness:
+            if not _candidate(POINT_TRIANGLE, x, rest, p, i, j, l, reach, thickness):
                 continue
             pairs = _append(pairs, count, p, t)
             count += 1
@@ -257,9 +265,7 @@ def _edge_edge_pairs(x, rest, edges, lo, hi, reach, thickness, cell):
                         u, v = edges[e, 0], edges[e, 1]
                         if i == u or i == v or j == u or j == v or not _boxes_overlap(lo, hi, a, lo, hi, e, reach):
                             continue
-                        if distance(EDGE_EDGE, point(x, i), point(x, j), point(x, u), point(x, v)) >= reach:
-                            continue
-                        if distance(EDGE_EDGE, point(rest, i), point(rest, j), point(rest, u), point(rest, v)) < thickness:
+                        if not _candidate(EDGE_EDGE, x, rest, i, j, u, v, reach, thickness):
                             continue
                         pairs = _append(pairs, count, a, e)
                         count += 1
