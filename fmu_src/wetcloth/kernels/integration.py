@@ -89,6 +89,19 @@ def _dot(a, b):
     return total
 
 
+@kernel(inline="always")
+def symmetric_adjugate(a, b, c, d, e, f):
+    """The adjugate of the symmetric 3x3 matrix [[a, d, e], [d, b, f], [e, f, c]] and its determinant:
+    (c11, c22, c33, c12, c13, c23, det); the inverse is the adjugate over det."""
+    c11 = b * c - f * f
+    c22 = a * c - e * e
+    c33 = a * b - d * d
+    c12 = e * f - d * c
+    c13 = d * f - b * e
+    c23 = d * e - a * f
+    return c11, c22, c33, c12, c13, c23, a * c11 + d * c12 + e * c13
+
+
 @kernel
 def invert_blocks(blocks, inverse):
     """Invert symmetric 3x3 blocks (6, n: xx, yy, zz, xy, xz, yz) into ``inverse`` (same layout).
@@ -96,15 +109,8 @@ def invert_blocks(blocks, inverse):
     A block that is not positive definite (a pinned particle's, whose rows are zero) gets the
     identity, so the preconditioner stays defined; its residual is zero anyway."""
     for i in range(blocks.shape[1]):
-        a, b, c = blocks[0, i], blocks[1, i], blocks[2, i]
-        d, e, f = blocks[3, i], blocks[4, i], blocks[5, i]
-        c11 = b * c - f * f
-        c22 = a * c - e * e
-        c33 = a * b - d * d
-        c12 = e * f - d * c
-        c13 = d * f - b * e
-        c23 = d * e - a * f
-        det = a * c11 + d * c12 + e * c13
+        c11, c22, c33, c12, c13, c23, det = symmetric_adjugate(blocks[0, i], blocks[1, i], blocks[2, i], blocks[3, i],
+                                                               blocks[4, i], blocks[5, i])
         if not det > 0.0:
             c11, c22, c33, c12, c13, c23, det = 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0
         scale = 1.0 / det

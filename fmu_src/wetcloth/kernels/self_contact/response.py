@@ -24,6 +24,7 @@ import math
 import numpy as np
 
 from wetcloth.kernels import kernel
+from wetcloth.kernels.integration import symmetric_adjugate
 from wetcloth.kernels.self_contact.broad_phase import (BUSY_STEPS, FREEZES, PASSES, RESPONSES, ZONE_ROUNDS, covers,
                                                        point, rebuild_for_step, too_loose)
 from wetcloth.kernels.self_contact.geometry import (CLEAR, EDGE_EDGE, POINT_TRIANGLE, closest, combine, distance,
@@ -232,13 +233,7 @@ def _solve_inertia(s, r):
     xx += eps
     yy += eps
     zz += eps
-    c00 = yy * zz - yz * yz
-    c01 = xz * yz - xy * zz
-    c02 = xy * yz - xz * yy
-    c11 = xx * zz - xz * xz
-    c12 = xy * xz - xx * yz
-    c22 = xx * yy - xy * xy
-    det = xx * c00 + xy * c01 + xz * c02
+    c00, c11, c22, c01, c02, c12, det = symmetric_adjugate(xx, yy, zz, xy, xz, yz)
     lx, ly, lz = s[_MOMENT, r], s[_MOMENT + 1, r], s[_MOMENT + 2, r]
     if not det > 0.0:
         return 0.0, 0.0, 0.0
