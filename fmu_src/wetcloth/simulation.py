@@ -10,6 +10,7 @@ from wetcloth.advice import blow_up_advice
 from wetcloth.errors import BlowUpError, ParameterError
 from wetcloth.integrators import make_integrator
 from wetcloth.kernels import self_contact
+from wetcloth.kernels.compilation import TypedCall
 from wetcloth.kernels.implicit import CG_ITERATIONS, FACTORISATIONS, NEWTON_ITERATIONS, UNCONVERGED, make_solver
 from wetcloth.kernels.integration import speed_and_finiteness
 from wetcloth.kernels.plane import make_plane, refresh
@@ -73,6 +74,7 @@ class Simulation:
                                  topo.spring_stiffness)
         self._contact = self_contact.make_contact(topo, scene.self_collision == "on", scene.self_friction)
         self.skip_idle_work = skip_idle_work
+        self._advance = TypedCall(advance)
 
     # ----------------------------------------------------------------- snapshots
     def snapshot(self) -> dict:
@@ -239,7 +241,7 @@ class Simulation:
         budget = max(1, STEPS_PER_CALL // model.topology.n)
         status = PAUSED
         while status == PAUSED:
-            status = advance(model.cloth, model.physics, self._control, model.work, self._solver, self._plane,
+            status = self._advance(model.cloth, model.physics, self._control, model.work, self._solver, self._plane,
                              self._contact, self._buffers, self._clock, target, budget)
         if status == BLOWN_UP:
             self._blown_up(float(self._clock[FAILED_STEP]))
