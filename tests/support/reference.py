@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from wetcloth.kernels.springs import TENSION_ROUNDING
 from wetcloth.model import GRAVITY, Model
 from wetcloth.state import State
 
@@ -77,7 +78,10 @@ class NumpyReference:
         d = pos[:, self.i] - pos[:, self.j]
         length = np.sqrt((d * d).sum(axis=0))
         stretch = length - self.rest
-        stretch = np.where(self.tension_only, np.maximum(stretch, 0.0), stretch)
+        # Tension-only: no pull when compressed, the rounded onset below a strain of TENSION_ROUNDING.
+        onset = TENSION_ROUNDING * self.rest
+        rounded = np.clip(stretch, 0.0, onset) ** 2 / onset * (2.0 - np.clip(stretch, 0.0, onset) / onset)
+        stretch = np.where(self.tension_only, np.where(stretch >= onset, stretch, rounded), stretch)
         dv = vel[:, self.i] - vel[:, self.j]
         f = -(self.k * stretch / length) * d
         if sc.damping_model == "projected":

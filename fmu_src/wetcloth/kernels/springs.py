@@ -13,8 +13,26 @@ import math
 from wetcloth.kernels import kernel
 
 _TINY_LENGTH = 1e-12  # m; below this a spring has no direction
+#: Tension-only springs pull with the stretch rounded over their first TENSION_ROUNDING of strain
+#: (``pulling_stretch``; docs/model.md section 3): with the sharp kink at zero, Newton's iterations
+#: flipped hundreds of near-slack springs between taut and slack at every step of a floating cloth.
+TENSION_ROUNDING = 6e-4
 #: Components (row, column) of the six slots of a symmetric 3x3 block: xx, yy, zz, xy, xz, yz.
 _BLOCK_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+
+
+@kernel(inline="always")
+def pulling_stretch(stretch, width):
+    """(the stretch (m) a tension-only spring pulls with, its derivative (-)) for a stretch
+    ``s = L - l0`` (m): zero for ``s <= 0``, the stretch itself for ``s >= width`` and between them
+    the cubic ``(s^2 / w) (2 - s / w)``, which joins the two with a continuous slope.  It pulls less
+    than ``max(s, 0)`` by ``s (1 - s/w)^2``, at most ``4 w / 27``."""
+    if stretch >= width:
+        return stretch, 1.0
+    if stretch <= 0.0:
+        return 0.0, 0.0
+    r = stretch / width
+    return stretch * r * (2.0 - r), r * (4.0 - 3.0 * r)
 
 
 @kernel
@@ -43,20 +61,23 @@ def _pair_views(off, pos, vel, saturation):
 def _tension(off, l0, tension_only, projected, kf, cf, wet_factor, saturation, pos, vel, t):
     """t[k] (N/m): spring k's force on its first end is ``t[k] * (x_i - x_j)`` (plus thesis damping).
 
-    Tension (eq. 3.1) ``-k (L - l0) / L``, zero when compressed for tension-only springs;
+    Tension (eq. 3.1) ``-k (L - l0) / L``, for tension-only springs with the stretch of
+    ``pulling_stretch`` (zero when compressed);
     projected damping ``-c ((v_i - v_j) . d) / L^2``; stiffness scaled by ``1 + wet_factor * sat``.
     """
     m = pos.shape[1] - off
     xi, yi, zi, xj, yj, zj, vxi, vyi, vzi, vxj, vyj, vzj, si, sj = _pair_views(off, pos, vel, saturation)
     damp = 1.0 if projected else 0.0
-    floor = 0.0 if tension_only else -math.inf
+    width = TENSION_ROUNDING * l0
     for k in range(m):
         dx = xi[k] - xj[k]
         dy = yi[k] - yj[k]
         dz = zi[k] - zj[k]
         length = math.sqrt(dx * dx + dy * dy + dz * dz)
         inv = 1.0 / max(length, _TINY_LENGTH)
-        stretch = max(length - l0, floor)
+        stretch = length - l0
+        if tension_only:
+            stretch = pulling_stretch(stretch, width)[0]
         stiffness = kf[k] * (1.0 + wet_factor * 0.5 * (si[k] + sj[k]))
         rate = (vxi[k] - vxj[k]) * dx + (vyi[k] - vyj[k]) * dy + (vzi[k] - vzj[k]) * dz
         t[k] = -(stiffness * stretch * inv + damp * cf[k] * rate * inv * inv)
@@ -105,7 +126,7 @@ def _blocks(off, l0, tension_only, projected, kf, cf, wet_factor, saturation, po
     ux, uy, uz = u[0], u[1], u[2]
     damp_along = 1.0 if projected else 0.0
     damp_across = 0.0 if projected else 1.0
-    always_along = 0.0 if tension_only else 1.0
+    width = TENSION_ROUNDING * l0
     h2 = h * h
     for k in range(m):
         dx = xi[k] - xj[k]
@@ -117,14 +138,15 @@ def _blocks(off, l0, tension_only, projected, kf, cf, wet_factor, saturation, po
         uy[k] = dy * inv
         uz[k] = dz * inv
         stretch = length - l0
-        taut = 1.0 if stretch > 0.0 else 0.0
+        slope = 1.0
+        if tension_only:
+            stretch, slope = pulling_stretch(stretch, width)
         stiffness = kf[k] * (1.0 + wet_factor * 0.5 * (si[k] + sj[k]))
         rate[k] = (vxi[k] - vxj[k]) * ux[k] + (vyi[k] - vyj[k]) * uy[k] + (vzi[k] - vzj[k]) * uz[k]
-        stretch = stretch * max(taut, always_along)
         t[k] = -(stiffness * stretch * inv + damp_along * cf[k] * rate[k] * inv)
-        # Geometric stiffness k (1 - l0/L) only while taut, so every block stays positive.
-        along[k] = h * cf[k] + h2 * stiffness * max(taut, always_along)
-        across[k] = damp_across * h * cf[k] + h2 * stiffness * stretch * inv * taut
+        # Geometric stiffness k s / L only while pulling, so every block stays positive.
+        along[k] = h * cf[k] + h2 * stiffness * slope
+        across[k] = damp_across * h * cf[k] + h2 * stiffness * max(stretch, 0.0) * inv
 
 
 @kernel
