@@ -64,6 +64,7 @@ class Simulation:
             pos=start.pos, vel=start.vel, water=start.water, trial_pos=start.pos.copy(),
             trial_vel=start.vel.copy(), trial_water=start.water.copy(), prev_pos=start.pos.copy(),
             prev_vel=start.vel.copy(), prev_water=start.water.copy(), anchor=start.pos.copy(),
+            held=np.zeros(topo.n),
         )
         self._clock = np.zeros(CLOCK_SIZE)
         self._clock[NEXT_STEP] = scene.max_step

@@ -1,6 +1,7 @@
 """The step loop: one compiled call advances the cloth from one output time to the next.
 
-Each accepted step: the integrator's step (with step-size control), the floor, self-collision, the
+Each accepted step: the integrator's step (with step-size control; particles at rest on the floor are
+held there during it), the floor, self-collision, the
 water's exchanges over the step (uptake, drying, wicking), the blow-up guard, the multistep history,
 and the check for sleep.  Everything that evolves lives in arrays the caller owns (the state, the
 BDF2 history, the sleep anchor, ``clock`` and the self-collision stage's ``contact``), so a snapshot
@@ -17,7 +18,7 @@ from numba.extending import overload
 from wetcloth.kernels import OPTIONS, kernel
 from wetcloth.kernels.absorption import dry, keep_momentum, uptake, uptake_timing_error, wick
 from wetcloth.kernels.assembly import forces
-from wetcloth.kernels.floor import floor_contact
+from wetcloth.kernels.floor import floor_contact, hold_resting, release_all, release_slipping
 from wetcloth.kernels.implicit import bdf2_step, implicit_euler_step
 from wetcloth.kernels.integration import copy, euler_update, largest_deviation, speed_and_finiteness, total
 from wetcloth.kernels.self_contact import resolve as self_collision
@@ -51,8 +52,9 @@ Control = namedtuple("Control", "scheme integrator tolerance allowed max_step ne
                                 "damping_rate spring_limit drag_rate_offset drag_rate_slope smallest_step growth "
                                 "shrink blow_up_speed sleep_distance sleep_after")
 #: State buffers: current and trial (pos, vel (3, n), water (n)), BDF2 history (the state before the
-#: last step), sleep anchor.
-Buffers = namedtuple("Buffers", "pos vel water trial_pos trial_vel trial_water prev_pos prev_vel prev_water anchor")
+#: last step), sleep anchor, and ``held`` (n): 1 for the particles the floor holds during the
+#: current step (scratch, set from the state at the start of each step).
+Buffers = namedtuple("Buffers", "pos vel water trial_pos trial_vel trial_water prev_pos prev_vel prev_water anchor held")
 
 #: Safety factor on the explicit schemes' linear-stability limit, and on the proposed next step.
 STABILITY_SAFETY = 0.9
@@ -209,6 +211,9 @@ def _maybe_sleep(control, phys, buf, clock, h, exchanging):
 def _step(cloth, phys, control, work, solver, plane, contact, buf, clock, remaining):
     """Take one accepted step of at most ``remaining`` s.  Returns DONE or BLOWN_UP."""
     adaptive = control.allowed > 0.0
+    # Particles at rest on the floor take no part in the step (a constraint of its solve) unless its
+    # forces would move them; the model's ``free`` flags are theirs again before the step ends.
+    held = hold_resting(phys.floor_z, buf.pos, buf.vel, cloth.free, buf.held)
     while True:
         if adaptive:
             planned = min(clock[NEXT_STEP], control.max_step, stable_step(control, clock[SPEED]))
@@ -220,6 +225,12 @@ def _step(cloth, phys, control, work, solver, plane, contact, buf, clock, remain
         # interval a rounding error longer than a whole number of planned steps).
         h = remaining / max(1.0, math.ceil(remaining / planned - STEP_COUNT_SLACK))
         error, order, converged = take_step(control.scheme, cloth, phys, control, work, solver, plane, buf, clock, h)
+        if held > 0 and converged:
+            released = release_slipping(phys.floor_friction, work.force, cloth.free, buf.held)
+            if released > 0:  # redo the step with them free
+                held -= released
+                clock[REJECTED] += 1
+                continue
         if not converged and h > control.smallest_step:
             clock[NEXT_STEP] = max(control.smallest_step, 0.25 * h)
             clock[REJECTED] += 1
@@ -246,6 +257,8 @@ def _step(cloth, phys, control, work, solver, plane, contact, buf, clock, remain
             break
         clock[NEXT_STEP] = max(control.smallest_step, h * max(control.shrink, factor))
         clock[REJECTED] += 1
+    if held > 0:
+        release_all(cloth.free, buf.held)
     floor_contact(phys.floor_z, phys.floor_friction, buf.trial_pos, buf.trial_vel)
     kinked = self_collision(contact, phys.thickness, phys.floor_z, control.blow_up_speed, solver.mass, cloth.free,
                             buf.pos, buf.trial_pos, buf.trial_vel, h)
