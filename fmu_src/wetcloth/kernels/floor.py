@@ -7,7 +7,8 @@ is held there during the step, as a constraint of the step's own solve (``hold_r
 as the force on it presses it onto the floor within the friction cone (``release_slipping``).
 Holding it, rather than letting the step push it into the floor and projecting it back, keeps
 the multistep history and the error estimate of an implicit step free of the floor: a cloth
-resting on the floor then takes steps set by the rest of its motion.
+resting on the floor then takes steps set by the rest of its motion.  Where the floor did change
+a particle's motion, its history is made to agree with its new velocity (``agree_history``).
 """
 
 from __future__ import annotations
@@ -83,3 +84,22 @@ def release_all(free, held):
         if held[i] != 0.0:
             free[i] = 1.0
             held[i] = 0.0
+
+
+@kernel
+def agree_history(z_min, pos, vel, prev_pos, prev_vel, h):
+    """After a step of ``h`` s: the particles on the floor (centre at ``z_min``, m) get the history of
+    a straight motion at their present velocity (``prev_pos = pos - h vel``, ``prev_vel = vel``).
+    The floor stops a particle (or slows its sliding) at once; a multistep scheme extrapolating the
+    positions before that would carry on the old fall (BDF2 from ``pos`` and ``prev_pos``) and its
+    error estimate would see the floor's stop as a large error at the next step.  Particles held
+    at rest keep the history they have (at rest: the same).  Returns how many were on the floor."""
+    count = 0
+    for i in range(pos.shape[1]):
+        if pos[2, i] > z_min:
+            continue
+        count += 1
+        for c in range(3):
+            prev_pos[c, i] = pos[c, i] - h * vel[c, i]
+            prev_vel[c, i] = vel[c, i]
+    return count
