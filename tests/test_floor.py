@@ -1,0 +1,117 @@
+"""The tank floor (docs/model.md section 6.1): no penetration, Coulomb friction, and a cloth at rest on
+it held there during each step, so that its steps are set by the rest of its motion."""
+
+import numpy as np
+import pytest
+
+import wetcloth
+
+#: A heavy (saturated) 7 x 7 cloth lying flat 1 mm above the floor, under water: it settles at once.
+ON_FLOOR = dict(nx=7, ny=7, width=0.3, length=0.3, initial_tilt=0.0, initial_height=-0.498, floor_level=-0.5,
+                initial_saturation=1.0, absorption_rate=0.0)
+
+
+def test_a_cloth_resting_on_the_floor_takes_steps_of_max_step_and_stays_on_it():
+    """A sunk towel that keeps absorbing (so it never falls asleep) lands on the floor and lies there.
+
+    At rest every particle's centre is exactly on the floor (``floor_z``: the floor puts it there and
+    holds it), none below it, and nothing moves along the floor.  Before particles at rest were held,
+    each step pushed them into the floor by ``h^2 g'`` and the floor pushed them back, which BDF2's
+    error estimate took for an error of that size: ~450 steps per simulated second.  Now the steps
+    are those of ``max_step``: at most ``1 / max_step`` per second, plus one per output interval
+    (here 0.5 s) that does not divide into whole steps."""
+    scene = wetcloth.load_scene(nx=9, ny=9, initial_tilt=5.0, initial_height=-0.9, floor_level=-1.0,
+                                initial_saturation=0.95, absorption_capacity=4.0, absorption_rate=0.2)
+    sim = wetcloth.Simulation(scene)
+    floor = sim.model.floor_z
+    sim.advance(3.5)  # lands at ~1.5 s and settles by ~2.5 s
+    assert (sim.state.pos[2] == floor).all()
+    resting = sim.state.pos.copy()
+    water, steps, duration = sim.state.water.sum(), sim.steps, 5.0
+    for _ in range(int(duration / 0.5)):
+        sim.advance(0.5)
+        assert (sim.state.pos[2] >= floor).all()
+    assert not sim.sleeping and sim.state.water.sum() > water  # held by the floor, not asleep
+    np.testing.assert_array_equal(sim.state.pos, resting)
+    assert sim.steps - steps <= duration / scene.max_step + duration / 0.5
+
+
+@pytest.mark.parametrize("integrator", ["bdf2", "symplectic_euler"])
+def test_static_friction_holds_a_cloth_the_current_pulls_less_than_friction(integrator):
+    """Coulomb's static friction: a current drags the cloth along the floor with a force ``F_t``
+    pressing it down with ``F_n`` (weight less buoyancy); with ``floor_friction`` above ``F_t / F_n``
+    (computed from the model's own forces at rest) nothing moves, to the bit.  Drag and weight are
+    lumped by the same area shares, so the ratio is the same for every particle (checked)."""
+    mu_needed = _friction_ratio(0.3)
+    sim = wetcloth.Simulation(wetcloth.load_scene(**ON_FLOOR, floor_friction=1.02 * mu_needed, integrator=integrator))
+    sim.advance(0.5)
+    before = sim.state.pos.copy()
+    sim.set_inputs(current_x=0.3)
+    sim.advance(1.0)
+    np.testing.assert_array_equal(sim.state.pos, before)
+
+
+def test_a_cloth_the_current_pulls_harder_than_friction_slides_at_the_terminal_speed():
+    """With ``floor_friction`` at 0.6 of ``F_t / F_n`` the held particles are released and the cloth
+    slides until the drag of the water passing it balances sliding friction: ``F_t(u - v) = mu F_n``,
+    solved for ``v`` by bisection on the model's forces (drag relative to the cloth's velocity).
+
+    Tolerance: the floor's friction impulse comes after each step, so the centroid moves with the
+    velocity before it, which exceeds the velocity after it by ``mu (F_n / m) h`` (h the step); that
+    twice, plus 0.1 % of the speed for what is left of the approach (time constant ~0.4 s, after 4 s)."""
+    u, share = 0.3, 0.6
+    mu = share * _friction_ratio(u)
+    sim = wetcloth.Simulation(wetcloth.load_scene(**ON_FLOOR, floor_friction=mu))
+    sim.advance(0.5)
+    sim.set_inputs(current_x=u)
+    model, state = sim.model, sim.state
+
+    def pull_and_press(v):
+        vel = np.zeros_like(state.vel)
+        vel[0] = v
+        force = model.forces(state.pos.copy(), vel, state.water.copy())
+        return force[0].sum(), -force[2].sum()
+
+    low, high = 0.0, u
+    for _ in range(60):
+        middle = 0.5 * (low + high)
+        pull, press = pull_and_press(middle)
+        low, high = (middle, high) if pull > mu * press else (low, middle)
+    terminal = 0.5 * (low + high)
+    sim.advance(4.0)
+    x, steps = sim.outputs()["centroid_x"], sim.steps
+    sim.advance(1.0)
+    speed = sim.outputs()["centroid_x"] - x
+    step = 1.0 / (sim.steps - steps)
+    press = pull_and_press(terminal)[1] / model.mass(sim.state.water).sum()
+    assert speed == pytest.approx(terminal, abs=2 * mu * press * step + 1e-3 * terminal)
+    assert (sim.state.pos[2] >= model.floor_z).all()
+
+
+def test_rollback_on_the_floor_repeats_the_run_bit_for_bit():
+    """The held set is derived from the state at the start of each step, so a snapshot taken while the
+    cloth lies on the floor (and a current starts to pull it) restores a run that repeats exactly."""
+    sim = wetcloth.Simulation(wetcloth.load_scene(**ON_FLOOR, floor_friction=0.6 * _friction_ratio(0.3)))
+    sim.advance(0.5)
+    sim.set_inputs(current_x=0.3)
+    sim.advance(0.05)
+    snapshot = sim.snapshot()
+    sim.advance(0.3)
+    first = sim.state.copy()
+    sim.restore(snapshot)
+    sim.advance(0.3)
+    for name in ("pos", "vel", "water"):
+        np.testing.assert_array_equal(getattr(sim.state, name), getattr(first, name))
+
+
+def _friction_ratio(current: float) -> float:
+    """``F_t / F_n`` of the ON_FLOOR cloth at rest on the floor in a current (m/s) along x."""
+    sim = wetcloth.Simulation(wetcloth.load_scene(**ON_FLOOR))
+    sim.advance(0.5)
+    assert (sim.state.pos[2] == sim.model.floor_z).all()
+    sim.set_inputs(current_x=current)
+    state = sim.state
+    force = sim.model.forces(state.pos.copy(), np.zeros_like(state.vel), state.water.copy())
+    ratio = np.hypot(force[0], force[1]) / -force[2]
+    assert ratio.max() == pytest.approx(ratio.min(), rel=1e-8)
+    return float(ratio.max())
