@@ -206,7 +206,7 @@ class Simulation:
 
     @property
     def rejected_steps(self) -> int:
-        """Steps redone with a smaller size (adaptive mode)."""
+        """Steps redone: with a smaller size (adaptive mode), or with particles the floor no longer holds."""
         return int(self._clock[REJECTED])
 
     @property
