@@ -21,6 +21,23 @@ from wetcloth.simulation import OUTPUT_NAMES
 
 #: Small, fast scene used throughout: a 9 x 9 cloth (docs/model.md's coarsest refinement level).
 SMALL = {"nx": 9, "ny": 9}
+#: A cloth that explodes within a fraction of a second (fixed explicit steps far above the stable step
+#: of 1e6 N/m).  When exactly depends on the physics: ``last_good_time`` computes it.
+BLOW_UP = SMALL | {"integrator": "explicit_euler", "tolerance": 0.0, "max_step": 0.01, "stretch_stiffness": 1e6,
+                   "damping": 0.0}
+
+
+def last_good_time(params: dict, interval: float, duration: float = 1.0) -> float:
+    """The last communication point (s, multiple of ``interval``) that the Python simulator reaches
+    with ``params`` before it blows up, computed in this process: where a unit that refuses the
+    failing step stays."""
+    sim = wetcloth.Simulation(wetcloth.scene.from_dict(params))
+    for k in range(round(duration / interval)):
+        try:
+            sim.advance(interval)
+        except wetcloth.BlowUpError:
+            return k * interval
+    raise AssertionError(f"{params} did not blow up within {duration} s")
 
 _BUILT: dict[str, Path] = {}
 
