@@ -15,7 +15,8 @@ import numpy as np
 from wetcloth.kernels import kernel
 from wetcloth.kernels import plane as plane_preconditioner
 from wetcloth.kernels.assembly import forces_and_blocks
-from wetcloth.kernels.integration import _dot, copy, _system_matvec, invert_blocks, solve_pcg
+from wetcloth.kernels.integration import (_dot, _system_matvec, conjugate_gradient_step, copy, invert_blocks,
+                                          next_search_direction, solve_pcg)
 
 #: Scratch of the implicit steps, each (3, n) unless noted: ``mass`` (n) kg; ``rhs``, ``dv``,
 #: ``r``, ``z``, ``p``, ``ap`` of the linear solves; ``hat_pos``, ``hat_vel`` the BDF2 history
@@ -104,19 +105,12 @@ def _plane_pcg(cloth, work, solver, plane, b, x, rtol, floor, max_iterations):
         p_ap = _dot(p, ap)
         if not p_ap > 0.0:
             break
-        alpha = rz / p_ap
-        for c in range(3):
-            for i in range(x.shape[1]):
-                x[c, i] += alpha * p[c, i]
-                r[c, i] -= alpha * ap[c, i]
+        conjugate_gradient_step(rz / p_ap, p, ap, x, r)
         iterations += 1
         plane_preconditioner.apply(plane, cloth.free, r, z)
         rz_new = _dot(r, z)
-        beta = rz_new / rz
+        next_search_direction(rz_new / rz, z, p)
         rz = rz_new
-        for c in range(3):
-            for i in range(x.shape[1]):
-                p[c, i] = z[c, i] + beta * p[c, i]
     return iterations, _largest(z) <= accuracy
 
 

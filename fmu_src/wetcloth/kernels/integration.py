@@ -162,6 +162,24 @@ def _combine_first_guesses(offsets, direction, along, across, mass, blocks, inve
             r[c, i] = free[i] * b[c, i] - c1 * ap[c, i] - c2 * p[c, i]
 
 
+@kernel(inline="always")
+def conjugate_gradient_step(alpha, p, ap, x, r):
+    """One conjugate-gradient update along the search direction ``p`` (``ap`` = A p), in place:
+    ``x += alpha p``, ``r -= alpha A p``."""
+    for c in range(3):
+        for i in range(x.shape[1]):
+            x[c, i] += alpha * p[c, i]
+            r[c, i] -= alpha * ap[c, i]
+
+
+@kernel(inline="always")
+def next_search_direction(beta, z, p):
+    """The next conjugate-gradient search direction, in place: ``p = z + beta p``."""
+    for c in range(3):
+        for i in range(p.shape[1]):
+            p[c, i] = z[c, i] + beta * p[c, i]
+
+
 @kernel
 def solve_pcg(offsets, direction, along, across, mass, blocks, inverse, free, b, x, r, z, p, ap, buf, rtol,
               max_iterations):
@@ -189,18 +207,11 @@ def solve_pcg(offsets, direction, along, across, mass, blocks, inverse, free, b,
         p_ap = _dot(p, ap)
         if p_ap <= 0.0:
             break
-        alpha = rz / p_ap
-        for c in range(3):
-            for i in range(n):
-                x[c, i] += alpha * p[c, i]
-                r[c, i] -= alpha * ap[c, i]
+        conjugate_gradient_step(rz / p_ap, p, ap, x, r)
         apply_block_inverse(inverse, r, z)
         rz_new = _dot(r, z)
-        beta = rz_new / rz
+        next_search_direction(rz_new / rz, z, p)
         rz = rz_new
-        for c in range(3):
-            for i in range(n):
-                p[c, i] = z[c, i] + beta * p[c, i]
         residual = math.sqrt(_dot(r, r)) / b_norm
         iterations += 1
     return iterations, residual
