@@ -38,6 +38,15 @@ def contact_fraction(z_start, z_end, vz_start, vz_end, h, surface):
     return 1.0 - crossing if below_end else crossing
 
 
+@kernel(inline="always")
+def _room(capacity, dry_mass, water):
+    """(the water a particle holds when full, what it can still take) in kg; 0 for the second once
+    it counts as saturated (SATURATED)."""
+    full = capacity * dry_mass
+    missing = full - water
+    return full, (0.0 if missing <= SATURATED * full else missing)
+
+
 @kernel
 def uptake(z_start, z_end, vz_start, vz_end, surface, dry_mass, capacity, rate, h, water, out):
     """Absorbed water (kg) after a step of ``h`` s, into ``out`` (may be ``water``).
@@ -56,9 +65,8 @@ def uptake(z_start, z_end, vz_start, vz_end, surface, dry_mass, capacity, rate, 
         touching = contact_fraction(z_start[i], z_end[i], vz_start[i], vz_end[i], h, surface)
         if touching <= 0.0:
             continue
-        full = capacity * dry_mass[i]
-        missing = full - water[i]
-        if missing <= SATURATED * full:
+        full, missing = _room(capacity, dry_mass[i], water[i])
+        if missing == 0.0:
             continue
         active += 1
         decay = full_decay if touching == 1.0 else math.exp(-rate * touching * h / capacity)
@@ -76,9 +84,8 @@ def uptake_timing_error(z_start, z_end, vz_start, vz_end, surface, dry_mass, cap
     for i in range(water.shape[0]):
         if (z_start[i] < surface) == (z_end[i] < surface):
             continue
-        full = capacity * dry_mass[i]
-        missing = full - water[i]
-        if missing <= SATURATED * full:
+        missing = _room(capacity, dry_mass[i], water[i])[1]
+        if missing == 0.0:
             continue
         curved = contact_fraction(z_start[i], z_end[i], vz_start[i], vz_end[i], h, surface)
         straight = contact_fraction(z_start[i], z_end[i], 0.0, 0.0, 0.0, surface)
