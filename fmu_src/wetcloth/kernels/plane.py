@@ -30,6 +30,8 @@ import numpy as np
 from wetcloth.kernels import kernel
 from wetcloth.kernels.integration import copy
 from wetcloth.kernels.lapack import band_arguments, band_factor, band_solve_two
+from wetcloth.kernels.multigrid import (CENTRE, NX, NY, PAD_X, START, galerkin, level_sizes, make_hierarchy,
+                                        padded_index, v_cycle_down, v_cycle_up)
 
 #: Share of each stretch-spring family's stiffness in the t1 and t2 components.  The bending springs
 #: (1 % of the stretch stiffness in the presets) are left out: they would double the bandwidth
@@ -44,42 +46,58 @@ _SHARE = {"structural_x": (1.0, 0.0), "structural_y": (0.0, 1.0), "shear_up_righ
 REFACTOR_SCALE = 4.0
 REFACTOR_CHANGE = 0.25
 
-#: ``order`` (n) particle at each band position, ``rank`` (n) its inverse; ``weights`` (2, F, n) per spring, N/m, for t1, t2;
-#: ``bands`` (2, n, kd + 1) the factored band matrices and ``rows`` the same factors by rows
-#: (``lapack.band_factor``); ``info`` (2, 5) LAPACK arguments;
-#: ``reference`` [factored scale (s^2), 1 if factored] and ``reference_mass`` (n) kg; ``frame``
-#: (3, 3, n) each particle's axes t1, t2, n; ``normal`` (n) the normal component's diagonal;
-#: ``local`` (3, n) scratch.
-Plane = namedtuple("Plane", "order rank weights bands rows info reference reference_mass frame normal local")
+#: Multigrid (``multigrid.py``) on grids whose shorter side exceeds MULTIGRID_SIDE, coarsened until
+#: the shorter side is at most COARSEST_SIDE; smaller grids are solved by the banded factors alone.
+MULTIGRID_SIDE = 32
+COARSEST_SIDE = 12
+
+#: Stencil slot (``multigrid``) of the neighbour ``i + offset`` for each family in the preconditioner.
+_SLOT = {"structural_x": 5, "structural_y": 7, "shear_up_right": 8, "shear_up_left": 6}
+
+#: ``weights`` (2, F, n) per spring, N/m, for t1, t2; ``slots`` (F) int64 each family's stencil slot
+#: (-1: not in the preconditioner); ``grid`` the multigrid ``Hierarchy`` (one level on small grids);
+#: on the coarsest level, ``order`` (n_c) the padded index of each band position and ``rank`` its
+#: inverse over the level's padded points (-1 off the grid); ``bands`` (2, n_c, kd + 1) the factored
+#: band matrices and ``rows`` the same factors by rows (``lapack.band_factor``); ``info`` (2, 5)
+#: LAPACK arguments; ``reference`` [factored scale (s^2), 1 if factored] and ``reference_mass`` (n)
+#: kg; ``frame`` (3, 3, n) each particle's axes t1, t2, n; ``normal`` (n) the normal component's
+#: diagonal; ``local`` (2, n_c) scratch of the band solves.
+Plane = namedtuple("Plane", "weights slots grid order rank bands rows info reference reference_mass frame normal local")
 
 
 def make_plane(grid_x: int, grid_y: int, offsets: np.ndarray, family_names: tuple, stiffness: np.ndarray) -> Plane:
     """The preconditioner's arrays for a grid (row-major particles, ``grid_x`` per row)."""
     n = grid_x * grid_y
-    col, row = np.arange(n) % grid_x, np.arange(n) // grid_x
-    if grid_x <= grid_y:
-        order, kd = np.arange(n), grid_x + 1
+    sizes = level_sizes(grid_x, grid_y, COARSEST_SIDE) if min(grid_x, grid_y) > MULTIGRID_SIDE else [(grid_x, grid_y)]
+    grid = make_hierarchy(sizes)
+    cx, cy = sizes[-1]
+    n_c = cx * cy
+    col, row = np.arange(n_c) % cx, np.arange(n_c) // cx
+    if cx <= cy:
+        ordered, kd = np.arange(n_c), cx + 1
     else:  # order along the columns: the shorter side
-        order, kd = (col * grid_y + row).argsort(), grid_y + 1
-    kd = min(kd, n - 1)
+        ordered, kd = (col * cy + row).argsort(), cy + 1
+    kd = min(kd, n_c - 1)
+    start, pad = grid.levels[-1, START], grid.levels[-1, PAD_X]
+    order = (start + (row[ordered] + 1) * pad + col[ordered] + 1).astype(np.int64)
+    rank = np.full(pad * (cy + 3), -1, dtype=np.int64)
+    rank[order - start] = np.arange(n_c)
     weights = np.zeros((2, len(offsets), n))
     for f, name in enumerate(family_names):
         for c in range(2):
             weights[c, f] = _SHARE.get(name, (0.0, 0.0))[c] * stiffness[f]
-    info = np.stack([band_arguments(n, kd), band_arguments(n, kd)])
-    order = order.astype(np.int64)
-    rank = np.empty(n, dtype=np.int64)
-    rank[order] = np.arange(n)
-    return Plane(order=order, rank=rank, weights=weights, bands=np.zeros((2, n, kd + 1)),
-                 rows=np.zeros((2, n, kd + 1)), info=info,
+    slots = np.array([_SLOT.get(name, -1) for name in family_names], dtype=np.int64)
+    info = np.stack([band_arguments(n_c, kd), band_arguments(n_c, kd)])
+    return Plane(weights=weights, slots=slots, grid=grid, order=order, rank=rank, bands=np.zeros((2, n_c, kd + 1)),
+                 rows=np.zeros((2, n_c, kd + 1)), info=info,
                  reference=np.zeros(2), reference_mass=np.zeros(n), frame=np.repeat(np.eye(3)[:, :, None], n, axis=2),
-                 normal=np.ones(n),
-                 local=np.zeros((3, n)))
+                 normal=np.ones(n), local=np.zeros((2, n_c)))
 
 
 @kernel
 def refresh(plane, offsets, mass, scale):
-    """Factor ``M + scale L_c`` (scale = (beta h)^2, s^2) unless the factors in hand are close enough.
+    """Factor ``M + scale L_c`` (scale = (beta h)^2, s^2) unless the factors in hand are close enough:
+    the stencils of every level, and the banded Cholesky factors of the coarsest.
     Returns 1 if it factored, 0 if not, -1 if a matrix was not positive definite."""
     ref = plane.reference
     if ref[1] == 1.0 and 1.0 / REFACTOR_SCALE <= scale / ref[0] <= REFACTOR_SCALE:
@@ -91,24 +109,45 @@ def refresh(plane, offsets, mass, scale):
         if close:
             return 0
     n = mass.shape[0]
-    rank = plane.rank
+    grid = plane.grid
+    levels, coef = grid.levels, grid.coef
+    grid_x = levels[0, NX]
     for c in range(2):
-        band = plane.bands[c]
-        band[...] = 0.0
-        for k in range(n):
-            band[k, 0] = mass[plane.order[k]]
+        for k in range(9):
+            for p in range(levels[0, PAD_X] * (levels[0, NY] + 3)):
+                coef[c, k, p] = 0.0
+        for i in range(n):
+            coef[c, CENTRE, padded_index(levels, 0, i % grid_x, i // grid_x)] = mass[i]
         weights = plane.weights[c]
         for f in range(offsets.shape[0]):
+            k = plane.slots[f]
+            if k < 0:
+                continue
             off = offsets[f]
             for i in range(n - off):
                 w = scale * weights[f, i]
                 if w == 0.0:
                     continue
-                a, b = rank[i], rank[i + off]
-                lo, hi = min(a, b), max(a, b)
-                band[lo, 0] += w
-                band[hi, 0] += w
-                band[lo, hi - lo] -= w
+                p = padded_index(levels, 0, i % grid_x, i // grid_x)
+                q = padded_index(levels, 0, (i + off) % grid_x, (i + off) // grid_x)
+                coef[c, CENTRE, p] += w
+                coef[c, CENTRE, q] += w
+                coef[c, k, p] -= w
+                coef[c, 8 - k, q] -= w
+    coarsest = levels.shape[0] - 1
+    for level in range(coarsest):
+        galerkin(grid, level)
+    start, pad = levels[coarsest, START], levels[coarsest, PAD_X]
+    for c in range(2):
+        band = plane.bands[c]
+        band[...] = 0.0
+        for position in range(plane.order.shape[0]):
+            p = plane.order[position]
+            band[position, 0] = coef[c, CENTRE, p]
+            for k in range(9):
+                other = plane.rank[p + (k // 3 - 1) * pad + k % 3 - 1 - start]
+                if other > position:
+                    band[position, other - position] = coef[c, k, p]
         if band_factor(band, plane.rows[c], plane.info[c]) != 0:
             ref[1] = 0.0
             return -1
@@ -180,17 +219,39 @@ def set_normal_diagonal(plane, mass, diagonal_blocks, blocks):
 
 @kernel
 def apply(plane, free, r, z):
-    """z = P^-1 r, rows of pinned particles zero."""
-    n = r.shape[1]
+    """z = P^-1 r, rows of pinned particles zero.  Loops over rows of the grid and views of them
+    (see ``multigrid._neighbour_rows``: vectorised loops)."""
     f = plane.frame
-    local = plane.local
-    for k in range(n):
-        i = plane.order[k]
+    grid = plane.grid
+    levels, b, x, local, normal = grid.levels, grid.b, grid.x, plane.local, grid.row
+    grid_x, grid_y = levels[0, NX], levels[0, NY]
+    for iy in range(grid_y):
+        first, base = iy * grid_x, padded_index(levels, 0, 0, iy)
+        r0, r1, r2 = r[0, first:first + grid_x], r[1, first:first + grid_x], r[2, first:first + grid_x]
         for c in range(2):
-            local[c, k] = f[c, 0, i] * r[0, i] + f[c, 1, i] * r[1, i] + f[c, 2, i] * r[2, i]
-    band_solve_two(plane.bands, plane.rows, local[:2])
-    for k in range(n):
-        i = plane.order[k]
-        normal = (f[2, 0, i] * r[0, i] + f[2, 1, i] * r[1, i] + f[2, 2, i] * r[2, i]) / plane.normal[i]
+            f0, f1, f2 = f[c, 0, first:first + grid_x], f[c, 1, first:first + grid_x], f[c, 2, first:first + grid_x]
+            bc = b[c, base:base + grid_x]
+            for s in range(grid_x):
+                bc[s] = f0[s] * r0[s] + f1[s] * r1[s] + f2[s] * r2[s]
+    v_cycle_down(grid)
+    for position in range(plane.order.shape[0]):
+        for c in range(2):
+            local[c, position] = b[c, plane.order[position]]
+    band_solve_two(plane.bands, plane.rows, local)
+    for position in range(plane.order.shape[0]):
+        for c in range(2):
+            x[c, plane.order[position]] = local[c, position]
+    v_cycle_up(grid)
+    for iy in range(grid_y):
+        first, base = iy * grid_x, padded_index(levels, 0, 0, iy)
+        r0, r1, r2 = r[0, first:first + grid_x], r[1, first:first + grid_x], r[2, first:first + grid_x]
+        n0, n1, n2 = f[2, 0, first:first + grid_x], f[2, 1, first:first + grid_x], f[2, 2, first:first + grid_x]
+        diagonal = plane.normal[first:first + grid_x]
+        for s in range(grid_x):
+            normal[s] = (n0[s] * r0[s] + n1[s] * r1[s] + n2[s] * r2[s]) / diagonal[s]
+        x0, x1, weight = x[0, base:base + grid_x], x[1, base:base + grid_x], free[first:first + grid_x]
         for c in range(3):
-            z[c, i] = free[i] * (f[0, c, i] * local[0, k] + f[1, c, i] * local[1, k] + f[2, c, i] * normal)
+            t1, t2, zc = f[0, c, first:first + grid_x], f[1, c, first:first + grid_x], z[c, first:first + grid_x]
+            u = f[2, c, first:first + grid_x]
+            for s in range(grid_x):
+                zc[s] = weight[s] * (t1[s] * x0[s] + t2[s] * x1[s] + u[s] * normal[s])
