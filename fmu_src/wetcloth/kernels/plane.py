@@ -48,7 +48,7 @@ REFACTOR_CHANGE = 0.25
 
 #: Multigrid (``multigrid.py``) on grids whose shorter side exceeds MULTIGRID_SIDE, coarsened until
 #: the shorter side is at most COARSEST_SIDE; smaller grids are solved by the banded factors alone.
-MULTIGRID_SIDE = 32
+MULTIGRID_SIDE = 28
 COARSEST_SIDE = 12
 
 #: Stencil slot (``multigrid``) of the neighbour ``i + offset`` for each family in the preconditioner.
@@ -65,10 +65,13 @@ _SLOT = {"structural_x": 5, "structural_y": 7, "shear_up_right": 8, "shear_up_le
 Plane = namedtuple("Plane", "weights slots grid order rank bands rows info reference reference_mass frame normal local")
 
 
-def make_plane(grid_x: int, grid_y: int, offsets: np.ndarray, family_names: tuple, stiffness: np.ndarray) -> Plane:
-    """The preconditioner's arrays for a grid (row-major particles, ``grid_x`` per row)."""
+def make_plane(grid_x: int, grid_y: int, offsets: np.ndarray, family_names: tuple, stiffness: np.ndarray,
+               multigrid_side: int | None = None) -> Plane:
+    """The preconditioner's arrays for a grid (row-major particles, ``grid_x`` per row); multigrid if
+    the shorter side exceeds ``multigrid_side`` (default MULTIGRID_SIDE)."""
     n = grid_x * grid_y
-    sizes = level_sizes(grid_x, grid_y, COARSEST_SIDE) if min(grid_x, grid_y) > MULTIGRID_SIDE else [(grid_x, grid_y)]
+    multigrid_side = MULTIGRID_SIDE if multigrid_side is None else multigrid_side
+    sizes = level_sizes(grid_x, grid_y, COARSEST_SIDE) if min(grid_x, grid_y) > multigrid_side else [(grid_x, grid_y)]
     grid = make_hierarchy(sizes)
     cx, cy = sizes[-1]
     n_c = cx * cy
