@@ -5,18 +5,24 @@ which are stiff along their own direction only: a flat cloth is stiff in its pla
 it.  In each particle's frame (t1, t2, n) that follows the cloth's surface there (t1 along its row,
 n its normal) this preconditioner keeps that structure:
 
-* the t1 and t2 components each get a scalar band matrix ``M + h^2 L_c``, with ``L_c`` the graph
+* the t1 and t2 components each get a scalar matrix ``M + h^2 L_c``, with ``L_c`` the graph
   Laplacian of the springs weighted by their rest stiffness times the share of their direction in
   that component (structural springs all in one, shear half in each).  These depend on neither
-  the positions nor the taut set, so they are factored (LAPACK's banded Cholesky) only when the
-  step's ``h`` or the masses have changed much (``REFACTOR_SCALE``, ``REFACTOR_CHANGE``), not at
-  every step;
+  the positions nor the taut set, so they are factored only when the step's ``h`` or the masses
+  have changed much (``REFACTOR_SCALE``, ``REFACTOR_CHANGE``), not at every step.  Small grids
+  solve them exactly with LAPACK's banded Cholesky; on large grids (shorter side above
+  MULTIGRID_SIDE) one multigrid V-cycle (``multigrid.py``) approximates their inverse, with the
+  banded Cholesky on its coarsest grid only;
 * the normal component gets the normal-normal entry of each particle's 3x3 diagonal block of A
   (mass, drag, buoyancy, and whatever stiffness the springs have across the plane).
 
-The bands are ordered along the grid's shorter side, so their half-bandwidth is that side plus one.  Conjugate gradients on A with this preconditioner need a
-handful of iterations on a floating or sinking towel at 1/30 s steps, where the isotropic
-Laplacian of projective dynamics needed hundreds (docs/benchmarks.md, Simulator step).
+The bands are ordered along the grid's shorter side, so their half-bandwidth is that side plus one
+and a band solve costs O(n x shorter side), a factorisation O(n x shorter side^2); the V-cycle
+costs O(n) for both (at 81 x 81: 0.36 against 2.7 ms per application, 8 ms against 0.3-1.2 s per
+factorisation, measured on the shared machine; docs/benchmarks.md, Large steps).  Conjugate
+gradients on A with this preconditioner need a handful of iterations on a floating or sinking
+towel at 1/30 s steps, where the isotropic Laplacian of projective dynamics needed hundreds
+(docs/benchmarks.md, Simulator step); the V-cycle instead of the exact inverse adds about 8 %.
 """
 
 from __future__ import annotations
@@ -48,6 +54,8 @@ REFACTOR_CHANGE = 0.25
 
 #: Multigrid (``multigrid.py``) on grids whose shorter side exceeds MULTIGRID_SIDE, coarsened until
 #: the shorter side is at most COARSEST_SIDE; smaller grids are solved by the banded factors alone.
+#: Crossover measured (one application, same process, shared machine): banded 50 and multigrid 53 us
+#: on the 21 x 29 towel, 49 and 49 us at 24 x 24, 134 and 82 us at 32 x 32, 814 and 222 us at 64 x 64.
 MULTIGRID_SIDE = 28
 COARSEST_SIDE = 12
 
