@@ -3,6 +3,7 @@
     .venv/bin/python bench/large_steps.py towel [--repeat 2]     # 21 x 29 towel, 90 s at 30 Hz
     .venv/bin/python bench/large_steps.py grids [--seconds 3]    # 64 x 64 towel, 81 x 81 sheet, at 30 Hz
     .venv/bin/python bench/large_steps.py grids --whole          # also the 64 x 64 towel's whole 90 s
+    .venv/bin/python bench/large_steps.py preconditioner         # one application, banded and multigrid
 
 ``towel``: the default towel (``models/towel.toml``) for its 90 s, outputs read at 30 Hz as the FMU
 and the frame export read them, with the current defaults and with the previous default
@@ -16,6 +17,11 @@ simulated from the drop (the landing), alternately with the preconditioner's ban
 whole grid instead of its multigrid cycle (``kernels/plane.py``), best of ``--repeat``; then the
 previous default over a tenth of that.  ``--whole``: also the 64 x 64 towel's whole run (90 s, as
 the default towel), with the real-time factors of its landing and of the whole run.
+
+``preconditioner``: one application of the plane preconditioner (``kernels/plane.py``) with the
+banded factors and with the multigrid cycle, alternately, best of 7 batches, from the default
+towel's 21 x 29 to 128 x 128 (the crossover that sets ``plane.MULTIGRID_SIDE``), and one
+refactorisation of each.
 """
 
 from __future__ import annotations
@@ -127,14 +133,48 @@ def whole_run(landing: float) -> None:
           f"{counts['newton_iterations']}, CG {counts['cg_iterations']}", flush=True)
 
 
+def preconditioner() -> None:
+    from wetcloth.model import Model
+    for nx, ny in ((21, 29), (24, 24), (32, 32), (48, 48), (64, 64), (81, 81), (128, 128)):
+        topology = Model(wetcloth.load_scene(nx=nx, ny=ny)).topology
+        n = topology.n
+        mass, scale, free = np.full(n, 5e-4 * 441 / n), (2.0 / 3.0 / FPS) ** 2, np.ones(n)
+        r, z = np.random.default_rng(0).standard_normal((3, n)), np.zeros((3, n))
+        planes = {setting: plane.make_plane(nx, ny, topology.spring_offset, topology.spring_family_names,
+                                            topology.spring_stiffness, multigrid_side=side)
+                  for setting, side in (("banded", 1 << 30), ("multigrid", 0))}
+        best = dict.fromkeys(planes, float("inf"))
+        factor = dict.fromkeys(planes, float("inf"))
+        count = max(3, int(2e5 / n))
+        for _ in range(7):
+            for setting, p in planes.items():
+                start = time.perf_counter()
+                p.reference[1] = 0.0
+                plane.refresh(p, topology.spring_offset, mass, scale)
+                factor[setting] = min(factor[setting], time.perf_counter() - start)
+                start = time.perf_counter()
+                for _ in range(count):
+                    plane.apply(p, free, r, z)
+                best[setting] = min(best[setting], (time.perf_counter() - start) / count)
+        print(f"{nx} x {ny}: one application banded {best['banded'] * 1e6:.0f} us, multigrid "
+              f"{best['multigrid'] * 1e6:.0f} us ({len(planes['multigrid'].grid.levels)} levels), "
+              f"{best['banded'] / best['multigrid']:.2f}x; refactorisation {factor['banded'] * 1e3:.2f} against "
+              f"{factor['multigrid'] * 1e3:.2f} ms", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("job", choices=("towel", "grids"))
+    parser.add_argument("job", choices=("towel", "grids", "preconditioner"))
     parser.add_argument("--repeat", type=int, default=2)
     parser.add_argument("--seconds", type=float, default=3.0)
     parser.add_argument("--whole", action="store_true", help="grids: also the 64 x 64 towel's whole run")
     args = parser.parse_args()
-    towel(args.repeat) if args.job == "towel" else grids(args.seconds, args.repeat, args.whole)
+    if args.job == "towel":
+        towel(args.repeat)
+    elif args.job == "grids":
+        grids(args.seconds, args.repeat, args.whole)
+    else:
+        preconditioner()
 
 
 if __name__ == "__main__":

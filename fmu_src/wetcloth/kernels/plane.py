@@ -54,9 +54,11 @@ REFACTOR_CHANGE = 0.25
 
 #: Multigrid (``multigrid.py``) on grids whose shorter side exceeds MULTIGRID_SIDE, coarsened until
 #: the shorter side is at most COARSEST_SIDE; smaller grids are solved by the banded factors alone.
-#: Crossover measured (one application, same process, shared machine): banded 50 and multigrid 53 us
-#: on the 21 x 29 towel, 49 and 49 us at 24 x 24, 134 and 82 us at 32 x 32, 814 and 222 us at 64 x 64.
-MULTIGRID_SIDE = 28
+#: Crossover (``bench/large_steps.py preconditioner``: one application, both alternately, shared
+#: machine, two runs at different loads): the multigrid 0.92-0.96x as fast as the banded solve on the
+#: 21 x 29 towel, 0.76-0.99x at 24 x 24, 1.16-1.63x at 32 x 32, 1.03-1.59x at 48 x 48, 3.7x at 64 x 64;
+#: CG needs about 8 % more iterations with it, so it pays from about 40 across.
+MULTIGRID_SIDE = 40
 COARSEST_SIDE = 12
 
 #: Stencil slot (``multigrid``) of the neighbour ``i + offset`` for each family in the preconditioner.
