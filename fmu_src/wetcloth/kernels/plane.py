@@ -48,7 +48,8 @@ _SHARE = {"structural_x": (1.0, 0.0), "structural_y": (0.0, 1.0), "shear_up_righ
 #: Refactor when (beta h)^2 has changed by more than the factor REFACTOR_SCALE (the step by more
 #: than 2x), or any particle's mass by more than REFACTOR_CHANGE, since the last factorisation.  An
 #: impact that shrinks and regrows the step over a few frames then costs a few factorisations, not
-#: one per step (on a 64 x 64 towel a factorisation costs as much as 20 CG iterations).
+#: one per step (with the banded factors on a 64 x 64 towel a factorisation cost as much as 20 CG
+#: iterations; the multigrid's Galerkin products, 2 ms there, as about 3).
 REFACTOR_SCALE = 4.0
 REFACTOR_CHANGE = 0.25
 
