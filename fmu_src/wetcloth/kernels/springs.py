@@ -57,6 +57,17 @@ def _pair_views(off, pos, vel, saturation):
             saturation[:m], saturation[off:])
 
 
+@kernel(inline="always")
+def _spring_geometry(xi, yi, zi, xj, yj, zj, kf, si, sj, wet_factor):
+    """Separation ``d = x_i - x_j`` (3 values, m), length ``L`` (m), ``1 / L`` (1/m; finite for a spring of
+    no length) and stiffness ``kf`` (N/m) scaled by the saturations ``si``, ``sj`` of both ends."""
+    dx = xi - xj
+    dy = yi - yj
+    dz = zi - zj
+    length = math.sqrt(dx * dx + dy * dy + dz * dz)
+    return dx, dy, dz, length, 1.0 / max(length, _TINY_LENGTH), kf * (1.0 + wet_factor * 0.5 * (si + sj))
+
+
 @kernel
 def _tension(off, l0, tension_only, projected, kf, cf, wet_factor, saturation, pos, vel, t):
     """t[k] (N/m): spring k's force on its first end is ``t[k] * (x_i - x_j)`` (plus thesis damping).
@@ -70,15 +81,11 @@ def _tension(off, l0, tension_only, projected, kf, cf, wet_factor, saturation, p
     damp = 1.0 if projected else 0.0
     width = TENSION_ROUNDING * l0
     for k in range(m):
-        dx = xi[k] - xj[k]
-        dy = yi[k] - yj[k]
-        dz = zi[k] - zj[k]
-        length = math.sqrt(dx * dx + dy * dy + dz * dz)
-        inv = 1.0 / max(length, _TINY_LENGTH)
+        dx, dy, dz, length, inv, stiffness = _spring_geometry(xi[k], yi[k], zi[k], xj[k], yj[k], zj[k], kf[k], si[k], sj[k],
+                                                              wet_factor)
         stretch = length - l0
         if tension_only:
             stretch = pulling_stretch(stretch, width)[0]
-        stiffness = kf[k] * (1.0 + wet_factor * 0.5 * (si[k] + sj[k]))
         rate = (vxi[k] - vxj[k]) * dx + (vyi[k] - vyj[k]) * dy + (vzi[k] - vzj[k]) * dz
         t[k] = -(stiffness * stretch * inv + damp * cf[k] * rate * inv * inv)
 
@@ -91,6 +98,17 @@ def _apply_pair_term(off, t, a, out, buf):
     for k in range(m):
         buf[k] = t[k] * (ai[k] - aj[k])
     add_to_both_ends(buf, off, out, -1.0)
+
+
+@kernel
+def _thesis_damping(off, cf, vel, force, negated, scratch):
+    """Add the thesis damping (eq. 3.2) ``-c (v_i - v_j)`` to ``force`` at each spring's first end and
+    the opposite at its second; ``negated`` and ``scratch`` are (n) scratch."""
+    m = vel.shape[1] - off
+    for k in range(m):
+        negated[k] = -cf[k]
+    for c in range(3):
+        _apply_pair_term(off, negated, vel[c], force[c], scratch)
 
 
 @kernel
@@ -109,11 +127,7 @@ def spring_forces(offsets, rest, tension_only, stiffness, damping, projected, we
         for c in range(3):
             _apply_pair_term(off, t, pos[c], force[c], scratch)
         if not projected:
-            m = pos.shape[1] - off
-            for k in range(m):
-                negated[k] = -damping[f, k]
-            for c in range(3):
-                _apply_pair_term(off, negated, vel[c], force[c], scratch)
+            _thesis_damping(off, damping[f], vel, force, negated, scratch)
 
 
 @kernel
@@ -129,11 +143,8 @@ def _blocks(off, l0, tension_only, projected, kf, cf, wet_factor, saturation, po
     width = TENSION_ROUNDING * l0
     h2 = h * h
     for k in range(m):
-        dx = xi[k] - xj[k]
-        dy = yi[k] - yj[k]
-        dz = zi[k] - zj[k]
-        length = math.sqrt(dx * dx + dy * dy + dz * dz)
-        inv = 1.0 / max(length, _TINY_LENGTH)
+        dx, dy, dz, length, inv, stiffness = _spring_geometry(xi[k], yi[k], zi[k], xj[k], yj[k], zj[k], kf[k], si[k], sj[k],
+                                                              wet_factor)
         ux[k] = dx * inv
         uy[k] = dy * inv
         uz[k] = dz * inv
@@ -141,7 +152,6 @@ def _blocks(off, l0, tension_only, projected, kf, cf, wet_factor, saturation, po
         slope = 1.0
         if tension_only:
             stretch, slope = pulling_stretch(stretch, width)
-        stiffness = kf[k] * (1.0 + wet_factor * 0.5 * (si[k] + sj[k]))
         rate[k] = (vxi[k] - vxj[k]) * ux[k] + (vyi[k] - vyj[k]) * uy[k] + (vzi[k] - vzj[k]) * uz[k]
         t[k] = -(stiffness * stretch * inv + damp_along * cf[k] * rate[k] * inv)
         # Geometric stiffness k s / L only while pulling, so every block stays positive.
@@ -175,17 +185,17 @@ def spring_forces_and_blocks(
                 u, al, ac, rate)
         for c in range(3):
             _apply_pair_term(off, t, pos[c], force[c], scratch)
-        # Thesis damping -c (v_i - v_j); stiffness part of the blocks times the relative velocity,
+        if not projected:
+            _thesis_damping(off, cf, vel, force, t, scratch)
+        # The stiffness part of the blocks times the relative velocity,
         # h^2 K v = -(h^2 k_across) dv - h^2 (k_along - k_across) (u . dv) u.
         thesis = 0.0 if projected else 1.0
         for k in range(m):
-            value[k] = -(ac[k] - thesis * h * cf[k])
-            t[k] = -thesis * cf[k]
+            value[k] = -(ac[k] - thesis * h * cf[k])  # -h^2 k_across
         for c in range(3):
-            _apply_pair_term(off, t, vel[c], force[c], scratch)
             _apply_pair_term(off, value, vel[c], rhs[c], scratch)
         for k in range(m):
-            t[k] = -((al[k] - h * cf[k]) - (ac[k] - thesis * h * cf[k])) * rate[k]
+            t[k] = -((al[k] - h * cf[k]) + value[k]) * rate[k]
         for c in range(3):
             uc = u[c]
             for k in range(m):
