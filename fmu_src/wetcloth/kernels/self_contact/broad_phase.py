@@ -144,8 +144,25 @@ def _cell(v, cell):
 
 
 @kernel(inline="always")
-def _bucket(ix, iy, iz, mask):
-    return ((ix * _HASH_X) ^ (iy * _HASH_Y) ^ (iz * _HASH_Z)) & mask
+def _box_cells(lo, hi, e, pad, cell):
+    """The hash cells that box ``[lo - pad, hi + pad]`` of element ``e`` overlaps: its first cell
+    (ix, iy, iz) and how many cells it spans along x, y, z (each at least 1)."""
+    ix, iy, iz = _cell(lo[0, e] - pad, cell), _cell(lo[1, e] - pad, cell), _cell(lo[2, e] - pad, cell)
+    return (ix, iy, iz, _cell(hi[0, e] + pad, cell) - ix + 1, _cell(hi[1, e] + pad, cell) - iy + 1,
+            _cell(hi[2, e] + pad, cell) - iz + 1)
+
+
+@kernel(inline="always")
+def _cell_count(cells):
+    return cells[3] * cells[4] * cells[5]
+
+
+@kernel(inline="always")
+def _bucket(cells, c, mask):
+    """The hash bucket of cell ``c`` (0 to ``_cell_count(cells) - 1``; x slowest, z fastest) of a box's
+    ``cells`` (``_box_cells``)."""
+    ix, iy, iz, _, ny, nz = cells
+    return (((ix + c // (ny * nz)) * _HASH_X) ^ ((iy + c // nz % ny) * _HASH_Y) ^ ((iz + c % nz) * _HASH_Z)) & mask
 
 
 @kernel
@@ -154,21 +171,19 @@ def _hash(lo, hi, pad, cell, mask):
     cell it overlaps.  Returns (start (buckets + 1), items): bucket b holds items[start[b]:start[b+1]]."""
     count = np.zeros(mask + 2, dtype=np.int64)
     for e in range(lo.shape[1]):
-        for ix in range(_cell(lo[0, e] - pad, cell), _cell(hi[0, e] + pad, cell) + 1):
-            for iy in range(_cell(lo[1, e] - pad, cell), _cell(hi[1, e] + pad, cell) + 1):
-                for iz in range(_cell(lo[2, e] - pad, cell), _cell(hi[2, e] + pad, cell) + 1):
-                    count[_bucket(ix, iy, iz, mask) + 1] += 1
+        cells = _box_cells(lo, hi, e, pad, cell)
+        for c in range(_cell_count(cells)):
+            count[_bucket(cells, c, mask) + 1] += 1
     for b in range(mask + 1):
         count[b + 1] += count[b]
     start = count.copy()
     items = np.empty(count[mask + 1], dtype=np.int64)
     for e in range(lo.shape[1]):
-        for ix in range(_cell(lo[0, e] - pad, cell), _cell(hi[0, e] + pad, cell) + 1):
-            for iy in range(_cell(lo[1, e] - pad, cell), _cell(hi[1, e] + pad, cell) + 1):
-                for iz in range(_cell(lo[2, e] - pad, cell), _cell(hi[2, e] + pad, cell) + 1):
-                    b = _bucket(ix, iy, iz, mask)
-                    items[count[b]] = e
-                    count[b] += 1
+        cells = _box_cells(lo, hi, e, pad, cell)
+        for c in range(_cell_count(cells)):
+            b = _bucket(cells, c, mask)
+            items[count[b]] = e
+            count[b] += 1
     return start, items
 
 
@@ -196,15 +211,24 @@ def _append(pairs, count, a, b):
 
 
 @kernel(inline="always")
-def _inside(p, lo, hi, e, pad):
-    return (lo[0, e] - pad <= p[0] <= hi[0, e] + pad and lo[1, e] - pad <= p[1] <= hi[1, e] + pad
-            and lo[2, e] - pad <= p[2] <= hi[2, e] + pad)
-
-
-@kernel(inline="always")
 def _boxes_overlap(lo, hi, a, lo2, hi2, b, pad):
     return (lo[0, a] <= hi2[0, b] + pad and lo2[0, b] - pad <= hi[0, a] and lo[1, a] <= hi2[1, b] + pad
             and lo2[1, b] - pad <= hi[1, a] and lo[2, a] <= hi2[2, b] + pad and lo2[2, b] - pad <= hi[2, a])
+
+
+@kernel(inline="always")
+def _particle(first, second, a, b, slot):
+    """Particle ``slot`` (0 to 3) of the pair of element ``a`` (a row of ``first``) and ``b`` (of ``second``)."""
+    return first[a, slot] if slot < first.shape[1] else second[b, slot - first.shape[1]]
+
+
+@kernel(inline="always")
+def _share_a_particle(first, second, a, b):
+    for i in range(first.shape[1]):
+        for j in range(second.shape[1]):
+            if first[a, i] == second[b, j]:
+                return True
+    return False
 
 
 @kernel(inline="always")
@@ -218,57 +242,32 @@ def _candidate(kind, x, rest, a, b, c, d, reach, thickness):
 
 
 @kernel
-def _point_triangle_pairs(x, rest, triangles, lo, hi, reach, thickness, cell):
-    n = x.shape[1]
-    mask = _buckets_for(8 * triangles.shape[0])
+def _pairs(kind, x, rest, first, first_lo, first_hi, second, lo, hi, reach, thickness, cell):
+    """The candidate pairs (2, count) of one ``kind``: (a, b) for element ``a`` of ``first`` (particles
+    (count, 1) for POINT_TRIANGLE, edges for EDGE_EDGE; boxes ``first_lo``, ``first_hi``) and element
+    ``b`` of ``second`` (triangles, or the same edges: then each pair once, a < b; boxes ``lo``, ``hi``),
+    found through a spatial hash of the second elements' boxes grown by ``reach``."""
+    mask = _buckets_for(8 * second.shape[0])
     start, items = _hash(lo, hi, reach, cell, mask)
-    seen = np.full(triangles.shape[0], -1, dtype=np.int64)
+    seen = np.full(second.shape[0], -1, dtype=np.int64)
     pairs = np.empty((2, _FIRST_CAPACITY), dtype=np.int64)
     count = 0
-    for p in range(n):
-        xp = point(x, p)
-        b = _bucket(_cell(xp[0], cell), _cell(xp[1], cell), _cell(xp[2], cell), mask)
-        for k in range(start[b], start[b + 1]):
-            t = items[k]
-            if seen[t] == p:
-                continue
-            seen[t] = p
-            i, j, l = triangles[t, 0], triangles[t, 1], triangles[t, 2]
-            if p == i or p == j or p == l or not _inside(xp, lo, hi, t, reach):
-                continue
-            if not _candidate(POINT_TRIANGLE, x, rest, p, i, j, l, reach, thickness):
-                continue
-            pairs = _append(pairs, count, p, t)
-            count += 1
-    return pairs[:, :count].copy()
-
-
-@kernel
-def _edge_edge_pairs(x, rest, edges, lo, hi, reach, thickness, cell):
-    m = edges.shape[0]
-    mask = _buckets_for(8 * m)
-    start, items = _hash(lo, hi, reach, cell, mask)
-    seen = np.full(m, -1, dtype=np.int64)
-    pairs = np.empty((2, _FIRST_CAPACITY), dtype=np.int64)
-    count = 0
-    for a in range(m):
-        i, j = edges[a, 0], edges[a, 1]
-        for ix in range(_cell(lo[0, a], cell), _cell(hi[0, a], cell) + 1):
-            for iy in range(_cell(lo[1, a], cell), _cell(hi[1, a], cell) + 1):
-                for iz in range(_cell(lo[2, a], cell), _cell(hi[2, a], cell) + 1):
-                    b = _bucket(ix, iy, iz, mask)
-                    for k in range(start[b], start[b + 1]):
-                        e = items[k]
-                        if e <= a or seen[e] == a:
-                            continue
-                        seen[e] = a
-                        u, v = edges[e, 0], edges[e, 1]
-                        if i == u or i == v or j == u or j == v or not _boxes_overlap(lo, hi, a, lo, hi, e, reach):
-                            continue
-                        if not _candidate(EDGE_EDGE, x, rest, i, j, u, v, reach, thickness):
-                            continue
-                        pairs = _append(pairs, count, a, e)
-                        count += 1
+    for a in range(first.shape[0]):
+        cells = _box_cells(first_lo, first_hi, a, 0.0, cell)
+        for c in range(_cell_count(cells)):
+            b = _bucket(cells, c, mask)
+            for k in range(start[b], start[b + 1]):
+                e = items[k]
+                if (kind == EDGE_EDGE and e <= a) or seen[e] == a:
+                    continue
+                seen[e] = a
+                if _share_a_particle(first, second, a, e) or not _boxes_overlap(first_lo, first_hi, a, lo, hi, e, reach):
+                    continue
+                if not _candidate(kind, x, rest, _particle(first, second, a, e, 0), _particle(first, second, a, e, 1),
+                                  _particle(first, second, a, e, 2), _particle(first, second, a, e, 3), reach, thickness):
+                    continue
+                pairs = _append(pairs, count, a, e)
+                count += 1
     return pairs[:, :count].copy()
 
 
@@ -293,7 +292,10 @@ def build(contact, thickness, margin):
         total += extent
         largest = max(largest, extent)
     cell = max(total / max(1, triangles.shape[0]), 0.125 * largest) + 2.0 * reach
-    contact.pairs[0] = _point_triangle_pairs(x, contact.rest, triangles, tri_lo, tri_hi, reach, thickness, cell)
-    contact.pairs[1] = _edge_edge_pairs(x, contact.rest, edges, edge_lo, edge_hi, reach, thickness, cell)
+    particles = np.arange(x.shape[1]).reshape((x.shape[1], 1))
+    contact.pairs[POINT_TRIANGLE] = _pairs(POINT_TRIANGLE, x, contact.rest, particles, x, x, triangles, tri_lo, tri_hi,
+                                           reach, thickness, cell)
+    contact.pairs[EDGE_EDGE] = _pairs(EDGE_EDGE, x, contact.rest, edges, edge_lo, edge_hi, edges, edge_lo, edge_hi, reach,
+                                      thickness, cell)
     contact.margin[0] = margin
     contact.counters[REBUILDS] += 1

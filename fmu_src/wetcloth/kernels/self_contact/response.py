@@ -45,13 +45,15 @@ ATTEMPTS = 6
 
 
 @kernel(inline="always")
-def _vertices(kind, contact, pairs, k):
-    """The four particles of candidate ``k``."""
-    if kind == POINT_TRIANGLE:
-        t = pairs[1, k]
-        return (pairs[0, k], contact.triangles[t, 0], contact.triangles[t, 1], contact.triangles[t, 2])
-    a, b = pairs[0, k], pairs[1, k]
-    return (contact.edges[a, 0], contact.edges[a, 1], contact.edges[b, 0], contact.edges[b, 1])
+def _candidate(contact, point_triangle, edge_edge, j):
+    """Kind and four particles of candidate ``j`` of the whole list: the point-triangle pairs
+    (``contact.pairs[POINT_TRIANGLE]``, passed as ``point_triangle``) first, then the edge-edge ones."""
+    if j < point_triangle.shape[1]:
+        t = point_triangle[1, j]
+        return POINT_TRIANGLE, (point_triangle[0, j], contact.triangles[t, 0], contact.triangles[t, 1],
+                                contact.triangles[t, 2])
+    a, b = edge_edge[0, j - point_triangle.shape[1]], edge_edge[1, j - point_triangle.shape[1]]
+    return EDGE_EDGE, (contact.edges[a, 0], contact.edges[a, 1], contact.edges[b, 0], contact.edges[b, 1])
 
 
 @kernel(inline="always")
@@ -72,13 +74,11 @@ def _at(x0, p, t):
 
 @kernel
 def _start_distances(contact, x0, out):
-    """Each candidate's distance (m) at the start of the step: point-triangle pairs, then edge-edge."""
-    for kind in (POINT_TRIANGLE, EDGE_EDGE):
-        pairs = contact.pairs[kind]
-        offset = 0 if kind == POINT_TRIANGLE else contact.pairs[POINT_TRIANGLE].shape[1]
-        for k in range(pairs.shape[1]):
-            idx = _vertices(kind, contact, pairs, k)
-            out[offset + k] = distance(kind, point(x0, idx[0]), point(x0, idx[1]), point(x0, idx[2]), point(x0, idx[3]))
+    """Each candidate's distance (m) at the start of the step (in the order of ``_candidate``)."""
+    point_triangle, edge_edge = contact.pairs[POINT_TRIANGLE], contact.pairs[EDGE_EDGE]
+    for j in range(out.shape[0]):
+        kind, idx = _candidate(contact, point_triangle, edge_edge, j)
+        out[j] = distance(kind, point(x0, idx[0]), point(x0, idx[1]), point(x0, idx[2]), point(x0, idx[3]))
 
 
 @kernel
@@ -191,17 +191,15 @@ def _settle_pair(kind, idx, start_distance, contact, thickness, floor_z, mass, f
 
 @kernel
 def _settle(contact, thickness, floor_z, mass, free, x0, x1, v1, start):
-    """Passes over the candidates until none needs treatment (at most PASSES_MAX)."""
-    offset = contact.pairs[POINT_TRIANGLE].shape[1]
+    """Passes over the candidates until none needs treatment (at most PASSES_MAX); ``start`` holds
+    their distances at the start of the step (``_start_distances``)."""
+    point_triangle, edge_edge = contact.pairs[POINT_TRIANGLE], contact.pairs[EDGE_EDGE]
     for _ in range(PASSES_MAX):
         contact.counters[PASSES] += 1
         treated = 0
-        for kind in (POINT_TRIANGLE, EDGE_EDGE):
-            pairs = contact.pairs[kind]
-            base = 0 if kind == POINT_TRIANGLE else offset
-            for k in range(pairs.shape[1]):
-                idx = _vertices(kind, contact, pairs, k)
-                treated += _settle_pair(kind, idx, start[base + k], contact, thickness, floor_z, mass, free, x0, x1, v1)
+        for j in range(start.shape[0]):
+            kind, idx = _candidate(contact, point_triangle, edge_edge, j)
+            treated += _settle_pair(kind, idx, start[j], contact, thickness, floor_z, mass, free, x0, x1, v1)
         contact.counters[RESPONSES] += treated
         if treated == 0:
             return
@@ -321,28 +319,25 @@ def _impact_zones(contact, thickness, floor_z, mass, free, x0, x1, v1, h, start)
     n = x0.shape[1]
     for i in range(n):
         parent[i] = i
-    offset = contact.pairs[POINT_TRIANGLE].shape[1]
+    point_triangle, edge_edge = contact.pairs[POINT_TRIANGLE], contact.pairs[EDGE_EDGE]
     for _ in range(n):
         unsafe = 0
-        for kind in (POINT_TRIANGLE, EDGE_EDGE):
-            pairs = contact.pairs[kind]
-            base = 0 if kind == POINT_TRIANGLE else offset
-            for k in range(pairs.shape[1]):
-                idx = _vertices(kind, contact, pairs, k)
-                r = _root(parent, idx[0])
-                if r == _root(parent, idx[1]) and r == _root(parent, idx[2]) and r == _root(parent, idx[3]):
-                    continue  # inside one zone: its rigid motion keeps it apart
-                inverse = _inverse_masses(idx, mass, free)
-                if inverse[0] + inverse[1] + inverse[2] + inverse[3] == 0.0:
-                    continue
-                when, _ = _contact_time(kind, idx, start[base + k], thickness, x0, x1)
-                if when == CLEAR:
-                    continue
-                unsafe += 1
-                for j in range(1, 4):
-                    a, b = _root(parent, idx[0]), _root(parent, idx[j])
-                    if a != b:
-                        parent[max(a, b)] = min(a, b)
+        for j in range(start.shape[0]):
+            kind, idx = _candidate(contact, point_triangle, edge_edge, j)
+            r = _root(parent, idx[0])
+            if r == _root(parent, idx[1]) and r == _root(parent, idx[2]) and r == _root(parent, idx[3]):
+                continue  # inside one zone: its rigid motion keeps it apart
+            inverse = _inverse_masses(idx, mass, free)
+            if inverse[0] + inverse[1] + inverse[2] + inverse[3] == 0.0:
+                continue
+            when, _ = _contact_time(kind, idx, start[j], thickness, x0, x1)
+            if when == CLEAR:
+                continue
+            unsafe += 1
+            for other in range(1, 4):
+                a, b = _root(parent, idx[0]), _root(parent, idx[other])
+                if a != b:
+                    parent[max(a, b)] = min(a, b)
         if unsafe == 0:
             return
         contact.counters[ZONE_ROUNDS] += 1
