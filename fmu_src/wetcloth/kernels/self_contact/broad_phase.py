@@ -44,32 +44,13 @@ def covers(contact, x):
     """Whether the candidate list is valid for positions ``x`` (3, n): each within the margin of its
     reference position, once the mid-range of all displacements is taken out."""
     margin = contact.margin[0]
-    if margin <= 0.0:
-        return False
-    ref = contact.reference
-    n = x.shape[1]
-    shift = np.empty(3)
-    for c in range(3):
-        lo, hi = math.inf, -math.inf
-        for i in range(n):
-            d = x[c, i] - ref[c, i]
-            lo = min(lo, d)
-            hi = max(hi, d)
-        shift[c] = 0.5 * (lo + hi)
-    limit = margin * margin
-    for i in range(n):
-        dx = x[0, i] - ref[0, i] - shift[0]
-        dy = x[1, i] - ref[1, i] - shift[1]
-        dz = x[2, i] - ref[2, i] - shift[2]
-        if dx * dx + dy * dy + dz * dz > limit:
-            return False
-    return True
+    return margin > 0.0 and _largest_motion_squared(contact.reference, x) <= margin * margin
 
 
 @kernel
-def _step_motion(x0, x1):
-    """The largest displacement (m) of a particle over the step from ``x0`` to ``x1``, once the
-    mid-range of all displacements (a common translation) is taken out; NaN if the step is not finite."""
+def _largest_motion_squared(x0, x1):
+    """The largest squared displacement (m^2) of a particle from ``x0`` to ``x1``, once the mid-range of
+    all displacements (a common translation) is taken out; NaN if a displacement is not finite."""
     n = x0.shape[1]
     shift = np.empty(3)
     for c in range(3):
@@ -87,7 +68,14 @@ def _step_motion(x0, x1):
         dy = x1[1, i] - x0[1, i] - shift[1]
         dz = x1[2, i] - x0[2, i] - shift[2]
         largest = max(largest, dx * dx + dy * dy + dz * dz)
-    return math.sqrt(largest)
+    return largest
+
+
+@kernel(inline="always")
+def _step_motion(x0, x1):
+    """The largest displacement (m) of a particle over the step from ``x0`` to ``x1`` (common translation
+    taken out; ``_largest_motion_squared``); NaN if the step is not finite."""
+    return math.sqrt(_largest_motion_squared(x0, x1))
 
 
 @kernel(inline="always")

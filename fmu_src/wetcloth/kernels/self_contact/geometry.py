@@ -45,7 +45,8 @@ def _clamp01(v):
 
 
 @kernel(inline="always")
-def _along(x, t, p):
+def along(x, t, p):
+    """The point ``x + t p`` (a 3-tuple): where ``x`` is after a fraction ``t`` of its motion ``p``."""
     return (x[0] + t * p[0], x[1] + t * p[1], x[2] + t * p[2])
 
 
@@ -133,7 +134,7 @@ def _point_triangle(p, a, b, c):
     for k in range(3):
         start, end = corners[k], corners[(k + 1) % 3]
         t = _point_segment(p, start, end)
-        d = _sub(p, _along(start, t, _sub(end, start)))
+        d = _sub(p, along(start, t, _sub(end, start)))
         if _dot(d, d) < best:
             best = _dot(d, d)
             if k == 0:
@@ -206,7 +207,7 @@ def time_of_contact(kind, x0, x1, x2, x3, p0, p1, p2, p3, start_distance, minimu
     advance = (1.0 - CCD_REPORT) * gap / bound
     for _ in range(CCD_ITERATIONS):
         trial = t + advance
-        d = distance(kind, _along(x0, trial, p0), _along(x1, trial, p1), _along(x2, trial, p2), _along(x3, trial, p3))
+        d = distance(kind, along(x0, trial, p0), along(x1, trial, p1), along(x2, trial, p2), along(x3, trial, p3))
         gap = d - minimum
         if gap < report:
             return t

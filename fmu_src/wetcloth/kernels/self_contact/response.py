@@ -27,7 +27,7 @@ from wetcloth.kernels import kernel
 from wetcloth.kernels.integration import symmetric_adjugate
 from wetcloth.kernels.self_contact.broad_phase import (BUSY_STEPS, FREEZES, PASSES, RESPONSES, ZONE_ROUNDS, covers,
                                                        point, rebuild_for_step, too_loose)
-from wetcloth.kernels.self_contact.geometry import (CLEAR, EDGE_EDGE, POINT_TRIANGLE, closest, combine, distance,
+from wetcloth.kernels.self_contact.geometry import (CLEAR, EDGE_EDGE, POINT_TRIANGLE, along, closest, combine, distance,
                                                     motion_bound, time_of_contact)
 
 #: Settling passes over the candidates per step (each pass treats every pair that needs it).
@@ -65,11 +65,6 @@ def _inverse_masses(idx, mass, free):
 @kernel(inline="always")
 def _motion(x0, x1, i):
     return (x1[0, i] - x0[0, i], x1[1, i] - x0[1, i], x1[2, i] - x0[2, i])
-
-
-@kernel(inline="always")
-def _at(x0, p, t):
-    return (x0[0] + t * p[0], x0[1] + t * p[1], x0[2] + t * p[2])
 
 
 @kernel
@@ -173,10 +168,10 @@ def _settle_pair(kind, idx, start_distance, contact, thickness, floor_z, mass, f
         a, b, c, d = point(x1, idx[0]), point(x1, idx[1]), point(x1, idx[2]), point(x1, idx[3])
     else:
         a0, b0, c0, d0 = point(x0, idx[0]), point(x0, idx[1]), point(x0, idx[2]), point(x0, idx[3])
-        a = _at(a0, _motion(x0, x1, idx[0]), when)
-        b = _at(b0, _motion(x0, x1, idx[1]), when)
-        c = _at(c0, _motion(x0, x1, idx[2]), when)
-        d = _at(d0, _motion(x0, x1, idx[3]), when)
+        a = along(a0, when, _motion(x0, x1, idx[0]))
+        b = along(b0, when, _motion(x0, x1, idx[1]))
+        c = along(c0, when, _motion(x0, x1, idx[2]))
+        d = along(d0, when, _motion(x0, x1, idx[3]))
     w = closest(kind, a, b, c, d)
     gap = combine(w, a, b, c, d)
     length = math.sqrt(gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2])
