@@ -54,40 +54,10 @@ def render(directory: Path, out: Path, samples: int) -> None:
     corners = [cloth.matrix_world @ Vector(c) for c in cloth.bound_box]
     centre = sum(corners, Vector()) / 8.0
 
-    camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
-    scene.collection.objects.link(camera)
-    camera.data.lens = 40.0
-    camera.location = centre + Vector((0.75, -0.65, 0.55))
-    camera.rotation_euler = (centre - camera.location).to_track_quat("-Z", "Y").to_euler()
-    scene.camera = camera
-    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
-    scene.collection.objects.link(sun)
-    sun.rotation_euler = (0.6, 0.2, 0.9)
-    sun.data.energy = 4.0
-    world = bpy.data.worlds.new("sky")
-    if bpy.app.version < (5, 0, 0):  # Blender 5 worlds always use nodes
-        world.use_nodes = True
-    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.25, 0.28, 0.32, 1.0)
-    scene.world = world
-    z = SCENE["floor_level"]
-    floor = bpy.data.meshes.new("floor")
-    floor.from_pydata([(-3, -3, z), (3, -3, z), (3, 3, z), (-3, 3, z)], [], [(0, 1, 2, 3)])
-    floor_object = bpy.data.objects.new("floor", floor)
-    scene.collection.objects.link(floor_object)
-    material = bpy.data.materials.new("tiles")
-    if bpy.app.version < (5, 0, 0):
-        material.use_nodes = True
-    bsdf = material.node_tree.nodes["Principled BSDF"]
-    bsdf.inputs["Base Color"].default_value = (0.05, 0.12, 0.16, 1.0)
-    bsdf.inputs["Roughness"].default_value = 0.4
-    floor.materials.append(material)
-
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = samples
-    scene.cycles.use_denoising = True
-    scene.render.resolution_x, scene.render.resolution_y = WIDTH, HEIGHT
-    scene.view_settings.view_transform = "Standard"
+    blender_stages.set_stage(scene, camera=centre + Vector((0.75, -0.65, 0.55)), target=centre, lens=40.0,
+                             sun=(0.6, 0.2, 0.9), sky=(0.25, 0.28, 0.32, 1.0), ground="floor",
+                             ground_z=SCENE["floor_level"], ground_color=(0.05, 0.12, 0.16, 1.0), ground_roughness=0.4,
+                             samples=samples, size=(WIDTH, HEIGHT))
     scene.render.image_settings.file_format = "PNG"
     scene.render.image_settings.color_mode = "RGB"
     scene.render.image_settings.compression = 100

@@ -45,44 +45,15 @@ def render(directory: Path, out: Path, samples: int) -> None:
 
     import bpy
     import numpy as np
-    from mathutils import Vector
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     runpy.run_path(str(directory / "load_in_blender.py"))["load"]()  # the defaults an artist gets
     scene = bpy.context.scene
 
-    camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
-    scene.collection.objects.link(camera)
-    camera.location = (1.7, -0.5, 0.6)
-    camera.rotation_euler = (Vector((0.0, 0.0, 0.38)) - camera.location).to_track_quat("-Z", "Y").to_euler()
-    scene.camera = camera
-    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
-    scene.collection.objects.link(sun)
-    sun.rotation_euler = (0.7, 0.3, 0.8)
-    sun.data.energy = 4.0
-    world = bpy.data.worlds.new("sky")
-    if bpy.app.version < (5, 0, 0):  # Blender 5 worlds always use nodes
-        world.use_nodes = True
-    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.12, 0.16, 0.24, 1.0)
-    scene.world = world
-    water = bpy.data.meshes.new("water")
-    water.from_pydata([(-3, -3, 0), (3, -3, 0), (3, 3, 0), (-3, 3, 0)], [], [(0, 1, 2, 3)])
-    water_object = bpy.data.objects.new("water", water)
-    scene.collection.objects.link(water_object)
-    material = bpy.data.materials.new("water")
-    if bpy.app.version < (5, 0, 0):
-        material.use_nodes = True
-    bsdf = material.node_tree.nodes["Principled BSDF"]
-    bsdf.inputs["Base Color"].default_value = (0.02, 0.09, 0.11, 1.0)
-    bsdf.inputs["Roughness"].default_value = 0.05
-    water.materials.append(material)
-
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = samples
-    scene.cycles.use_denoising = True
-    scene.render.resolution_x, scene.render.resolution_y = WIDTH, HEIGHT
-    scene.view_settings.view_transform = "Standard"  # plain sRGB: more contrast than AgX for a small still
+    blender_stages.set_stage(scene, camera=(1.7, -0.5, 0.6), target=(0.0, 0.0, 0.38), sun=(0.7, 0.3, 0.8),
+                             sky=(0.12, 0.16, 0.24, 1.0), ground="water", ground_z=0.0,
+                             ground_color=(0.02, 0.09, 0.11, 1.0), ground_roughness=0.05, samples=samples,
+                             size=(WIDTH, HEIGHT))
     scene.render.motion_blur_shutter = 0.5
     scene.frame_set(FRAME)
     pixels = []
