@@ -142,6 +142,7 @@ def _box_cells(lo, hi, e, pad, cell):
 
 @kernel(inline="always")
 def _cell_count(cells):
+    """How many hash cells a box's ``cells`` (``_box_cells``) holds."""
     return cells[3] * cells[4] * cells[5]
 
 
@@ -212,6 +213,7 @@ def _particle(first, second, a, b, slot):
 
 @kernel(inline="always")
 def _share_a_particle(first, second, a, b):
+    """Whether element ``a`` of ``first`` and ``b`` of ``second`` have a particle in common."""
     for i in range(first.shape[1]):
         for j in range(second.shape[1]):
             if first[a, i] == second[b, j]:
