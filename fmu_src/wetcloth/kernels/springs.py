@@ -60,7 +60,11 @@ def _pair_views(off, pos, vel, saturation):
 @kernel(inline="always")
 def _spring_geometry(xi, yi, zi, xj, yj, zj, kf, si, sj, wet_factor):
     """Separation ``d = x_i - x_j`` (3 values, m), length ``L`` (m), ``1 / L`` (1/m; finite for a spring of
-    no length) and stiffness ``kf`` (N/m) scaled by the saturations ``si``, ``sj`` of both ends."""
+    no length) and stiffness ``kf`` (N/m) scaled by the saturations ``si``, ``sj`` of both ends.
+
+    It takes values, not arrays: given ``_pair_views``'s tuple of views and an index, it kept LLVM from
+    vectorising ``_tension``'s loop (measured 2.5x slower); with values both loops compile to the
+    same instructions as when each had the lines written out."""
     dx = xi - xj
     dy = yi - yj
     dz = zi - zj
