@@ -18,33 +18,23 @@ import atexit
 import shutil
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Slave
 from fmpy.fmi3 import FMU3Slave
 
 import wetcloth
 from wetcloth.fmu.builder import build_fmu
 from wetcloth.simulation import OUTPUT_NAMES
 
-CLOCK = time.process_time
+from _fmu_units import CLOCK, direct_run, started_fmu2  # noqa: E402
+
 
 
 def direct(scene: wetcloth.Scene, duration: float, rate: float, mesh: bool) -> tuple[float, float]:
     """CPU time (s) of the direct run, and of its output reads alone."""
-    sim = wetcloth.Simulation(scene)
-    reading = 0.0
-    start = CLOCK()
-    for k in range(round(duration * rate)):
-        sim.advance((k + 1) / rate - sim.time)
-        before = CLOCK()
-        sim.outputs()
-        if mesh:
-            sim.positions.ravel().tolist(), sim.wetness.tolist()
-        reading += CLOCK() - before
-    return CLOCK() - start, reading
+    return direct_run(scene, duration, rate, (lambda sim: (sim.positions.ravel().tolist(), sim.wetness.tolist()))
+                      if mesh else None)
 
 
 def loop(fmi: int, directory: str, md, scene: wetcloth.Scene, duration: float, rate: float,
@@ -57,12 +47,7 @@ def loop(fmi: int, directory: str, md, scene: wetcloth.Scene, duration: float, r
     read = [vr[name] for name in OUTPUT_NAMES] + ([vr["positions"], vr["wetness"]] if mesh else [])
     count = len(OUTPUT_NAMES) + (4 * n if mesh else 0)
     if fmi == 2:
-        fmu = FMU2Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier="WetCloth", instanceName="bench")
-        fmu.instantiate()
-        fmu.setupExperiment(startTime=0.0)
-        fmu.enterInitializationMode()
-        fmu.setInteger([vr["nx"], vr["ny"]], [scene.nx, scene.ny])
-        fmu.exitInitializationMode()
+        fmu = started_fmu2(directory, md, scene)
         set_inputs, get_outputs = fmu.setReal, lambda: fmu.getReal(read)
     else:
         fmu = FMU3Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier="WetCloth", instanceName="bench")

@@ -18,28 +18,21 @@ from __future__ import annotations
 import argparse
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import fmpy
 from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Slave
 
 import wetcloth
 from wetcloth.fmu.builder import build_fmu
 from wetcloth.simulation import OUTPUT_NAMES
 
-CLOCK = time.process_time
+from _fmu_units import CLOCK, direct_run, started_fmu2  # noqa: E402
+
 
 
 def direct(scene: wetcloth.Scene, duration: float, rate: float) -> float:
-    sim = wetcloth.Simulation(scene)
-    steps = round(duration * rate)
-    start = CLOCK()
-    for k in range(steps):
-        sim.advance((k + 1) / rate - sim.time)
-        sim.outputs()
-    return CLOCK() - start
+    return direct_run(scene, duration, rate)[0]
 
 
 def through_fmu(directory: str, md, scene: wetcloth.Scene, duration: float, rate: float) -> tuple[float, float]:
@@ -50,12 +43,7 @@ def through_fmu(directory: str, md, scene: wetcloth.Scene, duration: float, rate
     input_values = [getattr(scene, n) for n in inputs]
     output_vrs = [vr[n] for n in OUTPUT_NAMES]
     setup = CLOCK()
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier="WetCloth", instanceName="bench")
-    fmu.instantiate()
-    fmu.setupExperiment(startTime=0.0)
-    fmu.enterInitializationMode()
-    fmu.setInteger([vr["nx"], vr["ny"]], [scene.nx, scene.ny])
-    fmu.exitInitializationMode()
+    fmu = started_fmu2(directory, md, scene)
     setup = CLOCK() - setup
     steps = round(duration * rate)
     start = CLOCK()
