@@ -243,7 +243,7 @@ class Simulation:
         status = PAUSED
         while status == PAUSED:
             status = self._advance(model.cloth, model.physics, self._control, model.work, self._solver, self._plane,
-                             self._contact, self._buffers, self._clock, target, budget)
+                                   self._contact, self._buffers, self._clock, target, budget)
         if status == BLOWN_UP:
             self._blown_up(float(self._clock[FAILED_STEP]))
 
