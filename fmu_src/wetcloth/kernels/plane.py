@@ -58,7 +58,9 @@ REFACTOR_CHANGE = 0.25
 #: Crossover (``bench/large_steps.py preconditioner``: one application, both alternately, shared
 #: machine, two runs at different loads): the multigrid 0.92-0.96x as fast as the banded solve on the
 #: 21 x 29 towel, 0.76-0.99x at 24 x 24, 1.16-1.63x at 32 x 32, 1.03-1.59x at 48 x 48, 3.7x at 64 x 64;
-#: CG needs about 8 % more iterations with it, so it pays from about 40 across.
+#: CG needs about 8 % more iterations with it, so it pays from about 40 across.  Idle, without the
+#: dispatcher's typing in each timed call: 0.98x at 21 x 29, 1.02x at 24 x 24, 1.55x at 32 x 32,
+#: 1.54x at 48 x 48, 3.0x at 64 x 64 (docs/benchmarks.md, Large steps).
 MULTIGRID_SIDE = 40
 COARSEST_SIDE = 12
 
