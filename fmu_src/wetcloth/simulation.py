@@ -14,8 +14,8 @@ from wetcloth.kernels.compilation import TypedCall
 from wetcloth.kernels.implicit import CG_ITERATIONS, FACTORISATIONS, NEWTON_ITERATIONS, UNCONVERGED, make_solver
 from wetcloth.kernels.integration import speed_and_finiteness
 from wetcloth.kernels.plane import make_plane, refresh
-from wetcloth.kernels.stepping import (BLOWN_UP, PAUSED, CALM_TIME, CLOCK_SIZE, EXCHANGING, FAILED_STEP, LAST_STEP, NEXT_STEP,
-                                       REJECTED, SLEEPING, SPEED, STEPS, TIME, UNCHECKED_TIME, Buffers, advance)
+from wetcloth.kernels.stepping import (BLOWN_UP, PAUSED, CALM_TIME, CLOCK_SIZE, EXCHANGING, FAILED_STEP, FIRST_GUESS, LAST_STEP,
+                                       NEWTON_RATE, NEXT_STEP, RATE_CORRECTION, REJECTED, SLEEPING, SPEED, STEPS, TIME, UNCHECKED_TIME, Buffers, advance)
 from wetcloth.model import Model
 from wetcloth.scene import INPUT, PARAMETERS, Scene, load_scene
 from wetcloth.state import State, initial_state
@@ -35,12 +35,13 @@ OUTPUT_NAMES = tuple(OUTPUTS)
 STEPS_PER_CALL = 2_000_000
 
 #: What a snapshot holds besides ``state`` and ``scene``: the buffers that carry over between steps
-#: (BDF2's previous step, the sleep anchor), and the clock's slots (name, slot, type).
-_SNAPSHOT_ARRAYS = ("prev_pos", "prev_vel", "prev_water", "anchor")
+#: (BDF2's previous step and acceleration, the sleep anchor), and the clock's slots (name, slot, type).
+_SNAPSHOT_ARRAYS = ("prev_pos", "prev_vel", "prev_water", "acceleration", "anchor")
 _SNAPSHOT_CLOCK = (("next_step", NEXT_STEP, float), ("last_step", LAST_STEP, float),
                    ("speed", SPEED, float), ("calm_time", CALM_TIME, float), ("unchecked_time", UNCHECKED_TIME, float),
                    ("exchanging", EXCHANGING, bool), ("sleeping", SLEEPING, bool), ("steps", STEPS, int),
-                   ("rejected_steps", REJECTED, int))
+                   ("rejected_steps", REJECTED, int), ("newton_rate", NEWTON_RATE, float),
+                   ("rate_correction", RATE_CORRECTION, float), ("first_guess", FIRST_GUESS, float))
 
 
 
@@ -63,7 +64,8 @@ class Simulation:
         self._buffers = Buffers(
             pos=start.pos, vel=start.vel, water=start.water, trial_pos=start.pos.copy(),
             trial_vel=start.vel.copy(), trial_water=start.water.copy(), prev_pos=start.pos.copy(),
-            prev_vel=start.vel.copy(), prev_water=start.water.copy(), anchor=start.pos.copy(),
+            prev_vel=start.vel.copy(), prev_water=start.water.copy(), acceleration=np.zeros_like(start.vel),
+            anchor=start.pos.copy(),
             held=np.zeros(topo.n),
         )
         self._clock = np.zeros(CLOCK_SIZE)

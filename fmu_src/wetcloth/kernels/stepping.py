@@ -35,10 +35,12 @@ SCHEMES = {EXPLICIT_EULER: ExplicitSteps(), SYMPLECTIC_EULER: ExplicitSteps(), I
 #: Slots of ``clock`` (float64): simulated time (s); the controller's next step (s); the last
 #: accepted step (s; 0 when there is no history for BDF2 to use); the fastest particle's speed
 #: (m/s); time spent still (s), time since stillness was last checked (s), whether water moved
-#: since then, whether asleep; accepted and rejected steps; the step that blew up (s).
-TIME, NEXT_STEP, LAST_STEP, SPEED, CALM_TIME, UNCHECKED_TIME, EXCHANGING, SLEEPING, STEPS, REJECTED, FAILED_STEP = (
-    range(11))
-CLOCK_SIZE = 11
+#: since then, whether asleep; accepted and rejected steps; the step that blew up (s); BDF2's last
+#: Newton convergence rate (-, 0 before one was observed) and the first correction of its step
+#: (m/s), and the kind of its first guess (``implicit.LINE`` or ``PARABOLA``).
+(TIME, NEXT_STEP, LAST_STEP, SPEED, CALM_TIME, UNCHECKED_TIME, EXCHANGING, SLEEPING, STEPS, REJECTED, FAILED_STEP,
+ NEWTON_RATE, RATE_CORRECTION, FIRST_GUESS) = range(14)
+CLOCK_SIZE = 14
 
 #: What ``advance`` returns.
 DONE, BLOWN_UP, PAUSED = 0, 1, 2
@@ -52,9 +54,11 @@ Control = namedtuple("Control", "scheme integrator tolerance allowed max_step ne
                                 "damping_rate spring_limit drag_rate_offset drag_rate_slope smallest_step growth "
                                 "shrink blow_up_speed sleep_distance sleep_after")
 #: State buffers: current and trial (pos, vel (3, n), water (n)), BDF2 history (the state before the
-#: last step), sleep anchor, and ``held`` (n): 1 for the particles the floor holds during the
-#: current step (scratch, set from the state at the start of each step).
-Buffers = namedtuple("Buffers", "pos vel water trial_pos trial_vel trial_water prev_pos prev_vel prev_water anchor held")
+#: last step, and the acceleration (3, n) m/s^2 the last step implied at its end), sleep anchor, and
+#: ``held`` (n): 1 for the particles the floor holds during the current step (scratch, set from the
+#: state at the start of each step).
+Buffers = namedtuple("Buffers", "pos vel water trial_pos trial_vel trial_water prev_pos prev_vel prev_water acceleration "
+                                "anchor held")
 
 #: Safety factor on the explicit schemes' linear-stability limit, and on the proposed next step.
 STABILITY_SAFETY = 0.9
@@ -136,8 +140,9 @@ def _bdf2_step(cloth, phys, control, work, solver, plane, buf, clock, h):
         uptake(buf.pos[2], predicted, buf.vel[2], predicted_speed, _surface(phys), cloth.dry_mass,
                phys.absorption_capacity, phys.absorption_rate, h, buf.water, step_water)
     error, converged = bdf2_step(cloth, phys, work, solver, plane, buf.pos, buf.vel, buf.water, step_water,
-                                 buf.prev_pos, buf.prev_vel, buf.prev_water, h, h_prev, control.newton_tolerance,
-                                 buf.trial_pos, buf.trial_vel)
+                                 buf.prev_pos, buf.prev_vel, buf.prev_water, buf.acceleration, h, h_prev,
+                                 control.newton_tolerance, clock[NEWTON_RATE:FIRST_GUESS + 1], buf.trial_pos,
+                                 buf.trial_vel)
     return error, 2 if h_prev > 0.0 else 1, converged
 
 
@@ -282,6 +287,8 @@ def _step(cloth, phys, control, work, solver, plane, contact, buf, clock, remain
     copy(buf.trial_pos, buf.pos)
     copy(buf.trial_vel, buf.vel)
     copy(buf.trial_water, buf.water)
+    if control.integrator == BDF2:
+        copy(solver.step_acceleration, buf.acceleration)
     if on_floor:
         agree_history(phys.floor_z, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h)
     clock[LAST_STEP] = 0.0 if kinked else h  # self-collision's push: BDF2 starts afresh
