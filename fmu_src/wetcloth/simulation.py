@@ -13,9 +13,10 @@ from wetcloth.kernels import self_contact
 from wetcloth.kernels.compilation import TypedCall
 from wetcloth.kernels.implicit import CG_ITERATIONS, FACTORISATIONS, NEWTON_ITERATIONS, UNCONVERGED, make_solver
 from wetcloth.kernels.integration import speed_and_finiteness
-from wetcloth.kernels.plane import make_plane, refresh
-from wetcloth.kernels.stepping import (BLOWN_UP, PAUSED, CALM_TIME, CLOCK_SIZE, EXCHANGING, FAILED_STEP, FIRST_GUESS, LAST_STEP,
-                                       NEWTON_RATE, NEXT_STEP, RATE_CORRECTION, REJECTED, SLEEPING, SPEED, STEPS, TIME, UNCHECKED_TIME, Buffers, advance)
+from wetcloth.kernels.plane import make_plane, refresh, refresh_from_jacobian
+from wetcloth.kernels.stepping import (BLOWN_UP, PAUSED, CALM_TIME, CLOCK_SIZE, EXCHANGING, FAILED_STEP, FIRST_GUESS,
+                                       LAST_SOLVE, LAST_STEP, NEWTON_RATE, NEXT_STEP, RATE_CORRECTION, REJECTED, SLEEPING,
+                                       SPEED, STEPS, TIME, UNCHECKED_TIME, Buffers, advance)
 from wetcloth.model import Model
 from wetcloth.scene import INPUT, PARAMETERS, Scene, load_scene
 from wetcloth.state import State, initial_state
@@ -41,7 +42,8 @@ _SNAPSHOT_CLOCK = (("next_step", NEXT_STEP, float), ("last_step", LAST_STEP, flo
                    ("speed", SPEED, float), ("calm_time", CALM_TIME, float), ("unchecked_time", UNCHECKED_TIME, float),
                    ("exchanging", EXCHANGING, bool), ("sleeping", SLEEPING, bool), ("steps", STEPS, int),
                    ("rejected_steps", REJECTED, int), ("newton_rate", NEWTON_RATE, float),
-                   ("rate_correction", RATE_CORRECTION, float), ("first_guess", FIRST_GUESS, float))
+                   ("rate_correction", RATE_CORRECTION, float), ("first_guess", FIRST_GUESS, float),
+                   ("last_solve_iterations", LAST_SOLVE, float))
 
 
 
@@ -93,6 +95,9 @@ class Simulation:
         values["preconditioner_mass"] = plane.reference_mass.copy()
         values["preconditioner_scale"] = float(plane.reference[0])
         values["preconditioner_factored"] = bool(plane.reference[1])
+        values["preconditioner_from_jacobian"] = bool(plane.reference[2])
+        values["preconditioner_jacobian_along"] = plane.jacobian_along.copy()
+        values["preconditioner_jacobian_mass"] = plane.jacobian_mass.copy()
         for key, slot, kind in _SNAPSHOT_CLOCK:
             values[key] = kind(self._clock[slot])
         values.update(self_contact.snapshot(self._contact))
@@ -117,8 +122,11 @@ class Simulation:
         plane = self._plane
         plane.reference[1] = 0.0
         if snapshot["preconditioner_factored"]:
-            refresh(plane, self.model.topology.spring_offset, snapshot["preconditioner_mass"],
-                    snapshot["preconditioner_scale"])
+            offsets = self.model.topology.spring_offset
+            refresh(plane, offsets, snapshot["preconditioner_mass"], snapshot["preconditioner_scale"])
+            if snapshot["preconditioner_from_jacobian"]:
+                refresh_from_jacobian(plane, offsets, snapshot["preconditioner_jacobian_mass"],
+                                      snapshot["preconditioner_jacobian_along"])
         self_contact.restore(self._contact, snapshot, self.scene.thickness)
         self._set_scene(snapshot["scene"])
 

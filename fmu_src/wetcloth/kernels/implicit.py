@@ -181,9 +181,11 @@ def bdf2_step(cloth, phys, work, solver, plane, pos, vel, water, step_water, pre
     observed convergence rate leaves to come, is within tolerance: ``newton_tolerance`` (m) in
     position, and see NEWTON_RELATIVE for the velocity.
 
-    ``memory`` (3,) carries over from step to step: the last convergence rate observed and the
-    correction (m/s) it was observed after (FIRST_ITERATION_TRUST), and which kind of first guess
-    to start from (``_first_guess``, with the ``acceleration`` (3, n) m/s^2 the last step implied).
+    ``memory`` (4,) carries over from step to step: the last convergence rate observed and the
+    correction (m/s) it was observed after (FIRST_ITERATION_TRUST), which kind of first guess
+    to start from (``_first_guess``, with the ``acceleration`` (3, n) m/s^2 the last step implied),
+    and the CG iterations of the last linear solve (whether to refactor the preconditioner from
+    the Jacobian: ``plane.jacobian_refresh_pays``).
     This step leaves in ``solver.step_acceleration`` the acceleration it implies at its end,
     ``(v+ - v^) / (b h)``, and in ``memory`` the kind of guess that would have come closer to its
     solution.
@@ -232,12 +234,18 @@ def bdf2_step(cloth, phys, work, solver, plane, pos, vel, water, step_water, pre
     for _ in range(NEWTON_ITERATIONS_MAX):
         forces_and_blocks(cloth, phys, work, out_pos, out_vel, step_water, bh)
         plane_preconditioner.set_normal_diagonal(plane, mass, work.diagonal_blocks, work.blocks)
+        if plane_preconditioner.jacobian_refresh_pays(plane, memory[3]):
+            factored = plane_preconditioner.refresh_from_jacobian(plane, cloth.offsets, mass, work.along)
+            if factored < 0:  # back to the rest stiffness
+                factored = plane_preconditioner.refresh(plane, cloth.offsets, mass, bh * bh)
+            solver.counters[FACTORISATIONS] += factored > 0
         for c in range(3):
             for i in range(n):
                 rhs[c, i] = free[i] * (bh * work.force[c, i] - mass[i] * (out_vel[c, i] - hat_vel[c, i]))
         floor = CG_FLOOR * min(newton_tolerance / bh, newton_tolerance / NEWTON_VELOCITY_TIME)
         iterations, solved = _plane_pcg(cloth, work, solver, plane, rhs, dv, CG_TOLERANCE, floor,
                                         NEWTON_CG_ITERATIONS)
+        memory[3] = iterations
         solver.counters[NEWTON_ITERATIONS] += 1
         solver.counters[CG_ITERATIONS] += iterations
         solver.counters[UNCONVERGED] += not solved

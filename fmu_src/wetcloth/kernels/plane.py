@@ -13,6 +13,10 @@ n its normal) this preconditioner keeps that structure:
   solve them exactly with LAPACK's banded Cholesky; on large grids (shorter side above
   MULTIGRID_SIDE) one multigrid V-cycle (``multigrid.py``) approximates their inverse, with the
   banded Cholesky on its coarsest grid only;
+* where a solve took many iterations (a sinking cloth: most of its stretch springs slack while
+  the rest-stiffness Laplacians assume all taut), small grids refactor the two systems from the
+  Jacobian in hand, ``M + L(along)`` with each spring's own coefficient along its direction
+  (``refresh_from_jacobian``, JACOBIAN_REFRESH_AFTER);
 * the normal component gets the normal-normal entry of each particle's 3x3 diagonal block of A
   (mass, drag, buoyancy, and whatever stiffness the springs have across the plane).
 
@@ -53,6 +57,17 @@ _SHARE = {"structural_x": (1.0, 0.0), "structural_y": (0.0, 1.0), "shear_up_righ
 REFACTOR_SCALE = 4.0
 REFACTOR_CHANGE = 0.25
 
+#: A banded grid's factors are rebuilt from the Jacobian in hand when the last solve took more CG
+#: iterations than JACOBIAN_REFRESH_AFTER times what a factorisation costs (``jacobian_refresh_pays``).
+#: A factorisation of the band costs about kd / 4 CG iterations (kd the half-bandwidth; measured
+#: idle: 16 us against 9.5 us per CG iteration on 9 x 9, 221 against 39 us on 21 x 29, 543
+#: against 67 us on 32 x 32).  On a sinking 9 x 9 cloth the CG iterations per Newton iteration fell
+#: from 15 to 5, on the sinking 21 x 29 towel from 14 to 7.  Over the towel's 90 s at 30 Hz
+#: (counts): at 0.5, 1, 2 and never, 12 795, 14 321, 22 485 and 25 610 CG iterations with 2091,
+#: 484, 93 and 20 factorisations; 1 costs least.  Refactored at every Newton iteration, the floating
+#: towel (3 CG iterations per solve) lost more to the factorisations than it gained.
+JACOBIAN_REFRESH_AFTER = 1.0
+
 #: Multigrid (``multigrid.py``) on grids whose shorter side exceeds MULTIGRID_SIDE, coarsened until
 #: the shorter side is at most COARSEST_SIDE; smaller grids are solved by the banded factors alone.
 #: Crossover (``bench/large_steps.py preconditioner``: one application, both alternately, shared
@@ -67,15 +82,19 @@ COARSEST_SIDE = 12
 #: Stencil slot (``multigrid``) of the neighbour ``i + offset`` for each family in the preconditioner.
 _SLOT = {"structural_x": 5, "structural_y": 7, "shear_up_right": 8, "shear_up_left": 6}
 
-#: ``weights`` (2, F, n) per spring, N/m, for t1, t2; ``slots`` (F) int64 each family's stencil slot
+#: ``stiffness`` (F, n) per spring, N/m; ``slots`` (F) int64 each family's stencil slot
 #: (-1: not in the preconditioner); ``grid`` the multigrid ``Hierarchy`` (one level on small grids);
 #: on the coarsest level, ``order`` (n_c) the padded index of each band position and ``rank`` its
 #: inverse over the level's padded points (-1 off the grid); ``bands`` (2, n_c, kd + 1) the factored
 #: band matrices and ``rows`` the same factors by rows (``lapack.band_factor``); ``info`` (2, 5)
-#: LAPACK arguments; ``reference`` [factored scale (s^2), 1 if factored] and ``reference_mass`` (n)
-#: kg; ``frame`` (3, 3, n) each particle's axes t1, t2, n; ``normal`` (n) the normal component's
-#: diagonal; ``local`` (2, n_c) scratch of the band solves.
-Plane = namedtuple("Plane", "weights slots grid order rank bands rows info reference reference_mass frame normal local")
+#: LAPACK arguments; ``reference`` [factored scale (s^2), 1 if factored, 1 if from the Jacobian]
+#: and ``reference_mass`` (n) kg of the last factorisation with the rest stiffness; ``shares`` (2, F)
+#: each family's share in t1, t2 (0 for the bending springs); ``jacobian_along`` (F, n) kg and
+#: ``jacobian_mass`` (n) kg of the last factorisation from the Jacobian; ``frame`` (3, 3, n) each
+#: particle's axes t1, t2, n; ``normal`` (n) the normal component's diagonal; ``local`` (2, n_c)
+#: scratch of the band solves.
+Plane = namedtuple("Plane", "stiffness slots grid order rank bands rows info reference reference_mass shares "
+                            "jacobian_along jacobian_mass frame normal local")
 
 
 def make_plane(grid_x: int, grid_y: int, offsets: np.ndarray, family_names: tuple, stiffness: np.ndarray,
@@ -98,16 +117,14 @@ def make_plane(grid_x: int, grid_y: int, offsets: np.ndarray, family_names: tupl
     order = (start + (row[ordered] + 1) * pad + col[ordered] + 1).astype(np.int64)
     rank = np.full(pad * (cy + 3), -1, dtype=np.int64)
     rank[order - start] = np.arange(n_c)
-    weights = np.zeros((2, len(offsets), n))
-    for f, name in enumerate(family_names):
-        for c in range(2):
-            weights[c, f] = _SHARE.get(name, (0.0, 0.0))[c] * stiffness[f]
+    shares = np.array([_SHARE.get(name, (0.0, 0.0)) for name in family_names]).reshape(len(family_names), 2).T.copy()
     slots = np.array([_SLOT.get(name, -1) for name in family_names], dtype=np.int64)
     info = np.stack([band_arguments(n_c, kd), band_arguments(n_c, kd)])
-    return Plane(weights=weights, slots=slots, grid=grid, order=order, rank=rank, bands=np.zeros((2, n_c, kd + 1)),
+    return Plane(stiffness=np.ascontiguousarray(stiffness, dtype=float), slots=slots, grid=grid, order=order, rank=rank, bands=np.zeros((2, n_c, kd + 1)),
                  rows=np.zeros((2, n_c, kd + 1)), info=info,
-                 reference=np.zeros(2), reference_mass=np.zeros(n), frame=np.repeat(np.eye(3)[:, :, None], n, axis=2),
-                 normal=np.ones(n), local=np.zeros((2, n_c)))
+                 reference=np.zeros(3), reference_mass=np.zeros(n), shares=shares,
+                 jacobian_along=np.zeros((len(offsets), n)), jacobian_mass=np.zeros(n),
+                 frame=np.repeat(np.eye(3)[:, :, None], n, axis=2), normal=np.ones(n), local=np.zeros((2, n_c)))
 
 
 @kernel
@@ -124,6 +141,46 @@ def refresh(plane, offsets, mass, scale):
                 break
         if close:
             return 0
+    if _factor(plane, offsets, mass, scale, plane.stiffness) != 0:
+        ref[1] = 0.0
+        return -1
+    ref[0] = scale
+    ref[1] = 1.0
+    ref[2] = 0.0
+    copy(mass, plane.reference_mass)
+    return 1
+
+
+@kernel
+def jacobian_refresh_pays(plane, iterations):
+    """Whether factoring from the Jacobian (``refresh_from_jacobian``) pays after a solve of
+    ``iterations`` CG iterations: on banded grids only (a multigrid hierarchy's Galerkin products
+    would cost more), see JACOBIAN_REFRESH_AFTER."""
+    kd = plane.bands.shape[2] - 1
+    return plane.grid.levels.shape[0] == 1 and iterations > JACOBIAN_REFRESH_AFTER * 0.25 * kd
+
+
+@kernel
+def refresh_from_jacobian(plane, offsets, mass, along):
+    """Factor ``M + L(along)``: each spring weighted by its coefficient ``along`` (F, n) kg in the
+    system matrix (damping and stiffness along its direction, zero stiffness where slack) times its
+    family's share, ``mass`` (n) kg.  Kept in ``jacobian_along`` and ``jacobian_mass`` (a snapshot
+    refactors from them).  Returns 1, or -1 if a matrix was not positive definite."""
+    copy(along, plane.jacobian_along)
+    copy(mass, plane.jacobian_mass)
+    if _factor(plane, offsets, mass, 1.0, plane.jacobian_along) != 0:
+        plane.reference[1] = 0.0
+        return -1
+    plane.reference[2] = 1.0
+    return 1
+
+
+@kernel
+def _factor(plane, offsets, mass, scale, weights):
+    """Build and factor ``M + scale L_c`` for c = t1, t2, with ``L_c`` the Laplacian of the springs
+    weighted by ``weights`` (F, n) times each family's share in c (``plane.shares``): the stencils of
+    every level and the banded Cholesky factors of the coarsest.  Returns 0, or LAPACK's info if a
+    matrix was not positive definite."""
     n = mass.shape[0]
     grid = plane.grid
     levels, coef = grid.levels, grid.coef
@@ -134,14 +191,14 @@ def refresh(plane, offsets, mass, scale):
                 coef[c, k, p] = 0.0
         for i in range(n):
             coef[c, CENTRE, padded_index(levels, 0, i % grid_x, i // grid_x)] = mass[i]
-        weights = plane.weights[c]
         for f in range(offsets.shape[0]):
             k = plane.slots[f]
             if k < 0:
                 continue
             off = offsets[f]
+            share = scale * plane.shares[c, f]
             for i in range(n - off):
-                w = scale * weights[f, i]
+                w = share * weights[f, i]
                 if w == 0.0:
                     continue
                 p = padded_index(levels, 0, i % grid_x, i // grid_x)
@@ -164,13 +221,10 @@ def refresh(plane, offsets, mass, scale):
                 other = plane.rank[p + (k // 3 - 1) * pad + k % 3 - 1 - start]
                 if other > position:
                     band[position, other - position] = coef[c, k, p]
-        if band_factor(band, plane.rows[c], plane.info[c]) != 0:
-            ref[1] = 0.0
-            return -1
-    ref[0] = scale
-    ref[1] = 1.0
-    copy(mass, plane.reference_mass)
-    return 1
+        info = band_factor(band, plane.rows[c], plane.info[c])
+        if info != 0:
+            return info
+    return 0
 
 
 @kernel

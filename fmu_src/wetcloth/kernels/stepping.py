@@ -36,11 +36,11 @@ SCHEMES = {EXPLICIT_EULER: ExplicitSteps(), SYMPLECTIC_EULER: ExplicitSteps(), I
 #: accepted step (s; 0 when there is no history for BDF2 to use); the fastest particle's speed
 #: (m/s); time spent still (s), time since stillness was last checked (s), whether water moved
 #: since then, whether asleep; accepted and rejected steps; the step that blew up (s); BDF2's last
-#: Newton convergence rate (-, 0 before one was observed) and the first correction of its step
-#: (m/s), and the kind of its first guess (``implicit.LINE`` or ``PARABOLA``).
+#: Newton convergence rate (-, 0 before one was observed) and the correction it followed (m/s), the
+#: kind of its first guess (``implicit.LINE`` or ``PARABOLA``) and its last solve's CG iterations.
 (TIME, NEXT_STEP, LAST_STEP, SPEED, CALM_TIME, UNCHECKED_TIME, EXCHANGING, SLEEPING, STEPS, REJECTED, FAILED_STEP,
- NEWTON_RATE, RATE_CORRECTION, FIRST_GUESS) = range(14)
-CLOCK_SIZE = 14
+ NEWTON_RATE, RATE_CORRECTION, FIRST_GUESS, LAST_SOLVE) = range(15)
+CLOCK_SIZE = 15
 
 #: What ``advance`` returns.
 DONE, BLOWN_UP, PAUSED = 0, 1, 2
@@ -141,7 +141,7 @@ def _bdf2_step(cloth, phys, control, work, solver, plane, buf, clock, h):
                phys.absorption_capacity, phys.absorption_rate, h, buf.water, step_water)
     error, converged = bdf2_step(cloth, phys, work, solver, plane, buf.pos, buf.vel, buf.water, step_water,
                                  buf.prev_pos, buf.prev_vel, buf.prev_water, buf.acceleration, h, h_prev,
-                                 control.newton_tolerance, clock[NEWTON_RATE:FIRST_GUESS + 1], buf.trial_pos,
+                                 control.newton_tolerance, clock[NEWTON_RATE:LAST_SOLVE + 1], buf.trial_pos,
                                  buf.trial_vel)
     return error, 2 if h_prev > 0.0 else 1, converged
 
