@@ -5,6 +5,8 @@ from __future__ import annotations
 import contextlib
 import csv
 import math
+import signal
+import threading
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -109,11 +111,13 @@ def run(
     sim = Simulation(scene)
     plotted = shape_frames(len(times), shapes)
     result = RunResult(scene=scene, fps=fps, triangles=sim.triangles)
-    with time_bar(duration, enabled=progress) as bar:
+    with time_bar(duration, enabled=progress) as bar, _remembered_interrupts() as interrupted:
         watching = progress or warn is not None
         with Watcher(sim, bar, _cost_check(sim, duration, warn)) if watching else contextlib.nullcontext():
             try:
                 for index, t in enumerate(times):
+                    if interrupted():  # a Ctrl-C that a library swallowed (see _remembered_interrupts)
+                        raise KeyboardInterrupt
                     sim.advance(t - sim.time)
                     result.rows.append({"time": float(t), **sim.outputs()})
                     if index in plotted:
@@ -125,6 +129,29 @@ def run(
                 raise
         bar.update(float(duration) - bar.n)
     return result
+
+
+@contextlib.contextmanager
+def _remembered_interrupts():
+    """Yields a function that tells whether Ctrl-C came while in the block.  Ctrl-C still raises
+    KeyboardInterrupt at once; remembering it keeps a library that catches BaseException from
+    making the run carry on (trimesh's vertex normals, called by the exporter, do).  Only where
+    Python's own handler is in place, in the main thread (elsewhere nothing changes)."""
+    seen = []
+    if threading.current_thread() is not threading.main_thread() or (
+            signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+        yield lambda: False
+        return
+
+    def handler(signum, frame):
+        seen.append(signum)
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGINT, handler)
+    try:
+        yield lambda: bool(seen)
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _cost_check(sim: Simulation, duration: float, warn: Callable[[str], None] | None):
