@@ -223,6 +223,57 @@ def test_a_sheet_without_folds_is_not_touched():
     assert counts["rebuilds"] < 0.05 * on.steps
 
 
+def test_the_landing_towel_rebuilds_its_list_a_few_times():
+    """The default towel's drop and impact (its first 0.5 s, 21 x 29) run bit for bit as with the stage
+    off, never with a candidate pair, and with at most 20 candidate lists.
+
+    The bound: the y_min edge lands first and stops while the far edge, 0.7 m x sin 10 deg = 0.12 m
+    higher, falls on, so the vertical spread of the particles' displacements grows by about 0.12 m;
+    the rest is flexing.  A list expires once that spread since its reference exceeds about twice its
+    margin (``broad_phase.covers`` takes out the mid-range of the displacements).  A list following
+    an empty one gets the widest margin that keeps it empty, up to ``_widest_margin`` (5.2 mm here:
+    reach 0.7 x the rest sheet's 17.7 mm between non-adjacent elements), so it lasts at least ~10 mm
+    of spread: about 12 lists, and 20 leave room for the flexing (14 measured).  With the least
+    margin alone (1.25 mm) it would take at least 48 (78 measured before the wide lists)."""
+    on = wetcloth.Simulation(wetcloth.load_scene())
+    off = wetcloth.Simulation(wetcloth.load_scene(self_collision="off"))
+    for sim in (on, off):
+        sim.advance(0.5)
+    assert np.array_equal(on.state.pos, off.state.pos) and np.array_equal(on.state.vel, off.state.vel)
+    counts = on.contact_counts
+    assert counts["busy_steps"] == 0 and counts["point_triangle_candidates"] + counts["edge_edge_candidates"] == 0
+    assert 1 <= counts["rebuilds"] <= 20, counts
+
+
+def test_a_list_searched_wide_is_the_list_built_for_its_margin():
+    """A list built after an empty one searches up to the widest margin and narrows to the widest one
+    that keeps it empty, or to the least one (``build_widest``); a restored run rebuilds it with
+    ``build`` for the kept margin alone, so both must give the same arrays.  Checked on a soft towel
+    crumpling on a floor, before its layers meet (0.3 s: a margin between the least and the widest,
+    no pairs) and in the pile (0.8 s: the least margin, hundreds of pairs)."""
+    from wetcloth.kernels.self_contact import broad_phase
+
+    values = dict(nx=11, ny=15, bend_stiffness=2.0, initial_tilt=90.0, initial_height=0.4, floor_level=0.0,
+                  water_level=-5.0)
+    sim = wetcloth.Simulation(wetcloth.load_scene(**values))
+    contact, thickness = sim._contact, sim.scene.thickness
+    least = contact.least_margin
+    widest = 0.5 * (broad_phase.WIDE_REACH * contact.rest_gap - thickness)
+    kept = []
+    for duration in (0.3, 0.5):
+        sim.advance(duration)
+        contact.reference[...] = sim.state.pos
+        broad_phase.build_widest(contact, thickness, least, widest)
+        searched = [pairs.copy() for pairs in contact.pairs]
+        margin = float(contact.margin[0])
+        broad_phase.build(contact, thickness, margin)
+        assert all(np.array_equal(a, b) for a, b in zip(searched, contact.pairs))
+        kept.append((margin, sum(pairs.shape[1] for pairs in searched)))
+    (early, none), (late, pairs) = kept
+    assert least < early < widest and none == 0
+    assert late == least and pairs > 100
+
+
 def test_a_restored_snapshot_repeats_a_run_in_contact_bit_for_bit(current_over_pin):
     """Snapshot with the layers in contact, sent through the FMU's byte format and restored twice (into
     the same simulation and into a fresh one): the next 0.5 s repeat exactly, contacts included."""

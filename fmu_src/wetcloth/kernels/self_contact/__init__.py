@@ -13,6 +13,7 @@ rebuilt from them, so a restored run repeats bit for bit.
 
 from __future__ import annotations
 
+import math
 from collections import namedtuple
 
 import numpy as np
@@ -24,21 +25,29 @@ from wetcloth.kernels.self_contact.response import ZONE_ROWS, resolve
 __all__ = ["Contact", "make_contact", "resolve", "snapshot", "restore", "invalidate", "candidate_counts", "grid_edges"]
 
 #: ``enabled`` (bool); ``friction`` (-) between layers; ``least_margin`` (m) of a candidate list;
+#: ``rest_gap`` (m) between the rest sheet's nearest elements that share no particle (``rest_gap``);
 #: the cloth's ``triangles`` (m, 3) and ``edges`` (k, 2) (particle indices) and ``rest`` positions
 #: (3, n) in the flat sheet (m); the list's ``reference`` positions (3, n) and ``margin`` (1,) (m; 0
 #: when there is none); ``pairs``, a typed list of the point-triangle (particle, triangle) and
 #: edge-edge (edge, edge) candidates, each (2, count) int64; scratch of the impact zones ``zone``
 #: (n) and ``zone_sums`` (ZONE_ROWS, n); ``counters`` (see ``broad_phase.COUNTERS``).
-Contact = namedtuple("Contact", "enabled friction least_margin triangles edges rest reference margin pairs zone zone_sums "
-                                "counters")
+Contact = namedtuple("Contact", "enabled friction least_margin rest_gap triangles edges rest reference margin pairs zone "
+                                "zone_sums counters")
 
-#: A candidate list's least margin, as a fraction of the grid's smaller spacing: the rest sheet's
-#: nearest non-adjacent elements (a corner and the far diagonal of its cell, 0.7 spacings apart) stay
-#: out of reach, so a sheet without folds has no candidates.  Smaller margins mean more rebuilds of
-#: the list and fewer candidates in it: from 0.2 to 0.05 a crumpled 11 x 15 towel's candidates fell
-#: from 9000 to 2000 and its run from 15 s to 4.5 s, while the unfolded towel's 10 s took 1.5-1.6 s
-#: either way (79 rebuilds in 1159 steps instead of 14).
+#: A candidate list's least margin, as a fraction of the grid's smaller spacing: the margin of a
+#: list that has candidates (or follows one that had).  Smaller margins mean more rebuilds of the
+#: list and fewer candidates in it: from 0.2 to 0.05 a crumpled 11 x 15 towel's candidates fell
+#: from 9000 to 2000 and its run from 15 s to 4.5 s.  A list that follows an empty one is as wide as
+#: keeps it empty, up to ``broad_phase.WIDE_REACH``: with 0.05 everywhere, the default towel's
+#: landing (first 0.5 s, no candidates) rebuilt its list 78 times, now 14 (docs/benchmarks.md).
 MARGIN_FRACTION = 0.05
+
+
+def rest_gap(dx: float, dy: float) -> float:
+    """The distance (m) of the rest sheet's nearest elements that share no particle, on a grid of
+    spacings ``dx``, ``dy`` (m) whose cells are cut by one diagonal: a cell's corner off that
+    diagonal and the diagonal."""
+    return dx * dy / math.hypot(dx, dy)
 
 
 def grid_edges(triangles: np.ndarray) -> np.ndarray:
@@ -56,6 +65,7 @@ def make_contact(topology, enabled: bool, friction: float) -> Contact:
     empty = np.zeros((2, 0), dtype=np.int64)
     return Contact(
         enabled=bool(enabled), friction=float(friction), least_margin=MARGIN_FRACTION * min(topology.dx, topology.dy),
+        rest_gap=rest_gap(topology.dx, topology.dy),
         triangles=np.ascontiguousarray(topology.triangles, dtype=np.int64), edges=grid_edges(topology.triangles),
         rest=rest, reference=np.zeros((3, n)), margin=np.zeros(1), pairs=typed.List([empty, empty.copy()]),
         zone=np.arange(n, dtype=np.int64), zone_sums=np.zeros((ZONE_ROWS, n)), counters=np.zeros(COUNTERS, dtype=np.int64),

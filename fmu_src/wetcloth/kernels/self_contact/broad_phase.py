@@ -9,8 +9,14 @@ it.  Pairs of elements that share a particle, or that lie closer than ``thicknes
 rest sheet (they touch by construction), are never candidates.  A sheet without folds has no
 candidates at all, and the step then costs one pass over the positions (``covers``).
 
-The list depends on the reference positions and the margin alone, so a run restored from a
-snapshot of those two rebuilds exactly the same list.
+A list's margin is at least twice the largest motion of the step it was built for (and at least
+``Contact.least_margin``).  A list that follows an empty one is as wide as keeps it empty too, up
+to a reach of WIDE_REACH of the rest sheet's nearest non-adjacent elements' distance: it is searched
+at that reach and narrowed (``build_widest``), so a sheet that moves fast without folds (a landing)
+rebuilds its list a few times, not every few steps, while a folded one keeps lists of few candidates.
+
+The list depends on the reference positions and the margin alone (its pairs ascend, whatever the
+hash), so a run restored from a snapshot of those two rebuilds exactly the same list.
 """
 
 from __future__ import annotations
@@ -29,8 +35,15 @@ COUNTERS = 6
 
 #: A list whose margin is more than this many times what the current step needs is rebuilt (``too_loose``).
 LOOSE = 4.0
+#: The reach of a list tried after an empty one, as a fraction of the rest sheet's nearest
+#: non-adjacent elements' distance (``_widest_margin``): room for the sheet to bend and crumple a
+#: little without candidates.
+WIDE_REACH = 0.7
 
 _FIRST_CAPACITY = 256
+#: The most hash cells a box spans (``build``'s cells: at most 9 along each axis, 10 if rounding
+#: puts both ends on a cell's boundary).
+_MOST_CELLS = 10 * 10 * 10
 _HASH_X, _HASH_Y, _HASH_Z = 73856093, 19349663, 83492791  # Teschner et al. 2003
 
 
@@ -84,13 +97,28 @@ def _margin_for(contact, motion):
     return max(contact.least_margin, 2.0 * motion)
 
 
+@kernel(inline="always")
+def _widest_margin(contact, thickness):
+    """The widest margin (m) of a list built where the last one was empty: its reach (``thickness`` + 2
+    margins) is WIDE_REACH of the rest sheet's nearest non-adjacent elements' distance
+    (``Contact.rest_gap``), so a sheet without folds still finds no candidates; at least ``least_margin``."""
+    return max(contact.least_margin, 0.5 * (WIDE_REACH * contact.rest_gap - thickness))
+
+
+@kernel(inline="always")
+def candidate_count(contact):
+    """How many candidate pairs the current list holds."""
+    return contact.pairs[POINT_TRIANGLE].shape[1] + contact.pairs[EDGE_EDGE].shape[1]
+
+
 @kernel
 def too_loose(contact, x0, x1):
     """Whether the list's margin is over LOOSE times what a list built for this step would get: a
     list built for one violent step (a landing) would otherwise hold far-apart pairs for the rest
-    of the run.  Costs nothing while the margin is the least one (a cloth that never moved fast)."""
+    of the run.  Costs nothing while the margin is the least one (a cloth that never moved fast) or
+    the list is empty (an empty list costs nothing however loose)."""
     margin = contact.margin[0]
-    if margin <= LOOSE * contact.least_margin:
+    if margin <= LOOSE * contact.least_margin or candidate_count(contact) == 0:
         return False
     motion = _step_motion(x0, x1)
     return math.isfinite(motion) and margin > LOOSE * _margin_for(contact, motion)
@@ -98,17 +126,22 @@ def too_loose(contact, x0, x1):
 
 @kernel
 def rebuild_for_step(contact, thickness, x0, x1):
-    """A new list valid for the whole step from ``x0`` to ``x1``: the reference is the midpoint, the
-    margin the larger of ``Contact.least_margin`` and twice the step's largest motion (common
-    translation taken out), which leaves room for the next steps.  Returns False (and builds nothing)
-    if the step is not finite."""
+    """A new list valid for the whole step from ``x0`` to ``x1``: the reference is the midpoint.  The
+    margin is the larger of ``Contact.least_margin`` and twice the step's largest motion (common
+    translation taken out), which leaves room for the next steps; where the expiring list was empty,
+    as wide as keeps the new list empty too, up to ``_widest_margin``.  Returns False (and builds
+    nothing) if the step is not finite."""
     motion = _step_motion(x0, x1)
     if not math.isfinite(motion):
         return False  # a blown-up step: the guard after this stage refuses it
     for c in range(3):
         for i in range(x0.shape[1]):
             contact.reference[c, i] = 0.5 * (x0[c, i] + x1[c, i])
-    build(contact, thickness, _margin_for(contact, motion))
+    margin = _margin_for(contact, motion)
+    if candidate_count(contact) == 0:
+        build_widest(contact, thickness, margin, max(margin, _widest_margin(contact, thickness)))
+    else:
+        build(contact, thickness, margin)
     return True
 
 
@@ -127,76 +160,83 @@ def _boxes(x, elements, lo, hi):
 
 
 @kernel(inline="always")
-def _cell(v, cell):
-    return np.int64(math.floor(v / cell))
+def _cell(v, origin, cell):
+    return np.int64(math.floor((v - origin) / cell))
 
 
 @kernel(inline="always")
-def _box_cells(lo, hi, e, pad, cell):
-    """The hash cells that box ``[lo - pad, hi + pad]`` of element ``e`` overlaps: its first cell
-    (ix, iy, iz) and how many cells it spans along x, y, z (each at least 1)."""
-    ix, iy, iz = _cell(lo[0, e] - pad, cell), _cell(lo[1, e] - pad, cell), _cell(lo[2, e] - pad, cell)
-    return (ix, iy, iz, _cell(hi[0, e] + pad, cell) - ix + 1, _cell(hi[1, e] + pad, cell) - iy + 1,
-            _cell(hi[2, e] + pad, cell) - iz + 1)
+def _box_cells(lo, hi, e, pad, origin, cell):
+    """The hash cells that box ``[lo - pad, hi + pad]`` of element ``e`` overlaps: its first and last
+    cells along x, y, z (cells of size ``cell`` counted from ``origin`` (3))."""
+    return (_cell(lo[0, e] - pad, origin[0], cell), _cell(lo[1, e] - pad, origin[1], cell),
+            _cell(lo[2, e] - pad, origin[2], cell), _cell(hi[0, e] + pad, origin[0], cell),
+            _cell(hi[1, e] + pad, origin[1], cell), _cell(hi[2, e] + pad, origin[2], cell))
 
 
 @kernel(inline="always")
 def _cell_count(cells):
     """How many hash cells a box's ``cells`` (``_box_cells``) holds."""
-    return cells[3] * cells[4] * cells[5]
+    return (cells[3] - cells[0] + 1) * (cells[4] - cells[1] + 1) * (cells[5] - cells[2] + 1)
 
 
 @kernel(inline="always")
-def _bucket(cells, c, mask):
-    """The hash bucket of cell ``c`` (0 to ``_cell_count(cells) - 1``; x slowest, z fastest) of a box's
-    ``cells`` (``_box_cells``)."""
-    ix, iy, iz, _, ny, nz = cells
-    return (((ix + c // (ny * nz)) * _HASH_X) ^ ((iy + c // nz % ny) * _HASH_Y) ^ ((iz + c % nz) * _HASH_Z)) & mask
+def _buckets(cells, mask, out):
+    """Write the hash buckets of a box's ``cells`` (``_box_cells``) to ``out``; returns how many.
+    (Nested loops: the integer divisions of one flat loop over the cells cost most of a rebuild.)"""
+    count = 0
+    for ix in range(cells[0], cells[3] + 1):
+        hx = ix * _HASH_X
+        for iy in range(cells[1], cells[4] + 1):
+            hxy = hx ^ (iy * _HASH_Y)
+            for iz in range(cells[2], cells[5] + 1):
+                out[count] = (hxy ^ (iz * _HASH_Z)) & mask
+                count += 1
+    return count
 
 
 @kernel
-def _hash(lo, hi, pad, cell, mask):
+def _hash(lo, hi, pad, origin, cell, out):
     """Spatial hash of boxes ``[lo - pad, hi + pad]`` (3, m): each box is listed in the bucket of every
-    cell it overlaps.  Returns (start (buckets + 1), items): bucket b holds items[start[b]:start[b+1]]."""
+    cell it overlaps (``out``: scratch for one box's buckets).  Returns (start (buckets + 1), items,
+    mask): bucket b (a cell's hash ``& mask``) holds items[start[b]:start[b+1]], in ascending order."""
+    entries = 0
+    for e in range(lo.shape[1]):
+        entries += _cell_count(_box_cells(lo, hi, e, pad, origin, cell))
+    mask = _table_mask(entries)
     count = np.zeros(mask + 2, dtype=np.int64)
     for e in range(lo.shape[1]):
-        cells = _box_cells(lo, hi, e, pad, cell)
-        for c in range(_cell_count(cells)):
-            count[_bucket(cells, c, mask) + 1] += 1
+        for k in range(_buckets(_box_cells(lo, hi, e, pad, origin, cell), mask, out)):
+            count[out[k] + 1] += 1
     for b in range(mask + 1):
         count[b + 1] += count[b]
     start = count.copy()
-    items = np.empty(count[mask + 1], dtype=np.int64)
+    items = np.empty(entries, dtype=np.int64)
     for e in range(lo.shape[1]):
-        cells = _box_cells(lo, hi, e, pad, cell)
-        for c in range(_cell_count(cells)):
-            b = _bucket(cells, c, mask)
-            items[count[b]] = e
-            count[b] += 1
-    return start, items
+        for k in range(_buckets(_box_cells(lo, hi, e, pad, origin, cell), mask, out)):
+            items[count[out[k]]] = e
+            count[out[k]] += 1
+    return start, items, mask
 
 
 @kernel
-def _buckets_for(entries):
-    """Hash mask: a power of two at least twice the entries, minus one."""
-    size = 1
-    while size < 2 * entries:
+def _table_mask(entries):
+    """Hash mask: a power of two at least the entries (and at least 2), minus one."""
+    size = 2
+    while size < entries:
         size *= 2
     return size - 1
 
 
 @kernel
-def _append(pairs, count, a, b):
-    """Append (a, b) to a (2, capacity) array, doubling it when full; returns the array."""
-    if count == pairs.shape[1]:
-        grown = np.empty((2, 2 * pairs.shape[1]), dtype=np.int64)
+def _room(values, count):
+    """``values`` (rows, capacity), or a copy with twice the capacity if ``count`` columns fill it."""
+    if count < values.shape[1]:
+        return values
+    grown = np.empty((values.shape[0], 2 * values.shape[1]), dtype=values.dtype)
+    for r in range(values.shape[0]):
         for k in range(count):  # element by element: a slice assignment's shape checks cost seconds of compiling
-            grown[0, k] = pairs[0, k]
-            grown[1, k] = pairs[1, k]
-        pairs = grown
-    pairs[0, count] = a
-    pairs[1, count] = b
-    return pairs
+            grown[r, k] = values[r, k]
+    return grown
 
 
 @kernel(inline="always")
@@ -222,50 +262,116 @@ def _share_a_particle(first, second, a, b):
 
 
 @kernel(inline="always")
-def _candidate(kind, x, rest, a, b, c, d, reach, thickness):
-    """Whether elements of particles (a | b, c, d) for POINT_TRIANGLE or (a, b | c, d) for EDGE_EDGE
-    are a candidate pair: within ``reach`` (m) now, and not already closer than ``thickness`` (m)
-    in the flat rest sheet (such neighbours are the fabric itself, not two layers)."""
-    if distance(kind, point(x, a), point(x, b), point(x, c), point(x, d)) >= reach:
-        return False
-    return distance(kind, point(rest, a), point(rest, b), point(rest, c), point(rest, d)) >= thickness
+def _candidate_distance(kind, x, rest, a, b, c, d, reach, thickness):
+    """The distance (m) at ``x`` of elements of particles (a | b, c, d) for POINT_TRIANGLE or
+    (a, b | c, d) for EDGE_EDGE if they are a candidate pair: within ``reach`` (m), and not already
+    closer than ``thickness`` (m) in the flat rest sheet (such neighbours are the fabric itself, not
+    two layers); infinity if they are not."""
+    gap = distance(kind, point(x, a), point(x, b), point(x, c), point(x, d))
+    if gap >= reach or distance(kind, point(rest, a), point(rest, b), point(rest, c), point(rest, d)) < thickness:
+        return math.inf
+    return gap
+
+
+@kernel(inline="always")
+def _kept(first_lo, first_hi, a, lo, hi, b, gap, reach):
+    """Whether a pair (element ``a`` of the first boxes, ``b`` of the second) at distance ``gap`` (m;
+    ``_candidate_distance``) is a candidate at ``reach`` (m): the one test of ``_pairs`` and ``_within``."""
+    return _boxes_overlap(first_lo, first_hi, a, lo, hi, b, reach) and gap < reach
 
 
 @kernel
-def _pairs(kind, x, rest, first, first_lo, first_hi, second, lo, hi, reach, thickness, cell):
+def _pairs(kind, x, rest, first, first_lo, first_hi, second, lo, hi, reach, thickness, origin, cell, out):
     """The candidate pairs (2, count) of one ``kind``: (a, b) for element ``a`` of ``first`` (particles
     (count, 1) for POINT_TRIANGLE, edges for EDGE_EDGE; boxes ``first_lo``, ``first_hi``) and element
     ``b`` of ``second`` (triangles, or the same edges: then each pair once, a < b; boxes ``lo``, ``hi``),
-    found through a spatial hash of the second elements' boxes grown by ``reach``."""
-    mask = _buckets_for(8 * second.shape[0])
-    start, items = _hash(lo, hi, reach, cell, mask)
+    found through a spatial hash of the second elements' boxes grown by ``reach`` (cells of ``cell``
+    from ``origin``; ``out``: scratch for one box's buckets), and their distances (1, count) m.  The
+    pairs come in ascending order of (a, b), whatever the hash: the order the stage treats them in
+    depends on the list alone."""
+    start, items, mask = _hash(lo, hi, reach, origin, cell, out)
     seen = np.full(second.shape[0], -1, dtype=np.int64)
     pairs = np.empty((2, _FIRST_CAPACITY), dtype=np.int64)
+    gaps = np.empty((1, _FIRST_CAPACITY))
     count = 0
     for a in range(first.shape[0]):
-        cells = _box_cells(first_lo, first_hi, a, 0.0, cell)
-        for c in range(_cell_count(cells)):
-            b = _bucket(cells, c, mask)
-            for k in range(start[b], start[b + 1]):
+        found = count
+        for q in range(_buckets(_box_cells(first_lo, first_hi, a, 0.0, origin, cell), mask, out)):
+            b = out[q]
+            for k in range(start[b + 1] - 1, start[b] - 1, -1):  # a bucket's items ascend (``_hash``)
                 e = items[k]
-                if (kind == EDGE_EDGE and e <= a) or seen[e] == a:
+                if kind == EDGE_EDGE and e <= a:
+                    break  # each edge-edge pair once, from its lower edge
+                if seen[e] == a:
                     continue
                 seen[e] = a
                 if _share_a_particle(first, second, a, e) or not _boxes_overlap(first_lo, first_hi, a, lo, hi, e, reach):
                     continue
-                if not _candidate(kind, x, rest, _particle(first, second, a, e, 0), _particle(first, second, a, e, 1),
-                                  _particle(first, second, a, e, 2), _particle(first, second, a, e, 3), reach, thickness):
+                gap = _candidate_distance(kind, x, rest, _particle(first, second, a, e, 0),
+                                          _particle(first, second, a, e, 1), _particle(first, second, a, e, 2),
+                                          _particle(first, second, a, e, 3), reach, thickness)
+                if not _kept(first_lo, first_hi, a, lo, hi, e, gap, reach):
                     continue
-                pairs = _append(pairs, count, a, e)
+                pairs = _room(pairs, count)
+                gaps = _room(gaps, count)
+                pairs[0, count], pairs[1, count], gaps[0, count] = a, e, gap
                 count += 1
-    return pairs[:, :count].copy()
+        _sort_partners(pairs, gaps, found, count)
+    return pairs[:, :count].copy(), gaps[:, :count].copy()
+
+
+@kernel(inline="always")
+def _sort_partners(pairs, gaps, begin, end):
+    """Sort columns ``begin:end`` of ``pairs`` (one element's few partners) and ``gaps`` by the
+    partner ``pairs[1]``, in place, by insertion."""
+    for i in range(begin + 1, end):
+        b, gap = pairs[1, i], gaps[0, i]
+        j = i
+        while j > begin and pairs[1, j - 1] > b:
+            pairs[1, j], gaps[0, j] = pairs[1, j - 1], gaps[0, j - 1]
+            j -= 1
+        pairs[1, j], gaps[0, j] = b, gap
+
+
+@kernel
+def _within(pairs, gaps, first_lo, first_hi, lo, hi, reach):
+    """The pairs (2, count) of a list (with their distances ``gaps`` (1, count) m, ``_pairs``) that are
+    candidates at the smaller ``reach`` (m): those a list built for it holds, in the same order."""
+    kept = 0
+    for k in range(pairs.shape[1]):
+        kept += _kept(first_lo, first_hi, pairs[0, k], lo, hi, pairs[1, k], gaps[0, k], reach)
+    narrow = np.empty((2, kept), dtype=np.int64)
+    kept = 0
+    for k in range(pairs.shape[1]):
+        if _kept(first_lo, first_hi, pairs[0, k], lo, hi, pairs[1, k], gaps[0, k], reach):
+            narrow[0, kept], narrow[1, kept] = pairs[0, k], pairs[1, k]
+            kept += 1
+    return narrow
+
+
+@kernel(inline="always")
+def _nearest(gaps):
+    """The smallest of a list's distances ``gaps`` (1, count) m; infinity if it is empty."""
+    nearest = math.inf
+    for k in range(gaps.shape[1]):
+        nearest = min(nearest, gaps[0, k])
+    return nearest
 
 
 @kernel
 def build(contact, thickness, margin):
     """Build the candidate lists from ``contact.reference`` for ``margin`` (m) and keep the margin."""
+    build_widest(contact, thickness, margin, margin)
+
+
+@kernel
+def build_widest(contact, thickness, least, widest):
+    """Build the candidate lists from ``contact.reference`` for the widest margin from ``least`` to
+    ``widest`` (m) whose lists are empty, or for ``least`` if none is (the lists searched at
+    ``widest`` and narrowed: the same lists as ``build`` for that margin, so a restored run repeats
+    them); keep that margin."""
     x = contact.reference
-    reach = thickness + 2.0 * margin
+    reach = thickness + 2.0 * widest
     triangles, edges = contact.triangles, contact.edges
     tri_lo = np.empty((3, triangles.shape[0]))
     tri_hi = np.empty((3, triangles.shape[0]))
@@ -274,18 +380,31 @@ def build(contact, thickness, margin):
     _boxes(x, triangles, tri_lo, tri_hi)
     _boxes(x, edges, edge_lo, edge_hi)
     # Cells as large as a typical triangle's box grown by the reach: a box then spans a few cells.
-    # (Cells of at least an eighth of the largest box: no box spans more than a few thousand cells.)
+    # (Cells of at least an eighth of the largest box: no box spans more than 9 cells along an axis.)
+    # The cells start at the lowest grown box, so that a flat sheet's boxes lie in one layer of cells.
     total = 0.0
     largest = 0.0
+    origin = np.full(3, math.inf)
     for t in range(triangles.shape[0]):
         extent = max(tri_hi[0, t] - tri_lo[0, t], tri_hi[1, t] - tri_lo[1, t], tri_hi[2, t] - tri_lo[2, t])
         total += extent
         largest = max(largest, extent)
+        for c in range(3):
+            origin[c] = min(origin[c], tri_lo[c, t] - reach)
     cell = max(total / max(1, triangles.shape[0]), 0.125 * largest) + 2.0 * reach
+    out = np.empty(_MOST_CELLS, dtype=np.int64)
     particles = np.arange(x.shape[1]).reshape((x.shape[1], 1))
-    contact.pairs[POINT_TRIANGLE] = _pairs(POINT_TRIANGLE, x, contact.rest, particles, x, x, triangles, tri_lo, tri_hi,
-                                           reach, thickness, cell)
-    contact.pairs[EDGE_EDGE] = _pairs(EDGE_EDGE, x, contact.rest, edges, edge_lo, edge_hi, edges, edge_lo, edge_hi, reach,
-                                      thickness, cell)
+    point_triangle, point_gaps = _pairs(POINT_TRIANGLE, x, contact.rest, particles, x, x, triangles, tri_lo, tri_hi,
+                                        reach, thickness, origin, cell, out)
+    edge_edge, edge_gaps = _pairs(EDGE_EDGE, x, contact.rest, edges, edge_lo, edge_hi, edges, edge_lo, edge_hi, reach,
+                                  thickness, origin, cell, out)
+    # The widest margin whose lists are empty: the nearest pair just out of reach.
+    margin = max(least, min(widest, 0.5 * (min(_nearest(point_gaps), _nearest(edge_gaps)) - thickness)))
+    if margin < widest:
+        reach = thickness + 2.0 * margin
+        point_triangle = _within(point_triangle, point_gaps, x, x, tri_lo, tri_hi, reach)
+        edge_edge = _within(edge_edge, edge_gaps, edge_lo, edge_hi, edge_lo, edge_hi, reach)
+    contact.pairs[POINT_TRIANGLE] = point_triangle
+    contact.pairs[EDGE_EDGE] = edge_edge
     contact.margin[0] = margin
     contact.counters[REBUILDS] += 1

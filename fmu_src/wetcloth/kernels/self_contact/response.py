@@ -25,8 +25,8 @@ import numpy as np
 
 from wetcloth.kernels import kernel
 from wetcloth.kernels.integration import symmetric_adjugate
-from wetcloth.kernels.self_contact.broad_phase import (BUSY_STEPS, FREEZES, PASSES, RESPONSES, ZONE_ROUNDS, covers,
-                                                       point, rebuild_for_step, too_loose)
+from wetcloth.kernels.self_contact.broad_phase import (BUSY_STEPS, FREEZES, PASSES, RESPONSES, ZONE_ROUNDS,
+                                                       candidate_count, covers, point, rebuild_for_step, too_loose)
 from wetcloth.kernels.self_contact.geometry import (CLEAR, EDGE_EDGE, POINT_TRIANGLE, along, closest, combine, distance,
                                                     motion_bound, time_of_contact)
 
@@ -368,7 +368,7 @@ def resolve(contact, thickness, floor_z, blow_up_speed, mass, free, x0, x1, v1, 
         if not covers(contact, x1) or too_loose(contact, x0, x1):
             if _refused(x1, v1, blow_up_speed) or not rebuild_for_step(contact, thickness, x0, x1):
                 return False
-        candidates = contact.pairs[POINT_TRIANGLE].shape[1] + contact.pairs[EDGE_EDGE].shape[1]
+        candidates = candidate_count(contact)
         if candidates == 0:
             return contact.counters[RESPONSES] + contact.counters[ZONE_ROUNDS] != treated
         if _refused(x1, v1, blow_up_speed):
