@@ -5,8 +5,8 @@
 * The default towel's landing (its first 0.5 s: the drop and the impact, and its first 3 s), frames
   of 1/30 s as the FMU reads them: the stage's share of the run (on - off) / on from the best of
   ``--repeat`` alternating runs of each, and the candidate lists built (exact counts).  Timed in CPU
-  time of the process (the run is single-threaded): on a shared machine the wall time of a half
-  second also counts other jobs' time slices, which swamped the difference.
+  time of the process, as every figure here (the runs are single-threaded): on a shared machine
+  wall time also counts other jobs' time slices, which swamped the difference.
 * The default towel (``models/towel.toml``, 21 x 29, 20 s: it lands, floats and soaks, and never
   folds): the stage only checks that its candidate list (empty) still holds.  Figure: the median
   of the per-pair ratios on / off (the runs alternate, so a load change on a shared machine hits both).
@@ -36,14 +36,14 @@ CRUMPLED = dict(nx=11, ny=15, bend_stiffness=2.0, initial_tilt=90.0, initial_hei
 
 
 def timed_run(values: dict, duration: float, count_crossings: bool = False) -> tuple[float, wetcloth.Simulation, int]:
-    """Wall time (s) of ``duration`` s in frames of FRAME s, the simulation, and the most crossings in
+    """CPU time (s) of ``duration`` s in frames of FRAME s, the simulation, and the most crossings in
     a frame (counted outside the timed part; 0 unless ``count_crossings``)."""
     sim = wetcloth.Simulation(wetcloth.load_scene(**values))
     spent, worst = 0.0, 0
     for _ in range(round(duration / FRAME)):
-        start = time.perf_counter()
+        start = time.process_time()
         sim.advance(FRAME)
-        spent += time.perf_counter() - start
+        spent += time.process_time() - start
         if count_crossings:
             worst = max(worst, crossings(sim.positions, sim.triangles))
     return spent, sim, worst
