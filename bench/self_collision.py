@@ -83,7 +83,7 @@ def landing_share(repeat: int) -> None:
 
 
 def folding_cost(repeat: int) -> None:
-    print("\n| scene | simulated | off: wall, steps, most crossings | on: wall, steps, most crossings | on / off |")
+    print("\n| scene | simulated | off: CPU, steps, most crossings | on: CPU, steps, most crossings | on / off |")
     print("|---|---|---|---|---|")
     for name, values, duration in (("edge-on drop into a 0.6 m pool (15 x 21)", EDGE_ON_POOL, 6.0),
                                    ("folded over its pinned edge by a current (15 x 21)", CURRENT_OVER_PIN, 2.0),
