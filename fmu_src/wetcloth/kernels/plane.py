@@ -151,13 +151,19 @@ def refresh(plane, offsets, mass, scale):
     return 1
 
 
+@kernel(inline="always")
+def banded(plane):
+    """Whether the in-plane systems are solved by the banded factors alone (no multigrid cycle)."""
+    return plane.grid.levels.shape[0] == 1
+
+
 @kernel
 def jacobian_refresh_pays(plane, iterations):
     """Whether factoring from the Jacobian (``refresh_from_jacobian``) pays after a solve of
     ``iterations`` CG iterations: on banded grids only (a multigrid hierarchy's Galerkin products
     would cost more), see JACOBIAN_REFRESH_AFTER."""
     kd = plane.bands.shape[2] - 1
-    return plane.grid.levels.shape[0] == 1 and iterations > JACOBIAN_REFRESH_AFTER * 0.25 * kd
+    return banded(plane) and iterations > JACOBIAN_REFRESH_AFTER * 0.25 * kd
 
 
 @kernel
