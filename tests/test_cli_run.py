@@ -116,9 +116,9 @@ def test_ctrl_c_keeps_the_outputs_and_prints_one_line(tmp_path):
     assert plot_path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-def test_a_ctrl_c_that_a_library_swallows_still_stops_the_run():
+def test_a_ctrl_c_during_a_frame_callback_stops_the_run_after_it():
     """Ctrl-C arrives while a frame callback runs library code that catches BaseException (as trimesh's
-    vertex normals do): the run still stops at the next frame, with the frames recorded so far."""
+    vertex normals do): the callback finishes, and the run stops after it with the frames so far."""
     def swallowing(index, sim):
         if index == 3:
             try:

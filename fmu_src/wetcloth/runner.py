@@ -111,19 +111,18 @@ def run(
     sim = Simulation(scene)
     plotted = shape_frames(len(times), shapes)
     result = RunResult(scene=scene, fps=fps, triangles=sim.triangles)
-    with time_bar(duration, enabled=progress) as bar, _remembered_interrupts() as interrupted:
+    with time_bar(duration, enabled=progress) as bar, _deferrable_interrupts() as deferred:
         watching = progress or warn is not None
         with Watcher(sim, bar, _cost_check(sim, duration, warn)) if watching else contextlib.nullcontext():
             try:
                 for index, t in enumerate(times):
-                    if interrupted():  # a Ctrl-C that a library swallowed (see _remembered_interrupts)
-                        raise KeyboardInterrupt
                     sim.advance(t - sim.time)
                     result.rows.append({"time": float(t), **sim.outputs()})
                     if index in plotted:
                         result.shapes.append(ClothShape(float(t), sim.positions, sim.wetness))
                     if on_frame is not None:
-                        on_frame(index, sim)
+                        with deferred():
+                            on_frame(index, sim)
             except BaseException as exc:
                 exc.partial_result = result  # every frame up to the last good one
                 raise
@@ -132,24 +131,38 @@ def run(
 
 
 @contextlib.contextmanager
-def _remembered_interrupts():
-    """Yields a function that tells whether Ctrl-C came while in the block.  Ctrl-C still raises
-    KeyboardInterrupt at once; remembering it keeps a library that catches BaseException from
-    making the run carry on (trimesh's vertex normals, called by the exporter, do).  Only where
-    Python's own handler is in place, in the main thread (elsewhere nothing changes)."""
-    seen = []
+def _deferrable_interrupts():
+    """Yields ``deferred``: a context manager inside which Ctrl-C is held back, and raised as
+    KeyboardInterrupt when the block ends; elsewhere it is raised at once, as usual.  The frame
+    callback runs deferred: the exporter's libraries catch BaseException in places (trimesh's
+    vertex normals do, and log a traceback), which swallowed the interrupt, and a frame's files are
+    written whole either way.  Only where Python's own handler is in place, in the main thread
+    (elsewhere ``deferred`` changes nothing)."""
     if threading.current_thread() is not threading.main_thread() or (
             signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
-        yield lambda: False
+        yield contextlib.nullcontext
         return
+    held = []  # [interrupts held back, ...] while deferring
 
     def handler(signum, frame):
-        seen.append(signum)
-        raise KeyboardInterrupt
+        if not held:
+            raise KeyboardInterrupt
+        held.append(signum)
+
+    @contextlib.contextmanager
+    def deferred():
+        held.append(None)
+        try:
+            yield
+        finally:
+            came = len(held) > 1
+            held.clear()
+        if came:
+            raise KeyboardInterrupt
 
     previous = signal.signal(signal.SIGINT, handler)
     try:
-        yield lambda: bool(seen)
+        yield deferred
     finally:
         signal.signal(signal.SIGINT, previous)
 
