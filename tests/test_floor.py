@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 import wetcloth
+from support.rollback import assert_restored_run_repeats
 
 #: A heavy (saturated) 7 x 7 cloth lying flat 1 mm above the floor, under water: it settles at once.
 ON_FLOOR = dict(nx=7, ny=7, width=0.3, length=0.3, initial_tilt=0.0, initial_height=-0.498, floor_level=-0.5,
@@ -95,13 +96,7 @@ def test_rollback_on_the_floor_repeats_the_run_bit_for_bit():
     sim.advance(0.5)
     sim.set_inputs(current_x=0.3)
     sim.advance(0.05)
-    snapshot = sim.snapshot()
-    sim.advance(0.3)
-    first = sim.state.copy()
-    sim.restore(snapshot)
-    sim.advance(0.3)
-    for name in ("pos", "vel", "water"):
-        np.testing.assert_array_equal(getattr(sim.state, name), getattr(first, name))
+    assert_restored_run_repeats(sim, sim.snapshot(), 0.3)
 
 
 def _friction_ratio(current: float) -> float:
