@@ -142,22 +142,23 @@ def _deferrable_interrupts():
             signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
         yield contextlib.nullcontext
         return
-    held = []  # [interrupts held back, ...] while deferring
+    deferring, held_back = False, False
 
     def handler(signum, frame):
-        if not held:
+        nonlocal held_back
+        if not deferring:
             raise KeyboardInterrupt
-        held.append(signum)
+        held_back = True
 
     @contextlib.contextmanager
     def deferred():
-        held.append(None)
+        nonlocal deferring, held_back
+        deferring, held_back = True, False
         try:
             yield
         finally:
-            came = len(held) > 1
-            held.clear()
-        if came:
+            deferring = False
+        if held_back:
             raise KeyboardInterrupt
 
     previous = signal.signal(signal.SIGINT, handler)
