@@ -6,6 +6,7 @@ import pytest
 import wetcloth
 from wetcloth.kernels.implicit import EULER_CG_TOLERANCE, implicit_euler_step, make_solver
 from wetcloth.kernels.integration import _system_matvec
+from wetcloth.kernels.water import face_drag_and_blocks
 from wetcloth.model import Model
 from support.reference import NumpyReference
 from wetcloth.state import State, initial_state
@@ -39,6 +40,35 @@ def test_forces_match_numpy_reference(variant):
     got = model.forces(state.pos, state.vel, state.water)
     assert (model.submerged > 0).any() and (model.submerged == 0).any(), "straddles the surface"
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
+
+
+def test_face_drag_skips_only_dry_rows():
+    """Face drag works out the rows from the highest wet one to the lowest in one run and zeroes
+    the rest: on a cloth dry at both ends and in one middle row, called again and again on the same
+    buffers with other rows wet, it matches the NumPy reference (to round-off) and, exactly, the
+    same kernel computing every row."""
+    scene = wetcloth.load_scene(nx=7, ny=9, initial_tilt=3.0, initial_height=0.0, drag_tangential=0.5)
+    model, state = disturbed_state(scene)
+    reference = NumpyReference(model)
+    nx, ny, n = scene.nx, scene.ny, model.topology.n
+    physics = model.physics
+    cells = np.zeros((2, 9, n + nx + 1))
+    rng = np.random.default_rng(5)
+    for dry_rows in ([], [0, 1, 4, 7, 8], [0, 1, 2, 3, 4, 5, 6, 7, 8], [5, 6, 7, 8], [0, 3]):
+        s = rng.uniform(0.1, 1.0, size=n)
+        for row in dry_rows:
+            s[row * nx:(row + 1) * nx] = 0.0
+        results = []
+        for skip_dry_rows in (True, False):
+            force, blocks = np.zeros((3, n)), np.zeros((6, n))
+            face_drag_and_blocks(nx, ny, state.pos, state.vel, s, physics.water_density, physics.drag_normal,
+                                 physics.drag_tangential, physics.drag_linear, physics.current_x,
+                                 physics.current_y, 1e-3, force, blocks, cells, skip_dry_rows)
+            results.append((force, blocks))
+        expected = reference._face_drag(state.pos, state.vel, s)
+        np.testing.assert_allclose(results[0][0], expected, rtol=0, atol=1e-12 * max(np.abs(expected).max(), 1.0))
+        for skipped, computed in zip(*results):
+            np.testing.assert_array_equal(skipped, computed)
 
 
 @pytest.mark.parametrize("integrator", ["explicit_euler"])

@@ -121,9 +121,9 @@ def _gather_cells(t1, t2, nx, out, scale):
         out[v] += quarter * (a1[v] + d1[v] + a2[v] + d2[v]) + half * (b1[v] + c2[v])
 
 
-@kernel
+@kernel(inline="always")
 def _drag_row(k_count, a, b, c, density, c_normal, c_tangential, c_linear, current_x, current_y, out, blocks_wanted):
-    """Triangles (a[k], b[k], c[k]) of one row: force and, if wanted, Jacobian blocks into ``out`` (9, k)."""
+    """Triangles (a[k], b[k], c[k]): force and, if wanted, Jacobian blocks into ``out`` (9, k)."""
     fx_, fy_, fz_ = out[0], out[1], out[2]
     xx, yy, zz, xy, xz, yz = out[3], out[4], out[5], out[6], out[7], out[8]
     for k in range(k_count):
@@ -156,22 +156,37 @@ def _dry(s, start, stop):
 def _drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells,
                blocks_wanted, skip_dry_rows):
     """Fill ``cells`` (2, 9, n + nx + 1) with both triangles' force and, if wanted, Jacobian blocks
-    (xx, yy, zz, xy, xz, yz) for every cell, row by row.  A row of cells none of whose particles
-    touches water has no drag: with ``skip_dry_rows`` it is zeroed, not computed."""
+    (xx, yy, zz, xy, xz, yz) for every cell.  Rows of cells none of whose particles touches water
+    have no drag: with ``skip_dry_rows``, those above the highest wet row and below the lowest are
+    zeroed, not computed.  The rows between are computed in one run along the grid, as if every
+    particle began a cell (fewer, longer loops: on a floating 9 x 9 cloth face drag with its blocks
+    took 4.0-4.6 us a call this way, 6.6 us row by row; 32 x 32: 54-59 against 64 us).  The last
+    column's, which are no cells, are then zeroed (dry triangles have zero drag anyway: their wet
+    area is zero)."""
     pad = nx + 1
-    w = nx - 1
-    for r in range(ny - 1):
-        base = r * nx
-        if skip_dry_rows and _dry(s, base, base + 2 * nx):
-            cells[:, :, pad + base:pad + base + w] = 0.0
-            continue
-        a = _corner(pos, vel, s, base, w)
-        b = _corner(pos, vel, s, base + 1, w)
-        c = _corner(pos, vel, s, base + nx, w)
-        d = _corner(pos, vel, s, base + nx + 1, w)
-        lo, hi = pad + base, pad + base + w
-        _drag_row(w, a, b, d, density, c_normal, c_tangential, c_linear, current_x, current_y, cells[0, :, lo:hi], blocks_wanted)
-        _drag_row(w, a, d, c, density, c_normal, c_tangential, c_linear, current_x, current_y, cells[1, :, lo:hi], blocks_wanted)
+    first, last = 0, ny - 2
+    if skip_dry_rows:
+        while first <= last and _dry(s, first * nx, first * nx + 2 * nx):
+            first += 1
+        while last >= first and _dry(s, last * nx, last * nx + 2 * nx):
+            last -= 1
+    cells[:, :, pad:pad + first * nx] = 0.0
+    cells[:, :, pad + (last + 1) * nx:] = 0.0
+    if first > last:
+        return
+    start = first * nx
+    count = (last - first + 1) * nx - 1
+    a = _corner(pos, vel, s, start, count)
+    b = _corner(pos, vel, s, start + 1, count)
+    c = _corner(pos, vel, s, start + nx, count)
+    d = _corner(pos, vel, s, start + nx + 1, count)
+    lo, hi = pad + start, pad + start + count
+    _drag_row(count, a, b, d, density, c_normal, c_tangential, c_linear, current_x, current_y, cells[0, :, lo:hi],
+              blocks_wanted)
+    _drag_row(count, a, d, c, density, c_normal, c_tangential, c_linear, current_x, current_y, cells[1, :, lo:hi],
+              blocks_wanted)
+    for r in range(first, last):
+        cells[:, :, pad + r * nx + nx - 1] = 0.0
 
 
 @kernel
