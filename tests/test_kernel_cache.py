@@ -84,3 +84,42 @@ def test_every_kernel_is_cached_against_the_whole_kernel_package():
     kernels = Path(compilation.__file__).parent
     assert compilation._scope(str(kernels / "water.py")) == kernels
     assert compilation._scope("/elsewhere/module.py") == Path("/elsewhere")
+
+
+BUNDLES = '''
+from wetcloth.kernels import {decorator}
+
+
+@{decorator}
+def first(a):
+    return a[0]
+
+
+@{decorator}
+def bundle_sum(bundle, out):
+    out[0] = first(bundle.a) + first(bundle.b)
+'''
+
+
+def test_kernels_count_no_references_unless_counted(tmp_path, monkeypatch):
+    """``kernel`` compiles with numba's reference counting off: a kernel passing a bundle of arrays
+    on to another kernel, as the step loop does, takes and releases no references (no NRT_incref
+    or NRT_decref in its code); compiled by ``counted_kernel`` the same kernel does."""
+    import importlib
+    from collections import namedtuple
+
+    import numpy as np
+
+    monkeypatch.syspath_prepend(str(tmp_path))
+    bundle = namedtuple("Bundle", "a b")(np.ones(3), np.full(3, 2.0))
+    codes = {}
+    for decorator in ("kernel", "counted_kernel"):
+        (tmp_path / f"bundles_{decorator}.py").write_text(BUNDLES.format(decorator=decorator))
+        module = importlib.import_module(f"bundles_{decorator}")
+        out = np.zeros(1)
+        module.bundle_sum(bundle, out)
+        assert out[0] == 3.0
+        (result,) = module.bundle_sum.overloads.values()
+        codes[decorator] = result.library.get_llvm_str()
+    assert "NRT_incref" not in codes["kernel"] and "NRT_decref" not in codes["kernel"]
+    assert "NRT_decref" in codes["counted_kernel"]

@@ -34,7 +34,7 @@ them changes):
   ``UserWideCacheLocator`` (public names from 0.62), their ``_py_file`` and ``get_source_stamp``;
 * ``CPUDispatcher(py_func, locals, targetoptions)``, its ``overloads``, ``enable_caching`` and
   ``_numba_type_``; the typing context's ``_remove_global`` and ``insert_global``; the target
-  options ``no_cpython_wrapper`` and ``no_cfunc_wrapper``;
+  options ``no_cpython_wrapper``, ``no_cfunc_wrapper`` and ``_nrt`` (``wetcloth.kernels``);
 * ``types.Dispatcher.get_impl_key`` (its result keys the lowering), the target context's
   ``insert_func_defn``, ``call_conv.get_function_type`` / ``call_function`` /
   ``return_status_propagate``, ``active_code_library._reload_init`` (callables run before a cached

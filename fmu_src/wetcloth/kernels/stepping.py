@@ -15,7 +15,7 @@ from collections import namedtuple
 
 from numba.extending import overload
 
-from wetcloth.kernels import OPTIONS, kernel
+from wetcloth.kernels import OPTIONS, counted_kernel, kernel
 from wetcloth.kernels.absorption import dry, keep_momentum, uptake, uptake_timing_error, wick
 from wetcloth.kernels.assembly import forces
 from wetcloth.kernels.floor import agree_history, floor_contact, hold_resting, release_all, release_slipping
@@ -220,7 +220,7 @@ def _maybe_sleep(control, phys, buf, clock, h, exchanging):
         clock[LAST_STEP] = 0.0  # the velocities changed: BDF2 starts afresh
 
 
-@kernel
+@counted_kernel  # passes self-collision's typed lists on
 def _step(cloth, phys, control, work, solver, plane, contact, buf, clock, remaining):
     """Take one accepted step of at most ``remaining`` s.  Returns DONE or BLOWN_UP."""
     adaptive = control.allowed > 0.0
@@ -298,7 +298,7 @@ def _step(cloth, phys, control, work, solver, plane, contact, buf, clock, remain
     return DONE
 
 
-@kernel
+@counted_kernel  # takes self-collision's typed lists
 def advance(cloth, phys, control, work, solver, plane, contact, buf, clock, target, max_steps):
     """Step until ``clock[TIME]`` reaches ``target`` (s) or the cloth falls asleep (time then jumps to
     ``target``).  Returns DONE; BLOWN_UP with the last good state kept; or PAUSED after

@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from wetcloth.kernels import kernel
+from wetcloth.kernels import counted_kernel as kernel  # builds the candidate lists (typed lists of arrays)
 from wetcloth.kernels.self_contact.geometry import EDGE_EDGE, POINT_TRIANGLE, distance
 
 #: Slots of ``Contact.counters`` (int64): candidate lists built; steps that had candidates; passes

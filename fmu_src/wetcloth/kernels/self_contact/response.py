@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from wetcloth.kernels import kernel
+from wetcloth.kernels import counted_kernel as kernel  # allocates arrays, reads the typed candidate lists
 from wetcloth.kernels.integration import symmetric_adjugate
 from wetcloth.kernels.self_contact.broad_phase import (BUSY_STEPS, FREEZES, PASSES, RESPONSES, ZONE_ROUNDS,
                                                        candidate_count, covers, point, rebuild_for_step, too_loose)
