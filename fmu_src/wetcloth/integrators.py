@@ -24,6 +24,7 @@ import numpy as np
 
 from wetcloth.kernels import stepping
 from wetcloth.kernels.assembly import GRAVITY
+from wetcloth.kernels.implicit import CG_TOLERANCE, FIXED_STEP_CG_TOLERANCE
 from wetcloth.model import Model
 
 #: Name -> code of the compiled step loop.
@@ -88,6 +89,7 @@ class Integrator:
         newton = NEWTON_FRACTION * allowed if allowed > 0 else FIXED_STEP_NEWTON_TOLERANCE * size
         return stepping.Control(
             scheme=stepping.SCHEMES[self.code], integrator=self.code, tolerance=sc.tolerance, allowed=allowed, max_step=sc.max_step, newton_tolerance=newton,
+            cg_tolerance=CG_TOLERANCE if allowed > 0 else FIXED_STEP_CG_TOLERANCE,
             omega_squared=self.omega_squared, buoyancy_omega_squared=sc.water_density * GRAVITY / sc.areal_density,
             damping_rate=self.damping_rate, spring_limit=self.spring_limit, drag_rate_offset=drag_offset,
             drag_rate_slope=drag_slope, smallest_step=SMALLEST_STEP, growth=STEP_GROWTH, shrink=STEP_SHRINK,

@@ -46,11 +46,13 @@ CLOCK_SIZE = 15
 DONE, BLOWN_UP, PAUSED = 0, 1, 2
 
 #: Integrator and controller settings: ``scheme`` (see SCHEMES), ``tolerance`` (-), ``allowed`` local position error per step
-#: (m, 0 = fixed steps of ``max_step`` s); ``newton_tolerance`` (m); the explicit schemes' stability data:
+#: (m, 0 = fixed steps of ``max_step`` s); ``newton_tolerance`` (m); ``cg_tolerance`` (-, BDF2's linear
+#: solves, relative to the correction); the explicit schemes' stability data:
 #: ``omega_squared`` (1/s2, Gershgorin bound of the springs), ``buoyancy_omega_squared`` (1/s2),
 #: ``damping_rate`` (1/s), ``spring_limit`` (s, explicit Euler), drag rate ``drag_rate_offset +
 #: drag_rate_slope * speed`` (1/s); the sleep rule: ``sleep_distance`` (m) for ``sleep_after`` s.
-Control = namedtuple("Control", "scheme integrator tolerance allowed max_step newton_tolerance omega_squared buoyancy_omega_squared "
+Control = namedtuple("Control", "scheme integrator tolerance allowed max_step newton_tolerance cg_tolerance omega_squared "
+                                "buoyancy_omega_squared "
                                 "damping_rate spring_limit drag_rate_offset drag_rate_slope smallest_step growth "
                                 "shrink blow_up_speed sleep_distance sleep_after")
 #: State buffers: current and trial (pos, vel (3, n), water (n)), BDF2 history (the state before the
@@ -141,8 +143,8 @@ def _bdf2_step(cloth, phys, control, work, solver, plane, buf, clock, h):
                phys.absorption_capacity, phys.absorption_rate, h, buf.water, step_water)
     error, converged = bdf2_step(cloth, phys, work, solver, plane, buf.pos, buf.vel, buf.water, step_water,
                                  buf.prev_pos, buf.prev_vel, buf.prev_water, buf.acceleration, h, h_prev,
-                                 control.newton_tolerance, clock[NEWTON_RATE:LAST_SOLVE + 1], buf.trial_pos,
-                                 buf.trial_vel)
+                                 control.newton_tolerance, control.cg_tolerance, clock[NEWTON_RATE:LAST_SOLVE + 1],
+                                 buf.trial_pos, buf.trial_vel)
     return error, 2 if h_prev > 0.0 else 1, converged
 
 
