@@ -2,8 +2,8 @@
 
 Shared by ``bench/work_precision.py`` and the accuracy tests, which both compute the references in
 their own process (``reference``): BDF2 with fixed steps of REFERENCE_STEP.  Halving that step
-moves the centroids by at most 1.4e-5 m and the wet mass by 9e-5 (docs/benchmarks.md), far below
-the 1 mm and 1e-3 asked of the defaults.
+moves the centroids by 6-27 um and the wet mass by up to 1.8e-4 (docs/benchmarks.md), well below
+the 1 mm and 1e-3 asked of the defaults (``tests/test_accuracy.py`` checks the sinking scene's).
 """
 
 from __future__ import annotations
