@@ -250,7 +250,8 @@ def test_a_list_searched_wide_is_the_list_built_for_its_margin():
     that keeps it empty, or to the least one (``build_widest``); a restored run rebuilds it with
     ``build`` for the kept margin alone, so both must give the same arrays.  Checked on a soft towel
     crumpling on a floor, before its layers meet (0.3 s: a margin between the least and the widest,
-    no pairs) and in the pile (0.8 s: the least margin, hundreds of pairs)."""
+    no pairs) and in the pile (0.8 s: the least margin, hundreds of pairs, more of one kind than
+    the search's first arrays hold)."""
     from wetcloth.kernels.self_contact import broad_phase
 
     values = dict(nx=11, ny=15, bend_stiffness=2.0, initial_tilt=90.0, initial_height=0.4, floor_level=0.0,
@@ -268,10 +269,11 @@ def test_a_list_searched_wide_is_the_list_built_for_its_margin():
         margin = float(contact.margin[0])
         broad_phase.build(contact, thickness, margin)
         assert all(np.array_equal(a, b) for a, b in zip(searched, contact.pairs))
-        kept.append((margin, sum(pairs.shape[1] for pairs in searched)))
-    (early, none), (late, pairs) = kept
+        kept.append((margin, sum(pairs.shape[1] for pairs in searched), max(pairs.shape[1] for pairs in searched)))
+    (early, none, _), (late, pairs, most) = kept
     assert least < early < widest and none == 0
     assert late == least and pairs > 100
+    assert most > broad_phase._FIRST_CAPACITY  # the search ran out of room and started again (``_pairs``)
 
 
 def test_a_restored_snapshot_repeats_a_run_in_contact_bit_for_bit(current_over_pin):
