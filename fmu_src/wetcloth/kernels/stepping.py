@@ -51,10 +51,9 @@ DONE, BLOWN_UP, PAUSED = 0, 1, 2
 #: ``omega_squared`` (1/s2, Gershgorin bound of the springs), ``buoyancy_omega_squared`` (1/s2),
 #: ``damping_rate`` (1/s), ``spring_limit`` (s, explicit Euler), drag rate ``drag_rate_offset +
 #: drag_rate_slope * speed`` (1/s); the sleep rule: ``sleep_distance`` (m) for ``sleep_after`` s.
-Control = namedtuple("Control", "scheme integrator tolerance allowed max_step newton_tolerance cg_tolerance omega_squared "
-                                "buoyancy_omega_squared "
-                                "damping_rate spring_limit drag_rate_offset drag_rate_slope smallest_step growth "
-                                "shrink blow_up_speed sleep_distance sleep_after")
+Control = namedtuple("Control", "scheme integrator tolerance allowed max_step newton_tolerance cg_tolerance "
+                                "omega_squared buoyancy_omega_squared damping_rate spring_limit drag_rate_offset "
+                                "drag_rate_slope smallest_step growth shrink blow_up_speed sleep_distance sleep_after")
 #: State buffers: current and trial (pos, vel (3, n), water (n)), BDF2 history (the state before the
 #: last step, and the acceleration (3, n) m/s^2 the last step implied at its end), sleep anchor, and
 #: ``held`` (n): 1 for the particles the floor holds during the current step (scratch, set from the
