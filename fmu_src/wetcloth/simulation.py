@@ -274,16 +274,17 @@ class Simulation:
     # ----------------------------------------------------------------- results
     def outputs(self) -> dict[str, float]:
         """The FMU outputs (docs/model.md section 8): centroid (m), depth (m), wet and water mass (kg)."""
-        mass = self.model.mass(self.state.water)
+        buf = self._buffers
+        mass = self.model.mass(buf.water)
         total = float(mass.sum())
-        centroid = self.state.pos @ mass / total
+        centroid_x, centroid_y, centroid_z = (buf.pos @ mass / total).tolist()
         return {
-            "centroid_x": float(centroid[0]),
-            "centroid_y": float(centroid[1]),
-            "centroid_z": float(centroid[2]),
-            "depth": float(self.scene.water_level - centroid[2]),
+            "centroid_x": centroid_x,
+            "centroid_y": centroid_y,
+            "centroid_z": centroid_z,
+            "depth": self.scene.water_level - centroid_z,
             "wet_mass": total,
-            "water_mass": float(self.state.water.sum()),
+            "water_mass": float(buf.water.sum()),
         }
 
     @property
