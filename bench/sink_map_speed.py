@@ -18,8 +18,8 @@ import time
 import numpy as np
 
 from wetcloth.batch.engines import python_series
-from wetcloth.batch.spec import load_study
-from wetcloth.scene import preset_dir
+
+from _sink_map import sink_map_runs
 
 PREVIOUS = dict(integrator="symplectic_euler", tolerance=1e-4, max_step=0.01)
 
@@ -33,9 +33,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=2)
     args = parser.parse_args()
-    study = load_study(preset_dir() / "studies" / "sink_map.toml")
-    runs = study.runs()
-    python_series(runs[0].params, 0.1, study.sample_rate)  # warm-up: load the compiled kernels
+    study, runs = sink_map_runs()
     totals = {"default": float("inf"), "previous": float("inf")}
     sinks = {}
     for _ in range(args.repeat):

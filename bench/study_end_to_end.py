@@ -24,17 +24,15 @@ import time
 
 import wetcloth
 from wetcloth.batch.engines import python_series
-from wetcloth.batch.spec import load_study
-from wetcloth.scene import preset_dir
+
+from _sink_map import sink_map_runs
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=2)
     args = parser.parse_args()
-    study = load_study(preset_dir() / "studies" / "sink_map.toml")
-    runs = study.runs()
-    python_series(runs[0].params, 0.1, study.sample_rate)  # warm-up: load or compile the kernels
+    study, runs = sink_map_runs()
     best = float("inf")
     for _ in range(args.repeat):
         start = time.perf_counter()
