@@ -138,23 +138,60 @@ def missing_dependency(exc: ModuleNotFoundError, requires: list[str]) -> ImportE
     return ImportError(message, name=exc.name)
 
 
-def release_at_exit(binaries: Path) -> None:
-    """Have Python's exit call ``finalizePythonInterpreter`` of each pythonfmu binary under
-    ``binaries`` that this process has loaded, before the binary's own exit handlers run (they
-    release its interpreter helper twice and corrupt the heap: ``wetcloth.fmu.guard``, item 3)."""
+class _LibraryInfo(ctypes.Structure):
+    """The first two fields of the C library's ``struct dl_phdr_info``: load address, file name."""
+    _fields_ = [("address", ctypes.c_void_p), ("name", ctypes.c_char_p)]
+
+
+_VISIT = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.POINTER(_LibraryInfo), ctypes.c_size_t, ctypes.c_void_p)
+
+
+def loaded_libraries() -> list[str]:
+    """The file names of the shared libraries this process has loaded, as they were loaded
+    (``dl_iterate_phdr``); empty where the C library has no such function."""
+    names = []
+
+    def visit(info, size, data):
+        if info.contents.name:
+            names.append(os.fsdecode(info.contents.name))
+        return 0
+
+    iterate = getattr(ctypes.CDLL(None), "dl_iterate_phdr", None)
+    if iterate is not None:
+        iterate(_VISIT(visit), None)
+    return names
+
+
+def _unit_binary(name: str) -> bool:
+    """Whether the library file ``name`` is a WetCloth unit's binary: ``binaries/<platform>/`` of an
+    unpacked FMU whose resources hold this project's manifest."""
+    path = Path(name)
+    return path.parent.parent.name == "binaries" and (path.parents[2] / "resources" / MANIFEST_NAME).is_file()
+
+
+def release_at_exit() -> None:
+    """Have Python's exit call ``finalizePythonInterpreter`` of every WetCloth unit binary this
+    process has loaded, before the binary's own exit handlers run (they release its interpreter
+    helper twice and corrupt the heap: ``wetcloth.fmu.guard``, item 3).
+
+    The library is opened once more here, so it stays loaded when its host frees the unit (its
+    exit handlers would run then, as harmful).  All loaded binaries are looked at, not only those
+    of the unit whose script calls this: for a second unit (another unpacked FMU) pythonfmu runs its
+    script in the namespace of the first's, whose ``__file__`` names the first unit's folder.  Other
+    FMUs' binaries are not touched (opened here, they too would stay loaded after their host frees
+    them)."""
     if not sys.orig_argv or os.name != "posix":  # the binary started this interpreter, or Windows (DllMain)
         return
-    for path in sorted(binaries.glob("*/*")):
-        key = str(path.resolve())
-        if key in _RELEASED:
+    for name in loaded_libraries():
+        if name in _RELEASED or not _unit_binary(name):
             continue
         try:  # RTLD_NOLOAD: only a library this process has loaded
-            library = ctypes.CDLL(key, mode=os.RTLD_NOLOAD | os.RTLD_LAZY)
+            library = ctypes.CDLL(name, mode=os.RTLD_NOLOAD | os.RTLD_LAZY)
             finalize = library.finalizePythonInterpreter
         except (OSError, AttributeError):
             continue
         finalize.argtypes, finalize.restype = [], None
-        _RELEASED[key] = library
+        _RELEASED[name] = library
         atexit.register(finalize)
 
 
@@ -162,7 +199,7 @@ def load_wetcloth(resources: Path):
     """The wetcloth module this FMU runs (see the module docstring), imported if needed.  First
     of all, the unit's binary is made to exit safely (``release_at_exit``), also when this fails."""
     resources = resources.resolve()
-    release_at_exit(resources.parent / "binaries")
+    release_at_exit()
     if str(resources) in _LOADED:
         return _LOADED[str(resources)]
     manifest_path = resources / MANIFEST_NAME

@@ -22,8 +22,9 @@
    in about one exit in two.  ``release_at_exit`` (in ``wetcloth.fmu.bootstrap``, so that it is in
    place before anything of the unit can fail, even a refused instantiation) has Python's own
    exit call the binary's ``finalizePythonInterpreter`` first, while the pointer is alive; the
-   later calls then find it empty.  Only in a Python host: where the binary started the
-   interpreter itself, its exit path must run as written.
+   later calls then find it empty.  It also keeps every unit binary loaded until then: unloaded
+   when its host frees the unit, a binary runs the same exit handlers at once.  Only in a Python
+   host: where the binary started the interpreter itself, its exit path must run as written.
 
 The references given back in 1 and 2 are real reference counts (``Py_IncRef``), not objects held in
 a list: the binary has already dropped them, and a list released at interpreter shutdown would
