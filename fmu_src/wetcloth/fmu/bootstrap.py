@@ -177,7 +177,8 @@ def release_at_exit() -> None:
     The library is opened once more here, so it stays loaded when its host frees the unit (its
     exit handlers would run then, as harmful).  All loaded binaries are looked at, not only those
     of the unit whose script calls this: for a second unit (another unpacked FMU) pythonfmu runs its
-    script in the namespace of the first's, whose ``__file__`` names the first unit's folder.  Other
+    script in the namespace of the first's, whose ``__file__`` names the first unit's folder, and
+    pythonfmu3 does not run it again at all (so each unit's ``__init__`` calls this too).  Other
     FMUs' binaries are not touched (opened here, they too would stay loaded after their host frees
     them)."""
     if not sys.orig_argv or os.name != "posix":  # the binary started this interpreter, or Windows (DllMain)
