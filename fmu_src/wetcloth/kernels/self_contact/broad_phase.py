@@ -37,9 +37,12 @@ COUNTERS = 6
 #: A list whose margin is more than this many times what the current step needs is rebuilt (``too_loose``).
 LOOSE = 4.0
 #: The reach of a list tried after an empty one, as a fraction of the rest sheet's nearest
-#: non-adjacent elements' distance (``_widest_margin``): room for the sheet to bend and crumple a
-#: little without candidates.
-WIDE_REACH = 0.7
+#: non-adjacent elements' distance (``_widest_margin``): room for the sheet to be compressed by a
+#: tenth without candidates (more, and the list is narrowed to the widest empty margin there is).
+#: 0.9 rather than 0.7: the 81 x 81 sheet's landing rebuilt its (empty) list 59 times instead of
+#: 115, the default towel 10 times instead of 14, the folding scenes took the same steps
+#: (docs/benchmarks.md, Self-collision).
+WIDE_REACH = 0.9
 
 _FIRST_CAPACITY = 256
 #: The most hash cells a box spans (``build``'s cells: at most 9 along each axis, 10 if rounding
