@@ -307,6 +307,36 @@ def test_every_unit_binary_a_host_loads_is_made_to_exit_safely(fmi_version, tmp_
     assert set(binaries) <= set(released)
 
 
+CHILD_SECOND_UNIT_MISMATCH = r"""
+import json, sys, fmpy
+from pathlib import Path
+first, second = Path(fmpy.extract(sys.argv[1])), Path(fmpy.extract(sys.argv[1]))
+manifest = second / "resources" / "wetcloth_fmu_manifest.json"
+data = json.loads(manifest.read_text())
+data["variables"].append("made_up_variable")
+manifest.write_text(json.dumps(data))
+for folder in (first, second):
+    try:
+        res = fmpy.simulate_fmu(str(folder), stop_time=0.1, output_interval=0.1, start_values={"nx": 5, "ny": 5},
+                                output=["centroid_z"])
+        print("RAN", len(res))
+    except Exception as exc:
+        print("RAISED", exc)
+"""
+
+
+@pytest.mark.parametrize("fmi_version", [2, 3])
+def test_a_second_unit_is_checked_against_its_own_manifest(fmi_version, tmp_path):
+    """The second unit in a process is refused if its model description lists other variables
+    than the wetcloth running (here: its manifest altered), though its slave script does not run
+    afresh (pythonfmu3) or runs with the first unit's ``__file__`` (pythonfmu): before, it ran with
+    the first unit's variables (value references that need not match).  The host exits cleanly."""
+    _, done = run_child(CHILD_SECOND_UNIT_MISMATCH, built_fmu(fmi_version), cwd=tmp_path)
+    outcomes = [line for line in done.stdout.splitlines() if line.startswith(("RAN", "RAISED"))]
+    assert outcomes[0] == "RAN 2" and outcomes[1].startswith("RAISED") and len(outcomes) == 2
+    assert "rebuild it with `wetcloth build-fmu`" in done.stderr
+
+
 CHILD_OTHER_SOURCES = r"""
 import json, sys, fmpy
 from pathlib import Path
