@@ -358,7 +358,7 @@ def test_unit_warns_when_it_runs_an_imported_wetcloth_of_other_sources(fmu, tmp_
     assert done.returncode == 0, done.stderr[-3000:]
     result = __import__("json").loads(done.stdout.strip().splitlines()[-1])
     assert result["file"] == wetcloth.__file__ and result["rows"] == 2
-    assert "whose sources differ from the copy the FMU was built with" in done.stderr
+    assert done.stderr.count("whose sources differ from the copy the FMU was built with") == 1  # once a unit
 
 
 def test_an_fmu_older_than_the_sources_is_stale(fmu, tmp_path):

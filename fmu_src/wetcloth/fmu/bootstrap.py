@@ -40,6 +40,8 @@ from pathlib import Path
 LOG = logging.getLogger("wetcloth.fmu")
 #: Written by the builder into the FMU's resources: digests of the bundled wetcloth, variable names...
 MANIFEST_NAME = "wetcloth_fmu_manifest.json"
+#: This file's module name inside the FMU (beside the slave script, importable before wetcloth).
+MODULE_NAME = "wetcloth_fmu_bootstrap"
 #: Environment variable naming the per-user folder of unpacked wetcloth copies.
 CACHE_VARIABLE = "WETCLOTH_FMU_CACHE"
 

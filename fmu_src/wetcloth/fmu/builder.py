@@ -30,13 +30,11 @@ from string import Template
 import wetcloth
 from wetcloth.files import whole_file
 from wetcloth.fmu import MODEL_NAME, default_fmu_path
-from wetcloth.fmu.bootstrap import MANIFEST_NAME, bundle_digest, digest
+from wetcloth.fmu.bootstrap import MANIFEST_NAME, MODULE_NAME, bundle_digest, digest
 from wetcloth.fmu.vocabulary import VariableSpec, fmi_unit_name, variable_specs
 
 HERE = Path(__file__).resolve().parent
 SLAVE_SCRIPTS = {2: HERE / "wetcloth_fmu_slave.py", 3: HERE / "wetcloth_fmu3_slave.py"}
-#: The bootstrap's module name inside the FMU (beside the slave script, importable before wetcloth).
-BOOTSTRAP_MODULE = "wetcloth_fmu_bootstrap"
 DOCS = HERE / "docs"
 #: Where the icon goes in the archive, by FMI version.
 ICON_PATH = {2: "model.png", 3: "terminalsAndIcons/icon.png"}
@@ -175,7 +173,7 @@ def build_fmu(out: str | Path | None = None, fmi_version: int = 2) -> Path:
         source.mkdir()
         script = source / slave.name
         shutil.copy2(slave, script)
-        bootstrap = source / f"{BOOTSTRAP_MODULE}.py"
+        bootstrap = source / f"{MODULE_NAME}.py"
         shutil.copy2(HERE / "bootstrap.py", bootstrap)
         package_files, bundle_files = _stage_package(source)
         manifest = source / MANIFEST_NAME
@@ -196,7 +194,7 @@ def build_fmu(out: str | Path | None = None, fmi_version: int = 2) -> Path:
             sys.path[:] = saved_path  # the builders put the script's folder first on sys.path
             if not cached:
                 sys.modules.pop(slave.stem, None)  # let each loaded FMU import its own script
-                sys.modules.pop(BOOTSTRAP_MODULE, None)
+                sys.modules.pop(MODULE_NAME, None)
         with zipfile.ZipFile(built, "a") as archive:
             archive.write(DOCS / "model.png", arcname=ICON_PATH[fmi_version])
         with whole_file(out) as tmp_out:

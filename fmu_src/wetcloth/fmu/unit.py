@@ -18,12 +18,13 @@ from __future__ import annotations
 import functools
 import logging
 import math
+import sys
 from pathlib import Path
 
 from wetcloth import run_settings
 from wetcloth.errors import ParameterError
 from wetcloth.fmu import checkpoint
-from wetcloth.fmu.bootstrap import load_wetcloth
+from wetcloth.fmu import bootstrap
 from wetcloth.fmu.checkpoint import Checkpoint, StateError
 from wetcloth.fmu.vocabulary import check_variable, variable_specs
 from wetcloth.scene import from_dict, read_scene_file
@@ -61,8 +62,8 @@ class WetClothUnit:
         # Every instance, not only the first script run: pythonfmu3 does not run the slave script
         # again for a second unit, and pythonfmu runs it with the first unit's ``__file__``.  So
         # each unit's binary is made to exit safely, and its own manifest checked, here too.
-        if self.resources:
-            load_wetcloth(Path(self.resources))
+        if self.resources:  # through the bootstrap the script ran, if any: it knows the units checked
+            sys.modules.get(bootstrap.MODULE_NAME, bootstrap).load_wetcloth(Path(self.resources))
         self.specs = {spec.name: spec for spec in variable_specs(fmi_version=self.FMI_VERSION)}
         self.values = {name: spec.start for name, spec in self.specs.items() if spec.causality in ("parameter", "input")}
         self.refused: dict[str, str] = {}  # variable -> why its value was refused (pending)
