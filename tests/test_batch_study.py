@@ -332,10 +332,10 @@ def test_dry_run_lists_runs_done_failed_and_to_run_and_estimates_their_time(tmp_
     assert [line.split()[-1] for line in printed[2:10]] == ["run", "run", "done", "failed", "run", "run", "run", "run"]
     assert printed[4].split()[:3] == ["3", "0.5", "0.0"]
     estimate = printed[10]
-    # 6 to run: 2 refused at once (absorption_rate = -1), 4 timed at the pace of 3 of them
+    # 6 to run: 2 refused at once (absorption_rate = -1), 4 timed at the pace of 3 of them or more
     assert re.fullmatch(r"estimated time: about \S+ \S+ per run x 4 runs = \S+ \S+ of computing; about \S+ \S+ on 2 "
-                        r"workers \(3 of the runs timed in this process for up to 1 s each, .*; 2 runs with a value out "
-                        r"of range will be refused at once\)", estimate), estimate
+                        r"workers \([34] of the runs timed in this process for up to 1 s each, .*; 2 runs with a value "
+                        r"out of range will be refused at once\)", estimate), estimate
     assert out.stat().st_mtime_ns == stamp and sorted(p.name for p in tmp_path.iterdir()) == ["dry.parquet", "dry.toml"]
     # with --retry-errors the failed run is to run again
     listing = preview.run_listing(study, read_table(out), retry_errors=True)
@@ -356,6 +356,19 @@ def test_time_estimate_extrapolates_the_timed_part_of_a_run_to_its_duration():
     assert whole.compute == pytest.approx(2 * whole.per_run) and whole.wall(2) == pytest.approx(whole.per_run)
     part = preview.estimate_time(study, study.runs()[:1], budget=0.0).timed[0]
     assert part.simulated == pytest.approx(0.05) and part.seconds == pytest.approx(part.elapsed / 0.05, rel=1e-9)
+
+
+def test_time_estimate_times_more_runs_while_its_total_budget_lasts():
+    """The first ``probes`` runs timed are spread over the study; more are timed, each once, until
+    the total budget is spent (a study's runs can differ in cost by 20x: three are too few)."""
+    from wetcloth.batch import preview
+
+    order = preview.probe_order(10, 3)
+    assert order[:3] == [0, 4, 9] and sorted(order) == list(range(10))
+    assert preview.probe_order(2, 3) == [0, 1] and preview.probe_order(0, 3) == []
+    study = make(duration=0.2, base={"nx": 5, "ny": 5}, axes={"absorption_rate": [0.25, 0.5, 0.75, 1.0, 1.25]})
+    assert len(preview.estimate_time(study, study.runs(), probes=2, total=0.0).timed) == 2
+    assert len(preview.estimate_time(study, study.runs(), probes=2, total=60.0).timed) == 5
 
 
 def test_sensitivity_study_whose_runs_all_fail_exits_1_naming_them(tmp_path, capsys):

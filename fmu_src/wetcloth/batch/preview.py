@@ -1,9 +1,12 @@
 """What a study would do, without doing it (``wetcloth batch --dry-run``): its runs, each marked done,
 failed or to run by the results table, and an estimate of their time.
 
-The estimate times a few of the runs still to do in this process, each for up to ``PROBE_BUDGET`` s
+The estimate times some of the runs still to do in this process, each for up to ``PROBE_BUDGET`` s
 of wall-clock time from its start (after one untimed frame that loads the kernels), and extrapolates
 each to its duration at the pace it had (``wetcloth.advice.estimate_cost``).  It starts no cluster.
+``PROBES`` runs spread over the study are timed, then more, in a fixed shuffled order, until
+``TOTAL_PROBE_BUDGET`` s are spent: the runs of a study can differ in cost by 20x or more (the
+sensitivity example's: 0.02 to 2 s), and three of them put its 512 runs at 20 s where they took 74 s.
 The pace of a run's first seconds is not always that of the rest (a towel that sinks moves more),
 so it is an estimate, not a promise.
 """
@@ -23,8 +26,10 @@ from wetcloth.batch.spec import Run, Study
 
 #: s of wall-clock time each probe run is timed for, at most.
 PROBE_BUDGET = 1.0
-#: Runs timed for the estimate, at most (spread over the runs to do).
+#: Runs timed for the estimate at least (spread over the runs to do), if there are as many.
 PROBES = 3
+#: s of wall-clock time after which no further run is timed (the first ``PROBES`` always are).
+TOTAL_PROBE_BUDGET = 5.0
 #: Rows of the run listing shown whole; a longer listing shows its head and tail.
 SHOWN_ROWS = 30
 
@@ -107,8 +112,18 @@ class TimeEstimate:
         return self.per_run * int(np.ceil(self.runs / workers))
 
 
-def estimate_time(study: Study, runs: list[Run], probes: int = PROBES, budget: float = PROBE_BUDGET) -> TimeEstimate:
-    """Time up to ``probes`` of ``runs`` (spread evenly over them) for ``budget`` s each: see :class:`TimeEstimate`."""
+def probe_order(count: int, spread: int) -> list[int]:
+    """The order in which ``count`` runs are timed: ``spread`` of them evenly spread over the list,
+    then the others in a shuffled order (fixed: the same study gets the same estimate)."""
+    first = sorted(set(np.linspace(0, count - 1, min(spread, count)).round().astype(int).tolist())) if count else []
+    rest = [int(i) for i in np.random.default_rng(0).permutation(count) if i not in set(first)]
+    return first + rest
+
+
+def estimate_time(study: Study, runs: list[Run], probes: int = PROBES, budget: float = PROBE_BUDGET,
+                  total: float = TOTAL_PROBE_BUDGET) -> TimeEstimate:
+    """Time ``probes`` of ``runs`` (spread evenly over them), then more until ``total`` s are spent,
+    each for ``budget`` s at most: see :class:`TimeEstimate`."""
     from wetcloth.scene import from_dict
 
     def valid(run: Run) -> bool:
@@ -121,8 +136,13 @@ def estimate_time(study: Study, runs: list[Run], probes: int = PROBES, budget: f
     costly = [r for r in runs if valid(r)]
     if not costly:
         return TimeEstimate(0, (), refused=len(runs))
-    picks = sorted(set(np.linspace(0, len(costly) - 1, min(probes, len(costly))).round().astype(int)))
-    return TimeEstimate(len(costly), tuple(probe(costly[i], study, budget) for i in picks), len(runs) - len(costly))
+    timed = []
+    start = time.perf_counter()
+    for i in probe_order(len(costly), probes):
+        if len(timed) >= probes and time.perf_counter() - start >= total:
+            break
+        timed.append(probe(costly[i], study, budget))
+    return TimeEstimate(len(costly), tuple(timed), len(runs) - len(costly))
 
 
 def format_listing(listing: pd.DataFrame, shown: int = SHOWN_ROWS) -> str:
