@@ -5,8 +5,8 @@ The estimate times some of the runs still to do in this process, each for up to 
 of wall-clock time from its start (after one untimed frame that loads the kernels), and extrapolates
 each to its duration at the pace it had (``wetcloth.advice.estimate_cost``).  It starts no cluster.
 ``PROBES`` runs spread over the study are timed, then more, in a fixed shuffled order, until
-``TOTAL_PROBE_BUDGET`` s are spent: the runs of a study can differ in cost by 20x or more (the
-sensitivity example's: 0.02 to 2 s), and three of them put its 512 runs at 20 s where they took 74 s.
+``TOTAL_PROBE_BUDGET`` s are spent: the runs of a study can differ in cost by 50x (the sensitivity
+example's: 0.08 to 4 s), and three of them put its 512 runs at 20 s on 2 workers where they took 74 s.
 The pace of a run's first seconds is not always that of the rest (a towel that sinks moves more),
 so it is an estimate, not a promise.
 """

@@ -23,8 +23,7 @@ from pathlib import Path
 
 from wetcloth import run_settings
 from wetcloth.errors import ParameterError
-from wetcloth.fmu import checkpoint
-from wetcloth.fmu import bootstrap
+from wetcloth.fmu import bootstrap, checkpoint
 from wetcloth.fmu.checkpoint import Checkpoint, StateError
 from wetcloth.fmu.vocabulary import check_variable, variable_specs
 from wetcloth.scene import from_dict, read_scene_file
