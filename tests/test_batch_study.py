@@ -360,7 +360,7 @@ def test_time_estimate_extrapolates_the_timed_part_of_a_run_to_its_duration():
 
 def test_time_estimate_times_more_runs_while_its_total_budget_lasts():
     """The first ``probes`` runs timed are spread over the study; more are timed, each once, until
-    the total budget is spent (a study's runs can differ in cost by 20x: three are too few)."""
+    the total budget is spent (a study's runs can differ in cost by 50x: three are too few)."""
     from wetcloth.batch import preview
 
     order = preview.probe_order(10, 3)

@@ -116,8 +116,8 @@ def probe_order(count: int, spread: int) -> list[int]:
     """The order in which ``count`` runs are timed: ``spread`` of them evenly spread over the list,
     then the others in a shuffled order (fixed: the same study gets the same estimate)."""
     first = sorted(set(np.linspace(0, count - 1, min(spread, count)).round().astype(int).tolist())) if count else []
-    rest = [int(i) for i in np.random.default_rng(0).permutation(count) if i not in set(first)]
-    return first + rest
+    chosen = set(first)
+    return first + [int(i) for i in np.random.default_rng(0).permutation(count) if i not in chosen]
 
 
 def estimate_time(study: Study, runs: list[Run], probes: int = PROBES, budget: float = PROBE_BUDGET,
