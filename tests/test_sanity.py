@@ -137,3 +137,55 @@ def test_only_inputs_change_during_a_run():
         sim.set_inputs(water_density=-1.0)
     with pytest.raises(ValueError, match="duration"):
         sim.advance(-1.0)
+
+
+def test_sampling_in_compiled_code_repeats_advance_and_outputs_bit_for_bit():
+    """``sample`` steps to each time and records the outputs there without returning to Python:
+    the same steps and values as ``advance`` to each time followed by ``outputs``.  (Times in
+    eighths of a second, so that ``advance``'s target ``time + (t - time)`` is ``t`` exactly.)"""
+    scene = wetcloth.load_scene("thesis_fast", nx=7, ny=7)
+    times = np.arange(0, 17) / 8.0
+    one_by_one = wetcloth.Simulation(scene)
+    expected = []
+    for t in times:
+        one_by_one.advance(t - one_by_one.time)
+        expected.append(list(one_by_one.outputs().values()))
+    sampled = wetcloth.Simulation(scene)
+    outputs = sampled.sample(times)
+    np.testing.assert_array_equal(outputs, np.array(expected))
+    assert sampled.steps == one_by_one.steps > len(times)
+    np.testing.assert_array_equal(sampled.state.pos, one_by_one.state.pos)
+
+
+def test_outputs_are_the_mass_weighted_centroid_and_masses():
+    """``outputs`` (computed in compiled code) against NumPy's sums of the same state."""
+    sim = wetcloth.Simulation(wetcloth.load_scene("thesis_fast", nx=7, ny=7))
+    sim.advance(1.0)
+    mass = sim.model.dry_mass + sim.state.water
+    centroid = sim.state.pos @ mass / mass.sum()
+    out = sim.outputs()
+    assert list(out) == list(wetcloth.simulation.OUTPUT_NAMES)
+    rounding = 64 * np.finfo(float).eps  # sums of 49 terms in another order
+    np.testing.assert_allclose([out["centroid_x"], out["centroid_y"], out["centroid_z"]], centroid, rtol=rounding, atol=1e-15)
+    assert out["depth"] == pytest.approx(sim.scene.water_level - centroid[2], rel=rounding, abs=1e-15)
+    assert out["wet_mass"] == pytest.approx(mass.sum(), rel=rounding)
+    assert out["water_mass"] == pytest.approx(sim.state.water.sum(), rel=rounding)
+
+
+def test_a_blow_up_while_sampling_keeps_the_outputs_of_the_times_reached():
+    scene = wetcloth.load_scene(nx=9, ny=9, integrator="explicit_euler", tolerance=0.0, max_step=2e-3,
+                                initial_tilt=30.0, **{k: v for k, v in DRY_AIR.items() if k != "initial_tilt"})
+    sim = wetcloth.Simulation(scene)
+    times = np.linspace(0.0, 10.0, 101)
+    with pytest.raises(wetcloth.BlowUpError) as err:
+        sim.sample(times)
+    reached = err.value.partial_outputs
+    assert 0 < len(reached) < len(times) and times[len(reached) - 1] <= sim.time < times[len(reached)]
+    assert np.isfinite(reached).all()
+
+
+@pytest.mark.parametrize("times", [[0.5, 0.25], [float("nan")], [[0.1, 0.2]]])
+def test_sampling_times_must_be_ascending_and_finite(times):
+    sim = wetcloth.Simulation(wetcloth.load_scene(nx=5, ny=5))
+    with pytest.raises(ValueError, match="times must be finite and ascending"):
+        sim.sample(times)

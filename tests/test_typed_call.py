@@ -38,3 +38,13 @@ def test_other_objects_or_number_types_find_their_own_compiled_code():
     assert call(integers, 1.0, 3) == 6.0
     assert call(integers, 1, 3) == 6.0  # an int where a float was: typed again
     assert len(weighted_sum.overloads) >= 3
+
+
+def test_new_objects_of_the_same_types_reuse_the_compiled_code():
+    """A new bundle of arrays of the same kinds (as ``Simulation.sample``'s time arrays are at each
+    call) is typed, and runs the compiled code found for the first."""
+    call = TypedCall(weighted_sum)
+    assert call(Bundle(np.arange(3.0), np.ones(3)), 1.0, 3) == 3.0
+    entry_point, overloads = call._entry_point, len(weighted_sum.overloads)
+    assert call(Bundle(np.arange(5.0), np.full(5, 2.0)), 1.0, 5) == 20.0
+    assert call._entry_point is entry_point and len(weighted_sum.overloads) == overloads

@@ -114,12 +114,21 @@ def run(
     with time_bar(duration, enabled=progress) as bar, _deferrable_interrupts() as deferred:
         watching = progress or warn is not None
         with Watcher(sim, bar, _cost_check(sim, duration, warn)) if watching else contextlib.nullcontext():
+            # Python steps in only at the frames it has work at; the frames between are sampled in
+            # compiled code (``Simulation.sample``).
+            stops = range(len(times)) if on_frame is not None else sorted({*plotted, len(times) - 1})
+            start = 0
             try:
-                for index, t in enumerate(times):
-                    sim.advance(t - sim.time)
-                    result.rows.append({"time": float(t), **sim.outputs()})
+                for index in stops:
+                    try:
+                        outputs = sim.sample(times[start:index + 1])
+                    except BaseException as exc:
+                        _add_rows(result, times[start:], getattr(exc, "partial_outputs", ()))
+                        raise
+                    _add_rows(result, times[start:index + 1], outputs)
+                    start = index + 1
                     if index in plotted:
-                        result.shapes.append(ClothShape(float(t), sim.positions, sim.wetness))
+                        result.shapes.append(ClothShape(float(times[index]), sim.positions, sim.wetness))
                     if on_frame is not None:
                         with deferred():
                             on_frame(index, sim)
@@ -128,6 +137,12 @@ def run(
                 raise
         bar.update(float(duration) - bar.n)
     return result
+
+
+def _add_rows(result: RunResult, times: np.ndarray, outputs) -> None:
+    """Append a row (time, then OUTPUT_NAMES) for each row of ``outputs`` (its times the first of ``times``)."""
+    for t, values in zip(times.tolist(), np.asarray(outputs).tolist()):
+        result.rows.append({"time": t, **dict(zip(OUTPUT_NAMES, values))})
 
 
 @contextlib.contextmanager

@@ -17,6 +17,7 @@ from wetcloth.kernels.plane import make_plane, refresh, refresh_from_jacobian
 from wetcloth.kernels.stepping import (BLOWN_UP, PAUSED, CALM_TIME, CLOCK_SIZE, EXCHANGING, FAILED_STEP, FIRST_GUESS,
                                        LAST_SOLVE, LAST_STEP, NEWTON_RATE, NEXT_STEP, RATE_CORRECTION, REJECTED, SLEEPING,
                                        SPEED, STEPS, TIME, UNCHECKED_TIME, Buffers, advance)
+from wetcloth.kernels.sampling import OUTPUT_COUNT, advance_sampling, record_outputs
 from wetcloth.model import Model
 from wetcloth.scene import INPUT, PARAMETERS, Scene, load_scene
 from wetcloth.state import State, initial_state
@@ -80,6 +81,9 @@ class Simulation:
         self._contact = self_contact.make_contact(topo, scene.self_collision == "on", scene.self_friction)
         self.skip_idle_work = skip_idle_work
         self._advance = TypedCall(advance)
+        self._advance_sampling = TypedCall(advance_sampling)
+        self._record_outputs = TypedCall(record_outputs)
+        self._output_row = np.zeros(OUTPUT_COUNT)
 
     # ----------------------------------------------------------------- snapshots
     def snapshot(self) -> dict:
@@ -247,15 +251,43 @@ class Simulation:
             raise ValueError(f"duration must be a finite number >= 0 s, got {duration!r}")
         model = self.model
         target = self.time + duration
-        # The compiled loop returns every STEPS_PER_CALL steps (fewer on large grids), so that Python
-        # sees Ctrl-C (and other signals) within a fraction of a second even when steps are tiny.
-        budget = max(1, STEPS_PER_CALL // model.topology.n)
         status = PAUSED
         while status == PAUSED:
             status = self._advance(model.cloth, model.physics, self._control, model.work, self._solver, self._plane,
-                                   self._contact, self._buffers, self._clock, target, budget)
+                                   self._contact, self._buffers, self._clock, target, self._steps_per_call)
         if status == BLOWN_UP:
             self._blown_up(float(self._clock[FAILED_STEP]))
+
+    def sample(self, times) -> np.ndarray:
+        """Advance to each of ``times`` (s, ascending, none before ``time``) in turn and return the
+        outputs there: one row per time, columns as OUTPUT_NAMES.  The same steps as ``advance`` to
+        each time, and the same values as ``outputs`` there, with no Python work between the times.
+        Whatever stops it early (BlowUpError, KeyboardInterrupt) carries the rows of the times
+        reached as its ``partial_outputs``."""
+        times = np.ascontiguousarray(times, dtype=float)
+        if times.ndim != 1 or not np.all(np.isfinite(times)) or np.any(np.diff(times) < 0.0) or (
+                times.size and times[0] < self.time):
+            raise ValueError(f"times must be finite and ascending from the current time {self.time!r} s, got {times!r}")
+        model = self.model
+        outputs = np.full((times.size, OUTPUT_COUNT), np.nan)
+        status, done = PAUSED, 0
+        try:
+            while status == PAUSED:
+                status, done = self._advance_sampling(
+                    model.cloth, model.physics, self._control, model.work, self._solver, self._plane, self._contact,
+                    self._buffers, self._clock, times, outputs, done, self._steps_per_call)
+            if status == BLOWN_UP:
+                self._blown_up(float(self._clock[FAILED_STEP]))
+        except BaseException as exc:
+            exc.partial_outputs = outputs[:done]
+            raise
+        return outputs
+
+    @property
+    def _steps_per_call(self) -> int:
+        """Steps one compiled call takes at most: it returns every STEPS_PER_CALL particle-steps, so
+        that Python sees Ctrl-C (and other signals) within a fraction of a second even when steps are tiny."""
+        return max(1, STEPS_PER_CALL // self.model.topology.n)
 
     def _blown_up(self, h: float) -> None:
         """Refuse a non-finite or exploded state; the last good state stays current."""
@@ -274,18 +306,9 @@ class Simulation:
     # ----------------------------------------------------------------- results
     def outputs(self) -> dict[str, float]:
         """The FMU outputs (docs/model.md section 8): centroid (m), depth (m), wet and water mass (kg)."""
-        buf = self._buffers
-        mass = self.model.mass(buf.water)
-        total = float(mass.sum())
-        centroid_x, centroid_y, centroid_z = (buf.pos @ mass / total).tolist()
-        return {
-            "centroid_x": centroid_x,
-            "centroid_y": centroid_y,
-            "centroid_z": centroid_z,
-            "depth": self.scene.water_level - centroid_z,
-            "wet_mass": total,
-            "water_mass": float(buf.water.sum()),
-        }
+        buf, model = self._buffers, self.model
+        self._record_outputs(model.cloth.dry_mass, model.physics.water_level, buf.pos, buf.water, self._output_row)
+        return dict(zip(OUTPUT_NAMES, self._output_row.tolist()))
 
     @property
     def positions(self) -> np.ndarray:
