@@ -1,4 +1,4 @@
-"""What one ``Simulation.advance`` call costs in Python, apart from the steps it takes.
+"""What one ``Simulation.advance`` call, and one sampled output, cost in Python, apart from the steps.
 
     .venv/bin/python bench/call_overhead.py [--calls 3000] [--repeat 3]
 
@@ -7,13 +7,18 @@ per FMU communication step.  Timed here on the default towel with calls that tak
 (``advance(0.0)``), so only the Python side is measured: numba's dispatcher (which types every
 argument, some sixty arrays in nested tuples, at each call) against the compiled code looked up
 once for those objects (``wetcloth.kernels.compilation.TypedCall``, what ``Simulation`` uses), in
-the same process, alternately; best of ``--repeat``.
+the same process, alternately; best of ``--repeat``.  Then what reading the outputs costs per
+sample: ``advance(0.0)`` and ``outputs()`` per sample, as a Python loop over output times does,
+against ``Simulation.sample`` over as many times in one call (what ``runner.run`` does between
+frames at which Python has work).
 """
 
 from __future__ import annotations
 
 import argparse
 import time
+
+import numpy as np
 
 import wetcloth
 from wetcloth.kernels.stepping import advance
@@ -46,6 +51,18 @@ def main() -> None:
     ratio = best["numba dispatcher"] / best["Simulation.advance(0.0)"]
     print(f"Simulation.advance's call costs {ratio:.1f}x less than the dispatcher's typing alone "
           f"(best of {args.repeat} x {args.calls} calls)")
+
+    def advance_and_read() -> None:
+        sim.advance(0.0)
+        sim.outputs()
+
+    times = np.full(args.calls, sim.time)  # no step to take: only the sampling is timed
+    loop, compiled = float("inf"), float("inf")
+    for _ in range(args.repeat):
+        loop = min(loop, per_call(advance_and_read, (), args.calls))
+        compiled = min(compiled, per_call(sim.sample, (times,), 1) / args.calls)
+    print(f"per sample: advance(0.0) + outputs() {loop:.1f} us, sample() of {args.calls} times {compiled:.2f} us "
+          f"({loop / compiled:.0f}x less)")
 
 
 if __name__ == "__main__":
