@@ -187,5 +187,5 @@ def test_a_blow_up_while_sampling_keeps_the_outputs_of_the_times_reached():
 @pytest.mark.parametrize("times", [[0.5, 0.25], [float("nan")], [[0.1, 0.2]]])
 def test_sampling_times_must_be_ascending_and_finite(times):
     sim = wetcloth.Simulation(wetcloth.load_scene(nx=5, ny=5))
-    with pytest.raises(ValueError, match="times must be finite and ascending"):
+    with pytest.raises(ValueError, match="times must be a 1-D sequence of finite times"):
         sim.sample(times)

@@ -267,7 +267,8 @@ class Simulation:
         times = np.ascontiguousarray(times, dtype=float)
         if times.ndim != 1 or not np.all(np.isfinite(times)) or np.any(np.diff(times) < 0.0) or (
                 times.size and times[0] < self.time):
-            raise ValueError(f"times must be finite and ascending from the current time {self.time!r} s, got {times!r}")
+            raise ValueError(f"times must be a 1-D sequence of finite times (s), ascending from the current time "
+                             f"{self.time:g} s; got shape {times.shape}, first {times.ravel()[:3].tolist()}")
         model = self.model
         outputs = np.full((times.size, OUTPUT_COUNT), np.nan)
         status, done = PAUSED, 0
@@ -279,7 +280,9 @@ class Simulation:
             if status == BLOWN_UP:
                 self._blown_up(float(self._clock[FAILED_STEP]))
         except BaseException as exc:
-            exc.partial_outputs = outputs[:done]
+            # The times reached (a Ctrl-C may come before ``done`` is assigned): the loop stops on each
+            # time exactly and records it there; a blow-up leaves the clock at the last good time.
+            exc.partial_outputs = outputs[:np.searchsorted(times, self.time, side="right")]
             raise
         return outputs
 
