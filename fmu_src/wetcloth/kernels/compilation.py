@@ -9,8 +9,9 @@ compiled, optimised and cached once, as a function of its own, and its callers c
   ``SeparateCall``.  Lowering such a call declares the callee under a stable name (module, name and
   a digest of its argument types) and calls it with numba's calling convention (errors propagate
   as usual), instead of linking the callee's code in.  The name is bound to the address of the
-  callee's compiled code with ``llvmlite.binding.add_symbol``; a caller loaded from the cache first
-  binds its callees again (numba's ``reload_init``), compiling or loading each from its own cache.
+  callee's compiled code with ``llvmlite.binding.add_symbol``, as ``lapack.py`` binds LAPACK's
+  routines; a caller loaded from the cache first binds its callees again (numba's ``reload_init``),
+  compiling or loading each from its own cache.
 * ``KernelCache`` is numba's function cache with one change: a kernel's cache is valid only for the
   sources of the whole kernel package (a digest of every ``.py`` file under ``wetcloth/kernels``),
   not just of its own file.  numba's own check sees only the file that defines a function, so a

@@ -10,7 +10,7 @@ n its normal) this preconditioner keeps that structure:
   that component (structural springs all in one, shear half in each).  These depend on neither
   the positions nor the taut set, so they are factored only when the step's ``h`` or the masses
   have changed much (``REFACTOR_SCALE``, ``REFACTOR_CHANGE``), not at every step.  Small grids
-  solve them exactly with a banded Cholesky factorisation (``band.py``); on large grids (shorter side above
+  solve them exactly with LAPACK's banded Cholesky; on large grids (shorter side above
   MULTIGRID_SIDE) one multigrid V-cycle (``multigrid.py``) approximates their inverse, with the
   banded Cholesky on its coarsest grid only;
 * where a solve took many iterations (a sinking cloth: most of its stretch springs slack while
@@ -39,7 +39,7 @@ import numpy as np
 
 from wetcloth.kernels import kernel
 from wetcloth.kernels.integration import copy
-from wetcloth.kernels.band import band_factor, band_solve_two
+from wetcloth.kernels.lapack import band_arguments, band_factor, band_solve_two
 from wetcloth.kernels.multigrid import (CENTRE, NX, NY, PAD_X, START, galerkin, level_sizes, make_hierarchy,
                                         padded_index, v_cycle_down, v_cycle_up)
 
@@ -86,13 +86,14 @@ _SLOT = {"structural_x": 5, "structural_y": 7, "shear_up_right": 8, "shear_up_le
 #: (-1: not in the preconditioner); ``grid`` the multigrid ``Hierarchy`` (one level on small grids);
 #: on the coarsest level, ``order`` (n_c) the padded index of each band position and ``rank`` its
 #: inverse over the level's padded points (-1 off the grid); ``bands`` (2, n_c, kd + 1) the factored
-#: band matrices and ``rows`` the same factors by rows (``band.band_factor``); ``reference``
-#: [factored scale (s^2), 1 if factored, 1 if from the Jacobian] and ``reference_mass`` (n) kg of the last factorisation with the rest stiffness; ``shares`` (2, F)
+#: band matrices and ``rows`` the same factors by rows (``lapack.band_factor``); ``info`` (2, 5)
+#: LAPACK arguments; ``reference`` [factored scale (s^2), 1 if factored, 1 if from the Jacobian]
+#: and ``reference_mass`` (n) kg of the last factorisation with the rest stiffness; ``shares`` (2, F)
 #: each family's share in t1, t2 (0 for the bending springs); ``jacobian_along`` (F, n) kg and
 #: ``jacobian_mass`` (n) kg of the last factorisation from the Jacobian; ``frame`` (3, 3, n) each
 #: particle's axes t1, t2, n; ``normal`` (n) the normal component's diagonal; ``local`` (2, n_c)
 #: scratch of the band solves.
-Plane = namedtuple("Plane", "stiffness slots grid order rank bands rows reference reference_mass shares "
+Plane = namedtuple("Plane", "stiffness slots grid order rank bands rows info reference reference_mass shares "
                             "jacobian_along jacobian_mass frame normal local")
 
 
@@ -118,8 +119,9 @@ def make_plane(grid_x: int, grid_y: int, offsets: np.ndarray, family_names: tupl
     rank[order - start] = np.arange(n_c)
     shares = np.array([_SHARE.get(name, (0.0, 0.0)) for name in family_names]).reshape(len(family_names), 2).T.copy()
     slots = np.array([_SLOT.get(name, -1) for name in family_names], dtype=np.int64)
+    info = np.stack([band_arguments(n_c, kd), band_arguments(n_c, kd)])
     return Plane(stiffness=np.ascontiguousarray(stiffness, dtype=float), slots=slots, grid=grid, order=order, rank=rank, bands=np.zeros((2, n_c, kd + 1)),
-                 rows=np.zeros((2, n_c, kd + 1)),
+                 rows=np.zeros((2, n_c, kd + 1)), info=info,
                  reference=np.zeros(3), reference_mass=np.zeros(n), shares=shares,
                  jacobian_along=np.zeros((len(offsets), n)), jacobian_mass=np.zeros(n),
                  frame=np.repeat(np.eye(3)[:, :, None], n, axis=2), normal=np.ones(n), local=np.zeros((2, n_c)))
@@ -183,8 +185,8 @@ def refresh_from_jacobian(plane, offsets, mass, along):
 def _factor(plane, offsets, mass, scale, weights):
     """Build and factor ``M + scale L_c`` for c = t1, t2, with ``L_c`` the Laplacian of the springs
     weighted by ``weights`` (F, n) times each family's share in c (``plane.shares``): the stencils of
-    every level and the banded Cholesky factors of the coarsest.  Returns 0, or ``band_factor``'s
-    info if a matrix was not positive definite."""
+    every level and the banded Cholesky factors of the coarsest.  Returns 0, or LAPACK's info if a
+    matrix was not positive definite."""
     n = mass.shape[0]
     grid = plane.grid
     levels, coef = grid.levels, grid.coef
@@ -225,7 +227,7 @@ def _factor(plane, offsets, mass, scale, weights):
                 other = plane.rank[p + (k // 3 - 1) * pad + k % 3 - 1 - start]
                 if other > position:
                     band[position, other - position] = coef[c, k, p]
-        info = band_factor(band, plane.rows[c])
+        info = band_factor(band, plane.rows[c], plane.info[c])
         if info != 0:
             return info
     return 0
