@@ -2,7 +2,9 @@
 
 Sampling a run from Python costs a compiled call and the outputs' NumPy work at every sample, about
 20 us: on a coarse study (a 9 x 9 cloth sampled at 10 Hz, one step per sample once it sinks) that
-was a sixth of the run.  ``advance_sampling`` goes through many sample times in one call.
+was 8 % of the run directly, and 10-24 % with the garbage collection and cache misses that came
+with it (docs/benchmarks.md, Large steps).  ``advance_sampling`` goes through many sample times in
+one call.
 """
 
 from __future__ import annotations
