@@ -18,9 +18,13 @@ BLENDER_STAMP := $(BLENDER_VENV)/.installed
 BPY_VERSION := 5.0.1
 BLENDER_WHEELS ?= $(HOME)/.cache/wetcloth/wheels
 
+# What the installed package is built from: a change to the compiled core (C++) or to the presets
+# (installed as wetcloth.presets) reinstalls; Python sources are used in place (editable install).
+CORE_FILES := CMakeLists.txt $(shell find fmu_src/core -name '*.cpp' -o -name '*.hpp') $(wildcard models/*.toml models/studies/*.toml)
+
 .PHONY: demo test bench clean
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml $(CORE_FILES)
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test]'

@@ -1,0 +1,783 @@
+// The native WetCloth unit (unit.hpp): a port of wetcloth/fmu/unit.py and the checks of
+// wetcloth/fmu/checkpoint.py over wc::Simulation.
+#include "unit.hpp"
+
+#include <algorithm>
+#include <array>
+#include <type_traits>
+#include <unordered_set>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <mutex>
+#include <new>
+#include <stdexcept>
+
+#include "wetcloth/stepping.hpp"
+#include "wetcloth_fmu_variables.hpp"  // generated: VARIABLES, INSTANTIATION_TOKEN, FMI_VERSION
+
+namespace wc::fmu {
+
+const Variable* variables() { return VARIABLES; }
+std::size_t variable_count() { return sizeof(VARIABLES) / sizeof(VARIABLES[0]); }
+const char* instantiation_token() { return INSTANTIATION_TOKEN; }
+int fmi_version() { return FMI_VERSION; }
+
+namespace {
+
+//: Relative tolerance when matching the master's communication time with the unit's (unit.py).
+constexpr double TIME_TOLERANCE = 1e-9;
+
+//: A ParameterError's text: "parameter 'name': message".
+std::string parameter_error(const char* name, const std::string& message) {
+    return std::string("parameter '") + name + "': " + message;
+}
+
+//: scene.check_value for a number: finite and within the range.
+void check_number(const Variable& var, double value, const std::string& text) {
+    if (!std::isfinite(value)) {
+        throw std::invalid_argument(parameter_error(var.name, text + " is not a finite number; allowed: " + var.range));
+    }
+    const bool below = var.lo_open ? value <= var.lo : value < var.lo;
+    if (below || value > var.hi) {
+        throw std::invalid_argument(parameter_error(var.name, text + " is out of range; allowed: " + var.range));
+    }
+}
+
+//: The code of a string choice, or -1.
+Index choice_code(const Variable& var, const char* value) {
+    for (Index k = 0; k < var.choice_count; ++k) {
+        if (std::strcmp(var.choices[k], value) == 0) return k;
+    }
+    return -1;
+}
+
+//: vocabulary.check_variable for a string; the choice's code (scene fields) or 0.
+Index check_string(const Variable& var, const char* value) {
+    if (value == nullptr) {
+        throw std::invalid_argument(parameter_error(var.name, std::string("expected a string, got None; allowed: ") +
+                                                                  (var.range ? var.range : "a text")));
+    }
+    if (var.role == Role::MESH_OUTPUT_DIR) {
+        if (value[0] != '\0') {
+            throw std::invalid_argument(parameter_error(
+                var.name, py_repr(std::string_view(value)) +
+                              " is not allowed: this unit (the native WetCloth) writes no mesh frames; allowed: '' "
+                              "(empty). The Python unit, built by `wetcloth build-fmu`, writes them."));
+        }
+        return 0;
+    }
+    const Index code = choice_code(var, value);
+    if (code < 0) {
+        std::string hint;
+        if (var.role == Role::SCENE) {
+            if (const char* close = close_match(value, var.choices, var.choice_count)) {
+                hint = " (did you mean " + py_repr(std::string_view(close)) + "?)";
+            }
+        }
+        throw std::invalid_argument(parameter_error(
+            var.name, py_repr(std::string_view(value)) + " is not allowed" + hint + "; allowed: " + var.range));
+    }
+    return code;
+}
+
+const char* type_name(Type type) {
+    switch (type) {
+        case Type::REAL: return fmi_version() == 2 ? "Real" : "Float64";
+        case Type::INTEGER: return fmi_version() == 2 ? "Integer" : "UInt64";
+        default: return "String";
+    }
+}
+
+Scene start_scene() {
+    Scene scene;
+    for (std::size_t vr = 0; vr < variable_count(); ++vr) {
+        const Variable& var = variables()[vr];
+        if (var.role != Role::SCENE) continue;
+        if (var.real) scene.*var.real = var.start;
+        if (var.integer) {
+            scene.*var.integer = var.type == Type::STRING ? choice_code(var, var.start_text)
+                                                          : static_cast<Index>(var.start);
+        }
+    }
+    return scene;
+}
+
+// ------------------------------------------------------------------------------ state bytes
+constexpr char STATE_MAGIC[] = "wetcloth-native-fmu-state\n";
+constexpr std::size_t MAGIC_SIZE = sizeof(STATE_MAGIC) - 1;
+constexpr std::uint32_t STATE_VERSION = 1;
+
+std::uint64_t fnv1a(const unsigned char* data, std::size_t size) {
+    std::uint64_t hash = 0xcbf29ce484222325ull;
+    for (std::size_t i = 0; i < size; ++i) {
+        hash ^= data[i];
+        hash *= 0x100000001b3ull;
+    }
+    return hash;
+}
+
+struct Out {
+    std::vector<unsigned char>& bytes;
+    template <class T>
+    void put(const T& value) {
+        const auto* p = reinterpret_cast<const unsigned char*>(&value);
+        bytes.insert(bytes.end(), p, p + sizeof(T));
+    }
+    void text(const std::string& s) {
+        put(static_cast<std::uint64_t>(s.size()));
+        bytes.insert(bytes.end(), s.begin(), s.end());
+    }
+};
+
+struct In {
+    const std::vector<unsigned char>& bytes;
+    std::size_t at = 0;
+    template <class T>
+    T get() {
+        if (bytes.size() - at < sizeof(T)) throw StateError("serialized WetCloth FMU state is truncated");
+        T value;
+        std::memcpy(&value, bytes.data() + at, sizeof(T));
+        at += sizeof(T);
+        return value;
+    }
+    std::string text() {
+        const auto size = get<std::uint64_t>();
+        if (bytes.size() - at < size) throw StateError("serialized WetCloth FMU state is truncated");
+        std::string s(reinterpret_cast<const char*>(bytes.data() + at), static_cast<std::size_t>(size));
+        at += static_cast<std::size_t>(size);
+        return s;
+    }
+};
+
+//: Whether two scenes hold the same values (Python's Scene equality).
+bool same_scene(const Scene& a, const Scene& b) {
+    std::vector<double> x, y;
+    for_each_field(a, [&](const char*, const auto& v) { x.push_back(static_cast<double>(v)); });
+    for_each_field(b, [&](const char*, const auto& v) { y.push_back(static_cast<double>(v)); });
+    return x == y;
+}
+
+//: A parsed unit state (checkpoint.Checkpoint).
+struct Parsed {
+    Scene values;
+    std::string mesh_output_dir, mesh_format;
+    std::vector<std::pair<std::uint64_t, std::string>> refused;
+    bool initialized = false, clock_set = false;
+    double start_time = 0.0;
+    Checkpoint simulation;
+};
+
+Parsed parse(const std::vector<unsigned char>& bytes) {
+    if (bytes.size() < MAGIC_SIZE + 12 || std::memcmp(bytes.data(), STATE_MAGIC, MAGIC_SIZE) != 0) {
+        throw StateError("not a serialized state of a native WetCloth unit (" + std::to_string(bytes.size()) +
+                         " bytes without its header)");
+    }
+    In in{bytes, MAGIC_SIZE};
+    const auto version = in.get<std::uint32_t>();
+    if (version != STATE_VERSION) {
+        throw StateError("serialized WetCloth FMU state of format version " + std::to_string(version) +
+                         "; this unit reads version " + std::to_string(STATE_VERSION));
+    }
+    const auto checksum = in.get<std::uint64_t>();
+    if (fnv1a(bytes.data() + in.at, bytes.size() - in.at) != checksum) {
+        throw StateError("serialized WetCloth FMU state is corrupt or truncated (its checksum does not match)");
+    }
+    Parsed p;
+    const auto count = in.get<std::uint64_t>();
+    if (count != variable_count()) {
+        throw StateError("the state is of a unit with other variables (" + std::to_string(count) + ", this unit has " +
+                         std::to_string(variable_count()) + ")");
+    }
+    for_each_field(p.values, [&](const char*, auto& v) { v = in.get<std::remove_reference_t<decltype(v)>>(); });
+    p.mesh_output_dir = in.text();
+    p.mesh_format = in.text();
+    const auto refusals = in.get<std::uint64_t>();
+    if (refusals > variable_count()) throw StateError("serialized WetCloth FMU state is malformed (refusals)");
+    for (std::uint64_t k = 0; k < refusals; ++k) {
+        const auto vr = in.get<std::uint64_t>();
+        if (vr >= variable_count()) throw StateError("the state refuses variables this unit does not have");
+        p.refused.emplace_back(vr, in.text());
+    }
+    p.initialized = in.get<std::uint8_t>() != 0;
+    p.clock_set = in.get<std::uint8_t>() != 0;
+    p.start_time = in.get<double>();
+    if (!std::isfinite(p.start_time)) throw StateError("serialized WetCloth FMU state: its start time is not finite");
+    const auto size = in.get<std::uint64_t>();
+    if (bytes.size() - in.at != size) throw StateError("serialized WetCloth FMU state is malformed (its size)");
+    if (p.initialized != (size > 0)) throw StateError("serialized WetCloth FMU state is malformed (its simulation)");
+    if (p.initialized) {
+        try {
+            p.simulation = Simulation::from_bytes(bytes.data() + in.at, static_cast<std::size_t>(size));
+        } catch (const SnapshotError& exc) {
+            throw StateError(exc.what());
+        }
+    }
+    // The values, each within its range (checkpoint.fitting_simulation), and the scene as a whole.
+    for (std::size_t vr = 0; vr < variable_count(); ++vr) {
+        const Variable& var = variables()[vr];
+        try {
+            if (var.role == Role::SCENE && var.real) check_number(var, p.values.*var.real, py_repr(p.values.*var.real));
+            if (var.role == Role::SCENE && var.integer && var.type == Type::INTEGER) {
+                const Index v = p.values.*var.integer;
+                check_number(var, static_cast<double>(v), std::to_string(v));
+            }
+            if (var.role == Role::SCENE && var.integer && var.type == Type::STRING) {
+                const Index code = p.values.*var.integer;
+                if (code < 0 || code >= var.choice_count) {
+                    throw std::invalid_argument(parameter_error(var.name, "a choice code out of range"));
+                }
+            }
+            if (var.role == Role::MESH_OUTPUT_DIR) check_string(var, p.mesh_output_dir.c_str());
+            if (var.role == Role::MESH_FORMAT) check_string(var, p.mesh_format.c_str());
+        } catch (const std::invalid_argument& exc) {
+            throw StateError(std::string("the state holds an invalid value: ") + exc.what());
+        }
+    }
+    if (p.initialized && !same_scene(p.values, p.simulation.scene)) {
+        throw StateError("the state's variable values differ from its simulation's scene");
+    }
+    return p;
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------------------ difflib
+namespace {
+
+//: difflib.SequenceMatcher(None, a, b).ratio() (no junk: the texts are short).
+double ratio(const std::string& a, const std::string& b) {
+    if (a.empty() && b.empty()) return 1.0;
+    std::size_t matches = 0;
+    std::vector<std::array<std::size_t, 4>> queue{{0, a.size(), 0, b.size()}};
+    while (!queue.empty()) {
+        const auto [alo, ahi, blo, bhi] = queue.back();
+        queue.pop_back();
+        // find_longest_match: the longest block, earliest in a, then earliest in b
+        std::size_t best_i = alo, best_j = blo, best = 0;
+        std::vector<std::size_t> lengths(b.size() + 1, 0), next(b.size() + 1, 0);
+        for (std::size_t i = alo; i < ahi; ++i) {
+            std::fill(next.begin(), next.end(), 0);
+            for (std::size_t j = blo; j < bhi; ++j) {
+                if (a[i] != b[j]) continue;
+                const std::size_t k = next[j + 1] = (j > 0 ? lengths[j] : 0) + 1;
+                if (k > best) {
+                    best_i = i + 1 - k;
+                    best_j = j + 1 - k;
+                    best = k;
+                }
+            }
+            lengths.swap(next);
+        }
+        if (best == 0) continue;
+        matches += best;
+        if (alo < best_i && blo < best_j) queue.push_back({alo, best_i, blo, best_j});
+        if (best_i + best < ahi && best_j + best < bhi) queue.push_back({best_i + best, ahi, best_j + best, bhi});
+    }
+    return 2.0 * static_cast<double>(matches) / static_cast<double>(a.size() + b.size());
+}
+
+}  // namespace
+
+const char* close_match(const std::string& word, const char* const* choices, Index count) {
+    const char* best = nullptr;
+    double best_ratio = 0.0;
+    for (Index k = 0; k < count; ++k) {
+        const double r = ratio(choices[k], word);  // get_close_matches: seq1 the possibility, seq2 the word
+        if (r < 0.6) continue;
+        if (best == nullptr || r > best_ratio || (r == best_ratio && std::strcmp(choices[k], best) > 0)) {
+            best = choices[k];
+            best_ratio = r;
+        }
+    }
+    return best;
+}
+
+// ------------------------------------------------------------------------------ the unit
+Unit::Unit(std::string instance_name, Log log) : name_(std::move(instance_name)), log_(std::move(log)) {
+    apply_starts();
+}
+
+void Unit::apply_starts() {
+    values_ = start_scene();
+    for (std::size_t vr = 0; vr < variable_count(); ++vr) {
+        const Variable& var = variables()[vr];
+        if (var.role == Role::MESH_OUTPUT_DIR) mesh_output_dir_ = var.start_text;
+        if (var.role == Role::MESH_FORMAT) mesh_format_ = var.start_text;
+    }
+}
+
+void Unit::reset() {
+    apply_starts();
+    refused_.clear();
+    initialized_ = terminated_ = clock_set_ = false;
+    start_time_ = 0.0;
+    sim_.reset();
+    preview_.reset();
+    changed();
+}
+
+void Unit::changed() { outputs_valid_ = false; }
+
+Simulation& Unit::simulation() {
+    if (sim_) return *sim_;
+    if (!preview_) {
+        // The initial state of the current values, or of the defaults while they do not form a scene.
+        if (scene_problem(values_).empty()) {
+            preview_ = std::make_unique<Simulation>(values_);
+        } else {
+            preview_ = std::make_unique<Simulation>(start_scene());
+        }
+    }
+    return *preview_;
+}
+
+double Unit::time() const { return start_time_ + (sim_ ? sim_->time() : 0.0); }
+
+const Variable* Unit::variable(std::uint64_t vr, const char* function) {
+    if (vr >= variable_count()) {
+        error(std::string(function) + ": no variable has the value reference " + std::to_string(vr) + " (0 to " +
+              std::to_string(variable_count() - 1) + ")");
+        return nullptr;
+    }
+    return &variables()[vr];
+}
+
+void Unit::pending(std::uint64_t vr, const std::string& message) {
+    for (auto& entry : refused_) {
+        if (entry.first == vr) {
+            entry.second = message;
+            return;
+        }
+    }
+    refused_.emplace_back(vr, message);
+}
+
+void Unit::clear_pending(std::uint64_t vr) {
+    refused_.erase(std::remove_if(refused_.begin(), refused_.end(), [vr](const auto& e) { return e.first == vr; }),
+                   refused_.end());
+}
+
+std::string Unit::current_text(const Variable& var) const {
+    switch (var.role) {
+        case Role::MESH_OUTPUT_DIR: return py_repr(std::string_view(mesh_output_dir_));
+        case Role::MESH_FORMAT: return py_repr(std::string_view(mesh_format_));
+        default: break;
+    }
+    if (var.real) return py_repr(values_.*var.real);
+    if (var.type == Type::STRING) return py_repr(std::string_view(var.choices[values_.*var.integer]));
+    return std::to_string(values_.*var.integer);
+}
+
+Outcome Unit::refuse(const Variable& var, std::uint64_t vr, const std::string& message) {
+    pending(vr, message);
+    error(message + " (value refused: " + var.name + " stays " + current_text(var) + ")");
+    return Outcome::ERROR;
+}
+
+Outcome Unit::accept(std::uint64_t vr) {
+    clear_pending(vr);
+    changed();
+    return Outcome::OK;
+}
+
+//: The message of a value set after initialization that must not change (unit.py's set_value and
+//: Simulation.set_inputs).
+static std::string fixed_after_start(const Variable& var) {
+    return parameter_error(var.name, var.role == Role::SCENE ? "is fixed once the simulation starts; only inputs may change"
+                                                             : "is fixed once the unit is initialized");
+}
+
+const Variable* Unit::settable(std::uint64_t vr, Type type, const char* function) {
+    const Variable* var = variable(vr, function);
+    if (!var) return nullptr;
+    if (var->causality == Causality::OUTPUT || var->causality == Causality::INDEPENDENT) {
+        error(std::string(function) + ": variable '" + var->name + "' is an output: the master cannot set it");
+        return nullptr;
+    }
+    if (var->type != type) {
+        error(std::string(function) + ": variable '" + var->name + "' is a " + type_name(var->type) + ", not a " +
+              type_name(type));
+        return nullptr;
+    }
+    return var;
+}
+
+Outcome Unit::set_real(std::uint64_t vr, double value, const char* function) {
+    const Variable* var = settable(vr, Type::REAL, function);
+    if (!var) return Outcome::ERROR;
+    try {
+        const std::string text = py_repr(value);
+        if (!initialized_) {
+            check_number(*var, value, text);
+            values_.*var->real = value;
+            preview_.reset();
+        } else if (value != values_.*var->real) {  // an unchanged value changes nothing (and clears a refusal)
+            if (!scene_input(var->name)) throw std::invalid_argument(fixed_after_start(*var));
+            check_number(*var, value, text);
+            Scene next = values_;
+            next.*var->real = value;
+            sim_->set_inputs(next);  // a changed input wakes a sleeping cloth
+            values_ = next;
+        }
+    } catch (const std::invalid_argument& exc) {
+        return refuse(*var, vr, exc.what());
+    }
+    return accept(vr);
+}
+
+Outcome Unit::set_integer(std::uint64_t vr, std::int64_t value, const std::string& text, const char* function) {
+    const Variable* var = settable(vr, Type::INTEGER, function);
+    if (!var) return Outcome::ERROR;
+    try {
+        if (!initialized_) {
+            check_number(*var, static_cast<double>(value), text);
+            values_.*var->integer = value;
+            preview_.reset();
+        } else if (value != values_.*var->integer) {
+            throw std::invalid_argument(fixed_after_start(*var));  // no Integer is an input
+        }
+    } catch (const std::invalid_argument& exc) {
+        return refuse(*var, vr, exc.what());
+    }
+    return accept(vr);
+}
+
+Outcome Unit::set_string(std::uint64_t vr, const char* value, const char* function) {
+    const Variable* var = settable(vr, Type::STRING, function);
+    if (!var) return Outcome::ERROR;
+    try {
+        if (!initialized_) {
+            const Index code = check_string(*var, value);
+            switch (var->role) {
+                case Role::MESH_OUTPUT_DIR: mesh_output_dir_ = value; break;
+                case Role::MESH_FORMAT: mesh_format_ = value; break;
+                default: values_.*var->integer = code; break;
+            }
+            preview_.reset();
+        } else {
+            if (value == nullptr) check_string(*var, value);
+            const char* current = var->role == Role::MESH_OUTPUT_DIR ? mesh_output_dir_.c_str()
+                                  : var->role == Role::MESH_FORMAT   ? mesh_format_.c_str()
+                                                                     : var->choices[values_.*var->integer];
+            if (std::strcmp(value, current) != 0) throw std::invalid_argument(fixed_after_start(*var));  // no String is an input
+        }
+    } catch (const std::invalid_argument& exc) {
+        return refuse(*var, vr, exc.what());
+    }
+    return accept(vr);
+}
+
+Outcome Unit::get_real(const std::uint32_t* vrs, std::size_t nvr, double* values, std::size_t n_values,
+                       const char* function) {
+    std::size_t at = 0;
+    for (std::size_t k = 0; k < nvr; ++k) {
+        const Variable* var = variable(vrs[k], function);
+        if (!var) return Outcome::ERROR;
+        if (var->type != Type::REAL) {
+            error(std::string(function) + ": variable '" + var->name + "' is a " + type_name(var->type));
+            return Outcome::ERROR;
+        }
+        std::size_t size = 1;
+        if (var->role == Role::POSITIONS || var->role == Role::WETNESS) {
+            const Index n = sim_ ? sim_->n() : values_.nx * values_.ny;
+            size = static_cast<std::size_t>(var->role == Role::POSITIONS ? 3 * n : n);
+        }
+        if (at + size > n_values) {
+            error(std::string(function) + ": " + std::to_string(n_values) + " values asked for, but the variables hold more"
+                  " (" + var->name + " alone " + std::to_string(size) + ")");
+            return Outcome::ERROR;
+        }
+        switch (var->role) {
+            case Role::SCENE: values[at] = values_.*var->real; break;
+            case Role::TIME: values[at] = time(); break;
+            case Role::OUTPUT:
+                if (!outputs_valid_) {
+                    simulation().outputs(outputs_);
+                    outputs_valid_ = true;
+                }
+                values[at] = outputs_[var->slot];
+                break;
+            case Role::POSITIONS:
+                if (static_cast<std::size_t>(3 * simulation().n()) != size) {
+                    error(std::string(function) + ": 'positions' holds 3 nx ny = " +
+                          std::to_string(3 * simulation().n()) + " values");
+                    return Outcome::ERROR;
+                }
+                simulation().positions(values + at);
+                break;
+            case Role::WETNESS:
+                if (static_cast<std::size_t>(simulation().n()) != size) {
+                    error(std::string(function) + ": 'wetness' holds nx ny = " + std::to_string(simulation().n()) +
+                          " values");
+                    return Outcome::ERROR;
+                }
+                simulation().wetness(values + at);
+                break;
+            default: break;
+        }
+        at += size;
+    }
+    if (at != n_values) {
+        error(std::string(function) + ": " + std::to_string(n_values) + " values asked for, the variables hold " +
+              std::to_string(at));
+        return Outcome::ERROR;
+    }
+    return Outcome::OK;
+}
+
+Outcome Unit::get_integer(std::uint64_t vr, std::int64_t& value, const char* function) {
+    const Variable* var = variable(vr, function);
+    if (!var) return Outcome::ERROR;
+    if (var->type != Type::INTEGER) {
+        error(std::string(function) + ": variable '" + var->name + "' is a " + type_name(var->type));
+        return Outcome::ERROR;
+    }
+    value = values_.*var->integer;
+    return Outcome::OK;
+}
+
+Outcome Unit::get_string(std::uint64_t vr, const char*& value, const char* function) {
+    const Variable* var = variable(vr, function);
+    if (!var) return Outcome::ERROR;
+    if (var->type != Type::STRING) {
+        error(std::string(function) + ": variable '" + var->name + "' is a " + type_name(var->type));
+        return Outcome::ERROR;
+    }
+    switch (var->role) {
+        case Role::MESH_OUTPUT_DIR: value = mesh_output_dir_.c_str(); break;
+        case Role::MESH_FORMAT: value = mesh_format_.c_str(); break;
+        default: value = var->choices[values_.*var->integer]; break;
+    }
+    return Outcome::OK;
+}
+
+// ------------------------------------------------------------------------------ life cycle
+Outcome Unit::setup_experiment(double start_time) {
+    if (!std::isfinite(start_time)) {
+        error("the start time must be a finite number of seconds, got " + py_repr(start_time));
+        return Outcome::ERROR;
+    }
+    start_time_ = start_time;
+    clock_set_ = true;
+    changed();
+    return Outcome::OK;
+}
+
+Outcome Unit::enter_initialization() { return Outcome::OK; }
+
+Outcome Unit::exit_initialization() {
+    if (initialized_) return Outcome::OK;
+    std::vector<std::string> problems;
+    for (const auto& entry : refused_) problems.push_back(entry.second);
+    const std::string whole = scene_problem(values_);
+    if (!whole.empty()) problems.push_back(whole);
+    if (problems.empty()) {
+        try {
+            sim_ = std::make_unique<Simulation>(values_);
+        } catch (const std::bad_alloc&) {
+            problems.push_back("not enough memory for a cloth of nx x ny = " + std::to_string(values_.nx) + " x " +
+                               std::to_string(values_.ny) + " particles");
+        } catch (const std::exception& exc) {
+            problems.emplace_back(exc.what());
+        }
+    }
+    if (!problems.empty()) {
+        std::string message = "initialization refused: ";
+        std::vector<std::string> seen;
+        for (const auto& p : problems) {
+            if (std::find(seen.begin(), seen.end(), p) != seen.end()) continue;
+            message += (seen.empty() ? "" : "; ") + p;
+            seen.push_back(p);
+        }
+        error(message);
+        return Outcome::ERROR;
+    }
+    preview_.reset();
+    initialized_ = true;
+    changed();
+    return Outcome::OK;
+}
+
+Outcome Unit::do_step(double current_time, double step_size) {
+    if (!(std::isfinite(current_time) && std::isfinite(step_size) && step_size >= 0.0)) {
+        error("doStep needs a finite communication point and a finite step size >= 0 s, got t = " +
+              py_repr(current_time) + " s, step " + py_repr(step_size) + " s");
+        return Outcome::ERROR;
+    }
+    if (terminated_) {
+        error("doStep at t = " + py_g(current_time) + " s after fmiTerminate: the run is over");
+        return Outcome::ERROR;
+    }
+    if (!initialized_) {
+        error("doStep before the unit was initialized");
+        return Outcome::ERROR;
+    }
+    if (!refused_.empty()) {
+        for (const auto& entry : refused_) error("step refused at t = " + py_g(current_time) + " s: " + entry.second);
+        return Outcome::DISCARD;
+    }
+    Simulation& sim = *sim_;
+    if (!clock_set_) {
+        start_time_ = current_time - sim.time();
+        clock_set_ = true;
+    }
+    const double now = start_time_ + sim.time();
+    if (std::fabs(current_time - now) > TIME_TOLERANCE * std::max(1.0, std::fabs(now))) {
+        error("doStep from t = " + py_repr(current_time) + " s, but the unit is at t = " + py_repr(now) +
+              " s; restore an FMU state to go back in time");
+        return Outcome::DISCARD;
+    }
+    sim.save(before_);
+    changed();
+    std::string failure;
+    try {
+        const double duration = current_time + step_size - start_time_ - sim.time();
+        if (sim.advance(duration > 0.0 ? duration : 0.0) == BLOWN_UP) failure = "BlowUpError: " + sim.blow_up_message();
+    } catch (const std::bad_alloc&) {
+        failure = "MemoryError: out of memory";
+    } catch (const std::exception& exc) {
+        failure = std::string("RuntimeError: ") + exc.what();
+    }
+    if (failure.empty()) return Outcome::OK;
+    try {
+        sim.restore(before_);
+    } catch (const std::exception& exc) {
+        error(std::string("step from t = ") + py_g(current_time) + " s failed and the unit could not go back: " +
+              exc.what());
+        return Outcome::ERROR;
+    }
+    error("step from t = " + py_g(current_time) + " s by " + py_g(step_size) + " s failed: " + failure +
+          " The unit stays at t = " + py_g(current_time) + " s with its last good outputs.");
+    return Outcome::DISCARD;
+}
+
+Outcome Unit::terminate() {
+    if (terminated_) {
+        warning("fmiTerminate called again: the run had already ended; nothing done");
+        return Outcome::OK;
+    }
+    terminated_ = true;
+    return Outcome::OK;
+}
+
+// ------------------------------------------------------------------------------ FMU states
+namespace {
+
+struct StateObject {
+    std::vector<unsigned char> bytes;
+};
+
+std::mutex& registry_mutex() {
+    static std::mutex mutex;
+    return mutex;
+}
+
+std::unordered_set<void*>& registry() {
+    static std::unordered_set<void*> objects;
+    return objects;
+}
+
+}  // namespace
+
+void* new_state(std::vector<unsigned char> bytes) {
+    auto* object = new StateObject{std::move(bytes)};
+    std::lock_guard<std::mutex> lock(registry_mutex());
+    registry().insert(object);
+    return object;
+}
+
+std::vector<unsigned char>* state_bytes(void* state) {
+    std::lock_guard<std::mutex> lock(registry_mutex());
+    if (state == nullptr || registry().count(state) == 0) return nullptr;
+    return &static_cast<StateObject*>(state)->bytes;
+}
+
+bool free_state(void* state) {
+    {
+        std::lock_guard<std::mutex> lock(registry_mutex());
+        if (state == nullptr || registry().erase(state) == 0) return false;
+    }
+    delete static_cast<StateObject*>(state);
+    return true;
+}
+
+std::vector<unsigned char> Unit::state() const {
+    std::vector<unsigned char> bytes(STATE_MAGIC, STATE_MAGIC + MAGIC_SIZE);
+    Out out{bytes};
+    out.put(STATE_VERSION);
+    out.put(std::uint64_t{0});  // the checksum, below
+    const std::size_t body = bytes.size();
+    out.put(static_cast<std::uint64_t>(variable_count()));
+    for_each_field(values_, [&](const char*, const auto& v) { out.put(v); });
+    out.text(mesh_output_dir_);
+    out.text(mesh_format_);
+    out.put(static_cast<std::uint64_t>(refused_.size()));
+    for (const auto& [vr, message] : refused_) {
+        out.put(vr);
+        out.text(message);
+    }
+    out.put(static_cast<std::uint8_t>(initialized_));
+    out.put(static_cast<std::uint8_t>(clock_set_));
+    out.put(start_time_);
+    if (sim_ && initialized_) {
+        const std::vector<unsigned char> simulation = sim_->snapshot();
+        out.put(static_cast<std::uint64_t>(simulation.size()));
+        bytes.insert(bytes.end(), simulation.begin(), simulation.end());
+    } else {
+        out.put(std::uint64_t{0});
+    }
+    const std::uint64_t checksum = fnv1a(bytes.data() + body, bytes.size() - body);
+    std::memcpy(bytes.data() + MAGIC_SIZE + 4, &checksum, sizeof(checksum));
+    return bytes;
+}
+
+void Unit::check_state(const std::vector<unsigned char>& bytes) { parse(bytes); }
+
+Outcome Unit::set_state(const std::vector<unsigned char>& bytes) {
+    try {
+        Parsed p = parse(bytes);
+        std::unique_ptr<Simulation> fresh;
+        if (p.initialized) {
+            const Scene& scene = p.simulation.scene;
+            if (sim_ && initialized_ && (scene.nx != sim_->scene().nx || scene.ny != sim_->scene().ny)) {
+                throw StateError("the state is of a cloth of nx x ny = " + std::to_string(scene.nx) + " x " +
+                                 std::to_string(scene.ny) + " particles, this unit runs " +
+                                 std::to_string(sim_->scene().nx) + " x " + std::to_string(sim_->scene().ny) +
+                                 " (fixed once it is initialized)");
+            }
+            try {
+                if (sim_ && fixed_differences(sim_->scene(), scene).empty()) {
+                    sim_->restore(p.simulation);  // checks everything before it changes anything
+                } else {
+                    fresh = std::make_unique<Simulation>(scene);
+                    fresh->restore(p.simulation);
+                }
+            } catch (const SnapshotError& exc) {
+                throw StateError(exc.what());
+            } catch (const std::invalid_argument& exc) {
+                throw StateError(std::string("the state's scene is not valid: ") + exc.what());
+            }
+            if (fresh) sim_ = std::move(fresh);
+        } else {
+            sim_.reset();
+        }
+        values_ = p.values;
+        mesh_output_dir_ = p.mesh_output_dir;
+        mesh_format_ = p.mesh_format;
+        refused_ = p.refused;
+        initialized_ = p.initialized;
+        start_time_ = p.start_time;
+        clock_set_ = clock_set_ || p.initialized || p.clock_set;
+        preview_.reset();
+        changed();
+        return Outcome::OK;
+    } catch (const StateError& exc) {
+        error(std::string("FMU state refused, the unit is unchanged: ") + exc.what());
+    } catch (const std::bad_alloc&) {
+        error("FMU state refused, the unit is unchanged: not enough memory");
+    }
+    return Outcome::ERROR;
+}
+
+}  // namespace wc::fmu

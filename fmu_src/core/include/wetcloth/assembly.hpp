@@ -1,0 +1,22 @@
+// The total force on every particle and, for the implicit schemes, the pieces of its Jacobian
+// (port of wetcloth/kernels/assembly.py).  Each force family is one call, skipped when the scene
+// does not need it.
+#pragma once
+#include "wetcloth/core.hpp"
+
+namespace wc {
+
+//: Fill out (n) with each particle's submerged fraction (0..1) from heights z (n, m); return the largest.
+double submerged(const Physics& phys, Index n, const double* z, double* out);
+
+//: Total force (N) on every particle into work.force (3, n); the submerged fractions into work.submerged.
+void forces(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
+            const double* water);
+
+//: Forces as `forces`, plus the pieces of the system matrix M - h dF/dv - h^2 dF/dx: work.rhs the term
+//: h^2 K v, work.blocks the per-particle blocks (drag, buoyancy), work.diagonal_blocks the springs' part
+//: of the diagonal blocks, and each spring's block in work.direction, along, across.
+void forces_and_blocks(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
+                       const double* water, double h);
+
+}  // namespace wc

@@ -1,0 +1,243 @@
+// The compiled core's data: views over flat arrays, one struct per bundle.
+//
+// Every array is C-contiguous and owned by the caller (NumPy in the Python package, the native
+// FMU's own storage there); a struct holds pointers into it, nothing more.  A (rows, n) array of
+// doubles is stored row after row: row r of `pos` (3, n) is `pos + r * n` (x, y, z rows), which
+// keeps every per-particle loop over contiguous memory that the compiler vectorises.
+//
+// The structs mirror the Python bundles field for field (wetcloth.kernels' named tuples), so that
+// the bindings fill them by name.  No dependency beyond the standard library.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace wc {
+
+using Index = std::int64_t;
+
+//: Acceleration of gravity (m/s2), acting along -z.
+inline constexpr double GRAVITY = 9.81;
+
+//: The fixed cloth: grid size, spring families (offset, rest length m, tension only, stiffness N/m,
+//: damping N s/m per spring), 1 for moving particles, dry mass kg, envelope volume m3, Stokes
+//: coefficient 6 pi a eta (N s/m), water capacity kg, wicking links (offsets, conductance kg/s).
+struct Cloth {
+    Index grid_x = 0, grid_y = 0, n = 0;  // particles per row, rows, particles
+    Index families = 0;                   // F
+    const Index* offsets = nullptr;       // (F)
+    const double* rest = nullptr;         // (F) m
+    const bool* tension_only = nullptr;   // (F)
+    const double* stiffness = nullptr;    // (F, n) N/m, zero where a family has no spring
+    const double* damping = nullptr;      // (F, n) N s/m
+    double* free = nullptr;               // (n) 1 moving, 0 pinned or held (the floor changes it during a step)
+    const double* dry_mass = nullptr;     // (n) kg
+    const double* volume = nullptr;       // (n) m3
+    const double* stokes_coefficient = nullptr;  // (n) N s/m
+    const double* capacity = nullptr;     // (n) kg
+    Index wick_families = 0;              // W
+    const Index* wick_offsets = nullptr;  // (W)
+    const double* wick_conductance = nullptr;  // (W, n) kg/s
+};
+
+//: Scene parameters as the kernels use them (SI units).  `wet_factor` is 0 unless wetness-dependent
+//: stiffness is active; `floor_z` is the lowest particle centre (m).
+struct Physics {
+    bool projected = false;
+    double wet_factor = 0, water_level = 0, water_density = 0, thickness = 0;
+    bool smooth = false, stokes = false;
+    double drag_normal = 0, drag_tangential = 0, drag_linear = 0, current_x = 0, current_y = 0;
+    double floor_z = 0, floor_friction = 0, absorption_capacity = 0, absorption_rate = 0;
+    double drying_rate = 0, wicking_rate = 0, wick_step_limit = 0;
+    bool skip_idle = true;
+};
+
+//: Scratch and results: force (3, n) N; submerged (n) fraction; saturation (n); blocks (6, n)
+//: per-particle symmetric 3x3 blocks (xx, yy, zz, xy, xz, yz) of the system matrix;
+//: diagonal_blocks (6, n) the springs' part of its diagonal blocks; direction (F, 3, n), along,
+//: across (F, n) each spring's block; rhs (3, n); buf (4, n); cells (2, 9, n + grid_x + 1)
+//: face-drag rows; wick_buffer (6, n).
+struct Work {
+    double* force = nullptr;
+    double* submerged = nullptr;
+    double* saturation = nullptr;
+    double* blocks = nullptr;
+    double* diagonal_blocks = nullptr;
+    double* direction = nullptr;
+    double* along = nullptr;
+    double* across = nullptr;
+    double* rhs = nullptr;
+    double* buf = nullptr;
+    double* cells = nullptr;
+    double* wick_buffer = nullptr;
+};
+
+//: Integrator codes (Control::integrator).
+enum Integrator : Index { EXPLICIT_EULER = 0, SYMPLECTIC_EULER = 1, IMPLICIT_EULER = 2, BDF2 = 3 };
+
+//: Integrator and controller settings (see wetcloth/integrators.py): tolerance (-), allowed local
+//: position error per step (m, 0 = fixed steps of max_step s), newton_tolerance (m), cg_tolerance
+//: (-), the explicit schemes' stability data, step limits and factors, the blow-up speed (m/s) and
+//: the sleep rule (sleep_distance m for sleep_after s).
+struct Control {
+    Index integrator = BDF2;
+    double tolerance = 0, allowed = 0, max_step = 0, newton_tolerance = 0, cg_tolerance = 0;
+    double omega_squared = 0, buoyancy_omega_squared = 0, damping_rate = 0, spring_limit = 0;
+    double drag_rate_offset = 0, drag_rate_slope = 0, smallest_step = 0, growth = 0, shrink = 0;
+    double blow_up_speed = 0, sleep_distance = 0, sleep_after = 0;
+};
+
+//: Slots of Solver::counters.
+enum SolverCounter : Index { NEWTON_ITERATIONS = 0, CG_ITERATIONS = 1, FACTORISATIONS = 2, UNCONVERGED = 3 };
+
+//: Scratch of the implicit steps, each (3, n) unless noted: mass (n) kg; rhs, dv, r, z, p, ap of the
+//: linear solves; hat_pos, hat_vel the BDF2 history terms; predicted the extrapolated positions;
+//: step_acceleration (3, n) m/s2; diagonal (6, n) the system's diagonal blocks and inverse (6, n)
+//: their inverses; counters (4) int64.
+struct Solver {
+    double* mass = nullptr;
+    double* rhs = nullptr;
+    double* dv = nullptr;
+    double* r = nullptr;
+    double* z = nullptr;
+    double* p = nullptr;
+    double* ap = nullptr;
+    double* hat_pos = nullptr;
+    double* hat_vel = nullptr;
+    double* predicted = nullptr;
+    double* step_acceleration = nullptr;
+    double* diagonal = nullptr;
+    double* inverse = nullptr;
+    Index* counters = nullptr;
+};
+
+//: Columns of Hierarchy::levels.
+enum LevelColumn : Index { NX = 0, NY = 1, START = 2, PAD_X = 3 };
+
+//: The multigrid hierarchy (multigrid.cpp): levels (L, 4) int64 (nx, ny, first padded index, padded
+//: row length), level 0 the particles' grid; coef (2, 9, size) both components' 9-point stencils;
+//: inverse_diagonal, x, b, r (2, size); row (grid_x + 3) scratch.
+struct Hierarchy {
+    Index level_count = 0;
+    Index size = 0;
+    Index* levels = nullptr;
+    double* coef = nullptr;
+    double* inverse_diagonal = nullptr;
+    double* x = nullptr;
+    double* b = nullptr;
+    double* r = nullptr;
+    double* row = nullptr;
+};
+
+//: The plane preconditioner (plane.cpp): per-spring stiffness (F, n) N/m; slots (F) each family's
+//: stencil slot (-1: left out); the hierarchy; on the coarsest level order (n_c) the padded index
+//: of each band position and rank (rank_size) its inverse (-1 off the grid); bands and rows
+//: (2, n_c, kd + 1) the banded Cholesky factors (band.cpp); reference (3) [factored scale s2,
+//: factored?, from the Jacobian?], reference_mass (n) kg; shares (2, F); jacobian_along (F, n) kg,
+//: jacobian_mass (n) kg; frame (3, 3, n) each particle's axes t1, t2, n; normal (n); local (2, n_c).
+struct Plane {
+    Index families = 0;
+    const double* stiffness = nullptr;
+    const Index* slots = nullptr;
+    Hierarchy grid;
+    Index coarse_n = 0;  // n_c
+    Index kd = 0;        // half-bandwidth of the coarsest level's band matrices
+    const Index* order = nullptr;
+    const Index* rank = nullptr;
+    Index rank_size = 0;
+    double* bands = nullptr;
+    double* rows = nullptr;
+    double* reference = nullptr;
+    double* reference_mass = nullptr;
+    const double* shares = nullptr;
+    double* jacobian_along = nullptr;
+    double* jacobian_mass = nullptr;
+    double* frame = nullptr;
+    double* normal = nullptr;
+    double* local = nullptr;
+};
+
+//: Self-collision's candidate lists and scratch, owned by the core (self_contact/*.cpp): the
+//: point-triangle (particle, triangle) and edge-edge (edge, edge) candidate pairs, and whatever
+//: scratch the broad phase and the response need between calls.
+struct ContactLists {
+    std::vector<Index> point_triangle;  // (2, count): first row particles, then triangles
+    std::vector<Index> edge_edge;       // (2, count)
+    std::vector<double> scratch;        // start distances and other per-step scratch
+    std::vector<Index> index_scratch;   // hash tables and other integer scratch
+    Index point_triangle_count() const { return static_cast<Index>(point_triangle.size() / 2); }
+    Index edge_edge_count() const { return static_cast<Index>(edge_edge.size() / 2); }
+};
+
+//: Slots of Contact::counters: candidate lists built; steps that had candidates; passes over them;
+//: pairs pushed apart; rounds of impact zones; steps undone as a last resort.
+enum ContactCounter : Index { REBUILDS = 0, BUSY_STEPS = 1, PASSES = 2, RESPONSES = 3, ZONE_ROUNDS = 4, FREEZES = 5 };
+inline constexpr Index CONTACT_COUNTERS = 6;
+inline constexpr Index ZONE_ROWS = 21;
+
+//: Self-collision (self_contact/): enabled; friction (-); least_margin (m); rest_gap (m);
+//: triangles (m, 3) and edges (k, 2) particle indices; rest positions (3, n) m; the candidate
+//: list's reference positions (3, n) and margin (1) m (0: none); zone (n) and zone_sums
+//: (ZONE_ROWS, n) scratch of the impact zones; counters (CONTACT_COUNTERS); the lists.
+struct Contact {
+    bool enabled = false;
+    double friction = 0, least_margin = 0, rest_gap = 0;
+    Index triangle_count = 0;
+    const Index* triangles = nullptr;
+    Index edge_count = 0;
+    const Index* edges = nullptr;
+    const double* rest = nullptr;
+    double* reference = nullptr;
+    double* margin = nullptr;
+    Index* zone = nullptr;
+    double* zone_sums = nullptr;
+    Index* counters = nullptr;
+    ContactLists* lists = nullptr;
+};
+
+//: State buffers: current and trial (pos, vel (3, n), water (n)), the BDF2 history (state before the
+//: last step; acceleration (3, n) m/s2 the last step implied at its end), the sleep anchor (3, n)
+//: and held (n): 1 for the particles the floor holds during the current step.
+struct Buffers {
+    double* pos = nullptr;
+    double* vel = nullptr;
+    double* water = nullptr;
+    double* trial_pos = nullptr;
+    double* trial_vel = nullptr;
+    double* trial_water = nullptr;
+    double* prev_pos = nullptr;
+    double* prev_vel = nullptr;
+    double* prev_water = nullptr;
+    double* acceleration = nullptr;
+    double* anchor = nullptr;
+    double* held = nullptr;
+};
+
+//: Slots of the clock (double): simulated time (s); the controller's next step (s); the last accepted
+//: step (s; 0: no history for BDF2); the fastest particle's speed (m/s); time spent still (s), time
+//: since stillness was last checked (s), whether water moved since, whether asleep; accepted and
+//: rejected steps; the step that blew up (s); BDF2's last Newton rate (-) and the correction it
+//: followed (m/s), the kind of its first guess, its last solve's CG iterations.
+enum ClockSlot : Index {
+    TIME = 0, NEXT_STEP, LAST_STEP, SPEED, CALM_TIME, UNCHECKED_TIME, EXCHANGING, SLEEPING, STEPS, REJECTED,
+    FAILED_STEP, NEWTON_RATE, RATE_CORRECTION, FIRST_GUESS, LAST_SOLVE, CLOCK_SIZE
+};
+
+//: What the step loop returns.
+enum Status : Index { DONE = 0, BLOWN_UP = 1, PAUSED = 2 };
+
+//: Everything one step loop works on.
+struct Core {
+    Cloth cloth;
+    Physics phys;
+    Control control;
+    Work work;
+    Solver solver;
+    Plane plane;
+    Contact contact;
+    Buffers buf;
+    double* clock = nullptr;  // (CLOCK_SIZE)
+};
+
+}  // namespace wc

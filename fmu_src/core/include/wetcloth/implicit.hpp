@@ -1,0 +1,72 @@
+// Implicit steps: backward Euler (one linearised Newton step) and BDF2 (Newton iterations) (port of
+// wetcloth/kernels/implicit.py).
+//
+// Both solve systems with the matrix A = M - h' dF/dv - h'^2 dF/dx (h' the step times the scheme's
+// coefficient), which forces_and_blocks (assembly.hpp) leaves as per-particle and per-spring blocks;
+// compressed springs contribute no negative stiffness, so A is symmetric positive definite.
+#pragma once
+#include "wetcloth/core.hpp"
+
+namespace wc {
+
+//: Backward Euler's conjugate gradients stop at this residual relative to the right-hand side (on the
+//: towel this moves the centroid by 0.02 mm against a 1e-8 solve).
+inline constexpr double EULER_CG_TOLERANCE = 1e-4;
+inline constexpr Index EULER_CG_ITERATIONS = 500;
+//: BDF2: at most this many Newton iterations, each a conjugate-gradient solve until the error left in
+//: the correction is estimated below CG_TOLERANCE of the correction, or below CG_FLOOR of the Newton
+//: tolerance (at most NEWTON_CG_ITERATIONS iterations).  The floor keeps tiny corrections from being
+//: solved to round-off; it must stay small, since an error left in every step's velocity is not random
+//: and adds up over the run.
+inline constexpr Index NEWTON_ITERATIONS_MAX = 8;
+//: Newton stops when the velocity correction is below NEWTON_RELATIVE of the fastest particle's speed
+//: and velocity change (or below the position tolerance over NEWTON_VELOCITY_TIME s) and moves
+//: positions by less than the position tolerance.
+inline constexpr double NEWTON_RELATIVE = 1e-3;
+inline constexpr double NEWTON_VELOCITY_TIME = 1.0;
+//: After its first iteration Newton has no convergence rate of its own yet.  It borrows the rate last
+//: observed (in an earlier step), scaled up by how much larger its correction is than the one that
+//: rate followed (Newton's rate grows in proportion to the correction: Deuflhard's affine-invariant
+//: model), and stops if the corrections still to come at that rate are within FIRST_ITERATION_TRUST of
+//: the tolerance (a borrowed rate is a guess, hence the margin).  Measured (docs/benchmarks.md): on a
+//: floating 9 x 9 cloth's 2 ms steps, 40 % fewer Newton and CG iterations; at 1.0, or without the
+//: scaling, the sinking reference scene's wet mass erred by 1.2e-3 or 9.5e-4 (6.3e-4 before).  Only
+//: with the banded preconditioner: with the multigrid cycle's inexact solves the floating 64 x 64
+//: towel's accepted first iterates made its later steps fail their error test.
+inline constexpr double FIRST_ITERATION_TRUST = 0.3;
+//: Newton converges only linearly (its Jacobian is approximate: drag lumped, tension-only springs
+//: clamped; each iteration cut the correction 2.5-3x on a sinking 9 x 9 cloth at 0.05 s steps), so
+//: solving each correction much more closely than that rate is wasted: 1e-1 took 10-13 % less time
+//: than 1e-2 on sink_map at the same accuracy; at 2e-1 the landing scene's centroid erred 0.72 mm
+//: instead of 0.19-0.24 (bench/work_precision.py).  With fixed steps no error estimate watches the
+//: steps: their solves go to FIXED_STEP_CG_TOLERANCE (at 1e-1 the 4 s sinking reference at 0.25 ms
+//: steps and the same at half the step differed by 0.17 mm in centroid, at 1e-2 by 0.03 mm).
+inline constexpr double CG_TOLERANCE = 1e-1;
+inline constexpr double FIXED_STEP_CG_TOLERANCE = 1e-2;
+inline constexpr double CG_FLOOR = 1e-2;
+inline constexpr Index NEWTON_CG_ITERATIONS = 300;
+
+//: Kinds of Newton's first guess (memory[2]): the line through v_prev and v; the parabola through them
+//: with the slope the last step implied at v.
+inline constexpr double LINE = 0.0;
+inline constexpr double PARABOLA = 1.0;
+
+//: Backward Euler, one Newton step solved by block-Jacobi conjugate gradients (Baraff and Witkin 1998):
+//: (M - h C - h^2 K) dv = h F + h^2 K v, then x+ = x + h (v + dv).  Returns max |dv| (m/s).
+double implicit_euler_step(const Cloth& cloth, const Physics& phys, Work& work, Solver& solver, const double* pos,
+                           const double* vel, const double* water, double h, double* out_pos, double* out_vel);
+
+struct StepEstimate {
+    double error;    // m, local position error estimate
+    bool converged;  // whether Newton converged
+};
+
+//: One step of the variable-step BDF2 (backward Euler when h_prev == 0); see implicit.py's bdf2_step.
+//: memory (4) carries over from step to step (clock slots NEWTON_RATE..LAST_SOLVE).
+StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solver& solver, Plane& plane,
+                       const double* pos, const double* vel, const double* water, const double* step_water,
+                       const double* prev_pos, const double* prev_vel, const double* prev_water,
+                       const double* acceleration, double h, double h_prev, double newton_tolerance,
+                       double cg_tolerance, double* memory, double* out_pos, double* out_vel);
+
+}  // namespace wc

@@ -1,0 +1,79 @@
+// Per-particle update kernels of the integrators and the conjugate-gradient solve of backward Euler
+// (port of wetcloth/kernels/integration.py).
+#pragma once
+#include "wetcloth/core.hpp"
+
+namespace wc {
+
+//: One Euler step: v+ = v + h F/m; x+ = x + h v+ (symplectic) or x + h v (explicit), into out_pos,
+//: out_vel.  Pinned particles (free == 0) keep zero velocity.  Returns max |v+ - v| (m/s).
+double euler_update(Index n, const double* pos, const double* vel, const double* force, const double* dry_mass,
+                    const double* water, const double* free, double h, bool symplectic, double* out_pos,
+                    double* out_vel);
+
+struct SpeedCheck {
+    double speed;  // m/s, the fastest particle's
+    bool finite;   // whether every value is finite
+};
+SpeedCheck speed_and_finiteness(Index n, const double* pos, const double* vel, const double* water);
+
+//: Largest coordinate difference (m) between two (3, n) position arrays.
+double largest_deviation(Index n, const double* pos, const double* anchor);
+
+//: target[0:count] = source[0:count].
+void copy(Index count, const double* source, double* target);
+
+//: Sum of count values, in order.
+double total(Index count, const double* a);
+
+//: out = A p with A = M + work.blocks + spring blocks, rows of pinned particles zeroed.
+void system_matvec(const Cloth& cloth, const Work& work, const double* mass, const double* p, double* out);
+
+//: Sum over 3 n values of a[k] b[k], in order.
+double dot(Index n, const double* a, const double* b);
+
+//: The adjugate of the symmetric 3x3 matrix [[a, d, e], [d, b, f], [e, f, c]] and its determinant; the
+//: inverse is the adjugate over det.
+struct Adjugate {
+    double c11, c22, c33, c12, c13, c23, det;
+};
+inline Adjugate symmetric_adjugate(double a, double b, double c, double d, double e, double f) {
+    const double c11 = b * c - f * f;
+    const double c22 = a * c - e * e;
+    const double c33 = a * b - d * d;
+    const double c12 = e * f - d * c;
+    const double c13 = d * f - b * e;
+    const double c23 = d * e - a * f;
+    return {c11, c22, c33, c12, c13, c23, a * c11 + d * c12 + e * c13};
+}
+
+//: Invert symmetric 3x3 blocks (6, n: xx, yy, zz, xy, xz, yz) into inverse (6, n); a block that is not
+//: positive definite (a pinned particle's, whose rows are zero) gets the identity.
+void invert_blocks(Index n, const double* blocks, double* inverse);
+
+//: z = B^-1 r with B^-1 the (6, n) inverted diagonal blocks.
+void apply_block_inverse(Index n, const double* inverse, const double* r, double* z);
+
+//: One conjugate-gradient update along p (ap = A p), in place: x += alpha p, r -= alpha A p.
+void conjugate_gradient_step(Index n, double alpha, const double* p, const double* ap, double* x, double* r);
+
+//: The next conjugate-gradient search direction, in place: p = z + beta p.
+void next_search_direction(Index n, double beta, const double* z, double* p);
+
+//: Replace the first guess x by the combination c1 x + c2 B^-1 b that minimises x.A x / 2 - b.x and
+//: leave its residual in r; z, p, ap scratch (3, n).
+void combine_first_guesses(const Cloth& cloth, const Work& work, const double* mass, const double* inverse,
+                           const double* b, double* x, double* r, double* z, double* p, double* ap);
+
+struct SolveResult {
+    Index iterations;
+    double residual;  // relative to |b|
+};
+
+//: Solve A x = b (A as in system_matvec) by block-Jacobi-preconditioned conjugate gradients from the
+//: first guess in x, until |r| <= rtol |b| or max_iterations; r, z, p, ap scratch (3, n).
+SolveResult solve_pcg(const Cloth& cloth, const Work& work, const double* mass, const double* inverse,
+                      const double* b, double* x, double* r, double* z, double* p, double* ap, double rtol,
+                      Index max_iterations);
+
+}  // namespace wc

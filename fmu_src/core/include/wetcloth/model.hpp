@@ -1,0 +1,300 @@
+// The native model: a scene and every array the step loop works on, in storage of its own (the native
+// FMU's; the Python package keeps its arrays in NumPy and views them through the bindings).
+//
+// A port of what the Python package does before and between the compiled calls:
+//   * wetcloth/scene.py: the Scene's fields (string choices as codes into the name lists below) and its
+//     one cross-parameter rule (scene_problem);
+//   * wetcloth/topology.py (build_topology), model.py (the Model.scene setter, _set_wicking),
+//     integrators.py (Integrator.__init__ and control()), state.py (initial_state);
+//   * the allocations of kernels/plane.py (make_plane), kernels/multigrid.py (level_sizes,
+//     make_hierarchy), kernels/self_contact/__init__.py (make_contact, rest_gap, grid_edges) and
+//     bundles.py / kernels/implicit.py (make_work, make_solver);
+//   * wetcloth/simulation.py: set_inputs, advance, outputs, positions, wetness, the blow-up message and
+//     snapshot / restore (the same values: state, BDF2 history, clock, preconditioner reference,
+//     self-collision reference and margin).
+// Every formula keeps the Python's order of operations, so that the arrays agree to the bit.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "wetcloth/core.hpp"
+
+namespace wc {
+
+// ------------------------------------------------------------------------------------------ the scene
+//: The allowed values of each string parameter, in the order of wetcloth/scene.py; a Scene holds the
+//: index into its list (INTEGRATORS follows core.hpp's Integrator codes).
+inline constexpr const char* DAMPING_MODELS[] = {"projected", "thesis"};
+inline constexpr const char* DRAG_MODELS[] = {"face", "stokes"};
+inline constexpr const char* BUOYANCY_MODELS[] = {"smooth", "thesis"};
+inline constexpr const char* SWITCHES[] = {"on", "off"};
+inline constexpr const char* EDGES[] = {"none", "x_min", "x_max", "y_min", "y_max"};
+inline constexpr const char* INTEGRATOR_NAMES[] = {"explicit_euler", "symplectic_euler", "implicit_euler", "bdf2"};
+enum DampingModel : Index { DAMPING_PROJECTED = 0, DAMPING_THESIS = 1 };
+enum DragModel : Index { DRAG_FACE = 0, DRAG_STOKES = 1 };
+enum BuoyancyModel : Index { BUOYANCY_SMOOTH = 0, BUOYANCY_THESIS = 1 };
+enum Switch : Index { SWITCH_ON = 0, SWITCH_OFF = 1 };
+enum Edge : Index { EDGE_NONE = 0, EDGE_X_MIN, EDGE_X_MAX, EDGE_Y_MIN, EDGE_Y_MAX };
+
+struct Choices {
+    const char* const* names = nullptr;
+    Index count = 0;
+};
+
+//: The choices of a string parameter by its name (none for a number parameter).
+constexpr Choices scene_choices(std::string_view field) {
+    if (field == "damping_model") return {DAMPING_MODELS, 2};
+    if (field == "drag_model") return {DRAG_MODELS, 2};
+    if (field == "buoyancy_model") return {BUOYANCY_MODELS, 2};
+    if (field == "self_collision") return {SWITCHES, 2};
+    if (field == "pinned_edge") return {EDGES, 5};
+    if (field == "integrator") return {INTEGRATOR_NAMES, 4};
+    return {};
+}
+
+//: A scene: every parameter of wetcloth.scene.Scene, in its order, with its default (the towel).
+//: Units are SI.  Nothing here checks ranges: the FMU checks each value against the range of the
+//: Python metadata (its generated variable table), and scene_problem the scene as a whole.
+struct Scene {
+    Index nx = 21, ny = 29;                                      // particles along x, y
+    double width = 0.5, length = 0.7;                            // m
+    double areal_density = 0.45;                                 // kg/m2
+    double thickness = 0.002;                                    // m
+    double stretch_stiffness = 2000.0, bend_stiffness = 20.0;    // N/m
+    double damping = 0.2;                                        // N s/m
+    Index damping_model = DAMPING_PROJECTED;
+    double water_level = 0.0;                                    // m (input)
+    double water_density = 1000.0;                               // kg/m3 (input)
+    double water_viscosity = 1.0e-3;                             // Pa s
+    Index drag_model = DRAG_FACE;
+    double drag_normal = 1.2, drag_tangential = 0.03;            // -
+    double drag_linear = 2.0;                                    // N s/m3
+    Index buoyancy_model = BUOYANCY_SMOOTH;
+    double absorption_capacity = 3.8;                            // kg/kg (input)
+    double absorption_rate = 0.15;                               // 1/s (input)
+    double wicking_rate = 0.0;                                   // m2/s
+    double drying_rate = 0.0;                                    // 1/s
+    double wet_stiffness_factor = 0.0;                           // -
+    double current_x = 0.0, current_y = 0.0;                     // m/s (inputs)
+    double initial_saturation = 0.0;                             // -
+    double initial_height = 0.1;                                 // m
+    double initial_tilt = 10.0;                                  // deg
+    double floor_level = -1.0;                                   // m
+    double floor_friction = 0.5;                                 // -
+    Index self_collision = SWITCH_ON;
+    double self_friction = 0.4;                                  // -
+    Index pinned_edge = EDGE_NONE;
+    Index integrator = BDF2;
+    double tolerance = 5e-6;                                     // -
+    double max_step = 0.1;                                       // s
+};
+
+//: The field names of Scene, in its order (the generated FMU variable table checks them against Python's).
+inline constexpr const char* SCENE_FIELDS[] = {
+    "nx", "ny", "width", "length", "areal_density", "thickness", "stretch_stiffness", "bend_stiffness", "damping",
+    "damping_model", "water_level", "water_density", "water_viscosity", "drag_model", "drag_normal",
+    "drag_tangential", "drag_linear", "buoyancy_model", "absorption_capacity", "absorption_rate", "wicking_rate",
+    "drying_rate", "wet_stiffness_factor", "current_x", "current_y", "initial_saturation", "initial_height",
+    "initial_tilt", "floor_level", "floor_friction", "self_collision", "self_friction", "pinned_edge", "integrator",
+    "tolerance", "max_step"};
+inline constexpr Index SCENE_FIELD_COUNT = sizeof(SCENE_FIELDS) / sizeof(SCENE_FIELDS[0]);
+
+//: Whether a parameter may change while the simulation runs (scene.py's fmu=INPUT).
+constexpr bool scene_input(std::string_view field) {
+    return field == "water_level" || field == "water_density" || field == "absorption_capacity" ||
+           field == "absorption_rate" || field == "current_x" || field == "current_y";
+}
+
+//: Call visit(name, member) for every field of a Scene (const or not), in SCENE_FIELDS order; member is a
+//: double& or an Index&.
+template <class S, class Visit>
+void for_each_field(S& s, Visit&& visit) {
+    visit("nx", s.nx); visit("ny", s.ny); visit("width", s.width); visit("length", s.length);
+    visit("areal_density", s.areal_density); visit("thickness", s.thickness);
+    visit("stretch_stiffness", s.stretch_stiffness); visit("bend_stiffness", s.bend_stiffness);
+    visit("damping", s.damping); visit("damping_model", s.damping_model); visit("water_level", s.water_level);
+    visit("water_density", s.water_density); visit("water_viscosity", s.water_viscosity);
+    visit("drag_model", s.drag_model); visit("drag_normal", s.drag_normal);
+    visit("drag_tangential", s.drag_tangential); visit("drag_linear", s.drag_linear);
+    visit("buoyancy_model", s.buoyancy_model); visit("absorption_capacity", s.absorption_capacity);
+    visit("absorption_rate", s.absorption_rate); visit("wicking_rate", s.wicking_rate);
+    visit("drying_rate", s.drying_rate); visit("wet_stiffness_factor", s.wet_stiffness_factor);
+    visit("current_x", s.current_x); visit("current_y", s.current_y);
+    visit("initial_saturation", s.initial_saturation); visit("initial_height", s.initial_height);
+    visit("initial_tilt", s.initial_tilt); visit("floor_level", s.floor_level);
+    visit("floor_friction", s.floor_friction); visit("self_collision", s.self_collision);
+    visit("self_friction", s.self_friction); visit("pinned_edge", s.pinned_edge); visit("integrator", s.integrator);
+    visit("tolerance", s.tolerance); visit("max_step", s.max_step);
+}
+
+//: The names of the fixed (non-input) fields whose values differ between a and b, comma-separated.
+std::string fixed_differences(const Scene& a, const Scene& b);
+
+//: scene.validate's rule on the scene as a whole: "" or the ParameterError's text ("parameter
+//: 'initial_height': the cloth starts at or below the floor ...").  Ranges are the caller's.
+std::string scene_problem(const Scene& scene);
+
+// ------------------------------------------------------------------------------------------ formatting
+//: Python's repr of a float ('0.1', '1e-05', '1e+16', 'inf', 'nan') and of a str ('text').
+std::string py_repr(double value);
+std::string py_repr(std::string_view text);
+//: Python's format(value, f".{precision}g") ('0.1', '1e-05', 'inf').
+std::string py_g(double value, int precision = 6);
+
+// ------------------------------------------------------------------------------------------ topology
+//: Spring families (topology.py), in the order they are built.
+enum Family : Index { STRUCTURAL_X = 0, STRUCTURAL_Y, SHEAR_UP_RIGHT, SHEAR_UP_LEFT, BEND_X, BEND_Y };
+inline constexpr const char* FAMILY_NAMES[] = {"structural_x", "structural_y", "shear_up_right", "shear_up_left",
+                                               "bend_x", "bend_y"};
+
+//: The grid and per-spring constants of a scene (topology.py's Topology).  Particle i = row * nx + col.
+struct Topology {
+    Index nx = 0, ny = 0, n = 0;
+    double dx = 0, dy = 0;                 // m, rest spacing
+    std::vector<double> rest_xy;           // (2, n) m, the flat rest sheet centred on 0
+    std::vector<double> area;              // (n) m2
+    std::vector<Index> family;             // (F) Family of each family present
+    std::vector<Index> offset;             // (F)
+    std::vector<double> rest;              // (F) m
+    std::unique_ptr<bool[]> tension_only;  // (F)
+    std::vector<double> stiffness;         // (F, n) N/m
+    std::vector<double> damping;           // (F, n) N s/m
+    std::vector<double> shape;             // (F, n) strip area / rest length^2 (-)
+    std::vector<Index> triangles;          // (m, 3)
+    std::vector<double> free;              // (n) 0 for pinned particles, else 1
+    Index families() const { return static_cast<Index>(offset.size()); }
+    Index triangle_count() const { return static_cast<Index>(triangles.size() / 3); }
+    //: Sum (n) over the springs touching each particle of per-spring values (F', n) of the families
+    //: with offsets (F'), as Topology.per_particle_sum.
+    std::vector<double> per_particle_sum(const double* per_spring, const std::vector<Index>& offsets) const;
+};
+
+Topology build_topology(const Scene& scene);
+
+//: The distinct edges (k, 2) of a triangle mesh (m, 3), each (lower, higher), sorted (grid_edges).
+std::vector<Index> grid_edges(const std::vector<Index>& triangles);
+
+//: The grids of the multigrid hierarchy, finest first (multigrid.level_sizes).
+std::vector<std::pair<Index, Index>> level_sizes(Index nx, Index ny, Index coarsest_side);
+
+// ------------------------------------------------------------------------------------------ control
+//: integrators.py's settings (the CG tolerances are implicit.hpp's).
+inline constexpr double SMALLEST_STEP = 1e-9;
+inline constexpr double STEP_GROWTH = 2.0, STEP_SHRINK = 0.2;
+inline constexpr double BLOW_UP_SPEED = 1.0e3;
+inline constexpr double NEWTON_FRACTION = 0.1;
+inline constexpr double FIXED_STEP_NEWTON_TOLERANCE = 1e-6;
+inline constexpr double SLEEP_DISTANCE = 5e-4, SLEEP_AFTER = 1.0;
+//: self_contact.MARGIN_FRACTION: a candidate list's least margin as a fraction of the smaller spacing.
+inline constexpr double MARGIN_FRACTION = 0.05;
+//: simulation.STEPS_PER_CALL: particle-steps per call of the step loop.
+inline constexpr Index STEPS_PER_CALL = 2'000'000;
+
+// ------------------------------------------------------------------------------------------ simulation
+//: A snapshot that does not fit (another grid or scene, values not finite, bytes not written by snapshot()).
+struct SnapshotError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+//: What evolves, copied out of a Simulation (Simulation.snapshot's values): the scene (its inputs may
+//: differ from the simulation's), the clock, the preconditioner's reference, self-collision's margin and
+//: the arrays `values` in the order pos, vel, water, prev_pos, prev_vel, prev_water, acceleration,
+//: anchor (3n, 3n, n, 3n, 3n, n, 3n, 3n), reference_mass (n), jacobian_along (F n), jacobian_mass (n),
+//: contact reference (3n).
+struct Checkpoint {
+    Scene scene;
+    Index families = 0;
+    double clock[CLOCK_SIZE] = {};
+    double plane_reference[3] = {};
+    double contact_margin = 0.0;
+    std::vector<double> values;
+};
+
+//: A cloth on water with every array it needs (wetcloth.Simulation's set-up), exposing them as a Core.
+class Simulation {
+public:
+    //: Build the simulation of `scene` (its values within their ranges; std::invalid_argument for a grid
+    //: below 2 x 2 or a scene_problem).
+    explicit Simulation(const Scene& scene);
+    Simulation(const Simulation&) = delete;
+    Simulation& operator=(const Simulation&) = delete;
+
+    const Scene& scene() const { return scene_; }
+    const Topology& topology() const { return topo_; }
+    Core& core() { return core_; }
+    const Core& core() const { return core_; }
+    const ContactLists& contact_lists() const { return lists_; }
+    Index n() const { return topo_.n; }
+    double time() const { return clock_[TIME]; }
+    //: The stability data of the integrator (Integrator.__init__): 1/s2, 1/s, s.
+    double omega_squared() const { return omega_squared_; }
+    double damping_rate() const { return damping_rate_; }
+    double spring_limit() const { return spring_limit_; }
+    //: The model's derived values (Model.scene): wick_step_limit s, floor_z m.
+    double wick_step_limit() const { return wick_step_limit_; }
+
+    //: Take new input values (Simulation.set_inputs): `next` must differ in inputs only
+    //: (std::invalid_argument naming the fixed ones that differ); a changed scene wakes a sleeping cloth.
+    //: Returns whether anything changed.
+    bool set_inputs(const Scene& next);
+
+    //: Simulate `duration` s (finite, >= 0) more: DONE, or BLOWN_UP with the last good state current
+    //: (blow_up_message says what happened).
+    Status advance(double duration);
+
+    //: The outputs (OUTPUT_COUNT): centroid x, y, z, depth (m), wet mass, water mass (kg).
+    void outputs(double* row) const;
+    //: Vertex positions (n, 3) m, vertex after vertex; saturation (n) of each vertex, 0 to 1.
+    void positions(double* xyz) const;
+    void wetness(double* out) const;
+    //: The BlowUpError's message after advance returned BLOWN_UP.
+    std::string blow_up_message() const;
+
+    //: Copy what evolves into `checkpoint` (no allocation once it has held one of this simulation).
+    void save(Checkpoint& checkpoint) const;
+    //: Return to a checkpoint of this scene (inputs may differ): the run continues exactly as from there.
+    //: SnapshotError, with nothing changed, for another grid or scene or values that are not finite.
+    void restore(const Checkpoint& checkpoint);
+    //: A checkpoint as bytes and back (little-endian, with a checksum); from_bytes refuses (SnapshotError)
+    //: bytes that snapshot() did not write.
+    std::vector<unsigned char> snapshot() const;
+    static Checkpoint from_bytes(const unsigned char* data, std::size_t size);
+    void restore(const unsigned char* data, std::size_t size) { restore(from_bytes(data, size)); }
+
+private:
+    void set_scene(const Scene& scene);  // Model.scene setter + Simulation._set_scene
+    void set_control();                  // Integrator.control()
+    void check(const Checkpoint& checkpoint) const;
+
+    Scene scene_;
+    Topology topo_;
+    // Model
+    std::vector<double> dry_mass_, volume_, stokes_, capacity_, wick_conductance_;
+    std::vector<Index> wick_offsets_;
+    double wick_step_limit_ = 0.0, floor_z_ = 0.0;
+    // Integrator
+    double omega_squared_ = 0.0, damping_rate_ = 0.0, spring_limit_ = 0.0;
+    // Work, Solver
+    std::vector<double> work_;
+    std::vector<double> solver_;
+    std::vector<Index> counters_;
+    // Plane and its hierarchy
+    std::vector<Index> slots_, order_, rank_, levels_;
+    std::vector<double> plane_, grid_;
+    // Contact
+    std::vector<Index> edges_, zone_, contact_counters_;
+    std::vector<double> contact_;
+    ContactLists lists_;
+    // Buffers, clock
+    std::vector<double> buffers_;
+    double clock_[CLOCK_SIZE] = {};
+    Core core_;
+};
+
+}  // namespace wc

@@ -1,0 +1,50 @@
+// Geometric multigrid on the cloth's grid: a symmetric V-cycle for two 9-point stencil matrices at
+// once (port of wetcloth/kernels/multigrid.py; level_sizes and make_hierarchy, which allocate, stay
+// in Python).
+//
+// Each coarser grid keeps every other grid line (nx // 2 + 1 of nx); bilinear interpolation P,
+// restriction P^T, Galerkin coarse matrices P^T A P; SWEEPS lexicographic Gauss-Seidel sweeps before
+// the coarse correction and as many backwards after it (the cycle is then symmetric positive
+// definite); the coarsest level is solved by the plane's banded factors.  Vectors are stored level
+// after level, each level padded by one line of zeros before its first row and column and two after
+// its last (levels[l, PAD_X] = nx + 3 values per padded row); coef[c, k, p] is the entry of point p
+// and its neighbour p + (dy - 1) pad_x + dx - 1 for k = 3 dy + dx (CENTRE = 4 the diagonal).
+#pragma once
+#include "wetcloth/core.hpp"
+
+namespace wc {
+
+//: Gauss-Seidel sweeps before the coarse correction (and as many backwards after it).
+inline constexpr Index SWEEPS = 1;
+//: Stencil slot of the centre; neighbour (dx, dy) is 3 (dy + 1) + dx + 1.
+inline constexpr Index CENTRE = 4;
+
+//: Column `column` (LevelColumn) of row `level` of levels (L, 4).
+inline Index level_value(const Index* levels, Index level, Index column) { return levels[level * 4 + column]; }
+
+//: Index in the flat vectors of point (ix, iy) of `level`.
+inline Index padded_index(const Index* levels, Index level, Index ix, Index iy) {
+    return levels[level * 4 + START] + (iy + 1) * levels[level * 4 + PAD_X] + ix + 1;
+}
+
+//: Stencils of level + 1: P^T A P of those of `level`, and the inverse diagonals of `level`.
+void galerkin(Hierarchy& hierarchy, Index level);
+
+//: One Gauss-Seidel sweep on `level`, in grid order (forward) or reversed; from_zero: x is zero before it.
+void sweep(Hierarchy& hierarchy, Index level, bool forward, bool from_zero);
+
+//: r = b - A x on `level`, and b of level + 1 = P^T r.
+void restrict_residual(Hierarchy& hierarchy, Index level);
+
+//: x of `level` += P x of level + 1.
+void interpolate(Hierarchy& hierarchy, Index level);
+
+//: First half of the V-cycle from b of level 0: on each level but the coarsest, smooth from x = 0 and
+//: restrict the residual; leaves the coarsest level's right-hand side in b.
+void v_cycle_down(Hierarchy& hierarchy);
+
+//: Second half, once x of the coarsest level holds its solution: on each finer level add the
+//: interpolated correction and smooth backwards.  Leaves the result in x of level 0.
+void v_cycle_up(Hierarchy& hierarchy);
+
+}  // namespace wc

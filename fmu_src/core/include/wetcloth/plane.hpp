@@ -1,0 +1,47 @@
+// The preconditioner of the implicit solves: the cloth's in-plane stiffness, factored once (port of
+// wetcloth/kernels/plane.py; multigrid.cpp and band.cpp are its parts).
+#pragma once
+#include "wetcloth/core.hpp"
+
+namespace wc {
+
+//: Refactor when (beta h)^2 has changed by more than the factor REFACTOR_SCALE (the step by more than
+//: 2x), or any particle's mass by more than REFACTOR_CHANGE, since the last factorisation: an impact
+//: that shrinks and regrows the step over a few frames then costs a few factorisations, not one per step.
+inline constexpr double REFACTOR_SCALE = 4.0;
+inline constexpr double REFACTOR_CHANGE = 0.25;
+
+//: A banded grid's factors are rebuilt from the Jacobian in hand when the last solve took more CG
+//: iterations than JACOBIAN_REFRESH_AFTER times what a factorisation costs (about kd / 4 CG
+//: iterations, kd the half-bandwidth; plane.py has the measurements behind 1).
+inline constexpr double JACOBIAN_REFRESH_AFTER = 1.0;
+
+//: Multigrid on grids whose shorter side exceeds MULTIGRID_SIDE, coarsened until the shorter side is
+//: at most COARSEST_SIDE; smaller grids are solved by the banded factors alone (make_plane, Python).
+inline constexpr Index MULTIGRID_SIDE = 40;
+inline constexpr Index COARSEST_SIDE = 12;
+
+//: Factor M + scale L_c (scale = (beta h)^2, s^2) unless the factors in hand are close enough.
+//: Returns 1 if it factored, 0 if not, -1 if a matrix was not positive definite.
+Index refresh(Plane& plane, const Cloth& cloth, const double* mass, double scale);
+
+//: Whether the in-plane systems are solved by the banded factors alone (no multigrid cycle).
+inline bool banded(const Plane& plane) { return plane.grid.level_count == 1; }
+
+//: Whether factoring from the Jacobian pays after a solve of `iterations` CG iterations.
+bool jacobian_refresh_pays(const Plane& plane, double iterations);
+
+//: Factor M + L(along) (along (F, n) kg); returns 1, or -1 if a matrix was not positive definite.
+Index refresh_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const double* along);
+
+//: Set each particle's frame (t1, t2, n) from positions pos (3, n).
+void follow_cloth(Plane& plane, const Cloth& cloth, const double* pos);
+
+//: The normal component's diagonal n^T B_i n + mass_i.
+void set_normal_diagonal(Plane& plane, Index n, const double* mass, const double* diagonal_blocks,
+                         const double* blocks);
+
+//: z = P^-1 r (both (3, n)), rows of pinned particles (free == 0) zero.
+void apply(Plane& plane, Index n, const double* free, const double* r, double* z);
+
+}  // namespace wc

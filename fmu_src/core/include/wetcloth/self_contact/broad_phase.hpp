@@ -1,0 +1,55 @@
+// Candidate pairs from a spatial hash, kept while the cloth's motion allows (port of
+// wetcloth/kernels/self_contact/broad_phase.py; see its docstring for the reasoning).
+//
+// A candidate list holds every point-triangle and edge-edge pair whose elements were closer than
+// reach = thickness + 2 margin at the *reference* positions it was built from; it stays valid while every
+// particle stays within `margin` of its reference position, up to a common translation.  The list depends
+// on the reference positions and the margin alone (its pairs ascend, whatever the hash), so a run restored
+// from a snapshot of those two rebuilds exactly the same list.
+//
+// The lists live in ContactLists (core.hpp): point_triangle and edge_edge (2, count), first row then
+// second row.  While a list is searched they hold records (first, second, bits of the distance), three
+// Index values per pair; scratch holds the boxes, index_scratch the hash.
+#pragma once
+
+#include "wetcloth/core.hpp"
+
+namespace wc::self_contact {
+
+//: A list whose margin is more than this many times what the current step needs is rebuilt (too_loose).
+inline constexpr double LOOSE = 4.0;
+//: The reach of a list tried after an empty one, as a fraction of the rest sheet's nearest non-adjacent
+//: elements' distance (Contact::rest_gap): room for the sheet to be compressed by a tenth without
+//: candidates (0.9 rather than 0.7: fewer rebuilds of empty lists, docs/benchmarks.md).
+inline constexpr double WIDE_REACH = 0.9;
+//: The most hash cells a box spans (at most 9 along each axis, 10 if rounding puts both ends on a cell's
+//: boundary).
+inline constexpr Index MOST_CELLS = 10 * 10 * 10;
+
+//: How many candidate pairs the current list holds.
+inline Index candidate_count(const Contact& contact) {
+    return contact.lists->point_triangle_count() + contact.lists->edge_edge_count();
+}
+
+//: The largest squared displacement (m2) of a particle from x0 to x1 (both (3, n)), once the mid-range of
+//: all displacements (a common translation) is taken out; NaN if a displacement is not finite.
+double largest_motion_squared(Index n, const double* x0, const double* x1);
+
+//: Whether the candidate list is valid for positions x (3, n): each within the margin of its reference
+//: position, once the mid-range of all displacements is taken out.
+bool covers(const Contact& contact, Index n, const double* x);
+
+//: Whether the list's margin is over LOOSE times what a list built for the step from x0 to x1 would get.
+bool too_loose(const Contact& contact, Index n, const double* x0, const double* x1);
+
+//: A new list valid for the whole step from x0 to x1 (the reference is the midpoint, the margin twice the
+//: step's largest motion, at least Contact::least_margin; after an empty list, as wide as keeps it empty).
+//: Returns false (and builds nothing) if the step is not finite.
+bool rebuild_for_step(Contact& contact, Index n, double thickness, const double* x0, const double* x1);
+
+//: Build the lists from contact.reference for the widest margin from `least` to `widest` (m) whose lists
+//: are empty, or for `least` if none is (searched at `widest` and narrowed: the same lists as build() for
+//: that margin); keep that margin.
+void build_widest(Contact& contact, Index n, double thickness, double least, double widest);
+
+}  // namespace wc::self_contact

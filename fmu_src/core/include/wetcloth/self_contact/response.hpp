@@ -1,0 +1,33 @@
+// The self-collision stage's response (port of wetcloth/kernels/self_contact/response.py): settling passes
+// that push layers apart to the thickness with friction, then rigid impact zones (Bridson, Fedkiw and
+// Anderson 2002).  The entry point, resolve(), is declared in wetcloth/self_contact.hpp.
+#pragma once
+
+#include "wetcloth/core.hpp"
+
+namespace wc::self_contact {
+
+//: Settling passes over the candidates per step (each pass treats every pair that needs it).
+inline constexpr int PASSES_MAX = 8;
+//: A pair whose end distance is within this fraction below the thickness is left alone.
+inline constexpr double SLACK = 0.01;
+//: The safe minimum distance of a pair along the step: this fraction of the thickness, or half the pair's
+//: distance at the start of the step if that is less.
+inline constexpr double SAFE_FRACTION = 0.1;
+//: A particle within this fraction of the thickness above the floor is on it (see push_apart).
+inline constexpr double ON_FLOOR = 0.01;
+//: Candidate lists rebuilt (when the treatment moved particles beyond the list's margin) at most this many
+//: times per step; after that the step's motion is undone (never seen; counted).
+inline constexpr int ATTEMPTS = 6;
+
+//: Rows of Contact::zone_sums per zone root: mass; mass-weighted start position (3) and motion (3);
+//: whether held; angular momentum (3); inertia (xx, yy, zz, xy, xz, yz); rotation over the step (3);
+//: members.
+enum ZoneRow : Index { MASS = 0, POS = 1, MOVE = 4, HELD = 7, MOMENT = 8, INERTIA = 11, SPIN = 17, MEMBERS = 20 };
+static_assert(MEMBERS + 1 == ZONE_ROWS, "Contact::zone_sums rows");
+
+//: Whether the step's blow-up guard will refuse it: a value not finite, or a particle at blow_up_speed
+//: (m/s) or faster.
+bool refused(Index n, const double* x1, const double* v1, double blow_up_speed);
+
+}  // namespace wc::self_contact

@@ -1,0 +1,36 @@
+// Spring forces (docs/model.md section 3) and their Jacobians (port of wetcloth/kernels/springs.py).
+#pragma once
+#include "wetcloth/core.hpp"
+
+namespace wc {
+
+//: Tension-only springs pull with the stretch rounded over their first TENSION_ROUNDING of strain.
+inline constexpr double TENSION_ROUNDING = 6e-4;
+
+struct Stretch {
+    double value;  // m
+    double slope;  // -
+};
+
+//: The stretch (m) a tension-only spring pulls with, and its derivative, for a stretch s = L - l0 (m).
+inline Stretch pulling_stretch(double stretch, double width) {
+    if (stretch >= width) return {stretch, 1.0};
+    if (stretch <= 0.0) return {0.0, 0.0};
+    const double r = stretch / width;
+    return {stretch * r * (2.0 - r), r * (4.0 - 3.0 * r)};
+}
+
+//: Add tension (eq. 3.1) and damping (eq. 3.2) of every spring to force (3, n); buf: one row of n scratch.
+void spring_forces(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos,
+                   const double* vel, double* force, double* buf);
+
+//: Forces as spring_forces plus one backward-Euler Newton step's pieces: adds to work.force, work.rhs
+//: (h^2 K v) and work.diagonal_blocks; writes work.direction, along, across; work.buf as scratch.
+void spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos,
+                              const double* vel, double h, Work& work);
+
+//: Add the springs' part of the system matrix (work.direction, along, across) times p (3, n) to out;
+//: rows 0 and 1 of work.buf as scratch.
+void spring_matvec(const Cloth& cloth, const Work& work, const double* p, double* out);
+
+}  // namespace wc

@@ -1,0 +1,50 @@
+// Water forces (docs/model.md section 4): submerged fraction, buoyancy, Stokes drag and face drag
+// (port of wetcloth/kernels/water.py).
+//
+// Face drag works per grid cell, each split into two triangles (i, i+1, i+nx+1) and (i, i+nx+1, i+nx),
+// the split of Topology.triangles.  Per-triangle values go into rows of length n + nx + 1 (cell i at
+// slot i + nx + 1; slots of non-cells stay zero), and each particle gathers its share of its six
+// triangles' values with the weights of its area: the right-angle corner 1/2, the other two 1/4 each.
+#pragma once
+#include "wetcloth/core.hpp"
+
+namespace wc {
+
+//: Write each of the n particles' submerged fraction (0..1) from heights z (m) into s; return the largest.
+//: smooth: the fraction of a slab of `thickness` (m) about the particle below water_level (m); else 0 or 1.
+double submerged_fractions(Index n, const double* z, double water_level, double thickness, bool smooth, double* s);
+
+//: Add Archimedes' upward force rho g V s (eq. 3.4, corrected) to row z of force (3, n): density kg/m3,
+//: gravity m/s2, volume (n) m3.
+void buoyancy(Index n, const double* s, const double* volume, double density, double gravity, double* force);
+
+//: Add -6 pi a eta s (v - v_water) (eq. 3.5) to force (3, n); coefficient (n) is 6 pi a eta (N s/m),
+//: current (m/s) the water's velocity, vel (3, n) m/s.
+void stokes_drag(Index n, const double* s, const double* coefficient, double current_x, double current_y,
+                 const double* vel, double* force);
+
+//: Every particle's area-weighted share of the six triangles around it, out[v] += scale * share; t1, t2
+//: the two triangles' rows (n + nx + 1), out (n).
+void gather_cells(Index nx, Index n, const double* t1, const double* t2, double* out, double scale);
+
+//: Fill cells (2, 9, n + nx + 1) with both triangles' drag force (N) and, if blocks_wanted, the
+//: Jacobian blocks (xx, yy, zz, xy, xz, yz; N s/m) of every cell; with skip_dry_rows the rows of cells
+//: above the highest wet row and below the lowest are zeroed, not computed.
+void drag_rows(Index nx, Index ny, const double* pos, const double* vel, const double* s, double density,
+               double c_normal, double c_tangential, double c_linear, double current_x, double current_y,
+               double* cells, bool blocks_wanted, bool skip_dry_rows);
+
+//: Add the face-model drag (docs/model.md section 4) on the nx x ny grid to force (3, n): density
+//: kg/m3, drag coefficients normal, tangential (-) and linear (kg/(m2 s)), current m/s; cells
+//: (2, 9, n + nx + 1) scratch.
+void face_drag(Index nx, Index ny, const double* pos, const double* vel, const double* s, double density,
+               double c_normal, double c_tangential, double c_linear, double current_x, double current_y,
+               double* force, double* cells, bool skip_dry_rows = true);
+
+//: Face drag as face_drag, plus h (s) times its lumped velocity Jacobian added to blocks (6, n: xx, yy,
+//: zz, xy, xz, yz): each triangle's Jacobian goes to its particles with the force's weights.
+void face_drag_and_blocks(Index nx, Index ny, const double* pos, const double* vel, const double* s, double density,
+                          double c_normal, double c_tangential, double c_linear, double current_x, double current_y,
+                          double h, double* force, double* blocks, double* cells, bool skip_dry_rows = true);
+
+}  // namespace wc

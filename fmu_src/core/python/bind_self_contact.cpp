@@ -1,0 +1,120 @@
+// Self-collision for Python (tests and parity checks): resolve, build, build_widest and invalidate over the
+// Python Contact bundle, with its candidate lists in a ContactState (the C++ ContactLists).  The lists are
+// taken from the `lists` argument or, when it is None, from the bundle's `pairs` field if that holds a
+// ContactState, so the kernels keep numba's signatures where the bundle carries one.
+#include <nanobind/stl/string.h>
+
+#include <algorithm>
+#include <cstring>
+
+#include "convert.hpp"
+#include "wetcloth/self_contact.hpp"
+#include "wetcloth/self_contact/broad_phase.hpp"
+
+namespace wc::py {
+namespace {
+
+//: One Python Contact's candidate lists, indexable like numba's typed list: [0] the point-triangle pairs,
+//: [1] the edge-edge pairs, each (2, count) int64 (copies).
+struct ContactState {
+    ContactLists lists;
+
+    std::vector<Index>& kind(Index k) {
+        if (k == 0) return lists.point_triangle;
+        if (k == 1) return lists.edge_edge;
+        throw nb::index_error("ContactState: 0 (point-triangle) or 1 (edge-edge)");
+    }
+};
+
+nb::object rows_copy(const std::vector<Index>& rows) {
+    const std::size_t count = rows.size() / 2;
+    Index* data = new Index[std::max<std::size_t>(rows.size(), 1)];
+    std::copy(rows.begin(), rows.end(), data);
+    nb::capsule owner(data, [](void* p) noexcept { delete[] static_cast<Index*>(p); });
+    const std::size_t shape[2] = {2, count};
+    return nb::cast(nb::ndarray<nb::numpy, Index, nb::ndim<2>>(data, 2, shape, owner));
+}
+
+ContactLists* lists_of(nb::handle contact, nb::handle lists) {
+    nb::handle source = lists.is_none() ? nb::handle(contact.attr("pairs")) : lists;
+    ContactState* state = nullptr;
+    if (!nb::try_cast(source, state, false) || state == nullptr) {
+        throw nb::type_error("self-collision: pass a ContactState as `lists` (or hold one in Contact.pairs)");
+    }
+    return &state->lists;
+}
+
+Index particles_of(nb::handle contact) { return size_of(contact.attr("reference")) / 3; }
+
+}  // namespace
+}  // namespace wc::py
+
+WETCLOTH_BINDINGS(m) {
+    using namespace wc;
+    using namespace wc::py;
+    using namespace nb::literals;
+
+    nb::class_<ContactState>(m, "ContactState",
+                             "Self-collision's candidate lists (C++ ContactLists): [0] point-triangle, [1] edge-edge "
+                             "pairs, each (2, count) int64")
+        .def(nb::init<>())
+        .def_prop_ro("point_triangle", [](ContactState& s) { return rows_copy(s.lists.point_triangle); })
+        .def_prop_ro("edge_edge", [](ContactState& s) { return rows_copy(s.lists.edge_edge); })
+        .def_prop_ro("point_triangle_count", [](ContactState& s) { return s.lists.point_triangle_count(); })
+        .def_prop_ro("edge_edge_count", [](ContactState& s) { return s.lists.edge_edge_count(); })
+        .def("__len__", [](ContactState&) { return 2; })
+        .def("__getitem__", [](ContactState& s, Index k) { return rows_copy(s.kind(k)); })
+        .def("__setitem__", [](ContactState& s, Index k, nb::ndarray<const Index, nb::ndim<2>, nb::device::cpu> a) {
+            if (a.shape(0) != 2) throw nb::value_error("ContactState: pairs are (2, count)");
+            std::vector<Index>& rows = s.kind(k);
+            const std::size_t count = a.shape(1);
+            rows.resize(2 * count);
+            for (std::size_t r = 0; r < 2; ++r)
+                for (std::size_t j = 0; j < count; ++j)
+                    rows[r * count + j] = a.data()[r * a.stride(0) + j * a.stride(1)];
+        });
+
+    m.def(
+        "resolve",
+        [](nb::handle contact, double thickness, double floor_z, double blow_up_speed, nb::handle mass,
+           nb::handle free, nb::handle x0, nb::handle x1, nb::handle v1, double h, nb::handle lists) {
+            const Index n = size_of(x0) / 3;
+            Contact c = contact_from(contact, n, lists_of(contact, lists));
+            return resolve(c, thickness, floor_z, blow_up_speed, n, argument<const double>(mass, "mass", n),
+                           argument<const double>(free, "free", n), argument<const double>(x0, "x0", 3 * n),
+                           argument<double>(x1, "x1", 3 * n), argument<double>(v1, "v1", 3 * n), h);
+        },
+        "contact"_a, "thickness"_a, "floor_z"_a, "blow_up_speed"_a, "mass"_a, "free"_a, "x0"_a, "x1"_a, "v1"_a, "h"_a,
+        "lists"_a = nb::none(),
+        "The self-collision stage of one step of h s from x0 to x1 (x1, v1 changed in place); whether it changed "
+        "them.");
+    m.def(
+        "build",
+        [](nb::handle contact, double thickness, double margin, nb::handle lists) {
+            const Index n = particles_of(contact);
+            Contact c = contact_from(contact, n, lists_of(contact, lists));
+            build(c, n, thickness, margin);
+        },
+        "contact"_a, "thickness"_a, "margin"_a, "lists"_a = nb::none(),
+        "Build the candidate lists from contact.reference for margin (m) and keep the margin.");
+    m.def(
+        "build_widest",
+        [](nb::handle contact, double thickness, double least, double widest, nb::handle lists) {
+            const Index n = particles_of(contact);
+            Contact c = contact_from(contact, n, lists_of(contact, lists));
+            self_contact::build_widest(c, n, thickness, least, widest);
+        },
+        "contact"_a, "thickness"_a, "least"_a, "widest"_a, "lists"_a = nb::none(),
+        "Build the candidate lists for the widest margin from least to widest (m) whose lists are empty.");
+    m.def(
+        "invalidate",
+        [](nb::handle contact, nb::handle lists) {
+            const Index n = particles_of(contact);
+            Contact c = contact_from(contact, n, lists_of(contact, lists));
+            invalidate(c);
+        },
+        "contact"_a, "lists"_a = nb::none(), "Forget the candidate list: margin 0, no pairs.");
+    m.attr("WIDE_REACH") = self_contact::WIDE_REACH;
+    m.attr("LOOSE") = self_contact::LOOSE;
+    m.attr("ZONE_ROWS") = ZONE_ROWS;
+}

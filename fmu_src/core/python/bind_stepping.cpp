@@ -1,0 +1,129 @@
+// The step loop as Python sees it: a Stepper holds the views of one simulation's bundles (kept alive
+// with it) and self-collision's candidate lists, and advances them with the GIL released.
+#include <nanobind/stl/tuple.h>
+
+#include "convert.hpp"
+#include "wetcloth/self_contact.hpp"
+#include "wetcloth/stepping.hpp"
+
+namespace wc::py {
+namespace {
+
+class Stepper {
+  public:
+    Stepper(nb::object cloth, nb::object phys, nb::object control, nb::object work, nb::object solver,
+            nb::object plane, nb::object contact, nb::object buffers, nb::object clock)
+        : work_(work), solver_(solver), plane_(plane), contact_(contact), buffers_(buffers), clock_(clock) {
+        set_cloth(cloth);
+        set_physics(phys);
+        set_control(control);
+        const Index n = core_.cloth.n;
+        core_.work = work_from(work, core_.cloth);
+        core_.solver = solver_from(solver, n);
+        core_.plane = plane_from(plane, n);
+        core_.contact = contact_from(contact, n, &lists_);
+        core_.buf = buffers_from(buffers, n);
+        core_.clock = argument<double>(clock, "clock", CLOCK_SIZE);
+    }
+
+    //: A new Cloth bundle (the scene's parameters changed its per-particle constants); same grid.
+    void set_cloth(nb::object cloth) {
+        Cloth view = cloth_from(cloth);
+        if (cloth_.is_valid() && view.n != core_.cloth.n) throw nb::value_error("set_cloth: another grid");
+        core_.cloth = view;
+        cloth_ = cloth;
+    }
+    void set_physics(nb::object phys) {
+        core_.phys = physics_from(phys);
+        phys_ = phys;
+    }
+    void set_control(nb::object control) {
+        core_.control = control_from(control);
+        control_ = control;
+    }
+
+    Index advance(double target, Index max_steps) {
+        nb::gil_scoped_release release;
+        return wc::advance(core_, target, max_steps);
+    }
+
+    std::tuple<Index, Index> advance_sampling(nb::handle times, nb::handle outputs, Index first, Index max_steps) {
+        const Index count = size_of(times);
+        const double* t = argument<const double>(times, "times", count);
+        double* out = argument<double>(outputs, "outputs", count * OUTPUT_COUNT);
+        if (first < 0 || first > count) throw nb::index_error("advance_sampling: first out of range");
+        SamplingResult result;
+        {
+            nb::gil_scoped_release release;
+            result = wc::advance_sampling(core_, t, count, out, first, max_steps);
+        }
+        return {result.status, result.next};
+    }
+
+    //: Build self-collision's candidate list from its reference positions with `margin` (m).
+    void build_contact(double thickness, double margin) { wc::build(core_.contact, core_.cloth.n, thickness, margin); }
+    void invalidate_contact() { wc::invalidate(core_.contact); }
+    std::tuple<Index, Index> candidate_counts() const {
+        return {lists_.point_triangle_count(), lists_.edge_edge_count()};
+    }
+
+  private:
+    Core core_;
+    ContactLists lists_;
+    nb::object cloth_, phys_, control_, work_, solver_, plane_, contact_, buffers_, clock_;
+};
+
+}  // namespace
+
+WETCLOTH_BINDINGS(m) {
+    nb::class_<Stepper>(m, "Stepper",
+                        "The step loop over one simulation's bundles (Cloth, Physics, Control, Work, Solver, "
+                        "Plane, Contact, Buffers and the clock), which it keeps alive")
+        .def(nb::init<nb::object, nb::object, nb::object, nb::object, nb::object, nb::object, nb::object,
+                      nb::object, nb::object>(),
+             "cloth"_a, "phys"_a, "control"_a, "work"_a, "solver"_a, "plane"_a, "contact"_a, "buffers"_a, "clock"_a)
+        .def("set_cloth", &Stepper::set_cloth)
+        .def("set_physics", &Stepper::set_physics)
+        .def("set_control", &Stepper::set_control)
+        .def("advance", &Stepper::advance, "target"_a, "max_steps"_a,
+             "Step until the clock reaches target (s); DONE, BLOWN_UP or PAUSED after max_steps steps")
+        .def("advance_sampling", &Stepper::advance_sampling, "times"_a, "outputs"_a, "first"_a, "max_steps"_a,
+             "Advance to each of times (s) from index first and record the outputs; (status, next index)")
+        .def("build_contact", &Stepper::build_contact, "thickness"_a, "margin"_a)
+        .def("invalidate_contact", &Stepper::invalidate_contact)
+        .def("candidate_counts", &Stepper::candidate_counts);
+    m.def(
+        "record_outputs",
+        [](nb::handle dry_mass, double water_level, nb::handle pos, nb::handle water, nb::handle row) {
+            const Index n = size_of(dry_mass);
+            wc::record_outputs(n, argument<const double>(dry_mass, "dry_mass", n), water_level,
+                               argument<const double>(pos, "pos", 3 * n), argument<const double>(water, "water", n),
+                               argument<double>(row, "row", OUTPUT_COUNT));
+        },
+        "dry_mass"_a, "water_level"_a, "pos"_a, "water"_a, "row"_a);
+    m.def("stable_step", [](nb::handle control, double speed) { return wc::stable_step(control_from(control), speed); });
+    m.attr("DONE") = Index(DONE);
+    m.attr("BLOWN_UP") = Index(BLOWN_UP);
+    m.attr("PAUSED") = Index(PAUSED);
+    m.attr("CLOCK_SIZE") = Index(CLOCK_SIZE);
+    m.attr("OUTPUT_COUNT") = OUTPUT_COUNT;
+    const char* slots[] = {"TIME", "NEXT_STEP", "LAST_STEP", "SPEED", "CALM_TIME", "UNCHECKED_TIME", "EXCHANGING",
+                           "SLEEPING", "STEPS", "REJECTED", "FAILED_STEP", "NEWTON_RATE", "RATE_CORRECTION",
+                           "FIRST_GUESS", "LAST_SOLVE"};
+    for (Index k = 0; k < CLOCK_SIZE; ++k) m.attr(slots[k]) = k;
+    m.attr("EXPLICIT_EULER") = Index(EXPLICIT_EULER);
+    m.attr("SYMPLECTIC_EULER") = Index(SYMPLECTIC_EULER);
+    m.attr("IMPLICIT_EULER") = Index(IMPLICIT_EULER);
+    m.attr("BDF2") = Index(BDF2);
+    m.attr("STABILITY_SAFETY") = STABILITY_SAFETY;
+    m.attr("GRAVITY") = GRAVITY;
+    m.attr("CONTACT_COUNTERS") = CONTACT_COUNTERS;
+    m.attr("ZONE_ROWS") = ZONE_ROWS;
+    m.attr("NEWTON_ITERATIONS") = Index(NEWTON_ITERATIONS);
+    m.attr("CG_ITERATIONS") = Index(CG_ITERATIONS);
+    m.attr("FACTORISATIONS") = Index(FACTORISATIONS);
+    m.attr("UNCONVERGED") = Index(UNCONVERGED);
+    m.attr("WICK_SUBSTEP_FRACTION") = WICK_SUBSTEP_FRACTION;
+}
+
+}  // namespace wc::py

@@ -1,0 +1,195 @@
+// The bundles' views (convert.hpp), field by field.
+#include "convert.hpp"
+
+namespace wc::py {
+
+std::vector<std::function<void(nb::module_&)>>& registry() {
+    static std::vector<std::function<void(nb::module_&)>> bindings;
+    return bindings;
+}
+
+Cloth cloth_from(nb::handle h) {
+    Cloth c;
+    c.grid_x = number<Index>(h, "grid_x");
+    c.grid_y = number<Index>(h, "grid_y");
+    c.n = c.grid_x * c.grid_y;
+    const Index n = c.n;
+    c.offsets = array<const Index>(h, "offsets");
+    c.families = size_of(h.attr("offsets"));
+    const Index f = c.families;
+    c.rest = array<const double>(h, "rest", f);
+    c.tension_only = array<const bool>(h, "tension_only", f);
+    c.stiffness = array<const double>(h, "stiffness", f * n);
+    c.damping = array<const double>(h, "damping", f * n);
+    c.free = array<double>(h, "free", n);
+    c.dry_mass = array<const double>(h, "dry_mass", n);
+    c.volume = array<const double>(h, "volume", n);
+    c.stokes_coefficient = array<const double>(h, "stokes_coefficient", n);
+    c.capacity = array<const double>(h, "capacity", n);
+    c.wick_offsets = array<const Index>(h, "wick_offsets");
+    c.wick_families = size_of(h.attr("wick_offsets"));
+    c.wick_conductance = array<const double>(h, "wick_conductance", c.wick_families * n);
+    return c;
+}
+
+Physics physics_from(nb::handle h) {
+    Physics p;
+    p.projected = number<bool>(h, "projected");
+    p.wet_factor = number<double>(h, "wet_factor");
+    p.water_level = number<double>(h, "water_level");
+    p.water_density = number<double>(h, "water_density");
+    p.thickness = number<double>(h, "thickness");
+    p.smooth = number<bool>(h, "smooth");
+    p.stokes = number<bool>(h, "stokes");
+    p.drag_normal = number<double>(h, "drag_normal");
+    p.drag_tangential = number<double>(h, "drag_tangential");
+    p.drag_linear = number<double>(h, "drag_linear");
+    p.current_x = number<double>(h, "current_x");
+    p.current_y = number<double>(h, "current_y");
+    p.floor_z = number<double>(h, "floor_z");
+    p.floor_friction = number<double>(h, "floor_friction");
+    p.absorption_capacity = number<double>(h, "absorption_capacity");
+    p.absorption_rate = number<double>(h, "absorption_rate");
+    p.drying_rate = number<double>(h, "drying_rate");
+    p.wicking_rate = number<double>(h, "wicking_rate");
+    p.wick_step_limit = number<double>(h, "wick_step_limit");
+    p.skip_idle = number<bool>(h, "skip_idle");
+    return p;
+}
+
+Control control_from(nb::handle h) {
+    Control c;
+    c.integrator = number<Index>(h, "integrator");
+    c.tolerance = number<double>(h, "tolerance");
+    c.allowed = number<double>(h, "allowed");
+    c.max_step = number<double>(h, "max_step");
+    c.newton_tolerance = number<double>(h, "newton_tolerance");
+    c.cg_tolerance = number<double>(h, "cg_tolerance");
+    c.omega_squared = number<double>(h, "omega_squared");
+    c.buoyancy_omega_squared = number<double>(h, "buoyancy_omega_squared");
+    c.damping_rate = number<double>(h, "damping_rate");
+    c.spring_limit = number<double>(h, "spring_limit");
+    c.drag_rate_offset = number<double>(h, "drag_rate_offset");
+    c.drag_rate_slope = number<double>(h, "drag_rate_slope");
+    c.smallest_step = number<double>(h, "smallest_step");
+    c.growth = number<double>(h, "growth");
+    c.shrink = number<double>(h, "shrink");
+    c.blow_up_speed = number<double>(h, "blow_up_speed");
+    c.sleep_distance = number<double>(h, "sleep_distance");
+    c.sleep_after = number<double>(h, "sleep_after");
+    return c;
+}
+
+Work work_from(nb::handle h, const Cloth& cloth) {
+    const Index n = cloth.n, f = cloth.families;
+    Work w;
+    w.force = array<double>(h, "force", 3 * n);
+    w.submerged = array<double>(h, "submerged", n);
+    w.saturation = array<double>(h, "saturation", n);
+    w.blocks = array<double>(h, "blocks", 6 * n);
+    w.diagonal_blocks = array<double>(h, "diagonal_blocks", 6 * n);
+    w.direction = array<double>(h, "direction", f * 3 * n);
+    w.along = array<double>(h, "along", f * n);
+    w.across = array<double>(h, "across", f * n);
+    w.rhs = array<double>(h, "rhs", 3 * n);
+    w.buf = array<double>(h, "buf", 4 * n);
+    w.cells = array<double>(h, "cells", 2 * 9 * (n + cloth.grid_x + 1));
+    w.wick_buffer = array<double>(h, "wick_buffer", 6 * n);
+    return w;
+}
+
+Solver solver_from(nb::handle h, Index n) {
+    Solver s;
+    s.mass = array<double>(h, "mass", n);
+    s.rhs = array<double>(h, "rhs", 3 * n);
+    s.dv = array<double>(h, "dv", 3 * n);
+    s.r = array<double>(h, "r", 3 * n);
+    s.z = array<double>(h, "z", 3 * n);
+    s.p = array<double>(h, "p", 3 * n);
+    s.ap = array<double>(h, "ap", 3 * n);
+    s.hat_pos = array<double>(h, "hat_pos", 3 * n);
+    s.hat_vel = array<double>(h, "hat_vel", 3 * n);
+    s.predicted = array<double>(h, "predicted", 3 * n);
+    s.step_acceleration = array<double>(h, "step_acceleration", 3 * n);
+    s.diagonal = array<double>(h, "diagonal", 6 * n);
+    s.inverse = array<double>(h, "inverse", 6 * n);
+    s.counters = array<Index>(h, "counters", 4);
+    return s;
+}
+
+Hierarchy hierarchy_from(nb::handle h) {
+    Hierarchy g;
+    g.levels = array<Index>(h, "levels");
+    g.level_count = size_of(h.attr("levels")) / 4;
+    g.size = size_of(h.attr("x")) / 2;
+    g.coef = array<double>(h, "coef", 2 * 9 * g.size);
+    g.inverse_diagonal = array<double>(h, "inverse_diagonal", 2 * g.size);
+    g.x = array<double>(h, "x", 2 * g.size);
+    g.b = array<double>(h, "b", 2 * g.size);
+    g.r = array<double>(h, "r", 2 * g.size);
+    g.row = array<double>(h, "row", g.levels[NX] + 3);
+    return g;
+}
+
+Plane plane_from(nb::handle h, Index n) {
+    Plane p;
+    p.stiffness = array<const double>(h, "stiffness");
+    p.families = size_of(h.attr("stiffness")) / n;
+    p.slots = array<const Index>(h, "slots", p.families);
+    p.grid = hierarchy_from(h.attr("grid"));
+    p.order = array<const Index>(h, "order");
+    p.coarse_n = size_of(h.attr("order"));
+    p.kd = size_of(h.attr("bands")) / (2 * p.coarse_n) - 1;
+    p.rank = array<const Index>(h, "rank");
+    p.rank_size = size_of(h.attr("rank"));
+    p.bands = array<double>(h, "bands", 2 * p.coarse_n * (p.kd + 1));
+    p.rows = array<double>(h, "rows", 2 * p.coarse_n * (p.kd + 1));
+    p.reference = array<double>(h, "reference", 3);
+    p.reference_mass = array<double>(h, "reference_mass", n);
+    p.shares = array<const double>(h, "shares", 2 * p.families);
+    p.jacobian_along = array<double>(h, "jacobian_along", p.families * n);
+    p.jacobian_mass = array<double>(h, "jacobian_mass", n);
+    p.frame = array<double>(h, "frame", 9 * n);
+    p.normal = array<double>(h, "normal", n);
+    p.local = array<double>(h, "local", 2 * p.coarse_n);
+    return p;
+}
+
+Contact contact_from(nb::handle h, Index n, ContactLists* lists) {
+    Contact c;
+    c.enabled = number<bool>(h, "enabled");
+    c.friction = number<double>(h, "friction");
+    c.least_margin = number<double>(h, "least_margin");
+    c.rest_gap = number<double>(h, "rest_gap");
+    c.triangles = array<const Index>(h, "triangles");
+    c.triangle_count = size_of(h.attr("triangles")) / 3;
+    c.edges = array<const Index>(h, "edges");
+    c.edge_count = size_of(h.attr("edges")) / 2;
+    c.rest = array<const double>(h, "rest", 3 * n);
+    c.reference = array<double>(h, "reference", 3 * n);
+    c.margin = array<double>(h, "margin", 1);
+    c.zone = array<Index>(h, "zone", n);
+    c.zone_sums = array<double>(h, "zone_sums", ZONE_ROWS * n);
+    c.counters = array<Index>(h, "counters", CONTACT_COUNTERS);
+    c.lists = lists;
+    return c;
+}
+
+Buffers buffers_from(nb::handle h, Index n) {
+    Buffers b;
+    b.pos = array<double>(h, "pos", 3 * n);
+    b.vel = array<double>(h, "vel", 3 * n);
+    b.water = array<double>(h, "water", n);
+    b.trial_pos = array<double>(h, "trial_pos", 3 * n);
+    b.trial_vel = array<double>(h, "trial_vel", 3 * n);
+    b.trial_water = array<double>(h, "trial_water", n);
+    b.prev_pos = array<double>(h, "prev_pos", 3 * n);
+    b.prev_vel = array<double>(h, "prev_vel", 3 * n);
+    b.prev_water = array<double>(h, "prev_water", n);
+    b.acceleration = array<double>(h, "acceleration", 3 * n);
+    b.anchor = array<double>(h, "anchor", 3 * n);
+    b.held = array<double>(h, "held", n);
+    return b;
+}
+
+}  // namespace wc::py

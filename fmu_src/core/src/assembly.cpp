@@ -1,0 +1,122 @@
+// The total force on every particle and, for the implicit schemes, the pieces of its Jacobian (port of
+// wetcloth/kernels/assembly.py).  Each force family is one call, skipped when the scene does not need
+// it: no spring kernel without springs, no water kernels while no particle touches the water.  A new
+// force family is one more call here, adding to force and, for the implicit schemes, to the
+// per-particle blocks or to the per-spring blocks that the system matrix uses.
+#include "wetcloth/assembly.hpp"
+
+#include "wetcloth/springs.hpp"
+#include "wetcloth/water.hpp"
+
+namespace wc {
+namespace {
+
+//: force (3, n) = gravity on the dry mass plus the absorbed water (kg).
+inline void gravity_loop(Index n, const double* __restrict dry_mass, const double* __restrict water,
+                         double* __restrict fx, double* __restrict fy, double* __restrict fz) {
+    for (Index i = 0; i < n; ++i) {
+        fx[i] = 0.0;
+        fy[i] = 0.0;
+        fz[i] = -(dry_mass[i] + water[i]) * GRAVITY;
+    }
+}
+
+void start_with_gravity(const Cloth& cloth, const double* water, double* force) {
+    const Index n = cloth.n;
+    gravity_loop(n, cloth.dry_mass, water, force, force + n, force + 2 * n);
+}
+
+//: The Stokes drag's velocity Jacobian times h on the blocks' diagonal: h 6 pi a eta s (N s/m * s).
+inline void stokes_blocks_loop(Index n, double h, const double* __restrict coefficient, const double* __restrict s,
+                               double* __restrict xx, double* __restrict yy, double* __restrict zz) {
+    for (Index i = 0; i < n; ++i) {
+        const double c = h * coefficient[i] * s[i];
+        xx[i] += c;
+        yy[i] += c;
+        zz[i] += c;
+    }
+}
+
+//: saturation = water / capacity, only while wetness-dependent stiffness is on.
+void update_saturation(const Cloth& cloth, const Physics& phys, const double* __restrict water,
+                       double* __restrict saturation) {
+    if (phys.wet_factor != 0.0) {
+        const double* __restrict capacity = cloth.capacity;
+        for (Index i = 0; i < cloth.n; ++i) saturation[i] = water[i] / capacity[i];
+    }
+}
+
+void fill_zero(double* a, Index count) {
+    for (Index i = 0; i < count; ++i) a[i] = 0.0;
+}
+
+//: Buoyancy and drag (Stokes or face) into work.force; with blocks_wanted their velocity Jacobian
+//: (times h) into work.blocks and, for smooth buoyancy, its position Jacobian (times h^2) into
+//: work.blocks and work.rhs.
+void water_forces(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel, double h,
+                  bool blocks_wanted) {
+    const Index n = cloth.n;
+    const double* s = work.submerged;
+    double* force = work.force;
+    double* blocks = work.blocks;
+    buoyancy(n, s, cloth.volume, phys.water_density, GRAVITY, force);
+    if (phys.stokes) {
+        stokes_drag(n, s, cloth.stokes_coefficient, phys.current_x, phys.current_y, vel, force);
+        if (blocks_wanted) stokes_blocks_loop(n, h, cloth.stokes_coefficient, s, blocks, blocks + n, blocks + 2 * n);
+    } else if (blocks_wanted) {
+        face_drag_and_blocks(cloth.grid_x, cloth.grid_y, pos, vel, s, phys.water_density, phys.drag_normal,
+                             phys.drag_tangential, phys.drag_linear, phys.current_x, phys.current_y, h, force, blocks,
+                             work.cells, phys.skip_idle);
+    } else {
+        face_drag(cloth.grid_x, cloth.grid_y, pos, vel, s, phys.water_density, phys.drag_normal, phys.drag_tangential,
+                  phys.drag_linear, phys.current_x, phys.current_y, force, work.cells, phys.skip_idle);
+    }
+    if (blocks_wanted && phys.smooth) {
+        // dF_z/dz = -rho g V / thickness inside the surface slab (0 < s < 1).
+        const double scale = h * h * phys.water_density * GRAVITY / phys.thickness;
+        for (Index i = 0; i < n; ++i) {
+            if (0.0 < s[i] && s[i] < 1.0) {
+                const double stiffness = scale * cloth.volume[i];
+                blocks[2 * n + i] += stiffness;
+                work.rhs[2 * n + i] -= stiffness * vel[2 * n + i];
+            }
+        }
+    }
+}
+
+}  // namespace
+
+double submerged(const Physics& phys, Index n, const double* z, double* out) {
+    return submerged_fractions(n, z, phys.water_level, phys.thickness, phys.smooth, out);
+}
+
+void forces(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
+            const double* water) {
+    const Index n = cloth.n;
+    start_with_gravity(cloth, water, work.force);
+    if (cloth.families > 0) {
+        update_saturation(cloth, phys, water, work.saturation);
+        spring_forces(cloth, phys, work.saturation, pos, vel, work.force, work.buf);
+    }
+    if (submerged(phys, n, pos + 2 * n, work.submerged) > 0.0 || !phys.skip_idle) {
+        water_forces(cloth, phys, work, pos, vel, 0.0, false);
+    }
+}
+
+void forces_and_blocks(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
+                       const double* water, double h) {
+    const Index n = cloth.n;
+    start_with_gravity(cloth, water, work.force);
+    fill_zero(work.rhs, 3 * n);
+    fill_zero(work.diagonal_blocks, 6 * n);
+    fill_zero(work.blocks, 6 * n);
+    if (cloth.families > 0) {
+        update_saturation(cloth, phys, water, work.saturation);
+        spring_forces_and_blocks(cloth, phys, work.saturation, pos, vel, h, work);
+    }
+    if (submerged(phys, n, pos + 2 * n, work.submerged) > 0.0 || !phys.skip_idle) {
+        water_forces(cloth, phys, work, pos, vel, h, true);
+    }
+}
+
+}  // namespace wc

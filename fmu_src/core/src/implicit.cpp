@@ -1,0 +1,283 @@
+// Implicit steps: backward Euler (one linearised Newton step) and BDF2 (Newton iterations) (port of
+// wetcloth/kernels/implicit.py).
+#include "wetcloth/implicit.hpp"
+
+#include <cmath>
+
+#include "wetcloth/assembly.hpp"
+#include "wetcloth/integration.hpp"
+#include "wetcloth/plane.hpp"
+
+namespace wc {
+
+namespace {
+
+//: Python's max(a, b) and min(a, b): a unless b compares greater (smaller); a NaN b is never taken.
+inline double py_max(double a, double b) { return b > a ? b : a; }
+inline double py_min(double a, double b) { return b < a ? b : a; }
+
+//: Largest |a| over a (3, n) array.
+double largest_of(Index n, const double* a) {
+    double largest = 0.0;
+    for (Index k = 0; k < 3 * n; ++k) largest = py_max(largest, std::fabs(a[k]));
+    return largest;
+}
+
+struct PlaneSolve {
+    Index iterations;
+    bool solved;
+};
+
+//: Solve A x = b (x = 0 first) by conjugate gradients preconditioned by the plane preconditioner, until
+//: the preconditioned residual P^-1 r, which estimates the error left in x, is at most rtol times its
+//: first value or `floor` (m/s) in every component.
+PlaneSolve plane_pcg(const Cloth& cloth, const Work& work, Solver& solver, Plane& plane, const double* b, double* x,
+                     double rtol, double floor, Index max_iterations) {
+    const Index n = cloth.n;
+    const double* mass = solver.mass;
+    double* r = solver.r;
+    double* z = solver.z;
+    double* p = solver.p;
+    double* ap = solver.ap;
+    for (Index k = 0; k < 3 * n; ++k) x[k] = 0.0;
+    copy(3 * n, b, r);
+    apply(plane, n, cloth.free, r, z);
+    copy(3 * n, z, p);
+    double rz = dot(n, r, z);
+    const double accuracy = py_max(rtol * largest_of(n, z), floor);
+    Index iterations = 0;
+    while (largest_of(n, z) > accuracy && iterations < max_iterations) {
+        system_matvec(cloth, work, mass, p, ap);
+        const double p_ap = dot(n, p, ap);
+        if (!(p_ap > 0.0)) break;
+        conjugate_gradient_step(n, rz / p_ap, p, ap, x, r);
+        iterations += 1;
+        apply(plane, n, cloth.free, r, z);
+        const double rz_new = dot(n, r, z);
+        next_search_direction(n, rz_new / rz, z, p);
+        rz = rz_new;
+    }
+    return {iterations, largest_of(n, z) <= accuracy};
+}
+
+//: Newton's first guess (m/s) of a velocity component h s ahead, extrapolated from v (now, with `slope`
+//: m/s^2) and v_prev (h_prev s ago).  The PARABOLA errs by third order in h where the solution is smooth
+//: on the step's scale (a floating cloth's bobbing at 2 ms steps: first corrections a third of the
+//: LINE's), the LINE by second order; on stiff modes at long steps (a floating cloth at 1/30 s) the
+//: implied slope is noise and the LINE does better.
+inline double first_guess(double kind, double v, double v_prev, double slope, double h, double h_prev) {
+    const double w = h / h_prev;
+    if (kind == PARABOLA) return v + h * slope + w * w * (v_prev - v + h_prev * slope);
+    return v + w * (v - v_prev);
+}
+
+//: Which first_guess kind came closer to this step's solution (3, n): the next step's.
+double better_guess(Index n, const double* vel, const double* prev_vel, const double* acceleration,
+                    const double* free, double h, double h_prev, const double* solution) {
+    double line = 0.0;
+    double parabola = 0.0;
+    for (Index c = 0; c < 3; ++c) {
+        for (Index i = 0; i < n; ++i) {
+            if (free[i] != 0.0) {
+                const Index k = c * n + i;
+                const double v = vel[k], v_prev = prev_vel[k], slope = acceleration[k], end = solution[k];
+                line = py_max(line, std::fabs(first_guess(LINE, v, v_prev, slope, h, h_prev) - end));
+                parabola = py_max(parabola, std::fabs(first_guess(PARABOLA, v, v_prev, slope, h, h_prev) - end));
+            }
+        }
+    }
+    return parabola < line ? PARABOLA : LINE;
+}
+
+}  // namespace
+
+double implicit_euler_step(const Cloth& cloth, const Physics& phys, Work& work, Solver& solver, const double* pos,
+                           const double* vel, const double* water, double h, double* out_pos, double* out_vel) {
+    const Index n = cloth.n;
+    double* mass = solver.mass;
+    const double* free = cloth.free;
+    for (Index i = 0; i < n; ++i) mass[i] = cloth.dry_mass[i] + water[i];
+    forces_and_blocks(cloth, phys, work, pos, vel, water, h);
+    double* rhs = solver.rhs;
+    double* dv = solver.dv;
+    double* full = solver.diagonal;
+    for (Index c = 0; c < 3; ++c) {
+        const double* __restrict f = work.force + c * n;
+        const double* __restrict wr = work.rhs + c * n;
+        double* __restrict rc = rhs + c * n;
+        double* __restrict dc = dv + c * n;
+        for (Index i = 0; i < n; ++i) {
+            rc[i] = h * f[i] + wr[i];
+            dc[i] = rc[i] / mass[i] * free[i];  // first guess: the explicit step
+        }
+    }
+    for (Index slot = 0; slot < 6; ++slot) {
+        const double* __restrict d = work.diagonal_blocks + slot * n;
+        const double* __restrict bl = work.blocks + slot * n;
+        double* __restrict out = full + slot * n;
+        if (slot < 3) {
+            for (Index i = 0; i < n; ++i) out[i] = d[i] + bl[i] + mass[i];
+        } else {
+            for (Index i = 0; i < n; ++i) out[i] = d[i] + bl[i];
+        }
+    }
+    invert_blocks(n, full, solver.inverse);
+    const SolveResult solve = solve_pcg(cloth, work, mass, solver.inverse, rhs, dv, solver.r, solver.z, solver.p,
+                                        solver.ap, EULER_CG_TOLERANCE, EULER_CG_ITERATIONS);
+    solver.counters[CG_ITERATIONS] += solve.iterations;
+    double largest = 0.0;
+    for (Index k = 0; k < 3 * n; ++k) {
+        out_vel[k] = vel[k] + dv[k];
+        out_pos[k] = pos[k] + h * out_vel[k];
+        largest = py_max(largest, std::fabs(dv[k]));
+    }
+    return largest;
+}
+
+//: With w = h / h_prev, y+ = y^ + b h f(y+) for y = (x, p), where y^ = ((1 + w)^2 y - w^2 y_prev) / (1 + 2w)
+//: and b = (1 + w) / (1 + 2w).  The momentum p = m v is the history's variable, not the velocity:
+//: absorbed water arrives at rest, so uptake between steps leaves p unchanged (and slows v); a history
+//: of velocities would carry that slowing forward and count it twice.  Forces and inertia are those of
+//: step_water, the water (kg) the particles will hold at the end of the step; water is what they hold
+//: now.  Newton iterations in the velocity, x+ = x^ + b h v+, each solving
+//: A dv = b h F(x+, v+) - M (v+ - v^) (see CG_TOLERANCE), until the correction, or what the observed
+//: convergence rate leaves to come, is within tolerance: newton_tolerance (m) in position, and see
+//: NEWTON_RELATIVE for the velocity.
+//:
+//: memory (4) carries over from step to step: the last convergence rate observed and the correction
+//: (m/s) it was observed after (FIRST_ITERATION_TRUST), which kind of first guess to start from (with
+//: the acceleration (3, n) m/s^2 the last step implied), and the CG iterations of the last linear solve
+//: (jacobian_refresh_pays).  Leaves in solver.step_acceleration the acceleration the step implies at
+//: its end, (v+ - v^) / (b h), and in memory[2] the kind of guess that would have come closer to it.
+//:
+//: The error estimate is the corrector's distance from the quadratic extrapolation through x_prev, x, v
+//: (Milne's device): BDF2 errs by -(1+w)^2/(6w(1+2w)) h^3 x''', the extrapolation by (1+w)/(6w) h^3 x''',
+//: so the BDF2 error is (1+w)/(2+3w) times their difference.  Without history: h |v+ - v| / 2.  Pinned
+//: particles' positions are not estimated (they do not move).
+StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solver& solver, Plane& plane,
+                       const double* pos, const double* vel, const double* water, const double* step_water,
+                       const double* prev_pos, const double* prev_vel, const double* prev_water,
+                       const double* acceleration, double h, double h_prev, double newton_tolerance,
+                       double cg_tolerance, double* memory, double* out_pos, double* out_vel) {
+    const Index n = cloth.n;
+    double* mass = solver.mass;
+    double* hat_pos = solver.hat_pos;
+    double* hat_vel = solver.hat_vel;
+    double* predicted = solver.predicted;
+    double* dv = solver.dv;
+    double* rhs = solver.rhs;
+    const double* free = cloth.free;
+    const double* dry_mass = cloth.dry_mass;
+    for (Index i = 0; i < n; ++i) mass[i] = dry_mass[i] + step_water[i];
+    const bool history = h_prev > 0.0;
+    const double w = history ? h / h_prev : 0.0;
+    const double beta = (1.0 + w) / (1.0 + 2.0 * w);
+    const double a = (1.0 + w) * (1.0 + w) / (1.0 + 2.0 * w);
+    const double b = w * w / (1.0 + 2.0 * w);
+    const double kind = memory[2];
+    for (Index c = 0; c < 3; ++c) {
+        for (Index i = 0; i < n; ++i) {
+            const Index k = c * n + i;
+            double guess;
+            if (history && free[i] != 0.0) {  // (a pinned particle stays exactly where it is)
+                hat_pos[k] = a * pos[k] - b * prev_pos[k];
+                const double momentum = (dry_mass[i] + water[i]) * vel[k];
+                const double previous_momentum = (dry_mass[i] + prev_water[i]) * prev_vel[k];
+                hat_vel[k] = (a * momentum - b * previous_momentum) / mass[i];
+                predicted[k] = pos[k] + h * vel[k] + w * w * (prev_pos[k] - pos[k] + h_prev * vel[k]);
+                guess = first_guess(kind, vel[k], prev_vel[k], acceleration[k], h, h_prev);
+            } else {
+                hat_pos[k] = pos[k];
+                hat_vel[k] = (dry_mass[i] + water[i]) * vel[k] / mass[i];
+                predicted[k] = pos[k];
+                guess = hat_vel[k];
+            }
+            out_vel[k] = guess * free[i];
+        }
+    }
+    const double bh = beta * h;
+    for (Index k = 0; k < 3 * n; ++k) out_pos[k] = hat_pos[k] + bh * out_vel[k];
+    Index factored = refresh(plane, cloth, mass, bh * bh);
+    solver.counters[FACTORISATIONS] += factored > 0;
+    follow_cloth(plane, cloth, pos);
+    bool converged = false;
+    double previous = 0.0;
+    for (Index iteration = 0; iteration < NEWTON_ITERATIONS_MAX; ++iteration) {
+        forces_and_blocks(cloth, phys, work, out_pos, out_vel, step_water, bh);
+        set_normal_diagonal(plane, n, mass, work.diagonal_blocks, work.blocks);
+        if (jacobian_refresh_pays(plane, memory[3])) {
+            factored = refresh_from_jacobian(plane, cloth, mass, work.along);
+            if (factored < 0) factored = refresh(plane, cloth, mass, bh * bh);  // back to the rest stiffness
+            solver.counters[FACTORISATIONS] += factored > 0;
+        }
+        for (Index c = 0; c < 3; ++c) {
+            const double* __restrict f = work.force + c * n;
+            const double* __restrict ov = out_vel + c * n;
+            const double* __restrict hv = hat_vel + c * n;
+            double* __restrict rc = rhs + c * n;
+            for (Index i = 0; i < n; ++i) rc[i] = free[i] * (bh * f[i] - mass[i] * (ov[i] - hv[i]));
+        }
+        const double floor = CG_FLOOR * py_min(newton_tolerance / bh, newton_tolerance / NEWTON_VELOCITY_TIME);
+        const PlaneSolve solve = plane_pcg(cloth, work, solver, plane, rhs, dv, cg_tolerance, floor,
+                                           NEWTON_CG_ITERATIONS);
+        memory[3] = static_cast<double>(solve.iterations);
+        solver.counters[NEWTON_ITERATIONS] += 1;
+        solver.counters[CG_ITERATIONS] += solve.iterations;
+        solver.counters[UNCONVERGED] += !solve.solved;
+        double largest = 0.0;
+        double increment = 0.0;
+        for (Index k = 0; k < 3 * n; ++k) {
+            out_vel[k] += dv[k];
+            out_pos[k] = hat_pos[k] + bh * out_vel[k];
+            largest = py_max(largest, std::fabs(dv[k]));
+            increment = py_max(py_max(increment, std::fabs(out_vel[k] - vel[k])), std::fabs(out_vel[k]));
+        }
+        if (!std::isfinite(largest)) break;
+        // The velocity's tolerance: an error left in every step's velocity is not random and adds up, so
+        // it is held to a fraction of the velocity and of its change over the step, or to what moves a
+        // particle by the position tolerance in NEWTON_VELOCITY_TIME.
+        const double velocity_tolerance =
+            py_max(NEWTON_RELATIVE * increment, newton_tolerance / NEWTON_VELOCITY_TIME);
+        const double tolerance = py_min(newton_tolerance / bh, velocity_tolerance);
+        // Converged when the correction, or the corrections still to come at the observed rate (a
+        // geometric series), are within the tolerance.
+        double rate, trust;
+        if (previous > 0.0) {
+            rate = largest / previous;
+            trust = 1.0;
+            memory[0] = rate;
+            memory[1] = previous;
+        } else {  // first iteration: the rate last observed, scaled to this correction, with a margin
+            rate = memory[1] > 0.0 ? memory[0] * py_max(1.0, largest / memory[1]) : 0.0;
+            trust = banded(plane) ? FIRST_ITERATION_TRUST : 0.0;
+        }
+        if (largest <= tolerance || (0.0 < rate && rate < 1.0 && rate / (1.0 - rate) * largest <= trust * tolerance)) {
+            converged = true;
+            break;
+        }
+        previous = largest;
+    }
+    for (Index k = 0; k < 3 * n; ++k) solver.step_acceleration[k] = (out_vel[k] - hat_vel[k]) / bh;
+    if (history) {
+        memory[2] = better_guess(n, vel, prev_vel, acceleration, free, h, h_prev, out_vel);
+    } else {
+        double error = 0.0;
+        for (Index k = 0; k < 3 * n; ++k) error = py_max(error, std::fabs(out_vel[k] - vel[k]));
+        return {0.5 * h * error, converged};
+    }
+    // The difference, filtered through (approximately) A^-1 M, as Shampine filters the error estimates
+    // of stiff solvers: stiff modes (in-plane vibration, a floating cloth's heave), which the scheme
+    // damps anyway, would otherwise dominate the estimate and hold the step far below what the smooth
+    // motion needs.
+    double* difference = solver.r;
+    for (Index c = 0; c < 3; ++c) {
+        for (Index i = 0; i < n; ++i) {
+            const Index k = c * n + i;
+            difference[k] = free[i] * mass[i] * (out_pos[k] - predicted[k]);
+        }
+    }
+    apply(plane, n, free, difference, solver.z);
+    return {(1.0 + w) / (2.0 + 3.0 * w) * largest_of(n, solver.z), converged};
+}
+
+}  // namespace wc

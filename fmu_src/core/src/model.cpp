@@ -1,0 +1,908 @@
+// The native model (model.hpp): scene, topology, per-particle constants, control and storage.
+#include "wetcloth/model.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <type_traits>
+
+#include "wetcloth/implicit.hpp"
+#include "wetcloth/integration.hpp"
+#include "wetcloth/multigrid.hpp"
+#include "wetcloth/plane.hpp"
+#include "wetcloth/self_contact.hpp"
+#include "wetcloth/stepping.hpp"
+
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "snapshots are written in the host's (little-endian) order");
+
+namespace wc {
+
+namespace {
+
+constexpr double PI = 3.141592653589793;  // math.pi
+constexpr double INF = std::numeric_limits<double>::infinity();
+constexpr double NaN = std::numeric_limits<double>::quiet_NaN();
+
+//: Python's max(a, b) and min(a, b): the first argument unless the second is strictly beyond it.
+inline double pymax(double a, double b) { return b > a ? b : a; }
+inline double pymin(double a, double b) { return b < a ? b : a; }
+
+//: x ** 2 as Python and NumPy compute it (libm's pow, not folded into x * x by the compiler).
+double square_as_python(double x) {
+    double (*volatile power)(double, double) = std::pow;
+    return power(x, 2.0);
+}
+
+//: NumPy's max and min of an array (NaN if any value is NaN).
+double np_max(const std::vector<double>& a) {
+    double best = -INF;
+    for (double v : a) {
+        if (std::isnan(v)) return NaN;
+        if (v > best) best = v;
+    }
+    return best;
+}
+
+double np_min(const std::vector<double>& a) {
+    double best = INF;
+    for (double v : a) {
+        if (std::isnan(v)) return NaN;
+        if (v < best) best = v;
+    }
+    return best;
+}
+
+//: Multigrid (plane.py's MULTIGRID_SIDE, COARSEST_SIDE) and the preconditioner's shares and stencil slots
+//: of each family (plane.py's _SHARE, _SLOT; the bending families are left out).
+constexpr double SHARE[6][2] = {{1.0, 0.0}, {0.0, 1.0}, {0.5, 0.5}, {0.5, 0.5}, {0.0, 0.0}, {0.0, 0.0}};
+constexpr Index SLOT[6] = {5, 7, 8, 6, -1, -1};
+
+//: 64-bit FNV-1a of bytes.
+std::uint64_t fnv1a(const unsigned char* data, std::size_t size) {
+    std::uint64_t hash = 0xcbf29ce484222325ull;
+    for (std::size_t i = 0; i < size; ++i) {
+        hash ^= data[i];
+        hash *= 0x100000001b3ull;
+    }
+    return hash;
+}
+
+constexpr char SNAPSHOT_MAGIC[] = "wetcloth-native-snapshot\n";
+constexpr std::size_t MAGIC_SIZE = sizeof(SNAPSHOT_MAGIC) - 1;
+constexpr std::uint32_t SNAPSHOT_VERSION = 1;
+constexpr std::size_t PREAMBLE = MAGIC_SIZE + 4 + 8;  // magic, version, checksum
+
+//: Doubles of a checkpoint's `values` for n particles and F spring families (see Checkpoint).
+std::size_t value_count(Index n, Index families) { return static_cast<std::size_t>((25 + families) * n); }
+
+struct Writer {
+    std::vector<unsigned char>& out;
+    template <class T>
+    void put(const T& value) {
+        const auto* p = reinterpret_cast<const unsigned char*>(&value);
+        out.insert(out.end(), p, p + sizeof(T));
+    }
+    void put(const double* values, std::size_t count) {
+        const auto* p = reinterpret_cast<const unsigned char*>(values);
+        out.insert(out.end(), p, p + count * sizeof(double));
+    }
+};
+
+struct Reader {
+    const unsigned char* data;
+    std::size_t size, at = 0;
+    template <class T>
+    T get() {
+        if (size - at < sizeof(T)) throw SnapshotError("snapshot bytes are truncated");
+        T value;
+        std::memcpy(&value, data + at, sizeof(T));
+        at += sizeof(T);
+        return value;
+    }
+    void get(double* values, std::size_t count) {
+        if ((size - at) / sizeof(double) < count) throw SnapshotError("snapshot bytes are truncated");
+        std::memcpy(values, data + at, count * sizeof(double));
+        at += count * sizeof(double);
+    }
+};
+
+}  // namespace
+
+// ------------------------------------------------------------------------------------------ scene
+namespace {
+
+//: The fields' values in SCENE_FIELDS order (codes and counts exactly, as doubles).
+std::vector<double> field_values(const Scene& scene) {
+    std::vector<double> values;
+    values.reserve(SCENE_FIELD_COUNT);
+    for_each_field(scene, [&](const char*, const auto& v) { values.push_back(static_cast<double>(v)); });
+    return values;
+}
+
+}  // namespace
+
+std::string fixed_differences(const Scene& a, const Scene& b) {
+    const std::vector<double> x = field_values(a), y = field_values(b);
+    std::string text;
+    for (Index k = 0; k < SCENE_FIELD_COUNT; ++k) {
+        if (!scene_input(SCENE_FIELDS[k]) && !(x[k] == y[k])) text += (text.empty() ? "" : ", ") + std::string(SCENE_FIELDS[k]);
+    }
+    return text;
+}
+
+std::string scene_problem(const Scene& s) {
+    const double half_drop = 0.5 * s.length * std::fabs(std::sin(s.initial_tilt * (PI / 180.0)));
+    const double lowest = s.initial_height - half_drop - 0.5 * s.thickness;
+    if (lowest <= s.floor_level) {
+        return "parameter 'initial_height': the cloth starts at or below the floor (lowest point " + py_g(lowest) +
+               " m, floor_level " + py_g(s.floor_level) + " m); allowed: initial_height > floor_level + " +
+               py_g(half_drop + 0.5 * s.thickness) + " m";
+    }
+    return "";
+}
+
+// ------------------------------------------------------------------------------------------ formatting
+std::string py_repr(double value) {
+    if (std::isnan(value)) return "nan";
+    if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+    if (value == 0.0) return std::signbit(value) ? "-0.0" : "0.0";
+    char buffer[64];
+    const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::scientific);
+    const std::string text(buffer, result.ptr);  // shortest round trip: [-]d[.ddd]e[+-]XX
+    const std::size_t e = text.find('e');
+    std::string mantissa = text.substr(0, e);
+    const int exponent = std::stoi(text.substr(e + 1));
+    const bool negative = mantissa[0] == '-';
+    if (negative) mantissa.erase(0, 1);
+    std::string digits;
+    for (char c : mantissa) {
+        if (c != '.') digits += c;
+    }
+    const int point = exponent + 1;  // value = 0.digits x 10^point
+    std::string out;
+    if (point <= -4 || point > 16) {  // Python's repr: exponent notation, at least two exponent digits
+        out = digits.substr(0, 1);
+        if (digits.size() > 1) out += "." + digits.substr(1);
+        char tail[16];
+        std::snprintf(tail, sizeof(tail), "e%c%02d", exponent < 0 ? '-' : '+', std::abs(exponent));
+        out += tail;
+    } else if (point <= 0) {
+        out = "0." + std::string(static_cast<std::size_t>(-point), '0') + digits;
+    } else if (static_cast<std::size_t>(point) >= digits.size()) {
+        out = digits + std::string(static_cast<std::size_t>(point) - digits.size(), '0') + ".0";
+    } else {
+        out = digits.substr(0, point) + "." + digits.substr(point);
+    }
+    return negative ? "-" + out : out;
+}
+
+std::string py_repr(std::string_view text) {
+    const bool double_quotes = text.find('\'') != std::string_view::npos && text.find('"') == std::string_view::npos;
+    const char quote = double_quotes ? '"' : '\'';
+    std::string out(1, quote);
+    for (char c : text) {
+        if (c == '\\' || c == quote) out += '\\';
+        if (c == '\n') {
+            out += "\\n";
+            continue;
+        }
+        out += c;
+    }
+    return out + quote;
+}
+
+std::string py_g(double value, int precision) {
+    if (std::isnan(value)) return "nan";
+    char buffer[64];
+    std::snprintf(buffer, sizeof(buffer), "%.*g", precision, value);
+    return buffer;
+}
+
+// ------------------------------------------------------------------------------------------ topology
+std::vector<double> Topology::per_particle_sum(const double* per_spring, const std::vector<Index>& offsets) const {
+    std::vector<double> total(static_cast<std::size_t>(n), 0.0);
+    for (std::size_t f = 0; f < offsets.size(); ++f) {
+        const Index off = offsets[f];
+        const double* values = per_spring + f * static_cast<std::size_t>(n);
+        for (Index i = 0; i < n - off; ++i) total[i] += values[i];
+        for (Index i = 0; i < n - off; ++i) total[i + off] += values[i];
+    }
+    return total;
+}
+
+Topology build_topology(const Scene& scene) {
+    if (scene.nx < 2 || scene.ny < 2) {
+        throw std::invalid_argument("the grid needs at least 2 x 2 particles, got " + std::to_string(scene.nx) +
+                                    " x " + std::to_string(scene.ny));
+    }
+    Topology t;
+    const Index nx = scene.nx, ny = scene.ny, n = nx * ny;
+    t.nx = nx;
+    t.ny = ny;
+    t.n = n;
+    t.dx = scene.width / static_cast<double>(nx - 1);
+    t.dy = scene.length / static_cast<double>(ny - 1);
+    const double dx = t.dx, dy = t.dy;
+    std::vector<Index> col(n), row(n);
+    std::vector<double> wc(n), wr(n);  // a particle's share of the cells along each axis: 1/2 on the edges
+    t.rest_xy.resize(2 * n);
+    t.area.resize(n);
+    for (Index i = 0; i < n; ++i) {
+        col[i] = i % nx;
+        row[i] = i / nx;
+        wc[i] = (col[i] == 0 || col[i] == nx - 1) ? 0.5 : 1.0;
+        wr[i] = (row[i] == 0 || row[i] == ny - 1) ? 0.5 : 1.0;
+        t.rest_xy[i] = static_cast<double>(col[i]) * dx - 0.5 * scene.width;
+        t.rest_xy[n + i] = static_cast<double>(row[i]) * dy - 0.5 * scene.length;
+        t.area[i] = dx * dy * wc[i] * wr[i];
+    }
+    // Each spring stands for a strip of the sheet of area a_s; with rest length l its constant is
+    // k = stiffness * a_s / l**2, likewise for damping (topology.py).
+    const double diag = std::hypot(dx, dy);
+    for (Index family = STRUCTURAL_X; family <= BEND_Y; ++family) {
+        const bool bending = family == BEND_X || family == BEND_Y;
+        const double modulus = bending ? scene.bend_stiffness : scene.stretch_stiffness;
+        Index offset = 0;
+        double rest = 0.0;
+        switch (family) {
+            case STRUCTURAL_X: offset = 1; rest = dx; break;
+            case STRUCTURAL_Y: offset = nx; rest = dy; break;
+            case SHEAR_UP_RIGHT: offset = nx + 1; rest = diag; break;
+            case SHEAR_UP_LEFT: offset = nx - 1; rest = diag; break;
+            case BEND_X: offset = 2; rest = 2 * dx; break;
+            default: offset = 2 * nx; rest = 2 * dy; break;
+        }
+        std::vector<double> strip(n);
+        std::vector<char> exists(n);
+        bool any = false;
+        for (Index i = 0; i < n; ++i) {
+            switch (family) {
+                case STRUCTURAL_X: strip[i] = dx * dy * wr[i]; exists[i] = col[i] < nx - 1; break;
+                case STRUCTURAL_Y: strip[i] = dy * dx * wc[i]; exists[i] = row[i] < ny - 1; break;
+                case SHEAR_UP_RIGHT:
+                    strip[i] = 0.5 * dx * dy;
+                    exists[i] = col[i] < nx - 1 && row[i] < ny - 1;
+                    break;
+                case SHEAR_UP_LEFT:
+                    strip[i] = 0.5 * dx * dy;
+                    exists[i] = col[i] > 0 && row[i] < ny - 1;
+                    break;
+                case BEND_X: strip[i] = 2 * dx * dy * wr[i]; exists[i] = col[i] < nx - 2; break;
+                default: strip[i] = 2 * dy * dx * wc[i]; exists[i] = row[i] < ny - 2; break;
+            }
+            any = any || exists[i];
+        }
+        if (modulus == 0.0 || !any) continue;
+        const double rest2 = square_as_python(rest);
+        t.family.push_back(family);
+        t.offset.push_back(offset);
+        t.rest.push_back(rest);
+        for (Index i = 0; i < n; ++i) {
+            t.stiffness.push_back(exists[i] ? modulus * strip[i] / rest2 : 0.0);
+            t.damping.push_back(exists[i] ? scene.damping * strip[i] / rest2 : 0.0);
+            t.shape.push_back(exists[i] ? strip[i] / rest2 : 0.0);
+        }
+    }
+    const Index families = t.families();
+    t.tension_only.reset(new bool[static_cast<std::size_t>(std::max<Index>(families, 1))]);
+    for (Index f = 0; f < families; ++f) t.tension_only[f] = t.family[f] != BEND_X && t.family[f] != BEND_Y;
+
+    std::vector<Index> quads;
+    for (Index i = 0; i < n; ++i) {
+        if (col[i] < nx - 1 && row[i] < ny - 1) quads.push_back(i);
+    }
+    t.triangles.reserve(6 * quads.size());
+    for (Index a : quads) t.triangles.insert(t.triangles.end(), {a, a + 1, a + nx + 1});
+    for (Index a : quads) t.triangles.insert(t.triangles.end(), {a, a + nx + 1, a + nx});
+
+    t.free.assign(n, 1.0);
+    for (Index i = 0; i < n; ++i) {
+        const bool pinned = (scene.pinned_edge == EDGE_X_MIN && col[i] == 0) ||
+                            (scene.pinned_edge == EDGE_X_MAX && col[i] == nx - 1) ||
+                            (scene.pinned_edge == EDGE_Y_MIN && row[i] == 0) ||
+                            (scene.pinned_edge == EDGE_Y_MAX && row[i] == ny - 1);
+        if (pinned) t.free[i] = 0.0;
+    }
+    return t;
+}
+
+std::vector<Index> grid_edges(const std::vector<Index>& triangles) {
+    std::vector<std::pair<Index, Index>> edges;
+    const std::size_t m = triangles.size() / 3;
+    edges.reserve(3 * m);
+    for (int k = 0; k < 3; ++k) {  // the edges [0, 1], then [1, 2], then [2, 0] of every triangle
+        for (std::size_t t = 0; t < m; ++t) {
+            const Index a = triangles[3 * t + k], b = triangles[3 * t + (k + 1) % 3];
+            edges.emplace_back(std::min(a, b), std::max(a, b));
+        }
+    }
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    std::vector<Index> flat;
+    flat.reserve(2 * edges.size());
+    for (const auto& [a, b] : edges) flat.insert(flat.end(), {a, b});
+    return flat;
+}
+
+std::vector<std::pair<Index, Index>> level_sizes(Index nx, Index ny, Index coarsest_side) {
+    std::vector<std::pair<Index, Index>> sizes{{nx, ny}};
+    while (std::min(sizes.back().first, sizes.back().second) > coarsest_side) {
+        const auto [cx, cy] = sizes.back();
+        sizes.emplace_back(cx / 2 + 1, cy / 2 + 1);
+    }
+    return sizes;
+}
+
+// ------------------------------------------------------------------------------------------ simulation
+Simulation::Simulation(const Scene& scene) : scene_(scene), topo_(build_topology(scene)) {
+    const std::string problem = scene_problem(scene);
+    if (!problem.empty()) throw std::invalid_argument(problem);
+    const Index n = topo_.n, nx = topo_.nx, ny = topo_.ny, families = topo_.families();
+    const std::size_t un = static_cast<std::size_t>(n);
+
+    // Model: the per-particle constants (set_scene fills them), the wicking links.
+    dry_mass_.assign(un, 0.0);
+    volume_.assign(un, 0.0);
+    stokes_.assign(un, 0.0);
+    capacity_.assign(un, 0.0);
+    for (Index f = 0; f < families; ++f) {
+        if (topo_.family[f] == STRUCTURAL_X || topo_.family[f] == STRUCTURAL_Y) wick_offsets_.push_back(topo_.offset[f]);
+    }
+    wick_conductance_.assign(wick_offsets_.size() * un, 0.0);
+
+    Cloth& cloth = core_.cloth;
+    cloth.grid_x = nx;
+    cloth.grid_y = ny;
+    cloth.n = n;
+    cloth.families = families;
+    cloth.offsets = topo_.offset.data();
+    cloth.rest = topo_.rest.data();
+    cloth.tension_only = topo_.tension_only.get();
+    cloth.stiffness = topo_.stiffness.data();
+    cloth.damping = topo_.damping.data();
+    cloth.free = topo_.free.data();
+    cloth.dry_mass = dry_mass_.data();
+    cloth.volume = volume_.data();
+    cloth.stokes_coefficient = stokes_.data();
+    cloth.capacity = capacity_.data();
+    cloth.wick_families = static_cast<Index>(wick_offsets_.size());
+    cloth.wick_offsets = wick_offsets_.data();
+    cloth.wick_conductance = wick_conductance_.data();
+
+    // Work (bundles.make_work).
+    const std::size_t cells = 2 * 9 * static_cast<std::size_t>(n + nx + 1);
+    const std::size_t uf = static_cast<std::size_t>(families);
+    work_.assign(un * (3 + 1 + 1 + 6 + 6 + 3 * uf + uf + uf + 3 + 4 + 6) + cells, 0.0);
+    {
+        double* p = work_.data();
+        auto take = [&p](std::size_t count) {
+            double* start = p;
+            p += count;
+            return start;
+        };
+        Work& w = core_.work;
+        w.force = take(3 * un);
+        w.submerged = take(un);
+        w.saturation = take(un);
+        w.blocks = take(6 * un);
+        w.diagonal_blocks = take(6 * un);
+        w.direction = take(3 * uf * un);
+        w.along = take(uf * un);
+        w.across = take(uf * un);
+        w.rhs = take(3 * un);
+        w.buf = take(4 * un);
+        w.cells = take(cells);
+        w.wick_buffer = take(6 * un);
+    }
+
+    // Solver (make_solver).
+    solver_.assign(un * (1 + 10 * 3 + 6 + 6), 0.0);
+    counters_.assign(4, 0);
+    {
+        double* p = solver_.data();
+        auto take = [&p](std::size_t count) {
+            double* start = p;
+            p += count;
+            return start;
+        };
+        Solver& s = core_.solver;
+        s.mass = take(un);
+        s.rhs = take(3 * un);
+        s.dv = take(3 * un);
+        s.r = take(3 * un);
+        s.z = take(3 * un);
+        s.p = take(3 * un);
+        s.ap = take(3 * un);
+        s.hat_pos = take(3 * un);
+        s.hat_vel = take(3 * un);
+        s.predicted = take(3 * un);
+        s.step_acceleration = take(3 * un);
+        s.diagonal = take(6 * un);
+        s.inverse = take(6 * un);
+        s.counters = counters_.data();
+    }
+
+    // Plane and its multigrid hierarchy (make_plane, make_hierarchy).
+    {
+        const auto sizes = std::min(nx, ny) > MULTIGRID_SIDE ? level_sizes(nx, ny, COARSEST_SIDE)
+                                                             : std::vector<std::pair<Index, Index>>{{nx, ny}};
+        const Index levels = static_cast<Index>(sizes.size());
+        levels_.assign(4 * sizes.size(), 0);
+        Index start = 0;
+        for (Index l = 0; l < levels; ++l) {
+            const auto [lx, ly] = sizes[l];
+            levels_[4 * l + NX] = lx;
+            levels_[4 * l + NY] = ly;
+            levels_[4 * l + START] = start;
+            levels_[4 * l + PAD_X] = lx + 3;
+            start += (lx + 3) * (ly + 3);
+        }
+        const std::size_t size = static_cast<std::size_t>(start);
+        grid_.assign(18 * size + 4 * 2 * size + static_cast<std::size_t>(nx + 3), 0.0);
+        Hierarchy& g = core_.plane.grid;
+        g.level_count = levels;
+        g.size = start;
+        g.levels = levels_.data();
+        g.coef = grid_.data();
+        g.inverse_diagonal = g.coef + 18 * size;
+        g.x = g.inverse_diagonal + 2 * size;
+        g.b = g.x + 2 * size;
+        g.r = g.b + 2 * size;
+        g.row = g.r + 2 * size;
+
+        const auto [cx, cy] = sizes.back();
+        const Index n_c = cx * cy;
+        std::vector<Index> ordered(n_c);
+        Index kd;
+        if (cx <= cy) {
+            for (Index k = 0; k < n_c; ++k) ordered[k] = k;
+            kd = cx + 1;
+        } else {  // along the columns, the shorter side: position j is column j / cy, row j % cy
+            for (Index j = 0; j < n_c; ++j) ordered[j] = (j % cy) * cx + j / cy;
+            kd = cy + 1;
+        }
+        kd = std::min(kd, n_c - 1);
+        const Index first = levels_[4 * (levels - 1) + START], pad = levels_[4 * (levels - 1) + PAD_X];
+        order_.resize(n_c);
+        rank_.assign(static_cast<std::size_t>(pad * (cy + 3)), -1);
+        for (Index j = 0; j < n_c; ++j) {
+            const Index k = ordered[j];
+            order_[j] = first + (k / cx + 1) * pad + k % cx + 1;
+            rank_[order_[j] - first] = j;
+        }
+        slots_.resize(uf);
+        for (Index f = 0; f < families; ++f) slots_[f] = SLOT[topo_.family[f]];
+        const std::size_t band = 2 * static_cast<std::size_t>(n_c * (kd + 1));
+        plane_.assign(2 * band + 3 + un + 2 * uf + uf * un + un + 9 * un + un + 2 * static_cast<std::size_t>(n_c), 0.0);
+        Plane& pl = core_.plane;
+        pl.families = families;
+        pl.stiffness = topo_.stiffness.data();
+        pl.slots = slots_.data();
+        pl.coarse_n = n_c;
+        pl.kd = kd;
+        pl.order = order_.data();
+        pl.rank = rank_.data();
+        pl.rank_size = static_cast<Index>(rank_.size());
+        double* p = plane_.data();
+        auto take = [&p](std::size_t count) {
+            double* at = p;
+            p += count;
+            return at;
+        };
+        pl.bands = take(band);
+        pl.rows = take(band);
+        pl.reference = take(3);
+        pl.reference_mass = take(un);
+        double* shares = take(2 * uf);
+        for (Index f = 0; f < families; ++f) {
+            shares[f] = SHARE[topo_.family[f]][0];
+            shares[families + f] = SHARE[topo_.family[f]][1];
+        }
+        pl.shares = shares;
+        pl.jacobian_along = take(uf * un);
+        pl.jacobian_mass = take(un);
+        pl.frame = take(9 * un);
+        for (Index a = 0; a < 3; ++a) {
+            for (Index i = 0; i < n; ++i) pl.frame[(4 * a) * n + i] = 1.0;  // frame[a, a, i]
+        }
+        pl.normal = take(un);
+        std::fill(pl.normal, pl.normal + n, 1.0);
+        pl.local = take(2 * static_cast<std::size_t>(n_c));
+    }
+
+    // Self-collision (make_contact).
+    {
+        edges_ = grid_edges(topo_.triangles);
+        zone_.resize(un);
+        for (Index i = 0; i < n; ++i) zone_[i] = i;
+        contact_counters_.assign(CONTACT_COUNTERS, 0);
+        contact_.assign(3 * un + 3 * un + 1 + ZONE_ROWS * un, 0.0);
+        Contact& c = core_.contact;
+        c.enabled = scene.self_collision == SWITCH_ON;
+        c.friction = scene.self_friction;
+        c.least_margin = MARGIN_FRACTION * pymin(topo_.dx, topo_.dy);
+        c.rest_gap = topo_.dx * topo_.dy / std::hypot(topo_.dx, topo_.dy);
+        c.triangle_count = topo_.triangle_count();
+        c.triangles = topo_.triangles.data();
+        c.edge_count = static_cast<Index>(edges_.size() / 2);
+        c.edges = edges_.data();
+        double* rest = contact_.data();
+        std::copy(topo_.rest_xy.begin(), topo_.rest_xy.end(), rest);  // z = 0
+        c.rest = rest;
+        c.reference = rest + 3 * un;
+        c.margin = c.reference + 3 * un;
+        c.zone = zone_.data();
+        c.zone_sums = c.margin + 1;
+        c.counters = contact_counters_.data();
+        c.lists = &lists_;
+    }
+
+    // The state at rest (initial_state) and the buffers around it (Simulation.__init__).
+    {
+        buffers_.assign(un * (3 + 3 + 1) * 3 + un * 3 + un * 3 + un, 0.0);
+        double* p = buffers_.data();
+        auto take = [&p](std::size_t count) {
+            double* at = p;
+            p += count;
+            return at;
+        };
+        Buffers& b = core_.buf;
+        b.pos = take(3 * un);
+        b.vel = take(3 * un);
+        b.water = take(un);
+        b.trial_pos = take(3 * un);
+        b.trial_vel = take(3 * un);
+        b.trial_water = take(un);
+        b.prev_pos = take(3 * un);
+        b.prev_vel = take(3 * un);
+        b.prev_water = take(un);
+        b.acceleration = take(3 * un);
+        b.anchor = take(3 * un);
+        b.held = take(un);
+        const double tilt = scene.initial_tilt * (PI / 180.0);  // math.radians
+        const double cos_tilt = std::cos(tilt), sin_tilt = std::sin(tilt);
+        for (Index i = 0; i < n; ++i) {
+            const double x = topo_.rest_xy[i], y = topo_.rest_xy[n + i];
+            b.pos[i] = x;
+            b.pos[n + i] = y * cos_tilt;
+            b.pos[2 * n + i] = scene.initial_height + y * sin_tilt;
+            b.water[i] = scene.initial_saturation * scene.absorption_capacity * scene.areal_density * topo_.area[i];
+        }
+        copy(3 * n, b.pos, b.trial_pos);
+        copy(n, b.water, b.trial_water);
+        copy(3 * n, b.pos, b.prev_pos);
+        copy(n, b.water, b.prev_water);
+        copy(3 * n, b.pos, b.anchor);
+        clock_[NEXT_STEP] = scene.max_step;
+        core_.clock = clock_;
+    }
+
+    set_scene(scene);
+
+    // The integrator's stability data (Integrator.__init__), from the first scene.
+    const double stiffest = 1.0 + pymax(scene.wet_stiffness_factor, 0.0);  // a saturated, stiffened cloth
+    std::vector<double> ratio = topo_.per_particle_sum(topo_.stiffness.data(), topo_.offset);
+    for (Index i = 0; i < n; ++i) ratio[i] = ratio[i] / dry_mass_[i];
+    omega_squared_ = 2.0 * stiffest * np_max(ratio);
+    ratio = topo_.per_particle_sum(topo_.damping.data(), topo_.offset);
+    for (Index i = 0; i < n; ++i) ratio[i] = ratio[i] / dry_mass_[i];
+    damping_rate_ = 2.0 * np_max(ratio);
+    std::vector<double> spring_ratio;
+    for (std::size_t k = 0; k < topo_.stiffness.size(); ++k) {
+        if (topo_.stiffness[k] > 0) spring_ratio.push_back(topo_.damping[k] / topo_.stiffness[k]);
+    }
+    double limit = spring_ratio.empty() ? INF : np_min(spring_ratio) / stiffest;
+    if (omega_squared_ > 0) limit = pymax(limit, 0.1 / std::sqrt(omega_squared_));
+    spring_limit_ = limit;
+    set_control();
+}
+
+void Simulation::set_scene(const Scene& scene) {
+    scene_ = scene;
+    const Index n = topo_.n;
+    for (Index i = 0; i < n; ++i) {
+        const double area = topo_.area[i];
+        dry_mass_[i] = scene.areal_density * area;
+        volume_[i] = scene.thickness * area;
+        stokes_[i] = 6.0 * PI * std::sqrt(area / PI) * scene.water_viscosity;
+        capacity_[i] = scene.absorption_capacity * dry_mass_[i];  // kg of water each particle holds at most
+    }
+    floor_z_ = scene.floor_level + 0.5 * scene.thickness;
+    // Wicking (Model._set_wicking): conductances of the structural links, and the sub-step limit.
+    std::vector<double> shape;
+    for (Index f = 0; f < topo_.families(); ++f) {
+        if (topo_.family[f] == STRUCTURAL_X || topo_.family[f] == STRUCTURAL_Y) {
+            shape.insert(shape.end(), topo_.shape.begin() + f * n, topo_.shape.begin() + (f + 1) * n);
+        }
+    }
+    for (std::size_t k = 0; k < shape.size(); ++k) {
+        wick_conductance_[k] = scene.wicking_rate * scene.absorption_capacity * scene.areal_density * shape[k];
+    }
+    std::vector<double> links = topo_.per_particle_sum(shape.data(), wick_offsets_);
+    for (Index i = 0; i < n; ++i) links[i] = topo_.area[i] / (scene.wicking_rate * links[i]);
+    wick_step_limit_ = np_min(links);
+
+    Physics& p = core_.phys;
+    const bool wet = scene.wet_stiffness_factor != 0.0 && scene.absorption_capacity > 0.0;
+    p.projected = scene.damping_model == DAMPING_PROJECTED;
+    p.wet_factor = wet ? scene.wet_stiffness_factor : 0.0;
+    p.water_level = scene.water_level;
+    p.water_density = scene.water_density;
+    p.thickness = scene.thickness;
+    p.smooth = scene.buoyancy_model == BUOYANCY_SMOOTH;
+    p.stokes = scene.drag_model == DRAG_STOKES;
+    p.drag_normal = scene.drag_normal;
+    p.drag_tangential = scene.drag_tangential;
+    p.drag_linear = scene.drag_linear;
+    p.current_x = scene.current_x;
+    p.current_y = scene.current_y;
+    p.floor_z = floor_z_;
+    p.floor_friction = scene.floor_friction;
+    p.absorption_capacity = scene.absorption_capacity;
+    p.absorption_rate = scene.absorption_rate;
+    p.drying_rate = scene.drying_rate;
+    p.wicking_rate = scene.wicking_rate;
+    p.wick_step_limit = wick_step_limit_;
+    p.skip_idle = true;
+}
+
+void Simulation::set_control() {
+    const Scene& sc = scene_;
+    const double size = pymax(sc.width, sc.length);
+    double drag_offset, drag_slope;
+    if (sc.drag_model == DRAG_STOKES) {
+        std::vector<double> rate(stokes_.size());
+        for (std::size_t i = 0; i < rate.size(); ++i) rate[i] = stokes_[i] / dry_mass_[i];
+        drag_offset = np_max(rate);
+        drag_slope = 0.0;
+    } else {  // the water's speed past the cloth is at most a particle's speed plus the current's
+        drag_slope = sc.water_density * (sc.drag_normal + sc.drag_tangential) / sc.areal_density;
+        drag_offset = drag_slope * std::hypot(sc.current_x, sc.current_y) + sc.drag_linear / sc.areal_density;
+    }
+    const double allowed = sc.tolerance * size;  // m of local position error per step
+    Control& c = core_.control;
+    c.integrator = sc.integrator;
+    c.tolerance = sc.tolerance;
+    c.allowed = allowed;
+    c.max_step = sc.max_step;
+    c.newton_tolerance = allowed > 0 ? NEWTON_FRACTION * allowed : FIXED_STEP_NEWTON_TOLERANCE * size;
+    c.cg_tolerance = allowed > 0 ? CG_TOLERANCE : FIXED_STEP_CG_TOLERANCE;
+    c.omega_squared = omega_squared_;
+    c.buoyancy_omega_squared = sc.water_density * GRAVITY / sc.areal_density;
+    c.damping_rate = damping_rate_;
+    c.spring_limit = spring_limit_;
+    c.drag_rate_offset = drag_offset;
+    c.drag_rate_slope = drag_slope;
+    c.smallest_step = SMALLEST_STEP;
+    c.growth = STEP_GROWTH;
+    c.shrink = STEP_SHRINK;
+    c.blow_up_speed = BLOW_UP_SPEED;
+    c.sleep_distance = SLEEP_DISTANCE;
+    c.sleep_after = SLEEP_AFTER;
+}
+
+bool Simulation::set_inputs(const Scene& next) {
+    const std::string fixed = fixed_differences(scene_, next);
+    if (!fixed.empty()) {
+        throw std::invalid_argument(fixed + " are fixed once the simulation starts; only inputs may change");
+    }
+    if (field_values(scene_) == field_values(next)) return false;  // Python's scene equality: 0.0 == -0.0
+    set_scene(next);
+    set_control();
+    // Wake a sleeping cloth (Simulation._wake).
+    clock_[SLEEPING] = 0.0;
+    clock_[CALM_TIME] = 0.0;
+    copy(3 * topo_.n, core_.buf.pos, core_.buf.anchor);
+    return true;
+}
+
+Status Simulation::advance(double duration) {
+    if (!(duration >= 0.0 && std::isfinite(duration))) {
+        throw std::invalid_argument("duration must be a finite number >= 0 s, got " + py_repr(duration));
+    }
+    const double target = time() + duration;
+    const Index steps_per_call = std::max<Index>(1, STEPS_PER_CALL / topo_.n);
+    Status status = PAUSED;
+    while (status == PAUSED) status = wc::advance(core_, target, steps_per_call);
+    return status;
+}
+
+void Simulation::outputs(double* row) const {
+    record_outputs(topo_.n, dry_mass_.data(), core_.phys.water_level, core_.buf.pos, core_.buf.water, row);
+}
+
+void Simulation::positions(double* xyz) const {
+    const Index n = topo_.n;
+    for (Index i = 0; i < n; ++i) {
+        for (Index c = 0; c < 3; ++c) xyz[3 * i + c] = core_.buf.pos[c * n + i];
+    }
+}
+
+void Simulation::wetness(double* out) const {
+    for (Index i = 0; i < topo_.n; ++i) {
+        const double capacity = scene_.absorption_capacity * dry_mass_[i];
+        double value = capacity > 0 ? core_.buf.water[i] / capacity : 0.0;
+        if (value < 0.0) value = 0.0;  // np.clip: NaN stays NaN
+        if (value > 1.0) value = 1.0;
+        out[i] = value;
+    }
+}
+
+std::string Simulation::blow_up_message() const {
+    const Buffers& b = core_.buf;
+    const SpeedCheck check = speed_and_finiteness(topo_.n, b.trial_pos, b.trial_vel, b.trial_water);
+    const std::string what = !check.finite ? "became non-finite" : "exploded (speed " + py_g(check.speed, 3) + " m/s)";
+    const double t = time(), h = clock_[FAILED_STEP];
+    // advice.blow_up_advice
+    std::vector<std::string> options;
+    if (scene_.integrator != IMPLICIT_EULER) options.emplace_back("integrator 'implicit_euler' (stable at any step)");
+    options.push_back("a smaller max_step (now " + py_g(scene_.max_step) + " s)");
+    options.push_back(scene_.tolerance == 0.0 ? "a tolerance > 0 (steps adapted to an error bound)"
+                                              : "a smaller tolerance (now " + py_g(scene_.tolerance) + ")");
+    std::string advice = "use ";
+    for (std::size_t k = 0; k < options.size(); ++k) {
+        advice += (k == 0 ? "" : k + 1 == options.size() ? " or " : ", ") + options[k];
+    }
+    return "the cloth state " + what + " in the step from t = " + py_g(t) + " s to " + py_g(t + h) + " s (step " +
+           py_g(h, 3) + " s, integrator " + py_repr(std::string_view(INTEGRATOR_NAMES[scene_.integrator])) +
+           "). Likely cause: the step is too large for stretch_stiffness = " + py_g(scene_.stretch_stiffness) +
+           " N/m; " + advice + ". Last good time: " + py_g(t) + " s.";
+}
+
+// ------------------------------------------------------------------------------------------ checkpoints
+void Simulation::save(Checkpoint& cp) const {
+    const Index n = topo_.n, families = topo_.families();
+    const Buffers& b = core_.buf;
+    const Plane& pl = core_.plane;
+    cp.scene = scene_;
+    cp.families = families;
+    std::copy(clock_, clock_ + CLOCK_SIZE, cp.clock);
+    std::copy(pl.reference, pl.reference + 3, cp.plane_reference);
+    cp.contact_margin = core_.contact.margin[0];
+    cp.values.resize(value_count(n, families));
+    double* out = cp.values.data();
+    auto put = [&out](const double* from, Index count) {
+        std::memcpy(out, from, static_cast<std::size_t>(count) * sizeof(double));
+        out += count;
+    };
+    put(b.pos, 3 * n);
+    put(b.vel, 3 * n);
+    put(b.water, n);
+    put(b.prev_pos, 3 * n);
+    put(b.prev_vel, 3 * n);
+    put(b.prev_water, n);
+    put(b.acceleration, 3 * n);
+    put(b.anchor, 3 * n);
+    put(pl.reference_mass, n);
+    put(pl.jacobian_along, families * n);
+    put(pl.jacobian_mass, n);
+    put(core_.contact.reference, 3 * n);
+}
+
+void Simulation::check(const Checkpoint& cp) const {
+    if (cp.scene.nx != scene_.nx || cp.scene.ny != scene_.ny) {
+        throw SnapshotError("snapshot of another grid: " + std::to_string(cp.scene.nx) + " x " +
+                            std::to_string(cp.scene.ny) + " particles, this simulation has " +
+                            std::to_string(scene_.nx) + " x " + std::to_string(scene_.ny));
+    }
+    const std::string fixed = fixed_differences(scene_, cp.scene);
+    if (!fixed.empty()) throw SnapshotError("snapshot of another scene: " + fixed + " differ (only inputs may)");
+    if (cp.families != topo_.families() || cp.values.size() != value_count(topo_.n, topo_.families())) {
+        throw SnapshotError("snapshot of another simulation: its arrays do not fit this one's");
+    }
+    bool finite = std::isfinite(cp.contact_margin);
+    for (double v : cp.clock) finite = finite && std::isfinite(v);
+    for (double v : cp.plane_reference) finite = finite && std::isfinite(v);
+    for_each_field(cp.scene, [&](const char*, const auto& v) { finite = finite && std::isfinite(static_cast<double>(v)); });
+    for (double v : cp.values) {
+        if (!std::isfinite(v)) finite = false;
+    }
+    if (!finite) throw SnapshotError("snapshot holds values that are not finite");
+}
+
+void Simulation::restore(const Checkpoint& cp) {
+    check(cp);
+    const Index n = topo_.n, families = topo_.families();
+    Buffers& b = core_.buf;
+    Plane& pl = core_.plane;
+    const double* in = cp.values.data();
+    auto get = [&in](double* to, Index count) {
+        std::memcpy(to, in, static_cast<std::size_t>(count) * sizeof(double));
+        in += count;
+    };
+    get(b.pos, 3 * n);
+    get(b.vel, 3 * n);
+    get(b.water, n);
+    get(b.prev_pos, 3 * n);
+    get(b.prev_vel, 3 * n);
+    get(b.prev_water, n);
+    get(b.acceleration, 3 * n);
+    get(b.anchor, 3 * n);
+    const double* reference_mass = in;
+    get(pl.reference_mass, n);
+    const double* jacobian_along = in;
+    get(pl.jacobian_along, families * n);
+    const double* jacobian_mass = in;
+    get(pl.jacobian_mass, n);
+    const double* contact_reference = in;
+    std::copy(cp.clock, cp.clock + CLOCK_SIZE, clock_);
+    // The preconditioner as it was factored (Simulation.restore: refresh, refresh_from_jacobian).
+    pl.reference[0] = cp.plane_reference[0];
+    pl.reference[1] = 0.0;
+    pl.reference[2] = cp.plane_reference[2];
+    if (cp.plane_reference[1] != 0.0) {
+        refresh(pl, core_.cloth, reference_mass, cp.plane_reference[0]);
+        if (cp.plane_reference[2] != 0.0) refresh_from_jacobian(pl, core_.cloth, jacobian_mass, jacobian_along);
+    }
+    // Self-collision's candidate list, rebuilt from its reference and margin (self_contact.restore).
+    Contact& contact = core_.contact;
+    std::memcpy(contact.reference, contact_reference, 3 * static_cast<std::size_t>(n) * sizeof(double));
+    if (cp.contact_margin > 0.0) {
+        build(contact, n, scene_.thickness, cp.contact_margin);
+    } else {
+        invalidate(contact);
+    }
+    set_scene(cp.scene);
+    set_control();
+}
+
+std::vector<unsigned char> Simulation::snapshot() const {
+    Checkpoint cp;
+    save(cp);
+    std::vector<unsigned char> out(SNAPSHOT_MAGIC, SNAPSHOT_MAGIC + MAGIC_SIZE);
+    Writer w{out};
+    w.put(SNAPSHOT_VERSION);
+    w.put(std::uint64_t{0});  // checksum, below
+    const std::size_t body = out.size();
+    w.put(cp.families);
+    w.put(static_cast<std::int64_t>(cp.values.size()));
+    for_each_field(cp.scene, [&](const char*, const auto& v) { w.put(v); });
+    w.put(cp.clock, CLOCK_SIZE);
+    w.put(cp.plane_reference, 3);
+    w.put(cp.contact_margin);
+    w.put(cp.values.data(), cp.values.size());
+    const std::uint64_t checksum = fnv1a(out.data() + body, out.size() - body);
+    std::memcpy(out.data() + MAGIC_SIZE + 4, &checksum, sizeof(checksum));
+    return out;
+}
+
+Checkpoint Simulation::from_bytes(const unsigned char* data, std::size_t size) {
+    if (data == nullptr || size < PREAMBLE || std::memcmp(data, SNAPSHOT_MAGIC, MAGIC_SIZE) != 0) {
+        throw SnapshotError("not a snapshot of a native wetcloth simulation (" + std::to_string(size) +
+                            " bytes without its header)");
+    }
+    Reader r{data, size, MAGIC_SIZE};
+    const auto version = r.get<std::uint32_t>();
+    if (version != SNAPSHOT_VERSION) {
+        throw SnapshotError("snapshot of format version " + std::to_string(version) + "; this build reads version " +
+                            std::to_string(SNAPSHOT_VERSION));
+    }
+    const auto checksum = r.get<std::uint64_t>();
+    if (fnv1a(data + PREAMBLE, size - PREAMBLE) != checksum) {
+        throw SnapshotError("snapshot bytes are corrupt or truncated (their checksum does not match)");
+    }
+    Checkpoint cp;
+    cp.families = r.get<Index>();
+    const auto count = r.get<std::int64_t>();
+    for_each_field(cp.scene, [&](const char*, auto& v) { v = r.get<std::remove_reference_t<decltype(v)>>(); });
+    const Index nx = cp.scene.nx, ny = cp.scene.ny;
+    if (nx < 2 || ny < 2 || nx > (1 << 20) || ny > (1 << 20) || cp.families < 0 || cp.families > 6 ||
+        count < 0 || static_cast<std::size_t>(count) != value_count(nx * ny, cp.families)) {
+        throw SnapshotError("snapshot bytes are malformed (grid, families and array sizes do not fit)");
+    }
+    r.get(cp.clock, CLOCK_SIZE);
+    r.get(cp.plane_reference, 3);
+    cp.contact_margin = r.get<double>();
+    if ((size - r.at) / sizeof(double) != static_cast<std::size_t>(count) || (size - r.at) % sizeof(double) != 0) {
+        throw SnapshotError("snapshot bytes are malformed (their arrays do not fill them)");
+    }
+    cp.values.resize(static_cast<std::size_t>(count));
+    r.get(cp.values.data(), cp.values.size());
+    if (r.at != size) throw SnapshotError("snapshot bytes are malformed (data after its end)");
+    return cp;
+}
+
+}  // namespace wc

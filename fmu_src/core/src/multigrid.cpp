@@ -1,0 +1,303 @@
+// Geometric multigrid V-cycle (port of wetcloth/kernels/multigrid.py).
+#include "wetcloth/multigrid.hpp"
+
+namespace wc {
+
+namespace {
+
+//: Python's floor division (a fine index of -1 has its parent at -1).
+inline Index floor_div2(Index a) { return a >= 0 ? a / 2 : -((1 - a) / 2); }
+
+void zero_level(Hierarchy& h, Index level, double* v) {
+    const Index start = level_value(h.levels, level, START);
+    const Index end = start + level_value(h.levels, level, PAD_X) * (level_value(h.levels, level, NY) + 3);
+    for (Index c = 0; c < 2; ++c) {
+        double* vc = v + c * h.size;
+        for (Index p = start; p < end; ++p) vc[p] = 0.0;
+    }
+}
+
+}  // namespace
+
+void galerkin(Hierarchy& h, Index level) {
+    const Index* levels = h.levels;
+    const Index size = h.size;
+    const Index nx = level_value(levels, level, NX), ny = level_value(levels, level, NY);
+    const Index coarse_start = level_value(levels, level + 1, START);
+    const Index coarse_pad = level_value(levels, level + 1, PAD_X);
+    const Index coarse_end = coarse_start + coarse_pad * (level_value(levels, level + 1, NY) + 3);
+    for (Index c = 0; c < 2; ++c) {
+        double* coef = h.coef + c * 9 * size;  // coef[k * size + p]
+        double* inverse = h.inverse_diagonal + c * size;
+        for (Index k = 0; k < 9; ++k)
+            for (Index q = coarse_start; q < coarse_end; ++q) coef[k * size + q] = 0.0;
+        for (Index iy = 0; iy < ny; ++iy) {
+            for (Index ix = 0; ix < nx; ++ix) {
+                const Index p = padded_index(levels, level, ix, iy);
+                inverse[p] = 1.0 / coef[CENTRE * size + p];
+                // Each of the 16 (parent of (ix, iy), parent of (jx, jy)) pairs adds a / 16 to one
+                // coarse entry; a parent appears twice along an axis where the fine index is even,
+                // so an entry may take the same addition 2, 4, 8 or 16 times.  Those are made in a
+                // register, one after the other as the loops over the pairs make them (the same
+                // roundings; additions to other entries between them do not touch it).
+                const Index ny_a = iy % 2 + 1, nx_a = ix % 2 + 1;  // distinct parents of (ix, iy)
+                const Index py0 = iy / 2, px0 = ix / 2;
+                for (Index k = 0; k < 9; ++k) {
+                    const double a = coef[k * size + p];
+                    if (a == 0.0) continue;
+                    const double v = 0.0625 * a;
+                    const Index jx = ix + k % 3 - 1, jy = iy + k / 3 - 1;
+                    const Index ny_b = (jy & 1) + 1, nx_b = (jx & 1) + 1;  // (jx, jy) >= -1
+                    const Index qy0 = floor_div2(jy), qx0 = floor_div2(jx);
+                    const Index count = (3 - ny_a) * (3 - nx_a) * (3 - ny_b) * (3 - nx_b);
+                    for (Index a_y = 0; a_y < ny_a; ++a_y) {
+                        const Index py = py0 + a_y;
+                        for (Index a_x = 0; a_x < nx_a; ++a_x) {
+                            const Index px = px0 + a_x;
+                            const Index q = coarse_start + (py + 1) * coarse_pad + px + 1;
+                            for (Index b_y = 0; b_y < ny_b; ++b_y) {
+                                const Index qy = qy0 + b_y;
+                                for (Index b_x = 0; b_x < nx_b; ++b_x) {
+                                    const Index qx = qx0 + b_x;
+                                    double& target = coef[(3 * (qy - py + 1) + qx - px + 1) * size + q];
+                                    double sum = target;
+                                    for (Index r = 0; r < count; ++r) sum += v;
+                                    target = sum;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+namespace {
+
+//: Points of a row whose Gauss-Seidel values are computed together: what is known of them is kept
+//: on the stack (for both components) before the recurrence along the row.
+constexpr Index BLOCK = 64;
+
+//: known = b - (the row below's three neighbours) for m points from s (a forward sweep from x = 0).
+//: coef (9, size) from the row's first point; below a view from one point before the row.
+void known_from_zero(double* __restrict known, const double* __restrict b, const double* __restrict coef,
+                     Index size, const double* __restrict below, Index s, Index m) {
+    const double* a0 = coef + 0 * size + s;
+    const double* a1 = coef + 1 * size + s;
+    const double* a2 = coef + 2 * size + s;
+    b += s;
+    below += s;
+    for (Index i = 0; i < m; ++i) known[i] = b[i] - a0[i] * below[i] - a1[i] * below[i + 1] - a2[i] * below[i + 2];
+}
+
+//: known = b - every neighbour but the one the forward recurrence updates (left: slot 3).
+void known_forward(double* __restrict known, const double* __restrict b, const double* __restrict coef, Index size,
+                   const double* __restrict below, const double* __restrict here, const double* __restrict above,
+                   Index s, Index m) {
+    const double* a0 = coef + 0 * size + s;
+    const double* a1 = coef + 1 * size + s;
+    const double* a2 = coef + 2 * size + s;
+    const double* a5 = coef + 5 * size + s;
+    const double* a6 = coef + 6 * size + s;
+    const double* a7 = coef + 7 * size + s;
+    const double* a8 = coef + 8 * size + s;
+    b += s;
+    below += s;
+    here += s;
+    above += s;
+    for (Index i = 0; i < m; ++i)
+        known[i] = b[i] - a0[i] * below[i] - a1[i] * below[i + 1] - a2[i] * below[i + 2] - a5[i] * here[i + 2] -
+                   a6[i] * above[i] - a7[i] * above[i + 1] - a8[i] * above[i + 2];
+}
+
+//: known = b - every neighbour but the one the backward recurrence updates (right: slot 5).
+void known_backward(double* __restrict known, const double* __restrict b, const double* __restrict coef,
+                    Index size, const double* __restrict below, const double* __restrict here,
+                    const double* __restrict above, Index s, Index m) {
+    const double* a0 = coef + 0 * size + s;
+    const double* a1 = coef + 1 * size + s;
+    const double* a2 = coef + 2 * size + s;
+    const double* a3 = coef + 3 * size + s;
+    const double* a6 = coef + 6 * size + s;
+    const double* a7 = coef + 7 * size + s;
+    const double* a8 = coef + 8 * size + s;
+    b += s;
+    below += s;
+    here += s;
+    above += s;
+    for (Index i = 0; i < m; ++i)
+        known[i] = b[i] - a0[i] * below[i] - a1[i] * below[i + 1] - a2[i] * below[i + 2] - a3[i] * here[i] -
+                   a6[i] * above[i] - a7[i] * above[i + 1] - a8[i] * above[i + 2];
+}
+
+}  // namespace
+
+void sweep(Hierarchy& h, Index level, bool forward, bool from_zero) {
+    // Each row in two passes: what is known before the row's own recurrence (vectorised), then the
+    // recurrence along the row.  The two components' recurrences run side by side (each fills the
+    // other's waits; they never meet, so the values are those of one component after the other),
+    // a block of points at a time.  A block's known values read only the row's old values beyond
+    // the block (forward: its right neighbours; backward: its left ones), which the recurrence has
+    // not reached yet.
+    const Index* levels = h.levels;
+    const Index size = h.size;
+    const Index nx = level_value(levels, level, NX), ny = level_value(levels, level, NY);
+    const Index pad = level_value(levels, level, PAD_X);
+    double known0[BLOCK], known1[BLOCK];
+    const double* coef0 = h.coef;
+    const double* coef1 = h.coef + 9 * size;
+    double* x0 = h.x;
+    double* x1 = h.x + size;
+    const double* b0 = h.b;
+    const double* b1 = h.b + size;
+    const double* inv0 = h.inverse_diagonal;
+    const double* inv1 = h.inverse_diagonal + size;
+    for (Index t = 0; t < ny; ++t) {
+        const Index iy = forward ? t : ny - 1 - t;
+        const Index base = padded_index(levels, level, 0, iy);
+        const Index below = base - pad - 1, here = base - 1, above = base + pad - 1;
+        double last0 = 0.0, last1 = 0.0;  // the row's neighbour just updated (none before the first)
+        for (Index done = 0; done < nx; done += BLOCK) {
+            const Index m = nx - done < BLOCK ? nx - done : BLOCK;
+            const Index s = forward ? done : nx - done - m;  // the block's first point
+            if (forward && from_zero) {
+                known_from_zero(known0, b0 + base, coef0 + base, size, x0 + below, s, m);
+                known_from_zero(known1, b1 + base, coef1 + base, size, x1 + below, s, m);
+            } else if (forward) {
+                known_forward(known0, b0 + base, coef0 + base, size, x0 + below, x0 + here, x0 + above, s, m);
+                known_forward(known1, b1 + base, coef1 + base, size, x1 + below, x1 + here, x1 + above, s, m);
+            } else {
+                known_backward(known0, b0 + base, coef0 + base, size, x0 + below, x0 + here, x0 + above, s, m);
+                known_backward(known1, b1 + base, coef1 + base, size, x1 + below, x1 + here, x1 + above, s, m);
+            }
+            double* xc0 = x0 + base + s;
+            double* xc1 = x1 + base + s;
+            const double* ic0 = inv0 + base + s;
+            const double* ic1 = inv1 + base + s;
+            if (forward) {
+                const double* a30 = coef0 + 3 * size + base + s;
+                const double* a31 = coef1 + 3 * size + base + s;
+                for (Index i = 0; i < m; ++i) {
+                    last0 = (known0[i] - a30[i] * last0) * ic0[i];
+                    last1 = (known1[i] - a31[i] * last1) * ic1[i];
+                    xc0[i] = last0;
+                    xc1[i] = last1;
+                }
+            } else {
+                const double* a50 = coef0 + 5 * size + base + s;
+                const double* a51 = coef1 + 5 * size + base + s;
+                for (Index i = m - 1; i >= 0; --i) {
+                    last0 = (known0[i] - a50[i] * last0) * ic0[i];
+                    last1 = (known1[i] - a51[i] * last1) * ic1[i];
+                    xc0[i] = last0;
+                    xc1[i] = last1;
+                }
+            }
+        }
+    }
+}
+
+namespace {
+
+//: r = b - A x over m points of a row (coef (9, size) from the row's first point; below, here,
+//: above views of x from one point before the row).
+void residual_row(double* __restrict r, const double* __restrict b, const double* __restrict coef, Index size,
+                  const double* __restrict below, const double* __restrict here, const double* __restrict above,
+                  Index m) {
+    const double* a0 = coef + 0 * size;
+    const double* a1 = coef + 1 * size;
+    const double* a2 = coef + 2 * size;
+    const double* a3 = coef + 3 * size;
+    const double* a4 = coef + 4 * size;
+    const double* a5 = coef + 5 * size;
+    const double* a6 = coef + 6 * size;
+    const double* a7 = coef + 7 * size;
+    const double* a8 = coef + 8 * size;
+    for (Index s = 0; s < m; ++s)
+        r[s] = b[s] - a0[s] * below[s] - a1[s] * below[s + 1] - a2[s] * below[s + 2] - a3[s] * here[s] -
+               a4[s] * here[s + 1] - a5[s] * here[s + 2] - a6[s] * above[s] - a7[s] * above[s + 1] -
+               a8[s] * above[s + 2];
+}
+
+//: b of a coarse row from the fine residual rows around its fine row (views from one point before it).
+void restrict_row(double* __restrict b, const double* __restrict below, const double* __restrict here,
+                  const double* __restrict above, Index coarse_nx) {
+    for (Index s = 0; s < coarse_nx; ++s) {
+        const Index t = 2 * s;
+        b[s] = here[t + 1] + 0.5 * (here[t] + here[t + 2] + below[t + 1] + above[t + 1]) +
+               0.25 * (below[t] + below[t + 2] + above[t] + above[t + 2]);
+    }
+}
+
+}  // namespace
+
+void restrict_residual(Hierarchy& h, Index level) {
+    const Index* levels = h.levels;
+    const Index size = h.size;
+    const Index nx = level_value(levels, level, NX), ny = level_value(levels, level, NY);
+    const Index pad = level_value(levels, level, PAD_X);
+    const Index coarse_nx = level_value(levels, level + 1, NX), coarse_ny = level_value(levels, level + 1, NY);
+    for (Index c = 0; c < 2; ++c) {
+        const double* coef = h.coef + c * 9 * size;
+        const double* x = h.x + c * size;
+        double* b = h.b + c * size;
+        double* r = h.r + c * size;
+        for (Index iy = 0; iy < ny; ++iy) {
+            const Index base = padded_index(levels, level, 0, iy);
+            residual_row(r + base, b + base, coef + base, size, x + base - pad - 1, x + base - 1, x + base + pad - 1, nx);
+        }
+        // each coarse point gathers its fine point with weight 1, those beside it with 1/2 and
+        // those diagonal to it with 1/4
+        for (Index iy = 0; iy < coarse_ny; ++iy) {
+            const Index coarse = padded_index(levels, level + 1, 0, iy);
+            const Index fine = padded_index(levels, level, 0, 2 * iy);
+            restrict_row(b + coarse, r + fine - pad - 1, r + fine - 1, r + fine + pad - 1, coarse_nx);
+        }
+    }
+}
+
+namespace {
+
+//: A fine row += its coarse rows' interpolation (lc, hc the coarse rows iy // 2 and (iy + 1) // 2):
+//: fine point ix takes its parents ix // 2 and (ix + 1) // 2, the even and odd points in pairs.
+void interpolate_row(double* __restrict xc, const double* __restrict lc, const double* __restrict hc, Index nx) {
+    const Index pairs = nx / 2;
+    for (Index s = 0; s < pairs; ++s) {
+        xc[2 * s] += 0.25 * (lc[s] + lc[s] + hc[s] + hc[s]);
+        xc[2 * s + 1] += 0.25 * (lc[s] + lc[s + 1] + hc[s] + hc[s + 1]);
+    }
+    if (nx % 2 != 0) xc[nx - 1] += 0.25 * (lc[pairs] + lc[pairs] + hc[pairs] + hc[pairs]);
+}
+
+}  // namespace
+
+void interpolate(Hierarchy& h, Index level) {
+    const Index* levels = h.levels;
+    const Index nx = level_value(levels, level, NX), ny = level_value(levels, level, NY);
+    for (Index c = 0; c < 2; ++c) {
+        double* x = h.x + c * h.size;
+        for (Index iy = 0; iy < ny; ++iy) {
+            const Index low = padded_index(levels, level + 1, 0, iy / 2);
+            const Index high = padded_index(levels, level + 1, 0, (iy + 1) / 2);
+            interpolate_row(x + padded_index(levels, level, 0, iy), x + low, x + high, nx);
+        }
+    }
+}
+
+void v_cycle_down(Hierarchy& h) {
+    for (Index level = 0; level < h.level_count - 1; ++level) {
+        zero_level(h, level, h.x);
+        for (Index s = 0; s < SWEEPS; ++s) sweep(h, level, true, s == 0);
+        restrict_residual(h, level);
+    }
+}
+
+void v_cycle_up(Hierarchy& h) {
+    for (Index level = h.level_count - 2; level >= 0; --level) {
+        interpolate(h, level);
+        for (Index s = 0; s < SWEEPS; ++s) sweep(h, level, false, false);
+    }
+}
+
+}  // namespace wc

@@ -1,0 +1,305 @@
+// The step loop (stepping.hpp).
+#include "wetcloth/stepping.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "wetcloth/absorption.hpp"
+#include "wetcloth/assembly.hpp"
+#include "wetcloth/floor.hpp"
+#include "wetcloth/implicit.hpp"
+#include "wetcloth/integration.hpp"
+#include "wetcloth/self_contact.hpp"
+
+namespace wc {
+
+namespace {
+
+//: Python's min/max (the first argument wins ties and NaN comparisons the same way).
+inline double pymin(double a, double b) { return b < a ? b : a; }
+inline double pymax(double a, double b) { return b > a ? b : a; }
+
+//: Height (m) below which a particle's centre touches water (its submerged fraction is positive).
+double surface(const Physics& phys) { return phys.water_level + (phys.smooth ? 0.5 * phys.thickness : 0.0); }
+
+bool absorbing(const Physics& phys) { return phys.absorption_capacity > 0.0 && phys.absorption_rate > 0.0; }
+
+struct Trial {
+    double error;  // m, local position error estimate
+    int order;     // order of that estimate
+    bool converged;
+};
+
+//: The integrator's step of h s from the current state into the trial buffers; the particle masses it
+//: used are left in solver.mass.
+Trial take_step(Core& core, double h) {
+    const Cloth& cloth = core.cloth;
+    const Physics& phys = core.phys;
+    Buffers& buf = core.buf;
+    Solver& solver = core.solver;
+    const Index n = cloth.n;
+    if (core.control.integrator == EXPLICIT_EULER || core.control.integrator == SYMPLECTIC_EULER) {
+        for (Index i = 0; i < n; ++i) solver.mass[i] = cloth.dry_mass[i] + buf.water[i];
+        forces(cloth, phys, core.work, buf.pos, buf.vel, buf.water);
+        const double largest = euler_update(n, buf.pos, buf.vel, core.work.force, cloth.dry_mass, buf.water,
+                                            cloth.free, h, core.control.integrator == SYMPLECTIC_EULER,
+                                            buf.trial_pos, buf.trial_vel);
+        return {0.5 * h * largest, 1, true};  // |h (v+ - v)| / 2: first- against second-order update
+    }
+    if (core.control.integrator == IMPLICIT_EULER) {
+        const double largest = implicit_euler_step(cloth, phys, core.work, solver, buf.pos, buf.vel, buf.water, h,
+                                                   buf.trial_pos, buf.trial_vel);
+        return {0.5 * h * largest, 1, true};
+    }
+    // BDF2 takes the forces and inertia at the end of the step, so it needs the water the cloth will hold
+    // then: the uptake along the extrapolated path (the exact uptake follows the step).
+    double* clock = core.clock;
+    const double h_prev = clock[LAST_STEP];
+    double* step_water = buf.trial_water;
+    copy(n, buf.water, step_water);
+    if (absorbing(phys)) {
+        double* predicted = solver.predicted;              // scratch: z
+        double* predicted_speed = solver.predicted + n;    // and v_z
+        const double w = h_prev > 0.0 ? h / h_prev : 0.0;
+        const double* z = buf.pos + 2 * n;
+        const double* vz = buf.vel + 2 * n;
+        const double* z_prev = buf.prev_pos + 2 * n;
+        const double* vz_prev = buf.prev_vel + 2 * n;
+        for (Index i = 0; i < n; ++i) {
+            predicted[i] = z[i] + h * vz[i] + w * w * (z_prev[i] - z[i] + h_prev * vz[i]);
+            predicted_speed[i] = vz[i] + w * (vz[i] - vz_prev[i]);
+        }
+        uptake(n, z, predicted, vz, predicted_speed, surface(phys), cloth.dry_mass, phys.absorption_capacity,
+               phys.absorption_rate, h, buf.water, step_water);
+    }
+    const StepEstimate step = bdf2_step(cloth, phys, core.work, solver, core.plane, buf.pos, buf.vel, buf.water,
+                                        step_water, buf.prev_pos, buf.prev_vel, buf.prev_water, buf.acceleration, h,
+                                        h_prev, core.control.newton_tolerance, core.control.cg_tolerance,
+                                        clock + NEWTON_RATE, buf.trial_pos, buf.trial_vel);
+    return {step.error, h_prev > 0.0 ? 2 : 1, step.converged};
+}
+
+//: Uptake where the cloth touches water, drying in air, wicking between neighbours; each skipped when its
+//: rate is zero.  mass_used (kg) is what the step took as each particle's mass: the momentum it gave is
+//: kept as the uptake changes that mass.  Returns whether any particle's water changed.
+bool exchange_water(Core& core, const double* mass_used, double h) {
+    const Cloth& cloth = core.cloth;
+    const Physics& phys = core.phys;
+    Buffers& buf = core.buf;
+    const Index n = cloth.n;
+    copy(n, buf.water, buf.trial_water);
+    const bool absorbs = absorbing(phys);
+    if (!(absorbs || phys.drying_rate > 0.0 || phys.wicking_rate > 0.0)) return false;
+    const double level = surface(phys);
+    Index exchanged = 0;
+    const double* z_start = buf.pos + 2 * n;
+    const double* z_end = buf.trial_pos + 2 * n;
+    const double* vz_start = buf.vel + 2 * n;
+    const double* vz_end = buf.trial_vel + 2 * n;
+    if (absorbs) {
+        exchanged += uptake(n, z_start, z_end, vz_start, vz_end, level, cloth.dry_mass, phys.absorption_capacity,
+                            phys.absorption_rate, h, buf.water, buf.trial_water);
+        keep_momentum(n, mass_used, cloth.dry_mass, buf.trial_water, buf.trial_vel);
+    }
+    if (phys.drying_rate > 0.0) {
+        exchanged += dry(n, z_start, z_end, vz_start, vz_end, level, phys.drying_rate, h, buf.trial_water);
+    }
+    if (phys.wicking_rate > 0.0 && phys.absorption_capacity > 0.0) {
+        const double substeps = std::max(1.0, std::ceil(h / (WICK_SUBSTEP_FRACTION * phys.wick_step_limit)));
+        const double moved = wick(cloth, static_cast<Index>(substeps), h, buf.trial_water, buf.trial_vel,
+                                  core.work.wick_buffer);
+        for (Index c = 0; c < 3; ++c) {
+            double* v = buf.trial_vel + c * n;
+            for (Index i = 0; i < n; ++i) v[i] *= cloth.free[i];
+        }
+        exchanged += moved > 0.0;
+    }
+    return exchanged > 0;
+}
+
+//: Fall asleep after sleep_after s still, with no water exchange (velocities then zero).  Stillness is
+//: checked every sleep_after / 20 s of simulated time, not at every step.
+void maybe_sleep(Core& core, double h, bool exchanging) {
+    if (!core.phys.skip_idle) return;
+    double* clock = core.clock;
+    const Control& control = core.control;
+    Buffers& buf = core.buf;
+    const Index n = core.cloth.n;
+    if (exchanging) clock[EXCHANGING] = 1.0;
+    clock[UNCHECKED_TIME] += h;
+    if (clock[UNCHECKED_TIME] < control.sleep_after / 20) return;
+    if (clock[EXCHANGING] != 0.0 || largest_deviation(n, buf.pos, buf.anchor) > control.sleep_distance) {
+        copy(3 * n, buf.pos, buf.anchor);
+        clock[CALM_TIME] = 0.0;
+    } else {
+        clock[CALM_TIME] += clock[UNCHECKED_TIME];
+    }
+    clock[UNCHECKED_TIME] = 0.0;
+    clock[EXCHANGING] = 0.0;
+    if (clock[CALM_TIME] >= control.sleep_after) {
+        clock[SLEEPING] = 1.0;
+        std::fill(buf.vel, buf.vel + 3 * n, 0.0);
+        clock[SPEED] = 0.0;
+        clock[LAST_STEP] = 0.0;  // the velocities changed: BDF2 starts afresh
+    }
+}
+
+//: Take one accepted step of at most `remaining` s.  Returns DONE or BLOWN_UP.
+Status step(Core& core, double remaining) {
+    Cloth& cloth = core.cloth;
+    const Physics& phys = core.phys;
+    const Control& control = core.control;
+    Buffers& buf = core.buf;
+    double* clock = core.clock;
+    const Index n = cloth.n;
+    const bool adaptive = control.allowed > 0.0;
+    // Particles at rest on the floor take no part in the step (a constraint of its solve) unless its forces
+    // would move them; the model's free flags are theirs again before the step ends.
+    Index held = hold_resting(n, phys.floor_z, buf.pos, buf.vel, cloth.free, buf.held);
+    double h = 0.0;
+    while (true) {
+        double planned = adaptive ? pymin(pymin(clock[NEXT_STEP], control.max_step), stable_step(control, clock[SPEED]))
+                                  : pymin(clock[NEXT_STEP], control.max_step);  // fixed steps, as the user asked
+        if (control.integrator == BDF2 && clock[LAST_STEP] > 0.0) {
+            planned = pymin(planned, control.growth * clock[LAST_STEP]);  // zero-stable for ratios < 2.4
+        }
+        // Equal steps to the end of the interval rather than a last sliver.
+        h = remaining / pymax(1.0, std::ceil(remaining / planned - STEP_COUNT_SLACK));
+        Trial trial = take_step(core, h);
+        if (held > 0 && trial.converged) {
+            const Index released = release_slipping(n, phys.floor_friction, core.work.force, cloth.free, buf.held);
+            if (released > 0) {  // redo the step with them free
+                held -= released;
+                clock[REJECTED] += 1;
+                continue;
+            }
+        }
+        if (!trial.converged && h > control.smallest_step) {
+            clock[NEXT_STEP] = pymax(control.smallest_step, 0.25 * h);
+            clock[REJECTED] += 1;
+            continue;
+        }
+        if (!adaptive) {  // the blow-up guard watches
+            clock[NEXT_STEP] = control.max_step;
+            break;
+        }
+        // Error relative to what is allowed: the position error, and the uptake's (a fraction of the wet
+        // mass, held to the tolerance), whichever is larger, with its order.
+        double ratio = trial.error / control.allowed;
+        int order = trial.order;
+        if (absorbing(phys)) {
+            const double water_error = uptake_timing_error(
+                n, buf.pos + 2 * n, buf.trial_pos + 2 * n, buf.vel + 2 * n, buf.trial_vel + 2 * n, surface(phys),
+                cloth.dry_mass, phys.absorption_capacity, phys.absorption_rate, h, buf.water);
+            const double water_ratio =
+                water_error / (control.tolerance * (total(n, cloth.dry_mass) + total(n, buf.water)));
+            if (water_ratio > ratio) {
+                ratio = water_ratio;
+                order = 1;
+            }
+        }
+        const bool finite = std::isfinite(ratio);
+        const double factor = ratio > 0.0 ? STEP_SAFETY * std::pow(ratio, -1.0 / (order + 1)) : control.growth;
+        if (ratio <= 1.0 || h <= control.smallest_step || !finite) {
+            const double proposed = finite ? h * pymin(control.growth, pymax(control.shrink, factor)) : h;
+            // A step cut short by the end of the interval says nothing against the planned one.
+            clock[NEXT_STEP] = (h < planned && ratio <= 1.0) ? pymax(proposed, planned) : proposed;
+            break;
+        }
+        clock[NEXT_STEP] = pymax(control.smallest_step, h * pymax(control.shrink, factor));
+        clock[REJECTED] += 1;
+    }
+    if (held > 0) release_all(n, cloth.free, buf.held);
+    const bool on_floor = floor_contact(n, phys.floor_z, phys.floor_friction, buf.trial_pos, buf.trial_vel) > 0 ||
+                          held > 0;
+    const bool kinked = resolve(core.contact, phys.thickness, phys.floor_z, control.blow_up_speed, n,
+                                core.solver.mass, cloth.free, buf.pos, buf.trial_pos, buf.trial_vel, h);
+    const bool exchanging = exchange_water(core, core.solver.mass, h);
+    const SpeedCheck check = speed_and_finiteness(n, buf.trial_pos, buf.trial_vel, buf.trial_water);
+    if (!(check.finite && check.speed < control.blow_up_speed)) {
+        clock[FAILED_STEP] = h;
+        return BLOWN_UP;
+    }
+    clock[SPEED] = check.speed;
+    copy(3 * n, buf.pos, buf.prev_pos);
+    copy(3 * n, buf.vel, buf.prev_vel);
+    copy(n, buf.water, buf.prev_water);
+    copy(3 * n, buf.trial_pos, buf.pos);
+    copy(3 * n, buf.trial_vel, buf.vel);
+    copy(n, buf.trial_water, buf.water);
+    if (control.integrator == BDF2) copy(3 * n, core.solver.step_acceleration, buf.acceleration);
+    if (on_floor) agree_history(n, phys.floor_z, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h);
+    clock[LAST_STEP] = kinked ? 0.0 : h;  // self-collision's push: BDF2 starts afresh
+    clock[TIME] += h;
+    clock[STEPS] += 1;
+    maybe_sleep(core, h, exchanging);
+    return DONE;
+}
+
+}  // namespace
+
+double stable_step(const Control& control, double speed) {
+    const double gamma = control.damping_rate + control.drag_rate_offset + control.drag_rate_slope * speed;
+    if (control.integrator == EXPLICIT_EULER) {
+        double limit = control.spring_limit;
+        if (gamma > 0.0) limit = pymin(limit, 2.0 / gamma);
+        return STABILITY_SAFETY * limit;
+    }
+    if (control.integrator == SYMPLECTIC_EULER) {
+        // For x'' = -w^2 x - g x' the scheme is stable iff h < 4 / (g + sqrt(g^2 + 4 w^2)).
+        const double omega2 = control.omega_squared + control.buoyancy_omega_squared;
+        return STABILITY_SAFETY * 4.0 / (gamma + std::sqrt(gamma * gamma + 4.0 * omega2));
+    }
+    return std::numeric_limits<double>::infinity();
+}
+
+Status advance(Core& core, double target, Index max_steps) {
+    double* clock = core.clock;
+    Index taken = 0;
+    while (target - clock[TIME] > 1e-12 * pymax(1.0, std::fabs(target)) && clock[SLEEPING] == 0.0) {
+        if (taken >= max_steps) return PAUSED;
+        if (step(core, target - clock[TIME]) != DONE) return BLOWN_UP;
+        ++taken;
+    }
+    clock[TIME] = pymax(clock[TIME], target);
+    return DONE;
+}
+
+void record_outputs(Index n, const double* dry_mass, double water_level, const double* pos, const double* water,
+                    double* row) {
+    double wet_mass = 0.0, water_mass = 0.0, moment_x = 0.0, moment_y = 0.0, moment_z = 0.0;
+    const double* x = pos;
+    const double* y = pos + n;
+    const double* z = pos + 2 * n;
+    for (Index i = 0; i < n; ++i) {
+        const double mass = dry_mass[i] + water[i];
+        wet_mass += mass;
+        water_mass += water[i];
+        moment_x += mass * x[i];
+        moment_y += mass * y[i];
+        moment_z += mass * z[i];
+    }
+    row[0] = moment_x / wet_mass;
+    row[1] = moment_y / wet_mass;
+    row[2] = moment_z / wet_mass;
+    row[3] = water_level - row[2];
+    row[4] = wet_mass;
+    row[5] = water_mass;
+}
+
+SamplingResult advance_sampling(Core& core, const double* times, Index count, double* outputs, Index first,
+                                Index max_steps) {
+    const double budget_end = core.clock[STEPS] + static_cast<double>(max_steps);
+    for (Index k = first; k < count; ++k) {
+        const Index budget = static_cast<Index>(budget_end - core.clock[STEPS]);
+        if (budget <= 0) return {PAUSED, k};
+        const Status status = advance(core, times[k], budget);
+        if (status != DONE) return {status, k};
+        record_outputs(core.cloth.n, core.cloth.dry_mass, core.phys.water_level, core.buf.pos, core.buf.water,
+                       outputs + k * OUTPUT_COUNT);
+    }
+    return {DONE, count};
+}
+
+}  // namespace wc

@@ -1,0 +1,272 @@
+// Water forces (docs/model.md section 4): submerged fraction, buoyancy, Stokes drag and face drag
+// (port of wetcloth/kernels/water.py; layout of the face-drag rows in wetcloth/water.hpp).
+#include "wetcloth/water.hpp"
+
+#include <cmath>
+
+namespace wc {
+namespace {
+
+//: numba's (Python's) max(a, b) and min(a, b): b if b > a (b < a) else a.
+inline double py_max(double a, double b) { return b > a ? b : a; }
+inline double py_min(double a, double b) { return b < a ? b : a; }
+
+//: Views (x, y, z, vx, vy, vz, s) of the particles from index `start` on.
+struct Corner {
+    const double* x;
+    const double* y;
+    const double* z;
+    const double* vx;
+    const double* vy;
+    const double* vz;
+    const double* s;
+};
+
+inline Corner corner(Index n, const double* pos, const double* vel, const double* s, Index start) {
+    return {pos + start, pos + n + start, pos + 2 * n + start, vel + start, vel + n + start, vel + 2 * n + start,
+            s + start};
+}
+
+//: 1 / max(x, 1e-300) as numba's min(1 / x, 1 / 1e-300): the same value for every x >= 0, inf or NaN
+//: (division rounds monotonically; NaN stays NaN), with the division outside the select.  GCC folds
+//: 1 / 1e-300 in the select's one branch and then may not speculate the other's division
+//: (-ftrapping-math): the loop would not vectorise.
+constexpr double INV_TINY_AREA = 1.0 / 1e-300;
+inline double inverse_area(double twice_area) {
+    const double inv = 1.0 / twice_area;
+    return INV_TINY_AREA < inv ? INV_TINY_AREA : inv;
+}
+
+//: Triangles (a[k], b[k], c[k]) for k < count: force (N) into fx, fy, fz and, if Blocks, the Jacobian
+//: blocks (N s/m) into xx..yz.  Per triangle: the unit normal n, and dF/du = k_normal n n^T +
+//: k_tangential (I - n n^T) + k_linear I + k_slip s s^T, with u the water's velocity relative to the
+//: triangle and s its in-plane part (the slip).  Branch-free, so the loop vectorises.  Every row is a
+//: __restrict parameter: GCC ignores __restrict on locals and struct members, and with nine written
+//: rows run-time overlap checks would be too many.
+template <bool Blocks>
+void drag_row_loop(Index count, double density, double c_normal, double c_tangential, double c_linear,
+                   double current_x, double current_y, const double* __restrict ax, const double* __restrict ay,
+                   const double* __restrict az, const double* __restrict avx, const double* __restrict avy,
+                   const double* __restrict avz, const double* __restrict as, const double* __restrict bx,
+                   const double* __restrict by, const double* __restrict bz, const double* __restrict bvx,
+                   const double* __restrict bvy, const double* __restrict bvz, const double* __restrict bs,
+                   const double* __restrict cx_, const double* __restrict cy_, const double* __restrict cz_,
+                   const double* __restrict cvx, const double* __restrict cvy, const double* __restrict cvz,
+                   const double* __restrict cs, double* __restrict fx_, double* __restrict fy_,
+                   double* __restrict fz_, double* __restrict xx, double* __restrict yy, double* __restrict zz,
+                   double* __restrict xy, double* __restrict xz, double* __restrict yz) {
+    for (Index k = 0; k < count; ++k) {
+        const double st = (as[k] + bs[k] + cs[k]) * (1.0 / 3.0);
+        const double e1x = bx[k] - ax[k];
+        const double e1y = by[k] - ay[k];
+        const double e1z = bz[k] - az[k];
+        const double e2x = cx_[k] - ax[k];
+        const double e2y = cy_[k] - ay[k];
+        const double e2z = cz_[k] - az[k];
+        const double cx = e1y * e2z - e1z * e2y;
+        const double cy = e1z * e2x - e1x * e2z;
+        const double cz = e1x * e2y - e1y * e2x;
+        const double twice_area = std::sqrt(cx * cx + cy * cy + cz * cz);
+        const double inv = inverse_area(twice_area);
+        const double normal_x = cx * inv;
+        const double normal_y = cy * inv;
+        const double normal_z = cz * inv;
+        const double wet_area = 0.5 * twice_area * st;
+        const double ux = current_x - (avx[k] + bvx[k] + cvx[k]) * (1.0 / 3.0);
+        const double uy = current_y - (avy[k] + bvy[k] + cvy[k]) * (1.0 / 3.0);
+        const double uz = -(avz[k] + bvz[k] + cvz[k]) * (1.0 / 3.0);
+        const double un = ux * normal_x + uy * normal_y + uz * normal_z;
+        const double utx = ux - un * normal_x;
+        const double uty = uy - un * normal_y;
+        const double utz = uz - un * normal_z;
+        const double ut = std::sqrt(utx * utx + uty * uty + utz * utz);
+        const double q = 0.5 * density * wet_area;
+        const double kn = q * c_normal * std::fabs(un);
+        const double kt = q * c_tangential * ut;
+        const double kl = c_linear * wet_area;
+        fx_[k] = kn * un * normal_x + kt * utx + kl * ux;
+        fy_[k] = kn * un * normal_y + kt * uty + kl * uy;
+        fz_[k] = kn * un * normal_z + kt * utz + kl * uz;
+        if (Blocks) {
+            // d(|w| w)/dw = |w| I + w w^T / |w|: along w twice the force's coefficient, across it once.
+            const double ks = q * c_tangential / py_max(ut, 1e-300);
+            const double diff = 2.0 * kn - kt;
+            const double iso = kt + kl;
+            xx[k] = iso + diff * normal_x * normal_x + ks * utx * utx;
+            yy[k] = iso + diff * normal_y * normal_y + ks * uty * uty;
+            zz[k] = iso + diff * normal_z * normal_z + ks * utz * utz;
+            xy[k] = diff * normal_x * normal_y + ks * utx * uty;
+            xz[k] = diff * normal_x * normal_z + ks * utx * utz;
+            yz[k] = diff * normal_y * normal_z + ks * uty * utz;
+        }
+    }
+}
+
+//: drag_row_loop over corners a, b, c; out is 9 rows of `stride` from their first slot.
+template <bool Blocks>
+void drag_row(Index count, const Corner& a, const Corner& b, const Corner& c, double density, double c_normal,
+              double c_tangential, double c_linear, double current_x, double current_y, double* out, Index stride) {
+    drag_row_loop<Blocks>(count, density, c_normal, c_tangential, c_linear, current_x, current_y, a.x, a.y, a.z, a.vx,
+                          a.vy, a.vz, a.s, b.x, b.y, b.z, b.vx, b.vy, b.vz, b.s, c.x, c.y, c.z, c.vx, c.vy, c.vz, c.s,
+                          out, out + stride, out + 2 * stride, out + 3 * stride, out + 4 * stride, out + 5 * stride,
+                          out + 6 * stride, out + 7 * stride, out + 8 * stride);
+}
+
+//: Whether no particle from start to stop touches water.
+inline bool dry(const double* s, Index start, Index stop) {
+    for (Index i = start; i < stop; ++i) {
+        if (s[i] > 0.0) return false;
+    }
+    return true;
+}
+
+inline void zero(double* a, Index count) {
+    for (Index i = 0; i < count; ++i) a[i] = 0.0;
+}
+
+//: Every cell's drag (and, if wanted, its Jacobian) into cells; the forces gathered into force.
+void drag_forces(Index nx, Index ny, const double* pos, const double* vel, const double* s, double density,
+                 double c_normal, double c_tangential, double c_linear, double current_x, double current_y,
+                 double* force, double* cells, bool blocks_wanted, bool skip_dry_rows) {
+    drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells,
+              blocks_wanted, skip_dry_rows);
+    const Index n = nx * ny;
+    const Index length = n + nx + 1;
+    for (Index comp = 0; comp < 3; ++comp) {
+        gather_cells(nx, n, cells + comp * length, cells + (9 + comp) * length, force + comp * n, 1.0);
+    }
+}
+
+}  // namespace
+
+double submerged_fractions(Index n, const double* z, double water_level, double thickness, bool smooth, double* s) {
+    double top = 0.0;
+    const double inv_thickness = 1.0 / thickness;
+    for (Index i = 0; i < n; ++i) {
+        double v;
+        if (smooth) {
+            v = py_min(py_max((water_level - z[i]) * inv_thickness + 0.5, 0.0), 1.0);
+        } else {
+            v = z[i] < water_level ? 1.0 : 0.0;
+        }
+        s[i] = v;
+        top = py_max(top, v);
+    }
+    return top;
+}
+
+void buoyancy(Index n, const double* __restrict s, const double* __restrict volume, double density, double gravity,
+              double* force) {
+    double* __restrict fz = force + 2 * n;
+    const double scale = density * gravity;
+    for (Index i = 0; i < n; ++i) fz[i] += scale * volume[i] * s[i];
+}
+
+namespace {
+
+inline void stokes_loop(Index n, const double* __restrict s, const double* __restrict coefficient, double current_x,
+                        double current_y, const double* __restrict vx, const double* __restrict vy,
+                        const double* __restrict vz, double* __restrict fx, double* __restrict fy,
+                        double* __restrict fz) {
+    for (Index i = 0; i < n; ++i) {
+        const double c = coefficient[i] * s[i];
+        fx[i] -= c * (vx[i] - current_x);
+        fy[i] -= c * (vy[i] - current_y);
+        fz[i] -= c * vz[i];
+    }
+}
+
+}  // namespace
+
+void stokes_drag(Index n, const double* s, const double* coefficient, double current_x, double current_y,
+                 const double* vel, double* force) {
+    stokes_loop(n, s, coefficient, current_x, current_y, vel, vel + n, vel + 2 * n, force, force + n, force + 2 * n);
+}
+
+namespace {
+
+inline void gather_loop(Index n, double scale, const double* __restrict a1, const double* __restrict b1,
+                        const double* __restrict d1, const double* __restrict a2, const double* __restrict d2,
+                        const double* __restrict c2, double* __restrict out) {
+    const double quarter = 0.25 * scale, half = 0.5 * scale;
+    for (Index v = 0; v < n; ++v) out[v] += quarter * (a1[v] + d1[v] + a2[v] + d2[v]) + half * (b1[v] + c2[v]);
+}
+
+}  // namespace
+
+// Particle v is corner a (weight 1/4) of both triangles of cell v, the right-angle corner b (1/2) of
+// cell v-1's first triangle, corner d (1/4) of both triangles of cell v-nx-1, and the right-angle
+// corner c (1/2) of cell v-nx's second triangle.
+void gather_cells(Index nx, Index n, const double* t1, const double* t2, double* out, double scale) {
+    const Index pad = nx + 1;
+    gather_loop(n, scale, t1 + pad, t1 + pad - 1, t1, t2 + pad, t2, t2 + 1, out);
+}
+
+// The rows between the highest and lowest wet ones are computed in one run along the grid, as if
+// every particle began a cell (fewer, longer loops: measured faster in numba on 9 x 9 and 32 x 32);
+// the last column's, which are no cells, are then zeroed (dry triangles have zero drag anyway: their
+// wet area is zero).
+void drag_rows(Index nx, Index ny, const double* pos, const double* vel, const double* s, double density,
+               double c_normal, double c_tangential, double c_linear, double current_x, double current_y,
+               double* cells, bool blocks_wanted, bool skip_dry_rows) {
+    const Index n = nx * ny;
+    const Index pad = nx + 1;
+    const Index length = n + pad;
+    Index first = 0, last = ny - 2;
+    if (skip_dry_rows) {
+        while (first <= last && dry(s, first * nx, first * nx + 2 * nx)) ++first;
+        while (last >= first && dry(s, last * nx, last * nx + 2 * nx)) --last;
+    }
+    const Index below = pad + first * nx;        // cells[:, :, pad:below] = 0
+    const Index above = pad + (last + 1) * nx;  // cells[:, :, above:] = 0
+    for (Index row = 0; row < 18; ++row) {
+        double* r = cells + row * length;
+        if (below > pad) zero(r + pad, (below < length ? below : length) - pad);
+        if (above < length) zero(r + (above > 0 ? above : 0), length - (above > 0 ? above : 0));
+    }
+    if (first > last) return;
+    const Index start = first * nx;
+    const Index count = (last - first + 1) * nx - 1;
+    const Corner a = corner(n, pos, vel, s, start);
+    const Corner b = corner(n, pos, vel, s, start + 1);
+    const Corner c = corner(n, pos, vel, s, start + nx);
+    const Corner d = corner(n, pos, vel, s, start + nx + 1);
+    const Index lo = pad + start;
+    double* first_triangles = cells + lo;
+    double* second_triangles = cells + 9 * length + lo;
+    if (blocks_wanted) {
+        drag_row<true>(count, a, b, d, density, c_normal, c_tangential, c_linear, current_x, current_y,
+                       first_triangles, length);
+        drag_row<true>(count, a, d, c, density, c_normal, c_tangential, c_linear, current_x, current_y,
+                       second_triangles, length);
+    } else {
+        drag_row<false>(count, a, b, d, density, c_normal, c_tangential, c_linear, current_x, current_y,
+                        first_triangles, length);
+        drag_row<false>(count, a, d, c, density, c_normal, c_tangential, c_linear, current_x, current_y,
+                        second_triangles, length);
+    }
+    for (Index r = first; r < last; ++r) {
+        for (Index row = 0; row < 18; ++row) cells[row * length + pad + r * nx + nx - 1] = 0.0;
+    }
+}
+
+void face_drag(Index nx, Index ny, const double* pos, const double* vel, const double* s, double density,
+               double c_normal, double c_tangential, double c_linear, double current_x, double current_y,
+               double* force, double* cells, bool skip_dry_rows) {
+    drag_forces(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, force, cells,
+                false, skip_dry_rows);
+}
+
+void face_drag_and_blocks(Index nx, Index ny, const double* pos, const double* vel, const double* s, double density,
+                          double c_normal, double c_tangential, double c_linear, double current_x, double current_y,
+                          double h, double* force, double* blocks, double* cells, bool skip_dry_rows) {
+    drag_forces(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, force, cells,
+                true, skip_dry_rows);
+    const Index n = nx * ny;
+    const Index length = n + nx + 1;
+    for (Index comp = 0; comp < 6; ++comp) {
+        gather_cells(nx, n, cells + (3 + comp) * length, cells + (9 + 3 + comp) * length, blocks + comp * n, h);
+    }
+}
+
+}  // namespace wc

@@ -1,0 +1,70 @@
+"""The arrays the compiled core works on, bundled as named tuples (``wetcloth._core`` views them by
+field name: ``fmu_src/core/include/wetcloth/core.hpp`` mirrors each bundle field by field).
+
+Python allocates every array (NumPy) and owns it; the core reads and writes them in place, so a
+snapshot of the arrays that carry over between steps is a snapshot of the run.  Arrays of per-particle
+vectors are (3, n): rows x, y, z, each contiguous.
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numpy as np
+
+#: The fixed cloth: grid size, spring families (offset, rest length m, tension only, stiffness N/m,
+#: damping N s/m per spring), 1 for moving particles, dry mass kg, envelope volume m3, Stokes
+#: coefficient 6 pi a eta (N s/m), water capacity kg, wicking links (offsets, conductance kg/s).
+Cloth = namedtuple("Cloth", "grid_x grid_y offsets rest tension_only stiffness damping free dry_mass volume "
+                            "stokes_coefficient capacity wick_offsets wick_conductance")
+#: Scene parameters as the core uses them (SI units; flags as bools).  ``wet_factor`` is 0 unless
+#: wetness-dependent stiffness is active; ``floor_z`` is the lowest particle centre.
+Physics = namedtuple("Physics", "projected wet_factor water_level water_density thickness smooth stokes "
+                                "drag_normal drag_tangential drag_linear current_x current_y floor_z "
+                                "floor_friction absorption_capacity absorption_rate drying_rate wicking_rate "
+                                "wick_step_limit skip_idle")
+#: Scratch and results: ``force`` (3, n) N; ``submerged`` (n) the submerged fraction of each
+#: particle; ``saturation`` (n); ``blocks`` (6, n) per-particle symmetric 3x3 blocks (xx, yy, zz,
+#: xy, xz, yz) of the system matrix; ``diagonal_blocks`` (6, n) the springs' part of its diagonal
+#: blocks; ``direction`` (F, 3, n), ``along``, ``across`` (F, n) each spring's block; ``rhs`` (3, n);
+#: ``buf`` (4, n); ``cells`` (2, 9, n + nx + 1) face-drag rows; ``wick_buffer`` (6, n).
+Work = namedtuple("Work", "force submerged saturation blocks diagonal_blocks direction along across rhs buf cells "
+                          "wick_buffer")
+#: Integrator and controller settings: ``integrator`` (code: ``wetcloth.integrators.INTEGRATORS``),
+#: ``tolerance`` (-), ``allowed`` local position error per step (m, 0 = fixed steps of ``max_step``
+#: s); ``newton_tolerance`` (m); ``cg_tolerance`` (-, BDF2's linear solves, relative to the
+#: correction); the explicit schemes' stability data: ``omega_squared`` (1/s2, Gershgorin bound of
+#: the springs), ``buoyancy_omega_squared`` (1/s2), ``damping_rate`` (1/s), ``spring_limit`` (s,
+#: explicit Euler), drag rate ``drag_rate_offset + drag_rate_slope * speed`` (1/s); step limits and
+#: factors; the blow-up speed (m/s); the sleep rule: ``sleep_distance`` (m) for ``sleep_after`` s.
+Control = namedtuple("Control", "integrator tolerance allowed max_step newton_tolerance cg_tolerance "
+                                "omega_squared buoyancy_omega_squared damping_rate spring_limit drag_rate_offset "
+                                "drag_rate_slope smallest_step growth shrink blow_up_speed sleep_distance sleep_after")
+#: State buffers: current and trial (pos, vel (3, n), water (n)), BDF2 history (the state before the
+#: last step, and the acceleration (3, n) m/s^2 the last step implied at its end), sleep anchor, and
+#: ``held`` (n): 1 for the particles the floor holds during the current step (scratch).
+Buffers = namedtuple("Buffers", "pos vel water trial_pos trial_vel trial_water prev_pos prev_vel prev_water acceleration "
+                                "anchor held")
+#: Scratch of the implicit steps, each (3, n) unless noted: ``mass`` (n) kg; ``rhs``, ``dv``,
+#: ``r``, ``z``, ``p``, ``ap`` of the linear solves; ``hat_pos``, ``hat_vel`` the BDF2 history
+#: terms; ``predicted`` the extrapolated positions; ``step_acceleration`` (3, n) m/s^2 the
+#: acceleration the last BDF2 step implies at its end; ``diagonal`` (6, n) the system's 3x3 diagonal
+#: blocks and ``inverse`` (6, n) their inverses; ``counters`` (int64: Newton iterations, CG
+#: iterations, factorisations, unconverged solves).
+Solver = namedtuple("Solver", "mass rhs dv r z p ap hat_pos hat_vel predicted step_acceleration diagonal inverse counters")
+
+
+def make_work(n: int, families: int, grid_x: int) -> Work:
+    """Zeroed scratch for n particles, ``families`` spring families and rows of ``grid_x`` particles."""
+    return Work(force=np.zeros((3, n)), submerged=np.zeros(n), saturation=np.zeros(n), blocks=np.zeros((6, n)),
+                diagonal_blocks=np.zeros((6, n)), direction=np.zeros((families, 3, n)),
+                along=np.zeros((families, n)), across=np.zeros((families, n)), rhs=np.zeros((3, n)),
+                buf=np.zeros((4, n)), cells=np.zeros((2, 9, n + grid_x + 1)), wick_buffer=np.zeros((6, n)))
+
+
+def make_solver(n: int) -> Solver:
+    """Zeroed scratch of the implicit steps for n particles."""
+    vectors = {name: np.zeros((3, n)) for name in ("rhs", "dv", "r", "z", "p", "ap", "hat_pos", "hat_vel",
+                                                   "predicted", "step_acceleration")}
+    return Solver(mass=np.zeros(n), diagonal=np.zeros((6, n)), inverse=np.zeros((6, n)),
+                  counters=np.zeros(4, dtype=np.int64), **vectors)

@@ -1,0 +1,101 @@
+"""The arrays of the implicit solves' preconditioner (the compiled core's ``plane.cpp``,
+``multigrid.cpp`` and ``band.cpp``; docs/core.md): each particle's frame, the in-plane stiffness as
+two scalar systems on the particle grid, a multigrid hierarchy on large grids and the banded
+Cholesky factors of its coarsest level.
+
+The system matrix of an implicit step, ``A = M - h C - h^2 K``, is dominated by the stretch springs,
+stiff along their own direction only: a flat cloth is stiff in its plane and soft across it.  In
+each particle's frame (t1, t2, n) the t1 and t2 components each get a scalar matrix ``M + h^2 L_c``
+(``L_c`` the graph Laplacian of the springs weighted by their stiffness times the share of their
+direction in that component), factored only when the step or the masses changed much; the normal
+component gets the normal-normal entry of each particle's diagonal block of A.  Small grids solve the
+two systems exactly with banded factors; on grids whose shorter side exceeds MULTIGRID_SIDE one
+multigrid V-cycle approximates their inverse, with the banded factors on its coarsest grid only.
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numpy as np
+
+from wetcloth._core import COARSEST_SIDE, MULTIGRID_SIDE
+
+#: Share of each stretch-spring family's stiffness in the t1 and t2 components.  The bending springs
+#: (1 % of the stretch stiffness in the presets) are left out: they would double the bandwidth
+#: (they reach two particles), and leaving them out did not change the iteration counts on the towel.
+_SHARE = {"structural_x": (1.0, 0.0), "structural_y": (0.0, 1.0), "shear_up_right": (0.5, 0.5),
+          "shear_up_left": (0.5, 0.5)}
+#: Stencil slot of the neighbour ``i + offset`` for each family in the preconditioner (slot
+#: ``3 (dy + 1) + dx + 1`` of the 9-point stencil; 4 is the centre).
+_SLOT = {"structural_x": 5, "structural_y": 7, "shear_up_right": 8, "shear_up_left": 6}
+
+#: The multigrid hierarchy: ``levels`` (L, 4) int64 (nx, ny, first padded index, padded row length),
+#: level 0 the particles' grid; ``coef`` (2, 9, size) both components' 9-point stencils;
+#: ``inverse_diagonal``, ``x``, ``b``, ``r`` (2, size); ``row`` (nx + 3) scratch.  Each level is
+#: padded by one line of zeros before its first row and column and two after its last.
+Hierarchy = namedtuple("Hierarchy", "levels coef inverse_diagonal x b r row")
+
+#: ``stiffness`` (F, n) per spring, N/m; ``slots`` (F) int64 each family's stencil slot (-1: left
+#: out); ``grid`` the ``Hierarchy`` (one level on small grids); on the coarsest level, ``order``
+#: (n_c) the padded index of each band position and ``rank`` its inverse over the level's padded
+#: points (-1 off the grid); ``bands`` (2, n_c, kd + 1) the factored band matrices and ``rows`` the
+#: same factors by rows; ``reference`` [factored scale (s^2), 1 if factored, 1 if from the Jacobian]
+#: and ``reference_mass`` (n) kg of the last factorisation with the rest stiffness; ``shares``
+#: (2, F) each family's share in t1, t2; ``jacobian_along`` (F, n) kg and ``jacobian_mass`` (n) kg
+#: of the last factorisation from the Jacobian; ``frame`` (3, 3, n) each particle's axes t1, t2, n;
+#: ``normal`` (n) the normal component's diagonal; ``local`` (2, n_c) scratch of the band solves.
+Plane = namedtuple("Plane", "stiffness slots grid order rank bands rows reference reference_mass shares "
+                            "jacobian_along jacobian_mass frame normal local")
+
+
+def level_sizes(nx: int, ny: int, coarsest_side: int) -> list[tuple[int, int]]:
+    """The grids of the hierarchy, finest first: halved while the shorter side exceeds ``coarsest_side``
+    (each coarser grid keeps every other grid line, ``nx // 2 + 1`` of ``nx``)."""
+    sizes = [(nx, ny)]
+    while min(sizes[-1]) > coarsest_side:
+        cx, cy = sizes[-1]
+        sizes.append((cx // 2 + 1, cy // 2 + 1))
+    return sizes
+
+
+def make_hierarchy(sizes: list[tuple[int, int]]) -> Hierarchy:
+    """Zeroed arrays for the grids ``sizes`` (finest first)."""
+    levels = np.zeros((len(sizes), 4), dtype=np.int64)
+    start = 0
+    for level, (nx, ny) in enumerate(sizes):
+        levels[level] = nx, ny, start, nx + 3
+        start += (nx + 3) * (ny + 3)
+    return Hierarchy(levels=levels, coef=np.zeros((2, 9, start)), inverse_diagonal=np.zeros((2, start)),
+                     x=np.zeros((2, start)), b=np.zeros((2, start)), r=np.zeros((2, start)),
+                     row=np.zeros(sizes[0][0] + 3))
+
+
+def make_plane(grid_x: int, grid_y: int, family_names: tuple, stiffness: np.ndarray,
+               multigrid_side: int | None = None) -> Plane:
+    """The preconditioner's arrays for a grid (row-major particles, ``grid_x`` per row); multigrid if
+    the shorter side exceeds ``multigrid_side`` (default MULTIGRID_SIDE)."""
+    n = grid_x * grid_y
+    families = len(family_names)
+    multigrid_side = MULTIGRID_SIDE if multigrid_side is None else multigrid_side
+    sizes = level_sizes(grid_x, grid_y, COARSEST_SIDE) if min(grid_x, grid_y) > multigrid_side else [(grid_x, grid_y)]
+    grid = make_hierarchy(sizes)
+    cx, cy = sizes[-1]
+    n_c = cx * cy
+    col, row = np.arange(n_c) % cx, np.arange(n_c) // cx
+    if cx <= cy:
+        ordered, kd = np.arange(n_c), cx + 1
+    else:  # order along the columns: the shorter side
+        ordered, kd = (col * cy + row).argsort(), cy + 1
+    kd = min(kd, n_c - 1)
+    start, pad = grid.levels[-1, 2], grid.levels[-1, 3]
+    order = (start + (row[ordered] + 1) * pad + col[ordered] + 1).astype(np.int64)
+    rank = np.full(pad * (cy + 3), -1, dtype=np.int64)
+    rank[order - start] = np.arange(n_c)
+    shares = np.array([_SHARE.get(name, (0.0, 0.0)) for name in family_names]).reshape(families, 2).T.copy()
+    slots = np.array([_SLOT.get(name, -1) for name in family_names], dtype=np.int64)
+    return Plane(stiffness=np.ascontiguousarray(stiffness, dtype=float), slots=slots, grid=grid, order=order, rank=rank,
+                 bands=np.zeros((2, n_c, kd + 1)), rows=np.zeros((2, n_c, kd + 1)), reference=np.zeros(3),
+                 reference_mass=np.zeros(n), shares=shares, jacobian_along=np.zeros((families, n)),
+                 jacobian_mass=np.zeros(n), frame=np.repeat(np.eye(3)[:, :, None], n, axis=2), normal=np.ones(n),
+                 local=np.zeros((2, n_c)))

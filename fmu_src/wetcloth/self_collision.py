@@ -1,0 +1,70 @@
+"""The arrays of self-collision (the compiled core's ``self_contact/``; docs/model.md section 6.2):
+the cloth never passes through itself and keeps its layers ``thickness`` apart.
+
+One stage per accepted step, after the floor: a spatial hash finds the candidate pairs (point and
+triangle, edge and edge) and the list is kept while the motion allows; close pairs are pushed apart
+with friction, and rigid impact zones are the fallback.  The candidate lists live in the core (a
+``_core.Stepper`` owns them); what carries over between steps is the list's reference positions and
+margin (``snapshot``), from which a restored run rebuilds the very same list.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numpy as np
+
+from wetcloth._core import CONTACT_COUNTERS, ZONE_ROWS
+
+#: ``enabled`` (bool); ``friction`` (-) between layers; ``least_margin`` (m) of a candidate list;
+#: ``rest_gap`` (m) between the rest sheet's nearest elements that share no particle (``rest_gap``);
+#: the cloth's ``triangles`` (m, 3) and ``edges`` (k, 2) (particle indices) and ``rest`` positions
+#: (3, n) in the flat sheet (m); the list's ``reference`` positions (3, n) and ``margin`` (1,) (m; 0
+#: when there is none); scratch of the impact zones ``zone`` (n) and ``zone_sums`` (ZONE_ROWS, n);
+#: ``counters``: lists built, steps that had candidates, passes over them, pairs pushed apart, rounds
+#: of impact zones, steps undone as a last resort.
+Contact = namedtuple("Contact", "enabled friction least_margin rest_gap triangles edges rest reference margin zone "
+                                "zone_sums counters")
+COUNTER_NAMES = ("rebuilds", "busy_steps", "passes", "responses", "zone_rounds", "freezes")
+
+#: A candidate list's least margin, as a fraction of the grid's smaller spacing: the margin of a
+#: list that has candidates (or follows one that had).  Smaller margins mean more rebuilds of the
+#: list and fewer candidates in it: from 0.2 to 0.05 a crumpled 11 x 15 towel's candidates fell
+#: from 9000 to 2000 and its run from 15 s to 4.5 s.  A list that follows an empty one is as wide as
+#: keeps it empty (the core's WIDE_REACH): with 0.05 everywhere, the default towel's landing (first
+#: 0.5 s, no candidates) rebuilt its list 78 times, now 10 (docs/benchmarks.md).
+MARGIN_FRACTION = 0.05
+
+
+def rest_gap(dx: float, dy: float) -> float:
+    """The distance (m) of the rest sheet's nearest elements that share no particle, on a grid of
+    spacings ``dx``, ``dy`` (m) whose cells are cut by one diagonal: a cell's corner off that
+    diagonal and the diagonal."""
+    return dx * dy / math.hypot(dx, dy)
+
+
+def grid_edges(triangles: np.ndarray) -> np.ndarray:
+    """The distinct edges (k, 2) of a triangle mesh, each as (lower index, higher index)."""
+    edges = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+    edges.sort(axis=1)
+    return np.unique(edges, axis=0).astype(np.int64)
+
+
+def make_contact(topology, enabled: bool, friction: float) -> Contact:
+    """The stage's arrays for a cloth ``topology`` (``wetcloth.topology.Topology``)."""
+    n = topology.n
+    rest = np.zeros((3, n))
+    rest[:2] = topology.rest_xy
+    return Contact(
+        enabled=bool(enabled), friction=float(friction), least_margin=MARGIN_FRACTION * min(topology.dx, topology.dy),
+        rest_gap=rest_gap(topology.dx, topology.dy),
+        triangles=np.ascontiguousarray(topology.triangles, dtype=np.int64), edges=grid_edges(topology.triangles),
+        rest=rest, reference=np.zeros((3, n)), margin=np.zeros(1), zone=np.arange(n, dtype=np.int64),
+        zone_sums=np.zeros((ZONE_ROWS, n)), counters=np.zeros(CONTACT_COUNTERS, dtype=np.int64),
+    )
+
+
+def snapshot(contact: Contact) -> dict:
+    """What the stage carries over between steps: the candidate list's reference (3, n) m and margin m."""
+    return {"contact_reference": contact.reference.copy(), "contact_margin": float(contact.margin[0])}

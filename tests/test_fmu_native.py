@@ -1,0 +1,976 @@
+"""The native unit (``wetcloth build-fmu --native``): the FMU compiled from the C++ core, with no Python in it.
+
+Built once per session (both FMI versions, the core's objects shared). Masters run in child processes (a
+crash of the unit fails a test, not the suite): fmpy, libcosimpy, and a C master that dlopens the binary.
+
+How close to the Python API: the unit runs the C++ core. While the Python package runs its numba kernels,
+the two are different compilations of the same arithmetic (same operations, same order, no fast-math):
+they agree to rounding, and rounding differences grow only where the step controller or the floor take a
+different discrete decision, which moves the cloth by about the local error the controller allows per step
+(``tolerance`` times the cloth's size, 3.5 um on the towel; 90 s of the towel at 0.1 s steps differed by at
+most 8.4 um in the centroid, 3e-16 kg in the masses). So positions are held to ten times that local error,
+masses to 1e-9 relative. Once the package runs on the same core (the same sources, the same value-preserving
+flags: no fast-math, no FMA contraction), the outputs must be identical, and they are required to be.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import json
+import math
+import os
+import shutil
+import struct
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_fmu_support import BLOW_UP, SMALL, last_good_time, run_child
+
+import wetcloth
+from wetcloth.errors import ParameterError
+from wetcloth.scene import check_value
+from wetcloth.simulation import OUTPUT_NAMES
+
+native = pytest.importorskip("wetcloth.fmu.native")
+
+try:
+    native.check_platform()
+    native.core_dir()
+    native.find_compiler()
+except native.NativeBuildError as exc:  # pragma: no cover - machines without a compiler or the sources
+    pytest.skip(f"the native unit cannot be built here: {exc}", allow_module_level=True)
+
+
+# ----------------------------------------------------------------------------------------- tolerances
+def python_runs_on_numba() -> bool:
+    """Whether wetcloth.Simulation still steps with the numba kernels (else it runs the C++ core)."""
+    stepping = getattr(wetcloth.simulation, "advance", None)
+    return stepping is not None and any(cls.__module__.startswith("numba") for cls in type(stepping).__mro__)
+
+
+def assert_agree(unit_rows, python_rows, scene, label=""):
+    """The unit's outputs against the Python API's (rows of OUTPUT_NAMES): identical on the same core,
+    else within the bounds of the module docstring."""
+    unit_rows, python_rows = np.asarray(unit_rows, dtype=float), np.asarray(python_rows, dtype=float)
+    assert unit_rows.shape == python_rows.shape
+    assert np.isfinite(unit_rows).all()
+    if not python_runs_on_numba():
+        np.testing.assert_array_equal(unit_rows, python_rows, err_msg=label)
+        return
+    local_error = scene.tolerance * max(scene.width, scene.length) if scene.tolerance > 0 else 1e-6
+    for column, name in enumerate(OUTPUT_NAMES):
+        if name in ("wet_mass", "water_mass"):
+            np.testing.assert_allclose(unit_rows[:, column], python_rows[:, column], rtol=1e-9, atol=1e-15,
+                                       err_msg=f"{label} {name}")
+        else:
+            np.testing.assert_allclose(unit_rows[:, column], python_rows[:, column], rtol=0, atol=10 * local_error,
+                                       err_msg=f"{label} {name}")
+
+
+def advance_as_the_unit(sim: wetcloth.Simulation, t: float) -> None:
+    """Step to fmpy's communication point t as the unit does: fmpy passes the step t - t_prev, and the unit
+    steps to t_prev + step (which may be an ulp from t) from the start time 0."""
+    previous = getattr(sim, "_communication_point", 0.0)
+    sim.advance(max(0.0, previous + (t - previous) - 0.0 - sim.time))
+    sim._communication_point = t
+
+
+# ----------------------------------------------------------------------------------------- the build
+@pytest.fixture(scope="session")
+def build(tmp_path_factory):
+    """Both units, built once; their extracted folders and model descriptions."""
+    import fmpy
+
+    folder = tmp_path_factory.mktemp("native_fmu")
+    objects = folder / "objects"
+    units = {}
+    for version in (2, 3):
+        fmu = native.build_native_fmu(folder / f"WetClothNative{'' if version == 2 else 3}.fmu", version,
+                                      build_dir=objects)
+        directory = Path(fmpy.extract(str(fmu), unzipdir=str(folder / f"unzipped{version}")))
+        units[version] = {"fmu": fmu, "dir": directory, "md": fmpy.read_model_description(str(fmu))}
+    units["objects"] = objects
+    units["folder"] = folder
+    return units
+
+
+def binary(build, version=2) -> Path:
+    return build[version]["dir"] / "binaries" / native.PLATFORM_FOLDER[version] / "WetCloth.so"
+
+
+# ----------------------------------------------------------------------------------------- the archive
+def test_fmpy_validates_both_units_without_remarks(build):
+    from fmpy.model_description import read_build_description
+    from fmpy.validation import validate_fmu
+
+    for version in (2, 3):
+        assert validate_fmu(str(build[version]["fmu"])) == [], version
+        # sources/buildDescription.xml (FMI 3.0's schema, checked) and, for FMI 2.0, the description's SourceFiles
+        configurations = read_build_description(str(build[version]["fmu"]), validate=True)
+        assert configurations[0].sourceFileSets[0].language == "C++17"
+        files = configurations[0].sourceFileSets[0].sourceFiles
+        assert f"fmu/fmi{version}.cpp" in files and "core/model.cpp" in files and "core/stepping.cpp" in files
+        assert all((build[version]["dir"] / "sources" / f).is_file() for f in files)
+    assert build[2]["md"].buildConfigurations[0].sourceFileSets[0].sourceFiles == files[:-1] + ["fmu/fmi2.cpp"]
+
+
+def test_the_variables_are_those_of_the_python_units(build):
+    """Same names, value references, types, causalities and starts as the pythonfmu units would write
+    (the vocabulary's order), and the same model name."""
+    from wetcloth.fmu.vocabulary import variable_specs
+
+    for version in (2, 3):
+        md = build[version]["md"]
+        assert md.modelName == "WetCloth" and md.coSimulation.modelIdentifier == "WetCloth"
+        assert md.coSimulation.needsExecutionTool in (False, "false")
+        specs = variable_specs(fmi_version=version)
+        assert [(v.name, v.valueReference, v.causality) for v in md.modelVariables] == [
+            (s.name, k, "structuralParameter" if version == 3 and s.name in ("nx", "ny") else s.causality)
+            for k, s in enumerate(specs)]
+
+
+def test_the_binary_carries_no_python_and_exports_only_fmi_functions(build):
+    for version in (2, 3):
+        so = binary(build, version)
+        libraries = subprocess.run(["ldd", str(so)], capture_output=True, text=True, check=True).stdout
+        assert "libpython" not in libraries
+        assert "libstdc++" not in libraries and "libgcc_s" not in libraries  # linked in statically
+        symbols = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True,
+                                 check=True).stdout.split()[2::3]
+        assert symbols and all(s.startswith(f"fmi{version}") for s in symbols), symbols
+        assert f"fmi{version}DoStep" in symbols
+    if shutil.which("objdump"):  # baseline x86-64: no AVX register anywhere
+        code = subprocess.run(["objdump", "-d", str(binary(build))], capture_output=True, text=True).stdout
+        assert "%ymm" not in code and "%zmm" not in code
+
+
+def test_its_documentation_says_it_writes_no_mesh_frames(build):
+    for version in (2, 3):
+        text = (build[version]["dir"] / "documentation" / "index.html").read_text()
+        assert "writes no mesh frames" in text and "mesh_output_dir" in text and "no Python" in text
+
+
+def test_wheel_installs_and_missing_compilers_are_refused_clearly(monkeypatch, tmp_path):
+    monkeypatch.setattr(native.wetcloth, "__file__", str(tmp_path / "site-packages" / "wetcloth" / "__init__.py"))
+    with pytest.raises(native.NativeBuildError, match="does not have: a wheel carries no C.. sources"):
+        native.core_dir()
+    monkeypatch.undo()
+    monkeypatch.setenv("CXX", str(tmp_path / "no-such-compiler"))
+    with pytest.raises(native.NativeBuildError, match="is not found"):
+        native.build_native_fmu(tmp_path / "x.fmu")
+    monkeypatch.delenv("CXX")
+    monkeypatch.setenv("PATH", str(tmp_path))
+    with pytest.raises(native.NativeBuildError, match="no C.. compiler found"):
+        native.find_compiler()
+
+
+# ----------------------------------------------------------------------------------------- the model arrays
+CHECKER = r"""
+// Exposes a wc::Simulation's arrays by name (the Python test compares them with wetcloth.Simulation's).
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+#include "wetcloth/model.hpp"
+#define API extern "C" __attribute__((visibility("default")))
+using namespace wc;
+struct Checked { std::unique_ptr<Simulation> sim; };
+
+static void assign(Scene& scene, int count, const char** names, const double* numbers, const char** texts) {
+    for (int k = 0; k < count; ++k) {
+        for_each_field(scene, [&](const char* field, auto& member) {
+            if (std::strcmp(field, names[k]) != 0) return;
+            if (texts[k] != nullptr) {
+                const Choices c = scene_choices(field);
+                for (Index j = 0; j < c.count; ++j) if (std::strcmp(c.names[j], texts[k]) == 0) member = j;
+            } else {
+                member = static_cast<std::remove_reference_t<decltype(member)>>(numbers[k]);
+            }
+        });
+    }
+}
+
+API void* check_new(int count, const char** names, const double* numbers, const char** texts, char* error) {
+    Scene scene;
+    assign(scene, count, names, numbers, texts);
+    try { return new Checked{std::make_unique<Simulation>(scene)}; }
+    catch (const std::exception& e) { std::snprintf(error, 1000, "%s", e.what()); return nullptr; }
+}
+API void check_free(void* h) { delete static_cast<Checked*>(h); }
+API int check_set_inputs(void* h, int count, const char** names, const double* numbers) {
+    Simulation& sim = *static_cast<Checked*>(h)->sim;
+    Scene next = sim.scene();
+    std::vector<const char*> texts(count, nullptr);
+    assign(next, count, names, numbers, texts.data());
+    return sim.set_inputs(next) ? 1 : 0;
+}
+API int check_advance(void* h, double duration) { return static_cast<int>(static_cast<Checked*>(h)->sim->advance(duration)); }
+API long check_snapshot(void* h, unsigned char* out, long capacity) {
+    const auto bytes = static_cast<Checked*>(h)->sim->snapshot();
+    if (out && capacity >= static_cast<long>(bytes.size())) std::memcpy(out, bytes.data(), bytes.size());
+    return static_cast<long>(bytes.size());
+}
+API int check_restore(void* h, const unsigned char* data, long size, char* error) {
+    try { static_cast<Checked*>(h)->sim->restore(data, static_cast<std::size_t>(size)); return 0; }
+    catch (const std::exception& e) { std::snprintf(error, 1000, "%s", e.what()); return 1; }
+}
+
+template <class T> static void put(std::vector<double>& v, const T* p, Index count) {
+    for (Index i = 0; i < count; ++i) v.push_back(static_cast<double>(p[i]));
+}
+
+API long check_array(void* h, const char* name, double* out, long capacity) {
+    const Simulation& sim = *static_cast<Checked*>(h)->sim;
+    const Core& c = sim.core();
+    const Index n = sim.n(), F = c.cloth.families, W = c.cloth.wick_families;
+    const std::string key = name;
+    std::vector<double> v;
+    const Physics& p = c.phys;
+    const Control& k = c.control;
+    const Plane& pl = c.plane;
+    const Contact& ct = c.contact;
+    const Buffers& b = c.buf;
+    if (key == "offsets") put(v, c.cloth.offsets, F);
+    else if (key == "rest") put(v, c.cloth.rest, F);
+    else if (key == "tension_only") put(v, c.cloth.tension_only, F);
+    else if (key == "stiffness") put(v, c.cloth.stiffness, F * n);
+    else if (key == "damping") put(v, c.cloth.damping, F * n);
+    else if (key == "free") put(v, c.cloth.free, n);
+    else if (key == "dry_mass") put(v, c.cloth.dry_mass, n);
+    else if (key == "volume") put(v, c.cloth.volume, n);
+    else if (key == "stokes_coefficient") put(v, c.cloth.stokes_coefficient, n);
+    else if (key == "capacity") put(v, c.cloth.capacity, n);
+    else if (key == "wick_offsets") put(v, c.cloth.wick_offsets, W);
+    else if (key == "wick_conductance") put(v, c.cloth.wick_conductance, W * n);
+    else if (key == "grid") v = {double(c.cloth.grid_x), double(c.cloth.grid_y)};
+    else if (key == "physics") v = {double(p.projected), p.wet_factor, p.water_level, p.water_density, p.thickness,
+        double(p.smooth), double(p.stokes), p.drag_normal, p.drag_tangential, p.drag_linear, p.current_x, p.current_y,
+        p.floor_z, p.floor_friction, p.absorption_capacity, p.absorption_rate, p.drying_rate, p.wicking_rate,
+        p.wick_step_limit, double(p.skip_idle)};
+    else if (key == "control") v = {double(k.integrator), k.tolerance, k.allowed, k.max_step, k.newton_tolerance,
+        k.cg_tolerance, k.omega_squared, k.buoyancy_omega_squared, k.damping_rate, k.spring_limit, k.drag_rate_offset,
+        k.drag_rate_slope, k.smallest_step, k.growth, k.shrink, k.blow_up_speed, k.sleep_distance, k.sleep_after};
+    else if (key == "plane.slots") put(v, pl.slots, F);
+    else if (key == "plane.shares") put(v, pl.shares, 2 * F);
+    else if (key == "plane.stiffness") put(v, pl.stiffness, F * n);
+    else if (key == "plane.order") put(v, pl.order, pl.coarse_n);
+    else if (key == "plane.rank") put(v, pl.rank, pl.rank_size);
+    else if (key == "plane.levels") put(v, pl.grid.levels, 4 * pl.grid.level_count);
+    else if (key == "plane.sizes") v = {double(pl.kd), double(pl.coarse_n), double(pl.grid.size)};
+    else if (key == "plane.reference") put(v, pl.reference, 3);
+    else if (key == "plane.reference_mass") put(v, pl.reference_mass, n);
+    else if (key == "plane.frame") put(v, pl.frame, 9 * n);
+    else if (key == "plane.normal") put(v, pl.normal, n);
+    else if (key == "contact") v = {double(ct.enabled), ct.friction, ct.least_margin, ct.rest_gap, ct.margin[0]};
+    else if (key == "contact.triangles") put(v, ct.triangles, 3 * ct.triangle_count);
+    else if (key == "contact.edges") put(v, ct.edges, 2 * ct.edge_count);
+    else if (key == "contact.rest") put(v, ct.rest, 3 * n);
+    else if (key == "contact.reference") put(v, ct.reference, 3 * n);
+    else if (key == "contact.zone") put(v, ct.zone, n);
+    else if (key == "pos") put(v, b.pos, 3 * n);
+    else if (key == "vel") put(v, b.vel, 3 * n);
+    else if (key == "water") put(v, b.water, n);
+    else if (key == "trial_pos") put(v, b.trial_pos, 3 * n);
+    else if (key == "trial_vel") put(v, b.trial_vel, 3 * n);
+    else if (key == "trial_water") put(v, b.trial_water, n);
+    else if (key == "prev_pos") put(v, b.prev_pos, 3 * n);
+    else if (key == "prev_vel") put(v, b.prev_vel, 3 * n);
+    else if (key == "prev_water") put(v, b.prev_water, n);
+    else if (key == "acceleration") put(v, b.acceleration, 3 * n);
+    else if (key == "anchor") put(v, b.anchor, 3 * n);
+    else if (key == "held") put(v, b.held, n);
+    else if (key == "clock") put(v, c.clock, CLOCK_SIZE);
+    else if (key == "outputs") { v.resize(6); sim.outputs(v.data()); }
+    else return -1;
+    if (out && capacity >= static_cast<long>(v.size())) std::memcpy(out, v.data(), v.size() * sizeof(double));
+    return static_cast<long>(v.size());
+}
+"""
+
+
+class Checker:
+    """A wc::Simulation in this process (model.cpp and the core's objects, through ctypes)."""
+
+    def __init__(self, library, **values):
+        self.lib = library
+        names = [k.encode() for k in values]
+        numbers = [0.0 if isinstance(v, str) else float(v) for v in values.values()]
+        texts = [v.encode() if isinstance(v, str) else None for v in values.values()]
+        error = ctypes.create_string_buffer(1000)
+        self.handle = library.check_new(len(names), (ctypes.c_char_p * len(names))(*names),
+                                        (ctypes.c_double * len(names))(*numbers),
+                                        (ctypes.c_char_p * len(names))(*texts), error)
+        if not self.handle:
+            raise ValueError(error.value.decode())
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        size = self.lib.check_array(self.handle, name.encode(), None, 0)
+        assert size >= 0, name
+        out = np.zeros(size)
+        self.lib.check_array(self.handle, name.encode(), out.ctypes.data_as(ctypes.c_void_p), size)
+        return out
+
+    @property
+    def time(self) -> float:
+        return float(self["clock"][0])
+
+    def advance(self, duration: float) -> int:
+        return self.lib.check_advance(self.handle, duration)
+
+    def set_inputs(self, **values) -> int:
+        names = [k.encode() for k in values]
+        return self.lib.check_set_inputs(self.handle, len(names), (ctypes.c_char_p * len(names))(*names),
+                                         (ctypes.c_double * len(names))(*map(float, values.values())))
+
+    def snapshot(self) -> bytes:
+        size = self.lib.check_snapshot(self.handle, None, 0)
+        out = ctypes.create_string_buffer(size)
+        self.lib.check_snapshot(self.handle, out, size)
+        return out.raw
+
+    def restore(self, data: bytes) -> str:
+        error = ctypes.create_string_buffer(1000)
+        return error.value.decode() if self.lib.check_restore(self.handle, data, len(data), error) else ""
+
+    def close(self):
+        self.lib.check_free(self.handle)
+
+
+@pytest.fixture(scope="module")
+def checker_library(build):
+    """The checker compiled against model.hpp and linked with the core's objects of the unit's build."""
+    folder = build["folder"] / "checker"
+    folder.mkdir(exist_ok=True)
+    source = folder / "checker.cpp"
+    source.write_text(CHECKER)
+    core = native.core_dir()
+    objects = native.core_objects(build["objects"])  # already compiled: reused
+    library = folder / "checker.so"
+    compiler = native.find_compiler()
+    subprocess.run([compiler, *native.CXX_FLAGS, "-O1", f"-I{core / 'include'}", "-shared", "-o", str(library),
+                    str(source), *map(str, objects)], check=True, capture_output=True)
+    lib = ctypes.CDLL(str(library))
+    lib.check_new.restype = ctypes.c_void_p
+    lib.check_new.argtypes = [ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_char_p]
+    lib.check_free.argtypes = [ctypes.c_void_p]
+    lib.check_array.restype = ctypes.c_long
+    lib.check_array.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_void_p, ctypes.c_long]
+    lib.check_set_inputs.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p]
+    lib.check_advance.argtypes = [ctypes.c_void_p, ctypes.c_double]
+    lib.check_snapshot.restype = ctypes.c_long
+    lib.check_snapshot.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_long]
+    lib.check_restore.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_long, ctypes.c_char_p]
+    return lib
+
+
+#: Scenes whose set-up takes every branch: the towel; wicking and a current (presets); a grid large enough
+#: for multigrid (wider than long: band order along the columns), pinned, without bending springs, with
+#: Stokes drag, thesis damping, wet stiffening and water at the start; fixed explicit steps.
+SCENES = [
+    {},
+    {"preset": "wicking"},
+    {"preset": "current"},
+    {"nx": 50, "ny": 45, "pinned_edge": "x_min", "bend_stiffness": 0.0, "drag_model": "stokes",
+     "damping_model": "thesis", "wet_stiffness_factor": 0.5, "initial_saturation": 0.3, "self_collision": "off",
+     "buoyancy_model": "thesis", "initial_tilt": -30.0},
+    {"nx": 7, "ny": 3, "integrator": "explicit_euler", "tolerance": 0.0, "max_step": 0.001, "pinned_edge": "y_max",
+     "wet_stiffness_factor": -0.5, "stretch_stiffness": 500.0, "damping": 0.0},
+]
+
+
+def scene_values(case: dict) -> dict:
+    case = dict(case)
+    preset = case.pop("preset", None)
+    return wetcloth.load_scene(preset, **case).to_dict()
+
+
+def python_arrays(sim: wetcloth.Simulation) -> dict[str, np.ndarray]:
+    """The same arrays from the Python package."""
+    cloth, plane, contact, buf = sim.model.cloth, sim._plane, sim._contact, sim._buffers
+    control = sim._control
+    arrays = {name: getattr(cloth, name) for name in ("offsets", "rest", "tension_only", "stiffness", "damping", "free",
+                                                      "dry_mass", "volume", "stokes_coefficient", "capacity",
+                                                      "wick_offsets", "wick_conductance")}
+    arrays["grid"] = [cloth.grid_x, cloth.grid_y]
+    arrays["physics"] = [float(v) for v in sim.model.physics]
+    arrays["control"] = [float(getattr(control, f)) for f in control._fields if f != "scheme"]
+    arrays |= {f"plane.{name}": getattr(plane, name) for name in ("slots", "shares", "stiffness", "order", "rank",
+                                                                  "reference", "reference_mass", "frame", "normal")}
+    arrays["plane.levels"] = plane.grid.levels
+    arrays["plane.sizes"] = [plane.bands.shape[2] - 1, plane.order.shape[0], plane.grid.x.shape[1]]
+    arrays["contact"] = [contact.enabled, contact.friction, contact.least_margin, contact.rest_gap, contact.margin[0]]
+    arrays |= {f"contact.{name}": getattr(contact, name) for name in ("triangles", "edges", "rest", "reference", "zone")}
+    arrays |= {name: getattr(buf, name) for name in buf._fields}
+    arrays["clock"] = sim._clock
+    return {k: np.ascontiguousarray(v, dtype=float).ravel() for k, v in arrays.items()}
+
+
+def assert_bitwise(ours: np.ndarray, theirs: np.ndarray, name: str):
+    assert ours.shape == theirs.shape, (name, ours.shape, theirs.shape)
+    assert ours.tobytes() == theirs.tobytes(), (name, np.flatnonzero(ours != theirs)[:5])
+
+
+@pytest.mark.parametrize("case", SCENES, ids=lambda c: "-".join(f"{k}={v}" for k, v in c.items()) or "towel")
+def test_model_arrays_agree_with_the_python_package_to_the_bit(checker_library, case):
+    values = scene_values(case)
+    ours = Checker(checker_library, **values)
+    try:
+        sim = wetcloth.Simulation(wetcloth.scene.from_dict(values))
+        theirs = python_arrays(sim)
+        for name, array in theirs.items():
+            assert_bitwise(ours[name], array, name)
+        # Inputs change Physics, Control and the capacity (and wicking's conductances) as set_inputs does.
+        inputs = dict(water_level=0.03, water_density=1020.0, absorption_capacity=2.5, absorption_rate=0.4,
+                      current_x=0.2, current_y=-0.1)
+        assert ours.set_inputs(**inputs) == 1 and ours.set_inputs(**inputs) == 0
+        sim.set_inputs(**inputs)
+        theirs = python_arrays(sim)
+        for name in ("capacity", "wick_conductance", "physics", "control", "dry_mass", "anchor", "clock"):
+            assert_bitwise(ours[name], theirs[name], f"{name} after set_inputs")
+    finally:
+        ours.close()
+
+
+def fnv1a(data: bytes) -> int:
+    h = 0xcbf29ce484222325
+    for byte in data:
+        h = ((h ^ byte) * 0x100000001b3) & 0xFFFFFFFFFFFFFFFF
+    return h
+
+
+def test_snapshots_of_another_grid_or_not_finite_are_refused_and_change_nothing(checker_library):
+    a = Checker(checker_library, nx=9, ny=9)
+    b = Checker(checker_library, nx=9, ny=11)
+    try:
+        assert checker_library.check_advance(a.handle, 0.3) == 0
+        data = a.snapshot()
+        before = a["pos"]
+        assert "another grid: 9 x 9 particles, this simulation has 9 x 11" in b.restore(data)
+        # A NaN among the positions (checksum made to fit): refused, nothing changed.
+        magic = len(b"wetcloth-native-snapshot\n")
+        body = bytearray(data[magic + 12:])
+        offset = 16 + 8 * 36 + 8 * (15 + 3 + 1) + 8 * 5  # families, count, scene, clock, reference, margin; 6th x
+        body[offset:offset + 8] = struct.pack("<d", float("nan"))
+        bad = data[:magic + 4] + struct.pack("<Q", fnv1a(bytes(body))) + bytes(body)
+        checker_library.check_advance(a.handle, 0.1)
+        moved = a["pos"]
+        assert "not finite" in a.restore(bad)
+        assert_bitwise(a["pos"], moved, "pos after a refused snapshot")
+        assert "checksum" in a.restore(data[:-8] + b"\0" * 8)
+        assert a.restore(data) == ""
+        assert_bitwise(a["pos"], before, "pos after restoring")
+    finally:
+        a.close()
+        b.close()
+
+
+# ----------------------------------------------------------------------------------------- fmpy
+def test_fmpy_runs_the_towel_as_the_python_api_does(build):
+    import fmpy
+
+    result = fmpy.simulate_fmu(str(build[2]["dir"]), stop_time=3.0, output_interval=1 / 30,
+                               model_description=build[2]["md"])
+    assert math.isclose(result["time"][-1], 3.0)
+    scene = wetcloth.load_scene()
+    sim = wetcloth.Simulation(scene)
+    rows = []
+    for t in result["time"]:
+        advance_as_the_unit(sim, t)
+        rows.append([sim.outputs()[n] for n in OUTPUT_NAMES])
+    assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows, scene, "fmpy FMI 2.0")
+
+
+def test_the_unit_steps_exactly_as_the_cores_simulation(build, checker_library):
+    """Whatever the Python package runs on: the unit adds nothing to the core's arithmetic (the outputs of
+    fmpy's run are those of a wc::Simulation stepped to the same points, bit for bit)."""
+    import fmpy
+
+    values = {"nx": 9, "ny": 13, "absorption_rate": 0.5}
+    result = fmpy.simulate_fmu(str(build[2]["dir"]), stop_time=2.0, output_interval=1 / 30, start_values=values,
+                               model_description=build[2]["md"])
+    core = Checker(checker_library, **values)
+    try:
+        previous, rows = 0.0, []
+        for t in result["time"]:
+            assert core.advance(max(0.0, previous + (t - previous) - 0.0 - core.time)) == 0
+            previous = t
+            rows.append(core["outputs"])
+    finally:
+        core.close()
+    for column, name in enumerate(OUTPUT_NAMES):
+        assert_bitwise(result[name].astype(float), np.array(rows)[:, column].copy(), name)
+
+
+def test_fmi3_mesh_outputs_are_the_python_api_positions_and_wetness(build):
+    from wetcloth.fmu.cosim import simulate
+
+    values = {"nx": 9, "ny": 13, "initial_saturation": 0.2, "absorption_rate": 0.5}
+    result = simulate(build[3]["fmu"], duration=1.0, fps=20, start_values=values,
+                      output=[*OUTPUT_NAMES, "positions", "wetness"])
+    assert result["positions"].shape == (21, 13, 9, 3) and result["wetness"].shape == (21, 13, 9)
+    scene = wetcloth.load_scene(**values)
+    sim = wetcloth.Simulation(scene)
+    rows, positions, wetness = [], [], []
+    for t in result["time"]:
+        advance_as_the_unit(sim, t)
+        rows.append([sim.outputs()[n] for n in OUTPUT_NAMES])
+        positions.append(sim.positions)
+        wetness.append(sim.wetness)
+    assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows, scene, "FMI 3.0")
+    exact = not python_runs_on_numba()
+    np.testing.assert_allclose(result["positions"].reshape(21, -1, 3), positions, rtol=0,
+                               atol=0 if exact else 10 * scene.tolerance * scene.length)
+    np.testing.assert_allclose(result["wetness"].reshape(21, -1), wetness, rtol=0, atol=0 if exact else 1e-9)
+    assert result["wetness"][-1].max() > 0.2  # the cloth took up water
+
+
+def test_fmpy_compiles_the_unit_from_its_sources(build, tmp_path, monkeypatch):
+    """sources/ is complete: fmpy's CMake build of it (unoptimised, for speed) runs the same steps."""
+    import fmpy
+    from fmpy.build import build_platform_binary
+
+    if not shutil.which("cmake"):
+        pytest.skip("fmpy builds from sources with cmake, which is not installed")
+    unzipped = Path(fmpy.extract(str(build[2]["fmu"]), unzipdir=str(tmp_path / "unit")))
+    prebuilt = unzipped / "binaries" / "linux64" / "WetCloth.so"
+    prebuilt.unlink()
+    monkeypatch.setenv("CMAKE_BUILD_PARALLEL_LEVEL", str(os.cpu_count() or 1))
+    (tmp_path / "cmake").mkdir()
+    build_platform_binary(unzipped, tmp_path / "cmake", configuration="Debug")
+    assert prebuilt.is_file()
+    values = {"nx": 9, "ny": 9}
+    ours = fmpy.simulate_fmu(str(unzipped), stop_time=0.5, output_interval=0.1, start_values=values)
+    theirs = fmpy.simulate_fmu(str(build[2]["dir"]), stop_time=0.5, output_interval=0.1, start_values=values,
+                               model_description=build[2]["md"])
+    # Baseline x86-64 has no fused multiply-add to contract into, and nothing else changes a value between
+    # -O0 and -O3 without fast-math: the same numbers.
+    for name in OUTPUT_NAMES:
+        np.testing.assert_array_equal(ours[name], theirs[name], err_msg=name)
+
+
+# ----------------------------------------------------------------------------------------- libcosimpy
+LIBCOSIM = r"""
+import json, sys
+from fmpy import read_model_description
+from libcosimpy.CosimExecution import CosimExecution
+from libcosimpy.CosimManipulator import CosimManipulator
+from libcosimpy.CosimObserver import CosimObserver
+from libcosimpy.CosimSlave import CosimLocalSlave
+fmu, values = sys.argv[1], json.loads(sys.argv[2])
+md = read_model_description(fmu)
+vr = {v.name: v.valueReference for v in md.modelVariables}
+outputs = [v.name for v in md.modelVariables if v.causality == "output"]
+execution = CosimExecution.from_step_size(50_000_000)
+index = execution.add_local_slave(CosimLocalSlave(fmu_path=fmu, instance_name="cloth"))
+observer = CosimObserver.create_last_value()
+execution.add_observer(observer)
+override = CosimManipulator.create_override()
+execution.add_manipulator(override)
+for name, value in values.items():
+    execution.integer_initial_value(index, vr[name], value)
+rows = []
+for k in range(12):
+    if k == 5:
+        assert override.slave_real_values(index, [vr["water_level"]], [0.02])
+    assert execution.step()
+    rows.append({"time": execution.status().current_time * 1e-9,
+                 **dict(zip(outputs, observer.last_real_values(index, [vr[n] for n in outputs])))})
+print(json.dumps({"rows": rows}), flush=True)
+"""
+
+
+def test_libcosim_runs_the_native_unit(build, tmp_path):
+    pytest.importorskip("libcosimpy")
+    records, _ = run_child(LIBCOSIM, build[2]["fmu"], json.dumps(SMALL), cwd=tmp_path)
+    rows = records[-1]["rows"]
+    assert len(rows) == 12
+    scene = wetcloth.Scene(**SMALL)
+    sim = wetcloth.Simulation(scene)
+    expected = []
+    for k, row in enumerate(rows):
+        if k == 5:
+            sim.set_inputs(water_level=0.02)
+        assert row["time"] == pytest.approx((k + 1) * 0.05, abs=1e-12)
+        sim.advance(row["time"] - sim.time)
+        expected.append([sim.outputs()[n] for n in OUTPUT_NAMES])
+    # libcosim's integer-nanosecond clock may put communication points a few ulp from ours: rounding
+    # differences at most, far inside the bounds (and not bitwise on the same core: hence rtol).
+    got = np.array([[row[n] for n in OUTPUT_NAMES] for row in rows])
+    np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-12)
+    assert rows[-1]["centroid_z"] > rows[4]["centroid_z"] + 0.01  # the new level reached the cloth
+
+
+# ----------------------------------------------------------------------------------------- a C master
+C_MASTER = r"""
+/* A co-simulation master in C: load the unit, set a parameter, step the towel 90 s at 0.1 s, print the outputs. */
+#include <dlfcn.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include "fmi2FunctionTypes.h"
+
+static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
+                   fmi2String message, ...) {
+    (void)env;
+    fprintf(stderr, "%s [%d %s] %s\n", name, (int)status, category, message);
+}
+
+#define LOAD(type, name) type* name = (type*)dlsym(lib, #name); if (!name) { fprintf(stderr, "no %s\n", #name); return 2; }
+
+int main(int argc, char** argv) {
+    if (argc != 6) return 2;
+    void* lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
+    if (!lib) { fprintf(stderr, "%s\n", dlerror()); return 2; }
+    LOAD(fmi2InstantiateTYPE, fmi2Instantiate)
+    LOAD(fmi2SetRealTYPE, fmi2SetReal)
+    LOAD(fmi2GetRealTYPE, fmi2GetReal)
+    LOAD(fmi2SetupExperimentTYPE, fmi2SetupExperiment)
+    LOAD(fmi2EnterInitializationModeTYPE, fmi2EnterInitializationMode)
+    LOAD(fmi2ExitInitializationModeTYPE, fmi2ExitInitializationMode)
+    LOAD(fmi2DoStepTYPE, fmi2DoStep)
+    LOAD(fmi2TerminateTYPE, fmi2Terminate)
+    LOAD(fmi2FreeInstanceTYPE, fmi2FreeInstance)
+    fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
+    fmi2Component c = fmi2Instantiate("towel", fmi2CoSimulation, argv[2], "", &callbacks, fmi2False, fmi2False);
+    if (!c) return 3;
+    const fmi2ValueReference parameter = (fmi2ValueReference)atoi(argv[3]);
+    const fmi2Real value = atof(argv[4]);
+    fmi2ValueReference outputs[6];
+    for (int k = 0; k < 6; ++k) outputs[k] = (fmi2ValueReference)(atoi(argv[5]) + k);
+    if (fmi2SetReal(c, &parameter, 1, &value) != fmi2OK) return 4;
+    if (fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) != fmi2OK) return 5;
+    if (fmi2EnterInitializationMode(c) != fmi2OK || fmi2ExitInitializationMode(c) != fmi2OK) return 6;
+    for (int k = 0; k < 900; ++k) {
+        const double t = k * 0.1;
+        if (fmi2DoStep(c, t, 0.1, fmi2True) != fmi2OK) return 7;
+        fmi2Real y[6];
+        if (fmi2GetReal(c, outputs, 6, y) != fmi2OK) return 8;
+        printf("%.17g %.17g %.17g %.17g %.17g %.17g\n", y[0], y[1], y[2], y[3], y[4], y[5]);
+    }
+    if (fmi2Terminate(c) != fmi2OK) return 9;
+    fmi2FreeInstance(c);
+    dlclose(lib);
+    return 0;
+}
+"""
+
+
+def test_a_c_master_runs_the_towel_for_90_s_without_python(build, tmp_path):
+    compiler = shutil.which("cc") or shutil.which("gcc")
+    if compiler is None:
+        pytest.skip("no C compiler")
+    source = tmp_path / "master.c"
+    source.write_text(C_MASTER)
+    master = tmp_path / "master"
+    subprocess.run([compiler, "-std=c99", "-O1", f"-I{build[2]['dir'] / 'sources' / 'fmu'}", "-o", str(master),
+                    str(source), "-ldl"], check=True, capture_output=True, text=True)
+    md = build[2]["md"]
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    env = {"PATH": "/usr/bin:/bin", "LANG": "C"}  # no Python anywhere near: not on the path, no PYTHONPATH
+    done = subprocess.run([str(master), str(binary(build)), md.guid, str(vr["absorption_rate"]), "0.3",
+                           str(vr["centroid_x"])], capture_output=True, text=True, env=env, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    got = np.array([[float(x) for x in line.split()] for line in done.stdout.splitlines()])
+    assert got.shape == (900, 6)
+    scene = wetcloth.load_scene(absorption_rate=0.3)
+    sim = wetcloth.Simulation(scene)
+    expected = []
+    for k in range(900):
+        sim.advance(k * 0.1 + 0.1 - sim.time)
+        expected.append([sim.outputs()[n] for n in OUTPUT_NAMES])
+    assert_agree(got, expected, scene, "C master")
+    assert got[-1, OUTPUT_NAMES.index("depth")] > 0.5  # the towel sank
+
+
+# ----------------------------------------------------------------------------------------- errors
+ERRORS = r"""
+import json, math, sys
+import fmpy
+from fmpy import calloc, free
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
+                       fmi2CallbackLoggerTYPE)
+directory = sys.argv[1]
+md = fmpy.read_model_description(directory)
+var = {v.name: v for v in md.modelVariables}
+messages = []
+
+def logger(env, instance, status, category, message):
+    messages.append((int(status), message.decode()))
+
+callbacks = fmi2CallbackFunctions()
+callbacks.logger = fmi2CallbackLoggerTYPE(logger)
+callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+
+def status(call, *args):
+    try:
+        call(*args)
+        return 0
+    except FMICallException as exc:
+        return int(exc.status)
+
+def new(name):
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier="WetCloth", instanceName=name)
+    fmu.instantiate(callbacks=callbacks, loggingOn=False)  # errors are logged with logging off too
+    fmu.setupExperiment(startTime=0.0)
+    return fmu
+
+def set(fmu, name, value):
+    v = var[name]
+    return status({"Real": fmu.setReal, "Integer": fmu.setInteger, "String": fmu.setString}[v.type],
+                  [v.valueReference], [value])
+
+def outputs(fmu):
+    return fmu.getReal([var[n].valueReference for n in ("centroid_x", "centroid_y", "centroid_z", "depth",
+                                                         "wet_mass", "water_mass")])
+
+def since(k):
+    return [m for s, m in messages[k:] if s >= 3]
+
+r = {}
+fmu = new("bad")
+for name, value in [("width", -1.0), ("water_level", float("nan")), ("nx", 1), ("integrator", "bdf3"),
+                    ("mesh_format", "stl"), ("drag_model", "fast")]:
+    k = len(messages)
+    r[f"set {name}"] = [set(fmu, name, value), since(k)]
+k = len(messages)
+r["init refused"] = [status(fmu.enterInitializationMode), status(fmu.exitInitializationMode), since(k)]
+for name, value in [("width", 0.5), ("water_level", 0.0), ("nx", 9), ("integrator", "bdf2"), ("mesh_format", "ply"),
+                    ("drag_model", "face")]:
+    set(fmu, name, value)
+k = len(messages)
+r["init ok"] = [status(fmu.exitInitializationMode), since(k)]
+r["step ok"] = status(fmu.doStep, 0.0, 0.1)
+k = len(messages)
+r["input nan"] = [set(fmu, "water_level", float("nan")), status(fmu.doStep, 0.1, 0.1), since(k),
+                  all(math.isfinite(x) for x in outputs(fmu))]
+r["input fixed"] = [set(fmu, "width", 0.6), set(fmu, "mesh_format", "obj"), since(k)[-2:]]
+set(fmu, "width", 0.5); set(fmu, "mesh_format", "ply")
+r["input ok again"] = [set(fmu, "water_level", 0.01), status(fmu.doStep, 0.1, 0.1), fmu.getReal([var["water_level"].valueReference])[0]]
+k = len(messages)
+r["calls"] = [status(fmu.doStep, float("inf"), 0.1), status(fmu.doStep, 0.5, 0.1), status(fmu.doStep, 0.2, -1.0),
+              status(fmu.setReal, [var["depth"].valueReference], [1.0]), status(fmu.setReal, [999], [1.0]),
+              status(fmu.setInteger, [var["width"].valueReference], [1]), status(fmu.doStep, 0.2, 0.1), since(k)]
+r["terminate"] = [status(fmu.terminate), status(fmu.terminate), status(fmu.doStep, 0.3, 0.1)]
+fmu.freeInstance()
+
+mesh = new("mesh")
+k = len(messages)
+r["mesh_output_dir"] = [set(mesh, "mesh_output_dir", "out/frames"), status(mesh.enterInitializationMode),
+                        status(mesh.exitInitializationMode), since(k), set(mesh, "mesh_output_dir", ""),
+                        status(mesh.exitInitializationMode)]
+mesh.freeInstance()
+
+floor = new("floor")
+set(floor, "initial_height", -0.99)
+k = len(messages)
+r["whole scene"] = [status(floor.enterInitializationMode), status(floor.exitInitializationMode), since(k)]
+floor.freeInstance()
+
+blow = new("blow up")
+values = json.loads(sys.argv[2])
+for name, value in values.items():
+    set(blow, name, value)
+blow.enterInitializationMode(); blow.exitInitializationMode()
+t, statuses = 0.0, []
+for i in range(20):
+    s = status(blow.doStep, t, 0.05)
+    statuses.append(s)
+    if s:
+        break
+    t += 0.05
+k = len(messages)
+r["blow up"] = [statuses, t, blow.getRealStatus(2), blow.getBooleanStatus(3), all(math.isfinite(x) for x in outputs(blow)),
+                [m for s, m in messages if "BlowUpError" in m]]
+blow.freeInstance()
+print(json.dumps(r))
+"""
+
+
+@pytest.fixture(scope="module")
+def errors(build):
+    records, _ = run_child(ERRORS, build[2]["dir"], json.dumps(BLOW_UP))
+    return records[-1]
+
+
+def python_message(name, value) -> str:
+    with pytest.raises(ParameterError) as exc:
+        check_value(name, value)
+    return str(exc.value)
+
+
+def test_bad_values_are_fmi2_errors_naming_the_parameter_and_its_range(errors):
+    for name, value in [("width", -1.0), ("water_level", float("nan")), ("nx", 1), ("integrator", "bdf3"),
+                        ("drag_model", "fast")]:
+        status, messages = errors[f"set {name}"]
+        assert status == 3, name  # fmi2Error
+        assert len(messages) == 1 and messages[0].startswith(python_message(name, value)), (name, messages)
+        assert "(value refused:" in messages[0]
+    assert "(did you mean 'bdf2'?)" in errors["set integrator"][1][0]
+    assert errors["set mesh_format"][0] == 3
+    assert "parameter 'mesh_format': 'stl' is not allowed; allowed: one of 'ply', 'obj'" in errors["set mesh_format"][1][0]
+    enter, exit_, messages = errors["init refused"]
+    assert (enter, exit_) == (0, 3)
+    assert messages[0].startswith("initialization refused: parameter 'width': -1.0 is out of range")
+    assert all(name in messages[0] for name in ("'nx'", "'integrator'", "'water_level'", "'mesh_format'"))
+    assert errors["init ok"] == [0, []] and errors["step ok"] == 0
+
+
+def test_bad_inputs_during_the_run_discard_steps_until_fixed(errors):
+    set_status, step_status, messages, finite = errors["input nan"]
+    assert (set_status, step_status, finite) == (3, 2, True)
+    assert messages[0].startswith(python_message("water_level", float("nan")))
+    assert messages[1].startswith("step refused at t = 0.1 s: parameter 'water_level': nan is not a finite number")
+    fixed_width, fixed_format, messages = errors["input fixed"]
+    assert (fixed_width, fixed_format) == (3, 3)
+    assert "parameter 'width': is fixed once the simulation starts; only inputs may change" in messages[0]
+    assert "parameter 'mesh_format': is fixed once the unit is initialized" in messages[1]
+    assert errors["input ok again"] == [0, 0, 0.01]
+
+
+def test_calls_the_master_must_not_make_are_errors_and_change_nothing(errors):
+    *statuses, messages = errors["calls"]
+    assert statuses == [3, 2, 3, 3, 3, 3, 0]  # inf time, wrong time (Discard), negative step, output, vr, type; ok
+    text = "\n".join(messages)
+    assert "finite communication point" in text and "restore an FMU state to go back in time" in text
+    assert "'depth' is an output" in text and "value reference 999" in text and "'width' is a Real" in text
+    assert errors["terminate"] == [0, 0, 3]
+
+
+def test_mesh_output_dir_is_refused_with_a_logged_message(errors):
+    set_status, enter, exit_, messages, cleared, retried = errors["mesh_output_dir"]
+    assert (set_status, enter, exit_) == (3, 0, 3)
+    assert messages[0].startswith("parameter 'mesh_output_dir': 'out/frames' is not allowed: this unit")
+    assert "writes no mesh frames" in messages[0]
+    assert messages[1].startswith("initialization refused: parameter 'mesh_output_dir'")
+    assert (cleared, retried) == (0, 0)
+
+
+def test_parameters_that_do_not_fit_together_fail_the_initialization(errors):
+    enter, exit_, messages = errors["whole scene"]
+    assert (enter, exit_) == (0, 3)
+    with pytest.raises(ParameterError) as exc:
+        wetcloth.load_scene(initial_height=-0.99)
+    assert messages == [f"initialization refused: {exc.value}"]
+
+
+def test_a_blow_up_is_discarded_naming_the_time_and_the_unit_stays_finite(errors):
+    statuses, t, last_successful, terminated, finite, messages = errors["blow up"]
+    assert statuses[-1] == 2 and set(statuses[:-1]) <= {0}  # fmi2Discard
+    assert t == pytest.approx(last_good_time(BLOW_UP, 0.05)) and last_successful == t
+    assert terminated and finite
+    assert len(messages) == 1
+    assert messages[0].startswith(f"step from t = {t:g} s by 0.05 s failed: BlowUpError: the cloth state ")
+    assert "Last good time:" in messages[0] and messages[0].endswith(f"The unit stays at t = {t:g} s with its last "
+                                                                     "good outputs.")
+
+
+# ----------------------------------------------------------------------------------------- FMU states
+STATES = r"""
+import json, sys
+import fmpy
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave
+directory, version = sys.argv[1], int(sys.argv[2])
+md = fmpy.read_model_description(directory)
+vr = {v.name: v.valueReference for v in md.modelVariables}
+outputs = [vr[n] for n in ("centroid_x", "centroid_y", "centroid_z", "depth", "wet_mass", "water_mass")]
+messages = []
+
+def status(call, *args):
+    try:
+        call(*args)
+        return 0
+    except FMICallException as exc:
+        return int(exc.status)
+
+if version == 2:
+    from fmpy import calloc, free
+    from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
+                           fmi2CallbackLoggerTYPE)
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, category, message: messages.append(message.decode()))
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    def new(name, **values):
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier="WetCloth", instanceName=name)
+        fmu.instantiate(callbacks=callbacks, loggingOn=False)
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        for key, value in values.items():
+            (fmu.setInteger if key in ("nx", "ny") else fmu.setReal)([vr[key]], [value])
+        fmu.exitInitializationMode()
+        return fmu
+    def read(fmu):
+        return fmu.getReal(outputs)
+    get, set_, ser, deser, free_ = "getFMUstate", "setFMUstate", "serializeFMUstate", "deSerializeFMUstate", "freeFMUstate"
+else:
+    from fmpy.fmi3 import FMU3Slave
+    def new(name, **values):
+        fmu = FMU3Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier="WetCloth", instanceName=name)
+        fmu.instantiate(loggingOn=False, logMessage=lambda env, status, category, message: messages.append(message.decode()))
+        for key, value in values.items():
+            (fmu.setUInt64 if key in ("nx", "ny") else fmu.setFloat64)([vr[key]], [value])
+        fmu.enterInitializationMode(startTime=0.0)
+        fmu.exitInitializationMode()
+        return fmu
+    def read(fmu):
+        return fmu.getFloat64(outputs)
+    get, set_, ser, deser, free_ = "getFMUState", "setFMUState", "serializeFMUState", "deserializeFMUState", "freeFMUState"
+
+def run(fmu, t, steps, h=0.1, level_at=3):
+    rows = []
+    for k in range(steps):
+        if k == level_at:
+            (fmu.setReal if version == 2 else fmu.setFloat64)([vr["water_level"]], [0.02])
+        assert status(fmu.doStep, t, h) == 0
+        t += h
+        row = list(read(fmu))
+        if version == 3:
+            n = 21 * 29
+            row += list(fmu.getFloat64([vr["positions"], vr["wetness"]], nValues=4 * n))
+        rows.append(row)
+    return rows
+
+r = {}
+a = new("a", initial_tilt=30.0, absorption_rate=0.5)
+run(a, 0.0, 10, level_at=None)  # the landing: steps, contacts, the preconditioner's factors
+state = getattr(a, get)()
+data = getattr(a, ser)(state)
+first = run(a, 1.0, 15)
+getattr(a, set_)(state)
+second = run(a, 1.0, 15)
+b = new("b", initial_tilt=30.0, absorption_rate=0.5)
+restored = getattr(b, deser)(data)
+getattr(b, set_)(restored)
+third = run(b, 1.0, 15)
+r["repeat"] = [first == second, first == third, len({tuple(x) for x in first}) == len(first)]
+# A state of another grid is refused; the unit keeps its own state and steps on.
+small = new("small", nx=9, ny=9)
+small_state = getattr(small, deser)(getattr(small, ser)(getattr(small, get)()))
+getattr(b, set_)(state)
+before = list(read(b))
+k = len(messages)
+r["other grid"] = [status(getattr(b, set_), small_state), messages[k:]]
+r["unchanged"] = list(read(b)) == before
+r["steps on"] = run(b, 1.0, 15) == first
+r["bad bytes"] = [status(getattr(b, deser), bytes(data[:-3])), status(getattr(b, deser), b"x" * 64),
+                  status(getattr(b, deser), bytes(data[:100]) + bytes(100) + bytes(data[200:]))]
+r["after bad bytes"] = status(b.doStep, 2.5, 0.1)
+print(json.dumps(r))
+"""
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_fmu_states_repeat_the_run_bit_for_bit_and_refuse_another_grid(build, version):
+    records, done = run_child(STATES, build[version]["dir"], version)
+    r = records[-1]
+    assert r["repeat"] == [True, True, True]  # the same instance and a fresh one, from bytes
+    status, messages = r["other grid"]
+    assert status == 3 and r["unchanged"] and r["steps on"]  # fmi2Error / fmi3Error, and the unit is usable
+    assert messages == ["FMU state refused, the unit is unchanged: the state is of a cloth of nx x ny = 9 x 9 "
+                        "particles, this unit runs 21 x 29 (fixed once it is initialized)"]
+    assert r["bad bytes"] == [3, 3, 3] and r["after bad bytes"] == 0
