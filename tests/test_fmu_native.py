@@ -84,7 +84,9 @@ def build(tmp_path_factory):
     import fmpy
 
     folder = tmp_path_factory.mktemp("native_fmu")
-    objects = folder / "objects"
+    # Objects are named by the digest of compiler, flags, source and headers: kept beside pytest's
+    # temporary folders, a later session recompiles only what changed.
+    objects = tmp_path_factory.getbasetemp().parent / "wetcloth-native-objects"
     units = {}
     for version in (2, 3):
         fmu = native.build_native_fmu(folder / f"WetClothNative{'' if version == 2 else 3}.fmu", version,

@@ -554,6 +554,10 @@ Outcome Unit::get_string(std::uint64_t vr, const char*& value, const char* funct
 
 // ------------------------------------------------------------------------------ life cycle
 Outcome Unit::setup_experiment(double start_time) {
+    if (initialized_) {
+        error("the start time is fixed once the unit is initialized (got " + py_repr(start_time) + " s)");
+        return Outcome::ERROR;
+    }
     if (!std::isfinite(start_time)) {
         error("the start time must be a finite number of seconds, got " + py_repr(start_time));
         return Outcome::ERROR;
