@@ -4,7 +4,8 @@
     .venv/bin/python bench/batch_throughput.py --runs 8 --nx 9 --workers 1 2 --markdown --engine fmu
 
 For each worker count: start a local cluster (timed apart), warm every worker with one run
-(imports and numba's cached kernels), then time ``run_study`` over the whole study.  The
+(its imports: wetcloth and its compiled core; nothing is compiled), then time ``run_study`` over
+the whole study.  The
 serial baseline runs the same scenes one after another in this process, without Dask, so the
 table shows both the scaling and Dask's own overhead.  The machine's load average is printed
 because other processes on a shared machine take cores away from the workers.
@@ -35,7 +36,7 @@ def serial(study, repeat: int) -> tuple[float, float]:
     from wetcloth.batch.execution import _task
 
     runs = study.runs()
-    execute(_task(runs[0], study))  # warm-up: numba kernels loaded
+    execute(_task(runs[0], study))  # warm-up, untimed: lazy imports, memory first touched
     best = None
     for _ in range(repeat):
         start = time.perf_counter()

@@ -3,14 +3,13 @@
     .venv/bin/python bench/call_overhead.py [--calls 3000] [--repeat 3]
 
 Every front end calls ``advance`` once per output: 2700 times for the default towel at 30 Hz, once
-per FMU communication step.  Timed here on the default towel with calls that take no step
-(``advance(0.0)``), so only the Python side is measured: numba's dispatcher (which types every
-argument, some sixty arrays in nested tuples, at each call) against the compiled code looked up
-once for those objects (``wetcloth.kernels.compilation.TypedCall``, what ``Simulation`` uses), in
-the same process, alternately; best of ``--repeat``.  Then what reading the outputs costs per
-sample: ``advance(0.0)`` and ``outputs()`` per sample, as a Python loop over output times does,
-against ``Simulation.sample`` over as many times in one call (what ``runner.run`` does between
-frames at which Python has work).
+per FMU communication step.  Timed here on the default towel with calls that take no step, so only
+the calls are measured: the compiled core's own entry, ``sim._stepper.advance(t, n)`` (nanobind's
+call, the GIL released and taken back), against ``Simulation.advance(0.0)`` (that call and the
+Python around it: the argument's check, the loop over paused calls), alternately, best of
+``--repeat``.  Then what reading the outputs costs per sample: ``advance(0.0)`` and ``outputs()``
+per sample, as a Python loop over output times does, against ``Simulation.sample`` over as many
+times in one call (what ``runner.run`` does between frames at which Python has work).
 """
 
 from __future__ import annotations
@@ -21,7 +20,6 @@ import time
 import numpy as np
 
 import wetcloth
-from wetcloth.kernels.stepping import advance
 
 
 def per_call(function, args, calls: int) -> float:
@@ -39,18 +37,14 @@ def main() -> None:
     args = parser.parse_args()
     sim = wetcloth.Simulation(wetcloth.load_scene())
     sim.advance(1.0 / 30.0)
-    m = sim.model
-    loop_args = (m.cloth, m.physics, sim._control, m.work, sim._solver, sim._plane, sim._contact, sim._buffers,
-                 sim._clock, sim.time, 1)
-    best = {"numba dispatcher": float("inf"), "Simulation.advance(0.0)": float("inf")}
+    calls = {"_stepper.advance(t, n)": (sim._stepper.advance, (sim.time, sim._steps_per_call)),
+             "Simulation.advance(0.0)": (sim.advance, (0.0,))}
+    best = dict.fromkeys(calls, float("inf"))
     for _ in range(args.repeat):
-        best["numba dispatcher"] = min(best["numba dispatcher"], per_call(advance, loop_args, args.calls))
-        best["Simulation.advance(0.0)"] = min(best["Simulation.advance(0.0)"], per_call(sim.advance, (0.0,), args.calls))
+        for name, (function, arguments) in calls.items():
+            best[name] = min(best[name], per_call(function, arguments, args.calls))
     for name, micro in best.items():
-        print(f"{name:26s} {micro:8.1f} us per call")
-    ratio = best["numba dispatcher"] / best["Simulation.advance(0.0)"]
-    print(f"Simulation.advance's call costs {ratio:.1f}x less than the dispatcher's typing alone "
-          f"(best of {args.repeat} x {args.calls} calls)")
+        print(f"{name:24s} {micro:6.2f} us per call")
 
     def advance_and_read() -> None:
         sim.advance(0.0)
@@ -61,8 +55,8 @@ def main() -> None:
     for _ in range(args.repeat):
         loop = min(loop, per_call(advance_and_read, (), args.calls))
         compiled = min(compiled, per_call(sim.sample, (times,), 1) / args.calls)
-    print(f"per sample: advance(0.0) + outputs() {loop:.1f} us, sample() of {args.calls} times {compiled:.2f} us "
-          f"({loop / compiled:.0f}x less)")
+    print(f"per sample: advance(0.0) + outputs() {loop:.2f} us, sample() of {args.calls} times {compiled:.3f} us "
+          f"({loop / compiled:.0f}x less); best of {args.repeat} x {args.calls}")
 
 
 if __name__ == "__main__":

@@ -5,7 +5,8 @@
 The core is checked out at ``--core-commit`` (the last commit before wicking, drying, wet
 stiffness and currents) into a temporary git worktree and timed in a child process, alternating
 with the current code, on the towel landing (21 x 29, 3 s, every effect off).  Each effect is then
-switched on alone in the current code.
+switched on alone in the current code.  The current code runs the compiled core and
+``--core-commit`` numba's kernels: "every effect off" against the core measures that change too.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import json, sys, time
 import wetcloth
 overrides = json.loads(sys.argv[1])
 scene = wetcloth.Scene(nx=21, ny=29, **overrides)
-wetcloth.Simulation(scene).advance(0.05)  # compile, or load the cached kernels
+wetcloth.Simulation(scene).advance(0.05)  # untimed warm-up (at --core-commit: numba compiles or loads the kernels)
 best = float("inf")
 for _ in range({repeat}):
     sim = wetcloth.Simulation(scene)

@@ -90,7 +90,7 @@ def main(argv=None) -> int:
     for fmi in (2, 3):
         path = str(build_fmu(work / f"WetCloth{fmi}.fmu", fmi_version=fmi))
         units[fmi] = (extract(path, unzipdir=str(work / f"unit{fmi}")), read_model_description(path))
-    direct(scene, 0.5, args.rate, True)  # warm numba's kernels
+    direct(scene, 0.5, args.rate, True)  # one untimed run first: lazy imports, memory first touched
     cases = {
         "direct run": lambda: direct(scene, args.duration, args.rate, False),
         "direct run + mesh read": lambda: direct(scene, args.duration, args.rate, True),

@@ -80,7 +80,7 @@ def main(argv=None) -> int:
         scene = scene.replace(nx=args.grid[0], ny=args.grid[1])
     fmu_path = str(build_fmu(Path(tempfile.mkdtemp(prefix="wetcloth_bench_")) / "WetCloth.fmu"))
     directory, md = extract(fmu_path), read_model_description(fmu_path)
-    direct(scene, 0.5, 30.0)  # warm numba's kernels
+    direct(scene, 0.5, 30.0)  # one untimed run first: lazy imports, memory first touched
     print(f"scene: default towel, {scene.nx} x {scene.ny} particles, integrator {scene.integrator}, "
           f"{args.duration:g} s simulated per run, best of {args.repeat}; Python {sys.version.split()[0]}")
     print()

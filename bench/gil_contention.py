@@ -3,8 +3,9 @@ every millisecond (as a Dask worker's event loop sits beside its task).
 
     .venv/bin/python bench/gil_contention.py [--repeat 3]
 
-With the kernels compiled ``nogil=True`` the loop thread runs while a kernel computes; without, it
-takes the GIL from the simulation each time it wakes (20 % of a run before the change).
+The compiled core steps with the GIL released (``_core.Stepper.advance``, docs/core.md), so the loop
+thread runs while it computes; code that held the GIL while stepping would lose it to the loop each
+time the loop wakes (20 % of a run, measured when the numba kernels still held it).
 """
 
 from __future__ import annotations
@@ -54,7 +55,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args()
     scene = wetcloth.load_scene("thesis_fast", **SCENE)
-    run(scene, 1.0, 10.0, shapes=0, progress=False)  # load the compiled kernels
+    run(scene, 1.0, 10.0, shapes=0, progress=False)  # one untimed run first
     alone, beside = [], []
     for _ in range(args.repeat):  # interleaved, so that drifts in the machine's speed hit both
         alone.append(one_run(scene))

@@ -14,14 +14,14 @@ its final wet mass, and the ratios.
 ``grids``: a 64 x 64 towel (real-time factor: simulated over wall-clock seconds) and an 81 x 81
 sheet of the same size (milliseconds per 1/30 s frame), each with the defaults, over ``--seconds``
 simulated from the drop (the landing), alternately with the preconditioner's banded factors on the
-whole grid instead of its multigrid cycle (``kernels/plane.py``), best of ``--repeat``; then the
+whole grid instead of its multigrid cycle (the core's ``plane.cpp``), best of ``--repeat``; then the
 previous default over a tenth of that.  ``--whole``: also the 64 x 64 towel's whole run (90 s, as
 the default towel), with the real-time factors of its landing and of the whole run.
 
-``preconditioner``: one application of the plane preconditioner (``kernels/plane.py``) with the
-banded factors and with the multigrid cycle, alternately, best of 7 batches, from the default
-towel's 21 x 29 to 128 x 128 (the crossover that sets ``plane.MULTIGRID_SIDE``), and one
-refactorisation of each.
+``preconditioner``: one application of the plane preconditioner (``_core.apply``; ``plane.cpp``,
+``multigrid.cpp``) with the banded factors and with the multigrid cycle, alternately, best of 7
+batches, from the default towel's 21 x 29 to 128 x 128 (the crossover that sets ``MULTIGRID_SIDE``,
+``plane.hpp``), and one refactorisation of each (``_core.refresh``).
 """
 
 from __future__ import annotations
@@ -33,8 +33,7 @@ import time
 import numpy as np
 
 import wetcloth
-from wetcloth.kernels import plane
-from wetcloth.kernels.compilation import TypedCall
+from wetcloth import _core, preconditioner as plane
 
 PREVIOUS = dict(integrator="symplectic_euler", tolerance=1e-4, max_step=0.01)
 FPS = 30.0
@@ -61,7 +60,7 @@ def towel(repeat: int) -> None:
     scene = wetcloth.load_scene()
     duration = wetcloth.scene.read_scene_file(None)["run"]["duration"]
     settings = {"default": {}, "previous": PREVIOUS}
-    wetcloth.Simulation(scene).advance(0.1)  # compile / load the kernels outside the timings
+    wetcloth.Simulation(scene).advance(0.1)  # one untimed run first: memory and caches warm
     best = {}
     for _ in range(repeat):
         for name, overrides in settings.items():
@@ -79,7 +78,8 @@ def towel(repeat: int) -> None:
 
 @contextlib.contextmanager
 def banded_preconditioner():
-    """Simulations made inside use the banded factors on any grid (no multigrid)."""
+    """Simulations made inside use the banded factors on any grid (no multigrid): ``make_plane``
+    reads ``wetcloth.preconditioner.MULTIGRID_SIDE`` when ``Simulation`` allocates its plane."""
     side = plane.MULTIGRID_SIDE
     plane.MULTIGRID_SIDE = 1 << 30
     try:
@@ -141,13 +141,9 @@ def preconditioner() -> None:
         n = topology.n
         mass, scale, free = np.full(n, 5e-4 * 441 / n), (2.0 / 3.0 / FPS) ** 2, np.ones(n)
         r, z = np.random.default_rng(0).standard_normal((3, n)), np.zeros((3, n))
-        planes = {setting: plane.make_plane(nx, ny, topology.spring_offset, topology.spring_family_names,
-                                            topology.spring_stiffness, multigrid_side=side)
+        planes = {setting: plane.make_plane(nx, ny, topology.spring_family_names, topology.spring_stiffness,
+                                            multigrid_side=side)
                   for setting, side in (("banded", 1 << 30), ("multigrid", 0))}
-        # Called as Simulation calls the step loop (TypedCall): numba's dispatcher would type the
-        # preconditioner's arrays at every call, tens of microseconds that are not its cost.
-        applies = {setting: TypedCall(plane.apply) for setting in planes}
-        refreshes = {setting: TypedCall(plane.refresh) for setting in planes}
         best = dict.fromkeys(planes, float("inf"))
         factor = dict.fromkeys(planes, float("inf"))
         count = max(3, int(2e5 / n))
@@ -155,11 +151,11 @@ def preconditioner() -> None:
             for setting, p in planes.items():
                 start = time.perf_counter()
                 p.reference[1] = 0.0
-                refreshes[setting](p, topology.spring_offset, mass, scale)
+                _core.refresh(p, topology.spring_offset, mass, scale)
                 factor[setting] = min(factor[setting], time.perf_counter() - start)
                 start = time.perf_counter()
                 for _ in range(count):
-                    applies[setting](p, free, r, z)
+                    _core.apply(p, free, r, z)
                 best[setting] = min(best[setting], (time.perf_counter() - start) / count)
         print(f"{nx} x {ny}: one application banded {best['banded'] * 1e6:.0f} us, multigrid "
               f"{best['multigrid'] * 1e6:.0f} us ({len(planes['multigrid'].grid.levels)} levels), "

@@ -8,7 +8,7 @@ A Newton iteration that solves with an approximate matrix ``A`` instead of the t
 ``I - A^-1 A*`` per iteration (its contraction).  Here, at states of one run of
 ``models/studies/sink_map.toml`` (a 9 x 9 cloth: the matrices are dense, 243 x 243), for a step of
 0.1 s (the study's output interval, ``bh = 2h/3``): ``A*`` from forward differences of the
-forces kernel, ``A`` as the conjugate gradients apply it (``_system_matvec``, column by column),
+core's ``forces``, ``A`` as the conjugate gradients apply it (``_system_matvec``, column by column),
 and the contraction each approximation gives alone (the true matrix with only that part as
 assembled): the springs' and buoyancy's, the face drag's; and with the face drag's velocity Jacobian
 spread over each triangle's corners as ``w w^T`` (w the corners' shares of its force: symmetric,
@@ -23,15 +23,14 @@ import argparse
 import numpy as np
 
 import wetcloth
-from wetcloth.kernels.assembly import forces, forces_and_blocks
-from wetcloth.kernels.integration import _system_matvec
+from wetcloth._core import _system_matvec, forces, forces_and_blocks
 from wetcloth.scene import from_dict
 
 from _sink_map import sink_map_runs
 
 STEP = 0.1  # s
 #: The corners of a cell's two triangles (offsets from its lower-left particle, in units of (1, nx))
-#: and their shares of the triangle's force (``kernels/water.py``: the right-angle corner 1/2).
+#: and their shares of the triangle's force (the core's ``water.cpp``: the right-angle corner 1/2).
 TRIANGLES = (((0, 0), (1, 0), (1, 1)), ((0, 0), (1, 1), (0, 1)))
 SHARES = ((0.25, 0.5, 0.25), (0.25, 0.25, 0.5))
 

@@ -46,7 +46,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=2)
     args = parser.parse_args()
-    wetcloth.Simulation(wetcloth.load_scene(nx=3, ny=3)).advance(0.01)  # compile the kernels first
+    wetcloth.Simulation(wetcloth.load_scene(nx=3, ny=3)).advance(0.01)  # one untimed run first
     print("| scene | simulated | skipping off | skipping on | gain | steps off / on |")
     print("|---|---|---|---|---|---|")
     for name, scene, duration in scenes():

@@ -19,8 +19,7 @@ import time
 import numpy as np
 
 import wetcloth
-from wetcloth.kernels.integration import _system_matvec
-from wetcloth.kernels.plane import apply
+from wetcloth._core import _system_matvec, apply
 import _paths  # noqa: E402,F401  (tests/ on sys.path for the oracles)
 from support.reference import NumpyReference
 

@@ -4,9 +4,10 @@
 
 Runs the study's 16 runs serially through ``wetcloth.batch.engines.python_series`` (what the batch
 runner's workers call) and prints the wall time of the 16 (best of ``--repeat``), after one short
-warm-up run that loads or compiles the kernels.  To compare with another version of the code, check
-it out beside this one and put it first on the path, alternating the two on the same machine, e.g.
-against the code as it was when issue 11 (large steps) was filed:
+untimed warm-up run (in code older than the compiled core, where numba compiles or loads the kernels).
+To compare with another version of the code, check it out beside this one and put it first on the
+path, alternating the two on the same machine, e.g. against the code as it was when issue 11 (large
+steps) was filed:
 
     git worktree add --detach /tmp/wt-filed 63363dd^
     PYTHONPATH=/tmp/wt-filed/fmu_src .venv/bin/python bench/study_end_to_end.py

@@ -9,6 +9,7 @@ import os
 import subprocess
 import sys
 import zipfile
+from pathlib import Path
 from xml.etree import ElementTree
 
 import pytest
@@ -17,6 +18,7 @@ from fmpy.validation import validate_fmu
 from test_fmu_support import built_fmu, run_child
 
 import wetcloth
+from wetcloth.fmu import bootstrap
 from wetcloth.fmu.description import extend_model_description, make_variable
 from wetcloth.fmu.vocabulary import OUTPUTS, fmi_unit_name, parse_unit, variable_specs
 from wetcloth.scene import INPUT, PARAMETERS, describe_range, read_scene_file
@@ -140,7 +142,7 @@ def test_archive_holds_documentation_icon_and_bundled_wetcloth(fmu):
     assert slave_module == "wetcloth_fmu_slave" and "resources/wetcloth_fmu_slave.py" in names
     for name in list(PARAMETERS) + list(OUTPUT_NAMES) + ["mesh_output_dir", "mesh_format"]:
         assert f"<td>{name}</td>" in doc, name
-    assert "numba" in doc and "interpreter" in doc  # what the unit needs to run
+    assert "numpy" in doc and "interpreter" in doc and "numba" not in doc  # what the unit needs to run
     assert icon.startswith(b"\x89PNG\r\n\x1a\n")
     for path in ("resources/wetcloth/simulation.py", "resources/wetcloth/presets/towel.toml",
                  "resources/wetcloth_fmu_bootstrap.py", "resources/wetcloth_fmu_manifest.json",
@@ -197,60 +199,43 @@ def test_build_fmu_command_writes_a_valid_unit(tmp_path):
 
 CHILD_BUNDLED = r"""
 import json, sys
-# A host without wetcloth installed: drop the editable install's finder and path entries.
-sys.meta_path[:] = [f for f in sys.meta_path if "editable" not in getattr(f, "__module__", "").lower()]
+# A host with numpy but without wetcloth, its dependencies beyond numpy, or a compiler.
+sys.meta_path[:] = [f for f in sys.meta_path if "editable" not in getattr(f, "__module__", "").lower()
+                    and "ScikitBuild" not in type(f).__name__]
 sys.path[:] = [p for p in sys.path if "fmu_src" not in p]
+import importlib.abc
+class Without(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in ("scipy", "numba", "meshio", "trimesh", "dask", "matplotlib", "tqdm", "pandas",
+                                  "pyarrow", "SALib", "pxr"):
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+sys.meta_path.insert(0, Without())
 import fmpy
 res = fmpy.simulate_fmu(sys.argv[1], stop_time=0.2, output_interval=0.1, start_values={"nx": 5, "ny": 5})
-from numba.core.registry import CPUDispatcher
-kernels = [f for name, m in list(sys.modules.items()) if name.startswith("wetcloth.")
-           for f in vars(m).values() if isinstance(f, CPUDispatcher)]
-print(json.dumps({"file": sys.modules["wetcloth"].__file__, "depth": float(res["depth"][-1]),
-                  "compiled": sum(sum(k.stats.cache_misses.values()) for k in kernels),
-                  "loaded": sum(sum(k.stats.cache_hits.values()) for k in kernels)}))
+print(json.dumps({"file": sys.modules["wetcloth"].__file__, "core": sys.modules["wetcloth._core"].__file__,
+                  "depth": float(res["depth"][-1])}))
 """
 
 
-def test_a_fresh_extract_runs_the_bundled_wetcloth_and_loads_the_kernels_compiled_before(fmu, tmp_path):
-    """A Python with numpy and numba but no wetcloth runs the copy inside the FMU, from a per-user folder
-    named by the bundle's digest.  The first start compiles the numba kernels there; a second start,
-    from a new extraction of the same FMU (a new temporary folder), loads them all and compiles none
-    (the start time itself is measured in bench/fmu_start.py, not here)."""
-    env = dict(os.environ, WETCLOTH_FMU_CACHE=str(tmp_path / "cache"))
-    runs = [run_child(CHILD_BUNDLED, fmu, cwd=tmp_path, env=env)[0][-1] for _ in range(2)]
-    manifest = json.loads(zipfile.ZipFile(fmu).read("resources/wetcloth_fmu_manifest.json"))
-    home = tmp_path / "cache" / manifest["bundle_digest"][:24] / "wetcloth"
-    assert runs[0]["file"] == runs[1]["file"] == str(home / "__init__.py")
-    # (a kernel called only from other kernels is compiled with them but never loaded on its own)
-    assert runs[0]["compiled"] > 0 and runs[1]["compiled"] == 0 and runs[1]["loaded"] > 0
-    assert list(home.rglob("*.nbi")), "numba's cache index lies beside the copied sources"
+def test_a_host_with_numpy_alone_runs_the_wetcloth_and_core_inside_the_fmu(fmu, tmp_path):
+    """A Python with numpy (and fmpy, pythonfmu) but no wetcloth, scipy, meshio, trimesh, dask or pandas runs
+    the copy inside the FMU, compiled core included, from the unit's own resources folder, and gets
+    the Python API's outputs."""
+    run, _ = run_child(CHILD_BUNDLED, fmu, cwd=tmp_path)
+    result = run[-1]
+    assert "/resources/wetcloth/" in result["file"] and Path(result["core"]).parent == Path(result["file"]).parent
     sim = wetcloth.Simulation(wetcloth.Scene(nx=5, ny=5))
     sim.advance(0.1)
     sim.advance(0.1)
-    for run in runs:
-        assert math.isclose(run["depth"], sim.outputs()["depth"], rel_tol=1e-12, abs_tol=1e-15)
+    assert result["depth"] == sim.outputs()["depth"]  # the same compiled core, the same steps
 
 
-CHILD_NO_NUMBA = r"""
-import importlib.abc, sys
-class NoNumba(importlib.abc.MetaPathFinder):  # a host Python without numba
-    def find_spec(self, name, path=None, target=None):
-        if name.split(".")[0] == "numba":
-            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
-sys.meta_path.insert(0, NoNumba())
-import fmpy
-try:
-    fmpy.simulate_fmu(sys.argv[1], stop_time=0.1)  # FMI logging off
-except Exception as exc:
-    print("RAISED", exc)
-"""
-
-
-def test_a_host_without_a_dependency_is_told_which_one_with_logging_off(fmu, tmp_path):
-    _, done = run_child(CHILD_NO_NUMBA, fmu, cwd=tmp_path,
-                        env=dict(os.environ, WETCLOTH_FMU_CACHE=str(tmp_path / "cache")))
-    assert "RAISED" in done.stdout
-    assert "has no module 'numba'" in done.stderr and "-m pip install 'numba>=" in done.stderr, done.stderr
+def test_a_missing_dependency_is_named_with_how_to_install_it():
+    """A module the host's Python lacks is named in the error, with the pip command for the
+    requirement that provides it."""
+    error = bootstrap.missing_dependency(ModuleNotFoundError("No module named 'numpy'", name="numpy"),
+                                         ["numpy>=1.26", "tqdm>=4.66"])
+    assert "has no module 'numpy'" in str(error) and "-m pip install 'numpy>=1.26'" in str(error)
 
 
 CHILD_MISMATCH = r"""

@@ -3,14 +3,9 @@
 Built once per session (both FMI versions, the core's objects shared). Masters run in child processes (a
 crash of the unit fails a test, not the suite): fmpy, libcosimpy, and a C master that dlopens the binary.
 
-How close to the Python API: the unit runs the C++ core. While the Python package runs its numba kernels,
-the two are different compilations of the same arithmetic (same operations, same order, no fast-math):
-they agree to rounding, and rounding differences grow only where the step controller or the floor take a
-different discrete decision, which moves the cloth by about the local error the controller allows per step
-(``tolerance`` times the cloth's size, 3.5 um on the towel; 90 s of the towel at 0.1 s steps differed by at
-most 8.4 um in the centroid, 3e-16 kg in the masses). So positions are held to ten times that local error,
-masses to 1e-9 relative. Once the package runs on the same core (the same sources, the same value-preserving
-flags: no fast-math, no FMA contraction), the outputs must be identical, and they are required to be.
+How close to the Python API: identical. The unit and wetcloth.Simulation run the same C++ core (the same
+sources, compiled with value-preserving flags: no fast-math, no contraction into fused multiply-adds, so
+the values do not depend on the instruction set either), and their outputs must be equal bit for bit.
 """
 
 from __future__ import annotations
@@ -43,30 +38,13 @@ except native.NativeBuildError as exc:  # pragma: no cover - machines without a 
     pytest.skip(f"the native unit cannot be built here: {exc}", allow_module_level=True)
 
 
-# ----------------------------------------------------------------------------------------- tolerances
-def python_runs_on_numba() -> bool:
-    """Whether wetcloth.Simulation still steps with the numba kernels (else it runs the C++ core)."""
-    stepping = getattr(wetcloth.simulation, "advance", None)
-    return stepping is not None and any(cls.__module__.startswith("numba") for cls in type(stepping).__mro__)
-
-
-def assert_agree(unit_rows, python_rows, scene, label=""):
-    """The unit's outputs against the Python API's (rows of OUTPUT_NAMES): identical on the same core,
-    else within the bounds of the module docstring."""
+# ----------------------------------------------------------------------------------------- agreement
+def assert_agree(unit_rows, python_rows, label=""):
+    """The unit's outputs against the Python API's (rows of OUTPUT_NAMES): identical (the same core)."""
     unit_rows, python_rows = np.asarray(unit_rows, dtype=float), np.asarray(python_rows, dtype=float)
     assert unit_rows.shape == python_rows.shape
     assert np.isfinite(unit_rows).all()
-    if not python_runs_on_numba():
-        np.testing.assert_array_equal(unit_rows, python_rows, err_msg=label)
-        return
-    local_error = scene.tolerance * max(scene.width, scene.length) if scene.tolerance > 0 else 1e-6
-    for column, name in enumerate(OUTPUT_NAMES):
-        if name in ("wet_mass", "water_mass"):
-            np.testing.assert_allclose(unit_rows[:, column], python_rows[:, column], rtol=1e-9, atol=1e-15,
-                                       err_msg=f"{label} {name}")
-        else:
-            np.testing.assert_allclose(unit_rows[:, column], python_rows[:, column], rtol=0, atol=10 * local_error,
-                                       err_msg=f"{label} {name}")
+    np.testing.assert_array_equal(unit_rows, python_rows, err_msg=label)
 
 
 def advance_as_the_unit(sim: wetcloth.Simulation, t: float) -> None:
@@ -482,7 +460,7 @@ def test_fmpy_runs_the_towel_as_the_python_api_does(build):
     for t in result["time"]:
         advance_as_the_unit(sim, t)
         rows.append([sim.outputs()[n] for n in OUTPUT_NAMES])
-    assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows, scene, "fmpy FMI 2.0")
+    assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows, "fmpy FMI 2.0")
 
 
 def test_the_unit_steps_exactly_as_the_cores_simulation(build, checker_library):
@@ -521,11 +499,9 @@ def test_fmi3_mesh_outputs_are_the_python_api_positions_and_wetness(build):
         rows.append([sim.outputs()[n] for n in OUTPUT_NAMES])
         positions.append(sim.positions)
         wetness.append(sim.wetness)
-    assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows, scene, "FMI 3.0")
-    exact = not python_runs_on_numba()
-    np.testing.assert_allclose(result["positions"].reshape(21, -1, 3), positions, rtol=0,
-                               atol=0 if exact else 10 * scene.tolerance * scene.length)
-    np.testing.assert_allclose(result["wetness"].reshape(21, -1), wetness, rtol=0, atol=0 if exact else 1e-9)
+    assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows, "FMI 3.0")
+    np.testing.assert_array_equal(result["positions"].reshape(21, -1, 3), positions)
+    np.testing.assert_array_equal(result["wetness"].reshape(21, -1), wetness)
     assert result["wetness"][-1].max() > 0.2  # the cloth took up water
 
 
@@ -682,7 +658,7 @@ def test_a_c_master_runs_the_towel_for_90_s_without_python(build, tmp_path):
     for k in range(900):
         sim.advance(k * 0.1 + 0.1 - sim.time)
         expected.append([sim.outputs()[n] for n in OUTPUT_NAMES])
-    assert_agree(got, expected, scene, "C master")
+    assert_agree(got, expected, "C master")
     assert got[-1, OUTPUT_NAMES.index("depth")] > 0.5  # the towel sank
 
 

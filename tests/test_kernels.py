@@ -1,12 +1,11 @@
-"""The numba kernels against independent references: a NumPy implementation and finite differences."""
+"""The compiled core's kernels against independent references: a NumPy implementation and finite differences."""
 
 import numpy as np
 import pytest
 
 import wetcloth
-from wetcloth.kernels.implicit import EULER_CG_TOLERANCE, implicit_euler_step, make_solver
-from wetcloth.kernels.integration import _system_matvec
-from wetcloth.kernels.water import face_drag_and_blocks
+from wetcloth._core import EULER_CG_TOLERANCE, _system_matvec, face_drag_and_blocks, implicit_euler_step
+from wetcloth.bundles import make_solver
 from wetcloth.model import Model
 from support.reference import NumpyReference
 from wetcloth.state import State, initial_state
@@ -214,11 +213,11 @@ def test_implicit_fixed_steps_of_a_communication_interval_stay_sane(stiffness, i
 
 
 def test_band_solves_match_a_dense_solve():
-    """The preconditioner's band solves (kernels/lapack.py: LAPACK's factor, our column-by-column
-    solves of two systems side by side) against numpy.linalg.solve, for bands from 1 to the whole
+    """The preconditioner's band solves (the core's band.cpp: a banded Cholesky factor and
+    column-by-column solves of two systems side by side) against numpy.linalg.solve, for bands from 1 to the whole
     matrix.  The matrices are shifted to eigenvalues of at least 1 and at most about 2 kd + 2, so
     both solutions err by under n * kd * 1e-16 relative: 1e-12 leaves a wide margin."""
-    from wetcloth.kernels.lapack import band_arguments, band_factor, band_solve_two
+    from wetcloth._core import band_factor, band_solve_two
     rng = np.random.default_rng(11)
     for n, kd in ((5, 1), (30, 29), (50, 7), (300, 22)):
         bands, dense = np.zeros((2, n, kd + 1)), []
@@ -232,7 +231,7 @@ def test_band_solves_match_a_dense_solve():
             dense.append(a)
             for d in range(kd + 1):
                 bands[c, np.arange(n - d), d] = a[np.arange(d, n), np.arange(n - d)]
-            assert band_factor(bands[c], rows[c], band_arguments(n, kd)) == 0
+            assert band_factor(bands[c], rows[c]) == 0
         b = rng.normal(size=(2, n))
         x = b.copy()
         band_solve_two(bands, rows, x)

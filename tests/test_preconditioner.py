@@ -1,14 +1,14 @@
-"""The implicit solves' plane preconditioner (``kernels/plane.py``): the multigrid V-cycle of large
-grids (``kernels/multigrid.py``) against the banded Cholesky factors it replaces there."""
+"""The implicit solves' plane preconditioner (the core's ``plane.cpp``): the multigrid V-cycle of large
+grids (``multigrid.cpp``) against the banded Cholesky factors it replaces there."""
 
 import numpy as np
 import pytest
 import scipy.sparse
 
 import wetcloth
-from wetcloth.kernels import plane as plane_preconditioner
-from wetcloth.kernels.assembly import forces_and_blocks
-from wetcloth.kernels.integration import _system_matvec
+from wetcloth import _core
+from wetcloth._core import _system_matvec, forces_and_blocks
+from wetcloth.preconditioner import _SHARE, make_plane
 from wetcloth.model import Model
 from wetcloth.state import initial_state
 
@@ -25,10 +25,9 @@ def make_planes(topology, mass):
     """(banded, multigrid) preconditioners of the same grid, both factored for ``mass`` and SCALE."""
     planes = []
     for side in (max(topology.nx, topology.ny), 0):  # (multigrid from any size on)
-        planes.append(plane_preconditioner.make_plane(topology.nx, topology.ny, topology.spring_offset,
-                                                      topology.spring_family_names, topology.spring_stiffness,
-                                                      multigrid_side=side))
-        assert plane_preconditioner.refresh(planes[-1], topology.spring_offset, mass, SCALE) == 1
+        planes.append(make_plane(topology.nx, topology.ny, topology.spring_family_names, topology.spring_stiffness,
+                                 multigrid_side=side))
+        assert _core.refresh(planes[-1], topology.spring_offset, mass, SCALE) == 1
     banded, multigrid = planes
     assert len(banded.grid.levels) == 1 and len(multigrid.grid.levels) >= 3
     return banded, multigrid
@@ -44,7 +43,7 @@ def laplacians(topology, mass, weights=None):
     for c in range(2):
         rows, cols, values = [], [], []
         for f, name in enumerate(topology.spring_family_names):
-            share = plane_preconditioner._SHARE.get(name, (0.0, 0.0))[c]
+            share = _SHARE.get(name, (0.0, 0.0))[c]
             i = np.flatnonzero(topology.spring_stiffness[f])
             w = share * weights[f, i]
             j = i + topology.spring_offset[f]
@@ -61,7 +60,7 @@ def random_frames(plane, topology, seed):
     """Frames of a crumpled sheet (so that t1, t2, n are not the axes), and a positive normal diagonal."""
     rng = np.random.default_rng(seed)
     pos = np.vstack([topology.rest_xy, np.zeros(topology.n)]) + rng.normal(scale=3e-3, size=(3, topology.n))
-    plane_preconditioner.follow_cloth(plane, topology.nx, pos)
+    _core.follow_cloth(plane, topology.nx, pos)
     plane.normal[...] = rng.uniform(0.5, 2.0, topology.n) * 1e-3
 
 
@@ -90,8 +89,8 @@ def test_multigrid_is_symmetric_positive_definite(towel):
     for _ in range(5):
         x, y = rng.standard_normal((2, 3, topology.n))
         px, py = np.zeros_like(x), np.zeros_like(y)
-        plane_preconditioner.apply(plane, free, x, px)
-        plane_preconditioner.apply(plane, free, y, py)
+        _core.apply(plane, free, x, px)
+        _core.apply(plane, free, y, py)
         scale = np.linalg.norm(x) * np.linalg.norm(py)
         assert abs(np.sum(x * py) - np.sum(y * px)) <= 100 * EPS * scale
         assert np.sum(x * px) > 0.0
@@ -114,7 +113,7 @@ def test_v_cycle_reduces_the_error_of_its_own_matrix(towel):
         r[c] = matrices[c] @ errors[c]
     for plane, bound in zip(make_planes(topology, mass), (1e-10, 0.25)):
         z = np.zeros_like(r)
-        plane_preconditioner.apply(plane, free, r, z)
+        _core.apply(plane, free, r, z)
         for c in range(2):
             left = errors[c] - z[c]
             reduction = np.sqrt(left @ matrices[c] @ left / (errors[c] @ matrices[c] @ errors[c]))
@@ -124,7 +123,7 @@ def test_v_cycle_reduces_the_error_of_its_own_matrix(towel):
 
 def pcg(model, mass, plane, b, rtol):
     """Conjugate gradients on the implicit step's system A x = b preconditioned by ``plane``, stopped
-    as the BDF2 solves stop (``kernels/implicit.py``): when the largest component of the
+    as the BDF2 solves stop (the core's ``implicit.cpp``): when the largest component of the
     preconditioned residual is at most ``rtol`` times its first value.  Returns (x, iterations)."""
     x, r = np.zeros_like(b), b.copy()
     z = apply(plane, model, r)
@@ -144,7 +143,7 @@ def pcg(model, mass, plane, b, rtol):
 
 def apply(plane, model, v):
     out = np.zeros_like(v)
-    plane_preconditioner.apply(plane, model.cloth.free, v, out)
+    _core.apply(plane, model.cloth.free, v, out)
     return out
 
 
@@ -180,8 +179,8 @@ def test_cg_reaches_the_same_solution_with_either_preconditioner(towel):
     b = bh * model.work.force * model.cloth.free
     results = {}
     for name, plane in zip(("banded", "multigrid"), make_planes(topology, mass)):
-        plane_preconditioner.follow_cloth(plane, topology.nx, pos)
-        plane_preconditioner.set_normal_diagonal(plane, mass, model.work.diagonal_blocks, model.work.blocks)
+        _core.follow_cloth(plane, topology.nx, pos)
+        _core.set_normal_diagonal(plane, mass, model.work.diagonal_blocks, model.work.blocks)
         (x, iterations), (_, loose) = pcg(model, mass, plane, b, 1e-9), pcg(model, mass, plane, b, 1e-2)
         residual = b - matvec(model, mass, x)
         results[name] = x, np.sqrt(np.sum(residual ** 2 / mass)), iterations, loose
@@ -205,7 +204,7 @@ def test_factors_from_the_jacobian_invert_the_laplacians_of_its_springs(towel):
     rng = np.random.default_rng(4)
     along = rng.uniform(0.0, 2.0, topology.spring_stiffness.shape) * SCALE * topology.spring_stiffness
     along[rng.random(along.shape) < 0.5] = 0.0
-    assert plane_preconditioner.refresh_from_jacobian(banded, topology.spring_offset, mass, along) == 1
+    assert _core.refresh_from_jacobian(banded, topology.spring_offset, mass, along) == 1
     matrices = laplacians(topology, mass, along)
     errors = rng.standard_normal((2, topology.n))
     r = np.zeros((3, topology.n))
@@ -226,7 +225,7 @@ def test_a_run_restored_after_refactoring_from_the_jacobian_repeats_bit_for_bit(
     for _ in range(250):
         sim.advance(0.1)
         snapshot = sim.snapshot()
-        if snapshot["preconditioner_from_jacobian"] and not plane_preconditioner.jacobian_refresh_pays(
+        if snapshot["preconditioner_from_jacobian"] and not _core.jacobian_refresh_pays(
                 sim._plane, snapshot["last_solve_iterations"]):
             break
     else:

@@ -24,6 +24,7 @@ from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
 import wetcloth
+from wetcloth import _core
 from wetcloth.fmu.checkpoint import Checkpoint, from_bytes, leaves_of, snapshot_from, to_bytes
 
 # --------------------------------------------------------------------------- the independent checker
@@ -248,32 +249,28 @@ def test_the_landing_towel_rebuilds_its_list_a_few_times():
 def test_a_list_searched_wide_is_the_list_built_for_its_margin():
     """A list built after an empty one searches up to the widest margin and narrows to the widest one
     that keeps it empty, or to the least one (``build_widest``); a restored run rebuilds it with
-    ``build`` for the kept margin alone, so both must give the same arrays.  Checked on a soft towel
+    ``build`` for the kept margin alone, so both must give the same pairs.  Checked on a soft towel
     crumpling on a floor, before its layers meet (0.3 s: a margin between the least and the widest,
-    no pairs) and in the pile (0.8 s: the least margin, hundreds of pairs, more of one kind than
-    the search's first arrays hold)."""
-    from wetcloth.kernels.self_contact import broad_phase
-
+    no pairs) and in the pile (0.8 s: the least margin, hundreds of pairs)."""
     values = dict(nx=11, ny=15, bend_stiffness=2.0, initial_tilt=90.0, initial_height=0.4, floor_level=0.0,
                   water_level=-5.0)
     sim = wetcloth.Simulation(wetcloth.load_scene(**values))
     contact, thickness = sim._contact, sim.scene.thickness
     least = contact.least_margin
-    widest = 0.5 * (broad_phase.WIDE_REACH * contact.rest_gap - thickness)
+    widest = 0.5 * (_core.WIDE_REACH * contact.rest_gap - thickness)
     kept = []
     for duration in (0.3, 0.5):
         sim.advance(duration)
         contact.reference[...] = sim.state.pos
-        broad_phase.build_widest(contact, thickness, least, widest)
-        searched = [pairs.copy() for pairs in contact.pairs]
+        searched, built = _core.ContactState(), _core.ContactState()
+        _core.build_widest(contact, thickness, least, widest, lists=searched)
         margin = float(contact.margin[0])
-        broad_phase.build(contact, thickness, margin)
-        assert all(np.array_equal(a, b) for a, b in zip(searched, contact.pairs))
-        kept.append((margin, sum(pairs.shape[1] for pairs in searched), max(pairs.shape[1] for pairs in searched)))
-    (early, none, _), (late, pairs, most) = kept
+        _core.build(contact, thickness, margin, lists=built)
+        assert all(np.array_equal(searched[k], built[k]) for k in (0, 1))
+        kept.append((margin, searched.point_triangle_count + searched.edge_edge_count))
+    (early, none), (late, pairs) = kept
     assert least < early < widest and none == 0
     assert late == least and pairs > 100
-    assert most > broad_phase._FIRST_CAPACITY  # the search ran out of room and started again (``_pairs``)
 
 
 def test_a_restored_snapshot_repeats_a_run_in_contact_bit_for_bit(current_over_pin):

@@ -7,11 +7,10 @@ from __future__ import annotations
 from hypothesis import given
 from hypothesis import strategies as st
 
-from wetcloth.kernels.springs import TENSION_ROUNDING, pulling_stretch
+from wetcloth._core import TENSION_ROUNDING, pulling_stretch
 
 REST = 0.025  # m, a towel spring
 WIDTH = TENSION_ROUNDING * REST
-pulling_stretch(0.0, WIDTH)  # compiled (or loaded) here, not within hypothesis's deadline for an example
 
 
 @given(st.floats(-1e3, 0.0))

@@ -1,12 +1,12 @@
 """Time integrators: their names, what their steps cost in stability, and their control settings.
 
-The steps themselves are compiled (``wetcloth.kernels.stepping`` runs them in its loop):
+The steps themselves are compiled (the core's step loop, ``fmu_src/core/src/stepping.cpp``):
 
 * ``explicit_euler``: the thesis scheme (eq. 3.8-3.9), ``v+ = v + h F/m``, ``x+ = x + h v``;
 * ``symplectic_euler``: ``v+ = v + h F/m``, then ``x+ = x + h v+``;
 * ``implicit_euler``: backward Euler, one linearised Newton step (Baraff and Witkin 1998);
 * ``bdf2``: the second-order backward differentiation formula with variable steps, Newton
-  iterations to a stated tolerance, and an embedded error estimate (``kernels/implicit.py``).
+  iterations to a stated tolerance, and an embedded error estimate (``fmu_src/core/src/implicit.cpp``).
 
 With ``tolerance > 0`` the step adapts to a local position error of at most ``tolerance`` times the
 cloth's size per step, estimated as each scheme's first omitted term: ``h |v+ - v| / 2`` for the
@@ -22,14 +22,14 @@ import math
 
 import numpy as np
 
-from wetcloth.kernels import stepping
-from wetcloth.kernels.assembly import GRAVITY
-from wetcloth.kernels.implicit import CG_TOLERANCE, FIXED_STEP_CG_TOLERANCE
+from wetcloth import _core
+from wetcloth._core import BDF2, CG_TOLERANCE, EXPLICIT_EULER, FIXED_STEP_CG_TOLERANCE, GRAVITY, IMPLICIT_EULER, SYMPLECTIC_EULER
+from wetcloth.bundles import Control
 from wetcloth.model import Model
 
 #: Name -> code of the compiled step loop.
-INTEGRATORS = {"explicit_euler": stepping.EXPLICIT_EULER, "symplectic_euler": stepping.SYMPLECTIC_EULER,
-               "implicit_euler": stepping.IMPLICIT_EULER, "bdf2": stepping.BDF2}
+INTEGRATORS = {"explicit_euler": EXPLICIT_EULER, "symplectic_euler": SYMPLECTIC_EULER,
+               "implicit_euler": IMPLICIT_EULER, "bdf2": BDF2}
 #: Steps the controller will not go below (s); an error above tolerance is then accepted.
 SMALLEST_STEP = 1e-9
 #: Largest growth and shrink factors of the step between two steps.
@@ -74,9 +74,9 @@ class Integrator:
 
     @property
     def implicit(self) -> bool:
-        return self.code in (stepping.IMPLICIT_EULER, stepping.BDF2)
+        return self.code in (IMPLICIT_EULER, BDF2)
 
-    def control(self) -> stepping.Control:
+    def control(self) -> Control:
         """The loop's settings for the model's current scene."""
         sc = self.model.scene
         size = max(sc.width, sc.length)
@@ -87,8 +87,8 @@ class Integrator:
             drag_offset = drag_slope * math.hypot(sc.current_x, sc.current_y) + sc.drag_linear / sc.areal_density
         allowed = sc.tolerance * size  # m of local position error per step
         newton = NEWTON_FRACTION * allowed if allowed > 0 else FIXED_STEP_NEWTON_TOLERANCE * size
-        return stepping.Control(
-            scheme=stepping.SCHEMES[self.code], integrator=self.code, tolerance=sc.tolerance, allowed=allowed, max_step=sc.max_step, newton_tolerance=newton,
+        return Control(
+            integrator=self.code, tolerance=sc.tolerance, allowed=allowed, max_step=sc.max_step, newton_tolerance=newton,
             cg_tolerance=CG_TOLERANCE if allowed > 0 else FIXED_STEP_CG_TOLERANCE,
             omega_squared=self.omega_squared, buoyancy_omega_squared=sc.water_density * GRAVITY / sc.areal_density,
             damping_rate=self.damping_rate, spring_limit=self.spring_limit, drag_rate_offset=drag_offset,
@@ -98,7 +98,7 @@ class Integrator:
 
     def stable_step(self, speed: float) -> float:
         """Largest step (s) for which the scheme is linearly stable with particles up to ``speed`` (m/s)."""
-        return stepping.stable_step(self.control(), speed)
+        return _core.stable_step(self.control(), speed)
 
 
 def make_integrator(name: str, model: Model) -> Integrator:

@@ -1,8 +1,8 @@
 """The model: scene, topology and per-particle constants, packed for the compiled kernels.
 
-The forces themselves are ``wetcloth.kernels.assembly`` (one kernel per force family); this class
-owns their arrays and gives Python callers (tests, benchmarks) the same evaluations the step loop
-makes.
+The forces themselves are the compiled core's (``fmu_src/core/src/assembly.cpp``, one call per
+force family); this class owns their arrays and gives Python callers (tests, benchmarks) the same
+evaluations the step loop makes.
 """
 
 from __future__ import annotations
@@ -11,8 +11,9 @@ import math
 
 import numpy as np
 
-from wetcloth.kernels import assembly
-from wetcloth.kernels.assembly import GRAVITY, Cloth, Physics, Work
+from wetcloth import _core
+from wetcloth._core import GRAVITY
+from wetcloth.bundles import Cloth, Physics, make_work
 from wetcloth.scene import Scene
 from wetcloth.topology import Topology, build_topology
 
@@ -25,15 +26,8 @@ class Model:
     def __init__(self, scene: Scene, topology: Topology | None = None, skip_idle_work: bool = True):
         self.topology = topo = topology if topology is not None else build_topology(scene)
         self.skip_idle_work = skip_idle_work  # False: run the water kernels on dry cloth too (benchmarks)
-        n = topo.n
-        families = len(topo.spring_offset)
         self.free = (~topo.pinned).astype(np.float64)  # 1 for moving particles, 0 for pinned
-        self.work = Work(
-            force=np.zeros((3, n)), submerged=np.zeros(n), saturation=np.zeros(n), blocks=np.zeros((6, n)),
-            diagonal_blocks=np.zeros((6, n)), direction=np.zeros((families, 3, n)), along=np.zeros((families, n)),
-            across=np.zeros((families, n)), rhs=np.zeros((3, n)), buf=np.zeros((4, n)),
-            cells=np.zeros((2, 9, n + topo.nx + 1)), wick_buffer=np.zeros((6, n)),
-        )
+        self.work = make_work(topo.n, len(topo.spring_offset), topo.nx)
         self.scene = scene
 
     @property
@@ -96,15 +90,15 @@ class Model:
 
     def update_submerged(self, z: np.ndarray) -> float:
         """Set ``submerged`` from particle heights ``z`` (m); return its largest value."""
-        return assembly.submerged(self.physics, z, self.work.submerged)
+        return _core.submerged(self.physics, z, self.work.submerged)
 
     def forces(self, pos: np.ndarray, vel: np.ndarray, water: np.ndarray) -> np.ndarray:
         """Total force (N, (3, n)) on every particle; also sets ``submerged``."""
-        assembly.forces(self.cloth, self.physics, self.work, pos, vel, water)
+        _core.forces(self.cloth, self.physics, self.work, pos, vel, water)
         return self.work.force
 
     def forces_and_blocks(self, pos: np.ndarray, vel: np.ndarray, water: np.ndarray, h: float) -> np.ndarray:
         """Forces as ``forces``, plus the pieces of the system matrix ``M - h dF/dv - h^2 dF/dx`` for step
-        ``h`` (s) in ``work`` (see ``assembly.forces_and_blocks``)."""
-        assembly.forces_and_blocks(self.cloth, self.physics, self.work, pos, vel, water, h)
+        ``h`` (s) in ``work`` (see ``fmu_src/core/include/wetcloth/assembly.hpp``)."""
+        _core.forces_and_blocks(self.cloth, self.physics, self.work, pos, vel, water, h)
         return self.work.force

@@ -6,19 +6,17 @@ import math
 
 import numpy as np
 
+from wetcloth import _core, self_collision
+from wetcloth._core import (BLOWN_UP, CALM_TIME, CG_ITERATIONS, CLOCK_SIZE, EXCHANGING, FACTORISATIONS, FAILED_STEP,
+                            FIRST_GUESS, LAST_SOLVE, LAST_STEP, NEWTON_ITERATIONS, NEWTON_RATE, NEXT_STEP,
+                            OUTPUT_COUNT, PAUSED, RATE_CORRECTION, REJECTED, SLEEPING, SPEED, STEPS, TIME,
+                            UNCHECKED_TIME, UNCONVERGED)
 from wetcloth.advice import blow_up_advice
+from wetcloth.bundles import Buffers, make_solver
 from wetcloth.errors import BlowUpError, ParameterError
 from wetcloth.integrators import make_integrator
-from wetcloth.kernels import self_contact
-from wetcloth.kernels.compilation import TypedCall
-from wetcloth.kernels.implicit import CG_ITERATIONS, FACTORISATIONS, NEWTON_ITERATIONS, UNCONVERGED, make_solver
-from wetcloth.kernels.integration import speed_and_finiteness
-from wetcloth.kernels.plane import make_plane, refresh, refresh_from_jacobian
-from wetcloth.kernels.stepping import (BLOWN_UP, PAUSED, CALM_TIME, CLOCK_SIZE, EXCHANGING, FAILED_STEP, FIRST_GUESS,
-                                       LAST_SOLVE, LAST_STEP, NEWTON_RATE, NEXT_STEP, RATE_CORRECTION, REJECTED, SLEEPING,
-                                       SPEED, STEPS, TIME, UNCHECKED_TIME, Buffers, advance)
-from wetcloth.kernels.sampling import OUTPUT_COUNT, advance_sampling, record_outputs
 from wetcloth.model import Model
+from wetcloth.preconditioner import make_plane
 from wetcloth.scene import INPUT, PARAMETERS, Scene, load_scene
 from wetcloth.state import State, initial_state
 
@@ -76,13 +74,12 @@ class Simulation:
         self.integrator = make_integrator(scene.integrator, model)
         self._control = self.integrator.control()
         self._solver = make_solver(topo.n)
-        self._plane = make_plane(topo.nx, topo.ny, topo.spring_offset, topo.spring_family_names,
-                                 topo.spring_stiffness)
-        self._contact = self_contact.make_contact(topo, scene.self_collision == "on", scene.self_friction)
+        self._plane = make_plane(topo.nx, topo.ny, topo.spring_family_names, topo.spring_stiffness)
+        self._contact = self_collision.make_contact(topo, scene.self_collision == "on", scene.self_friction)
         self.skip_idle_work = skip_idle_work
-        self._advance = TypedCall(advance)
-        self._advance_sampling = TypedCall(advance_sampling)
-        self._record_outputs = TypedCall(record_outputs)
+        #: The compiled step loop over these arrays (it keeps them alive and views them in place).
+        self._stepper = _core.Stepper(model.cloth, model.physics, self._control, model.work, self._solver,
+                                      self._plane, self._contact, self._buffers, self._clock)
         self._output_row = np.zeros(OUTPUT_COUNT)
 
     # ----------------------------------------------------------------- snapshots
@@ -104,7 +101,7 @@ class Simulation:
         values["preconditioner_jacobian_mass"] = plane.jacobian_mass.copy()
         for key, slot, kind in _SNAPSHOT_CLOCK:
             values[key] = kind(self._clock[slot])
-        values.update(self_contact.snapshot(self._contact))
+        values.update(self_collision.snapshot(self._contact))
         return values
 
     def restore(self, snapshot: dict) -> None:
@@ -126,12 +123,18 @@ class Simulation:
         plane = self._plane
         plane.reference[1] = 0.0
         if snapshot["preconditioner_factored"]:
-            offsets = self.model.topology.spring_offset
-            refresh(plane, offsets, snapshot["preconditioner_mass"], snapshot["preconditioner_scale"])
+            cloth = self.model.cloth
+            _core.refresh(plane, cloth, snapshot["preconditioner_mass"], snapshot["preconditioner_scale"])
             if snapshot["preconditioner_from_jacobian"]:
-                refresh_from_jacobian(plane, offsets, snapshot["preconditioner_jacobian_mass"],
-                                      snapshot["preconditioner_jacobian_along"])
-        self_contact.restore(self._contact, snapshot, self.scene.thickness)
+                _core.refresh_from_jacobian(plane, cloth, snapshot["preconditioner_jacobian_mass"],
+                                            snapshot["preconditioner_jacobian_along"])
+        # Self-collision's list: the same reference and margin, and the list rebuilt from them.
+        self._contact.reference[...] = snapshot["contact_reference"]
+        margin = float(snapshot["contact_margin"])
+        if margin > 0.0:
+            self._stepper.build_contact(self.scene.thickness, margin)
+        else:
+            self._stepper.invalidate_contact()
         self._set_scene(snapshot["scene"])
 
     def _check_snapshot(self, snapshot: dict) -> None:
@@ -171,8 +174,12 @@ class Simulation:
         return self.model.scene
 
     def _set_scene(self, scene: Scene) -> None:
-        self.model.scene = scene
+        model = self.model
+        model.scene = scene
         self._control = self.integrator.control()
+        self._stepper.set_cloth(model.cloth)
+        self._stepper.set_physics(model.physics)
+        self._stepper.set_control(self._control)
 
     def set_inputs(self, **values) -> None:
         """Change inputs (water level, density, absorption; see ``scene.INPUT``) from now on."""
@@ -211,7 +218,7 @@ class Simulation:
         buf.water[...] = state.water
         self._clock[TIME] = state.time
         self._clock[LAST_STEP] = 0.0  # a state from elsewhere: no history
-        self_contact.invalidate(self._contact)  # nor a candidate list
+        self._stepper.invalidate_contact()  # nor a candidate list
 
     @property
     def steps(self) -> int:
@@ -240,21 +247,18 @@ class Simulation:
         """Work of self-collision so far: candidate lists built, steps that had candidates, passes
         over them, pairs pushed apart, rounds of impact zones, and steps whose motion was undone (a
         last resort); with the current list's point-triangle and edge-edge candidates."""
-        counts = dict(zip(("rebuilds", "busy_steps", "passes", "responses", "zone_rounds", "freezes"),
-                          (int(c) for c in self._contact.counters)))
-        counts["point_triangle_candidates"], counts["edge_edge_candidates"] = self_contact.candidate_counts(self._contact)
+        counts = dict(zip(self_collision.COUNTER_NAMES, (int(c) for c in self._contact.counters)))
+        counts["point_triangle_candidates"], counts["edge_edge_candidates"] = self._stepper.candidate_counts()
         return counts
 
     def advance(self, duration: float) -> None:
         """Simulate ``duration`` seconds (>= 0) more."""
         if not (duration >= 0.0 and math.isfinite(duration)):
             raise ValueError(f"duration must be a finite number >= 0 s, got {duration!r}")
-        model = self.model
         target = self.time + duration
         status = PAUSED
         while status == PAUSED:
-            status = self._advance(model.cloth, model.physics, self._control, model.work, self._solver, self._plane,
-                                   self._contact, self._buffers, self._clock, target, self._steps_per_call)
+            status = self._stepper.advance(target, self._steps_per_call)
         if status == BLOWN_UP:
             self._blown_up(float(self._clock[FAILED_STEP]))
 
@@ -269,14 +273,11 @@ class Simulation:
                 times.size and times[0] < self.time):
             raise ValueError(f"times must be a 1-D sequence of finite times (s), ascending from the current time "
                              f"{self.time:g} s; got shape {times.shape}, first {times.ravel()[:3].tolist()}")
-        model = self.model
         outputs = np.full((times.size, OUTPUT_COUNT), np.nan)
         status, done = PAUSED, 0
         try:
             while status == PAUSED:
-                status, done = self._advance_sampling(
-                    model.cloth, model.physics, self._control, model.work, self._solver, self._plane, self._contact,
-                    self._buffers, self._clock, times, outputs, done, self._steps_per_call)
+                status, done = self._stepper.advance_sampling(times, outputs, done, self._steps_per_call)
             if status == BLOWN_UP:
                 self._blown_up(float(self._clock[FAILED_STEP]))
         except BaseException as exc:
@@ -295,7 +296,7 @@ class Simulation:
     def _blown_up(self, h: float) -> None:
         """Refuse a non-finite or exploded state; the last good state stays current."""
         buf = self._buffers
-        speed, finite = speed_and_finiteness(buf.trial_pos, buf.trial_vel, buf.trial_water)
+        speed, finite = _core.speed_and_finiteness(buf.trial_pos, buf.trial_vel, buf.trial_water)
         scene = self.scene
         what = "became non-finite" if not finite else f"exploded (speed {speed:.3g} m/s)"
         raise BlowUpError(
@@ -310,7 +311,7 @@ class Simulation:
     def outputs(self) -> dict[str, float]:
         """The FMU outputs (docs/model.md section 8): centroid (m), depth (m), wet and water mass (kg)."""
         buf, model = self._buffers, self.model
-        self._record_outputs(model.cloth.dry_mass, model.physics.water_level, buf.pos, buf.water, self._output_row)
+        _core.record_outputs(model.cloth.dry_mass, model.physics.water_level, buf.pos, buf.water, self._output_row)
         return dict(zip(OUTPUT_NAMES, self._output_row.tolist()))
 
     @property

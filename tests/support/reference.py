@@ -1,5 +1,5 @@
 """The explicit step in plain, vectorised NumPy: the speed baseline of ``bench/step_speed.py`` and an
-independent check of the numba kernels (it uses index lists and ``Topology.triangles`` where the
+independent check of the compiled core (it uses index lists and ``Topology.triangles`` where the
 kernels use offsets and grid rows).  Not used by the simulator.
 """
 
@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from wetcloth.kernels.springs import TENSION_ROUNDING
+from wetcloth._core import TENSION_ROUNDING
 from wetcloth.model import GRAVITY, Model
 from wetcloth.state import State
 

@@ -9,14 +9,8 @@ libcosimpy, any Python master).  One wetcloth per process:
 
 1. a wetcloth already imported there is used, with a warning if its sources differ from the FMU's;
 2. else the host's installed wetcloth, if its sources are the FMU's (same SHA-256 digests);
-3. else the copy inside the FMU, from a per-user folder named by the digest of all its files
-   (``~/.cache/wetcloth/fmu/<digest>``, or ``$WETCLOTH_FMU_CACHE``), copied there once.
-
-Why 3: numba caches compiled kernels in ``__pycache__`` beside their source, under a name keyed
-by the source folder's path (``numba.core.caching``: index of the file's path and, since numba
-0.61, its content hash; older numba its mtime).  Each extraction of the FMU is a new temporary
-folder with new mtimes, so the kernels compiled again at every start (14-17 s).  The digest-named
-copy keeps one path and one set of mtimes per FMU content: after the first start, its kernels load.
+3. else the copy inside the FMU (``resources/wetcloth``), with its compiled core: it needs no more
+   than numpy from the host, and nothing is compiled at start.
 
 A dependency the host's Python lacks is named in an ImportError and in Python's logging (stderr
 unless the host configured logging), also while the master's FMI logging is off.
@@ -32,9 +26,7 @@ import importlib.util
 import json
 import logging
 import os
-import shutil
 import sys
-import tempfile
 from pathlib import Path
 
 LOG = logging.getLogger("wetcloth.fmu")
@@ -42,8 +34,6 @@ LOG = logging.getLogger("wetcloth.fmu")
 MANIFEST_NAME = "wetcloth_fmu_manifest.json"
 #: This file's module name inside the FMU (beside the slave script, importable before wetcloth).
 MODULE_NAME = "wetcloth_fmu_bootstrap"
-#: Environment variable naming the per-user folder of unpacked wetcloth copies.
-CACHE_VARIABLE = "WETCLOTH_FMU_CACHE"
 
 _LOADED: dict[str, object] = {}  # resources folder -> the wetcloth module it runs
 _RELEASED: dict[str, ctypes.CDLL] = {}  # binaries whose finalizePythonInterpreter runs at Python's exit
@@ -63,44 +53,6 @@ def _same_files(folder: Path, files: dict[str, str]) -> bool:
         return all(digest(folder / rel) == value for rel, value in files.items())
     except OSError:
         return False
-
-
-def cache_root() -> Path:
-    """The per-user folder of unpacked wetcloth copies."""
-    if os.environ.get(CACHE_VARIABLE):
-        return Path(os.environ[CACHE_VARIABLE])
-    if sys.platform == "win32":
-        base = Path(os.environ.get("LOCALAPPDATA") or Path.home() / "AppData" / "Local")
-    elif sys.platform == "darwin":
-        base = Path.home() / "Library" / "Caches"
-    else:
-        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    return base / "wetcloth" / "fmu"
-
-
-def cached_copy(bundle: Path, files: dict[str, str]) -> Path | None:
-    """A folder holding ``bundle`` (a ``wetcloth`` package folder) at a path that depends only on its
-    contents, copied there if needed; None (logged) if the per-user folder cannot be used."""
-    home = cache_root() / bundle_digest(files)[:24]
-    if _same_files(home / "wetcloth", files):
-        return home
-    try:
-        home.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
-        staging = Path(tempfile.mkdtemp(prefix=".incoming-", dir=home.parent))
-        shutil.copytree(bundle, staging / "wetcloth", ignore=shutil.ignore_patterns("__pycache__"))
-        try:
-            os.rename(staging, home)  # atomic: another process may have won the race, which is as good
-        except OSError:
-            shutil.rmtree(staging, ignore_errors=True)
-    except OSError as exc:
-        LOG.warning("WetCloth FMU: cannot keep its wetcloth in %s (%s); numba compiles its kernels at every start",
-                    home, exc)
-        return None
-    if not _same_files(home / "wetcloth", files):
-        LOG.warning("WetCloth FMU: %s holds other files than the FMU's wetcloth; using the FMU's copy "
-                    "(numba compiles its kernels at every start); delete that folder to fix this", home)
-        return None
-    return home
 
 
 def _path_without(resources: Path) -> list[str]:
@@ -218,8 +170,7 @@ def load_wetcloth(resources: Path):
         elif _host_wetcloth(resources, manifest["package_files"]):
             module = _import(_path_without(resources))
         else:
-            home = cached_copy(resources / "wetcloth", manifest["bundle_files"])
-            module = _import([str(home or resources)] + _path_without(resources))
+            module = _import([str(resources)] + _path_without(resources))
     except ModuleNotFoundError as exc:
         if exc.name and exc.name.split(".")[0] == "wetcloth":
             raise

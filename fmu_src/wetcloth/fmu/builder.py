@@ -5,8 +5,9 @@ documentation folder; ``build_fmu`` stages what the unit needs:
 
 * the slave script (``wetcloth_fmu_slave.py`` or ``wetcloth_fmu3_slave.py``, project-unique
   module names) and the bootstrap ``wetcloth_fmu_bootstrap.py`` (``bootstrap.py``);
-* a copy of the wetcloth package with its scene presets and exporter (``resources/wetcloth``), so
-  the FMU runs with any Python that has wetcloth's dependencies;
+* a copy of the wetcloth package with its compiled core (``_core``, built for this Python's version
+  and platform), scene presets and exporter (``resources/wetcloth``), so the FMU runs with any
+  such Python that has numpy (and pythonfmu);
 * a manifest: the copy's file digests (by which the bootstrap picks the host's identical wetcloth
   or a per-user cached copy of its own), the variable names (a wetcloth whose variables differ
   from the model description is refused) and the requirements (named when one is missing);
@@ -45,19 +46,24 @@ CAPABILITIES = {
             canBeInstantiatedOnlyOncePerProcess=False, canInterpolateInputs=False, needsExecutionTool=True),
     3: dict(canHandleVariableCommunicationStepSize=True, canGetAndSetFMUState=True, canSerializeFMUState=True,
             canBeInstantiatedOnlyOncePerProcess=False, needsExecutionTool=True),
-}  # needsExecutionTool: a Python interpreter with numpy and numba, see documentation/index.html
+}  # needsExecutionTool: a Python interpreter with numpy, see documentation/index.html
 
 #: Subpackages of wetcloth the unit uses that an editable install keeps outside the package folder.
 MAPPED_SUBPACKAGES = ("presets", "exporter")
 #: What of the presets folder (the repository's ``models/``, which also holds built FMUs) is packed.
 PRESET_PATTERNS = ("*.toml", "__init__.py")
 
-_SKIP = shutil.ignore_patterns("__pycache__", "*.pyc", "*.nbi", "*.nbc")
+_SKIP = shutil.ignore_patterns("__pycache__", "*.pyc")
 
 
 def package_dir() -> Path:
     """The wetcloth package folder being packed."""
     return Path(wetcloth.__file__).resolve().parent
+
+
+def core_module() -> Path:
+    """The compiled core's extension module file (``wetcloth._core``), wherever the install put it."""
+    return Path(importlib.util.find_spec("wetcloth._core").origin).resolve()
 
 
 def _mapped_subpackages() -> dict[str, Path]:
@@ -75,12 +81,14 @@ def _mapped_subpackages() -> dict[str, Path]:
 
 def _files(folder: Path, patterns=("*",)) -> list[Path]:
     return sorted(p for pattern in patterns for p in folder.rglob(pattern) if p.is_file()
-                  and "__pycache__" not in p.parts and p.suffix not in (".pyc", ".nbi", ".nbc"))
+                  and "__pycache__" not in p.parts and p.suffix != ".pyc")
 
 
 def source_files() -> list[Path]:
-    """The files the FMU carries: the wetcloth package, its presets and exporter (no caches)."""
+    """The files the FMU carries: the wetcloth package, its compiled core, presets and exporter (no caches)."""
     files = _files(package_dir())
+    if package_dir() not in core_module().parents:
+        files.append(core_module())
     for sub, location in _mapped_subpackages().items():
         files += _files(location, PRESET_PATTERNS if sub == "presets" else ("*",))
     return files
@@ -101,6 +109,8 @@ def _stage_package(stage: Path) -> tuple[dict[str, str], dict[str, str]]:
     bundle = stage / "wetcloth"
     shutil.copytree(package_dir(), bundle, ignore=_SKIP)
     package_files = {p.relative_to(bundle).as_posix(): digest(p) for p in _files(bundle)}
+    if not (bundle / core_module().name).exists():  # an editable install keeps it outside the package folder
+        shutil.copy2(core_module(), bundle / core_module().name)
     for sub, location in _mapped_subpackages().items():
         for p in _files(location, PRESET_PATTERNS if sub == "presets" else ("*",)):
             target = bundle / sub / p.relative_to(location)

@@ -30,7 +30,7 @@ class Fmi2Unit(WetClothUnit, Fmi2Slave):
     LOG_STATUS = {"error": Fmi2Status.error, "warning": Fmi2Status.warning}
     author = "wetcloth"
     description = ("Mass-spring cloth on water with buoyancy, drag and Buras-law absorption "
-                   "(wetcloth, FMI 2.0 co-simulation via pythonfmu; needs Python with numpy and numba)")
+                   "(wetcloth, FMI 2.0 co-simulation via pythonfmu; needs CPython with numpy)")
     version = wetcloth.__version__
     license = "MIT"
     default_experiment = DefaultExperiment(0.0, *default_run())

@@ -33,8 +33,8 @@ class Fmi3Unit(WetClothUnit, Fmi3Slave):
         self.modelName = MODEL_NAME
         self.author, self.license, self.version = "wetcloth", "MIT", wetcloth.__version__
         self.description = ("Mass-spring cloth on water with buoyancy, drag and Buras-law absorption, and its mesh "
-                            "at every step (wetcloth, FMI 3.0 co-simulation via pythonfmu3; needs Python with "
-                            "numpy and numba)")
+                            "at every step (wetcloth, FMI 3.0 co-simulation via pythonfmu3; needs CPython with "
+                            "numpy)")
         self.default_experiment = DefaultExperiment(0.0, *default_run())
         self._start_unit()
         guard.register(self)
