@@ -32,22 +32,28 @@ def figure_file(path: str | Path, dpi: int, **options):
         plt.close(fig)
 
 
-def plot_run(result, path: str | Path, title: str | None = None) -> Path:
+def plot_run(result, path: str | Path, title: str | None = None, label: str | None = None,
+             compare: dict | None = None) -> Path:
     """Write a figure (whole or not at all): depth, wet mass and water mass against time, and the
-    run's cloth shapes."""
+    run's cloth shapes.  ``compare`` maps a label to other runs' outputs (columns ``time``, ``depth``,
+    ``wet_mass``, ``water_mass``), drawn dashed over the run's curves (``label`` names the run's)."""
     shots = result.shapes
     with figure_file(path, 90, figsize=(4 * max(len(shots), 3), 8), constrained_layout=True) as fig:
-        _draw_run(fig, result, title)
+        _draw_run(fig, result, title, label, compare or {})
     return Path(path)
 
 
-def _draw_run(fig, result, title: str | None) -> None:
+def _draw_run(fig, result, title: str | None, label: str | None, compare: dict) -> None:
     shots = result.shapes
     grid = fig.add_gridspec(2, max(len(shots), 3))
     t = result.column("time")
 
     ax = fig.add_subplot(grid[0, : max(len(shots), 3) // 2 + 1])
-    ax.plot(t, 100 * result.column("depth"), color="tab:blue")
+    ax.plot(t, 100 * result.column("depth"), color="tab:blue", label=label)
+    for name, other in compare.items():
+        ax.plot(other["time"], 100 * other["depth"], color="black", ls="--", lw=1.0, label=name)
+    if compare:
+        ax.legend(loc="lower right")
     ax.axhline(0.0, color="0.6", lw=0.8, ls="--")
     ax.set_xlabel("time (s)")
     ax.set_ylabel("depth of the centroid below the surface (cm)")
@@ -57,6 +63,10 @@ def _draw_run(fig, result, title: str | None) -> None:
     ax = fig.add_subplot(grid[0, max(len(shots), 3) // 2 + 1 :])
     ax.plot(t, 1000 * result.column("wet_mass"), label="wet mass", color="tab:purple")
     ax.plot(t, 1000 * result.column("water_mass"), label="absorbed water", color="tab:cyan")
+    for name, other in compare.items():
+        for column in ("wet_mass", "water_mass"):
+            ax.plot(other["time"], 1000 * other[column], color="black", ls="--", lw=1.0,
+                    label=f"{name}" if column == "wet_mass" else None)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("mass (g)")
     ax.legend(loc="upper left")

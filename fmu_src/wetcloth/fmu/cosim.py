@@ -156,12 +156,16 @@ def run_result(outputs: np.ndarray, scene, fps: float, frames: Path | None = Non
 
 
 def demo(out: str | Path = DEFAULT_DEMO_DIR, fmu: str | Path | None = None, duration: float | None = None,
-         start_values: dict | None = None, progress: bool = True) -> dict[str, Path]:
+         start_values: dict | None = None, progress: bool = True, native: bool = True) -> dict:
     """Co-simulate the default towel through fmpy: PLY frames, ``outputs.csv`` and ``plot.png`` in ``out``.
 
     Builds ``fmu`` (default ``default_fmu_path()``) first if it is missing or older than wetcloth's
     sources.  The duration (s) and frame rate are the towel preset's ``[run]`` table unless
-    ``duration`` is given.
+    ``duration`` is given.  With ``native``, also builds the native unit (``build-fmu --native``, beside
+    ``fmu``, its objects kept in ``build/native``) and co-simulates the same towel through it; the plot shows
+    both curves, and the result holds the largest difference of their outputs (``native_difference``:
+    zero, the same core) or, where no C++ compiler is found, why there is no native run
+    (``native_skipped``).
     """
     from wetcloth.fmu.builder import build_fmu, is_stale
 
@@ -173,10 +177,27 @@ def demo(out: str | Path = DEFAULT_DEMO_DIR, fmu: str | Path | None = None, dura
     frames = out / "frames"
     values = {"mesh_output_dir": str(frames.resolve()), "mesh_format": "ply"} | dict(start_values or {})
     outputs = simulate(fmu, duration, fps, values, progress=progress)
-    scene = load_scene(None, **{k: v for k, v in values.items() if k in PARAMETERS})
+    scene_values = {k: v for k, v in values.items() if k in PARAMETERS}
+    scene = load_scene(None, **scene_values)
     result = run_result(outputs, scene, fps, frames)
     csv_path = result.write_csv(out / "outputs.csv")
+    paths = {"fmu": fmu, "frames": frames, "csv": csv_path}
+    compare = {}
+    if native:
+        from wetcloth.fmu.native import NativeBuildError, build_native_fmu, native_fmu_path
+
+        try:
+            native_fmu = build_native_fmu(fmu.parent / native_fmu_path().name, build_dir=Path("build") / "native")
+        except NativeBuildError as exc:
+            paths["native_skipped"] = str(exc)
+        else:
+            native_outputs = simulate(native_fmu, duration, fps, scene_values, progress=progress)
+            compare[native_fmu.name] = native_outputs
+            paths["native"] = native_fmu
+            paths["native_difference"] = max(float(np.max(np.abs(native_outputs[name] - outputs[name])))
+                                             for name in OUTPUT_NAMES)
     from wetcloth.plotting import plot_run
 
-    plot_path = plot_run(result, out / "plot.png", title=f"towel through {fmu.name} (fmpy): {duration:g} s")
-    return {"fmu": fmu, "frames": frames, "csv": csv_path, "plot": plot_path}
+    title = f"towel through {' and '.join([fmu.name, *compare])} (fmpy): {duration:g} s"
+    paths["plot"] = plot_run(result, out / "plot.png", title=title, label=fmu.name, compare=compare)
+    return paths
