@@ -27,7 +27,10 @@ Everything lives in the .blend file: save it and it plays again when reopened, w
 (the modifier does the work, no frame-change handler).  A USD sequence (``<prefix>.usd``) is
 instead imported with Blender's USD importer, which plays it through a Mesh Sequence Cache
 modifier and reads the velocities into the attribute ``velocity`` (Cycles' motion blur uses it);
-the script then adds the same modifiers and material.
+the script then adds the same modifiers and material.  The .blend then plays the .usd from where
+it is: a missing one is refused when the script loads it, and the registered text block
+``wetcloth_check_caches.py`` says so in Blender's interface when the file opens (where Blender may
+run the file's scripts), rather than leaving the cloth frozen with a console warning.
 
 For OBJ frames the wetness comes back from the vertex colour (OBJ cannot carry a custom float):
 the colour is matched to the exporter's colour table, so it is exact to 1/255.
@@ -467,6 +470,65 @@ def finish(ob, options, manifest, fps, first_frame, frame_count):
     apply_timeline(options["timeline"], fps, first_frame, frame_count)
 
 
+# ---------------------------------------------------------------------------- the USD cache
+#: A text block registered as a module (Blender runs it when the file opens, where it may run the
+#: file's scripts): it says in the interface when a USD cache the file plays is missing, which else
+#: leaves the cloth frozen with only a console warning.
+CACHE_CHECK = "wetcloth_check_caches.py"
+CACHE_CHECK_SOURCE = '''"""wetcloth: say when a USD cache this file plays is missing (the cloth would stand still).
+
+Registered (Text > Register): Blender runs it when the file opens, if it may run the file's scripts
+(Preferences > Save & Load > Auto Run Python Scripts, or "Allow Execution" when it asks)."""
+import os
+
+import bpy
+
+
+def missing_caches():
+    """(cache name, absolute path) of every cache file that is not on disk."""
+    found = []
+    for cache in bpy.data.cache_files:
+        path = bpy.path.abspath(cache.filepath)
+        if not os.path.isfile(path):
+            found.append((cache.name, path))
+    return found
+
+
+def report(problems):
+    lines = [f"USD cache missing: {path} (cache {name!r}): the cloth stands still. Put the file back, or "
+             "point the cache at it (Mesh Sequence Cache modifier > Cache File > File Path)."
+             for name, path in problems]
+    for line in lines:
+        print("wetcloth: " + line)
+    bpy.app.driver_namespace["wetcloth_missing_caches"] = problems
+
+    def popup():
+        wm = bpy.context.window_manager
+        if wm is not None and wm.windows:
+            wm.popup_menu(lambda menu, context: [menu.layout.label(text=line) for line in lines],
+                          title="wetcloth: USD cache missing", icon="ERROR")
+        return None
+
+    if not bpy.app.background:
+        bpy.app.timers.register(popup, first_interval=0.5)
+
+
+problems = missing_caches()
+bpy.app.driver_namespace["wetcloth_missing_caches"] = problems
+if problems:
+    report(problems)
+'''
+
+
+def register_cache_check():
+    """Put the cache check in the file (as a registered text block) and run it once now."""
+    text = bpy.data.texts.get(CACHE_CHECK) or bpy.data.texts.new(CACHE_CHECK)
+    text.clear()
+    text.write(CACHE_CHECK_SOURCE)
+    text.use_module = True
+    exec(compile(CACHE_CHECK_SOURCE, CACHE_CHECK, "exec"), {"__name__": CACHE_CHECK})
+
+
 # ---------------------------------------------------------------------------- entry points
 def load_usd(directory, manifest, name, options, fps):
     """Import ``<prefix>.usd`` (played by a Mesh Sequence Cache modifier), shifted to the option's first frame."""
@@ -488,6 +550,7 @@ def load_usd(directory, manifest, name, options, fps):
     cache.cache_file.frame_offset = first_frame - stage_range[0]  # subtracted from the scene frame
     frame_count = manifest.get("frame_count") or stage_range[1] - stage_range[0] + 1
     finish(ob, options, manifest, fps, first_frame, frame_count)
+    register_cache_check()  # when the file opens again, a moved cache is said in the interface
     return ob
 
 
@@ -504,6 +567,10 @@ def load(directory=None, name=None, **options):
     name = name or SETTINGS["prefix"]
     fps = float(manifest.get("fps", SETTINGS["fps"]))
     first_frame = options["first_frame"]
+    usd = os.path.join(directory, SETTINGS["usd_file"]) if SETTINGS["format"] == "usd" else None
+    if usd is not None and not os.path.isfile(usd):  # refused before the scene is touched
+        raise RuntimeError(f"wetcloth: the USD cache {usd} is missing: nothing to play (was the .usd moved or "
+                           "deleted?)")
     remove_default_cube()
     if SETTINGS["format"] == "usd":
         return load_usd(directory, manifest, name, options, fps)

@@ -43,11 +43,16 @@ MANIFEST = "frames.json"
 LOADER = "load_in_blender.py"
 #: Least zero-padding of frame numbers (the public naming: ``cloth_0001.ply``).
 MIN_DIGITS = 4
-#: A frame is written as ``<name>.part`` and then renamed, so no reader sees half a frame.
+#: A frame is written as ``<name>.<random>.part`` (created new: ``wetcloth.files.whole_file``) and
+#: then renamed, so no reader sees half a frame.
 PARTIAL = ".part"
+#: What follows a file's name in the name of its temporary copy: ``.<random>.part`` for a frame (or
+#: ``.part`` of earlier versions); frames.json and the loader are written as hidden
+#: ``.<name>.<random>.tmp``.
+_PART = r"(?:\.[a-z0-9_]+)?\.part"
 #: Files that show a directory already holds a run's frames: any ``name_0001.ply``-like frame (or
 #: one an interrupted run left half-written), a USD file, a manifest or a loader.
-_FRAME_FILE = re.compile(r"^.+_\d{4,}\.(ply|obj)(\.part)?$")
+_FRAME_FILE = re.compile(rf"^.+_\d{{4,}}\.(ply|obj)({_PART})?$")
 _PREFIX = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
@@ -85,7 +90,7 @@ def _own_file_pattern(prefix: str, fmt: str) -> re.Pattern:
     a frame left half-written (``.part``), ``frames.json``, the loader and their temporary copies."""
     media = re.escape(f"{prefix}.usd") if fmt == "usd" else rf"{re.escape(prefix)}_\d{{{MIN_DIGITS},}}\.{fmt}"
     side = "|".join(re.escape(name) for name in (MANIFEST, LOADER))
-    return re.compile(rf"^(?:(?:{media})(?:{re.escape(PARTIAL)})?|(?:{side})(?:\.tmp)?)$")
+    return re.compile(rf"^(?:(?:{media})(?:{_PART})?|(?:{side})(?:\.tmp)?|\.(?:{side})\.[a-z0-9_]+\.tmp)$")
 
 
 def sequence_files(directory: str | Path) -> list[Path]:
@@ -142,8 +147,8 @@ def _make_directory(directory: Path) -> None:
 
 
 def _frame_number(name: str) -> int:
-    """The frame number in a frame file name such as ``cloth_0012.ply`` (or ``.ply.part``)."""
-    return int(re.search(r"_(\d+)\.[a-z]+(?:\.part)?$", name).group(1))
+    """The frame number in a frame file name such as ``cloth_0012.ply`` (or ``.ply.<random>.part``)."""
+    return int(re.search(rf"_(\d+)\.[a-z]+(?:{_PART})?$", name).group(1))
 
 
 def _remove(paths: list[Path]) -> None:
@@ -419,13 +424,16 @@ def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: flo
     is a file, a directory that cannot be created or written, and one that already holds frames
     (``*_0001.ply``-like files, a ``.usd``, ``frames.json`` or ``load_in_blender.py``) unless
     ``overwrite`` and they are the sequence its frames.json describes.  Each frame file appears
-    whole (written under a ``.part`` name, then renamed): a run stopped midway leaves only
-    complete frames.
+    whole (written under a new ``.<random>.part`` name, then renamed): a run stopped midway leaves
+    only complete frames.
     """
     if fmt not in FORMATS:
         raise ExportError(f"unknown mesh format {fmt!r}; choose one of {', '.join(FORMATS)}")
     if writer not in WRITERS:
         raise ExportError(f"unknown mesh writer {writer!r}; choose one of {', '.join(WRITERS)}")
+    if fmt == "usd" and writer != "trimesh":
+        raise ExportError(f"writer {writer!r} does not apply to usd: usd-core writes USD files (the writer "
+                          "chooses the library for ply and obj)")
     if not (isinstance(fps, (int, float)) and math.isfinite(fps) and fps > 0):
         raise ExportError(f"fps must be a finite number > 0, got {fps!r}")
     if not _PREFIX.match(prefix):

@@ -210,8 +210,8 @@ def test_cli_on_a_scheduler_writes_table_csv_and_plots(client, tmp_path, capsys)
     table = read_table(out)
     assert len(table) == 4 and (table["status"] == "ok").all()
     assert pd.read_csv(csv)["run_key"].tolist() == table["run_key"].tolist()
-    for name in ("cli_study_time_to_sink_absorption_capacity_x_absorption_rate.png",
-                 "cli_study_final_wet_mass_vs_absorption_rate.png"):
+    for name in ("cli_time_to_sink_absorption_capacity_x_absorption_rate.png",  # named after the table, cli.parquet
+                 "cli_final_wet_mass_vs_absorption_rate.png"):
         image = matplotlib.image.imread(out.parent / name)
         assert image.shape[0] > 100 and image.shape[1] > 100
     assert main(argv) == 0

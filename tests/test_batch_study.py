@@ -334,7 +334,8 @@ def test_dry_run_lists_runs_done_failed_and_to_run_and_estimates_their_time(tmp_
     estimate = printed[10]
     # 6 to run: 2 refused at once (absorption_rate = -1), 4 timed at the pace of 3 of them or more
     assert re.fullmatch(r"estimated time: about \S+ \S+ per run x 4 runs = \S+ \S+ of computing; about \S+ \S+ on 2 "
-                        r"workers \([34] of the runs timed in this process for up to 1 s each, .*; 2 runs with a value "
+                        r"workers of a local cluster, \S+ \S+ of it to start the cluster, warm up its workers and "
+                        r"stop it \([34] of the runs timed in this process for up to 1 s each, .*; 2 runs with a value "
                         r"out of range will be refused at once\)", estimate), estimate
     assert out.stat().st_mtime_ns == stamp and sorted(p.name for p in tmp_path.iterdir()) == ["dry.parquet", "dry.toml"]
     # with --retry-errors the failed run is to run again

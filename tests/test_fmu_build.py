@@ -53,8 +53,12 @@ def test_every_scene_field_is_a_variable_with_its_metadata(md):
         assert start == f.default, name
         assert v.unit == fmi_unit_name(meta["unit"]) if v.type == "Real" else v.unit is None, name
         assert meta["doc"] in v.description and describe_range(f) in v.description, name
-        if v.type != "String":
-            assert float(v.min) == meta["lo"] and float(v.max) == meta["hi"], name
+        if v.type != "String":  # a value that must be above lo declares the least normal double above it
+            lowest = (math.nextafter(meta["lo"], math.inf) if meta["lo"] else sys.float_info.min) if meta["lo_open"] \
+                else meta["lo"]
+            assert float(v.min) == lowest and float(v.max) == meta["hi"], name
+            if v.type == "Real":
+                assert float(v.nominal) == (abs(f.default) or 1.0), name
 
 
 #: docs/interface.md's promise, written out here rather than derived from the Scene, so that a renamed
@@ -181,7 +185,7 @@ def test_new_scene_fields_become_variables_without_code_changes():
     units = {u.get("name"): u.find("BaseUnit").attrib for u in root.iter("Unit")}
     assert units["m/s"] == {"m": "1", "s": "-1"} and units["m2/s"] == {"m": "2", "s": "-1"}
     real = make_variable(specs["current_x"], lambda: 0.0, None).to_xml()[0]
-    assert real.attrib == {"unit": "m/s", "min": "-10.0", "max": "10.0"}
+    assert real.attrib == {"unit": "m/s", "min": "-10.0", "max": "10.0", "nominal": "1.0"}
 
 
 def test_unknown_unit_symbol_is_refused_by_name():

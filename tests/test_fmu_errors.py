@@ -154,7 +154,7 @@ def test_cloth_below_the_floor_names_initial_height_and_its_bound(results):
 def test_a_parameter_cannot_change_after_initialization(results):
     record = results["fixed_after_initialization"]
     assert statuses(record, "step") == [OK, DISCARD, OK]  # set back to the value it has, the unit steps again
-    assert "'nx': is fixed once the simulation starts" in error_messages(record)  # Simulation.set_inputs' rule
+    assert "'nx' is fixed once the simulation starts" in error_messages(record)  # Simulation.set_inputs' rule
     assert record["outputs"][3] == record["outputs"][1] != record["outputs"][-1]
 
 

@@ -804,8 +804,8 @@ def test_bad_inputs_during_the_run_discard_steps_until_fixed(errors):
     assert messages[1].startswith("step refused at t = 0.1 s: parameter 'water_level': nan is not a finite number")
     fixed_width, fixed_format, messages = errors["input fixed"]
     assert (fixed_width, fixed_format) == (3, 3)
-    assert "parameter 'width': is fixed once the simulation starts; only inputs may change" in messages[0]
-    assert "parameter 'mesh_format': is fixed once the unit is initialized" in messages[1]
+    assert "parameter 'width' is fixed once the simulation starts; only inputs may change" in messages[0]
+    assert "parameter 'mesh_format' is fixed once the unit is initialized" in messages[1]
     assert errors["input ok again"] == [0, 0, 0.01]
 
 

@@ -72,14 +72,15 @@ def test_serialized_state_resumes_in_a_fresh_instance():
         uninterrupted.close()
     assert isinstance(saved, bytes) and len(saved) > 0
 
-    # A new instance with other parameters: the deserialized state replaces all of it.
-    fresh = Unit({"nx": 4, "ny": 6, "water_level": 0.1}, name="resumed")
+    # A new instance with other parameters (the same grid: a running unit's grid is fixed): the
+    # deserialized state replaces all of it.
+    fresh = Unit(SMALL | {"initial_tilt": 5.0, "absorption_rate": 0.1, "water_level": 0.1}, name="resumed")
     try:
         state = fresh.fmu.deSerializeFMUstate(saved)
         fresh.fmu.setFMUstate(state)
         fresh.fmu.freeFMUstate(state)
         fresh.time = saved_time  # the master resumes from the saved communication point
-        assert fresh.get("nx") == VALUES["nx"] and fresh.get("water_level") == 0.0
+        assert fresh.get("initial_tilt") == VALUES["initial_tilt"] and fresh.get("water_level") == 0.0
         resumed = run(fresh, 10)
     finally:
         fresh.close()

@@ -127,7 +127,7 @@ def test_a_scene_file_with_several_mistakes_reports_all_of_them_at_once(tmp_path
 @pytest.mark.parametrize("text, message", [
     ("run = 5\n", "setting 'run': must be the table [run]"),
     ('[run]\nduration = "abc"\n', "[run] 'duration': expected a number, got 'abc'; allowed: 0 < duration <= 1e+06 s"),
-    ("duration = 3.0\n", "parameter 'duration': is a run setting: put it in the [run] table"),
+    ("duration = 3.0\n", "parameter 'duration' is a run setting: put it in the [run] table"),
     ("description = 3\n", "parameter 'description': must be text"),
 ])
 def test_run_table_and_other_keys_are_checked(tmp_path, text, message):

@@ -30,7 +30,7 @@ class ConfigError(ValueError):
         return self.problems[0][1]
 
     def __str__(self) -> str:
-        lines = [f"{label} '{name}': {message}" for label, name, message in self.problems]
+        lines = [line(label, name, message) for label, name, message in self.problems]
         head = f"{self.source}: " if self.source else ""
         if len(lines) == 1:
             return head + lines[0]
@@ -43,6 +43,12 @@ class ConfigError(ValueError):
 
     def __reduce__(self):  # picklable (Dask sends exceptions between processes)
         return _made, (type(self), self.problems, self.source)
+
+
+def line(label: str, name: str, message: str) -> str:
+    """"parameter 'width': expected a number ..." or, for a message that says what the name is,
+    "parameter 'width' is fixed once ..." (no colon between subject and verb)."""
+    return f"{label} '{name}'{' ' if message.startswith('is ') else ': '}{message}"
 
 
 def _made(cls, problems: list[tuple[str, str, str]], source: str | None) -> ConfigError:

@@ -100,7 +100,8 @@ def run(
     """Simulate ``scene`` for ``duration`` s; record outputs at ``fps`` and ``shapes`` cloth shapes
     (evenly spread frames, ``shape_frames``).
 
-    ``on_frame(index, sim)`` is called at every frame (index 0 at t = 0), for exporters.
+    ``on_frame(index, sim)`` is called at every frame (index 0 at t = 0), for exporters; a frame's
+    row of outputs is recorded once ``on_frame`` has returned, so the rows are the frames written.
     Whatever stops the run early (a ``BlowUpError``, Ctrl-C's ``KeyboardInterrupt``, a failed
     ``on_frame``) is raised with the frames recorded so far as its ``partial_result``.
     ``progress``: a bar of simulated seconds, moving by wall-clock time, once the run has taken
@@ -123,15 +124,18 @@ def run(
                     try:
                         outputs = sim.sample(times[start:index + 1])
                     except BaseException as exc:
-                        _add_rows(result, times[start:], getattr(exc, "partial_outputs", ()))
+                        if on_frame is None:  # with frames, a row counts once its frame is written
+                            _add_rows(result, times[start:], getattr(exc, "partial_outputs", ()))
                         raise
-                    _add_rows(result, times[start:index + 1], outputs)
-                    start = index + 1
+                    if on_frame is None:
+                        _add_rows(result, times[start:index + 1], outputs)
                     if index in plotted:
                         result.shapes.append(ClothShape(float(times[index]), sim.positions, sim.wetness))
                     if on_frame is not None:
-                        with deferred():
+                        with deferred():  # the frame, then its row: the outputs never count a frame not on disk
                             on_frame(index, sim)
+                            _add_rows(result, times[start:index + 1], outputs)
+                    start = index + 1
             except BaseException as exc:
                 exc.partial_result = result  # every frame up to the last good one
                 raise

@@ -8,9 +8,9 @@ import numpy as np
 
 from wetcloth import _core, self_collision
 from wetcloth._core import (BLOWN_UP, CALM_TIME, CG_ITERATIONS, CLOCK_SIZE, EXCHANGING, FACTORISATIONS, FAILED_STEP,
-                            FIRST_GUESS, LAST_SOLVE, LAST_STEP, NEWTON_ITERATIONS, NEWTON_RATE, NEXT_STEP,
-                            OUTPUT_COUNT, PAUSED, RATE_CORRECTION, REJECTED, SLEEPING, SPEED, STEPS, TIME,
-                            UNCHECKED_TIME, UNCONVERGED)
+                            FIRST_GUESS, LAST_SOLVE, LAST_STEP, MAX_REJECTIONS, NEWTON_ITERATIONS, NEWTON_RATE,
+                            NEXT_STEP, OUTPUT_COUNT, PAUSE_AFTER, PAUSED, RATE_CORRECTION, REJECTED, SLEEPING, SPEED,
+                            STEPS, TIME, UNCHECKED_TIME, UNCONVERGED)
 from wetcloth.advice import blow_up_advice
 from wetcloth.bundles import Buffers, make_solver
 from wetcloth.errors import BlowUpError, ParameterError
@@ -107,9 +107,9 @@ class Simulation:
     def restore(self, snapshot: dict) -> None:
         """Return to a ``snapshot`` of this simulation; the run continues exactly as it did from there.
 
-        The snapshot is checked first (its keys, array shapes and types, and a scene that differs
-        from this one in inputs only); a ValueError names what does not fit, and nothing changes."""
-        self._check_snapshot(snapshot)
+        The snapshot is checked whole before anything changes (``check_snapshot``); a ValueError
+        names what does not fit, and nothing changes."""
+        self.check_snapshot(snapshot)
         buf = self._buffers
         state = snapshot["state"]
         buf.pos[...] = state.pos
@@ -137,7 +137,39 @@ class Simulation:
             self._stepper.invalidate_contact()
         self._set_scene(snapshot["scene"])
 
-    def _check_snapshot(self, snapshot: dict) -> None:
+    def check_snapshot(self, snapshot: dict) -> None:
+        """ValueError, naming what does not fit, unless ``restore`` would take ``snapshot``: its keys,
+        array shapes and types, a scene that differs from this one in inputs only, and contents the
+        cloth can be in (the core's ``state_problem``: every value finite; time 0 to MAX_TIME s;
+        positions within MAX_COORDINATE m and above the floor; speeds below the blow-up speed,
+        pinned particles still; water from 0 to MAX_WATER_RATIO times the dry mass; a positive next
+        step, whole counts; asleep only at rest)."""
+        self._check_layout(snapshot)
+        state = snapshot["state"]
+        clock = np.zeros(CLOCK_SIZE)
+        try:
+            clock[TIME] = state.time
+            for key, slot, _ in _SNAPSHOT_CLOCK:
+                clock[slot] = snapshot[key]
+        except OverflowError:
+            raise ValueError("snapshot of a state the cloth cannot be in: a number of its clock is too large") from None
+        others = np.concatenate([snapshot["preconditioner_mass"], snapshot["preconditioner_jacobian_along"].ravel(),
+                                 snapshot["preconditioner_jacobian_mass"], [float(snapshot["preconditioner_scale"])]])
+        self._refuse_contents(state, snapshot, clock, float(snapshot["contact_margin"]), others)
+
+    def _refuse_contents(self, state: State, arrays, clock: np.ndarray, margin: float, others: np.ndarray) -> None:
+        """ValueError if ``state`` with the history ``arrays`` (``_SNAPSHOT_ARRAYS`` and
+        ``contact_reference``), ``clock`` and self-collision's ``margin`` is not one the cloth can be in."""
+        model = self.model
+        flat = [np.ascontiguousarray(a, dtype=float) for a in (
+            state.pos, state.vel, state.water, arrays["prev_pos"], arrays["prev_vel"], arrays["prev_water"],
+            arrays["acceleration"], arrays["anchor"], arrays["contact_reference"])]
+        problem = _core.state_problem(model.cloth, model.physics, self._control, *flat, margin, clock,
+                                      np.ascontiguousarray(others, dtype=float))
+        if problem:
+            raise ValueError(f"snapshot of a state the cloth cannot be in: {problem}")
+
+    def _check_layout(self, snapshot: dict) -> None:
         live = self.snapshot()
         if not isinstance(snapshot, dict) or set(snapshot) != set(live):
             keys = set(snapshot) if isinstance(snapshot, dict) else set()
@@ -148,6 +180,8 @@ class Simulation:
             if key == "state":
                 if not isinstance(given, State):
                     raise ValueError(f"snapshot 'state': expected a State, got {type(given).__name__}")
+                if not isinstance(given.time, (int, float, np.integer, np.floating)) or isinstance(given.time, bool):
+                    raise ValueError(f"snapshot 'state.time': expected a number, got {type(given.time).__name__}")
                 for name in ("pos", "vel", "water"):
                     want, got = getattr(value, name), getattr(given, name)
                     if not isinstance(got, np.ndarray) or got.shape != want.shape or got.dtype != want.dtype:
@@ -212,13 +246,29 @@ class Simulation:
 
     @state.setter
     def state(self, state: State) -> None:
+        """Take ``state`` (arrays of this cloth's shapes) as the current one, with no history; a
+        ValueError, and nothing changed, unless its contents are a state the cloth can be in (as for
+        ``restore``)."""
         buf = self._buffers
+        for name in ("pos", "vel", "water"):
+            got, want = getattr(state, name, None), getattr(buf, name)
+            if not isinstance(got, np.ndarray) or got.shape != want.shape:
+                raise ValueError(f"state.{name}: expected an array of shape {want.shape}")
+        if not isinstance(state.time, (int, float, np.integer, np.floating)) or isinstance(state.time, bool):
+            raise ValueError(f"state.time: expected a number, got {type(state.time).__name__}")
+        clock = self._clock.copy()
+        clock[TIME], clock[LAST_STEP], clock[SLEEPING] = state.time, 0.0, 0.0
+        arrays = {key: getattr(buf, key) for key in _SNAPSHOT_ARRAYS} | {"contact_reference": self._contact.reference}
+        contiguous = State(state.time, *(np.ascontiguousarray(getattr(state, k), dtype=float)
+                                         for k in ("pos", "vel", "water")))
+        self._refuse_contents(contiguous, arrays, clock, 0.0, np.zeros(0))
         buf.pos[...] = state.pos
         buf.vel[...] = state.vel
         buf.water[...] = state.water
         self._clock[TIME] = state.time
         self._clock[LAST_STEP] = 0.0  # a state from elsewhere: no history
         self._stepper.invalidate_contact()  # nor a candidate list
+        self._wake()  # and it may move
 
     @property
     def steps(self) -> int:
@@ -258,7 +308,7 @@ class Simulation:
         target = self.time + duration
         status = PAUSED
         while status == PAUSED:
-            status = self._stepper.advance(target, self._steps_per_call)
+            status = self._stepper.advance(target, self._steps_per_call, self.pause_after)
         if status == BLOWN_UP:
             self._blown_up(float(self._clock[FAILED_STEP]))
 
@@ -277,7 +327,8 @@ class Simulation:
         status, done = PAUSED, 0
         try:
             while status == PAUSED:
-                status, done = self._stepper.advance_sampling(times, outputs, done, self._steps_per_call)
+                status, done = self._stepper.advance_sampling(times, outputs, done, self._steps_per_call,
+                                                              self.pause_after)
             if status == BLOWN_UP:
                 self._blown_up(float(self._clock[FAILED_STEP]))
         except BaseException as exc:
@@ -287,17 +338,31 @@ class Simulation:
             raise
         return outputs
 
+    #: Wall-clock seconds after which a compiled call returns (and Python sees Ctrl-C), whatever the
+    #: steps cost; where the calls return never changes the results.
+    pause_after: float = PAUSE_AFTER
+
     @property
     def _steps_per_call(self) -> int:
-        """Steps one compiled call takes at most: it returns every STEPS_PER_CALL particle-steps, so
-        that Python sees Ctrl-C (and other signals) within a fraction of a second even when steps are tiny."""
+        """Steps one compiled call takes at most: it returns every STEPS_PER_CALL particle-steps (and
+        every ``pause_after`` s of wall-clock time), so that Python sees Ctrl-C (and other signals)
+        within a fraction of a second even when steps are tiny."""
         return max(1, STEPS_PER_CALL // self.model.topology.n)
 
     def _blown_up(self, h: float) -> None:
-        """Refuse a non-finite or exploded state; the last good state stays current."""
+        """Refuse a non-finite or exploded state, or one the step control accepts no step from; the
+        last good state stays current."""
         buf = self._buffers
         speed, finite = _core.speed_and_finiteness(buf.trial_pos, buf.trial_vel, buf.trial_water)
         scene = self.scene
+        if finite and speed < self._control.blow_up_speed:  # neither: no step was accepted (the core's bound)
+            raise BlowUpError(
+                f"the cloth state could not be stepped from t = {self.time:.6g} s: the step control accepted "
+                f"no step (rejected more than {MAX_REJECTIONS} times, the last of {h:.3g} s; integrator "
+                f"{scene.integrator!r}). Likely cause: a state the cloth cannot be in, or a scene stiffer than "
+                f"the smallest step resolves; {blow_up_advice(scene)}. Last good time: {self.time:.6g} s.",
+                last_good_time=self.time,
+            )
         what = "became non-finite" if not finite else f"exploded (speed {speed:.3g} m/s)"
         raise BlowUpError(
             f"the cloth state {what} in the step from t = {self.time:.6g} s to {self.time + h:.6g} s "

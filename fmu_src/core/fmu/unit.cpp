@@ -28,9 +28,9 @@ namespace {
 //: Relative tolerance when matching the master's communication time with the unit's (unit.py).
 constexpr double TIME_TOLERANCE = 1e-9;
 
-//: A ParameterError's text: "parameter 'name': message".
+//: A ParameterError's text: "parameter 'name': message", or "parameter 'name' is ..." (errors.line).
 std::string parameter_error(const char* name, const std::string& message) {
-    return std::string("parameter '") + name + "': " + message;
+    return std::string("parameter '") + name + (message.rfind("is ", 0) == 0 ? "' " : "': ") + message;
 }
 
 //: scene.check_value for a number: finite and within the range.
@@ -202,7 +202,10 @@ Parsed parse(const std::vector<unsigned char>& bytes) {
     p.initialized = in.get<std::uint8_t>() != 0;
     p.clock_set = in.get<std::uint8_t>() != 0;
     p.start_time = in.get<double>();
-    if (!std::isfinite(p.start_time)) throw StateError("serialized WetCloth FMU state: its start time is not finite");
+    if (!(std::fabs(p.start_time) <= MAX_TIME)) {
+        throw StateError("serialized WetCloth FMU state: its start time " + py_repr(p.start_time) +
+                         " s is not a finite number within +-" + py_g(MAX_TIME) + " s");
+    }
     const auto size = in.get<std::uint64_t>();
     if (bytes.size() - in.at != size) throw StateError("serialized WetCloth FMU state is malformed (its size)");
     if (p.initialized != (size > 0)) throw StateError("serialized WetCloth FMU state is malformed (its simulation)");
@@ -558,8 +561,9 @@ Outcome Unit::setup_experiment(double start_time) {
         error("the start time is fixed once the unit is initialized (got " + py_repr(start_time) + " s)");
         return Outcome::ERROR;
     }
-    if (!std::isfinite(start_time)) {
-        error("the start time must be a finite number of seconds, got " + py_repr(start_time));
+    if (!(std::fabs(start_time) <= MAX_TIME)) {
+        error("the start time must be a finite number of seconds within +-" + py_g(MAX_TIME) + " s, got " +
+              py_repr(start_time));
         return Outcome::ERROR;
     }
     start_time_ = start_time;
@@ -604,9 +608,10 @@ Outcome Unit::exit_initialization() {
 }
 
 Outcome Unit::do_step(double current_time, double step_size) {
-    if (!(std::isfinite(current_time) && std::isfinite(step_size) && step_size >= 0.0)) {
-        error("doStep needs a finite communication point and a finite step size >= 0 s, got t = " +
-              py_repr(current_time) + " s, step " + py_repr(step_size) + " s");
+    if (!(std::fabs(current_time) <= MAX_TIME && step_size >= 0.0 && step_size <= MAX_TIME)) {
+        error("doStep needs a finite communication point within +-" + py_g(MAX_TIME) +
+              " s and a finite step size >= 0 s (at most as long), got t = " + py_repr(current_time) + " s, step " +
+              py_repr(step_size) + " s");
         return Outcome::ERROR;
     }
     if (terminated_) {

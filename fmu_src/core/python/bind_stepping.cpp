@@ -1,5 +1,6 @@
 // The step loop as Python sees it: a Stepper holds the views of one simulation's bundles (kept alive
 // with it) and self-collision's candidate lists, and advances them with the GIL released.
+#include <nanobind/stl/string.h>
 #include <nanobind/stl/tuple.h>
 
 #include "convert.hpp"
@@ -42,12 +43,13 @@ class Stepper {
         control_ = control;
     }
 
-    Index advance(double target, Index max_steps) {
+    Index advance(double target, Index max_steps, double pause_after) {
         nb::gil_scoped_release release;
-        return wc::advance(core_, target, max_steps);
+        return wc::advance(core_, target, max_steps, pause_after);
     }
 
-    std::tuple<Index, Index> advance_sampling(nb::handle times, nb::handle outputs, Index first, Index max_steps) {
+    std::tuple<Index, Index> advance_sampling(nb::handle times, nb::handle outputs, Index first, Index max_steps,
+                                              double pause_after) {
         const Index count = size_of(times);
         const double* t = argument<const double>(times, "times", count);
         double* out = argument<double>(outputs, "outputs", count * OUTPUT_COUNT);
@@ -55,7 +57,7 @@ class Stepper {
         SamplingResult result;
         {
             nb::gil_scoped_release release;
-            result = wc::advance_sampling(core_, t, count, out, first, max_steps);
+            result = wc::advance_sampling(core_, t, count, out, first, max_steps, pause_after);
         }
         return {result.status, result.next};
     }
@@ -85,9 +87,11 @@ WETCLOTH_BINDINGS(m) {
         .def("set_cloth", &Stepper::set_cloth)
         .def("set_physics", &Stepper::set_physics)
         .def("set_control", &Stepper::set_control)
-        .def("advance", &Stepper::advance, "target"_a, "max_steps"_a,
-             "Step until the clock reaches target (s); DONE, BLOWN_UP or PAUSED after max_steps steps")
+        .def("advance", &Stepper::advance, "target"_a, "max_steps"_a, "pause_after"_a = PAUSE_AFTER,
+             "Step until the clock reaches target (s); DONE, BLOWN_UP, or PAUSED after max_steps steps or "
+             "pause_after s of wall-clock time (which never changes what is computed)")
         .def("advance_sampling", &Stepper::advance_sampling, "times"_a, "outputs"_a, "first"_a, "max_steps"_a,
+             "pause_after"_a = PAUSE_AFTER,
              "Advance to each of times (s) from index first and record the outputs; (status, next index)")
         .def("build_contact", &Stepper::build_contact, "thickness"_a, "margin"_a)
         .def("invalidate_contact", &Stepper::invalidate_contact)
@@ -101,12 +105,46 @@ WETCLOTH_BINDINGS(m) {
                                argument<double>(row, "row", OUTPUT_COUNT));
         },
         "dry_mass"_a, "water_level"_a, "pos"_a, "water"_a, "row"_a);
+    m.def(
+        "state_problem",
+        [](nb::handle cloth, nb::handle phys, nb::handle control, nb::handle pos, nb::handle vel, nb::handle water,
+           nb::handle prev_pos, nb::handle prev_vel, nb::handle prev_water, nb::handle acceleration, nb::handle anchor,
+           nb::handle contact_reference, double contact_margin, nb::handle clock, nb::handle others) {
+            const Cloth c = cloth_from(cloth);
+            const Index n = c.n;
+            StateView s;
+            s.pos = argument<const double>(pos, "pos", 3 * n);
+            s.vel = argument<const double>(vel, "vel", 3 * n);
+            s.water = argument<const double>(water, "water", n);
+            s.prev_pos = argument<const double>(prev_pos, "prev_pos", 3 * n);
+            s.prev_vel = argument<const double>(prev_vel, "prev_vel", 3 * n);
+            s.prev_water = argument<const double>(prev_water, "prev_water", n);
+            s.acceleration = argument<const double>(acceleration, "acceleration", 3 * n);
+            s.anchor = argument<const double>(anchor, "anchor", 3 * n);
+            s.contact_reference = argument<const double>(contact_reference, "contact_reference", 3 * n);
+            s.contact_margin = contact_margin;
+            s.clock = argument<const double>(clock, "clock", CLOCK_SIZE);
+            s.other_count = size_of(others);
+            s.others = argument<const double>(others, "others", s.other_count);
+            const Physics p = physics_from(phys);
+            const Control k = control_from(control);
+            nb::gil_scoped_release release;
+            return wc::state_problem(c, p, k, s);
+        },
+        "cloth"_a, "phys"_a, "control"_a, "pos"_a, "vel"_a, "water"_a, "prev_pos"_a, "prev_vel"_a, "prev_water"_a,
+        "acceleration"_a, "anchor"_a, "contact_reference"_a, "contact_margin"_a, "clock"_a, "others"_a,
+        "What makes a state one the cloth cannot be in ('' if nothing): stepping.hpp, state_problem");
     m.def("stable_step", [](nb::handle control, double speed) { return wc::stable_step(control_from(control), speed); });
     m.attr("DONE") = Index(DONE);
     m.attr("BLOWN_UP") = Index(BLOWN_UP);
     m.attr("PAUSED") = Index(PAUSED);
     m.attr("CLOCK_SIZE") = Index(CLOCK_SIZE);
     m.attr("OUTPUT_COUNT") = OUTPUT_COUNT;
+    m.attr("MAX_REJECTIONS") = MAX_REJECTIONS;
+    m.attr("PAUSE_AFTER") = PAUSE_AFTER;
+    m.attr("MAX_TIME") = MAX_TIME;
+    m.attr("MAX_COORDINATE") = MAX_COORDINATE;
+    m.attr("MAX_WATER_RATIO") = MAX_WATER_RATIO;
     const char* slots[] = {"TIME", "NEXT_STEP", "LAST_STEP", "SPEED", "CALM_TIME", "UNCHECKED_TIME", "EXCHANGING",
                            "SLEEPING", "STEPS", "REJECTED", "FAILED_STEP", "NEWTON_RATE", "RATE_CORRECTION",
                            "FIRST_GUESS", "LAST_SOLVE"};

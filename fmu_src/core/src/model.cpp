@@ -746,6 +746,13 @@ std::string Simulation::blow_up_message() const {
     for (std::size_t k = 0; k < options.size(); ++k) {
         advice += (k == 0 ? "" : k + 1 == options.size() ? " or " : ", ") + options[k];
     }
+    const std::string integrator = py_repr(std::string_view(INTEGRATOR_NAMES[scene_.integrator]));
+    if (check.finite && check.speed < core_.control.blow_up_speed) {  // no step was accepted (stepping.hpp)
+        return "the cloth state could not be stepped from t = " + py_g(t) + " s: the step control accepted no step "
+               "(rejected more than " + std::to_string(MAX_REJECTIONS) + " times, the last of " + py_g(h, 3) +
+               " s; integrator " + integrator + "). Likely cause: a state the cloth cannot be in, or a scene stiffer "
+               "than the smallest step resolves; " + advice + ". Last good time: " + py_g(t) + " s.";
+    }
     return "the cloth state " + what + " in the step from t = " + py_g(t) + " s to " + py_g(t + h) + " s (step " +
            py_g(h, 3) + " s, integrator " + py_repr(std::string_view(INTEGRATOR_NAMES[scene_.integrator])) +
            "). Likely cause: the step is too large for stretch_stiffness = " + py_g(scene_.stretch_stiffness) +
@@ -801,6 +808,25 @@ void Simulation::check(const Checkpoint& cp) const {
         if (!std::isfinite(v)) finite = false;
     }
     if (!finite) throw SnapshotError("snapshot holds values that are not finite");
+    // The state's contents (stepping.hpp, state_problem; Simulation.check_snapshot in Python).
+    const Index n = topo_.n, families = topo_.families();
+    const double* v = cp.values.data();
+    StateView state;
+    state.pos = v;
+    state.vel = v + 3 * n;
+    state.water = v + 6 * n;
+    state.prev_pos = v + 7 * n;
+    state.prev_vel = v + 10 * n;
+    state.prev_water = v + 13 * n;
+    state.acceleration = v + 14 * n;
+    state.anchor = v + 17 * n;
+    state.others = v + 20 * n;  // the preconditioner's masses and Jacobian
+    state.other_count = (2 + families) * n;
+    state.contact_reference = v + (22 + families) * n;
+    state.contact_margin = cp.contact_margin;
+    state.clock = cp.clock;
+    const std::string problem = state_problem(core_.cloth, core_.phys, core_.control, state);
+    if (!problem.empty()) throw SnapshotError("snapshot of a state the cloth cannot be in: " + problem);
 }
 
 void Simulation::restore(const Checkpoint& cp) {

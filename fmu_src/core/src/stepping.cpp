@@ -2,8 +2,11 @@
 #include "wetcloth/stepping.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <string>
 
 #include "wetcloth/absorption.hpp"
 #include "wetcloth/assembly.hpp"
@@ -158,7 +161,13 @@ Status step(Core& core, double remaining) {
     // would move them; the model's free flags are theirs again before the step ends.
     Index held = hold_resting(n, phys.floor_z, buf.pos, buf.vel, cloth.free, buf.held);
     double h = 0.0;
+    int rejections = 0;  // by the controller (the floor's releases are bounded by the particles held)
     while (true) {
+        if (rejections > MAX_REJECTIONS) {  // no step it accepts: a state it cannot go on from
+            if (held > 0) release_all(n, cloth.free, buf.held);
+            clock[FAILED_STEP] = h;
+            return BLOWN_UP;
+        }
         double planned = adaptive ? pymin(pymin(clock[NEXT_STEP], control.max_step), stable_step(control, clock[SPEED]))
                                   : pymin(clock[NEXT_STEP], control.max_step);  // fixed steps, as the user asked
         if (control.integrator == BDF2 && clock[LAST_STEP] > 0.0) {
@@ -178,6 +187,7 @@ Status step(Core& core, double remaining) {
         if (!trial.converged && h > control.smallest_step) {
             clock[NEXT_STEP] = pymax(control.smallest_step, 0.25 * h);
             clock[REJECTED] += 1;
+            ++rejections;
             continue;
         }
         if (!adaptive) {  // the blow-up guard watches
@@ -209,8 +219,13 @@ Status step(Core& core, double remaining) {
         }
         clock[NEXT_STEP] = pymax(control.smallest_step, h * pymax(control.shrink, factor));
         clock[REJECTED] += 1;
+        ++rejections;
     }
     if (held > 0) release_all(n, cloth.free, buf.held);
+    if (!(h > 0.0 && clock[TIME] + h > clock[TIME])) {  // a step that would not advance the time
+        clock[FAILED_STEP] = h;
+        return BLOWN_UP;
+    }
     const bool on_floor = floor_contact(n, phys.floor_z, phys.floor_friction, buf.trial_pos, buf.trial_vel) > 0 ||
                           held > 0;
     const bool kinked = resolve(core.contact, phys.thickness, phys.floor_z, control.blow_up_speed, n,
@@ -239,6 +254,139 @@ Status step(Core& core, double remaining) {
 
 }  // namespace
 
+namespace {
+
+std::string g(double value) {  // Python's format(value, "g")
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", value);
+    return text;
+}
+
+//: The clock's slots as Simulation.snapshot() names them.
+const char* const SLOT_NAMES[CLOCK_SIZE] = {
+    "state.time", "next_step", "last_step", "speed", "calm_time", "unchecked_time", "exchanging", "sleeping",
+    "steps", "rejected_steps", "failed_step", "newton_rate", "rate_correction", "first_guess",
+    "last_solve_iterations"};
+
+//: The first value of values[0 .. count) outside [lo, hi] (or not finite), as "<name> holds <value><unit> at
+//: particle <i> (<x|y|z>)" (rows of n, when n > 0) or "... at <index>", else empty.
+std::string outside(const char* name, const double* values, Index count, double lo, double hi, const char* unit,
+                    Index n = 0) {
+    for (Index k = 0; k < count; ++k) {
+        const double v = values[k];
+        if (!(v >= lo && v <= hi)) {
+            std::string where = n > 0 ? "particle " + std::to_string(k % n) : "index " + std::to_string(k);
+            if (n > 0 && count == 3 * n) where += std::string(" (") + "xyz"[k / n] + ")";
+            return std::string(name) + " holds " + g(v) + unit + " at " + where;
+        }
+    }
+    return "";
+}
+
+}  // namespace
+
+std::string state_problem(const Cloth& cloth, const Physics& phys, const Control& control, const StateView& s) {
+    const Index n = cloth.n;
+    const double* clock = s.clock;
+    std::string what;
+    // Every value finite.
+    for (Index k = 0; k < CLOCK_SIZE; ++k) {
+        if (!std::isfinite(clock[k])) return std::string(SLOT_NAMES[k]) + " is " + g(clock[k]) + ": not a finite number";
+    }
+    if (!std::isfinite(s.contact_margin)) return "contact_margin is not finite";
+    const double big = std::numeric_limits<double>::max();  // within +-big: finite
+    if (!(what = outside("acceleration", s.acceleration, 3 * n, -big, big, " m/s2", n)).empty()) {
+        return what + ": not a finite number";
+    }
+    if (!(what = outside("the preconditioner", s.others, s.other_count, -big, big, "")).empty()) {
+        return what + ": not a finite number";
+    }
+    // Time and the step control.
+    if (!(clock[TIME] >= 0.0 && clock[TIME] <= MAX_TIME)) {
+        return "state.time is " + g(clock[TIME]) + " s: a state's time is 0 (its start) to " + g(MAX_TIME) + " s";
+    }
+    if (!(clock[NEXT_STEP] > 0.0)) return "next_step is " + g(clock[NEXT_STEP]) + " s: it must be > 0 s";
+    if (!(clock[LAST_STEP] >= 0.0 && clock[LAST_STEP] <= 2.0 * control.max_step)) {
+        return "last_step is " + g(clock[LAST_STEP]) + " s: it is 0 (none) to twice max_step";
+    }
+    for (const ClockSlot slot : {CALM_TIME, UNCHECKED_TIME}) {
+        if (!(clock[slot] >= 0.0 && clock[slot] <= MAX_TIME)) {
+            return std::string(slot == CALM_TIME ? "calm_time" : "unchecked_time") + " is " + g(clock[slot]) +
+                   " s: it is 0 to " + g(MAX_TIME) + " s";
+        }
+    }
+    for (const ClockSlot slot : {STEPS, REJECTED}) {
+        if (!(clock[slot] >= 0.0 && clock[slot] == std::floor(clock[slot]))) {
+            return std::string(slot == STEPS ? "steps" : "rejected_steps") + " is " + g(clock[slot]) +
+                   ": a count is a whole number >= 0";
+        }
+    }
+    for (const ClockSlot slot : {EXCHANGING, SLEEPING}) {
+        if (clock[slot] != 0.0 && clock[slot] != 1.0) {
+            return std::string(slot == EXCHANGING ? "exchanging" : "sleeping") + " is " + g(clock[slot]) +
+                   ": a flag is 0 or 1";
+        }
+    }
+    if (!(clock[SPEED] >= 0.0 && clock[SPEED] < control.blow_up_speed)) {
+        return "speed is " + g(clock[SPEED]) + " m/s: it is 0 to below " + g(control.blow_up_speed) + " m/s";
+    }
+    if (!(s.contact_margin >= 0.0)) return "contact_margin is " + g(s.contact_margin) + " m: it must be >= 0 m";
+    // Positions: finite, bounded, above the floor.
+    const double c = MAX_COORDINATE;
+    const char* const position_names[] = {"state.pos", "prev_pos", "anchor", "contact_reference"};
+    const double* const positions[] = {s.pos, s.prev_pos, s.anchor, s.contact_reference};
+    for (int a = 0; a < 4; ++a) {
+        if (!(what = outside(position_names[a], positions[a], 3 * n, -c, c, " m", n)).empty()) {
+            return what + ": coordinates are finite, within " + g(c) + " m of the origin";
+        }
+    }
+    const double lowest = phys.floor_z - phys.thickness;
+    if (!(what = outside("state.pos", s.pos + 2 * n, n, lowest, c, " m", n)).empty()) {
+        return what + ": the floor holds every particle at z >= " + g(phys.floor_z) + " m";
+    }
+    // Velocities: below the blow-up speed; zero where pinned, and everywhere while asleep.
+    const char* const velocity_names[] = {"state.vel", "prev_vel"};
+    const double* const velocities[] = {s.vel, s.prev_vel};
+    for (int a = 0; a < 2; ++a) {
+        const double* v = velocities[a];
+        for (Index i = 0; i < n; ++i) {
+            const double x = v[i], y = v[n + i], z = v[2 * n + i];
+            const double speed = std::sqrt(x * x + y * y + z * z);
+            if (!(speed < control.blow_up_speed)) {
+                return std::string(velocity_names[a]) + " holds a speed of " + g(speed) + " m/s at particle " +
+                       std::to_string(i) + ": speeds are finite and below " + g(control.blow_up_speed) + " m/s";
+            }
+            if (a == 0 && (x != 0.0 || y != 0.0 || z != 0.0)) {
+                if (cloth.free[i] == 0.0) {
+                    return "state.vel holds " + g(speed) + " m/s at particle " + std::to_string(i) +
+                           ", which is pinned: pinned particles do not move";
+                }
+                if (clock[SLEEPING] != 0.0) {
+                    return "the state is asleep but moves (" + g(speed) + " m/s at particle " + std::to_string(i) +
+                           "): a cloth sleeps only at rest";
+                }
+            }
+        }
+    }
+    if (clock[SLEEPING] != 0.0 && clock[SPEED] != 0.0) {
+        return "the state is asleep but its speed is " + g(clock[SPEED]) + " m/s: a cloth sleeps only at rest";
+    }
+    // Water: 0 to the most a particle can hold.
+    const char* const water_names[] = {"state.water", "prev_water"};
+    const double* const waters[] = {s.water, s.prev_water};
+    for (int a = 0; a < 2; ++a) {
+        for (Index i = 0; i < n; ++i) {
+            const double w = waters[a][i], most = MAX_WATER_RATIO * cloth.dry_mass[i];
+            if (!(w >= 0.0 && w <= most)) {
+                return std::string(water_names[a]) + " holds " + g(w) + " kg at particle " + std::to_string(i) +
+                       ": a particle holds 0 to " + g(most) + " kg of water (" + g(MAX_WATER_RATIO) +
+                       " times its dry mass)";
+            }
+        }
+    }
+    return "";
+}
+
 double stable_step(const Control& control, double speed) {
     const double gamma = control.damping_rate + control.drag_rate_offset + control.drag_rate_slope * speed;
     if (control.integrator == EXPLICIT_EULER) {
@@ -254,16 +402,36 @@ double stable_step(const Control& control, double speed) {
     return std::numeric_limits<double>::infinity();
 }
 
-Status advance(Core& core, double target, Index max_steps) {
+namespace {
+
+using WallClock = std::chrono::steady_clock;
+
+WallClock::time_point deadline_after(double seconds) {
+    const double capped = pymin(pymax(seconds, 0.0), 1e6);  // NaN: at once
+    return WallClock::now() + std::chrono::duration_cast<WallClock::duration>(std::chrono::duration<double>(capped));
+}
+
+//: advance up to a wall-clock deadline.  The clock is read every `stride` steps, a few microseconds of
+//: work apart at least (a step costs some tens of nanoseconds per particle), and after the first step:
+//: a call always makes progress.
+Status advance_until(Core& core, double target, Index max_steps, WallClock::time_point deadline) {
     double* clock = core.clock;
+    const Index stride = std::max<Index>(1, 1024 / std::max<Index>(1, core.cloth.n));
     Index taken = 0;
     while (target - clock[TIME] > 1e-12 * pymax(1.0, std::fabs(target)) && clock[SLEEPING] == 0.0) {
         if (taken >= max_steps) return PAUSED;
+        if (taken > 0 && taken % stride == 0 && WallClock::now() >= deadline) return PAUSED;
         if (step(core, target - clock[TIME]) != DONE) return BLOWN_UP;
         ++taken;
     }
     clock[TIME] = pymax(clock[TIME], target);
     return DONE;
+}
+
+}  // namespace
+
+Status advance(Core& core, double target, Index max_steps, double pause_after) {
+    return advance_until(core, target, max_steps, deadline_after(pause_after));
 }
 
 void record_outputs(Index n, const double* dry_mass, double water_level, const double* pos, const double* water,
@@ -289,12 +457,13 @@ void record_outputs(Index n, const double* dry_mass, double water_level, const d
 }
 
 SamplingResult advance_sampling(Core& core, const double* times, Index count, double* outputs, Index first,
-                                Index max_steps) {
+                                Index max_steps, double pause_after) {
+    const WallClock::time_point deadline = deadline_after(pause_after);
     const double budget_end = core.clock[STEPS] + static_cast<double>(max_steps);
     for (Index k = first; k < count; ++k) {
         const Index budget = static_cast<Index>(budget_end - core.clock[STEPS]);
-        if (budget <= 0) return {PAUSED, k};
-        const Status status = advance(core, times[k], budget);
+        if (budget <= 0 || (k > first && WallClock::now() >= deadline)) return {PAUSED, k};
+        const Status status = advance_until(core, times[k], budget, deadline);
         if (status != DONE) return {status, k};
         record_outputs(core.cloth.n, core.cloth.dry_mass, core.phys.water_level, core.buf.pos, core.buf.water,
                        outputs + k * OUTPUT_COUNT);

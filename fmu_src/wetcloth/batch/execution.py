@@ -15,6 +15,7 @@ import math
 import sys
 import time
 import uuid
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
@@ -184,6 +185,44 @@ def _beside(announce: Callable[[str], None], line: str) -> None:
         announce(line)
 
 
+class WorkerWatch:
+    """Says when the cluster has lost workers for good: fewer than the most it had, for longer than
+    ``lost_after`` s (a Nanny restarts a worker that died within a few seconds), once per new count.
+    ``count()`` gives the workers connected now, ``say(line)`` is told."""
+
+    def __init__(self, count: Callable[[], int], say: Callable[[str], None], lost_after: float | None = None,
+                 clock: Callable[[], float] = time.monotonic):
+        self.count, self.say, self.clock = count, say, clock
+        self.lost_after = LOST_AFTER if lost_after is None else lost_after
+        self.peak, self.short_since, self.said = 0, None, None
+
+    def look(self) -> None:
+        now, workers = self.clock(), self.count()
+        if workers >= self.peak:
+            self.peak, self.short_since, self.said = workers, None, None
+            return
+        if self.short_since is None:
+            self.short_since = now
+        if now - self.short_since < self.lost_after or workers == self.said:
+            return
+        self.said = workers
+        lost = f"wetcloth batch: {self.peak - workers} of {self.peak} Dask workers lost (gone for {self.lost_after:g} s)"
+        if workers:
+            self.say(f"{lost}; the study goes on with {workers}, slower")
+        else:
+            self.say(f"{lost}; none is left: the runs wait for a worker to connect (Ctrl-C stops the study, "
+                     "the finished runs are saved)")
+
+
+#: s between looks at the cluster's workers while a study runs, and how long one must be missing to be
+#: said lost (longer than a Nanny takes to restart a worker that died).
+WATCH_INTERVAL, LOST_AFTER = 1.0, 15.0
+
+
+def _warn(line: str) -> None:
+    warnings.warn(line, RuntimeWarning, stacklevel=3)
+
+
 def _run_on_dask(tasks: list[Run], study: Study, record, *, client, scheduler, workers, announce) -> None:
     from distributed import as_completed
 
@@ -191,17 +230,27 @@ def _run_on_dask(tasks: list[Run], study: Study, record, *, client, scheduler, w
         tag = uuid.uuid4().hex[:8]  # one submission's keys never collide with an earlier one's
         futures = {c.submit(execute, _task(run, study), key=f"wetcloth-{run.key}-{tag}", pure=False): run
                    for run in tasks}
+        watch = WorkerWatch(lambda: len(c.scheduler_info()["workers"]), announce or _warn)
+        next_look = time.monotonic()
         try:
-            for future in as_completed(list(futures), loop=c.loop):
-                run = futures.pop(future)
-                if future.status == "finished":
-                    result = future.result()
-                else:  # the task itself failed in Dask (e.g. KilledWorker: its workers kept dying)
-                    exc = future.exception()
-                    result = dict(status=ERROR, error=f"{type(exc).__name__}: {exc}", run_time=math.nan,
-                                  cpu_time=math.nan, worker=None)
-                future.release()
-                record(run, result)
+            done = as_completed(list(futures), loop=c.loop)
+            while done.count():
+                if time.monotonic() >= next_look:  # between the results: whether workers were lost for good
+                    watch.look()
+                    next_look = time.monotonic() + WATCH_INTERVAL
+                if not done.has_ready():
+                    time.sleep(0.02)
+                    continue
+                for future in done.next_batch(block=False):
+                    run = futures.pop(future)
+                    if future.status == "finished":
+                        result = future.result()
+                    else:  # the task itself failed in Dask (e.g. KilledWorker: its workers kept dying)
+                        exc = future.exception()
+                        result = dict(status=ERROR, error=f"{type(exc).__name__}: {exc}", run_time=math.nan,
+                                      cpu_time=math.nan, worker=None)
+                    future.release()
+                    record(run, result)
         finally:
             if futures:  # interrupted: do not leave work on a shared cluster
                 c.cancel(list(futures))

@@ -15,10 +15,12 @@ class PlotSpec:
     x: str
     y: str | None = None
 
-    def filename(self, study_name: str) -> str:
+    def filename(self, stem: str) -> str:
+        """``<stem>_<metric>_vs_<x>.png`` or ``<stem>_<metric>_<x>_x_<y>.png``; ``wetcloth batch`` gives
+        its results table's stem (``--out runs/a.parquet``: ``a_...``)."""
         if self.y is None:
-            return f"{study_name}_{self.metric}_vs_{self.x}.png"
-        return f"{study_name}_{self.metric}_{self.x}_x_{self.y}.png"
+            return f"{stem}_{self.metric}_vs_{self.x}.png"
+        return f"{stem}_{self.metric}_{self.x}_x_{self.y}.png"
 
 
 def parse_plot_spec(text: str) -> PlotSpec:

@@ -95,13 +95,14 @@ def main(args) -> int:
         written.append(str(batch.write_csv(table, args.csv)))
     plot_dir = args.plot_dir if args.plot_dir is not None else out.parent
     for spec in [*study.plots, *plot_specs]:
-        written.append(str(batch.plot(table, spec, plot_dir / spec.filename(study.name), study=study)))
+        # named after the table, so that runs with another --out keep their plots apart
+        written.append(str(batch.plot(table, spec, plot_dir / spec.filename(out.stem), study=study)))
     status = 0
     if study.sensitivity is not None:
         result = batch.sensitivity_indices(study, table)
         print(batch.format_indices(result))
         written.append(str(batch.write_csv(result.indices, out.with_name(f"{out.stem}_sensitivity.csv"))))
-        written.append(str(batch.plot_sensitivity(result, plot_dir / f"{study.name}_sensitivity.png", study=study)))
+        written.append(str(batch.plot_sensitivity(result, plot_dir / f"{out.stem}_sensitivity.png", study=study)))
         if result.problems:
             print(f"wetcloth batch: no sensitivity indices for {', '.join(result.problems)} (why: above)", file=sys.stderr)
             status = INCOMPLETE
@@ -124,13 +125,16 @@ def dry_run(study, out: Path, args) -> int:
           f"{counts.get('to run', 0)} to run")
     print(preview.format_listing(listing))
     todo = [r for r, state in zip(study.runs(), listing["state"]) if state == "to run"]
+    from dask.system import CPU_COUNT  # as the local cluster would count them
+
     if args.workers is not None:
         workers = args.workers
     elif args.scheduler is None:
-        from dask.system import CPU_COUNT  # as the local cluster would count them
-
         workers = CPU_COUNT
     else:
         workers = None  # a remote cluster's workers are not asked for in a dry run
-    print(preview.format_estimate(preview.estimate_time(study, todo), workers))
+    estimate = preview.estimate_time(study, todo)
+    # a local cluster's start, warm-up and stop (a remote one is running already)
+    startup = preview.startup_time(workers, CPU_COUNT) if args.scheduler is None and estimate.runs else None
+    print(preview.format_estimate(estimate, workers, startup=startup))
     return 0

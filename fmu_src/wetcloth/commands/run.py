@@ -39,7 +39,8 @@ def add_parser(sub) -> None:
                    metavar="NAME=VALUE", help="override a scene parameter (repeatable)")
     p.add_argument("--export", type=path_argument, metavar="DIR", help="write one mesh per frame into DIR")
     p.add_argument("--format", default="ply", choices=["ply", "obj", "usd"], help="mesh format (default ply)")
-    p.add_argument("--writer", default="trimesh", choices=["trimesh", "meshio"], help="mesh writer (default trimesh)")
+    p.add_argument("--writer", choices=["trimesh", "meshio"],
+                   help="mesh writer of ply and obj frames (default trimesh; usd is written by usd-core)")
     p.add_argument("--faces", default="quads", choices=["quads", "triangles"],
                    help="mesh faces: one quad per grid cell or two triangles (default quads)")
     p.add_argument("--first-frame", type=int, default=1, metavar="N",
@@ -69,6 +70,10 @@ def scene_and_settings(args):
 
 
 def main(args) -> int:
+    if args.writer is not None and args.format == "usd":
+        raise ValueError(f"--writer {args.writer} does not apply to --format usd: usd-core writes USD files "
+                         "(--writer chooses the library for ply and obj)")
+    args.writer = args.writer or "trimesh"
     scene, settings = scene_and_settings(args)
     # Every output is checked before any simulating: a run is not thrown away at its end.
     _check_writable(args.csv, "--csv")

@@ -18,6 +18,9 @@ __all__ = ["MODEL_NAME", "build_fmu", "default_fmu_path", "demo", "simulate"]
 
 #: Model name and FMI model identifier (binary name) of both units.
 MODEL_NAME = "WetCloth"
+#: The GUID (FMI 3.0: instantiationToken) of the unit ``build_fmu`` is building, derived from its
+#: contents (the slave classes' ``to_xml`` writes it); None otherwise.
+BUILD_TOKEN: str | None = None
 
 
 def default_fmu_path(fmi_version: int = 2) -> Path:

@@ -17,6 +17,7 @@ documentation folder; ``build_fmu`` stages what the unit needs:
 
 from __future__ import annotations
 
+import hashlib
 import html
 import importlib.metadata
 import importlib.util
@@ -24,11 +25,13 @@ import json
 import shutil
 import sys
 import tempfile
+import uuid
 import zipfile
 from pathlib import Path
 from string import Template
 
 import wetcloth
+import wetcloth.fmu as fmu_package
 from wetcloth.files import whole_file
 from wetcloth.fmu import MODEL_NAME, default_fmu_path
 from wetcloth.fmu.bootstrap import MANIFEST_NAME, MODULE_NAME, bundle_digest, digest
@@ -131,7 +134,7 @@ def _requirements() -> list[str]:
 def _range(spec: VariableSpec) -> str:
     if spec.min is None:
         return ""
-    return f"{spec.min:g} .. {spec.max:g}"
+    return f"{'> ' if spec.min_open else ''}{spec.min:g} .. {spec.max:g}"
 
 
 def documentation_html(specs: list[VariableSpec], fmi_version: int = 2) -> str:
@@ -167,6 +170,15 @@ def _pythonfmu_builder(fmi_version: int):
     return FmuBuilder
 
 
+def content_token(fmi_version: int, files: list[Path]) -> str:
+    """The unit's GUID (FMI 3.0: instantiationToken): a UUID 5 of a digest of what it is built from
+    (the slave script, the bootstrap, the manifest with every bundled file's digest and the variable
+    names, the documentation), so that a rebuild of the same sources carries the same token and
+    another build another (as the native units' tokens, ``native.py``)."""
+    text = f"wetcloth-pythonfmu{fmi_version}:" + ",".join(f"{p.name}={digest(p)}" for p in files)
+    return "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, hashlib.sha256(text.encode()).hexdigest())) + "}"
+
+
 def build_fmu(out: str | Path | None = None, fmi_version: int = 2) -> Path:
     """Build the co-simulation unit (FMI ``fmi_version`` 2 or 3) at ``out`` (default
     ``default_fmu_path(fmi_version)``); return its path."""
@@ -196,11 +208,13 @@ def build_fmu(out: str | Path | None = None, fmi_version: int = 2) -> Path:
         docs.mkdir()
         (docs / "index.html").write_text(documentation_html(specs, fmi_version), encoding="utf-8")
         saved_path = list(sys.path)
+        fmu_package.BUILD_TOKEN = content_token(fmi_version, [script, bootstrap, manifest, docs / "index.html"])
         try:
             built = Path(_pythonfmu_builder(fmi_version).build_FMU(
                 script, dest=stage / "fmu", project_files=[source / "wetcloth", manifest, bootstrap],
                 documentation_folder=docs, **CAPABILITIES[fmi_version]))
         finally:
+            fmu_package.BUILD_TOKEN = None
             sys.path[:] = saved_path  # the builders put the script's folder first on sys.path
             if not cached:
                 sys.modules.pop(slave.stem, None)  # let each loaded FMU import its own script

@@ -20,7 +20,10 @@ Bytes, version 1 (all integers little-endian)::
     the rest   the arrays' raw data, C order, in the dtypes named
 
 Reading runs no code (no pickle): JSON, then raw little-endian numbers of whitelisted dtypes, each
-bound-checked against the data.  Anything else is refused with ``StateError``.
+bound-checked against the data.  Anything else is refused with ``StateError``.  The SHA-256 has no
+key (anyone can recompute it), so ``fitting_simulation`` also checks what a state holds, as a
+parameter is checked: a start time within +-MAX_TIME s, the running unit's grid, and contents the
+cloth can be in (``Simulation.check_snapshot``), all before anything changes.
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ import numpy as np
 from wetcloth.errors import ParameterError
 from wetcloth.fmu.vocabulary import check_variable
 from wetcloth.scene import INPUT, PARAMETERS, Scene, from_dict
+from wetcloth._core import MAX_TIME
 from wetcloth.simulation import Simulation
 
 MAGIC = b"wetcloth-fmu-state\n"
@@ -138,11 +142,16 @@ def _describe(value) -> str:
 # ------------------------------------------------------------------------------------ fit to a unit
 def fitting_simulation(state, names: set[str], sim: Simulation | None = None) -> Simulation | None:
     """The simulation ``state`` restores into (``sim`` if it runs the same scene, else a new one; None
-    before initialization), after checking that ``state`` is a Checkpoint of a unit with the variables
-    ``names``, holding valid values consistent with its scene, and leaves that fit that simulation's
-    snapshot; StateError otherwise."""
+    before initialization), after checking everything: that ``state`` is a Checkpoint of a unit with
+    the variables ``names``, holding valid values consistent with its scene, a start time within
+    +-MAX_TIME s, the grid of ``sim`` (a running unit's grid is fixed), and leaves that fit that
+    simulation's snapshot, with contents the cloth can be in (``Simulation.check_snapshot``);
+    StateError otherwise.  Nothing is changed."""
     if not isinstance(state, Checkpoint):
         raise StateError(f"not a WetCloth FMU state: a {type(state).__name__}")
+    if not (isinstance(state.start_time, (int, float)) and abs(state.start_time) <= MAX_TIME):
+        raise StateError(f"the state's start time {state.start_time!r} s is not a finite number within "
+                         f"+-{MAX_TIME:g} s")
     if set(state.values) != names:
         raise StateError(f"the state is of a unit with other variables (missing {sorted(names - set(state.values))}, "
                          f"unknown {sorted(set(state.values) - names)})")
@@ -160,9 +169,20 @@ def fitting_simulation(state, names: set[str], sim: Simulation | None = None) ->
     scene = state.scene.to_dict()
     if any(scene[name] != value for name, value in state.values.items() if name in scene):
         raise StateError("the state's variable values differ from its simulation's scene")
+    if sim is not None and (state.scene.nx, state.scene.ny) != (sim.scene.nx, sim.scene.ny):
+        raise StateError(f"the state is of a cloth of nx x ny = {state.scene.nx} x {state.scene.ny} particles, this "
+                         f"unit runs {sim.scene.nx} x {sim.scene.ny} (fixed once it is initialized)")
     if sim is None or scene_id(sim.scene) != scene_id(state.scene):
-        sim = Simulation(state.scene)
-    check_leaves(state.leaves, leaves_of(sim.snapshot()))
+        try:
+            sim = Simulation(state.scene)
+        except ParameterError as exc:
+            raise StateError(f"the state's scene is not valid: {exc}") from None
+    live = sim.snapshot()
+    check_leaves(state.leaves, leaves_of(live))
+    try:
+        sim.check_snapshot(snapshot_from(state.leaves, state.scene, live))
+    except ValueError as exc:
+        raise StateError(str(exc)) from None
     return sim
 
 

@@ -12,6 +12,7 @@ from pythonfmu import DefaultExperiment, Fmi2Slave
 from pythonfmu.enums import Fmi2Status
 
 import wetcloth
+import wetcloth.fmu as fmu_package
 from wetcloth.fmu import MODEL_NAME, guard
 from wetcloth.fmu.description import extend_model_description, make_variable
 from wetcloth.fmu.unit import OK, WetClothUnit, default_run
@@ -44,6 +45,7 @@ class Fmi2Unit(WetClothUnit, Fmi2Slave):
             self.register_variable(make_variable(spec, *self.accessors(name)))
 
     def to_xml(self, model_options=dict()):
+        self.guid = fmu_package.BUILD_TOKEN or self.guid  # from the unit's contents (builder.content_token)
         return extend_model_description(super().to_xml(model_options), list(self.specs.values()))
 
     def do_step(self, current_time: float, step_size: float) -> bool:

@@ -12,6 +12,7 @@ from __future__ import annotations
 from pythonfmu3 import DefaultExperiment, Fmi3Slave, Fmi3Status, Fmi3StepResult
 
 import wetcloth
+import wetcloth.fmu as fmu_package
 from wetcloth.fmu import MODEL_NAME, description3, guard
 from wetcloth.fmu.unit import OK, UnitError, WetClothUnit, default_run
 
@@ -46,6 +47,7 @@ class Fmi3Unit(WetClothUnit, Fmi3Slave):
             self.register_variable(description3.make_variable(spec, *self.accessors(name), references, structural))
 
     def to_xml(self, model_options=dict()):
+        self.guid = fmu_package.BUILD_TOKEN or self.guid  # from the unit's contents (builder.content_token)
         return description3.extend_model_description(super().to_xml(model_options), list(self.specs.values()))
 
     def do_step(self, current_time: float, step_size: float) -> Fmi3StepResult:

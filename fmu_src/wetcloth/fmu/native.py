@@ -44,7 +44,7 @@ from string import Template
 from xml.etree import ElementTree
 
 import wetcloth
-from wetcloth.files import whole_file
+from wetcloth.files import new_temporary, whole_file
 from wetcloth.fmu import MODEL_NAME
 from wetcloth.fmu.vocabulary import (MESH_FORMAT_RANGE, MESH_FORMATS, MESH_OUTPUTS, VariableSpec, fmi_unit_name,
                                      variable_specs)
@@ -368,8 +368,10 @@ its last good outputs. A <code>${api}DoStep</code> before initialization, after
 refused and changes nothing.</li>
 <li>FMU states (get, set, serialize) hold the whole unit (every particle array, the step controller, the
 inputs), so a resumed run repeats the uninterrupted one bit for bit, in this instance or another. Serialized
-states carry a version and a checksum; bytes the unit did not write, and a state of a cloth of another grid
-than the initialized unit's, are refused with an error, and the instance stays as it was.</li>
+states carry a version and a checksum; bytes the unit did not write, a state of a cloth of another grid
+than the initialized unit's, and a state the cloth cannot be in (a value that is not finite; a time beyond
+1e9 s; a coordinate beyond 1e6 m or below the floor; a speed of 1000 m/s or more; water beyond 0 to 100
+times the dry mass; asleep but moving) are refused with an error, and the instance stays as it was.</li>
 </ul>
 
 <h2>Variables</h2>
@@ -446,7 +448,7 @@ def compile_objects(compiler: str, sources: list[Path], include_dirs: list[Path]
         source, target = task
         if target.exists():
             return None
-        partial = target.with_suffix(f".{os.getpid()}.tmp.o")
+        partial = new_temporary(target, ".tmp.o")  # created new (a random name): never a link planted there
         done = subprocess.run([compiler, *flags, "-c", str(source), "-o", str(partial)], capture_output=True, text=True)
         if done.returncode != 0:
             partial.unlink(missing_ok=True)

@@ -17,11 +17,11 @@ from __future__ import annotations
 
 import functools
 import logging
-import math
 import sys
 from pathlib import Path
 
 from wetcloth import run_settings
+from wetcloth._core import MAX_TIME
 from wetcloth.errors import ParameterError
 from wetcloth.fmu import bootstrap, checkpoint
 from wetcloth.fmu.checkpoint import Checkpoint, StateError
@@ -136,6 +136,11 @@ class WetClothUnit:
 
     # ------------------------------------------------------------------ life cycle
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):  # pythonfmu's call
+        if self.initialized:
+            self._refuse_call(f"the start time is fixed once the unit is initialized (got {start_time!r} s)")
+        if not abs(start_time) <= MAX_TIME:
+            self._refuse_call(f"the start time must be a finite number of seconds within +-{MAX_TIME:g} s, "
+                              f"got {start_time!r}")
         self.start_time, self._clock_set = float(start_time), True
         self._read.clear()
 
@@ -168,8 +173,9 @@ class WetClothUnit:
     def step(self, current_time: float, step_size: float) -> str:
         """Advance from ``current_time`` by ``step_size`` s: OK, or DISCARD (the unit stays at
         ``current_time``, message logged); UnitError (logged) for a call the master must not make."""
-        if not (math.isfinite(current_time) and math.isfinite(step_size) and step_size >= 0.0):
-            self._refuse_call(f"doStep needs a finite communication point and a finite step size >= 0 s, "
+        if not (abs(current_time) <= MAX_TIME and 0.0 <= step_size <= MAX_TIME):
+            self._refuse_call(f"doStep needs a finite communication point within +-{MAX_TIME:g} s and a finite step "
+                              f"size >= 0 s (at most as long), "
                               f"got t = {current_time!r} s, step {step_size!r} s")
         if self.terminated:
             self._refuse_call(f"doStep at t = {current_time:g} s after fmiTerminate: the run is over")
@@ -260,9 +266,10 @@ class WetClothUnit:
     def _set_fmu_state(self, state) -> None:
         try:
             self.restore(state)
-        except StateError as exc:
-            self._report("error", f"FMU state refused, the unit is unchanged: {exc}")
-            raise
+        except Exception as exc:  # whatever it is, the reason is logged (wetcloth.fmu too) and the unit unchanged
+            reason = str(exc) if isinstance(exc, StateError) else f"{type(exc).__name__}: {exc}"
+            self._report("error", f"FMU state refused, the unit is unchanged: {reason}")
+            raise StateError(reason) from None
 
     @staticmethod
     def _fmu_state_to_bytes(state) -> bytes:
@@ -279,9 +286,10 @@ class WetClothUnit:
             checkpoint.fitting_simulation(state, {s.name for s in variable_specs(fmi_version=cls.FMI_VERSION)
                                                   if s.causality in ("parameter", "input")})
             return state
-        except StateError as exc:
-            LOG.error("serialized FMU state refused: %s", exc)
-            raise
+        except Exception as exc:  # whatever it is, the reason is logged on wetcloth.fmu
+            reason = str(exc) if isinstance(exc, StateError) else f"{type(exc).__name__}: {exc}"
+            LOG.error("serialized FMU state refused: %s", reason)
+            raise StateError(reason) from None
 
     # ------------------------------------------------------------------ FMU state
     def capture(self) -> Checkpoint:
@@ -293,8 +301,10 @@ class WetClothUnit:
 
     def restore(self, state) -> None:
         """Return to a checkpoint (of this or another instance of this unit); StateError, nothing
-        changed, if it is not one or does not fit."""
-        sim = checkpoint.fitting_simulation(state, set(self.values), self.sim)
+        changed, if it is not one or does not fit: everything is checked before anything changes."""
+        sim = checkpoint.fitting_simulation(state, set(self.values), self.sim if self.initialized else None)
+        if sim is None and self.sim is not None and self.initialized:
+            pass  # an uninitialized state: the unit goes back to before its initialization
         if sim is not None:
             sim.restore(checkpoint.snapshot_from(state.leaves, state.scene, sim.snapshot()))
         self._rewind_frames(state)
@@ -307,15 +317,16 @@ class WetClothUnit:
     def _rewind_frames(self, state: Checkpoint) -> None:
         """After a rollback the open sequence continues after the state's frames (later ones were the
         abandoned branch); a sequence of another folder or format is closed (the next step resumes)."""
-        from wetcloth.exporter import ExportError
-
-        if self.sequence is None:
+        if self.sequence is None:  # no mesh output: nothing of the exporter (meshio, trimesh) is needed
             return
         mesh = ("mesh_output_dir", "mesh_format")
         try:
             if all(state.values[k] == self.values[k] for k in mesh):
                 return self.sequence.resume_after(state.frames)
-        except ExportError as exc:
+        except Exception as exc:  # ExportError, OSError: the frames' trouble; the state is restored all the same
             self._report("warning", f"mesh_output_dir: {exc}")
-        self.sequence.close(complete=False)
+        try:
+            self.sequence.close(complete=False)
+        except Exception as exc:
+            self._report("warning", f"mesh_output_dir: {exc}")
         self.sequence = None

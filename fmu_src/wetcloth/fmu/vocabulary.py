@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
+import sys
 from dataclasses import dataclass
 from typing import Any, Iterable
 
@@ -50,6 +51,16 @@ class VariableSpec:
     max: float | int | None = None
     scene: bool = True  # a Scene field (else an FMU-only parameter or an output)
     dimensions: tuple[str | int, ...] = ()  # array outputs: sizes, or names of the parameters holding them
+    min_open: bool = False  # the value must be above ``min`` (FMI's min is inclusive: see ``declared_min``)
+    nominal: float | None = None  # Reals: the magnitude of a typical value (FMI ``nominal``, > 0)
+
+    @property
+    def declared_min(self) -> float | int | None:
+        """``min`` as the model description declares it: for a value that must be above ``min``, the
+        least double above it (the least normal one above 0), since FMI's ``min`` is inclusive."""
+        if self.min is None or not self.min_open:
+            return self.min
+        return sys.float_info.min if self.min == 0 else math.nextafter(float(self.min), math.inf)
 
     @property
     def initial(self) -> str | None:
@@ -82,6 +93,8 @@ def scene_spec(f: dataclasses.Field) -> VariableSpec:
         start=f.default,
         min=md["lo"] if numeric else None,
         max=md["hi"] if numeric else None,
+        min_open=bool(md["lo_open"]) and numeric,
+        nominal=(abs(float(f.default)) or 1.0) if fmi_type == "Real" else None,
     )
 
 
@@ -103,13 +116,25 @@ def variable_specs(fields: Iterable[dataclasses.Field] | None = None, fmi_versio
     specs = [scene_spec(f) for f in fields]
     specs += [VariableSpec(name, "String", "parameter", "fixed", doc, start=start, scene=False)
               for name, (start, doc) in FMU_PARAMETERS.items()]
-    specs += [VariableSpec(n, "Real", "output", "continuous", doc, unit=u, scene=False) for n, (u, doc) in OUTPUTS.items()]
+    nominal = output_nominals()
+    specs += [VariableSpec(n, "Real", "output", "continuous", doc, unit=u, scene=False, nominal=nominal[n])
+              for n, (u, doc) in OUTPUTS.items()]
     if fmi_version == 3:
-        specs += [VariableSpec(n, "Real", "output", "continuous", doc, unit=u, scene=False, dimensions=dims)
-                  for n, (u, doc, dims) in MESH_OUTPUTS.items()]
+        specs += [VariableSpec(n, "Real", "output", "continuous", doc, unit=u, scene=False, dimensions=dims,
+                               nominal=nominal[n]) for n, (u, doc, dims) in MESH_OUTPUTS.items()]
         specs.append(VariableSpec("time", "Real", "independent", "continuous", "simulation time (the FMI 3.0 "
-                                  "independent variable)", unit="s", scene=False))
+                                  "independent variable)", unit="s", scene=False, nominal=1.0))
     return specs
+
+
+def output_nominals() -> dict[str, float]:
+    """The outputs' typical magnitudes, from the default scene: lengths its cloth's size (m), masses
+    its dry mass (kg), wetness 1."""
+    defaults = {name: f.default for name, f in PARAMETERS.items()}
+    size = max(defaults["width"], defaults["length"])
+    mass = defaults["areal_density"] * defaults["width"] * defaults["length"]
+    lengths = ("centroid_x", "centroid_y", "centroid_z", "depth", "positions")
+    return {**{name: size for name in lengths}, "wet_mass": mass, "water_mass": mass, "wetness": 1.0}
 
 
 def check_variable(name: str, value) -> None:
@@ -159,15 +184,18 @@ def _number_text(value) -> str:
 
 
 def xml_attributes(spec: VariableSpec) -> dict[str, str]:
-    """A variable's ``unit`` (Reals), ``min`` and ``max`` as model-description attributes (FMI 2.0 and 3.0)."""
+    """A variable's ``unit`` and ``nominal`` (Reals), ``min`` and ``max`` as model-description attributes
+    (FMI 2.0 and 3.0)."""
     attributes = {}
     unit = fmi_unit_name(spec.unit)
     if spec.type == "Real" and unit is not None:
         attributes["unit"] = unit
     if spec.min is not None:
-        attributes["min"] = _number_text(spec.min)
+        attributes["min"] = _number_text(spec.declared_min)
     if spec.max is not None:
         attributes["max"] = _number_text(spec.max)
+    if spec.type == "Real" and spec.nominal is not None:
+        attributes["nominal"] = _number_text(float(spec.nominal))
     return attributes
 
 

@@ -8,6 +8,8 @@
 // clock and self-collision's reference and margin), so a snapshot of those arrays is a snapshot of
 // the run and restoring it repeats the run bit for bit.
 #pragma once
+#include <string>
+
 #include "wetcloth/core.hpp"
 
 namespace wc {
@@ -24,14 +26,55 @@ inline constexpr double WICK_SUBSTEP_FRACTION = 1.0 / 30.0;
 inline constexpr double STEP_COUNT_SLACK = 1e-6;
 //: Number of outputs: centroid x, y, z (m), depth (m), wet mass, water mass (kg).
 inline constexpr Index OUTPUT_COUNT = 6;
+//: A step the controller rejects more often than this (smaller steps, or a solve that did not converge)
+//: is a blow-up: from max_step to SMALLEST_STEP takes about 15 rejections; the floor's releases do not count.
+inline constexpr int MAX_REJECTIONS = 100;
+//: Wall-clock seconds after which advance returns PAUSED (checked between steps), so that its caller
+//: sees signals (Ctrl-C) in time.  Where a call returns never changes what is computed.
+inline constexpr double PAUSE_AFTER = 0.1;
+
+//: Bounds of a state the step loop goes on from (state_problem): simulated time (s), any coordinate (m),
+//: and the water a particle holds per kg of its dry mass (kg/kg: absorption_capacity's largest value;
+//: the capacity is an input, so a cloth may hold more than the current one allows).
+inline constexpr double MAX_TIME = 1e9;
+inline constexpr double MAX_COORDINATE = 1e6;
+inline constexpr double MAX_WATER_RATIO = 100.0;
+
+//: The arrays and numbers a snapshot restores into a Core, for state_problem (each (3, n) or (n) as in
+//: Buffers; `clock` CLOCK_SIZE; `others` further values that need only be finite, such as the
+//: preconditioner's).
+struct StateView {
+    const double* pos = nullptr;
+    const double* vel = nullptr;
+    const double* water = nullptr;
+    const double* prev_pos = nullptr;
+    const double* prev_vel = nullptr;
+    const double* prev_water = nullptr;
+    const double* acceleration = nullptr;
+    const double* anchor = nullptr;
+    const double* contact_reference = nullptr;
+    double contact_margin = 0.0;
+    const double* clock = nullptr;
+    const double* others = nullptr;
+    Index other_count = 0;
+};
+
+//: Empty if the state could be the cloth's (every value finite; time 0 to MAX_TIME s; positions within
+//: MAX_COORDINATE m, none more than a thickness below the floor; speeds below blow_up_speed, pinned
+//: particles still; water 0 to MAX_WATER_RATIO times the dry mass; a positive next step; the counters
+//: whole numbers >= 0; asleep only at rest), else what is wrong, naming the value (as
+//: Simulation.snapshot() names it).  The cloth's `free` flags must be the model's (between steps).
+std::string state_problem(const Cloth& cloth, const Physics& phys, const Control& control, const StateView& state);
 
 //: Largest step (s) for which the explicit scheme is linearly stable with particles up to speed (m/s).
 double stable_step(const Control& control, double speed);
 
 //: Step until clock[TIME] reaches target (s) or the cloth falls asleep (time then jumps to target).
-//: Returns DONE; BLOWN_UP with the last good state kept (clock[FAILED_STEP] the step); or PAUSED after
-//: max_steps steps short of the target (call again to go on).
-Status advance(Core& core, double target, Index max_steps);
+//: Returns DONE; BLOWN_UP with the last good state kept (clock[FAILED_STEP] the step that failed: its
+//: state not finite or faster than blow_up_speed, or rejected more than MAX_REJECTIONS times, or too
+//: short to advance the time); or PAUSED short of the target after max_steps steps or about
+//: pause_after s of wall-clock time (call again to go on: the results are the same bits).
+Status advance(Core& core, double target, Index max_steps, double pause_after = PAUSE_AFTER);
 
 //: The outputs into row (OUTPUT_COUNT): centroid weighted by wet mass, depth = water_level - centroid z,
 //: wet mass, absorbed water.
@@ -44,8 +87,9 @@ struct SamplingResult {
 };
 
 //: Advance to times[k] (s, ascending) for k = first, first + 1, ... < count and record the outputs there
-//: in outputs[k * OUTPUT_COUNT ...].  PAUSED after about max_steps steps (call again from `next`).
+//: in outputs[k * OUTPUT_COUNT ...].  PAUSED after about max_steps steps or pause_after s of wall-clock
+//: time (call again from `next`).
 SamplingResult advance_sampling(Core& core, const double* times, Index count, double* outputs, Index first,
-                                Index max_steps);
+                                Index max_steps, double pause_after = PAUSE_AFTER);
 
 }  // namespace wc
