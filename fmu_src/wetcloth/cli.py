@@ -17,6 +17,7 @@ COMMAND_MODULES = (
     "wetcloth.commands.build_fmu",
     "wetcloth.commands.demo",
     "wetcloth.commands.batch",
+    "wetcloth.commands.fit",
 )
 
 
