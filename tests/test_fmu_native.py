@@ -319,19 +319,16 @@ class Checker:
         self.lib.check_free(self.handle)
 
 
-@pytest.fixture(scope="module")
-def checker_library(build):
-    """The checker compiled against model.hpp and linked with the core's objects of the unit's build."""
-    folder = build["folder"] / "checker"
-    folder.mkdir(exist_ok=True)
+def compile_checker(folder: Path, objects_dir: Path):
+    """The checker (CHECKER, a wc::Simulation behind C functions) compiled in ``folder`` against
+    model.hpp and linked with the core's objects kept in ``objects_dir``; loaded through ctypes."""
+    folder.mkdir(parents=True, exist_ok=True)
     source = folder / "checker.cpp"
     source.write_text(CHECKER)
-    core = native.core_dir()
-    objects = native.core_objects(build["objects"])  # already compiled: reused
+    objects = native.core_objects(objects_dir)  # compiled once, then reused
     library = folder / "checker.so"
-    compiler = native.find_compiler()
-    subprocess.run([compiler, *native.CXX_FLAGS, "-O1", f"-I{core / 'include'}", "-shared", "-o", str(library),
-                    str(source), *map(str, objects)], check=True, capture_output=True)
+    subprocess.run([native.find_compiler(), *native.CXX_FLAGS, "-O1", f"-I{native.core_dir() / 'include'}",
+                    "-shared", "-o", str(library), str(source), *map(str, objects)], check=True, capture_output=True)
     lib = ctypes.CDLL(str(library))
     lib.check_new.restype = ctypes.c_void_p
     lib.check_new.argtypes = [ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_char_p]
@@ -344,6 +341,12 @@ def checker_library(build):
     lib.check_snapshot.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_long]
     lib.check_restore.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_long, ctypes.c_char_p]
     return lib
+
+
+@pytest.fixture(scope="module")
+def checker_library(build):
+    """The checker linked with the core's objects of the unit's build."""
+    return compile_checker(build["folder"] / "checker", build["objects"])
 
 
 #: Scenes whose set-up takes every branch: the towel; wicking and a current (presets); a grid large enough

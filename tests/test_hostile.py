@@ -506,29 +506,8 @@ def native_checker(tmp_path_factory):
     """A wc::Simulation through ctypes (tests/test_fmu_native.py's checker), built from the core."""
     import test_fmu_native as native_tests
 
-    from wetcloth.fmu import native
-
     objects = tmp_path_factory.getbasetemp().parent / "wetcloth-native-objects"
-    folder = tmp_path_factory.mktemp("checker")
-    (folder / "checker.cpp").write_text(native_tests.CHECKER)
-    core_objects = native.core_objects(objects)
-    library = folder / "checker.so"
-    subprocess.run([native.find_compiler(), *native.CXX_FLAGS, "-O1", f"-I{native.core_dir() / 'include'}", "-shared",
-                    "-o", str(library), str(folder / "checker.cpp"), *map(str, core_objects)], check=True,
-                   capture_output=True)
-    import ctypes
-
-    lib = ctypes.CDLL(str(library))
-    lib.check_new.restype = ctypes.c_void_p
-    lib.check_new.argtypes = [ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_char_p]
-    lib.check_free.argtypes = [ctypes.c_void_p]
-    lib.check_array.restype = ctypes.c_long
-    lib.check_array.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_void_p, ctypes.c_long]
-    lib.check_set_inputs.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p]
-    lib.check_advance.argtypes = [ctypes.c_void_p, ctypes.c_double]
-    lib.check_snapshot.restype = ctypes.c_long
-    lib.check_snapshot.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_long]
-    lib.check_restore.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_long, ctypes.c_char_p]
+    lib = native_tests.compile_checker(tmp_path_factory.mktemp("checker"), objects)
     return native_tests.Checker, lib, native_tests.fnv1a
 
 

@@ -17,3 +17,18 @@ def path_argument(text: str) -> Path:
     if not text.strip():
         raise argparse.ArgumentTypeError("needs a path, got an empty string")
     return Path(text)
+
+
+def scene_with_overrides(scene: str | Path | None, overrides: list[tuple[str, str]]):
+    """The scene of a file or preset with the command line's ``--set NAME=VALUE`` texts applied;
+    every mistake of the ``--set`` options reported at once."""
+    from wetcloth.errors import Mistakes
+    from wetcloth.scene import load_scene, parse_text
+
+    mistakes = Mistakes("--set")
+    values = {}
+    for name, text in overrides:
+        with mistakes.collect():
+            values[name] = parse_text(name, text)
+    mistakes.raise_if_any()
+    return load_scene(scene, **values)

@@ -6,10 +6,10 @@ import sys
 from pathlib import Path
 
 from wetcloth import run_settings
-from wetcloth.commands.common import path_argument
+from wetcloth.commands.common import path_argument, scene_with_overrides
 from wetcloth.commands.run import parse_assignment
 from wetcloth.errors import Mistakes
-from wetcloth.scene import load_scene, parse_text, read_scene_file
+from wetcloth.scene import read_scene_file
 
 #: Where the report goes without --out: out/fit/<data file name without suffix>/.
 DEFAULT_OUT_DIR = Path("out/fit")
@@ -54,13 +54,7 @@ def main(args) -> int:
     from wetcloth.calibration import fit, parse_bounds, read_measurements, summary, write_report
     from wetcloth.calibration.parameters import BoundsError
 
-    mistakes = Mistakes("--set")
-    overrides = {}
-    for name, text in args.overrides:
-        with mistakes.collect():
-            overrides[name] = parse_text(name, text)
-    mistakes.raise_if_any()
-    scene = load_scene(args.scene, **overrides)
+    scene = scene_with_overrides(args.scene, args.overrides)
     names = [n.strip() for n in args.params.split(",") if n.strip()]
     bounds = {}
     mistakes = Mistakes()

@@ -13,10 +13,10 @@ from pathlib import Path
 from tqdm.auto import tqdm
 
 from wetcloth import run_settings
-from wetcloth.commands.common import FAILED, INTERRUPTED, path_argument
-from wetcloth.errors import BlowUpError, Mistakes
+from wetcloth.commands.common import FAILED, INTERRUPTED, path_argument, scene_with_overrides
+from wetcloth.errors import BlowUpError
 from wetcloth.runner import run
-from wetcloth.scene import load_scene, parse_text, read_scene_file
+from wetcloth.scene import read_scene_file
 
 def parse_assignment(text: str) -> tuple[str, str]:
     """'name=value' from ``--set``."""
@@ -58,13 +58,7 @@ def add_parser(sub) -> None:
 def scene_and_settings(args):
     """The scene (file, then ``--set``) and the run settings (options, then the file's [run]);
     every mistake of the command line reported at once."""
-    mistakes = Mistakes("--set")
-    overrides = {}
-    for name, text in args.overrides:
-        with mistakes.collect():
-            overrides[name] = parse_text(name, text)
-    mistakes.raise_if_any()
-    scene = load_scene(args.scene, **overrides)
+    scene = scene_with_overrides(args.scene, args.overrides)
     settings = run_settings.resolve(read_scene_file(args.scene).get("run"), duration=args.duration, fps=args.fps)
     return scene, settings
 
