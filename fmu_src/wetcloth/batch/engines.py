@@ -2,7 +2,8 @@
 
 Two engines give the output time series: ``python`` (``wetcloth.runner.run``, the default) and
 ``fmu`` (``models/WetCloth.fmu`` co-simulated through fmpy by ``wetcloth.fmu.cosim.simulate``).  An exception in a
-run becomes a result with status ``error`` and the exception's text, so the study goes on.
+run becomes a result with status ``error`` and the exception's text, so the study goes on.  A study
+that keeps curves (``series``) gets them back with the result, under ``series``.
 """
 
 from __future__ import annotations
@@ -15,7 +16,11 @@ from typing import Any
 
 import numpy as np
 
-from wetcloth.batch.metrics import SERIES, compute_metrics
+from wetcloth.batch.metrics import compute_metrics
+from wetcloth.simulation import OUTPUT_NAMES
+
+#: Every output series a run gives: time (s), then the outputs (``wetcloth.simulation.OUTPUTS``).
+RUN_SERIES = ("time", *OUTPUT_NAMES)
 
 #: The engines a study may run on.
 ENGINES = ("python", "fmu")
@@ -29,7 +34,7 @@ def python_series(params: dict[str, Any], duration: float, sample_rate: float) -
     from wetcloth.scene import from_dict
 
     result = run(from_dict(params), duration, sample_rate, shapes=0, progress=False, warn=None)
-    return {name: result.column(name) for name in SERIES}
+    return {name: result.column(name) for name in RUN_SERIES}
 
 
 def fmu_series(params: dict[str, Any], duration: float, sample_rate: float, fmu: str) -> dict[str, np.ndarray]:
@@ -37,8 +42,8 @@ def fmu_series(params: dict[str, Any], duration: float, sample_rate: float, fmu:
     stops early raises (a blow-up as BlowUpError), as the Python engine does."""
     from wetcloth.fmu.cosim import simulate
 
-    result = simulate(fmu, duration, sample_rate, params, output=[name for name in SERIES if name != "time"])
-    return {name: np.asarray(result[name], float) for name in SERIES}
+    result = simulate(fmu, duration, sample_rate, params, output=OUTPUT_NAMES)
+    return {name: np.asarray(result[name], float) for name in RUN_SERIES}
 
 
 def _worker_name() -> str:
@@ -52,8 +57,10 @@ def _worker_name() -> str:
 
 def execute(task: dict[str, Any]) -> dict[str, Any]:
     """Run one study run; ``task`` has key, params, duration, sample_rate, sink_depth, metrics,
-    engine, fmu.  Returns run_key, status ('ok' or 'error'), error, the metrics, run_time (s of wall-clock
-    time), cpu_time (s of CPU time of the thread that ran it; well below run_time = cores shared), worker."""
+    engine, fmu, and optionally series (outputs whose curves to return).  Returns run_key, status
+    ('ok' or 'error'), error, the metrics, run_time (s of wall-clock time), cpu_time (s of CPU time of
+    the thread that ran it; well below run_time = cores shared), worker; with series, an ok run also
+    ``series``: {'time': its sample times, output: values} (float64 arrays)."""
     start = time.perf_counter()
     cpu_start = time.thread_time()
     row: dict[str, Any] = {"run_key": task["key"]}
@@ -64,6 +71,8 @@ def execute(task: dict[str, Any]) -> dict[str, Any]:
             series = python_series(task["params"], task["duration"], task["sample_rate"])
         row.update(compute_metrics(series, task["metrics"], task["sink_depth"]))
         row.update(status=OK, error=None)
+        if task.get("series"):
+            row["series"] = {name: np.asarray(series[name], float) for name in ("time", *task["series"])}
     except Exception as exc:  # every failure of a run is data, not a crash of the study
         message = f"{type(exc).__name__}: {exc}"
         if not isinstance(exc, (ValueError, RuntimeError)):  # unexpected: keep where it came from

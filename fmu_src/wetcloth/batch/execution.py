@@ -6,7 +6,10 @@ it) and the scheduler reruns its tasks elsewhere, up to Dask's
 ``distributed.scheduler.allowed-failures`` times; past that, the run is recorded as an error
 (``KilledWorker``) and the study goes on.  Results are written to the Parquet table at safe points
 (every ``flush_interval`` s and at the end, also when interrupted), whole or not at all, and a
-rerun skips the runs whose ``run_key`` is already in the table.
+rerun skips the runs whose ``run_key`` is already in the table.  A study that keeps curves
+(``series``) appends them to ``NAME.series.zarr`` beside the table at the same safe points, after the
+table (``wetcloth.batch.series``); a run whose row is in the table but whose curves are not in the store
+(the study had no ``series`` then, or was killed between the two) is run again, and its row replaced.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from tqdm.auto import tqdm
 from wetcloth.batch import cluster
 from wetcloth.batch.engines import ERROR, OK, execute, fmu_path_or_default
 from wetcloth.batch.results import KEY, full_row, make_table, normalise, read_table, write_table
+from wetcloth.batch.series import SeriesStore, curves_dataset, select_runs, series_path
 from wetcloth.batch.spec import Run, Study, load_study
 from wetcloth.scene import from_dict
 
@@ -45,12 +49,17 @@ class StudyReport:
     failed: int  # of those, status 'error'
     elapsed: float  # s of wall-clock time
     out: Path | None
+    series: Any = None  # the kept curves of the study's runs (xarray Dataset), if it keeps any
+    series_path: Path | None = None  # where they are kept (NAME.series.zarr beside the table)
+    for_curves: int = 0  # of the runs run now: those run again only because their curves were missing
 
     def summary(self) -> str:
         text = f"{self.study.name}: {self.total} runs"
         if self.skipped:
             text += f", {self.skipped} already in {self.out}"
         text += f"; ran {self.ran}: {self.ok} ok, {self.failed} failed"
+        if self.for_curves:
+            text += f" ({self.for_curves} of them again, for curves missing from {self.series_path})"
         if self.ran:
             text += f", in {self.elapsed:.1f} s ({60.0 * self.ran / max(self.elapsed, 1e-9):.0f} runs/min)"
         return text
@@ -59,7 +68,7 @@ class StudyReport:
 def _task(run: Run, study: Study) -> dict[str, Any]:
     return dict(key=run.key, params=run.params, duration=study.duration, sample_rate=study.sample_rate,
                 sink_depth=study.sink_depth, metrics=list(study.metrics), engine=study.engine,
-                fmu=fmu_path_or_default(study.fmu) if study.engine == "fmu" else "")
+                fmu=fmu_path_or_default(study.fmu) if study.engine == "fmu" else "", series=list(study.series))
 
 
 def as_study(spec, name: str | None = None) -> Study:
@@ -81,11 +90,21 @@ def without_retried(existing: pd.DataFrame, runs: list[Run], retry_errors: bool)
     return existing[~(existing[KEY].isin({r.key for r in runs}) & (existing["status"] == ERROR))]
 
 
-def runs_to_do(runs: list[Run], existing: pd.DataFrame, retry_errors: bool = False) -> list[Run]:
+def runs_to_do(runs: list[Run], existing: pd.DataFrame, retry_errors: bool = False,
+               curves: set[str] | None = None) -> list[Run]:
     """The ``runs`` a study still has to run: not in the ``existing`` table (or recorded as errors,
-    with ``retry_errors``)."""
-    done = set(without_retried(existing, runs, retry_errors)[KEY])
+    with ``retry_errors``), and, for a study that keeps curves, the ok runs whose curves are not among
+    ``curves`` (the run keys the series store holds whole; None: the study keeps none)."""
+    done = without_retried(existing, runs, retry_errors)
+    if curves is not None and len(done):  # an ok row counts as done only with its curves
+        done = done[(done["status"] != OK) | done[KEY].isin(curves)]
+    done = set(done[KEY])
     return [r for r in runs if r.key not in done]
+
+
+def series_store(study: Study, out: str | Path | None) -> SeriesStore | None:
+    """The store of ``study``'s curves beside the table ``out`` (None: it keeps none, or nothing is saved)."""
+    return SeriesStore(series_path(out)) if out is not None and study.series else None
 
 
 def run_study(
@@ -117,13 +136,19 @@ def run_study(
     existing = read_table(out) if out is not None else make_table([])
     study_keys = {r.key for r in runs}
     existing = without_retried(existing, runs, retry_errors)
-    todo = runs_to_do(runs, existing)
+    store = series_store(study, out)
+    complete = store.complete_keys(study.series) if store is not None else None
+    todo = runs_to_do(runs, existing, curves=complete)
+    for_curves = len(set(existing[KEY]) & {r.key for r in todo}) if store is not None else 0
     new_rows: list[dict[str, Any]] = []
+    new_curves: list[tuple[Run, dict]] = []  # not yet in the store (all of them without out)
     counts = {OK: 0, ERROR: 0}
     last_flush = time.monotonic()
 
     def combined() -> pd.DataFrame:
-        frames = [f for f in (existing, make_table(new_rows, study.axis_names)) if len(f)]
+        new = make_table(new_rows, study.axis_names)
+        old = existing[~existing[KEY].isin(set(new[KEY]))] if len(new) else existing  # a row run again replaces its old one
+        frames = [f for f in (old, new) if len(f)]
         if not frames:
             return make_table([], study.axis_names)
         return normalise(pd.concat(frames, ignore_index=True), study.axis_names)
@@ -132,7 +157,19 @@ def run_study(
         nonlocal last_flush
         if out is not None and new_rows and (force or time.monotonic() - last_flush >= flush_interval):
             save(combined())
+            if store is not None and new_curves:  # after the table: a run in the store is always in the table
+                save_curves()
             last_flush = time.monotonic()
+
+    def save_curves() -> None:
+        try:
+            store.write(curves_dataset(new_curves, study), complete)
+        except OSError as exc:
+            raise OSError(f"cannot save the study's curves in {store.path} ({exc.strerror or exc}); the "
+                          f"{len(new_curves)} runs finished now are in the table without them: a rerun runs "
+                          "them again") from None
+        complete.update(run.key for run, _ in new_curves)
+        new_curves.clear()
 
     def save(table: pd.DataFrame) -> None:
         try:
@@ -144,6 +181,9 @@ def run_study(
     bar = tqdm(total=len(todo), desc=study.name, unit="run", disable=not (progress and todo), dynamic_ncols=True)
 
     def record(run: Run, result: dict[str, Any]) -> None:
+        curves = result.pop("series", None)
+        if curves is not None and study.series:
+            new_curves.append((run, curves))
         row = full_row(run, study, result)
         new_rows.append(row)
         counts[row["status"]] += 1
@@ -173,9 +213,18 @@ def run_study(
     mine = normalise(table.set_index(KEY, drop=False).loc[[r.key for r in runs]], study.axis_names)  # in run order
     if out is not None and new_rows:  # other studies' rows first, then this study's in run order
         save(normalise(pd.concat([table[~table[KEY].isin(study_keys)], mine]), study.axis_names))
+    curves = None
+    if store is not None:
+        curves = select_runs(store.open(), [r.key for r in runs])
+    elif study.series and new_curves:  # nothing saved: the curves of this call, in memory
+        by_key = {run.key: (run, c) for run, c in new_curves}
+        curves = curves_dataset([by_key[r.key] for r in runs if r.key in by_key], study)
+    if curves is None and study.series:  # kept, but no run has any (none finished ok)
+        curves = curves_dataset([], study)
     return StudyReport(
         study=study, table=mine, total=len(runs), skipped=len(runs) - len(todo),
         ran=len(new_rows), ok=counts[OK], failed=counts[ERROR], elapsed=time.perf_counter() - start, out=out,
+        series=curves, series_path=store.path if store is not None else None, for_curves=for_curves,
     )
 
 

@@ -1,6 +1,7 @@
-"""Plots of a results table: a metric against one axis, and a heatmap of a metric over two axes.
+"""Plots of a results table: a metric against one axis, and a heatmap of a metric over two axes; and
+of a study's kept curves: every run's, overlaid against time and coloured by an axis.
 
-Only runs with status 'ok' are plotted.  When other axes vary too, each point of the plot is the
+Only runs with status 'ok' are plotted (only they have curves).  When other axes vary too, each point of the plot is the
 mean over them (the line plot also shows every run as a dot).  A run whose metric is NaN (for
 ``time_to_sink``: it never sank) is drawn as 'never' rather than dropped silently.
 """
@@ -13,13 +14,16 @@ import numpy as np
 import pandas as pd
 
 from wetcloth.batch.metrics import METRICS
-from wetcloth.batch.plot_spec import PlotSpec
+from wetcloth.batch.plot_spec import PlotSpec, SeriesPlotSpec
 from wetcloth.scene import PARAMETERS
+from wetcloth.simulation import OUTPUTS
 
 
 def _label(name: str) -> str:
     if name in METRICS:
         unit = METRICS[name].unit
+    elif name in OUTPUTS:
+        unit = OUTPUTS[name][0]
     elif name in PARAMETERS:
         unit = PARAMETERS[name].metadata["unit"]
     else:
@@ -58,9 +62,16 @@ def heatmap_data(table: pd.DataFrame, metric: str, x: str, y: str) -> tuple[pd.D
     return grid(ok, metric, "mean"), counts[0], counts[1]
 
 
-def plot(table: pd.DataFrame, spec: PlotSpec, path: str | Path, study=None) -> Path:
-    """Draw ``spec`` (a line if ``spec.y`` is None, else a heatmap) from ``table`` to a PNG at ``path``."""
+def plot(table: pd.DataFrame, spec: PlotSpec | SeriesPlotSpec, path: str | Path, study=None, series=None) -> Path:
+    """Draw ``spec`` (a line if ``spec.y`` is None, else a heatmap) from ``table`` to a PNG at ``path``;
+    a :class:`SeriesPlotSpec` from the curves ``series`` (the study's Dataset: ``StudyReport.series``)."""
     from wetcloth.plotting import figure_file
+
+    if isinstance(spec, SeriesPlotSpec):
+        if series is None:
+            raise ValueError("cannot plot the curves: none were kept (the study needs series = [...] and a results "
+                             "table to keep them beside)")
+        return plot_series(series, spec, path, study=study)
 
     title = f"{study.name}: " if study is not None else ""
     with figure_file(path, 110, figsize=(6.4, 4.8), constrained_layout=True) as fig:
@@ -112,6 +123,98 @@ def _heatmap(fig, ax, table: pd.DataFrame, spec: PlotSpec) -> None:
             ax.text(j, i, "never", ha="center", va="center", fontsize=7, color="0.3")
         elif small:
             ax.text(j, i, f"{v:.3g}", ha="center", va="center", fontsize=7, color="k" if image.norm(v) > 0.6 else "w")
+
+
+def series_colours(values: np.ndarray, axis=None):
+    """(colours, legend): one RGBA colour per value of the colouring axis, and how to explain them: a
+    ``ScalarMappable`` for numbers (viridis; a logarithmic scale for a log-uniform axis or a geometric
+    grid), a {value: colour} dict for text."""
+    import matplotlib
+    from matplotlib.colors import LogNorm, Normalize
+
+    values = np.asarray(values)
+    if values.dtype.kind in "OUST" or values.dtype.kind == "b":
+        names = list(dict.fromkeys(str(v) for v in values))
+        palette = {name: matplotlib.colormaps["tab10"](i % 10) for i, name in enumerate(names)}
+        return [palette[str(v)] for v in values], palette
+    numbers = values.astype(float)
+    finite = numbers[np.isfinite(numbers)]
+    lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
+    norm = LogNorm(lo, hi) if _log_scaled(finite, axis) else Normalize(lo, hi if hi > lo else lo + 1.0)
+    mappable = matplotlib.cm.ScalarMappable(norm=norm, cmap=matplotlib.colormaps["viridis"])
+    return [mappable.to_rgba(v) for v in numbers], mappable
+
+
+def _log_scaled(values: np.ndarray, axis) -> bool:
+    """Whether an axis is best coloured on a log scale: sampled log-uniform, or a grid of three or more
+    positive values in geometric progression."""
+    if values.size == 0 or values.min() <= 0:
+        return False
+    if axis is not None and axis.distribution is not None:
+        return axis.distribution.get("random") == "loguniform"
+    grid = np.unique(values)
+    if grid.size < 3:
+        return False
+    ratios = grid[1:] / grid[:-1]
+    return bool(np.allclose(ratios, ratios[0], rtol=1e-6) and ratios[0] > 1.0 + 1e-9)
+
+
+def plot_series(series, spec: SeriesPlotSpec, path: str | Path, study=None) -> Path:
+    """The kept curves (an xarray Dataset: ``StudyReport.series`` or ``xarray.open_zarr`` of
+    ``NAME.series.zarr``) to a PNG at ``path``: one panel per output of ``spec`` (all of the Dataset's if
+    it names none), one line per run, coloured by its value on the axis ``spec.color`` (default: the
+    study's first axis, else the Dataset's first coordinate along ``run``), with a colour bar or legend."""
+    from wetcloth.plotting import figure_file
+
+    names = list(spec.series or [n for n in series.data_vars if series[n].dims == ("run", "time")])
+    missing = [n for n in names if n not in series.data_vars]
+    if missing or not names:
+        raise ValueError(f"cannot plot the curves of {', '.join(missing) or 'no output'}: the kept curves are "
+                         f"{', '.join(series.data_vars) or 'none'}")
+    along_run = [c for c in series.coords if series[c].dims == ("run",) and c != "run"]
+    color = spec.color or (study.axis_names[0] if study is not None and study.axis_names else
+                           (along_run[0] if along_run else None))
+    if color is not None and color not in series.coords:
+        raise ValueError(f"cannot colour the curves by {color!r}: it is not a coordinate of the kept curves; "
+                         f"they have {', '.join(along_run) or 'none'}")
+    axis = next((a for a in study.axes if a.name == color), None) if study is not None else None
+    runs = series.sizes["run"]
+    time = np.asarray(series["time"].values, float)
+    if color is not None:
+        colours, legend = series_colours(np.asarray(series[color].values), axis)
+    else:
+        colours, legend = ["C0"] * runs, None
+    width = 0.6 if runs > 100 else 1.0 if runs > 20 else 1.4
+    alpha = 0.45 if runs > 100 else 0.8
+    title = f"{study.name}: " if study is not None else ""
+    with figure_file(path, 110, figsize=(7.2, 0.6 + 2.6 * len(names)), constrained_layout=True) as fig:
+        axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
+        for ax, name in zip(axes, names):
+            values = np.asarray(series[name].values, float)
+            for i in range(runs):
+                ax.plot(time, values[i], color=colours[i], lw=width, alpha=alpha)
+            ax.set_ylabel(_label(name))
+            ax.grid(alpha=0.3)
+            if name == "depth":
+                ax.invert_yaxis()  # down is deeper, as the cloth goes
+            if runs == 0:
+                ax.text(0.5, 0.5, "no curves (no run finished ok)", ha="center", va="center",
+                        transform=ax.transAxes, color="0.4")
+        axes[-1].set_xlabel("time (s)")
+        if isinstance(legend, dict):
+            from matplotlib.lines import Line2D
+
+            handles = [Line2D([], [], color=c, lw=2, label=v) for v, c in legend.items()]
+            axes[0].legend(handles=handles, title=color.replace("_", " "), fontsize=8)
+        elif legend is not None:
+            bar = fig.colorbar(legend, ax=list(axes), label=_label(color))
+            ticks = np.unique(np.asarray(series[color].values, float))
+            if 0 < ticks.size <= 12:  # a grid's values, as they are
+                bar.minorticks_off()
+                bar.set_ticks(ticks, labels=[f"{v:g}" for v in ticks])
+        fig.suptitle(f"{title}{', '.join(names)} of {runs} runs" + (f", coloured by {color}" if color else ""),
+                     fontsize=10)
+    return Path(path)
 
 
 def plot_sensitivity(result, path: str | Path, study=None) -> Path:

@@ -49,13 +49,15 @@ WORKER_IMPORTS = "import distributed, wetcloth.batch.engines, wetcloth.simulatio
 SHOWN_ROWS = 30
 
 
-def run_listing(study: Study, existing: pd.DataFrame, retry_errors: bool = False) -> pd.DataFrame:
+def run_listing(study: Study, existing: pd.DataFrame, retry_errors: bool = False,
+                curves: set[str] | None = None) -> pd.DataFrame:
     """One row per run of ``study``, in run order: ``run`` (1, 2, ...), the axis values, and ``state``:
-    'done' (in ``existing`` and ok), 'failed' (recorded as an error: kept, unless ``retry_errors``)
+    'done' (in ``existing`` and ok, with its curves among ``curves`` if the study keeps them: the
+    run keys its series store holds), 'failed' (recorded as an error: kept, unless ``retry_errors``)
     or 'to run'."""
     runs = study.runs()
     status = dict(zip(existing[KEY], existing["status"])) if len(existing) else {}
-    todo = {r.key for r in runs_to_do(runs, existing, retry_errors)}
+    todo = {r.key for r in runs_to_do(runs, existing, retry_errors, curves)}
     rows = []
     for i, r in enumerate(runs, 1):
         state = "to run" if r.key in todo else "done" if status[r.key] == OK else "failed"

@@ -8,6 +8,7 @@ A study file is TOML (see ``docs/batch.md`` and ``models/studies/``)::
     sample_rate = 10.0             # Hz: outputs are sampled at this rate for the metrics
     sink_depth = 0.05              # m: 'sunk' once the centroid is more than this below the surface
     metrics = ["time_to_sink", "final_depth", "final_wet_mass", "time_to_90_wet_mass"]
+    series = ["depth", "wet_mass"] # outputs whose curves are kept (NAME.series.zarr beside the table)
 
     [base]                         # parameter overrides shared by every run
     nx = 9
@@ -42,8 +43,9 @@ from wetcloth.batch.axes import (SAMPLINGS, Axis, check_count, check_name, from_
                                  points, typed)
 from wetcloth.batch.engines import ENGINES
 from wetcloth.batch.metrics import DEFAULT_METRICS, check_metric_names
-from wetcloth.batch.plot_spec import PlotSpec, plot_specs
+from wetcloth.batch.plot_spec import PlotSpec, SeriesPlotSpec, plot_specs
 from wetcloth.batch.sensitivity import SensitivitySpec, check_factors, design, parse_sensitivity
+from wetcloth.batch.series import check_series_names
 from wetcloth.errors import ConfigError, Mistakes, StudyError, check_choice, did_you_mean
 from wetcloth.scene import PARAMETERS, RESERVED_KEYS, read_scene_file, read_toml, resolve_scene_path
 
@@ -52,7 +54,7 @@ DEFAULT_SINK_DEPTH = 0.05  # m
 
 #: Keys allowed at the top level of a study file.
 STUDY_KEYS = (
-    "name", "description", "scene", "duration", "sample_rate", "sink_depth", "metrics", "engine", "fmu",
+    "name", "description", "scene", "duration", "sample_rate", "sink_depth", "metrics", "series", "engine", "fmu",
     "seed", "samples", "sampling", "base", "axes", "plot", "sensitivity",
 )
 #: A study's name names its output files (``out/batch/<name>.parquet``): one file name, no folder.
@@ -103,6 +105,7 @@ _SETTING_CHECKS = {
     "sample_rate": lambda v: _positive("sample_rate", v, most=run_settings.SETTINGS["fps"].hi),
     "sink_depth": lambda v: _positive("sink_depth", v, allow_zero=True),
     "metrics": functools.partial(check_metric_names, "metrics", at_least_one=True),
+    "series": functools.partial(check_series_names, "series"),
     "engine": functools.partial(check_choice, StudyError, "engine", allowed=ENGINES),
     "seed": lambda v: _whole("seed", v),
     "samples": lambda v: _whole("samples", v),
@@ -131,13 +134,14 @@ class Study:
     sample_rate: float = DEFAULT_SAMPLE_RATE  # Hz
     sink_depth: float = DEFAULT_SINK_DEPTH  # m
     metrics: tuple[str, ...] = DEFAULT_METRICS
+    series: tuple[str, ...] = ()  # outputs whose curves are kept, at sample_rate (wetcloth.batch.series)
     engine: str = "python"
     fmu: str = ""  # FMU path for engine 'fmu'; "" = models/WetCloth.fmu
     seed: int = 0
     samples: int = 0
     sampling: str = "random"  # how the sampled axes' points are placed: random, lhs or sobol
     sensitivity: SensitivitySpec | None = None  # a sensitivity design instead of grid and samples
-    plots: tuple[PlotSpec, ...] = ()
+    plots: tuple[PlotSpec | SeriesPlotSpec, ...] = ()
     description: str = ""
     scene: str = ""  # where the base scene came from (for messages)
 
@@ -187,7 +191,8 @@ class Study:
         settings = dict(name=data.get("name", name or "study"), duration=duration,
                         sample_rate=data.get("sample_rate", DEFAULT_SAMPLE_RATE),
                         sink_depth=data.get("sink_depth", DEFAULT_SINK_DEPTH),
-                        metrics=data.get("metrics", list(DEFAULT_METRICS)), engine=data.get("engine", "python"),
+                        metrics=data.get("metrics", list(DEFAULT_METRICS)), series=data.get("series", []),
+                        engine=data.get("engine", "python"),
                         seed=data.get("seed", 0), samples=data.get("samples", 0),
                         sampling=data.get("sampling", "random"))
         settings = _check_settings(settings, mistakes)
@@ -273,9 +278,13 @@ class Study:
                         spec.run_count(len(self.axes)))
 
     def check_plots(self, specs) -> None:
-        """Each plot names a recorded metric and one or two axes of this study."""
+        """Each plot names a recorded metric and one or two axes of this study; a series plot, saved
+        outputs and an axis to colour by."""
         names = self.axis_names
         for spec in specs:
+            if isinstance(spec, SeriesPlotSpec):
+                self._check_series_plot(spec)
+                continue
             if spec.metric not in self.metrics:
                 raise StudyError("plot", f"metric {spec.metric!r} is not recorded; recorded: {', '.join(self.metrics)}")
             for axis in (spec.x, spec.y):
@@ -283,6 +292,18 @@ class Study:
                     raise StudyError("plot", f"{axis!r} is not an axis of this study; axes: {', '.join(names) or 'none'}")
             if spec.y is not None and spec.y == spec.x:
                 raise StudyError("plot", f"a heatmap needs two different axes, got {spec.x!r} twice")
+
+    def _check_series_plot(self, spec: SeriesPlotSpec) -> None:
+        if not self.series:
+            raise StudyError("plot", "a plot of kind 'series' draws the curves the study keeps: give the outputs to "
+                                     "keep as series = [...] (e.g. series = [\"depth\", \"wet_mass\"])")
+        for name in spec.series:
+            if name not in self.series:
+                raise StudyError("plot", f"series {name!r} is not kept; kept: {', '.join(self.series)} "
+                                         "(add it to the study's series)")
+        if spec.color is not None and spec.color not in self.axis_names:
+            raise StudyError("plot", f"color {spec.color!r} is not an axis of this study; axes: "
+                                     f"{', '.join(self.axis_names) or 'none'}")
 
     # ---- the runs
     @property

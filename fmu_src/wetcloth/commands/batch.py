@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from wetcloth.batch.engines import ENGINES
+from wetcloth.batch.results import KEY
 from wetcloth.commands.common import INTERRUPTED, path_argument
 
 #: Where results go without --out: <study name>.parquet in this folder.
@@ -24,7 +25,8 @@ def add_parser(sub) -> None:
             "Run every scene of a study file on Dask: with no --scheduler a local cluster of processes "
             "(one per core, or --workers N) starts and stops by itself; with --scheduler the study runs "
             "on that cluster. Results go to a Parquet table, one row per run; a rerun skips the runs "
-            "already in it. A study with a [sensitivity] table also writes its sensitivity indices "
+            "already in it. A study with series = [...] keeps its runs' curves beside it (<table>.series.zarr, "
+            "an xarray Dataset). A study with a [sensitivity] table also writes its sensitivity indices "
             "(<table>_sensitivity.csv) and their bar plot. See docs/batch.md."
         ),
     )
@@ -39,7 +41,8 @@ def add_parser(sub) -> None:
     p.add_argument("--engine", choices=ENGINES, help="simulate with the Python simulator (default) or the FMU through fmpy")
     p.add_argument("--fmu", type=path_argument, metavar="PATH", help="FMU for --engine fmu (default: models/WetCloth.fmu)")
     p.add_argument("--plot", action="append", default=[], metavar="METRIC:AXIS[,AXIS2]",
-                   help="plot a metric against one axis, or as a heatmap over two axes (repeatable)")
+                   help="plot a metric against one axis, or as a heatmap over two axes; series:AXIS: the kept "
+                        "curves coloured by AXIS (repeatable)")
     p.add_argument("--plot-dir", type=path_argument, metavar="DIR", help="where plots go (default: beside the results table)")
     p.add_argument("--retry-errors", action="store_true", help="run again the runs recorded with status 'error'")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -91,12 +94,18 @@ def main(args) -> int:
     table = report.table
     print(report.summary())
     written = [str(out)]
+    if report.series_path is not None and report.series_path.exists():
+        written.append(str(report.series_path))
     if args.csv is not None:
         written.append(str(batch.write_csv(table, args.csv)))
     plot_dir = args.plot_dir if args.plot_dir is not None else out.parent
     for spec in [*study.plots, *plot_specs]:
         # named after the table, so that runs with another --out keep their plots apart
-        written.append(str(batch.plot(table, spec, plot_dir / spec.filename(out.stem), study=study)))
+        if isinstance(spec, batch.SeriesPlotSpec):
+            name = spec.filename(out.stem, study.series, study.axis_names[0] if study.axis_names else None)
+        else:
+            name = spec.filename(out.stem)
+        written.append(str(batch.plot(table, spec, plot_dir / name, study=study, series=report.series)))
     status = 0
     if study.sensitivity is not None:
         result = batch.sensitivity_indices(study, table)
@@ -114,15 +123,21 @@ def dry_run(study, out: Path, args) -> int:
     """Print the runs of ``study`` (done, failed or to run by the table at ``out``) and an estimate of
     their time; run nothing, start no cluster."""
     from wetcloth.batch import preview, read_table
+    from wetcloth.batch.execution import series_store
 
     existing = read_table(out)
-    listing = preview.run_listing(study, existing, args.retry_errors)
+    store = series_store(study, out)
+    curves = store.complete_keys(study.series) if store is not None else None
+    listing = preview.run_listing(study, existing, args.retry_errors, curves)
     counts = listing["state"].value_counts()
+    recorded = set(existing.loc[existing["status"] == "ok", KEY]) if len(existing) else set()  # ok, without curves
+    n_again = sum(r.key in recorded for r, state in zip(study.runs(), listing["state"]) if state == "to run")
+    again = f" ({n_again} of them again, for curves missing from {store.path})" if n_again else ""
     how = study.sensitivity.describe(len(study.axes)) if study.sensitivity is not None else (
         f"{study.sampling} sampling" if any(a.is_random for a in study.axes) else "grid")
     print(f"{study.name}: {len(listing)} runs ({how}); in {out}: {counts.get('done', 0)} done, "
           f"{counts.get('failed', 0)} failed{' (kept: --retry-errors runs them again)' if counts.get('failed') else ''}; "
-          f"{counts.get('to run', 0)} to run")
+          f"{counts.get('to run', 0)} to run{again}")
     print(preview.format_listing(listing))
     todo = [r for r, state in zip(study.runs(), listing["state"]) if state == "to run"]
     from dask.system import CPU_COUNT  # as the local cluster would count them
