@@ -269,27 +269,13 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 
 // ---------------------------------------------------------------------------------------------- FMU states
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate) {
-    return guarded(c, "fmi2GetFMUstate", [&](Instance& instance) {
-        if (FMUstate == nullptr) return fmi2Error;
-        std::vector<unsigned char> bytes = instance.unit->state();
-        if (std::vector<unsigned char>* existing = wc::fmu::state_bytes(*FMUstate)) {
-            *existing = std::move(bytes);  // the master passed a state to update
-        } else {
-            *FMUstate = wc::fmu::new_state(std::move(bytes));
-        }
-        return fmi2OK;
-    });
+    return guarded(c, "fmi2GetFMUstate",
+                   [&](Instance& instance) { return status_of(wc::fmu::get_fmu_state(*instance.unit, FMUstate)); });
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
     return guarded(c, "fmi2SetFMUstate", [&](Instance& instance) {
-        const std::vector<unsigned char>* bytes = wc::fmu::state_bytes(FMUstate);
-        if (bytes == nullptr) {
-            instance.unit->error("FMU state refused, the unit is unchanged: not a WetCloth FMU state (an object this "
-                                 "unit did not make, or one already freed)");
-            return fmi2Error;
-        }
-        const fmi2Status status = status_of(instance.unit->set_state(*bytes));
+        const fmi2Status status = status_of(wc::fmu::set_fmu_state(*instance.unit, FMUstate));
         if (status == fmi2OK) instance.discarded = false;
         return status;
     });
@@ -297,67 +283,29 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* FMUstate) {
     return guarded(c, "fmi2FreeFMUstate", [&](Instance& instance) {
-        if (FMUstate == nullptr || *FMUstate == nullptr) return fmi2OK;
-        if (!wc::fmu::free_state(*FMUstate)) {
-            instance.unit->error("fmi2FreeFMUstate: not a WetCloth FMU state (an object this unit did not make, or one "
-                                 "already freed)");
-            return fmi2Error;
-        }
-        *FMUstate = nullptr;
-        return fmi2OK;
+        return status_of(wc::fmu::free_fmu_state(*instance.unit, FMUstate, "fmi2FreeFMUstate"));
     });
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t* size) {
     return guarded(c, "fmi2SerializedFMUstateSize", [&](Instance& instance) {
-        const std::vector<unsigned char>* bytes = wc::fmu::state_bytes(FMUstate);
-        if (bytes == nullptr || size == nullptr) {
-            instance.unit->error("fmi2SerializedFMUstateSize: not a WetCloth FMU state");
-            return fmi2Error;
-        }
-        *size = bytes->size();
-        return fmi2OK;
+        return status_of(wc::fmu::serialized_state_size(*instance.unit, FMUstate, size, "fmi2SerializedFMUstateSize"));
     });
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
     return guarded(c, "fmi2SerializeFMUstate", [&](Instance& instance) {
-        const std::vector<unsigned char>* bytes = wc::fmu::state_bytes(FMUstate);
-        if (bytes == nullptr) {
-            instance.unit->error("fmi2SerializeFMUstate: not a WetCloth FMU state");
-            return fmi2Error;
-        }
-        if (serializedState == nullptr || size < bytes->size()) {
-            instance.unit->error("fmi2SerializeFMUstate: the state needs " + std::to_string(bytes->size()) +
-                                 " bytes, the buffer has " + std::to_string(size));
-            return fmi2Error;
-        }
-        std::memcpy(serializedState, bytes->data(), bytes->size());
-        return fmi2OK;
+        return status_of(wc::fmu::serialize_fmu_state(*instance.unit, FMUstate,
+                                                      reinterpret_cast<unsigned char*>(serializedState), size,
+                                                      "fmi2SerializeFMUstate"));
     });
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
                                    fmi2FMUstate* FMUstate) {
     return guarded(c, "fmi2DeSerializeFMUstate", [&](Instance& instance) {
-        if (FMUstate == nullptr) return fmi2Error;
-        std::vector<unsigned char> bytes;
-        if (serializedState != nullptr) {
-            const auto* data = reinterpret_cast<const unsigned char*>(serializedState);
-            bytes.assign(data, data + size);
-        }
-        try {
-            Unit::check_state(bytes);
-        } catch (const wc::fmu::StateError& exc) {
-            instance.unit->error(std::string("serialized FMU state refused: ") + exc.what());
-            return fmi2Error;
-        }
-        if (std::vector<unsigned char>* existing = wc::fmu::state_bytes(*FMUstate)) {
-            *existing = std::move(bytes);
-        } else {
-            *FMUstate = wc::fmu::new_state(std::move(bytes));
-        }
-        return fmi2OK;
+        return status_of(wc::fmu::deserialize_fmu_state(
+            *instance.unit, reinterpret_cast<const unsigned char*>(serializedState), size, FMUstate));
     });
 }
 

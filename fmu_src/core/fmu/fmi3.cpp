@@ -402,90 +402,38 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance c, fmi3ValueReference, size_
 
 // ---------------------------------------------------------------------------------------------- FMU states
 fmi3Status fmi3GetFMUState(fmi3Instance c, fmi3FMUState* FMUState) {
-    return guarded(c, "fmi3GetFMUState", [&](Instance& instance) {
-        if (FMUState == nullptr) return fmi3Error;
-        std::vector<unsigned char> bytes = instance.unit->state();
-        if (std::vector<unsigned char>* existing = wc::fmu::state_bytes(*FMUState)) {
-            *existing = std::move(bytes);
-        } else {
-            *FMUState = wc::fmu::new_state(std::move(bytes));
-        }
-        return fmi3OK;
-    });
+    return guarded(c, "fmi3GetFMUState",
+                   [&](Instance& instance) { return status_of(wc::fmu::get_fmu_state(*instance.unit, FMUState)); });
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance c, fmi3FMUState FMUState) {
-    return guarded(c, "fmi3SetFMUState", [&](Instance& instance) {
-        const std::vector<unsigned char>* bytes = wc::fmu::state_bytes(FMUState);
-        if (bytes == nullptr) {
-            instance.unit->error("FMU state refused, the unit is unchanged: not a WetCloth FMU state (an object this "
-                                 "unit did not make, or one already freed)");
-            return fmi3Error;
-        }
-        return status_of(instance.unit->set_state(*bytes));
-    });
+    return guarded(c, "fmi3SetFMUState",
+                   [&](Instance& instance) { return status_of(wc::fmu::set_fmu_state(*instance.unit, FMUState)); });
 }
 
 fmi3Status fmi3FreeFMUState(fmi3Instance c, fmi3FMUState* FMUState) {
     return guarded(c, "fmi3FreeFMUState", [&](Instance& instance) {
-        if (FMUState == nullptr || *FMUState == nullptr) return fmi3OK;
-        if (!wc::fmu::free_state(*FMUState)) {
-            instance.unit->error("fmi3FreeFMUState: not a WetCloth FMU state (an object this unit did not make, or "
-                                 "one already freed)");
-            return fmi3Error;
-        }
-        *FMUState = nullptr;
-        return fmi3OK;
+        return status_of(wc::fmu::free_fmu_state(*instance.unit, FMUState, "fmi3FreeFMUState"));
     });
 }
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance c, fmi3FMUState FMUState, size_t* size) {
     return guarded(c, "fmi3SerializedFMUStateSize", [&](Instance& instance) {
-        const std::vector<unsigned char>* bytes = wc::fmu::state_bytes(FMUState);
-        if (bytes == nullptr || size == nullptr) {
-            instance.unit->error("fmi3SerializedFMUStateSize: not a WetCloth FMU state");
-            return fmi3Error;
-        }
-        *size = bytes->size();
-        return fmi3OK;
+        return status_of(wc::fmu::serialized_state_size(*instance.unit, FMUState, size, "fmi3SerializedFMUStateSize"));
     });
 }
 
 fmi3Status fmi3SerializeFMUState(fmi3Instance c, fmi3FMUState FMUState, fmi3Byte serializedState[], size_t size) {
     return guarded(c, "fmi3SerializeFMUState", [&](Instance& instance) {
-        const std::vector<unsigned char>* bytes = wc::fmu::state_bytes(FMUState);
-        if (bytes == nullptr) {
-            instance.unit->error("fmi3SerializeFMUState: not a WetCloth FMU state");
-            return fmi3Error;
-        }
-        if (serializedState == nullptr || size < bytes->size()) {
-            instance.unit->error("fmi3SerializeFMUState: the state needs " + std::to_string(bytes->size()) +
-                                 " bytes, the buffer has " + std::to_string(size));
-            return fmi3Error;
-        }
-        std::memcpy(serializedState, bytes->data(), bytes->size());
-        return fmi3OK;
+        return status_of(wc::fmu::serialize_fmu_state(*instance.unit, FMUState, serializedState, size,
+                                                      "fmi3SerializeFMUState"));
     });
 }
 
 fmi3Status fmi3DeserializeFMUState(fmi3Instance c, const fmi3Byte serializedState[], size_t size,
                                    fmi3FMUState* FMUState) {
     return guarded(c, "fmi3DeserializeFMUState", [&](Instance& instance) {
-        if (FMUState == nullptr) return fmi3Error;
-        std::vector<unsigned char> bytes;
-        if (serializedState != nullptr) bytes.assign(serializedState, serializedState + size);
-        try {
-            Unit::check_state(bytes);
-        } catch (const wc::fmu::StateError& exc) {
-            instance.unit->error(std::string("serialized FMU state refused: ") + exc.what());
-            return fmi3Error;
-        }
-        if (std::vector<unsigned char>* existing = wc::fmu::state_bytes(*FMUState)) {
-            *existing = std::move(bytes);
-        } else {
-            *FMUState = wc::fmu::new_state(std::move(bytes));
-        }
-        return fmi3OK;
+        return status_of(wc::fmu::deserialize_fmu_state(*instance.unit, serializedState, size, FMUState));
     });
 }
 

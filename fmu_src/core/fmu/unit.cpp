@@ -687,8 +687,8 @@ std::unordered_set<void*>& registry() {
     return objects;
 }
 
-}  // namespace
-
+//: FMU state objects: new_state makes one, state_bytes finds the bytes of one made here (null for any
+//: other pointer), free_state deletes one (false if it is not one of ours).
 void* new_state(std::vector<unsigned char> bytes) {
     auto* object = new StateObject{std::move(bytes)};
     std::lock_guard<std::mutex> lock(registry_mutex());
@@ -710,6 +710,8 @@ bool free_state(void* state) {
     delete static_cast<StateObject*>(state);
     return true;
 }
+
+}  // namespace
 
 std::vector<unsigned char> Unit::state() const {
     std::vector<unsigned char> bytes(STATE_MAGIC, STATE_MAGIC + MAGIC_SIZE);
@@ -787,6 +789,81 @@ Outcome Unit::set_state(const std::vector<unsigned char>& bytes) {
         error("FMU state refused, the unit is unchanged: not enough memory");
     }
     return Outcome::ERROR;
+}
+
+Outcome get_fmu_state(Unit& unit, void** state) {
+    if (state == nullptr) return Outcome::ERROR;
+    std::vector<unsigned char> bytes = unit.state();
+    if (std::vector<unsigned char>* existing = state_bytes(*state)) {
+        *existing = std::move(bytes);  // the master passed a state to update
+    } else {
+        *state = new_state(std::move(bytes));
+    }
+    return Outcome::OK;
+}
+
+Outcome set_fmu_state(Unit& unit, void* state) {
+    const std::vector<unsigned char>* bytes = state_bytes(state);
+    if (bytes == nullptr) {
+        unit.error("FMU state refused, the unit is unchanged: not a WetCloth FMU state (an object this unit did not "
+                   "make, or one already freed)");
+        return Outcome::ERROR;
+    }
+    return unit.set_state(*bytes);
+}
+
+Outcome free_fmu_state(Unit& unit, void** state, const char* function) {
+    if (state == nullptr || *state == nullptr) return Outcome::OK;
+    if (!free_state(*state)) {
+        unit.error(std::string(function) + ": not a WetCloth FMU state (an object this unit did not make, or one "
+                   "already freed)");
+        return Outcome::ERROR;
+    }
+    *state = nullptr;
+    return Outcome::OK;
+}
+
+Outcome serialized_state_size(Unit& unit, void* state, std::size_t* size, const char* function) {
+    const std::vector<unsigned char>* bytes = state_bytes(state);
+    if (bytes == nullptr || size == nullptr) {
+        unit.error(std::string(function) + ": not a WetCloth FMU state");
+        return Outcome::ERROR;
+    }
+    *size = bytes->size();
+    return Outcome::OK;
+}
+
+Outcome serialize_fmu_state(Unit& unit, void* state, unsigned char* out, std::size_t size, const char* function) {
+    const std::vector<unsigned char>* bytes = state_bytes(state);
+    if (bytes == nullptr) {
+        unit.error(std::string(function) + ": not a WetCloth FMU state");
+        return Outcome::ERROR;
+    }
+    if (out == nullptr || size < bytes->size()) {
+        unit.error(std::string(function) + ": the state needs " + std::to_string(bytes->size()) +
+                   " bytes, the buffer has " + std::to_string(size));
+        return Outcome::ERROR;
+    }
+    std::memcpy(out, bytes->data(), bytes->size());
+    return Outcome::OK;
+}
+
+Outcome deserialize_fmu_state(Unit& unit, const unsigned char* data, std::size_t size, void** state) {
+    if (state == nullptr) return Outcome::ERROR;
+    std::vector<unsigned char> bytes;
+    if (data != nullptr) bytes.assign(data, data + size);
+    try {
+        Unit::check_state(bytes);
+    } catch (const StateError& exc) {
+        unit.error(std::string("serialized FMU state refused: ") + exc.what());
+        return Outcome::ERROR;
+    }
+    if (std::vector<unsigned char>* existing = state_bytes(*state)) {
+        *existing = std::move(bytes);
+    } else {
+        *state = new_state(std::move(bytes));
+    }
+    return Outcome::OK;
 }
 
 }  // namespace wc::fmu

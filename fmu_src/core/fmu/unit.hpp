@@ -73,13 +73,6 @@ struct StateError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
-//: FMU state objects (the bytes of Unit::state), shared by all instances of the process: new_state
-//: makes one, state_bytes finds the bytes of one made here (null for any other pointer), free_state
-//: deletes one (false if it is not one of ours).
-void* new_state(std::vector<unsigned char> bytes);
-std::vector<unsigned char>* state_bytes(void* state);
-bool free_state(void* state);
-
 //: One instance's values, simulation and life cycle.
 class Unit {
 public:
@@ -154,5 +147,18 @@ private:
     bool outputs_valid_ = false;
     std::vector<double> mesh_;
 };
+
+//: The FMU state calls of both FMI versions over one unit (`function` names the call in messages).  A
+//: state object holds the bytes of Unit::state; objects are shared by all instances of the process, and
+//: any other pointer is refused with an error.  GetFMUstate: a new object in *state, or *state updated;
+//: SetFMUstate: the unit returns to it (nothing changes when refused); FreeFMUstate: *state deleted and
+//: nulled; SerializedFMUstateSize, SerializeFMUstate: its bytes; DeSerializeFMUstate: checked bytes into
+//: a new object in *state, or *state updated.
+Outcome get_fmu_state(Unit& unit, void** state);
+Outcome set_fmu_state(Unit& unit, void* state);
+Outcome free_fmu_state(Unit& unit, void** state, const char* function);
+Outcome serialized_state_size(Unit& unit, void* state, std::size_t* size, const char* function);
+Outcome serialize_fmu_state(Unit& unit, void* state, unsigned char* out, std::size_t size, const char* function);
+Outcome deserialize_fmu_state(Unit& unit, const unsigned char* data, std::size_t size, void** state);
 
 }  // namespace wc::fmu

@@ -1,4 +1,4 @@
-// Bindings of the force assembly (wetcloth/kernels/assembly.py): forces, forces_and_blocks and submerged
+// Bindings of the force assembly (bf41571:fmu_src/wetcloth/kernels/assembly.py): forces, forces_and_blocks and submerged
 // with the numba kernels' arguments (the Cloth, Physics and Work named tuples, arrays, numbers).
 #include "convert.hpp"
 #include "wetcloth/assembly.hpp"

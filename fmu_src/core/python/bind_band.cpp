@@ -1,4 +1,4 @@
-// Bindings of the band factorisation and solves (band.cpp) under the names of wetcloth/kernels/lapack.py.
+// Bindings of the band factorisation and solves (band.cpp) under the names of bf41571:fmu_src/wetcloth/kernels/lapack.py.
 #include "convert.hpp"
 #include "wetcloth/band.hpp"
 
@@ -9,13 +9,12 @@ using Bands = nb::ndarray<double, nb::ndim<3>, nb::c_contig, nb::device::cpu>;
 }  // namespace
 
 WETCLOTH_BINDINGS(m) {
-    // (band, rows[, info]): numba's third argument, LAPACK's argument array, is accepted and ignored.
-    m.def("band_factor", [](Band band, Band rows, nb::handle) {
+    m.def("band_factor", [](Band band, Band rows) {
         const wc::Index n = band.shape(0), kd = band.shape(1) - 1;
         if (rows.shape(0) != band.shape(0) || rows.shape(1) != band.shape(1))
             throw nb::value_error("band_factor: rows must have the shape of band");
         return wc::band_factor(band.data(), rows.data(), n, kd);
-    }, nb::arg("band"), nb::arg("rows"), nb::arg("info") = nb::none());
+    }, nb::arg("band"), nb::arg("rows"));
     m.def("band_solve_two", [](Bands bands, Bands rows, Band b) {
         const wc::Index n = bands.shape(1), kd = bands.shape(2) - 1;
         if (bands.shape(0) != 2 || rows.shape(0) != 2 || rows.shape(1) != bands.shape(1) ||

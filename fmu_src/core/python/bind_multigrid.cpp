@@ -1,4 +1,4 @@
-// Bindings of the multigrid V-cycle (multigrid.cpp) under the names of wetcloth/kernels/multigrid.py.
+// Bindings of the multigrid V-cycle (multigrid.cpp) under the names of bf41571:fmu_src/wetcloth/kernels/multigrid.py.
 #include "convert.hpp"
 #include "wetcloth/multigrid.hpp"
 

@@ -1,4 +1,4 @@
-// Bindings of the plane preconditioner (plane.cpp) under the names of wetcloth/kernels/plane.py.
+// Bindings of the plane preconditioner (plane.cpp) under the names of bf41571:fmu_src/wetcloth/kernels/plane.py.
 // Where the numba kernels took the cloth's offsets (refresh, refresh_from_jacobian) or grid_x
 // (follow_cloth), these take the cloth bundle, or that array or number as before.
 #include "convert.hpp"

@@ -1,4 +1,4 @@
-// Bindings of the spring kernels (wetcloth/kernels/springs.py) for tests and benchmarks: the same names
+// Bindings of the spring kernels (bf41571:fmu_src/wetcloth/kernels/springs.py) for tests and benchmarks: the same names
 // and arguments as the numba kernels (arrays as NumPy arrays, C-contiguous; n from pos / p).
 #include "convert.hpp"
 #include "wetcloth/springs.hpp"

@@ -1,4 +1,4 @@
-// Bindings of the water kernels (wetcloth/kernels/water.py) for tests: the same names and arguments as
+// Bindings of the water kernels (bf41571:fmu_src/wetcloth/kernels/water.py) for tests: the same names and arguments as
 // the numba kernels (arrays as NumPy arrays, C-contiguous).
 #include "convert.hpp"
 #include "wetcloth/water.hpp"

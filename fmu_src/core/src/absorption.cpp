@@ -1,5 +1,5 @@
 // Water uptake (docs/model.md section 5): the Buras law, integrated exactly over a step; drying in air
-// and wicking between neighbours (port of wetcloth/kernels/absorption.py).
+// and wicking between neighbours (port of bf41571:fmu_src/wetcloth/kernels/absorption.py).
 #include "wetcloth/absorption.hpp"
 
 #include <cmath>

@@ -1,5 +1,5 @@
 // The total force on every particle and, for the implicit schemes, the pieces of its Jacobian (port of
-// wetcloth/kernels/assembly.py).  Each force family is one call, skipped when the scene does not need
+// bf41571:fmu_src/wetcloth/kernels/assembly.py).  Each force family is one call, skipped when the scene does not need
 // it: no spring kernel without springs, no water kernels while no particle touches the water.  A new
 // force family is one more call here, adding to force and, for the implicit schemes, to the
 // per-particle blocks or to the per-spring blocks that the system matrix uses.

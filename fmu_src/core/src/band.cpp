@@ -1,4 +1,4 @@
-// Banded Cholesky factorisation and band solves (port of wetcloth/kernels/lapack.py).
+// Banded Cholesky factorisation and band solves (port of bf41571:fmu_src/wetcloth/kernels/lapack.py).
 #include "wetcloth/band.hpp"
 
 #include <algorithm>

@@ -1,5 +1,5 @@
 // The tank floor: a rigid plane with Coulomb friction (docs/model.md section 6.1; port of
-// wetcloth/kernels/floor.py).
+// bf41571:fmu_src/wetcloth/kernels/floor.py).
 //
 // Two parts of one rule.  A particle that reaches the floor during a step is put back on it and loses
 // its downward velocity, and its sliding speed drops by `friction` times that loss (floor_contact,

@@ -1,5 +1,5 @@
 // Implicit steps: backward Euler (one linearised Newton step) and BDF2 (Newton iterations) (port of
-// wetcloth/kernels/implicit.py).
+// bf41571:fmu_src/wetcloth/kernels/implicit.py).
 #include "wetcloth/implicit.hpp"
 
 #include <cmath>

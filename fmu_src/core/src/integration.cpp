@@ -1,5 +1,5 @@
 // Per-particle update kernels of the integrators, and the conjugate-gradient solve of the implicit one
-// (port of wetcloth/kernels/integration.py).
+// (port of bf41571:fmu_src/wetcloth/kernels/integration.py).
 #include "wetcloth/integration.hpp"
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// Geometric multigrid V-cycle (port of wetcloth/kernels/multigrid.py).
+// Geometric multigrid V-cycle (port of bf41571:fmu_src/wetcloth/kernels/multigrid.py).
 #include "wetcloth/multigrid.hpp"
 
 namespace wc {

@@ -1,4 +1,4 @@
-// The plane preconditioner of the implicit solves (port of wetcloth/kernels/plane.py).
+// The plane preconditioner of the implicit solves (port of bf41571:fmu_src/wetcloth/kernels/plane.py).
 //
 // In each particle's frame (t1, t2, n): the t1 and t2 components each get a scalar matrix
 // M + h^2 L_c (L_c the springs' graph Laplacian weighted by rest stiffness times the share of their

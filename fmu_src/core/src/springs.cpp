@@ -1,5 +1,5 @@
 // Spring forces (docs/model.md section 3) and their Jacobians for the implicit integrator (port of
-// wetcloth/kernels/springs.py).
+// bf41571:fmu_src/wetcloth/kernels/springs.py).
 //
 // A spring family joins particle i to i + offset.  With m = n - offset, a[0..m) is every spring's
 // first end and a[offset..n) its second, so every loop indexes all its arrays with the same counter

@@ -1,5 +1,5 @@
 // Water forces (docs/model.md section 4): submerged fraction, buoyancy, Stokes drag and face drag
-// (port of wetcloth/kernels/water.py; layout of the face-drag rows in wetcloth/water.hpp).
+// (port of bf41571:fmu_src/wetcloth/kernels/water.py; layout of the face-drag rows in wetcloth/water.hpp).
 #include "wetcloth/water.hpp"
 
 #include <cmath>

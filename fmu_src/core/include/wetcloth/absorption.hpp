@@ -1,4 +1,4 @@
-// Water uptake (Buras law), drying and wicking (port of wetcloth/kernels/absorption.py).
+// Water uptake (Buras law), drying and wicking (port of bf41571:fmu_src/wetcloth/kernels/absorption.py).
 #pragma once
 #include "wetcloth/core.hpp"
 

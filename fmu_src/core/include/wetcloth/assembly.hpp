@@ -1,5 +1,5 @@
 // The total force on every particle and, for the implicit schemes, the pieces of its Jacobian
-// (port of wetcloth/kernels/assembly.py).  Each force family is one call, skipped when the scene
+// (port of bf41571:fmu_src/wetcloth/kernels/assembly.py).  Each force family is one call, skipped when the scene
 // does not need it.
 #pragma once
 #include "wetcloth/core.hpp"

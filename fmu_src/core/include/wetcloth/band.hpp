@@ -1,5 +1,5 @@
 // Banded Cholesky factorisation and the two-system band solve of the plane preconditioner (port of
-// wetcloth/kernels/lapack.py, with a factorisation of our own in place of LAPACK's dpbtrf).
+// bf41571:fmu_src/wetcloth/kernels/lapack.py, with a factorisation of our own in place of LAPACK's dpbtrf).
 //
 // A band matrix is stored in LAPACK's lower band form: in a C array `band` (n, kd + 1),
 // band[j, i - j] = A[i, j] for j <= i <= j + kd, so that row j of the array is column j of A from

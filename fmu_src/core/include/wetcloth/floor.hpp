@@ -1,4 +1,4 @@
-// The tank floor: a rigid plane with Coulomb friction (port of wetcloth/kernels/floor.py).
+// The tank floor: a rigid plane with Coulomb friction (port of bf41571:fmu_src/wetcloth/kernels/floor.py).
 #pragma once
 #include "wetcloth/core.hpp"
 

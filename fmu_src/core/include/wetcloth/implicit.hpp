@@ -1,5 +1,5 @@
 // Implicit steps: backward Euler (one linearised Newton step) and BDF2 (Newton iterations) (port of
-// wetcloth/kernels/implicit.py).
+// bf41571:fmu_src/wetcloth/kernels/implicit.py).
 //
 // Both solve systems with the matrix A = M - h' dF/dv - h'^2 dF/dx (h' the step times the scheme's
 // coefficient), which forces_and_blocks (assembly.hpp) leaves as per-particle and per-spring blocks;

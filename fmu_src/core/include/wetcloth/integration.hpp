@@ -1,5 +1,5 @@
 // Per-particle update kernels of the integrators and the conjugate-gradient solve of backward Euler
-// (port of wetcloth/kernels/integration.py).
+// (port of bf41571:fmu_src/wetcloth/kernels/integration.py).
 #pragma once
 #include "wetcloth/core.hpp"
 

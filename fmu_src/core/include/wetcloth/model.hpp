@@ -6,9 +6,8 @@
 //     one cross-parameter rule (scene_problem);
 //   * wetcloth/topology.py (build_topology), model.py (the Model.scene setter, _set_wicking),
 //     integrators.py (Integrator.__init__ and control()), state.py (initial_state);
-//   * the allocations of kernels/plane.py (make_plane), kernels/multigrid.py (level_sizes,
-//     make_hierarchy), kernels/self_contact/__init__.py (make_contact, rest_gap, grid_edges) and
-//     bundles.py / kernels/implicit.py (make_work, make_solver);
+//   * the allocations of wetcloth/preconditioner.py (make_plane, level_sizes, make_hierarchy),
+//     self_collision.py (make_contact, rest_gap, grid_edges) and bundles.py (make_work, make_solver);
 //   * wetcloth/simulation.py: set_inputs, advance, outputs, positions, wetness, the blow-up message and
 //     snapshot / restore (the same values: state, BDF2 history, clock, preconditioner reference,
 //     self-collision reference and margin).

@@ -1,5 +1,5 @@
 // Geometric multigrid on the cloth's grid: a symmetric V-cycle for two 9-point stencil matrices at
-// once (port of wetcloth/kernels/multigrid.py; level_sizes and make_hierarchy, which allocate, stay
+// once (port of bf41571:fmu_src/wetcloth/kernels/multigrid.py; level_sizes and make_hierarchy, which allocate, stay
 // in Python).
 //
 // Each coarser grid keeps every other grid line (nx // 2 + 1 of nx); bilinear interpolation P,

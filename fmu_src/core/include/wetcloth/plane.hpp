@@ -1,5 +1,5 @@
 // The preconditioner of the implicit solves: the cloth's in-plane stiffness, factored once (port of
-// wetcloth/kernels/plane.py; multigrid.cpp and band.cpp are its parts).
+// bf41571:fmu_src/wetcloth/kernels/plane.py; multigrid.cpp and band.cpp are its parts).
 #pragma once
 #include "wetcloth/core.hpp"
 

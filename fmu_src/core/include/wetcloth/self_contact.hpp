@@ -1,4 +1,4 @@
-// Self-collision (docs/model.md section 6.2; port of wetcloth/kernels/self_contact/).
+// Self-collision (docs/model.md section 6.2; port of bf41571:fmu_src/wetcloth/kernels/self_contact/).
 #pragma once
 #include "wetcloth/core.hpp"
 

@@ -1,4 +1,4 @@
-// Spring forces (docs/model.md section 3) and their Jacobians (port of wetcloth/kernels/springs.py).
+// Spring forces (docs/model.md section 3) and their Jacobians (port of bf41571:fmu_src/wetcloth/kernels/springs.py).
 #pragma once
 #include "wetcloth/core.hpp"
 

@@ -1,5 +1,5 @@
 // The step loop: one call advances the cloth from one output time to the next (port of
-// wetcloth/kernels/stepping.py and sampling.py).
+// bf41571:fmu_src/wetcloth/kernels/stepping.py and sampling.py).
 //
 // Each accepted step: the integrator's step with step-size control (particles at rest on the floor
 // held there during it), the floor, self-collision, the water's exchanges over the step (uptake,

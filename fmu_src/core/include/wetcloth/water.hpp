@@ -1,5 +1,5 @@
 // Water forces (docs/model.md section 4): submerged fraction, buoyancy, Stokes drag and face drag
-// (port of wetcloth/kernels/water.py).
+// (port of bf41571:fmu_src/wetcloth/kernels/water.py).
 //
 // Face drag works per grid cell, each split into two triangles (i, i+1, i+nx+1) and (i, i+nx+1, i+nx),
 // the split of Topology.triangles.  Per-triangle values go into rows of length n + nx + 1 (cell i at

@@ -1,5 +1,5 @@
 // Candidate pairs from a spatial hash, kept while the cloth's motion allows (port of
-// wetcloth/kernels/self_contact/broad_phase.py).
+// bf41571:fmu_src/wetcloth/kernels/self_contact/broad_phase.py).
 #include "wetcloth/self_contact/broad_phase.hpp"
 
 #include <cmath>

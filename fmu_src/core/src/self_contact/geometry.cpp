@@ -1,5 +1,5 @@
 // Closest points and the continuous collision test of self-collision's pairs: the parts too long or too
-// rare to inline (port of wetcloth/kernels/self_contact/geometry.py; the rest is in geometry.hpp).
+// rare to inline (port of bf41571:fmu_src/wetcloth/kernels/self_contact/geometry.py; the rest is in geometry.hpp).
 #include "wetcloth/self_contact/geometry.hpp"
 
 #include <limits>

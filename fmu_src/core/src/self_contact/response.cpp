@@ -1,5 +1,5 @@
 // The self-collision stage of a step (docs/model.md section 6.2; port of
-// wetcloth/kernels/self_contact/response.py): after the integrator and the floor have moved the cloth from
+// bf41571:fmu_src/wetcloth/kernels/self_contact/response.py): after the integrator and the floor have moved the cloth from
 // x0 to x1 (velocities v1), make the motion free of self-intersection and push layers apart to the
 // thickness.
 //

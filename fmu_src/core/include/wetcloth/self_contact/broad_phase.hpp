@@ -1,5 +1,5 @@
 // Candidate pairs from a spatial hash, kept while the cloth's motion allows (port of
-// wetcloth/kernels/self_contact/broad_phase.py; see its docstring for the reasoning).
+// bf41571:fmu_src/wetcloth/kernels/self_contact/broad_phase.py; see its docstring for the reasoning).
 //
 // A candidate list holds every point-triangle and edge-edge pair whose elements were closer than
 // reach = thickness + 2 margin at the *reference* positions it was built from; it stays valid while every

@@ -1,5 +1,5 @@
 // Closest points of the two kinds of contact pair, and a conservative continuous collision test (port of
-// wetcloth/kernels/self_contact/geometry.py).
+// bf41571:fmu_src/wetcloth/kernels/self_contact/geometry.py).
 //
 // A *pair* is four particles: a point and a triangle (POINT_TRIANGLE: p, a, b, c) or two edges (EDGE_EDGE:
 // p1, q1, p2, q2).  Its closest points are given by four *weights* w (the point side positive, the other

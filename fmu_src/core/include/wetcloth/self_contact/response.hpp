@@ -1,4 +1,4 @@
-// The self-collision stage's response (port of wetcloth/kernels/self_contact/response.py): settling passes
+// The self-collision stage's response (port of bf41571:fmu_src/wetcloth/kernels/self_contact/response.py): settling passes
 // that push layers apart to the thickness with friction, then rigid impact zones (Bridson, Fedkiw and
 // Anderson 2002).  The entry point, resolve(), is declared in wetcloth/self_contact.hpp.
 #pragma once
