@@ -254,8 +254,10 @@ def test_local_cluster_one_single_threaded_process_per_core_stopped_on_exit():
 
 def test_ctrl_c_saves_finished_runs_and_stops_quietly(tmp_path):
     study_file = tmp_path / "long.toml"
+    # 400 runs (about 0.07 s each on the compiled core): still running when the Ctrl-C comes, on any machine
+    runs = 400
     study_file.write_text('scene = "thesis_fast"\nduration = 60.0\n[base]\nnx = 9\nny = 9\n'
-                          '[axes]\nabsorption_rate = { start = 0.1, stop = 2.0, num = 20 }\n')
+                          f'[axes]\nabsorption_rate = {{ start = 0.1, stop = 2.0, num = {runs} }}\n')
     out = tmp_path / "long.parquet"
     # a terminal's Ctrl-C: SIGINT to every process of the foreground group (the command and its workers)
     proc = subprocess.Popen([sys.executable, "-m", "wetcloth.cli", "batch", str(study_file), "--workers", "2",
@@ -279,7 +281,7 @@ def test_ctrl_c_saves_finished_runs_and_stops_quietly(tmp_path):
             "run the same command again to resume") in err.splitlines(), err
     assert "Traceback" not in err, err
     saved = read_table(out)
-    assert 0 < len(saved) < 20 and (saved["status"] == "ok").all()
+    assert 0 < len(saved) < runs and (saved["status"] == "ok").all()
 
 
 def _processes() -> dict[int, tuple[int, int, str]]:
