@@ -24,6 +24,7 @@ import pytest
 from test_fmu_support import BLOW_UP, SMALL, last_good_time, run_child
 
 import wetcloth
+from wetcloth._core import CLOCK_SIZE
 from wetcloth.errors import ParameterError
 from wetcloth.scene import check_value
 from wetcloth.simulation import OUTPUT_NAMES
@@ -240,7 +241,7 @@ API long check_array(void* h, const char* name, double* out, long capacity) {
     else if (key == "plane.rank") put(v, pl.rank, pl.rank_size);
     else if (key == "plane.levels") put(v, pl.grid.levels, 4 * pl.grid.level_count);
     else if (key == "plane.sizes") v = {double(pl.kd), double(pl.coarse_n), double(pl.grid.size)};
-    else if (key == "plane.reference") put(v, pl.reference, 3);
+    else if (key == "plane.reference") put(v, pl.reference, 4);
     else if (key == "plane.reference_mass") put(v, pl.reference_mass, n);
     else if (key == "plane.frame") put(v, pl.frame, 9 * n);
     else if (key == "plane.normal") put(v, pl.normal, n);
@@ -435,7 +436,7 @@ def test_snapshots_of_another_grid_or_not_finite_are_refused_and_change_nothing(
         # A NaN among the positions (checksum made to fit): refused, nothing changed.
         magic = len(b"wetcloth-native-snapshot\n")
         body = bytearray(data[magic + 12:])
-        offset = 16 + 8 * 36 + 8 * (15 + 3 + 1) + 8 * 5  # families, count, scene, clock, reference, margin; 6th x
+        offset = 16 + 8 * 36 + 8 * (CLOCK_SIZE + 3 + 1) + 8 * 5  # families, count, scene, clock, reference, margin; 6th x
         body[offset:offset + 8] = struct.pack("<d", float("nan"))
         bad = data[:magic + 4] + struct.pack("<Q", fnv1a(bytes(body))) + bytes(body)
         checker_library.check_advance(a.handle, 0.1)

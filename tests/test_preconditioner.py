@@ -231,3 +231,52 @@ def test_a_run_restored_after_refactoring_from_the_jacobian_repeats_bit_for_bit(
     else:
         pytest.fail("no snapshot with factors from the Jacobian in use")
     assert_restored_run_repeats(sim, snapshot, 1.0)
+
+
+def test_systems_from_the_jacobian_are_its_projection_on_the_frames():
+    """Fixed steps build each frame axis's system from the system matrix A itself
+    (``set_systems_from_jacobian``): S_a = V_a^T A' V_a, V_a the particles' axis a (crumpled frames
+    here), A' the matrix without the bending springs and with no coupling to the pinned edge.  Assembled
+    independently from A's products with unit vectors; the banded factors invert it to round-off:
+    applied to V_a S_a e the preconditioner returns V_a e (the frames are orthonormal, so the other
+    axes see nothing), relative 1e-10 as the rest-stiffness factors above.  On the multigrid the
+    same systems give a symmetric positive definite cycle (as in the test above)."""
+    scene = wetcloth.load_scene(nx=30, ny=27, pinned_edge="y_max")
+    model = Model(scene)
+    topology, n = model.topology, model.topology.n
+    rng = np.random.default_rng(5)
+    mass = model.dry_mass * rng.uniform(1.0, 3.0, n)
+    state = initial_state(scene, topology)
+    pos = state.pos + rng.normal(scale=2e-3, size=state.pos.shape)
+    vel = rng.normal(scale=0.1, size=state.vel.shape)
+    forces_and_blocks(model.cloth, model.physics, model.work, pos, vel, mass - model.dry_mass, 1 / 30)
+    work, free = model.work, model.cloth.free
+    planes = [make_plane(topology.nx, topology.ny, topology.spring_family_names, topology.spring_stiffness,
+                         multigrid_side=side) for side in (100, 0)]
+    for plane in planes:
+        random_frames(plane, topology, seed=6)
+        assert _core.set_systems_from_jacobian(plane, model.cloth, mass, work, 0) == 1
+    banded, multigrid = planes
+    assert len(banded.grid.levels) == 1 and len(multigrid.grid.levels) >= 3
+    # A' = A without the bending springs, its products with unit vectors
+    stretch = np.array([name in _SHARE for name in topology.spring_family_names])
+    along, across = work.along.copy(), work.across.copy()
+    work.along[~stretch] = 0.0
+    work.across[~stretch] = 0.0
+    dense = np.column_stack([matvec(model, mass, np.eye(3 * n)[k].reshape(3, n)).ravel() for k in range(3 * n)])
+    work.along[...], work.across[...] = along, across
+    pinned = free == 0
+    frames = banded.frame.reshape(3, 3, n)
+    for a in range(3):
+        v = np.zeros((3 * n, n))
+        for c in range(3):
+            v[c * n + np.arange(n), np.arange(n)] = frames[a, c]
+        s = v.T @ dense @ v
+        s[np.ix_(pinned, ~pinned)] = s[np.ix_(~pinned, pinned)] = 0.0  # the pinned edge holds
+        e = rng.standard_normal(n) * free
+        z = apply(banded, model, (v @ (s @ e)).reshape(3, n))
+        assert np.abs(v.T @ z.ravel() - e).max() <= 1e-10 * np.abs(e).max(), a
+    x, y = rng.standard_normal((2, 3, n)) * free
+    px, py = apply(multigrid, model, x), apply(multigrid, model, y)
+    assert abs(np.sum(x * py) - np.sum(y * px)) <= 100 * EPS * np.linalg.norm(x) * np.linalg.norm(py)
+    assert np.sum(x * px) > 0.0

@@ -12,6 +12,8 @@ from collections import namedtuple
 
 import numpy as np
 
+from wetcloth._core import SOLVER_COUNTERS
+
 #: The fixed cloth: grid size, spring families (offset, rest length m, tension only, stiffness N/m,
 #: damping N s/m per spring), 1 for moving particles, dry mass kg, envelope volume m3, Stokes
 #: coefficient 6 pi a eta (N s/m), water capacity kg, wicking links (offsets, conductance kg/s).
@@ -67,4 +69,4 @@ def make_solver(n: int) -> Solver:
     vectors = {name: np.zeros((3, n)) for name in ("rhs", "dv", "r", "z", "p", "ap", "hat_pos", "hat_vel",
                                                    "predicted", "step_acceleration")}
     return Solver(mass=np.zeros(n), diagonal=np.zeros((6, n)), inverse=np.zeros((6, n)),
-                  counters=np.zeros(4, dtype=np.int64), **vectors)
+                  counters=np.zeros(SOLVER_COUNTERS, dtype=np.int64), **vectors)

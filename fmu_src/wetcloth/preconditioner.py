@@ -19,7 +19,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from wetcloth._core import COARSEST_SIDE, MULTIGRID_SIDE
+from wetcloth._core import COARSEST_SIDE, COMPONENTS, MULTIGRID_SIDE
 
 #: Share of each stretch-spring family's stiffness in the t1 and t2 components.  The bending springs
 #: (1 % of the stretch stiffness in the presets) are left out: they would double the bandwidth
@@ -40,7 +40,8 @@ Hierarchy = namedtuple("Hierarchy", "levels coef inverse_diagonal x b r row")
 #: out); ``grid`` the ``Hierarchy`` (one level on small grids); on the coarsest level, ``order``
 #: (n_c) the padded index of each band position and ``rank`` its inverse over the level's padded
 #: points (-1 off the grid); ``bands`` (2, n_c, kd + 1) the factored band matrices and ``rows`` the
-#: same factors by rows; ``reference`` [factored scale (s^2), 1 if factored, 1 if from the Jacobian]
+#: same factors by rows; ``reference`` [factored scale (s^2), 1 if factored, 1 if from the Jacobian,
+#: 1 if the normal component has its system rather than its diagonal]
 #: and ``reference_mass`` (n) kg of the last factorisation with the rest stiffness; ``shares``
 #: (2, F) each family's share in t1, t2; ``jacobian_along`` (F, n) kg and ``jacobian_mass`` (n) kg
 #: of the last factorisation from the Jacobian; ``frame`` (3, 3, n) each particle's axes t1, t2, n;
@@ -66,8 +67,8 @@ def make_hierarchy(sizes: list[tuple[int, int]]) -> Hierarchy:
     for level, (nx, ny) in enumerate(sizes):
         levels[level] = nx, ny, start, nx + 3
         start += (nx + 3) * (ny + 3)
-    return Hierarchy(levels=levels, coef=np.zeros((2, 9, start)), inverse_diagonal=np.zeros((2, start)),
-                     x=np.zeros((2, start)), b=np.zeros((2, start)), r=np.zeros((2, start)),
+    return Hierarchy(levels=levels, coef=np.zeros((COMPONENTS, 9, start)), inverse_diagonal=np.zeros((COMPONENTS, start)),
+                     x=np.zeros((COMPONENTS, start)), b=np.zeros((COMPONENTS, start)), r=np.zeros((COMPONENTS, start)),
                      row=np.zeros(sizes[0][0] + 3))
 
 
@@ -95,7 +96,7 @@ def make_plane(grid_x: int, grid_y: int, family_names: tuple, stiffness: np.ndar
     shares = np.array([_SHARE.get(name, (0.0, 0.0)) for name in family_names]).reshape(families, 2).T.copy()
     slots = np.array([_SLOT.get(name, -1) for name in family_names], dtype=np.int64)
     return Plane(stiffness=np.ascontiguousarray(stiffness, dtype=float), slots=slots, grid=grid, order=order, rank=rank,
-                 bands=np.zeros((2, n_c, kd + 1)), rows=np.zeros((2, n_c, kd + 1)), reference=np.zeros(3),
+                 bands=np.zeros((COMPONENTS, n_c, kd + 1)), rows=np.zeros((COMPONENTS, n_c, kd + 1)), reference=np.zeros(4),
                  reference_mass=np.zeros(n), shares=shares, jacobian_along=np.zeros((families, n)),
                  jacobian_mass=np.zeros(n), frame=np.repeat(np.eye(3)[:, :, None], n, axis=2), normal=np.ones(n),
-                 local=np.zeros((2, n_c)))
+                 local=np.zeros((COMPONENTS, n_c)))

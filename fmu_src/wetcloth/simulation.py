@@ -10,7 +10,7 @@ from wetcloth import _core, self_collision
 from wetcloth._core import (BLOWN_UP, CALM_TIME, CG_ITERATIONS, CLOCK_SIZE, EXCHANGING, FACTORISATIONS, FAILED_STEP,
                             FIRST_GUESS, LAST_SOLVE, LAST_STEP, MAX_REJECTIONS, NEWTON_ITERATIONS, NEWTON_RATE,
                             NEXT_STEP, OUTPUT_COUNT, PAUSE_AFTER, PAUSED, RATE_CORRECTION, REJECTED, SLEEPING, SPEED,
-                            STEPS, TIME, UNCHECKED_TIME, UNCONVERGED)
+                            STEPS, TIME, UNCHECKED_TIME, UNCONVERGED, STEP_ERROR, LARGEST_ERROR)
 from wetcloth.advice import blow_up_advice
 from wetcloth.bundles import Buffers, make_solver
 from wetcloth.errors import BlowUpError, ParameterError
@@ -42,7 +42,7 @@ _SNAPSHOT_CLOCK = (("next_step", NEXT_STEP, float), ("last_step", LAST_STEP, flo
                    ("exchanging", EXCHANGING, bool), ("sleeping", SLEEPING, bool), ("steps", STEPS, int),
                    ("rejected_steps", REJECTED, int), ("newton_rate", NEWTON_RATE, float),
                    ("rate_correction", RATE_CORRECTION, float), ("first_guess", FIRST_GUESS, float),
-                   ("last_solve_iterations", LAST_SOLVE, float))
+                   ("last_solve_iterations", LAST_SOLVE, float), ("step_error", STEP_ERROR, float))
 
 
 
@@ -306,11 +306,19 @@ class Simulation:
         if not (duration >= 0.0 and math.isfinite(duration)):
             raise ValueError(f"duration must be a finite number >= 0 s, got {duration!r}")
         target = self.time + duration
+        self._clock[LARGEST_ERROR] = 0.0
         status = PAUSED
         while status == PAUSED:
             status = self._stepper.advance(target, self._steps_per_call, self.pause_after)
         if status == BLOWN_UP:
             self._blown_up(float(self._clock[FAILED_STEP]))
+
+    @property
+    def error_estimate(self) -> float:
+        """The largest local position error (m) any step of the last ``advance`` estimated for itself:
+        the integrator's own estimate plus what an unfinished Newton solve left.  With fixed steps
+        (``tolerance = 0``) nothing holds it down: it shows what the step size costs."""
+        return float(self._clock[LARGEST_ERROR])
 
     def sample(self, times) -> np.ndarray:
         """Advance to each of ``times`` (s, ascending, none before ``time``) in turn and return the

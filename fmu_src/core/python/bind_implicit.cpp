@@ -22,6 +22,7 @@ WETCLOTH_BINDINGS(m) {
     m.attr("CG_ITERATIONS") = static_cast<Index>(CG_ITERATIONS);
     m.attr("FACTORISATIONS") = static_cast<Index>(FACTORISATIONS);
     m.attr("UNCONVERGED") = static_cast<Index>(UNCONVERGED);
+    m.attr("SOLVER_COUNTERS") = static_cast<Index>(SOLVER_COUNTERS);
     m.def(
         "implicit_euler_step",
         [](nb::handle cloth, nb::handle phys, nb::handle work, nb::handle solver, nb::handle pos, nb::handle vel,
@@ -43,7 +44,7 @@ WETCLOTH_BINDINGS(m) {
         [](nb::handle cloth, nb::handle phys, nb::handle work, nb::handle solver, nb::handle plane, nb::handle pos,
            nb::handle vel, nb::handle water, nb::handle step_water, nb::handle prev_pos, nb::handle prev_vel,
            nb::handle prev_water, nb::handle acceleration, double h, double h_prev, double newton_tolerance,
-           double cg_tolerance, nb::handle memory, nb::handle out_pos, nb::handle out_vel) {
+           double cg_tolerance, nb::handle memory, nb::handle out_pos, nb::handle out_vel, bool fixed_steps) {
             const Cloth c = cloth_from(cloth);
             const Index n = c.n;
             Work w = work_from(work, c);
@@ -55,14 +56,15 @@ WETCLOTH_BINDINGS(m) {
                 argument<const double>(step_water, "step_water", n), argument<const double>(prev_pos, "prev_pos", 3 * n),
                 argument<const double>(prev_vel, "prev_vel", 3 * n), argument<const double>(prev_water, "prev_water", n),
                 argument<const double>(acceleration, "acceleration", 3 * n), h, h_prev, newton_tolerance, cg_tolerance,
-                argument<double>(memory, "memory", 4), argument<double>(out_pos, "out_pos", 3 * n),
+                fixed_steps, argument<double>(memory, "memory", 4), argument<double>(out_pos, "out_pos", 3 * n),
                 argument<double>(out_vel, "out_vel", 3 * n));
             return nb::make_tuple(e.error, e.converged);
         },
         nb::arg("cloth"), nb::arg("phys"), nb::arg("work"), nb::arg("solver"), nb::arg("plane"), nb::arg("pos"),
         nb::arg("vel"), nb::arg("water"), nb::arg("step_water"), nb::arg("prev_pos"), nb::arg("prev_vel"),
         nb::arg("prev_water"), nb::arg("acceleration"), nb::arg("h"), nb::arg("h_prev"), nb::arg("newton_tolerance"),
-        nb::arg("cg_tolerance"), nb::arg("memory"), nb::arg("out_pos"), nb::arg("out_vel"));
+        nb::arg("cg_tolerance"), nb::arg("memory"), nb::arg("out_pos"), nb::arg("out_vel"),
+        nb::arg("fixed_steps") = false);
 }
 
 }  // namespace wc::py

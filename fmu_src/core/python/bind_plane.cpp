@@ -31,6 +31,8 @@ WETCLOTH_BINDINGS(m) {
     m.attr("JACOBIAN_REFRESH_AFTER") = JACOBIAN_REFRESH_AFTER;
     m.attr("MULTIGRID_SIDE") = MULTIGRID_SIDE;
     m.attr("COARSEST_SIDE") = COARSEST_SIDE;
+    m.attr("COMPONENTS") = COMPONENTS;
+    m.attr("NORMAL") = NORMAL;
     m.def("refresh", [](nb::handle plane, nb::handle cloth, nb::handle mass, double scale) {
         const Index n = particles(plane);
         Plane p = py::plane_from(plane, n);
@@ -66,6 +68,15 @@ WETCLOTH_BINDINGS(m) {
         wc::set_normal_diagonal(p, n, py::argument<const double>(mass, "mass", n),
                                 py::argument<const double>(diagonal_blocks, "diagonal_blocks", 6 * n),
                                 py::argument<const double>(blocks, "blocks", 6 * n));
+    });
+    m.def("set_systems_from_jacobian", [](nb::handle plane, nb::handle cloth, nb::handle mass, nb::handle work,
+                                          Index first) {
+        const Index n = particles(plane);
+        Plane p = py::plane_from(plane, n);
+        const Cloth c = py::cloth_from(cloth);
+        if (first < 0 || first > NORMAL) throw nb::value_error("set_systems_from_jacobian: first is 0 to NORMAL (2)");
+        return wc::set_systems_from_jacobian(p, c, py::argument<const double>(mass, "mass", n), py::work_from(work, c),
+                                             first);
     });
     m.def("apply", [](nb::handle plane, nb::handle free, nb::handle r, nb::handle z) {
         const Index n = particles(plane);

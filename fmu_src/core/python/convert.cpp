@@ -113,7 +113,7 @@ Solver solver_from(nb::handle h, Index n) {
     s.step_acceleration = array<double>(h, "step_acceleration", 3 * n);
     s.diagonal = array<double>(h, "diagonal", 6 * n);
     s.inverse = array<double>(h, "inverse", 6 * n);
-    s.counters = array<Index>(h, "counters", 4);
+    s.counters = array<Index>(h, "counters", SOLVER_COUNTERS);
     return s;
 }
 
@@ -121,12 +121,12 @@ Hierarchy hierarchy_from(nb::handle h) {
     Hierarchy g;
     g.levels = array<Index>(h, "levels");
     g.level_count = size_of(h.attr("levels")) / 4;
-    g.size = size_of(h.attr("x")) / 2;
-    g.coef = array<double>(h, "coef", 2 * 9 * g.size);
-    g.inverse_diagonal = array<double>(h, "inverse_diagonal", 2 * g.size);
-    g.x = array<double>(h, "x", 2 * g.size);
-    g.b = array<double>(h, "b", 2 * g.size);
-    g.r = array<double>(h, "r", 2 * g.size);
+    g.size = size_of(h.attr("x")) / COMPONENTS;
+    g.coef = array<double>(h, "coef", COMPONENTS * 9 * g.size);
+    g.inverse_diagonal = array<double>(h, "inverse_diagonal", COMPONENTS * g.size);
+    g.x = array<double>(h, "x", COMPONENTS * g.size);
+    g.b = array<double>(h, "b", COMPONENTS * g.size);
+    g.r = array<double>(h, "r", COMPONENTS * g.size);
     g.row = array<double>(h, "row", g.levels[NX] + 3);
     return g;
 }
@@ -139,19 +139,19 @@ Plane plane_from(nb::handle h, Index n) {
     p.grid = hierarchy_from(h.attr("grid"));
     p.order = array<const Index>(h, "order");
     p.coarse_n = size_of(h.attr("order"));
-    p.kd = size_of(h.attr("bands")) / (2 * p.coarse_n) - 1;
+    p.kd = size_of(h.attr("bands")) / (COMPONENTS * p.coarse_n) - 1;
     p.rank = array<const Index>(h, "rank");
     p.rank_size = size_of(h.attr("rank"));
-    p.bands = array<double>(h, "bands", 2 * p.coarse_n * (p.kd + 1));
-    p.rows = array<double>(h, "rows", 2 * p.coarse_n * (p.kd + 1));
-    p.reference = array<double>(h, "reference", 3);
+    p.bands = array<double>(h, "bands", COMPONENTS * p.coarse_n * (p.kd + 1));
+    p.rows = array<double>(h, "rows", COMPONENTS * p.coarse_n * (p.kd + 1));
+    p.reference = array<double>(h, "reference", 4);
     p.reference_mass = array<double>(h, "reference_mass", n);
     p.shares = array<const double>(h, "shares", 2 * p.families);
     p.jacobian_along = array<double>(h, "jacobian_along", p.families * n);
     p.jacobian_mass = array<double>(h, "jacobian_mass", n);
     p.frame = array<double>(h, "frame", 9 * n);
     p.normal = array<double>(h, "normal", n);
-    p.local = array<double>(h, "local", 2 * p.coarse_n);
+    p.local = array<double>(h, "local", COMPONENTS * p.coarse_n);
     return p;
 }
 

@@ -192,4 +192,20 @@ void band_solve_two(const double* bands, const double* rows, double* b, Index n,
     }
 }
 
+void band_solve_one(const double* band, const double* rows, double* b, Index n, Index kd) {
+    const Index width = kd + 1;
+    for (Index j = 0; j < n; ++j) {  // L y = b: column j reaches j + 1 .. j + m
+        const double y = b[j] * rows[j * width + kd];
+        b[j] = y;
+        const Index m = std::min(kd, n - 1 - j);
+        axpy_down(b + j + 1, band + j * width + 1, y, m);
+    }
+    for (Index j = n - 1; j >= 0; --j) {  // L^T x = y: column j reaches j - m .. j - 1
+        const double x = b[j] * rows[j * width + kd];
+        b[j] = x;
+        const Index m = std::min(kd, j);
+        axpy_down(b + j - m, rows + j * width + kd - m, x, m);
+    }
+}
+
 }  // namespace wc

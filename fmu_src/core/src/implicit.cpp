@@ -89,6 +89,23 @@ double better_guess(Index n, const double* vel, const double* prev_vel, const do
     return parabola < line ? PARABOLA : LINE;
 }
 
+//: Forces and Jacobian pieces at (out_pos, out_vel), and Newton's residual into solver.rhs:
+//: free (b h F - M (v - v^)), minus the gradient of the step's incremental potential in v.
+void newton_residual(const Cloth& cloth, const Physics& phys, Work& work, Solver& solver, const double* hat_vel,
+                     const double* step_water, const double* out_pos, const double* out_vel, double bh) {
+    const Index n = cloth.n;
+    forces_and_blocks(cloth, phys, work, out_pos, out_vel, step_water, bh);
+    const double* free = cloth.free;
+    const double* mass = solver.mass;
+    for (Index c = 0; c < 3; ++c) {
+        const double* __restrict f = work.force + c * n;
+        const double* __restrict ov = out_vel + c * n;
+        const double* __restrict hv = hat_vel + c * n;
+        double* __restrict rc = solver.rhs + c * n;
+        for (Index i = 0; i < n; ++i) rc[i] = free[i] * (bh * f[i] - mass[i] * (ov[i] - hv[i]));
+    }
+}
+
 }  // namespace
 
 double implicit_euler_step(const Cloth& cloth, const Physics& phys, Work& work, Solver& solver, const double* pos,
@@ -158,7 +175,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
                        const double* pos, const double* vel, const double* water, const double* step_water,
                        const double* prev_pos, const double* prev_vel, const double* prev_water,
                        const double* acceleration, double h, double h_prev, double newton_tolerance,
-                       double cg_tolerance, double* memory, double* out_pos, double* out_vel) {
+                       double cg_tolerance, bool fixed_steps, double* memory, double* out_pos, double* out_vel) {
     const Index n = cloth.n;
     double* mass = solver.mass;
     double* hat_pos = solver.hat_pos;
@@ -197,25 +214,26 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
     }
     const double bh = beta * h;
     for (Index k = 0; k < 3 * n; ++k) out_pos[k] = hat_pos[k] + bh * out_vel[k];
-    Index factored = refresh(plane, cloth, mass, bh * bh);
-    solver.counters[FACTORISATIONS] += factored > 0;
+    Index factored = 0;
+    if (!fixed_steps) {  // (fixed steps build every system from the Jacobian)
+        factored = refresh(plane, cloth, mass, bh * bh);
+        solver.counters[FACTORISATIONS] += factored > 0;
+    }
     follow_cloth(plane, cloth, pos);
     bool converged = false;
     double previous = 0.0;
     for (Index iteration = 0; iteration < NEWTON_ITERATIONS_MAX; ++iteration) {
-        forces_and_blocks(cloth, phys, work, out_pos, out_vel, step_water, bh);
-        set_normal_diagonal(plane, n, mass, work.diagonal_blocks, work.blocks);
-        if (jacobian_refresh_pays(plane, memory[3])) {
-            factored = refresh_from_jacobian(plane, cloth, mass, work.along);
-            if (factored < 0) factored = refresh(plane, cloth, mass, bh * bh);  // back to the rest stiffness
-            solver.counters[FACTORISATIONS] += factored > 0;
-        }
-        for (Index c = 0; c < 3; ++c) {
-            const double* __restrict f = work.force + c * n;
-            const double* __restrict ov = out_vel + c * n;
-            const double* __restrict hv = hat_vel + c * n;
-            double* __restrict rc = rhs + c * n;
-            for (Index i = 0; i < n; ++i) rc[i] = free[i] * (bh * f[i] - mass[i] * (ov[i] - hv[i]));
+        newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh);
+        if (fixed_steps) {
+            set_systems_from_jacobian(plane, cloth, mass, work, 0);
+            solver.counters[FACTORISATIONS] += 1;
+        } else {
+            if (jacobian_refresh_pays(plane, memory[3])) {
+                factored = refresh_from_jacobian(plane, cloth, mass, work.along);
+                if (factored < 0) factored = refresh(plane, cloth, mass, bh * bh);  // back to the rest stiffness
+                solver.counters[FACTORISATIONS] += factored > 0;
+            }
+            set_normal_diagonal(plane, n, mass, work.diagonal_blocks, work.blocks);
         }
         const double floor = CG_FLOOR * py_min(newton_tolerance / bh, newton_tolerance / NEWTON_VELOCITY_TIME);
         const PlaneSolve solve = plane_pcg(cloth, work, solver, plane, rhs, dv, cg_tolerance, floor,

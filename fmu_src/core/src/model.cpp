@@ -400,7 +400,7 @@ Simulation::Simulation(const Scene& scene) : scene_(scene), topo_(build_topology
 
     // Solver (make_solver).
     solver_.assign(un * (1 + 10 * 3 + 6 + 6), 0.0);
-    counters_.assign(4, 0);
+    counters_.assign(SOLVER_COUNTERS, 0);
     {
         double* p = solver_.data();
         auto take = [&p](std::size_t count) {
@@ -441,17 +441,18 @@ Simulation::Simulation(const Scene& scene) : scene_(scene), topo_(build_topology
             start += (lx + 3) * (ly + 3);
         }
         const std::size_t size = static_cast<std::size_t>(start);
-        grid_.assign(18 * size + 4 * 2 * size + static_cast<std::size_t>(nx + 3), 0.0);
+        const std::size_t components = COMPONENTS;
+        grid_.assign(9 * components * size + 4 * components * size + static_cast<std::size_t>(nx + 3), 0.0);
         Hierarchy& g = core_.plane.grid;
         g.level_count = levels;
         g.size = start;
         g.levels = levels_.data();
         g.coef = grid_.data();
-        g.inverse_diagonal = g.coef + 18 * size;
-        g.x = g.inverse_diagonal + 2 * size;
-        g.b = g.x + 2 * size;
-        g.r = g.b + 2 * size;
-        g.row = g.r + 2 * size;
+        g.inverse_diagonal = g.coef + 9 * components * size;
+        g.x = g.inverse_diagonal + components * size;
+        g.b = g.x + components * size;
+        g.r = g.b + components * size;
+        g.row = g.r + components * size;
 
         const auto [cx, cy] = sizes.back();
         const Index n_c = cx * cy;
@@ -475,8 +476,9 @@ Simulation::Simulation(const Scene& scene) : scene_(scene), topo_(build_topology
         }
         slots_.resize(uf);
         for (Index f = 0; f < families; ++f) slots_[f] = SLOT[topo_.family[f]];
-        const std::size_t band = 2 * static_cast<std::size_t>(n_c * (kd + 1));
-        plane_.assign(2 * band + 3 + un + 2 * uf + uf * un + un + 9 * un + un + 2 * static_cast<std::size_t>(n_c), 0.0);
+        const std::size_t band = COMPONENTS * static_cast<std::size_t>(n_c * (kd + 1));
+        plane_.assign(2 * band + 4 + un + 2 * uf + uf * un + un + 9 * un + un + COMPONENTS * static_cast<std::size_t>(n_c),
+                      0.0);
         Plane& pl = core_.plane;
         pl.families = families;
         pl.stiffness = topo_.stiffness.data();
@@ -494,7 +496,7 @@ Simulation::Simulation(const Scene& scene) : scene_(scene), topo_(build_topology
         };
         pl.bands = take(band);
         pl.rows = take(band);
-        pl.reference = take(3);
+        pl.reference = take(4);
         pl.reference_mass = take(un);
         double* shares = take(2 * uf);
         for (Index f = 0; f < families; ++f) {
@@ -510,7 +512,7 @@ Simulation::Simulation(const Scene& scene) : scene_(scene), topo_(build_topology
         }
         pl.normal = take(un);
         std::fill(pl.normal, pl.normal + n, 1.0);
-        pl.local = take(2 * static_cast<std::size_t>(n_c));
+        pl.local = take(COMPONENTS * static_cast<std::size_t>(n_c));
     }
 
     // Self-collision (make_contact).

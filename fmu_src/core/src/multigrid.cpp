@@ -8,10 +8,10 @@ namespace {
 //: Python's floor division (a fine index of -1 has its parent at -1).
 inline Index floor_div2(Index a) { return a >= 0 ? a / 2 : -((1 - a) / 2); }
 
-void zero_level(Hierarchy& h, Index level, double* v) {
+void zero_level(Hierarchy& h, Index level, double* v, Index components) {
     const Index start = level_value(h.levels, level, START);
     const Index end = start + level_value(h.levels, level, PAD_X) * (level_value(h.levels, level, NY) + 3);
-    for (Index c = 0; c < 2; ++c) {
+    for (Index c = 0; c < components; ++c) {
         double* vc = v + c * h.size;
         for (Index p = start; p < end; ++p) vc[p] = 0.0;
     }
@@ -19,14 +19,14 @@ void zero_level(Hierarchy& h, Index level, double* v) {
 
 }  // namespace
 
-void galerkin(Hierarchy& h, Index level) {
+void galerkin(Hierarchy& h, Index level, Index first, Index end) {
     const Index* levels = h.levels;
     const Index size = h.size;
     const Index nx = level_value(levels, level, NX), ny = level_value(levels, level, NY);
     const Index coarse_start = level_value(levels, level + 1, START);
     const Index coarse_pad = level_value(levels, level + 1, PAD_X);
     const Index coarse_end = coarse_start + coarse_pad * (level_value(levels, level + 1, NY) + 3);
-    for (Index c = 0; c < 2; ++c) {
+    for (Index c = first; c < end; ++c) {
         double* coef = h.coef + c * 9 * size;  // coef[k * size + p]
         double* inverse = h.inverse_diagonal + c * size;
         for (Index k = 0; k < 9; ++k)
@@ -133,10 +133,11 @@ void known_backward(double* __restrict known, const double* __restrict b, const 
 
 }  // namespace
 
-void sweep(Hierarchy& h, Index level, bool forward, bool from_zero) {
+template <Index C>
+void sweep_components(Hierarchy& h, Index level, bool forward, bool from_zero) {
     // Each row in two passes: what is known before the row's own recurrence (vectorised), then the
-    // recurrence along the row.  The two components' recurrences run side by side (each fills the
-    // other's waits; they never meet, so the values are those of one component after the other),
+    // recurrence along the row.  The components' recurrences run side by side (each fills the
+    // others' waits; they never meet, so the values are those of one component after the other),
     // a block of points at a time.  A block's known values read only the row's old values beyond
     // the block (forward: its right neighbours; backward: its left ones), which the recurrence has
     // not reached yet.
@@ -144,57 +145,59 @@ void sweep(Hierarchy& h, Index level, bool forward, bool from_zero) {
     const Index size = h.size;
     const Index nx = level_value(levels, level, NX), ny = level_value(levels, level, NY);
     const Index pad = level_value(levels, level, PAD_X);
-    double known0[BLOCK], known1[BLOCK];
-    const double* coef0 = h.coef;
-    const double* coef1 = h.coef + 9 * size;
-    double* x0 = h.x;
-    double* x1 = h.x + size;
-    const double* b0 = h.b;
-    const double* b1 = h.b + size;
-    const double* inv0 = h.inverse_diagonal;
-    const double* inv1 = h.inverse_diagonal + size;
+    double known[C][BLOCK];
     for (Index t = 0; t < ny; ++t) {
         const Index iy = forward ? t : ny - 1 - t;
         const Index base = padded_index(levels, level, 0, iy);
         const Index below = base - pad - 1, here = base - 1, above = base + pad - 1;
-        double last0 = 0.0, last1 = 0.0;  // the row's neighbour just updated (none before the first)
+        double last[C] = {};  // the row's neighbour just updated (none before the first)
         for (Index done = 0; done < nx; done += BLOCK) {
             const Index m = nx - done < BLOCK ? nx - done : BLOCK;
             const Index s = forward ? done : nx - done - m;  // the block's first point
-            if (forward && from_zero) {
-                known_from_zero(known0, b0 + base, coef0 + base, size, x0 + below, s, m);
-                known_from_zero(known1, b1 + base, coef1 + base, size, x1 + below, s, m);
-            } else if (forward) {
-                known_forward(known0, b0 + base, coef0 + base, size, x0 + below, x0 + here, x0 + above, s, m);
-                known_forward(known1, b1 + base, coef1 + base, size, x1 + below, x1 + here, x1 + above, s, m);
-            } else {
-                known_backward(known0, b0 + base, coef0 + base, size, x0 + below, x0 + here, x0 + above, s, m);
-                known_backward(known1, b1 + base, coef1 + base, size, x1 + below, x1 + here, x1 + above, s, m);
+            for (Index c = 0; c < C; ++c) {
+                const double* coef = h.coef + c * 9 * size + base;
+                const double* b = h.b + c * size + base;
+                const double* x = h.x + c * size;
+                if (forward && from_zero) {
+                    known_from_zero(known[c], b, coef, size, x + below, s, m);
+                } else if (forward) {
+                    known_forward(known[c], b, coef, size, x + below, x + here, x + above, s, m);
+                } else {
+                    known_backward(known[c], b, coef, size, x + below, x + here, x + above, s, m);
+                }
             }
-            double* xc0 = x0 + base + s;
-            double* xc1 = x1 + base + s;
-            const double* ic0 = inv0 + base + s;
-            const double* ic1 = inv1 + base + s;
+            double* xc[C];
+            const double* ic[C];
+            const double* neighbour[C];  // the slot the recurrence updates: left (3) or right (5)
+            for (Index c = 0; c < C; ++c) {
+                xc[c] = h.x + c * size + base + s;
+                ic[c] = h.inverse_diagonal + c * size + base + s;
+                neighbour[c] = h.coef + (c * 9 + (forward ? 3 : 5)) * size + base + s;
+            }
             if (forward) {
-                const double* a30 = coef0 + 3 * size + base + s;
-                const double* a31 = coef1 + 3 * size + base + s;
                 for (Index i = 0; i < m; ++i) {
-                    last0 = (known0[i] - a30[i] * last0) * ic0[i];
-                    last1 = (known1[i] - a31[i] * last1) * ic1[i];
-                    xc0[i] = last0;
-                    xc1[i] = last1;
+                    for (Index c = 0; c < C; ++c) {
+                        last[c] = (known[c][i] - neighbour[c][i] * last[c]) * ic[c][i];
+                        xc[c][i] = last[c];
+                    }
                 }
             } else {
-                const double* a50 = coef0 + 5 * size + base + s;
-                const double* a51 = coef1 + 5 * size + base + s;
                 for (Index i = m - 1; i >= 0; --i) {
-                    last0 = (known0[i] - a50[i] * last0) * ic0[i];
-                    last1 = (known1[i] - a51[i] * last1) * ic1[i];
-                    xc0[i] = last0;
-                    xc1[i] = last1;
+                    for (Index c = 0; c < C; ++c) {
+                        last[c] = (known[c][i] - neighbour[c][i] * last[c]) * ic[c][i];
+                        xc[c][i] = last[c];
+                    }
                 }
             }
         }
+    }
+}
+
+void sweep(Hierarchy& h, Index level, bool forward, bool from_zero, Index components) {
+    if (components == 3) {
+        sweep_components<3>(h, level, forward, from_zero);
+    } else {
+        sweep_components<2>(h, level, forward, from_zero);
     }
 }
 
@@ -232,13 +235,13 @@ void restrict_row(double* __restrict b, const double* __restrict below, const do
 
 }  // namespace
 
-void restrict_residual(Hierarchy& h, Index level) {
+void restrict_residual(Hierarchy& h, Index level, Index components) {
     const Index* levels = h.levels;
     const Index size = h.size;
     const Index nx = level_value(levels, level, NX), ny = level_value(levels, level, NY);
     const Index pad = level_value(levels, level, PAD_X);
     const Index coarse_nx = level_value(levels, level + 1, NX), coarse_ny = level_value(levels, level + 1, NY);
-    for (Index c = 0; c < 2; ++c) {
+    for (Index c = 0; c < components; ++c) {
         const double* coef = h.coef + c * 9 * size;
         const double* x = h.x + c * size;
         double* b = h.b + c * size;
@@ -272,10 +275,10 @@ void interpolate_row(double* __restrict xc, const double* __restrict lc, const d
 
 }  // namespace
 
-void interpolate(Hierarchy& h, Index level) {
+void interpolate(Hierarchy& h, Index level, Index components) {
     const Index* levels = h.levels;
     const Index nx = level_value(levels, level, NX), ny = level_value(levels, level, NY);
-    for (Index c = 0; c < 2; ++c) {
+    for (Index c = 0; c < components; ++c) {
         double* x = h.x + c * h.size;
         for (Index iy = 0; iy < ny; ++iy) {
             const Index low = padded_index(levels, level + 1, 0, iy / 2);
@@ -285,18 +288,18 @@ void interpolate(Hierarchy& h, Index level) {
     }
 }
 
-void v_cycle_down(Hierarchy& h) {
+void v_cycle_down(Hierarchy& h, Index components) {
     for (Index level = 0; level < h.level_count - 1; ++level) {
-        zero_level(h, level, h.x);
-        for (Index s = 0; s < SWEEPS; ++s) sweep(h, level, true, s == 0);
-        restrict_residual(h, level);
+        zero_level(h, level, h.x, components);
+        for (Index s = 0; s < SWEEPS; ++s) sweep(h, level, true, s == 0, components);
+        restrict_residual(h, level, components);
     }
 }
 
-void v_cycle_up(Hierarchy& h) {
+void v_cycle_up(Hierarchy& h, Index components) {
     for (Index level = h.level_count - 2; level >= 0; --level) {
-        interpolate(h, level);
-        for (Index s = 0; s < SWEEPS; ++s) sweep(h, level, false, false);
+        interpolate(h, level, components);
+        for (Index s = 0; s < SWEEPS; ++s) sweep(h, level, false, false, components);
     }
 }
 

@@ -2,12 +2,16 @@
 //
 // In each particle's frame (t1, t2, n): the t1 and t2 components each get a scalar matrix
 // M + h^2 L_c (L_c the springs' graph Laplacian weighted by rest stiffness times the share of their
-// direction in c), factored only when h or the masses have changed much; solved by banded Cholesky
-// factors on small grids, by one multigrid V-cycle (banded factors on its coarsest level) on large
-// ones.  The normal component gets the normal-normal entry of each particle's diagonal block.
+// direction in c), factored only when h or the masses have changed much.  The normal component gets
+// the system matrix itself restricted to the particles' normals, n_i^T A_ij n_j, at every Newton
+// iteration: across a cloth under tension (a hanging sheet at frame-long steps) it is a stiff
+// Laplacian, which its diagonal alone preconditioned poorly (CG iterations growing in proportion to
+// the step).  All three are solved by banded Cholesky factors on small grids, by one multigrid
+// V-cycle (banded factors on its coarsest level) on large ones.
 #include "wetcloth/plane.hpp"
 
 #include <cmath>
+#include <vector>
 
 #include "wetcloth/band.hpp"
 #include "wetcloth/multigrid.hpp"
@@ -15,6 +19,39 @@
 namespace wc {
 
 namespace {
+
+//: Component c's stencils on every level and its coarsest banded factors, from its level-0 stencil.
+//: Returns 0, or band_factor's info.
+Index factor_component(Plane& plane, Index c) {
+    Hierarchy& grid = plane.grid;
+    const Index coarsest = grid.level_count - 1;
+    for (Index level = 0; level < coarsest; ++level) galerkin(grid, level, c, c + 1);
+    const Index size = grid.size, width = plane.kd + 1;
+    const Index start = level_value(grid.levels, coarsest, START), pad = level_value(grid.levels, coarsest, PAD_X);
+    const double* coef = grid.coef + c * 9 * size;
+    double* band = plane.bands + c * plane.coarse_n * width;
+    for (Index e = 0; e < plane.coarse_n * width; ++e) band[e] = 0.0;
+    for (Index position = 0; position < plane.coarse_n; ++position) {
+        const Index p = plane.order[position];
+        band[position * width] = coef[CENTRE * size + p];
+        for (Index k = 0; k < 9; ++k) {
+            const Index other = plane.rank[p + (k / 3 - 1) * pad + k % 3 - 1 - start];
+            if (other > position) band[position * width + other - position] = coef[k * size + p];
+        }
+    }
+    return band_factor(band, plane.rows + c * plane.coarse_n * width, plane.coarse_n, plane.kd);
+}
+
+//: Zero component c's level-0 stencil and put diagonal (n) on its centre.
+void diagonal_stencil(Plane& plane, Index n, Index c, const double* diagonal) {
+    Hierarchy& grid = plane.grid;
+    const Index size = grid.size, grid_x = level_value(grid.levels, 0, NX);
+    const Index level0_end = level_value(grid.levels, 0, PAD_X) * (level_value(grid.levels, 0, NY) + 3);
+    double* coef = grid.coef + c * 9 * size;
+    for (Index k = 0; k < 9; ++k)
+        for (Index p = 0; p < level0_end; ++p) coef[k * size + p] = 0.0;
+    for (Index i = 0; i < n; ++i) coef[CENTRE * size + padded_index(grid.levels, 0, i % grid_x, i / grid_x)] = diagonal[i];
+}
 
 //: Build and factor M + scale L_c for c = t1, t2, L_c the Laplacian of the springs weighted by
 //: `weights` (F, n) times each family's share in c: the stencils of every level and the banded
@@ -51,7 +88,7 @@ Index factor(Plane& plane, const Cloth& cloth, const double* mass, double scale,
         }
     }
     const Index coarsest = grid.level_count - 1;
-    for (Index level = 0; level < coarsest; ++level) galerkin(grid, level);
+    for (Index level = 0; level < coarsest; ++level) galerkin(grid, level, 0, 2);
     const Index start = level_value(levels, coarsest, START), pad = level_value(levels, coarsest, PAD_X);
     const Index width = plane.kd + 1;
     for (Index c = 0; c < 2; ++c) {
@@ -166,25 +203,97 @@ void follow_cloth(Plane& plane, const Cloth& cloth, const double* pos) {
     }
 }
 
-void set_normal_diagonal(Plane& plane, Index n, const double* mass, const double* diagonal_blocks,
-                         const double* blocks) {
-    const double* __restrict n0 = plane.frame + 6 * n;
-    const double* __restrict n1 = plane.frame + 7 * n;
-    const double* __restrict n2 = plane.frame + 8 * n;
-    double* __restrict normal = plane.normal;
-    const double* __restrict d = diagonal_blocks;
+namespace {
+
+//: out[i] = mass_i + t_i^T (D_i + B_i) t_i for the frame's axis c (t1, t2, n); D = 0 if null.
+void axis_diagonal(const Plane& plane, Index n, Index c, const double* mass, const double* diagonal_blocks,
+                   const double* blocks, double* __restrict out) {
+    const double* __restrict t0 = plane.frame + (3 * c) * n;
+    const double* __restrict t1 = plane.frame + (3 * c + 1) * n;
+    const double* __restrict t2 = plane.frame + (3 * c + 2) * n;
+    const double* __restrict d = diagonal_blocks != nullptr ? diagonal_blocks : blocks;
     const double* __restrict b = blocks;
+    const double d_scale = diagonal_blocks != nullptr ? 1.0 : 0.0;
     for (Index i = 0; i < n; ++i) {
-        const double nx = n0[i], ny = n1[i], nz = n2[i];
-        const double xx = d[i] + b[i];
-        const double yy = d[n + i] + b[n + i];
-        const double zz = d[2 * n + i] + b[2 * n + i];
-        const double xy = d[3 * n + i] + b[3 * n + i];
-        const double xz = d[4 * n + i] + b[4 * n + i];
-        const double yz = d[5 * n + i] + b[5 * n + i];
-        normal[i] = mass[i] + (xx * nx * nx + yy * ny * ny + zz * nz * nz + 2.0 * (xy * nx * ny + xz * nx * nz + yz * ny * nz));
+        const double tx = t0[i], ty = t1[i], tz = t2[i];
+        const double xx = d_scale * d[i] + b[i];
+        const double yy = d_scale * d[n + i] + b[n + i];
+        const double zz = d_scale * d[2 * n + i] + b[2 * n + i];
+        const double xy = d_scale * d[3 * n + i] + b[3 * n + i];
+        const double xz = d_scale * d[4 * n + i] + b[4 * n + i];
+        const double yz = d_scale * d[5 * n + i] + b[5 * n + i];
+        out[i] = mass[i] + (xx * tx * tx + yy * ty * ty + zz * tz * tz + 2.0 * (xy * tx * ty + xz * tx * tz + yz * ty * tz));
     }
 }
+
+//: Component c's level-0 stencil from the Jacobian: on the diagonal `diagonal` (the mass and the
+//: particle's own blocks) plus t_i^T S t_i of each spring the stencil reaches, and between its ends
+//: -t_i^T S t_j, S = across I + (along - across) u u^T the spring's block.  Springs it does not reach
+//: (bending) are left out whole: their diagonal part alone would make smooth modes far too stiff.
+void jacobian_stencil(Plane& plane, const Cloth& cloth, const Work& work, Index c, const double* diagonal) {
+    const Index n = cloth.n;
+    diagonal_stencil(plane, n, c, diagonal);
+    Hierarchy& grid = plane.grid;
+    const Index size = grid.size, grid_x = cloth.grid_x;
+    double* coef = grid.coef + c * 9 * size;
+    const double* tx = plane.frame + (3 * c) * n;
+    const double* ty = tx + n;
+    const double* tz = ty + n;
+    const double* free = cloth.free;
+    for (Index f = 0; f < cloth.families; ++f) {
+        const Index k = plane.slots[f];
+        if (k < 0) continue;  // a family the stencil does not reach: its diagonal part stays
+        const Index off = cloth.offsets[f];
+        const double* ux = work.direction + (3 * f) * n;
+        const double* uy = ux + n;
+        const double* uz = uy + n;
+        const double* along = work.along + f * n;
+        const double* across = work.across + f * n;
+        for (Index i = 0; i < n - off; ++i) {
+            const Index j = i + off;
+            if (along[i] == 0.0 && across[i] == 0.0) continue;
+            const double ti_u = tx[i] * ux[i] + ty[i] * uy[i] + tz[i] * uz[i];
+            const double tj_u = tx[j] * ux[i] + ty[j] * uy[i] + tz[j] * uz[i];
+            const double ti_tj = tx[i] * tx[j] + ty[i] * ty[j] + tz[i] * tz[j];
+            const double ti_ti = tx[i] * tx[i] + ty[i] * ty[i] + tz[i] * tz[i];
+            const double tj_tj = tx[j] * tx[j] + ty[j] * ty[j] + tz[j] * tz[j];
+            const double stiff = along[i] - across[i];
+            const Index p = padded_index(grid.levels, 0, i % grid_x, i / grid_x);
+            const Index q = padded_index(grid.levels, 0, j % grid_x, j / grid_x);
+            coef[CENTRE * size + p] += across[i] * ti_ti + stiff * ti_u * ti_u;
+            coef[CENTRE * size + q] += across[i] * tj_tj + stiff * tj_u * tj_u;
+            if (free[i] == 0.0 || free[j] == 0.0) continue;  // a pinned end holds: no coupling (Dirichlet)
+            coef[k * size + p] -= across[i] * ti_tj + stiff * ti_u * tj_u;
+            coef[(8 - k) * size + q] -= across[i] * ti_tj + stiff * ti_u * tj_u;
+        }
+    }
+}
+
+}  // namespace
+
+void set_normal_diagonal(Plane& plane, Index n, const double* mass, const double* diagonal_blocks,
+                         const double* blocks) {
+    axis_diagonal(plane, n, NORMAL, mass, diagonal_blocks, blocks, plane.normal);
+    plane.reference[3] = 0.0;
+}
+
+Index set_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const Work& work, Index first) {
+    const Index n = cloth.n;
+    if (first < NORMAL) plane.reference[1] = plane.reference[2] = 0.0;  // the rest-stiffness factors are overwritten
+    plane.reference[3] = 1.0;
+    Index result = 1;
+    std::vector<double> in_plane(first < NORMAL ? static_cast<std::size_t>(n) : 0);
+    for (Index c = first; c < COMPONENTS; ++c) {
+        double* diagonal = c == NORMAL ? plane.normal : in_plane.data();
+        axis_diagonal(plane, n, c, mass, nullptr, work.blocks, diagonal);
+        jacobian_stencil(plane, cloth, work, c, diagonal);
+        if (factor_component(plane, c) == 0) continue;
+        diagonal_stencil(plane, n, c, diagonal);  // not positive definite (round-off on a crumpled cloth)
+        if (factor_component(plane, c) != 0) result = -1;
+    }
+    return result;
+}
+
 
 namespace {
 
@@ -195,11 +304,9 @@ void project_row(double* __restrict b, const double* __restrict f0, const double
     for (Index s = 0; s < m; ++s) b[s] = f0[s] * r0[s] + f1[s] * r1[s] + f2[s] * r2[s];
 }
 
-//: normal = (n . r) / diagonal over a row of m particles.
-void normal_row(double* __restrict normal, const double* __restrict n0, const double* __restrict n1,
-                const double* __restrict n2, const double* __restrict r0, const double* __restrict r1,
-                const double* __restrict r2, const double* __restrict diagonal, Index m) {
-    for (Index s = 0; s < m; ++s) normal[s] = (n0[s] * r0[s] + n1[s] * r1[s] + n2[s] * r2[s]) / diagonal[s];
+//: out = b / diagonal over a row of m particles.
+void divide_row(double* __restrict out, const double* __restrict b, const double* __restrict diagonal, Index m) {
+    for (Index s = 0; s < m; ++s) out[s] = b[s] / diagonal[s];
 }
 
 //: z_c = free (t1_c x0 + t2_c x1 + n_c normal) over a row of m particles.
@@ -212,42 +319,44 @@ void combine_row(double* __restrict zc, const double* __restrict weight, const d
 }  // namespace
 
 void apply(Plane& plane, Index n, const double* free, const double* r, double* z) {
-    // Loops over rows of the grid (vectorised).
+    // Loops over rows of the grid (vectorised).  The normal component goes through the cycle and the
+    // band solves when it has a system (set_systems_from_jacobian), else it is divided by its diagonal.
     const double* f = plane.frame;  // f[(3 a + c) n + i]
     Hierarchy& grid = plane.grid;
     const Index* levels = grid.levels;
     const Index size = grid.size;
+    const Index components = plane.reference[3] != 0.0 ? COMPONENTS : NORMAL;
     double* b = grid.b;
     double* x = grid.x;
     double* local = plane.local;
-    double* normal = grid.row;
     const Index grid_x = level_value(levels, 0, NX), grid_y = level_value(levels, 0, NY);
     for (Index iy = 0; iy < grid_y; ++iy) {
         const Index first = iy * grid_x, base = padded_index(levels, 0, 0, iy);
-        for (Index c = 0; c < 2; ++c)
+        for (Index c = 0; c < COMPONENTS; ++c)
             project_row(b + c * size + base, f + 3 * c * n + first, f + (3 * c + 1) * n + first,
                         f + (3 * c + 2) * n + first, r + first, r + n + first, r + 2 * n + first, grid_x);
     }
-    v_cycle_down(grid);
+    v_cycle_down(grid, components);
     const Index coarse_n = plane.coarse_n;
     const Index* order = plane.order;
-    for (Index position = 0; position < coarse_n; ++position) {
-        local[position] = b[order[position]];
-        local[coarse_n + position] = b[size + order[position]];
-    }
+    for (Index c = 0; c < components; ++c)
+        for (Index position = 0; position < coarse_n; ++position) local[c * coarse_n + position] = b[c * size + order[position]];
     band_solve_two(plane.bands, plane.rows, local, coarse_n, plane.kd);
-    for (Index position = 0; position < coarse_n; ++position) {
-        x[order[position]] = local[position];
-        x[size + order[position]] = local[coarse_n + position];
+    if (components == COMPONENTS) {
+        const Index band_size = coarse_n * (plane.kd + 1);
+        band_solve_one(plane.bands + NORMAL * band_size, plane.rows + NORMAL * band_size, local + NORMAL * coarse_n,
+                       coarse_n, plane.kd);
     }
-    v_cycle_up(grid);
+    for (Index c = 0; c < components; ++c)
+        for (Index position = 0; position < coarse_n; ++position) x[c * size + order[position]] = local[c * coarse_n + position];
+    v_cycle_up(grid, components);
+    double* normal = x + NORMAL * size;
     for (Index iy = 0; iy < grid_y; ++iy) {
         const Index first = iy * grid_x, base = padded_index(levels, 0, 0, iy);
-        normal_row(normal, f + 6 * n + first, f + 7 * n + first, f + 8 * n + first, r + first, r + n + first,
-                   r + 2 * n + first, plane.normal + first, grid_x);
+        if (components == NORMAL) divide_row(normal + base, b + NORMAL * size + base, plane.normal + first, grid_x);
         for (Index c = 0; c < 3; ++c)
             combine_row(z + c * n + first, free + first, f + c * n + first, f + (3 + c) * n + first,
-                        f + (6 + c) * n + first, x + base, x + size + base, normal, grid_x);
+                        f + (6 + c) * n + first, x + base, x + size + base, normal + base, grid_x);
     }
 }
 

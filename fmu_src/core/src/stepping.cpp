@@ -79,7 +79,8 @@ Trial take_step(Core& core, double h) {
     const StepEstimate step = bdf2_step(cloth, phys, core.work, solver, core.plane, buf.pos, buf.vel, buf.water,
                                         step_water, buf.prev_pos, buf.prev_vel, buf.prev_water, buf.acceleration, h,
                                         h_prev, core.control.newton_tolerance, core.control.cg_tolerance,
-                                        clock + NEWTON_RATE, buf.trial_pos, buf.trial_vel);
+                                        !(core.control.allowed > 0.0), clock + NEWTON_RATE, buf.trial_pos,
+                                        buf.trial_vel);
     return {step.error, h_prev > 0.0 ? 2 : 1, step.converged};
 }
 
@@ -161,6 +162,7 @@ Status step(Core& core, double remaining) {
     // would move them; the model's free flags are theirs again before the step ends.
     Index held = hold_resting(n, phys.floor_z, buf.pos, buf.vel, cloth.free, buf.held);
     double h = 0.0;
+    Trial trial{};
     int rejections = 0;  // by the controller (the floor's releases are bounded by the particles held)
     while (true) {
         if (rejections > MAX_REJECTIONS) {  // no step it accepts: a state it cannot go on from
@@ -175,7 +177,7 @@ Status step(Core& core, double remaining) {
         }
         // Equal steps to the end of the interval rather than a last sliver.
         h = remaining / pymax(1.0, std::ceil(remaining / planned - STEP_COUNT_SLACK));
-        Trial trial = take_step(core, h);
+        trial = take_step(core, h);
         if (held > 0 && trial.converged) {
             const Index released = release_slipping(n, phys.floor_friction, core.work.force, cloth.free, buf.held);
             if (released > 0) {  // redo the step with them free
@@ -222,6 +224,8 @@ Status step(Core& core, double remaining) {
         ++rejections;
     }
     if (held > 0) release_all(n, cloth.free, buf.held);
+    clock[STEP_ERROR] = std::isfinite(trial.error) ? trial.error : 0.0;
+    clock[LARGEST_ERROR] = pymax(clock[LARGEST_ERROR], clock[STEP_ERROR]);
     if (!(h > 0.0 && clock[TIME] + h > clock[TIME])) {  // a step that would not advance the time
         clock[FAILED_STEP] = h;
         return BLOWN_UP;
@@ -266,7 +270,7 @@ std::string g(double value) {  // Python's format(value, "g")
 const char* const SLOT_NAMES[CLOCK_SIZE] = {
     "state.time", "next_step", "last_step", "speed", "calm_time", "unchecked_time", "exchanging", "sleeping",
     "steps", "rejected_steps", "failed_step", "newton_rate", "rate_correction", "first_guess",
-    "last_solve_iterations"};
+    "last_solve_iterations", "step_error", "largest_error"};
 
 //: The first value of values[0 .. count) outside [lo, hi] (or not finite), as "<name> holds <value><unit> at
 //: particle <i> (<x|y|z>)" (rows of n, when n > 0) or "... at <index>", else empty.

@@ -25,4 +25,7 @@ Index band_factor(double* band, double* rows, Index n, Index kd);
 //: side (each fills the other's waits on the column before).
 void band_solve_two(const double* bands, const double* rows, double* b, Index n, Index kd);
 
+//: The same for one system: band and rows (n, kd + 1), b (n).
+void band_solve_one(const double* band, const double* rows, double* b, Index n, Index kd);
+
 }  // namespace wc

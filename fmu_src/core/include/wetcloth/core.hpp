@@ -89,7 +89,7 @@ struct Control {
 };
 
 //: Slots of Solver::counters.
-enum SolverCounter : Index { NEWTON_ITERATIONS = 0, CG_ITERATIONS = 1, FACTORISATIONS = 2, UNCONVERGED = 3 };
+enum SolverCounter : Index { NEWTON_ITERATIONS = 0, CG_ITERATIONS = 1, FACTORISATIONS = 2, UNCONVERGED = 3, SOLVER_COUNTERS };
 
 //: Scratch of the implicit steps, each (3, n) unless noted: mass (n) kg; rhs, dv, r, z, p, ap of the
 //: linear solves; hat_pos, hat_vel the BDF2 history terms; predicted the extrapolated positions;
@@ -115,9 +115,15 @@ struct Solver {
 //: Columns of Hierarchy::levels.
 enum LevelColumn : Index { NX = 0, NY = 1, START = 2, PAD_X = 3 };
 
+//: The preconditioner's scalar systems, one per component of each particle's frame: t1 and t2 (the
+//: in-plane stiffness, factored when the step or the masses change much) and the normal (from the
+//: Jacobian, at every Newton iteration).
+inline constexpr Index COMPONENTS = 3;
+inline constexpr Index NORMAL = 2;
+
 //: The multigrid hierarchy (multigrid.cpp): levels (L, 4) int64 (nx, ny, first padded index, padded
-//: row length), level 0 the particles' grid; coef (2, 9, size) both components' 9-point stencils;
-//: inverse_diagonal, x, b, r (2, size); row (grid_x + 3) scratch.
+//: row length), level 0 the particles' grid; coef (COMPONENTS, 9, size) the components' 9-point
+//: stencils; inverse_diagonal, x, b, r (COMPONENTS, size); row (grid_x + 3) scratch.
 struct Hierarchy {
     Index level_count = 0;
     Index size = 0;
@@ -133,9 +139,11 @@ struct Hierarchy {
 //: The plane preconditioner (plane.cpp): per-spring stiffness (F, n) N/m; slots (F) each family's
 //: stencil slot (-1: left out); the hierarchy; on the coarsest level order (n_c) the padded index
 //: of each band position and rank (rank_size) its inverse (-1 off the grid); bands and rows
-//: (2, n_c, kd + 1) the banded Cholesky factors (band.cpp); reference (3) [factored scale s2,
-//: factored?, from the Jacobian?], reference_mass (n) kg; shares (2, F); jacobian_along (F, n) kg,
-//: jacobian_mass (n) kg; frame (3, 3, n) each particle's axes t1, t2, n; normal (n); local (2, n_c).
+//: (COMPONENTS, n_c, kd + 1) the banded Cholesky factors (band.cpp); reference (4) [factored scale
+//: s2, factored?, from the Jacobian?, normal component by its system (1) or its diagonal (0)?],
+//: reference_mass (n) kg; shares (2, F); jacobian_along (F, n)
+//: kg, jacobian_mass (n) kg; frame (3, 3, n) each particle's axes t1, t2, n; normal (n) the normal
+//: component's diagonal (kg); local (COMPONENTS, n_c).
 struct Plane {
     Index families = 0;
     const double* stiffness = nullptr;
@@ -218,10 +226,12 @@ struct Buffers {
 //: step (s; 0: no history for BDF2); the fastest particle's speed (m/s); time spent still (s), time
 //: since stillness was last checked (s), whether water moved since, whether asleep; accepted and
 //: rejected steps; the step that blew up (s); BDF2's last Newton rate (-) and the correction it
-//: followed (m/s), the kind of its first guess, its last solve's CG iterations.
+//: followed (m/s), the kind of its first guess, its last solve's CG iterations; the last accepted
+//: step's estimated local position error (m: the implicit schemes' estimate plus what Newton left,
+//: with fixed steps too) and the largest since the caller last reset it.
 enum ClockSlot : Index {
     TIME = 0, NEXT_STEP, LAST_STEP, SPEED, CALM_TIME, UNCHECKED_TIME, EXCHANGING, SLEEPING, STEPS, REJECTED,
-    FAILED_STEP, NEWTON_RATE, RATE_CORRECTION, FIRST_GUESS, LAST_SOLVE, CLOCK_SIZE
+    FAILED_STEP, NEWTON_RATE, RATE_CORRECTION, FIRST_GUESS, LAST_SOLVE, STEP_ERROR, LARGEST_ERROR, CLOCK_SIZE
 };
 
 //: What the step loop returns.

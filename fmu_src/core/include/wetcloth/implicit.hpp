@@ -61,12 +61,14 @@ struct StepEstimate {
     bool converged;  // whether Newton converged
 };
 
-//: One step of the variable-step BDF2 (backward Euler when h_prev == 0); see implicit.py's bdf2_step.
+//: One step of the variable-step BDF2 (backward Euler when h_prev == 0); see implicit.cpp.  With
+//: fixed_steps (no error estimate watches them, steps up to a frame long) every Newton iteration builds
+//: its preconditioner from the Jacobian (set_systems_from_jacobian).
 //: memory (4) carries over from step to step (clock slots NEWTON_RATE..LAST_SOLVE).
 StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solver& solver, Plane& plane,
                        const double* pos, const double* vel, const double* water, const double* step_water,
                        const double* prev_pos, const double* prev_vel, const double* prev_water,
                        const double* acceleration, double h, double h_prev, double newton_tolerance,
-                       double cg_tolerance, double* memory, double* out_pos, double* out_vel);
+                       double cg_tolerance, bool fixed_steps, double* memory, double* out_pos, double* out_vel);
 
 }  // namespace wc

@@ -1,5 +1,5 @@
-// Geometric multigrid on the cloth's grid: a symmetric V-cycle for two 9-point stencil matrices at
-// once (port of bf41571:fmu_src/wetcloth/kernels/multigrid.py; level_sizes and make_hierarchy, which allocate, stay
+// Geometric multigrid on the cloth's grid: a symmetric V-cycle for COMPONENTS 9-point stencil matrices
+// at once (port of bf41571:fmu_src/wetcloth/kernels/multigrid.py; level_sizes and make_hierarchy, which allocate, stay
 // in Python).
 //
 // Each coarser grid keeps every other grid line (nx // 2 + 1 of nx); bilinear interpolation P,
@@ -27,24 +27,26 @@ inline Index padded_index(const Index* levels, Index level, Index ix, Index iy) 
     return levels[level * 4 + START] + (iy + 1) * levels[level * 4 + PAD_X] + ix + 1;
 }
 
-//: Stencils of level + 1: P^T A P of those of `level`, and the inverse diagonals of `level`.
-void galerkin(Hierarchy& hierarchy, Index level);
+//: Stencils of level + 1: P^T A P of those of `level`, and the inverse diagonals of `level`, for the
+//: components first .. end - 1.
+void galerkin(Hierarchy& hierarchy, Index level, Index first = 0, Index end = COMPONENTS);
 
 //: One Gauss-Seidel sweep on `level`, in grid order (forward) or reversed; from_zero: x is zero before it.
-void sweep(Hierarchy& hierarchy, Index level, bool forward, bool from_zero);
+//: The V-cycle's functions work on the first `components` components (2: t1 and t2; 3: and the normal).
+void sweep(Hierarchy& hierarchy, Index level, bool forward, bool from_zero, Index components = COMPONENTS);
 
 //: r = b - A x on `level`, and b of level + 1 = P^T r.
-void restrict_residual(Hierarchy& hierarchy, Index level);
+void restrict_residual(Hierarchy& hierarchy, Index level, Index components = COMPONENTS);
 
 //: x of `level` += P x of level + 1.
-void interpolate(Hierarchy& hierarchy, Index level);
+void interpolate(Hierarchy& hierarchy, Index level, Index components = COMPONENTS);
 
 //: First half of the V-cycle from b of level 0: on each level but the coarsest, smooth from x = 0 and
 //: restrict the residual; leaves the coarsest level's right-hand side in b.
-void v_cycle_down(Hierarchy& hierarchy);
+void v_cycle_down(Hierarchy& hierarchy, Index components = COMPONENTS);
 
 //: Second half, once x of the coarsest level holds its solution: on each finer level add the
 //: interpolated correction and smooth backwards.  Leaves the result in x of level 0.
-void v_cycle_up(Hierarchy& hierarchy);
+void v_cycle_up(Hierarchy& hierarchy, Index components = COMPONENTS);
 
 }  // namespace wc

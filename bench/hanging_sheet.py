@@ -1,0 +1,60 @@
+"""The hanging sheet of issue 25: an 81 x 81 sheet, 1 m square, pinned along its y_max edge in air,
+released horizontal (water and floor far below), in frames of 1/30 s.
+
+    .venv/bin/python bench/hanging_sheet.py [--side 81] [--duration 0.5] [--self-collision off]
+
+For the default adaptive steps and for fixed frame steps (``tolerance = 0``, ``max_step = 1/30``):
+CPU time per frame, steps and rejected steps, Newton and CG iterations (CG per Newton iteration is
+what the preconditioner buys), the largest error a step estimated for itself (``error_estimate``)
+and the centroid at the end.  Liu et al. 2013 ran this sheet at 50 ms a frame; the issue asks for
+25 ms in fixed steps and 100 ms by default.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import wetcloth
+
+FRAME = 1.0 / 30.0
+
+
+def sheet(side: int, self_collision: str, **overrides) -> wetcloth.Scene:
+    return wetcloth.load_scene(nx=side, ny=side, width=1.0, length=1.0, pinned_edge="y_max", initial_tilt=0.0,
+                               initial_height=2.0, water_level=-10.0, floor_level=-20.0,
+                               self_collision=self_collision, **overrides)
+
+
+def run(label: str, scene: wetcloth.Scene, duration: float) -> None:
+    sim = wetcloth.Simulation(scene)
+    frames = round(duration / FRAME)
+    spent, worst = 0.0, 0.0
+    for _ in range(frames):
+        start = time.process_time()
+        sim.advance(FRAME)
+        spent += time.process_time() - start
+        worst = max(worst, sim.error_estimate)
+    counts = sim.solver_counts
+    per_newton = counts["cg_iterations"] / max(1, counts["newton_iterations"])
+    x, y, z = sim.positions.mean(axis=0)
+    print(f"{label:<34} {1e3 * spent / frames:8.1f} ms/frame  steps {sim.steps:5d}  rejected {sim.rejected_steps:4d}  "
+          f"Newton {counts['newton_iterations']:5d}  CG/Newton {per_newton:5.1f}  "
+          f"largest step error {1e3 * worst:7.3f} mm  centroid ({x:+.4f}, {y:+.4f}, {z:+.4f}) m", flush=True)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--side", type=int, default=81)
+    parser.add_argument("--duration", type=float, default=0.5, help="simulated seconds (default 0.5)")
+    parser.add_argument("--self-collision", default="off", choices=("off", "on"))
+    args = parser.parse_args()
+    print(f"{args.side} x {args.side} sheet hanging from y_max, first {args.duration:g} s, "
+          f"self_collision {args.self_collision}, CPU time")
+    run("adaptive (tolerance 5e-6)", sheet(args.side, args.self_collision), args.duration)
+    run("fixed frame steps (tolerance 0)", sheet(args.side, args.self_collision, tolerance=0.0, max_step=FRAME),
+        args.duration)
+
+
+if __name__ == "__main__":
+    main()
