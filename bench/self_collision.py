@@ -1,12 +1,18 @@
 """What self-collision costs: each scene run with ``self_collision`` "off" and "on", alternately, in one process.
 
-    .venv/bin/python bench/self_collision.py [--repeat 5] [--skip-stability] [--landing-only]
+    .venv/bin/python bench/self_collision.py [--repeat 5] [--skip-stability] [--landing-only] [--hanging-only]
 
 * The default towel's landing (its first 0.5 s: the drop and the impact, and its first 3 s), frames
   of 1/30 s as the FMU reads them: the stage's share of the run (on - off) / on from the best of
   ``--repeat`` alternating runs of each, and the candidate lists built (exact counts).  Timed in CPU
   time of the process, as every figure here (the runs are single-threaded): on a shared machine
   wall time also counts other jobs' time slices, which swamped the difference.
+* The hanging sheet of issue 25 (81 x 81, 1 m square, pinned along y_max, released horizontal in air:
+  it swings down and its free edge whips, but it never comes near itself), its first 0.5 s in frames
+  of 1/30 s, with the default adaptive steps and with fixed frame steps (``tolerance = 0``,
+  ``max_step = 1/30``; such a step may be rejected and retried shorter): ms per frame and per step
+  off and on from the best of ``--repeat`` alternating runs, the ratio on / off, the candidate lists
+  built and the most candidate pairs held after any frame (exact counts).
 * The default towel (``models/towel.toml``, 21 x 29, 20 s: it lands, floats and soaks, and never
   folds): the stage only checks that its candidate list (empty) still holds.  Figure: the median
   of the per-pair ratios on / off (the runs alternate, so a load change on a shared machine hits both).
@@ -82,6 +88,39 @@ def landing_share(repeat: int) -> None:
               f"({best['on'] - best['off']:.3f} s); {steps} steps, {rebuilds} candidate lists built", flush=True)
 
 
+#: The hanging sheet of issue 25.
+HANGING = dict(nx=81, ny=81, width=1.0, length=1.0, pinned_edge="y_max", initial_tilt=0.0, initial_height=2.0,
+               water_level=-10.0, floor_level=-20.0)
+#: Fixed frame steps.
+FRAME_STEPS = dict(tolerance=0.0, max_step=1.0 / 30.0)
+
+
+def hanging_sheet_cost(repeat: int, duration: float = 0.5) -> None:
+    frames = round(duration * 30)
+    for label, extra in (("adaptive steps", {}), ("fixed frame steps", FRAME_STEPS)):
+        best, rows = {}, {}
+        for _ in range(repeat):
+            for mode in ("off", "on"):
+                sim = wetcloth.Simulation(wetcloth.load_scene(**HANGING, **extra, self_collision=mode))
+                spent, most = 0.0, 0
+                for _ in range(frames):
+                    start = time.process_time()
+                    sim.advance(1.0 / 30.0)
+                    spent += time.process_time() - start
+                    counts = sim.contact_counts
+                    most = max(most, counts["point_triangle_candidates"] + counts["edge_edge_candidates"])
+                best[mode] = min(best.get(mode, spent), spent)
+                rows[mode] = (sim.steps, sim.rejected_steps, counts, most)
+        (steps, rejected, _, _), (_, _, counts, most) = rows["off"], rows["on"]
+        per_frame = {m: 1000.0 * best[m] / frames for m in best}
+        per_step = {m: 1000.0 * best[m] / rows[m][0] for m in best}
+        print(f"hanging sheet 81 x 81, first {duration:g} s, {label} (best of {repeat} alternating, CPU time): off "
+              f"{per_frame['off']:.1f} ms/frame ({per_step['off']:.2f} ms/step), on {per_frame['on']:.1f} ms/frame "
+              f"({per_step['on']:.2f} ms/step); on / off {best['on'] / best['off']:.2f}x; {steps} steps, {rejected} "
+              f"rejected; {counts['rebuilds']} candidate lists built, {counts['busy_steps']} steps with candidates, "
+              f"at most {most} candidate pairs after a frame", flush=True)
+
+
 def folding_cost(repeat: int) -> None:
     print("\n| scene | simulated | off: CPU, steps, most crossings | on: CPU, steps, most crossings | on / off |")
     print("|---|---|---|---|---|")
@@ -115,8 +154,14 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=5, help="alternating off/on pairs (default 5)")
     parser.add_argument("--skip-stability", action="store_true")
     parser.add_argument("--landing-only", action="store_true", help="only the default towel's landing")
+    parser.add_argument("--hanging-only", action="store_true", help="only the hanging sheet")
+    parser.add_argument("--hanging-duration", type=float, default=0.5, help="simulated s of the hanging sheet")
     args = parser.parse_args()
     wetcloth.Simulation(wetcloth.load_scene(nx=3, ny=3)).advance(0.01)  # one untimed run first
+    if not args.landing_only:
+        hanging_sheet_cost(args.repeat, args.hanging_duration)
+    if args.hanging_only:
+        return
     landing_share(args.repeat)
     if args.landing_only:
         return

@@ -1,8 +1,10 @@
-// Self-collision for Python (tests and parity checks): resolve, build, build_widest and invalidate over the
-// Python Contact bundle, with its candidate lists in a ContactState (the C++ ContactLists).  The lists are
-// taken from the `lists` argument or, when it is None, from the bundle's `pairs` field if that holds a
-// ContactState, so the kernels keep numba's signatures where the bundle carries one.
+// Self-collision for Python (tests and parity checks): resolve, build, build_widest, invalidate, covers and
+// deviation over the Python Contact bundle, with its candidate lists in a ContactState (the C++
+// ContactLists).  The lists are taken from the `lists` argument or, when it is None, from the bundle's
+// `pairs` field if that holds a ContactState, so the kernels keep numba's signatures where the bundle
+// carries one.
 #include <nanobind/stl/string.h>
+#include <nanobind/stl/vector.h>
 
 #include <algorithm>
 #include <cstring>
@@ -10,6 +12,7 @@
 #include "convert.hpp"
 #include "wetcloth/self_contact.hpp"
 #include "wetcloth/self_contact/broad_phase.hpp"
+#include "wetcloth/self_contact/tiers.hpp"
 
 namespace wc::py {
 namespace {
@@ -62,6 +65,8 @@ WETCLOTH_BINDINGS(m) {
         .def_prop_ro("edge_edge", [](ContactState& s) { return rows_copy(s.lists.edge_edge); })
         .def_prop_ro("point_triangle_count", [](ContactState& s) { return s.lists.point_triangle_count(); })
         .def_prop_ro("edge_edge_count", [](ContactState& s) { return s.lists.edge_edge_count(); })
+        .def_prop_ro("allowances", [](ContactState& s) { return s.lists.allowances; },
+                     "Each tier's allowance (m) of the last list built (empty before one is)")
         .def("__len__", [](ContactState&) { return 2; })
         .def("__getitem__", [](ContactState& s, Index k) { return rows_copy(s.kind(k)); })
         .def("__setitem__", [](ContactState& s, Index k, nb::ndarray<const Index, nb::ndim<2>, nb::device::cpu> a) {
@@ -114,6 +119,30 @@ WETCLOTH_BINDINGS(m) {
             invalidate(c);
         },
         "contact"_a, "lists"_a = nb::none(), "Forget the candidate list: margin 0, no pairs.");
+    m.def(
+        "covers",
+        [](nb::handle contact, nb::handle x0, nb::handle x1, nb::handle lists) {
+            const Index n = particles_of(contact);
+            Contact c = contact_from(contact, n, lists_of(contact, lists));
+            return self_contact::covers(c, n, argument<const double>(x0, "x0", 3 * n),
+                                        argument<const double>(x1, "x1", 3 * n));
+        },
+        "contact"_a, "x0"_a, "x1"_a, "lists"_a = nb::none(),
+        "Whether the candidate list (built first) holds for the straight-line motion from x0 to x1.");
+    m.def(
+        "deviation",
+        [](nb::handle contact, int tier, nb::handle x0, nb::handle x1, nb::handle lists) {
+            const Index n = particles_of(contact);
+            if (tier < 0 || tier >= self_contact::TIERS) throw nb::index_error("deviation: no such tier");
+            Contact c = contact_from(contact, n, lists_of(contact, lists));
+            self_contact::prepare_tiers(c, n);
+            return self_contact::deviation(c, n, tier, c.reference, argument<const double>(x0, "x0", 3 * n),
+                                           argument<const double>(x1, "x1", 3 * n));
+        },
+        "contact"_a, "tier"_a, "x0"_a, "x1"_a, "lists"_a = nb::none(),
+        "The largest deviation (m) of tier's windows, moving from x0 to x1, from a rigid motion of "
+        "contact.reference.");
+    m.attr("TIERS") = self_contact::TIERS;
     m.attr("WIDE_REACH") = self_contact::WIDE_REACH;
     m.attr("LOOSE") = self_contact::LOOSE;
     m.attr("ZONE_ROWS") = ZONE_ROWS;

@@ -168,12 +168,16 @@ struct Plane {
 
 //: Self-collision's candidate lists and scratch, owned by the core (self_contact/*.cpp): the
 //: point-triangle (particle, triangle) and edge-edge (edge, edge) candidate pairs, and whatever
-//: scratch the broad phase and the response need between calls.
+//: scratch the broad phase and the response need between calls; the rest sheet's tiers of cells and
+//: the list's allowance in each (self_contact/tiers.hpp), derived from the reference and the margin.
 struct ContactLists {
     std::vector<Index> point_triangle;  // (2, count): first row particles, then triangles
     std::vector<Index> edge_edge;       // (2, count)
     std::vector<double> scratch;        // start distances and other per-step scratch
     std::vector<Index> index_scratch;   // hash tables and other integer scratch
+    std::vector<Index> tiers;           // each tier's cells of the rest sheet (self_contact/tiers.hpp)
+    std::vector<double> allowances;     // (tiers) m: how far each tier's windows may move beyond a rigid motion
+    std::vector<double> tier_scratch;   // the tiers' sums and fits
     Index point_triangle_count() const { return static_cast<Index>(point_triangle.size() / 2); }
     Index edge_edge_count() const { return static_cast<Index>(edge_edge.size() / 2); }
 };

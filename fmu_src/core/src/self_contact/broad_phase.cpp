@@ -4,11 +4,13 @@
 
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <limits>
 
 #include "wetcloth/self_contact.hpp"
+#include "wetcloth/self_contact/elements.hpp"
+#include "wetcloth/self_contact/far_pairs.hpp"
 #include "wetcloth/self_contact/geometry.hpp"
+#include "wetcloth/self_contact/tiers.hpp"
 
 namespace wc::self_contact {
 
@@ -24,33 +26,6 @@ inline double margin_for(const Contact& contact, double motion) { return py_max(
 //: WIDE_REACH of the rest sheet's nearest non-adjacent elements' distance, at least least_margin.
 inline double widest_margin(const Contact& contact, double thickness) {
     return py_max(contact.least_margin, 0.5 * (WIDE_REACH * contact.rest_gap - thickness));
-}
-
-//: Axis-aligned boxes (3, count) of `count` elements: lo[c * count + e], hi likewise.
-struct Boxes {
-    const double* lo;
-    const double* hi;
-    Index count;
-    double low(int c, Index e) const { return lo[c * count + e]; }
-    double high(int c, Index e) const { return hi[c * count + e]; }
-};
-
-//: Each element's (`width` particles, rows of `elements`) box at positions x (3, n).
-void boxes(const double* x, Index n, const Index* elements, Index count, int width, double* lo, double* hi) {
-    for (Index e = 0; e < count; ++e) {
-        for (int c = 0; c < 3; ++c) {
-            const double* row = x + c * n;
-            double a = INF;
-            double b = -INF;
-            for (int k = 0; k < width; ++k) {
-                const double v = row[elements[e * width + k]];
-                a = py_min(a, v);
-                b = py_max(b, v);
-            }
-            lo[c * count + e] = a;
-            hi[c * count + e] = b;
-        }
-    }
 }
 
 struct Grid {
@@ -101,67 +76,10 @@ inline Index table_mask(Index entries) {
     return size - 1;
 }
 
-inline bool boxes_overlap(const Boxes& p, Index a, const Boxes& q, Index b, double pad) {
-    return p.low(0, a) <= q.high(0, b) + pad && q.low(0, b) - pad <= p.high(0, a) && p.low(1, a) <= q.high(1, b) + pad &&
-           q.low(1, b) - pad <= p.high(1, a) && p.low(2, a) <= q.high(2, b) + pad && q.low(2, b) - pad <= p.high(2, a);
-}
-
 //: Whether a pair at distance `gap` (m) is a candidate at `reach` (m): the one test of the search and of
 //: narrowing a list (within).
 inline bool kept(const Boxes& p, Index a, const Boxes& q, Index b, double gap, double reach) {
     return boxes_overlap(p, a, q, b, reach) && gap < reach;
-}
-
-//: A pair's record while a list is searched: first, second element, bits of its distance (m).
-inline Index gap_bits(double gap) {
-    Index bits;
-    std::memcpy(&bits, &gap, sizeof bits);
-    return bits;
-}
-inline double gap_of(Index bits) {
-    double gap;
-    std::memcpy(&gap, &bits, sizeof gap);
-    return gap;
-}
-
-//: The four particles (a | b, c, d) of point a and triangle t, or (a, b | c, d) of edges a and e.
-template <int KIND>
-inline void particles(const Contact& contact, Index a, Index e, Index idx[4]) {
-    if (KIND == POINT_TRIANGLE) {
-        idx[0] = a;
-        for (int j = 0; j < 3; ++j) idx[1 + j] = contact.triangles[3 * e + j];
-    } else {
-        idx[0] = contact.edges[2 * a], idx[1] = contact.edges[2 * a + 1];
-        idx[2] = contact.edges[2 * e], idx[3] = contact.edges[2 * e + 1];
-    }
-}
-
-//: Whether element a (a particle or an edge) and element e (a triangle or an edge) share a particle.
-template <int KIND>
-inline bool share_a_particle(const Contact& contact, Index a, Index e) {
-    if (KIND == POINT_TRIANGLE) {
-        for (int j = 0; j < 3; ++j)
-            if (a == contact.triangles[3 * e + j]) return true;
-        return false;
-    }
-    for (int i = 0; i < 2; ++i)
-        for (int j = 0; j < 2; ++j)
-            if (contact.edges[2 * a + i] == contact.edges[2 * e + j]) return true;
-    return false;
-}
-
-//: The distance (m) at x of the pair's particles if it is a candidate: within `reach` (m), and not already
-//: closer than `thickness` (m) in the flat rest sheet (such neighbours are the fabric itself, not two
-//: layers); infinity if it is not.
-template <int KIND>
-inline double candidate_distance(const double* x, const double* rest, Index n, const Index idx[4], double reach,
-                                 double thickness) {
-    const double gap = distance(KIND, point(x, n, idx[0]), point(x, n, idx[1]), point(x, n, idx[2]),
-                                point(x, n, idx[3]));
-    if (gap >= reach || distance(KIND, point(rest, n, idx[0]), point(rest, n, idx[1]), point(rest, n, idx[2]),
-                                 point(rest, n, idx[3])) < thickness)
-        return INF;
-    return gap;
 }
 
 //: The candidate pairs of one kind: (a, e) for element a of `first` (particles for POINT_TRIANGLE, edges
@@ -265,64 +183,145 @@ void to_rows(std::vector<Index>& records, std::vector<Index>& scratch) {
     records.resize(2 * count);
 }
 
+//: The widest allowance (m) searched for in tier s >= 1: its reach (thickness + 2 allowances) is WIDE_REACH
+//: of the least distance in the rest sheet between elements of tier s or coarser (infinite if none can be).
+inline double widest_allowance(const Contact& contact, Index n, double thickness, int s) {
+    return 0.5 * (WIDE_REACH * rest_distance_beyond(contact, n, s - 1) - thickness);
+}
+
+//: Each tier's deviation (m) of the motion from x0 to x1 away from `ref` (all (3, n)), then the least of it
+//: and every coarser tier's: what bounds the distance change of the tier's pairs.  NaN if not finite.
+void bounds(const Contact& contact, Index n, const double* ref, const double* x0, const double* x1,
+            double out[TIERS]) {
+    for (int s = 0; s < TIERS; ++s) out[s] = deviation(contact, n, s, ref, x0, x1);
+    const double shifted = shifted_deviation(n, ref, x0, x1);
+    if (out[TIERS - 1] == out[TIERS - 1]) out[TIERS - 1] = py_min(out[TIERS - 1], shifted);
+    for (int s = TIERS - 2; s >= 0; --s) out[s] = out[s] == out[s] ? py_min(out[s], out[s + 1]) : out[s];
+}
+
+//: The tier of the pair of particles idx: the finest whose windows it fits.
+inline int tier_of_pair(const Contact& contact, Index n, const Index idx[4]) {
+    for (int s = 0; s < TIERS - 1; ++s)
+        if (fits(tier_of(contact, n, s), idx)) return s;
+    return TIERS - 1;
+}
+
+//: The least distance among the records (of `kind`) of each tier s >= 1, into nearest[s] (if less).
+void nearest_by_tier(const Contact& contact, Index n, const std::vector<Index>& records, int kind,
+                     double nearest[TIERS]) {
+    for (std::size_t k = 0; k < records.size(); k += 3) {
+        Index idx[4];
+        if (kind == POINT_TRIANGLE) {
+            particles<POINT_TRIANGLE>(contact, records[k], records[k + 1], idx);
+        } else {
+            particles<EDGE_EDGE>(contact, records[k], records[k + 1], idx);
+        }
+        const int s = tier_of_pair(contact, n, idx);
+        nearest[s] = py_min(nearest[s], gap_of(records[k + 2]));
+    }
+}
+
+//: Whether the list holds for the motion from x0 to x1 (covers), and in `shifted` the whole sheet's
+//: deviation with a translation alone.  That first (a cloth that does not turn: two passes over the
+//: positions), then the tiers from the coarsest: a coarser tier's deviation within a finer one's allowance
+//: covers the finer one's pairs too, and the finest tier (the most windows) is the dearest to check.
+bool holds(const Contact& contact, Index n, const double* x0, const double* x1, double& shifted) {
+    const std::vector<double>& allowance = contact.lists->allowances;
+    if (!(contact.margin[0] > 0.0) || allowance.size() != static_cast<std::size_t>(TIERS)) return false;
+    shifted = shifted_deviation(n, contact.reference, x0, x1);
+    if (!(shifted == shifted)) return false;
+    double bound = shifted;  // the least deviation found so far of this tier or a coarser one
+    bool found[TIERS] = {};
+    for (int s = TIERS - 1; s >= 0; --s) {
+        // This tier's windows, then those of the coarser tiers passed over, until one holds the tier's pairs
+        // (the same bound as rebuild_for_step's, so that a list holds for the step it was built for).
+        for (int t = s; t < TIERS && !(bound <= allowance[s]); ++t) {
+            if (found[t]) continue;
+            found[t] = true;
+            const double d = deviation(contact, n, t, contact.reference, x0, x1);
+            if (!(d == d)) return false;
+            bound = py_min(bound, d);
+        }
+        if (!(bound <= allowance[s])) return false;
+    }
+    return true;
+}
+
+//: Whether a list that holds is not worth keeping (`shifted` as from holds()).  A list whose margin is over
+//: LOOSE times what the step needs, unless that margin is the least one (a cloth that never moved fast): a
+//: list built for one violent step (a landing) would otherwise hold far-apart pairs for the rest of the
+//: run.  An empty list costs nothing however loose, but one the cloth has turned away from is checked
+//: window by window: where the cloth now barely moves (a towel afloat), a list built afresh holds through
+//: the translation alone.
+bool too_loose(const Contact& contact, Index n, const double* x0, const double* x1, double shifted) {
+    const double margin = contact.margin[0];
+    if (candidate_count(contact) == 0) {
+        return !(shifted <= margin) && shifted_deviation(n, x0, x0, x1) < margin / (LOOSE * LOOSE);
+    }
+    if (margin <= LOOSE * contact.least_margin) return false;
+    // The step's deviation from its own midpoint, where it is least: the margin is loose once four times
+    // that is under margin / LOOSE.
+    std::vector<double>& middle = contact.lists->scratch;
+    middle.resize(static_cast<std::size_t>(3 * n));
+    for (Index k = 0; k < 3 * n; ++k) middle[k] = 0.5 * (x0[k] + x1[k]);
+    const double loose = margin / (2.0 * LOOSE);
+    if (2.0 * shifted_deviation(n, middle.data(), x0, x1) < loose) return true;
+    for (int s = TIERS - 1; s >= 0; --s) {
+        if (2.0 * deviation(contact, n, s, middle.data(), x0, x1) < loose) return true;
+    }
+    return false;
+}
+
 }  // namespace
 
-double largest_motion_squared(Index n, const double* x0, const double* x1) {
-    double shift[3];
-    for (int c = 0; c < 3; ++c) {
-        const double* a = x0 + c * n;
-        const double* b = x1 + c * n;
-        double lo = INF, hi = -INF;
-        for (Index i = 0; i < n; ++i) {
-            const double d = b[i] - a[i];
-            if (!std::isfinite(d)) return std::numeric_limits<double>::quiet_NaN();
-            lo = py_min(lo, d);
-            hi = py_max(hi, d);
-        }
-        shift[c] = 0.5 * (lo + hi);
-    }
-    double largest = 0.0;
-    for (Index i = 0; i < n; ++i) {
-        const double dx = x1[i] - x0[i] - shift[0];
-        const double dy = x1[n + i] - x0[n + i] - shift[1];
-        const double dz = x1[2 * n + i] - x0[2 * n + i] - shift[2];
-        largest = py_max(largest, dx * dx + dy * dy + dz * dz);
-    }
-    return largest;
+bool covers(const Contact& contact, Index n, const double* x0, const double* x1) {
+    double shifted = INF;
+    return holds(contact, n, x0, x1, shifted);
 }
 
-bool covers(const Contact& contact, Index n, const double* x) {
-    const double margin = contact.margin[0];
-    return margin > 0.0 && largest_motion_squared(n, contact.reference, x) <= margin * margin;
-}
-
-//: Costs nothing while the margin is the least one (a cloth that never moved fast) or the list is empty (an
-//: empty list costs nothing however loose): a list built for one violent step (a landing) would otherwise
-//: hold far-apart pairs for the rest of the run.
-bool too_loose(const Contact& contact, Index n, const double* x0, const double* x1) {
-    const double margin = contact.margin[0];
-    if (margin <= LOOSE * contact.least_margin || candidate_count(contact) == 0) return false;
-    const double motion = std::sqrt(largest_motion_squared(n, x0, x1));
-    return std::isfinite(motion) && margin > LOOSE * margin_for(contact, motion);
+bool expired(const Contact& contact, Index n, const double* x0, const double* x1) {
+    double shifted = INF;
+    return !holds(contact, n, x0, x1, shifted) || too_loose(contact, n, x0, x1, shifted);
 }
 
 bool rebuild_for_step(Contact& contact, Index n, double thickness, const double* x0, const double* x1) {
-    const double motion = std::sqrt(largest_motion_squared(n, x0, x1));
-    if (!std::isfinite(motion)) return false;  // a blown-up step: the guard after this stage refuses it
+    for (Index k = 0; k < 3 * n; ++k)
+        if (!std::isfinite(x0[k]) || !std::isfinite(x1[k])) return false;  // the guard after this stage refuses it
     for (Index k = 0; k < 3 * n; ++k) contact.reference[k] = 0.5 * (x0[k] + x1[k]);
-    const double margin = margin_for(contact, motion);
+    prepare_tiers(contact, n);
+    double bound[TIERS];
+    bounds(contact, n, contact.reference, x0, x1, bound);
+    // Twice the step's motion in the finest tier (its deviation from the midpoint, doubled: room for the
+    // next steps), but no wider than keeps the fabric's neighbours out of the list, unless the step itself
+    // needs it.
+    const double widest = widest_margin(contact, thickness);
+    const double margin = py_max(bound[0], py_min(margin_for(contact, 2.0 * bound[0]), widest));
     if (candidate_count(contact) == 0) {
-        build_widest(contact, n, thickness, margin, py_max(margin, widest_margin(contact, thickness)));
+        build_lists(contact, n, thickness, margin, py_max(margin, widest));
     } else {
-        build(contact, n, thickness, margin);
+        build_lists(contact, n, thickness, margin, margin);
+    }
+    // A coarser tier whose allowance cannot hold the step (a violent one): the margin that just holds it,
+    // in every tier (the list has room for this step alone; the next is likely as violent).
+    double need = 0.0;
+    for (int s = 1; s < TIERS; ++s)
+        if (!(bound[s] <= contact.lists->allowances[s])) need = py_max(need, bound[s]);
+    if (need > 0.0) {
+        const double held = py_max(contact.margin[0], need);
+        build_lists(contact, n, thickness, held, held);
     }
     return true;
 }
 
 void build_widest(Contact& contact, Index n, double thickness, double least, double widest) {
+    prepare_tiers(contact, n);
+    build_lists(contact, n, thickness, least, widest);
+}
+
+void build_lists(Contact& contact, Index n, double thickness, double least, double widest) {
     ContactLists& lists = *contact.lists;
     const double* x = contact.reference;
-    double reach = thickness + 2.0 * widest;
+    const double reach = thickness + 2.0 * widest;
     const Index m = contact.triangle_count, k = contact.edge_count;
     lists.scratch.resize(static_cast<std::size_t>(6 * (m + k)));
     double* tri_lo = lists.scratch.data();
@@ -354,10 +353,29 @@ void build_widest(Contact& contact, Index n, double thickness, double least, dou
                                                   lists.index_scratch, lists.edge_edge);
     // The widest margin whose lists are empty: the nearest pair just out of reach.
     const double margin = py_max(least, py_min(widest, 0.5 * (py_min(point_nearest, edge_nearest) - thickness)));
+    // The nearest pair of each coarser tier among those found (a folded cloth's layers).
+    double nearest[TIERS];
+    for (int s = 0; s < TIERS; ++s) nearest[s] = INF;
+    nearest_by_tier(contact, n, lists.point_triangle, POINT_TRIANGLE, nearest);
+    nearest_by_tier(contact, n, lists.edge_edge, EDGE_EDGE, nearest);
     if (margin < widest) {
-        reach = thickness + 2.0 * margin;
-        within(lists.point_triangle, particle_boxes, triangle_boxes, reach);
-        within(lists.edge_edge, edge_boxes, edge_boxes, reach);
+        within(lists.point_triangle, particle_boxes, triangle_boxes, thickness + 2.0 * margin);
+        within(lists.edge_edge, edge_boxes, edge_boxes, thickness + 2.0 * margin);
+    }
+    // The coarser tiers: each as wide as keeps its pairs out of the list, up to what their distance in the
+    // rest sheet leaves room for, and at least the margin (their pairs within the margin's reach are in the
+    // list already).  A tier with a pair found above has its nearest one (a folded cloth's layers); the
+    // others are searched as wide as their allowance can be (a sheet without folds, where the cells keep
+    // the search cheap).  Either way the allowance is the one build() for the margin kept finds.
+    lists.allowances.assign(TIERS, margin);
+    for (int s = 1; s < TIERS; ++s) {
+        const double wide = widest_allowance(contact, n, thickness, s);
+        if (!(wide > margin) || wide == INF) continue;  // no room beyond the margin, or no pair of this tier
+        if (!(nearest[s] < reach)) {
+            nearest[s] = nearest_far_pair(contact, n, x, s - 1, thickness + 2.0 * wide, thickness, triangle_boxes,
+                                          edge_boxes);
+        }
+        lists.allowances[s] = py_max(margin, py_min(wide, 0.5 * (nearest[s] - thickness)));
     }
     to_rows(lists.point_triangle, lists.index_scratch);
     to_rows(lists.edge_edge, lists.index_scratch);
@@ -378,6 +396,7 @@ void invalidate(Contact& contact) {
     if (contact.lists != nullptr) {
         contact.lists->point_triangle.clear();
         contact.lists->edge_edge.clear();
+        contact.lists->allowances.clear();
     }
 }
 

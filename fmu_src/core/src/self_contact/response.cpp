@@ -360,16 +360,17 @@ bool refused(Index n, const double* x1, const double* v1, double blow_up_speed) 
 
 namespace wc {
 
-//: Nothing to do, and one pass over the positions, while no pair is near.  A step that the blow-up guard
-//: will refuse (checked only where there is work) is left alone.  Returns whether it changed x1 or v1: the
-//: step's motion then has a kink that a multistep integrator must not extrapolate.
+//: Nothing to do, and two passes over the positions (more while the cloth turns), while no pair is near.
+//: A step that the blow-up guard will refuse (checked only where there is work) is left alone.  Returns
+//: whether it changed x1 or v1: the step's motion then has a kink that a multistep integrator must not
+//: extrapolate.
 bool resolve(Contact& contact, double thickness, double floor_z, double blow_up_speed, Index n, const double* mass,
              const double* free, const double* x0, double* x1, double* v1, double h) {
     using namespace self_contact;
     if (!contact.enabled) return false;
     const Index treated = contact.counters[RESPONSES] + contact.counters[ZONE_ROUNDS];
     for (int attempt = 0; attempt < ATTEMPTS; ++attempt) {
-        if (!covers(contact, n, x1) || too_loose(contact, n, x0, x1)) {
+        if (expired(contact, n, x0, x1)) {
             if (refused(n, x1, v1, blow_up_speed) || !rebuild_for_step(contact, n, thickness, x0, x1)) return false;
         }
         const Index candidates = candidate_count(contact);
@@ -382,7 +383,7 @@ bool resolve(Contact& contact, double thickness, double floor_z, double blow_up_
         start_distances(contact, n, x0, candidates, start);
         settle(contact, thickness, floor_z, n, mass, free, x0, x1, v1, candidates, start);
         impact_zones(contact, thickness, floor_z, n, mass, free, x0, x1, v1, h, candidates, start);
-        if (covers(contact, n, x1)) return contact.counters[RESPONSES] + contact.counters[ZONE_ROUNDS] != treated;
+        if (covers(contact, n, x0, x1)) return contact.counters[RESPONSES] + contact.counters[ZONE_ROUNDS] != treated;
     }
     // The treatment kept moving particles beyond every list built for it: undo the step's motion.
     contact.counters[FREEZES] += 1;

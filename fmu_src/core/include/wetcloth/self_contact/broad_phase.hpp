@@ -2,10 +2,15 @@
 // bf41571:fmu_src/wetcloth/kernels/self_contact/broad_phase.py; see its docstring for the reasoning).
 //
 // A candidate list holds every point-triangle and edge-edge pair whose elements were closer than
-// reach = thickness + 2 margin at the *reference* positions it was built from; it stays valid while every
-// particle stays within `margin` of its reference position, up to a common translation.  The list depends
-// on the reference positions and the margin alone (its pairs ascend, whatever the hash), so a run restored
-// from a snapshot of those two rebuilds exactly the same list.
+// reach = thickness + 2 margin at the *reference* positions it was built from.  It stays valid while no pair
+// outside it can come closer than the thickness, judged tier by tier (tiers.hpp): each tier's windows may
+// deviate from a rigid motion of their reference positions by the tier's allowance (or a coarser tier's
+// windows by that much) along the step's motion.  The finest tier's pairs are the fabric's neighbours, and
+// its allowance is the margin; a coarser tier's pairs lie farther apart in the rest sheet, and its
+// allowance is the widest that keeps them out of the list (its nearest pair at the reference positions, out
+// of reach), up to what their distance in the rest sheet leaves room for, and at least the margin.  The list
+// and the allowances depend on the reference positions and the margin alone (its pairs ascend, whatever the
+// hash), so a run restored from a snapshot of those two rebuilds exactly the same list.
 //
 // The lists live in ContactLists (core.hpp): point_triangle and edge_edge (2, count), first row then
 // second row.  While a list is searched they hold records (first, second, bits of the distance), three
@@ -16,7 +21,7 @@
 
 namespace wc::self_contact {
 
-//: A list whose margin is more than this many times what the current step needs is rebuilt (too_loose).
+//: A list whose margin is more than this many times what the current step needs is rebuilt (expired).
 inline constexpr double LOOSE = 4.0;
 //: The reach of a list tried after an empty one, as a fraction of the rest sheet's nearest non-adjacent
 //: elements' distance (Contact::rest_gap): room for the sheet to be compressed by a tenth without
@@ -31,25 +36,29 @@ inline Index candidate_count(const Contact& contact) {
     return contact.lists->point_triangle_count() + contact.lists->edge_edge_count();
 }
 
-//: The largest squared displacement (m2) of a particle from x0 to x1 (both (3, n)), once the mid-range of
-//: all displacements (a common translation) is taken out; NaN if a displacement is not finite.
-double largest_motion_squared(Index n, const double* x0, const double* x1);
+//: Whether the candidate list is valid for the straight-line motion from x0 to x1 (both (3, n)): for each
+//: tier, its windows' deviation from a rigid motion of their reference positions (or a coarser tier's) is
+//: at most the tier's allowance.  False if a position is not finite.
+bool covers(const Contact& contact, Index n, const double* x0, const double* x1);
 
-//: Whether the candidate list is valid for positions x (3, n): each within the margin of its reference
-//: position, once the mid-range of all displacements is taken out.
-bool covers(const Contact& contact, Index n, const double* x);
+//: Whether the list must be rebuilt for the step from x0 to x1: it does not hold (covers); or its margin is
+//: over LOOSE times what a list built for the step would get; or it is empty, holds only window by window
+//: (the cloth has turned since its reference) and the cloth barely moves (a list built now holds through
+//: the translation alone, the cheapest check).
+bool expired(const Contact& contact, Index n, const double* x0, const double* x1);
 
-//: Whether the list's margin is over LOOSE times what a list built for the step from x0 to x1 would get.
-bool too_loose(const Contact& contact, Index n, const double* x0, const double* x1);
-
-//: A new list valid for the whole step from x0 to x1 (the reference is the midpoint, the margin twice the
-//: step's largest motion, at least Contact::least_margin; after an empty list, as wide as keeps it empty).
-//: Returns false (and builds nothing) if the step is not finite.
+//: A new list valid for the whole step from x0 to x1 (the reference is the midpoint; the margin four times
+//: the step's deviation from the midpoint in the finest tier's windows, or in a coarser tier's if less, at
+//: least Contact::least_margin; after an empty list, as wide as keeps it empty; larger if a coarser tier's
+//: allowance could not hold the step).  Returns false (and builds nothing) if the step is not finite.
 bool rebuild_for_step(Contact& contact, Index n, double thickness, const double* x0, const double* x1);
 
 //: Build the lists from contact.reference for the widest margin from `least` to `widest` (m) whose lists
 //: are empty, or for `least` if none is (searched at `widest` and narrowed: the same lists as build() for
-//: that margin); keep that margin.
+//: that margin); keep that margin, and the coarser tiers' allowances.
 void build_widest(Contact& contact, Index n, double thickness, double least, double widest);
+
+//: build_widest() over the tiers' cells already cut (prepare_tiers).
+void build_lists(Contact& contact, Index n, double thickness, double least, double widest);
 
 }  // namespace wc::self_contact
