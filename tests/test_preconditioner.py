@@ -255,7 +255,7 @@ def test_systems_from_the_jacobian_are_its_projection_on_the_frames():
                          multigrid_side=side) for side in (100, 0)]
     for plane in planes:
         random_frames(plane, topology, seed=6)
-        assert _core.set_systems_from_jacobian(plane, model.cloth, mass, work, 0) == 1
+        assert _core.set_systems_from_jacobian(plane, model.cloth, mass, work) == 1
     banded, multigrid = planes
     assert len(banded.grid.levels) == 1 and len(multigrid.grid.levels) >= 3
     # A' = A without the bending springs, its products with unit vectors

@@ -10,7 +10,7 @@ from wetcloth import _core, self_collision
 from wetcloth._core import (BLOWN_UP, CALM_TIME, CG_ITERATIONS, CLOCK_SIZE, EXCHANGING, FACTORISATIONS, FAILED_STEP,
                             FIRST_GUESS, LAST_SOLVE, LAST_STEP, MAX_REJECTIONS, NEWTON_ITERATIONS, NEWTON_RATE,
                             NEXT_STEP, OUTPUT_COUNT, PAUSE_AFTER, PAUSED, RATE_CORRECTION, REJECTED, SLEEPING, SPEED,
-                            STEPS, TIME, UNCHECKED_TIME, UNCONVERGED, STEP_ERROR, LARGEST_ERROR)
+                            STEPS, TIME, UNCHECKED_TIME, UNCONVERGED, LARGEST_ERROR)
 from wetcloth.advice import blow_up_advice
 from wetcloth.bundles import Buffers, make_solver
 from wetcloth.errors import BlowUpError, ParameterError
@@ -42,7 +42,7 @@ _SNAPSHOT_CLOCK = (("next_step", NEXT_STEP, float), ("last_step", LAST_STEP, flo
                    ("exchanging", EXCHANGING, bool), ("sleeping", SLEEPING, bool), ("steps", STEPS, int),
                    ("rejected_steps", REJECTED, int), ("newton_rate", NEWTON_RATE, float),
                    ("rate_correction", RATE_CORRECTION, float), ("first_guess", FIRST_GUESS, float),
-                   ("last_solve_iterations", LAST_SOLVE, float), ("step_error", STEP_ERROR, float))
+                   ("last_solve_iterations", LAST_SOLVE, float))
 
 
 

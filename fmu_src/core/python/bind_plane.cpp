@@ -69,14 +69,11 @@ WETCLOTH_BINDINGS(m) {
                                 py::argument<const double>(diagonal_blocks, "diagonal_blocks", 6 * n),
                                 py::argument<const double>(blocks, "blocks", 6 * n));
     });
-    m.def("set_systems_from_jacobian", [](nb::handle plane, nb::handle cloth, nb::handle mass, nb::handle work,
-                                          Index first) {
+    m.def("set_systems_from_jacobian", [](nb::handle plane, nb::handle cloth, nb::handle mass, nb::handle work) {
         const Index n = particles(plane);
         Plane p = py::plane_from(plane, n);
         const Cloth c = py::cloth_from(cloth);
-        if (first < 0 || first > NORMAL) throw nb::value_error("set_systems_from_jacobian: first is 0 to NORMAL (2)");
-        return wc::set_systems_from_jacobian(p, c, py::argument<const double>(mass, "mass", n), py::work_from(work, c),
-                                             first);
+        return wc::set_systems_from_jacobian(p, c, py::argument<const double>(mass, "mass", n), py::work_from(work, c));
     });
     m.def("apply", [](nb::handle plane, nb::handle free, nb::handle r, nb::handle z) {
         const Index n = particles(plane);

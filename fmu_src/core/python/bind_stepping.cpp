@@ -147,7 +147,7 @@ WETCLOTH_BINDINGS(m) {
     m.attr("MAX_WATER_RATIO") = MAX_WATER_RATIO;
     const char* slots[] = {"TIME", "NEXT_STEP", "LAST_STEP", "SPEED", "CALM_TIME", "UNCHECKED_TIME", "EXCHANGING",
                            "SLEEPING", "STEPS", "REJECTED", "FAILED_STEP", "NEWTON_RATE", "RATE_CORRECTION",
-                           "FIRST_GUESS", "LAST_SOLVE", "STEP_ERROR", "LARGEST_ERROR"};
+                           "FIRST_GUESS", "LAST_SOLVE", "LARGEST_ERROR"};
     static_assert(sizeof slots / sizeof slots[0] == CLOCK_SIZE, "a clock slot without its name");
     for (Index k = 0; k < CLOCK_SIZE; ++k) m.attr(slots[k]) = k;
     m.attr("EXPLICIT_EULER") = Index(EXPLICIT_EULER);

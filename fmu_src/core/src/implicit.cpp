@@ -225,7 +225,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
     for (Index iteration = 0; iteration < NEWTON_ITERATIONS_MAX; ++iteration) {
         newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh);
         if (fixed_steps) {
-            set_systems_from_jacobian(plane, cloth, mass, work, 0);
+            set_systems_from_jacobian(plane, cloth, mass, work);
             solver.counters[FACTORISATIONS] += 1;
         } else {
             if (jacobian_refresh_pays(plane, memory[3])) {

@@ -63,12 +63,9 @@ Index factor(Plane& plane, const Cloth& cloth, const double* mass, double scale,
     const Index* levels = grid.levels;
     const Index size = grid.size;
     const Index grid_x = level_value(levels, 0, NX);
-    const Index level0_end = level_value(levels, 0, PAD_X) * (level_value(levels, 0, NY) + 3);
     for (Index c = 0; c < 2; ++c) {
+        diagonal_stencil(plane, n, c, mass);
         double* coef = grid.coef + c * 9 * size;
-        for (Index k = 0; k < 9; ++k)
-            for (Index p = 0; p < level0_end; ++p) coef[k * size + p] = 0.0;
-        for (Index i = 0; i < n; ++i) coef[CENTRE * size + padded_index(levels, 0, i % grid_x, i / grid_x)] = mass[i];
         for (Index f = 0; f < cloth.families; ++f) {
             const Index k = plane.slots[f];
             if (k < 0) continue;
@@ -87,23 +84,8 @@ Index factor(Plane& plane, const Cloth& cloth, const double* mass, double scale,
             }
         }
     }
-    const Index coarsest = grid.level_count - 1;
-    for (Index level = 0; level < coarsest; ++level) galerkin(grid, level, 0, 2);
-    const Index start = level_value(levels, coarsest, START), pad = level_value(levels, coarsest, PAD_X);
-    const Index width = plane.kd + 1;
     for (Index c = 0; c < 2; ++c) {
-        const double* coef = grid.coef + c * 9 * size;
-        double* band = plane.bands + c * plane.coarse_n * width;
-        for (Index e = 0; e < plane.coarse_n * width; ++e) band[e] = 0.0;
-        for (Index position = 0; position < plane.coarse_n; ++position) {
-            const Index p = plane.order[position];
-            band[position * width] = coef[CENTRE * size + p];
-            for (Index k = 0; k < 9; ++k) {
-                const Index other = plane.rank[p + (k / 3 - 1) * pad + k % 3 - 1 - start];
-                if (other > position) band[position * width + other - position] = coef[k * size + p];
-            }
-        }
-        const Index info = band_factor(band, plane.rows + c * plane.coarse_n * width, plane.coarse_n, plane.kd);
+        const Index info = factor_component(plane, c);
         if (info != 0) return info;
     }
     return 0;
@@ -205,24 +187,22 @@ void follow_cloth(Plane& plane, const Cloth& cloth, const double* pos) {
 
 namespace {
 
-//: out[i] = mass_i + t_i^T (D_i + B_i) t_i for the frame's axis c (t1, t2, n); D = 0 if null.
+//: out[i] = mass_i + t_i^T (D_i + B_i) t_i for the frame's axis c (t1, t2, n); without WITH_SPRINGS
+//: D (the springs' part of the diagonal blocks) is left out.
+template <bool WITH_SPRINGS>
 void axis_diagonal(const Plane& plane, Index n, Index c, const double* mass, const double* diagonal_blocks,
                    const double* blocks, double* __restrict out) {
     const double* __restrict t0 = plane.frame + (3 * c) * n;
     const double* __restrict t1 = plane.frame + (3 * c + 1) * n;
     const double* __restrict t2 = plane.frame + (3 * c + 2) * n;
-    const double* __restrict d = diagonal_blocks != nullptr ? diagonal_blocks : blocks;
+    const double* __restrict d = diagonal_blocks;
     const double* __restrict b = blocks;
-    const double d_scale = diagonal_blocks != nullptr ? 1.0 : 0.0;
     for (Index i = 0; i < n; ++i) {
+        double e[6];
+        for (Index slot = 0; slot < 6; ++slot) e[slot] = WITH_SPRINGS ? d[slot * n + i] + b[slot * n + i] : b[slot * n + i];
         const double tx = t0[i], ty = t1[i], tz = t2[i];
-        const double xx = d_scale * d[i] + b[i];
-        const double yy = d_scale * d[n + i] + b[n + i];
-        const double zz = d_scale * d[2 * n + i] + b[2 * n + i];
-        const double xy = d_scale * d[3 * n + i] + b[3 * n + i];
-        const double xz = d_scale * d[4 * n + i] + b[4 * n + i];
-        const double yz = d_scale * d[5 * n + i] + b[5 * n + i];
-        out[i] = mass[i] + (xx * tx * tx + yy * ty * ty + zz * tz * tz + 2.0 * (xy * tx * ty + xz * tx * tz + yz * ty * tz));
+        out[i] = mass[i] + (e[0] * tx * tx + e[1] * ty * ty + e[2] * tz * tz +
+                            2.0 * (e[3] * tx * ty + e[4] * tx * tz + e[5] * ty * tz));
     }
 }
 
@@ -273,19 +253,19 @@ void jacobian_stencil(Plane& plane, const Cloth& cloth, const Work& work, Index 
 
 void set_normal_diagonal(Plane& plane, Index n, const double* mass, const double* diagonal_blocks,
                          const double* blocks) {
-    axis_diagonal(plane, n, NORMAL, mass, diagonal_blocks, blocks, plane.normal);
+    axis_diagonal<true>(plane, n, NORMAL, mass, diagonal_blocks, blocks, plane.normal);
     plane.reference[3] = 0.0;
 }
 
-Index set_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const Work& work, Index first) {
+Index set_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const Work& work) {
     const Index n = cloth.n;
-    if (first < NORMAL) plane.reference[1] = plane.reference[2] = 0.0;  // the rest-stiffness factors are overwritten
+    plane.reference[1] = plane.reference[2] = 0.0;  // the rest-stiffness factors are overwritten
     plane.reference[3] = 1.0;
     Index result = 1;
-    std::vector<double> in_plane(first < NORMAL ? static_cast<std::size_t>(n) : 0);
-    for (Index c = first; c < COMPONENTS; ++c) {
+    std::vector<double> in_plane(static_cast<std::size_t>(n));
+    for (Index c = 0; c < COMPONENTS; ++c) {
         double* diagonal = c == NORMAL ? plane.normal : in_plane.data();
-        axis_diagonal(plane, n, c, mass, nullptr, work.blocks, diagonal);
+        axis_diagonal<false>(plane, n, c, mass, nullptr, work.blocks, diagonal);
         jacobian_stencil(plane, cloth, work, c, diagonal);
         if (factor_component(plane, c) == 0) continue;
         diagonal_stencil(plane, n, c, diagonal);  // not positive definite (round-off on a crumpled cloth)

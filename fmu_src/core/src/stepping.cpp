@@ -224,8 +224,7 @@ Status step(Core& core, double remaining) {
         ++rejections;
     }
     if (held > 0) release_all(n, cloth.free, buf.held);
-    clock[STEP_ERROR] = std::isfinite(trial.error) ? trial.error : 0.0;
-    clock[LARGEST_ERROR] = pymax(clock[LARGEST_ERROR], clock[STEP_ERROR]);
+    if (std::isfinite(trial.error)) clock[LARGEST_ERROR] = pymax(clock[LARGEST_ERROR], trial.error);
     if (!(h > 0.0 && clock[TIME] + h > clock[TIME])) {  // a step that would not advance the time
         clock[FAILED_STEP] = h;
         return BLOWN_UP;
@@ -270,7 +269,7 @@ std::string g(double value) {  // Python's format(value, "g")
 const char* const SLOT_NAMES[CLOCK_SIZE] = {
     "state.time", "next_step", "last_step", "speed", "calm_time", "unchecked_time", "exchanging", "sleeping",
     "steps", "rejected_steps", "failed_step", "newton_rate", "rate_correction", "first_guess",
-    "last_solve_iterations", "step_error", "largest_error"};
+    "last_solve_iterations", "largest_error"};
 
 //: The first value of values[0 .. count) outside [lo, hi] (or not finite), as "<name> holds <value><unit> at
 //: particle <i> (<x|y|z>)" (rows of n, when n > 0) or "... at <index>", else empty.

@@ -230,12 +230,11 @@ struct Buffers {
 //: step (s; 0: no history for BDF2); the fastest particle's speed (m/s); time spent still (s), time
 //: since stillness was last checked (s), whether water moved since, whether asleep; accepted and
 //: rejected steps; the step that blew up (s); BDF2's last Newton rate (-) and the correction it
-//: followed (m/s), the kind of its first guess, its last solve's CG iterations; the last accepted
-//: step's estimated local position error (m: the implicit schemes' estimate plus what Newton left,
-//: with fixed steps too) and the largest since the caller last reset it.
+//: followed (m/s), the kind of its first guess, its last solve's CG iterations; the largest local
+//: position error (m) an accepted step estimated for itself since the caller last reset it.
 enum ClockSlot : Index {
     TIME = 0, NEXT_STEP, LAST_STEP, SPEED, CALM_TIME, UNCHECKED_TIME, EXCHANGING, SLEEPING, STEPS, REJECTED,
-    FAILED_STEP, NEWTON_RATE, RATE_CORRECTION, FIRST_GUESS, LAST_SOLVE, STEP_ERROR, LARGEST_ERROR, CLOCK_SIZE
+    FAILED_STEP, NEWTON_RATE, RATE_CORRECTION, FIRST_GUESS, LAST_SOLVE, LARGEST_ERROR, CLOCK_SIZE
 };
 
 //: What the step loop returns.

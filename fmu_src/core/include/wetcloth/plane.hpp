@@ -42,15 +42,15 @@ void follow_cloth(Plane& plane, const Cloth& cloth, const double* pos);
 void set_normal_diagonal(Plane& plane, Index n, const double* mass, const double* diagonal_blocks,
                          const double* blocks);
 
-//: The systems of components first .. NORMAL from the Jacobian in work: for each frame axis t, the
+//: Every component's system from the Jacobian in work: for each frame axis t, the
 //: diagonal mass_i + t_i^T (D_i + B_i) t_i and, between neighbours the stencil reaches, each spring's
 //: -t_i^T S t_j (S = across I + (along - across) u u^T its block), factored; the diagonal alone where
 //: that is not positive definite (round-off on a crumpled cloth).  Across a cloth under tension (a
 //: hanging sheet at frame-long steps) the tension's stiffness across the springs makes these far
 //: better than the rest stiffness's in-plane systems and the normal's diagonal: on a 41 x 41 sheet
 //: hanging at 1/30 s steps, 14 CG iterations to 1e-2 where those took 42.  Call after follow_cloth;
-//: in-plane components (first < NORMAL) overwrite the rest-stiffness factors.  Returns 1, or -1.
-Index set_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const Work& work, Index first);
+//: it overwrites the rest-stiffness factors.  Returns 1, or -1.
+Index set_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const Work& work);
 
 //: z = P^-1 r (both (3, n)), rows of pinned particles (free == 0) zero.
 void apply(Plane& plane, Index n, const double* free, const double* r, double* z);
