@@ -3,7 +3,7 @@ and the tolerance controls the error.
 
 The references are computed in this process (no arrays from another CPU): BDF2 with fixed steps of
 2.5e-4 s (``support.accuracy.reference``); halving that step moves their centroids by 6-27 um and
-their wet mass by up to 1.8e-4 (docs/benchmarks.md, Work against precision), so they are converged
+their wet mass by up to 1.8e-4 (docs/benchmarks.md, Method), so they are converged
 well below what is asked of the defaults (``test_the_sinking_reference_is_converged``).
 """
 

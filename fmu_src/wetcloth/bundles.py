@@ -50,10 +50,9 @@ Buffers = namedtuple("Buffers", "pos vel water trial_pos trial_vel trial_water p
 #: Scratch of the implicit steps, each (3, n) unless noted: ``mass`` (n) kg; ``rhs``, ``dv``,
 #: ``r``, ``z``, ``p``, ``ap`` of the linear solves; ``hat_pos``, ``hat_vel`` the BDF2 history
 #: terms; ``predicted`` the extrapolated positions; ``step_acceleration`` (3, n) m/s^2 the
-#: acceleration the last BDF2 step implies at its end; ``diagonal`` (6, n) the system's 3x3 diagonal
-#: blocks and ``inverse`` (6, n) their inverses; ``counters`` (int64: Newton iterations, CG
+#: acceleration the last BDF2 step implies at its end; ``counters`` (int64: Newton iterations, CG
 #: iterations, factorisations, unconverged solves).
-Solver = namedtuple("Solver", "mass rhs dv r z p ap hat_pos hat_vel predicted step_acceleration diagonal inverse counters")
+Solver = namedtuple("Solver", "mass rhs dv r z p ap hat_pos hat_vel predicted step_acceleration counters")
 
 
 def make_work(n: int, families: int, grid_x: int) -> Work:
@@ -68,5 +67,4 @@ def make_solver(n: int) -> Solver:
     """Zeroed scratch of the implicit steps for n particles."""
     vectors = {name: np.zeros((3, n)) for name in ("rhs", "dv", "r", "z", "p", "ap", "hat_pos", "hat_vel",
                                                    "predicted", "step_acceleration")}
-    return Solver(mass=np.zeros(n), diagonal=np.zeros((6, n)), inverse=np.zeros((6, n)),
-                  counters=np.zeros(SOLVER_COUNTERS, dtype=np.int64), **vectors)
+    return Solver(mass=np.zeros(n), counters=np.zeros(SOLVER_COUNTERS, dtype=np.int64), **vectors)

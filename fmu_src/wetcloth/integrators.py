@@ -4,7 +4,9 @@ The steps themselves are compiled (the core's step loop, ``fmu_src/core/src/step
 
 * ``explicit_euler``: the thesis scheme (eq. 3.8-3.9), ``v+ = v + h F/m``, ``x+ = x + h v``;
 * ``symplectic_euler``: ``v+ = v + h F/m``, then ``x+ = x + h v+``;
-* ``implicit_euler``: backward Euler, one linearised Newton step (Baraff and Witkin 1998);
+* ``implicit_euler``: backward Euler, Newton iterations that descend the step's incremental potential
+  (a line search along each correction) and stop after a few: its steps never fail, so it is the
+  fixed-step mode for frame-long steps (``tolerance = 0``, ``max_step = 1/fps``);
 * ``bdf2``: the second-order backward differentiation formula with variable steps, Newton
   iterations to a stated tolerance, and an embedded error estimate (``fmu_src/core/src/implicit.cpp``).
 

@@ -30,9 +30,16 @@ class Case:
     water_level: Callable[[float], float] | None = None  # t (s) -> m, or None for a constant level
 
 
+def hanging_sheet() -> Scene:
+    """A 41 x 41 sheet, 1 m square, pinned along its y_max edge and released horizontal in air (water
+    and floor far below): it falls, swings and hangs, most of its springs slack as it swings."""
+    return load_scene(nx=41, ny=41, width=1.0, length=1.0, pinned_edge="y_max", initial_tilt=0.0,
+                      initial_height=2.0, water_level=-10.0, floor_level=-20.0)
+
+
 def cases() -> list[Case]:
     """A tilted towel landing; a towel soaking up water almost at once and sinking; a floating towel
-    carried up by water rising 3 cm in 1 s."""
+    carried up by water rising 3 cm in 1 s; a sheet swinging down from one edge (1 s)."""
     towel = load_scene(**GRID)
     return [
         Case("landing", towel, 3.0),
@@ -40,6 +47,7 @@ def cases() -> list[Case]:
         Case("rising_water", towel.replace(absorption_capacity=0.0, absorption_rate=0.0, initial_height=0.02,
                                            initial_tilt=0.0), 3.0,
              water_level=lambda t: 0.03 * min(max(t - 1.0, 0.0), 1.0)),
+        Case("hanging_sheet", hanging_sheet(), 1.0),
     ]
 
 

@@ -33,14 +33,14 @@ WETCLOTH_BINDINGS(m) {
     m.def(
         "forces_and_blocks",
         [](nb::handle cloth, nb::handle phys, nb::handle work, nb::handle pos, nb::handle vel, nb::handle water,
-           double h) {
+           double h, double slack_slope) {
             const Cloth c = cloth_from(cloth);
             Work w = work_from(work, c);
             forces_and_blocks(c, physics_from(phys), w, argument<const double>(pos, "pos", 3 * c.n),
                               argument<const double>(vel, "vel", 3 * c.n),
-                              argument<const double>(water, "water", c.n), h);
+                              argument<const double>(water, "water", c.n), h, slack_slope);
         },
         nb::arg("cloth"), nb::arg("phys"), nb::arg("work"), nb::arg("pos"), nb::arg("vel"), nb::arg("water"),
-        nb::arg("h"),
+        nb::arg("h"), nb::arg("slack_slope") = 0.0,
         "Forces as forces, plus the pieces of the system matrix M - h dF/dv - h^2 dF/dx in work.");
 }

@@ -111,22 +111,6 @@ WETCLOTH_BINDINGS(m) {
         },
         nb::arg("a"), nb::arg("b"), nb::arg("c"), nb::arg("d"), nb::arg("e"), nb::arg("f"));
     m.def(
-        "invert_blocks",
-        [](nb::handle blocks, nb::handle inverse) {
-            const Index n = size_of(blocks) / 6;
-            invert_blocks(n, argument<const double>(blocks, "blocks", 6 * n),
-                          argument<double>(inverse, "inverse", 6 * n));
-        },
-        nb::arg("blocks"), nb::arg("inverse"));
-    m.def(
-        "apply_block_inverse",
-        [](nb::handle inverse, nb::handle r, nb::handle z) {
-            const Index n = size_of(r) / 3;
-            apply_block_inverse(n, argument<const double>(inverse, "inverse", 6 * n),
-                                argument<const double>(r, "r", 3 * n), argument<double>(z, "z", 3 * n));
-        },
-        nb::arg("inverse"), nb::arg("r"), nb::arg("z"));
-    m.def(
         "conjugate_gradient_step",
         [](double alpha, nb::handle p, nb::handle ap, nb::handle x, nb::handle r) {
             const Index n = size_of(x) / 3;
@@ -142,39 +126,6 @@ WETCLOTH_BINDINGS(m) {
             next_search_direction(n, beta, argument<const double>(z, "z", 3 * n), argument<double>(p, "p", 3 * n));
         },
         nb::arg("beta"), nb::arg("z"), nb::arg("p"));
-    m.def(
-        "_combine_first_guesses",
-        [](nb::handle offsets, nb::handle direction, nb::handle along, nb::handle across, nb::handle mass,
-           nb::handle blocks, nb::handle inverse, nb::handle free, nb::handle b, nb::handle x, nb::handle r,
-           nb::handle z, nb::handle p, nb::handle ap, nb::handle buf) {
-            const Parts s = parts(offsets, direction, along, across, blocks, free, b, buf);
-            const Index n = s.cloth.n;
-            combine_first_guesses(s.cloth, s.work, argument<const double>(mass, "mass", n),
-                                  argument<const double>(inverse, "inverse", 6 * n),
-                                  argument<const double>(b, "b", 3 * n), argument<double>(x, "x", 3 * n),
-                                  argument<double>(r, "r", 3 * n), argument<double>(z, "z", 3 * n),
-                                  argument<double>(p, "p", 3 * n), argument<double>(ap, "ap", 3 * n));
-        },
-        nb::arg("offsets"), nb::arg("direction"), nb::arg("along"), nb::arg("across"), nb::arg("mass"),
-        nb::arg("blocks"), nb::arg("inverse"), nb::arg("free"), nb::arg("b"), nb::arg("x"), nb::arg("r"),
-        nb::arg("z"), nb::arg("p"), nb::arg("ap"), nb::arg("buf"));
-    m.def(
-        "solve_pcg",
-        [](nb::handle offsets, nb::handle direction, nb::handle along, nb::handle across, nb::handle mass,
-           nb::handle blocks, nb::handle inverse, nb::handle free, nb::handle b, nb::handle x, nb::handle r,
-           nb::handle z, nb::handle p, nb::handle ap, nb::handle buf, double rtol, Index max_iterations) {
-            const Parts s = parts(offsets, direction, along, across, blocks, free, b, buf);
-            const Index n = s.cloth.n;
-            const SolveResult result = solve_pcg(
-                s.cloth, s.work, argument<const double>(mass, "mass", n),
-                argument<const double>(inverse, "inverse", 6 * n), argument<const double>(b, "b", 3 * n),
-                argument<double>(x, "x", 3 * n), argument<double>(r, "r", 3 * n), argument<double>(z, "z", 3 * n),
-                argument<double>(p, "p", 3 * n), argument<double>(ap, "ap", 3 * n), rtol, max_iterations);
-            return nb::make_tuple(result.iterations, result.residual);
-        },
-        nb::arg("offsets"), nb::arg("direction"), nb::arg("along"), nb::arg("across"), nb::arg("mass"),
-        nb::arg("blocks"), nb::arg("inverse"), nb::arg("free"), nb::arg("b"), nb::arg("x"), nb::arg("r"),
-        nb::arg("z"), nb::arg("p"), nb::arg("ap"), nb::arg("buf"), nb::arg("rtol"), nb::arg("max_iterations"));
 }
 
 }  // namespace wc::py

@@ -67,7 +67,7 @@ WETCLOTH_BINDINGS(m) {
         [](nb::handle offsets, nb::handle rest, nb::handle tension_only, nb::handle stiffness, nb::handle damping,
            nb::handle projected, double wet_factor, nb::handle saturation, nb::handle pos, nb::handle vel, double h,
            nb::handle force, nb::handle rhs, nb::handle diagonal_blocks, nb::handle direction, nb::handle along,
-           nb::handle across, nb::handle buf) {
+           nb::handle across, nb::handle buf, double slack_slope) {
             const Index n = size_of(pos) / 3;
             const Cloth cloth = spring_cloth(n, offsets, rest, tension_only, stiffness, damping);
             const Index f = cloth.families;
@@ -84,14 +84,15 @@ WETCLOTH_BINDINGS(m) {
             work.buf = argument<double>(buf, "buf", n);
             spring_forces_and_blocks(cloth, phys, argument<const double>(saturation, "saturation", n),
                                      argument<const double>(pos, "pos", 3 * n),
-                                     argument<const double>(vel, "vel", 3 * n), h, work);
+                                     argument<const double>(vel, "vel", 3 * n), h, slack_slope, work);
         },
         nb::arg("offsets"), nb::arg("rest"), nb::arg("tension_only"), nb::arg("stiffness"), nb::arg("damping"),
         nb::arg("projected"), nb::arg("wet_factor"), nb::arg("saturation"), nb::arg("pos"), nb::arg("vel"),
         nb::arg("h"), nb::arg("force"), nb::arg("rhs"), nb::arg("diagonal_blocks"), nb::arg("direction"),
-        nb::arg("along"), nb::arg("across"), nb::arg("buf"),
+        nb::arg("along"), nb::arg("across"), nb::arg("buf"), nb::arg("slack_slope") = 0.0,
         "Forces as spring_forces plus h^2 K v into rhs, the springs' blocks into diagonal_blocks (6, n) and "
-        "each spring's block into direction (F, 3, n), along, across (F, n).");
+        "each spring's block into direction (F, 3, n), along, across (F, n); tension-only springs' slope along "
+        "themselves at least slack_slope in the blocks.");
 
     m.def(
         "spring_matvec",

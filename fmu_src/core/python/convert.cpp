@@ -111,8 +111,6 @@ Solver solver_from(nb::handle h, Index n) {
     s.hat_vel = array<double>(h, "hat_vel", 3 * n);
     s.predicted = array<double>(h, "predicted", 3 * n);
     s.step_acceleration = array<double>(h, "step_acceleration", 3 * n);
-    s.diagonal = array<double>(h, "diagonal", 6 * n);
-    s.inverse = array<double>(h, "inverse", 6 * n);
     s.counters = array<Index>(h, "counters", SOLVER_COUNTERS);
     return s;
 }

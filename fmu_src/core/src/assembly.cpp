@@ -104,7 +104,7 @@ void forces(const Cloth& cloth, const Physics& phys, Work& work, const double* p
 }
 
 void forces_and_blocks(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
-                       const double* water, double h) {
+                       const double* water, double h, double slack_slope) {
     const Index n = cloth.n;
     start_with_gravity(cloth, water, work.force);
     fill_zero(work.rhs, 3 * n);
@@ -112,7 +112,7 @@ void forces_and_blocks(const Cloth& cloth, const Physics& phys, Work& work, cons
     fill_zero(work.blocks, 6 * n);
     if (cloth.families > 0) {
         update_saturation(cloth, phys, water, work.saturation);
-        spring_forces_and_blocks(cloth, phys, work.saturation, pos, vel, h, work);
+        spring_forces_and_blocks(cloth, phys, work.saturation, pos, vel, h, slack_slope, work);
     }
     if (submerged(phys, n, pos + 2 * n, work.submerged) > 0.0 || !phys.skip_idle) {
         water_forces(cloth, phys, work, pos, vel, h, true);

@@ -1,4 +1,4 @@
-// Implicit steps: backward Euler (one linearised Newton step) and BDF2 (Newton iterations) (port of
+// Implicit steps: BDF2 and backward Euler, both by Newton iterations (BDF2 a port of
 // bf41571:fmu_src/wetcloth/kernels/implicit.py).
 #include "wetcloth/implicit.hpp"
 
@@ -92,9 +92,10 @@ double better_guess(Index n, const double* vel, const double* prev_vel, const do
 //: Forces and Jacobian pieces at (out_pos, out_vel), and Newton's residual into solver.rhs:
 //: free (b h F - M (v - v^)), minus the gradient of the step's incremental potential in v.
 void newton_residual(const Cloth& cloth, const Physics& phys, Work& work, Solver& solver, const double* hat_vel,
-                     const double* step_water, const double* out_pos, const double* out_vel, double bh) {
+                     const double* step_water, const double* out_pos, const double* out_vel, double bh,
+                     double slack_slope) {
     const Index n = cloth.n;
-    forces_and_blocks(cloth, phys, work, out_pos, out_vel, step_water, bh);
+    forces_and_blocks(cloth, phys, work, out_pos, out_vel, step_water, bh, slack_slope);
     const double* free = cloth.free;
     const double* mass = solver.mass;
     for (Index c = 0; c < 3; ++c) {
@@ -106,50 +107,53 @@ void newton_residual(const Cloth& cloth, const Physics& phys, Work& work, Solver
     }
 }
 
-}  // namespace
-
-double implicit_euler_step(const Cloth& cloth, const Physics& phys, Work& work, Solver& solver, const double* pos,
-                           const double* vel, const double* water, double h, double* out_pos, double* out_vel) {
+//: Descent's line search along the correction dv from the velocities out_vel, whose residual (minus
+//: the gradient of the step's incremental potential) is in solver.rhs: the step length a in (0, 1] where
+//: the potential stops falling along dv, the root of the slope dv . r(v + a dv) by false position
+//: (Illinois), or 1 where it still falls.  At most LINE_SEARCH_EVALUATIONS residuals; the last is
+//: where it leaves out_vel, out_pos and solver.rhs (so the next Newton iteration starts from it).
+//: base (3, n) is scratch.
+double line_search(const Cloth& cloth, const Physics& phys, Work& work, Solver& solver, const double* hat_pos,
+                   const double* hat_vel, const double* step_water, double bh, double slack_slope, const double* dv,
+                   double* base, double* out_pos, double* out_vel) {
     const Index n = cloth.n;
-    double* mass = solver.mass;
-    const double* free = cloth.free;
-    for (Index i = 0; i < n; ++i) mass[i] = cloth.dry_mass[i] + water[i];
-    forces_and_blocks(cloth, phys, work, pos, vel, water, h);
-    double* rhs = solver.rhs;
-    double* dv = solver.dv;
-    double* full = solver.diagonal;
-    for (Index c = 0; c < 3; ++c) {
-        const double* __restrict f = work.force + c * n;
-        const double* __restrict wr = work.rhs + c * n;
-        double* __restrict rc = rhs + c * n;
-        double* __restrict dc = dv + c * n;
-        for (Index i = 0; i < n; ++i) {
-            rc[i] = h * f[i] + wr[i];
-            dc[i] = rc[i] / mass[i] * free[i];  // first guess: the explicit step
+    const double first = dot(n, dv, solver.rhs);
+    copy(3 * n, out_vel, base);
+    const auto slope_at = [&](double a) {
+        for (Index k = 0; k < 3 * n; ++k) {
+            out_vel[k] = base[k] + a * dv[k];
+            out_pos[k] = hat_pos[k] + bh * out_vel[k];
         }
-    }
-    for (Index slot = 0; slot < 6; ++slot) {
-        const double* __restrict d = work.diagonal_blocks + slot * n;
-        const double* __restrict bl = work.blocks + slot * n;
-        double* __restrict out = full + slot * n;
-        if (slot < 3) {
-            for (Index i = 0; i < n; ++i) out[i] = d[i] + bl[i] + mass[i];
+        newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh, slack_slope);
+        return dot(n, dv, solver.rhs);
+    };
+    double high = 1.0;
+    double high_slope = slope_at(high);
+    if (!(first > 0.0 && high_slope < 0.0)) return high;  // still falling at the full step
+    double low = 0.0;
+    double low_slope = first;
+    double a = high;
+    int side = 0;  // which end the last two guesses moved (Illinois halves the other end's slope)
+    for (Index evaluation = 1; evaluation < LINE_SEARCH_EVALUATIONS; ++evaluation) {
+        a = high - high_slope * (high - low) / (high_slope - low_slope);
+        const double slope = slope_at(a);
+        if (std::fabs(slope) <= LINE_SEARCH_SLOPE * first) break;
+        if (slope > 0.0) {
+            low = a;
+            low_slope = slope;
+            if (side > 0) high_slope *= 0.5;
+            side = 1;
         } else {
-            for (Index i = 0; i < n; ++i) out[i] = d[i] + bl[i];
+            high = a;
+            high_slope = slope;
+            if (side < 0) low_slope *= 0.5;
+            side = -1;
         }
     }
-    invert_blocks(n, full, solver.inverse);
-    const SolveResult solve = solve_pcg(cloth, work, mass, solver.inverse, rhs, dv, solver.r, solver.z, solver.p,
-                                        solver.ap, EULER_CG_TOLERANCE, EULER_CG_ITERATIONS);
-    solver.counters[CG_ITERATIONS] += solve.iterations;
-    double largest = 0.0;
-    for (Index k = 0; k < 3 * n; ++k) {
-        out_vel[k] = vel[k] + dv[k];
-        out_pos[k] = pos[k] + h * out_vel[k];
-        largest = py_max(largest, std::fabs(dv[k]));
-    }
-    return largest;
+    return a;
 }
+
+}  // namespace
 
 //: With w = h / h_prev, y+ = y^ + b h f(y+) for y = (x, p), where y^ = ((1 + w)^2 y - w^2 y_prev) / (1 + 2w)
 //: and b = (1 + w) / (1 + 2w).  The momentum p = m v is the history's variable, not the velocity:
@@ -175,7 +179,8 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
                        const double* pos, const double* vel, const double* water, const double* step_water,
                        const double* prev_pos, const double* prev_vel, const double* prev_water,
                        const double* acceleration, double h, double h_prev, double newton_tolerance,
-                       double cg_tolerance, bool fixed_steps, double* memory, double* out_pos, double* out_vel) {
+                       double cg_tolerance, NewtonMode mode, bool descent, double* memory, double* out_pos,
+                       double* out_vel) {
     const Index n = cloth.n;
     double* mass = solver.mass;
     double* hat_pos = solver.hat_pos;
@@ -214,17 +219,24 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
     }
     const double bh = beta * h;
     for (Index k = 0; k < 3 * n; ++k) out_pos[k] = hat_pos[k] + bh * out_vel[k];
+    const bool adaptive = mode == NewtonMode::ADAPTIVE;
     Index factored = 0;
-    if (!fixed_steps) {  // (fixed steps build every system from the Jacobian)
+    if (adaptive) {  // (fixed steps build every system from the Jacobian)
         factored = refresh(plane, cloth, mass, bh * bh);
         solver.counters[FACTORISATIONS] += factored > 0;
     }
     follow_cloth(plane, cloth, pos);
+    const double slack_slope = descent && !adaptive ? DESCENT_SLACK_SLOPE : 0.0;
+    const Index iterations = descent ? DESCENT_NEWTON_ITERATIONS : NEWTON_ITERATIONS_MAX;
     bool converged = false;
+    bool residual_ready = false;  // the line search leaves the residual at its end in rhs
     double previous = 0.0;
-    for (Index iteration = 0; iteration < NEWTON_ITERATIONS_MAX; ++iteration) {
-        newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh);
-        if (fixed_steps) {
+    double correction = 0.0;  // m/s, the last iteration's
+    for (Index iteration = 0; iteration < iterations; ++iteration) {
+        if (!residual_ready) {
+            newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh, slack_slope);
+        }
+        if (!adaptive) {
             set_systems_from_jacobian(plane, cloth, mass, work);
             solver.counters[FACTORISATIONS] += 1;
         } else {
@@ -242,14 +254,24 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
         solver.counters[NEWTON_ITERATIONS] += 1;
         solver.counters[CG_ITERATIONS] += solve.iterations;
         solver.counters[UNCONVERGED] += !solve.solved;
+        double length = 1.0;  // of the step along dv
+        if (descent) {
+            length = line_search(cloth, phys, work, solver, hat_pos, hat_vel, step_water, bh,
+                                 slack_slope, dv, solver.step_acceleration, out_pos, out_vel);
+            residual_ready = true;
+        } else {
+            for (Index k = 0; k < 3 * n; ++k) {
+                out_vel[k] += dv[k];
+                out_pos[k] = hat_pos[k] + bh * out_vel[k];
+            }
+        }
         double largest = 0.0;
         double increment = 0.0;
         for (Index k = 0; k < 3 * n; ++k) {
-            out_vel[k] += dv[k];
-            out_pos[k] = hat_pos[k] + bh * out_vel[k];
-            largest = py_max(largest, std::fabs(dv[k]));
+            largest = py_max(largest, std::fabs(length * dv[k]));
             increment = py_max(py_max(increment, std::fabs(out_vel[k] - vel[k])), std::fabs(out_vel[k]));
         }
+        correction = largest;
         if (!std::isfinite(largest)) break;
         // The velocity's tolerance: an error left in every step's velocity is not random and adds up, so
         // it is held to a fraction of the velocity and of its change over the step, or to what moves a
@@ -276,12 +298,16 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
         previous = largest;
     }
     for (Index k = 0; k < 3 * n; ++k) solver.step_acceleration[k] = (out_vel[k] - hat_vel[k]) / bh;
+    // Descent never fails: a solve still short of its tolerance after DESCENT_NEWTON_ITERATIONS is taken,
+    // its last correction (as a position error) added to the estimate, so the user sees what it cost.
+    const double unsolved = converged ? 0.0 : bh * correction;
+    if (descent && std::isfinite(correction)) converged = true;
     if (history) {
         memory[2] = better_guess(n, vel, prev_vel, acceleration, free, h, h_prev, out_vel);
     } else {
         double error = 0.0;
         for (Index k = 0; k < 3 * n; ++k) error = py_max(error, std::fabs(out_vel[k] - vel[k]));
-        return {0.5 * h * error, converged};
+        return {0.5 * h * error + unsolved, converged};
     }
     // The difference, filtered through (approximately) A^-1 M, as Shampine filters the error estimates
     // of stiff solvers: stiff modes (in-plane vibration, a floating cloth's heave), which the scheme
@@ -295,7 +321,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
         }
     }
     apply(plane, n, free, difference, solver.z);
-    return {(1.0 + w) / (2.0 + 3.0 * w) * largest_of(n, solver.z), converged};
+    return {(1.0 + w) / (2.0 + 3.0 * w) * largest_of(n, solver.z) + unsolved, converged};
 }
 
 }  // namespace wc

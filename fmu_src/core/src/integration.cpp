@@ -97,42 +97,6 @@ double dot(Index n, const double* a, const double* b) {
     return sum;
 }
 
-void invert_blocks(Index n, const double* blocks, double* inverse) {
-    for (Index i = 0; i < n; ++i) {
-        Adjugate m = symmetric_adjugate(blocks[i], blocks[n + i], blocks[2 * n + i], blocks[3 * n + i],
-                                        blocks[4 * n + i], blocks[5 * n + i]);
-        if (!(m.det > 0.0)) m = {1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0};
-        const double scale = 1.0 / m.det;
-        inverse[i] = m.c11 * scale;
-        inverse[n + i] = m.c22 * scale;
-        inverse[2 * n + i] = m.c33 * scale;
-        inverse[3 * n + i] = m.c12 * scale;
-        inverse[4 * n + i] = m.c13 * scale;
-        inverse[5 * n + i] = m.c23 * scale;
-    }
-}
-
-void apply_block_inverse(Index n, const double* inverse, const double* r, double* z) {
-    const double* __restrict v0 = inverse;
-    const double* __restrict v1 = inverse + n;
-    const double* __restrict v2 = inverse + 2 * n;
-    const double* __restrict v3 = inverse + 3 * n;
-    const double* __restrict v4 = inverse + 4 * n;
-    const double* __restrict v5 = inverse + 5 * n;
-    const double* __restrict rx = r;
-    const double* __restrict ry = r + n;
-    const double* __restrict rz = r + 2 * n;
-    double* __restrict zx = z;
-    double* __restrict zy = z + n;
-    double* __restrict zz = z + 2 * n;
-    for (Index i = 0; i < n; ++i) {
-        const double x = rx[i], y = ry[i], w = rz[i];
-        zx[i] = v0[i] * x + v3[i] * y + v4[i] * w;
-        zy[i] = v3[i] * x + v1[i] * y + v5[i] * w;
-        zz[i] = v4[i] * x + v5[i] * y + v2[i] * w;
-    }
-}
-
 void conjugate_gradient_step(Index n, double alpha, const double* p, const double* ap, double* x, double* r) {
     const double* __restrict pp = p;
     const double* __restrict aa = ap;
@@ -148,71 +112,6 @@ void next_search_direction(Index n, double beta, const double* z, double* p) {
     const double* __restrict zz = z;
     double* __restrict pp = p;
     for (Index k = 0; k < 3 * n; ++k) pp[k] = zz[k] + beta * pp[k];
-}
-
-//: The given guess (the explicit step) is right for smooth motion, which the springs barely resist; the
-//: block-Jacobi solve B^-1 b is right for stiff, local motion.  Their best combination is at least as
-//: good as either, for two products with A.
-void combine_first_guesses(const Cloth& cloth, const Work& work, const double* mass, const double* inverse,
-                           const double* b, double* x, double* r, double* z, double* p, double* ap) {
-    const Index n = cloth.n;
-    const double* free = cloth.free;
-    apply_block_inverse(n, inverse, b, z);
-    for (Index c = 0; c < 3; ++c) {
-        double* __restrict zc = z + c * n;
-        for (Index i = 0; i < n; ++i) zc[i] *= free[i];
-    }
-    system_matvec(cloth, work, mass, x, ap);
-    system_matvec(cloth, work, mass, z, p);
-    const double a11 = dot(n, x, ap), a12 = dot(n, x, p), a22 = dot(n, z, p);
-    const double b1 = dot(n, b, x), b2 = dot(n, b, z);
-    const double det = a11 * a22 - a12 * a12;
-    double c1 = 0.0, c2 = 0.0;
-    if (det > 1e-12 * a11 * a22) {
-        c1 = (b1 * a22 - b2 * a12) / det;
-        c2 = (a11 * b2 - a12 * b1) / det;
-    } else if (a22 > 0.0) {  // the two guesses are (nearly) parallel: the best multiple of the second
-        c2 = b2 / a22;
-    }  // else no force at all
-    for (Index c = 0; c < 3; ++c) {
-        double* __restrict xc = x + c * n;
-        double* __restrict rc = r + c * n;
-        const double* __restrict zc = z + c * n;
-        const double* __restrict bc = b + c * n;
-        const double* __restrict apc = ap + c * n;
-        const double* __restrict pc = p + c * n;
-        for (Index i = 0; i < n; ++i) {
-            xc[i] = c1 * xc[i] + c2 * zc[i];
-            rc[i] = free[i] * bc[i] - c1 * apc[i] - c2 * pc[i];
-        }
-    }
-}
-
-SolveResult solve_pcg(const Cloth& cloth, const Work& work, const double* mass, const double* inverse,
-                      const double* b, double* x, double* r, double* z, double* p, double* ap, double rtol,
-                      Index max_iterations) {
-    const Index n = cloth.n;
-    combine_first_guesses(cloth, work, mass, inverse, b, x, r, z, p, ap);
-    apply_block_inverse(n, inverse, r, z);
-    copy(3 * n, z, p);
-    double b_norm = std::sqrt(dot(n, b, b));
-    if (b_norm == 0.0) b_norm = 1.0;
-    double rz = dot(n, r, z);
-    double residual = std::sqrt(dot(n, r, r)) / b_norm;
-    Index iterations = 0;
-    while (residual > rtol && iterations < max_iterations) {
-        system_matvec(cloth, work, mass, p, ap);
-        const double p_ap = dot(n, p, ap);
-        if (p_ap <= 0.0) break;
-        conjugate_gradient_step(n, rz / p_ap, p, ap, x, r);
-        apply_block_inverse(n, inverse, r, z);
-        const double rz_new = dot(n, r, z);
-        next_search_direction(n, rz_new / rz, z, p);
-        rz = rz_new;
-        residual = std::sqrt(dot(n, r, r)) / b_norm;
-        iterations += 1;
-    }
-    return {iterations, residual};
 }
 
 }  // namespace wc

@@ -399,7 +399,7 @@ Simulation::Simulation(const Scene& scene) : scene_(scene), topo_(build_topology
     }
 
     // Solver (make_solver).
-    solver_.assign(un * (1 + 10 * 3 + 6 + 6), 0.0);
+    solver_.assign(un * (1 + 10 * 3), 0.0);
     counters_.assign(SOLVER_COUNTERS, 0);
     {
         double* p = solver_.data();
@@ -420,8 +420,6 @@ Simulation::Simulation(const Scene& scene) : scene_(scene), topo_(build_topology
         s.hat_vel = take(3 * un);
         s.predicted = take(3 * un);
         s.step_acceleration = take(3 * un);
-        s.diagonal = take(6 * un);
-        s.inverse = take(6 * un);
         s.counters = counters_.data();
     }
 

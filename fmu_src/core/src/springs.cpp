@@ -147,7 +147,8 @@ inline void add_spring_forces(Index n, Index off, const double* t, bool projecte
 //: Per spring: force coefficient t (as tension, without thesis damping), unit direction u (ux, uy,
 //: uz) and the system-matrix block along u u^T + across (I - u u^T) (kg).
 template <Law L>
-void coefficients_loop(Index m, double l0, bool projected, double wet_factor, double h, const double* __restrict kf,
+void coefficients_loop(Index m, double l0, bool projected, double wet_factor, double h, double slack_slope,
+                       const double* __restrict kf,
                        const double* __restrict cf, const double* __restrict si, const double* __restrict sj,
                        const double* __restrict xi, const double* __restrict yi, const double* __restrict zi,
                        const double* __restrict xj, const double* __restrict yj, const double* __restrict zj,
@@ -172,7 +173,7 @@ void coefficients_loop(Index m, double l0, bool projected, double wet_factor, do
         if (L != Law::BOTH_WAYS) {
             const Stretch s = pulled<L>(stretch, width);
             stretch = s.value;
-            slope = s.slope;
+            slope = py_max(s.slope, slack_slope);
         }
         const double rate = (vxi[k] - vxj[k]) * ex + (vyi[k] - vyj[k]) * ey + (vzi[k] - vzj[k]) * ez;
         t[k] = -(g.stiffness * stretch * g.inv + damp_along * cf[k] * rate * g.inv);
@@ -185,8 +186,8 @@ void coefficients_loop(Index m, double l0, bool projected, double wet_factor, do
 template <Law L>
 void coefficients(Index n, Index off, double l0, bool projected, const double* kf, const double* cf,
                   double wet_factor, const double* saturation, const double* pos, const double* vel, double h,
-                  double* t, double* u, double* along, double* across) {
-    coefficients_loop<L>(n - off, l0, projected, wet_factor, h, kf, cf, saturation, saturation + off, pos,
+                  double slack_slope, double* t, double* u, double* along, double* across) {
+    coefficients_loop<L>(n - off, l0, projected, wet_factor, h, slack_slope, kf, cf, saturation, saturation + off, pos,
                                    pos + n, pos + 2 * n, pos + off, pos + n + off, pos + 2 * n + off, vel, vel + n,
                                    vel + 2 * n, vel + off, vel + n + off, vel + 2 * n + off, t, u, u + n, u + 2 * n,
                                    along, across);
@@ -357,7 +358,7 @@ void spring_forces(const Cloth& cloth, const Physics& phys, const double* satura
 }
 
 void spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos,
-                              const double* vel, double h, Work& work) {
+                              const double* vel, double h, double slack_slope, Work& work) {
     const Index n = cloth.n;
     double* t = work.buf;
     for (Index f = 0; f < cloth.families; ++f) {
@@ -371,15 +372,15 @@ void spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const dou
         switch (law_of(cloth.tension_only[f], l0)) {
             case Law::BOTH_WAYS:
                 coefficients<Law::BOTH_WAYS>(n, off, l0, phys.projected, kf, cf, phys.wet_factor, saturation, pos, vel,
-                                             h, t, u, along, across);
+                                             h, slack_slope, t, u, along, across);
                 break;
             case Law::CLAMPED:
                 coefficients<Law::CLAMPED>(n, off, l0, phys.projected, kf, cf, phys.wet_factor, saturation, pos, vel, h,
-                                           t, u, along, across);
+                                           slack_slope, t, u, along, across);
                 break;
             case Law::EXACT:
                 coefficients<Law::EXACT>(n, off, l0, phys.projected, kf, cf, phys.wet_factor, saturation, pos, vel, h,
-                                         t, u, along, across);
+                                         slack_slope, t, u, along, across);
                 break;
         }
         add_spring_forces(n, off, t, phys.projected, cf, pos, vel, work.force);

@@ -50,15 +50,10 @@ Trial take_step(Core& core, double h) {
                                             buf.trial_pos, buf.trial_vel);
         return {0.5 * h * largest, 1, true};  // |h (v+ - v)| / 2: first- against second-order update
     }
-    if (core.control.integrator == IMPLICIT_EULER) {
-        const double largest = implicit_euler_step(cloth, phys, core.work, solver, buf.pos, buf.vel, buf.water, h,
-                                                   buf.trial_pos, buf.trial_vel);
-        return {0.5 * h * largest, 1, true};
-    }
-    // BDF2 takes the forces and inertia at the end of the step, so it needs the water the cloth will hold
-    // then: the uptake along the extrapolated path (the exact uptake follows the step).
+    // Backward Euler is BDF2's first step, without history, solved by descent: its steps never fail.
+    const bool euler = core.control.integrator == IMPLICIT_EULER;
     double* clock = core.clock;
-    const double h_prev = clock[LAST_STEP];
+    const double h_prev = euler ? 0.0 : clock[LAST_STEP];
     double* step_water = buf.trial_water;
     copy(n, buf.water, step_water);
     if (absorbing(phys)) {
@@ -76,11 +71,13 @@ Trial take_step(Core& core, double h) {
         uptake(n, z, predicted, vz, predicted_speed, surface(phys), cloth.dry_mass, phys.absorption_capacity,
                phys.absorption_rate, h, buf.water, step_water);
     }
+    const NewtonMode mode = core.control.allowed > 0.0 ? NewtonMode::ADAPTIVE : NewtonMode::FIXED;
     const StepEstimate step = bdf2_step(cloth, phys, core.work, solver, core.plane, buf.pos, buf.vel, buf.water,
                                         step_water, buf.prev_pos, buf.prev_vel, buf.prev_water, buf.acceleration, h,
-                                        h_prev, core.control.newton_tolerance, core.control.cg_tolerance,
-                                        !(core.control.allowed > 0.0), clock + NEWTON_RATE, buf.trial_pos,
-                                        buf.trial_vel);
+                                        h_prev, core.control.newton_tolerance,
+                                        euler ? CG_TOLERANCE : core.control.cg_tolerance, mode, euler,
+                                        clock + NEWTON_RATE,
+                                        buf.trial_pos, buf.trial_vel);
     return {step.error, h_prev > 0.0 ? 2 : 1, step.converged};
 }
 

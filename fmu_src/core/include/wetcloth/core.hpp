@@ -93,8 +93,7 @@ enum SolverCounter : Index { NEWTON_ITERATIONS = 0, CG_ITERATIONS = 1, FACTORISA
 
 //: Scratch of the implicit steps, each (3, n) unless noted: mass (n) kg; rhs, dv, r, z, p, ap of the
 //: linear solves; hat_pos, hat_vel the BDF2 history terms; predicted the extrapolated positions;
-//: step_acceleration (3, n) m/s2; diagonal (6, n) the system's diagonal blocks and inverse (6, n)
-//: their inverses; counters (4) int64.
+//: step_acceleration (3, n) m/s2; counters (4) int64.
 struct Solver {
     double* mass = nullptr;
     double* rhs = nullptr;
@@ -107,8 +106,6 @@ struct Solver {
     double* hat_vel = nullptr;
     double* predicted = nullptr;
     double* step_acceleration = nullptr;
-    double* diagonal = nullptr;
-    double* inverse = nullptr;
     Index* counters = nullptr;
 };
 

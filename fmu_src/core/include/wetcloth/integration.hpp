@@ -33,7 +33,7 @@ void system_matvec(const Cloth& cloth, const Work& work, const double* mass, con
 double dot(Index n, const double* a, const double* b);
 
 //: The adjugate of the symmetric 3x3 matrix [[a, d, e], [d, b, f], [e, f, c]] and its determinant; the
-//: inverse is the adjugate over det.
+//: inverse is the adjugate over det (an impact zone's inertia, self_contact/response.cpp).
 struct Adjugate {
     double c11, c22, c33, c12, c13, c23, det;
 };
@@ -47,33 +47,10 @@ inline Adjugate symmetric_adjugate(double a, double b, double c, double d, doubl
     return {c11, c22, c33, c12, c13, c23, a * c11 + d * c12 + e * c13};
 }
 
-//: Invert symmetric 3x3 blocks (6, n: xx, yy, zz, xy, xz, yz) into inverse (6, n); a block that is not
-//: positive definite (a pinned particle's, whose rows are zero) gets the identity.
-void invert_blocks(Index n, const double* blocks, double* inverse);
-
-//: z = B^-1 r with B^-1 the (6, n) inverted diagonal blocks.
-void apply_block_inverse(Index n, const double* inverse, const double* r, double* z);
-
 //: One conjugate-gradient update along p (ap = A p), in place: x += alpha p, r -= alpha A p.
 void conjugate_gradient_step(Index n, double alpha, const double* p, const double* ap, double* x, double* r);
 
 //: The next conjugate-gradient search direction, in place: p = z + beta p.
 void next_search_direction(Index n, double beta, const double* z, double* p);
-
-//: Replace the first guess x by the combination c1 x + c2 B^-1 b that minimises x.A x / 2 - b.x and
-//: leave its residual in r; z, p, ap scratch (3, n).
-void combine_first_guesses(const Cloth& cloth, const Work& work, const double* mass, const double* inverse,
-                           const double* b, double* x, double* r, double* z, double* p, double* ap);
-
-struct SolveResult {
-    Index iterations;
-    double residual;  // relative to |b|
-};
-
-//: Solve A x = b (A as in system_matvec) by block-Jacobi-preconditioned conjugate gradients from the
-//: first guess in x, until |r| <= rtol |b| or max_iterations; r, z, p, ap scratch (3, n).
-SolveResult solve_pcg(const Cloth& cloth, const Work& work, const double* mass, const double* inverse,
-                      const double* b, double* x, double* r, double* z, double* p, double* ap, double rtol,
-                      Index max_iterations);
 
 }  // namespace wc

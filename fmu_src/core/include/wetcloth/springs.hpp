@@ -25,9 +25,11 @@ void spring_forces(const Cloth& cloth, const Physics& phys, const double* satura
                    const double* vel, double* force, double* buf);
 
 //: Forces as spring_forces plus one backward-Euler Newton step's pieces: adds to work.force, work.rhs
-//: (h^2 K v) and work.diagonal_blocks; writes work.direction, along, across; work.buf as scratch.
+//: (h^2 K v) and work.diagonal_blocks; writes work.direction, along, across; work.buf as scratch.  A
+//: tension-only spring's stiffness along itself enters the blocks at no less than slack_slope times k
+//: (0: its true slope, nothing while slack).
 void spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos,
-                              const double* vel, double h, Work& work);
+                              const double* vel, double h, double slack_slope, Work& work);
 
 //: Add the springs' part of the system matrix (work.direction, along, across) times p (3, n) to out;
 //: rows 0 and 1 of work.buf as scratch.

@@ -17,6 +17,7 @@
 
 #include <cmath>
 
+#include "wetcloth/integration.hpp"
 #include "wetcloth/self_contact.hpp"
 #include "wetcloth/self_contact/broad_phase.hpp"
 #include "wetcloth/self_contact/geometry.hpp"
@@ -220,18 +221,11 @@ inline Vec3 solve_inertia(const double* s, Index n, Index r) {
     xx += eps;
     yy += eps;
     zz += eps;
-    // The adjugate of [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]] and its determinant (symmetric_adjugate).
-    const double c00 = yy * zz - yz * yz;
-    const double c11 = xx * zz - xz * xz;
-    const double c22 = xx * yy - xy * xy;
-    const double c01 = xz * yz - xy * zz;
-    const double c02 = xy * yz - yy * xz;
-    const double c12 = xy * xz - xx * yz;
-    const double det = xx * c00 + xy * c01 + xz * c02;
+    const Adjugate a = symmetric_adjugate(xx, yy, zz, xy, xz, yz);
     const double lx = s[MOMENT * n + r], ly = s[(MOMENT + 1) * n + r], lz = s[(MOMENT + 2) * n + r];
-    if (!(det > 0.0)) return {0.0, 0.0, 0.0};
-    return {(c00 * lx + c01 * ly + c02 * lz) / det, (c01 * lx + c11 * ly + c12 * lz) / det,
-            (c02 * lx + c12 * ly + c22 * lz) / det};
+    if (!(a.det > 0.0)) return {0.0, 0.0, 0.0};
+    return {(a.c11 * lx + a.c12 * ly + a.c13 * lz) / a.det, (a.c12 * lx + a.c22 * ly + a.c23 * lz) / a.det,
+            (a.c13 * lx + a.c23 * ly + a.c33 * lz) / a.det};
 }
 
 //: Give every zone (a root with members) the rigid motion of its members' linear and angular momentum over

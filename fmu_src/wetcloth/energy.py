@@ -1,0 +1,37 @@
+"""The cloth's mechanical energy: kinetic, gravitational and the springs' elastic energy (J).
+
+What the fixed-step mode promises not to grow (docs/model.md section 7) and what the hanging-sheet
+benchmark reports.  Water's forces (buoyancy, drag) and its uptake are not counted: it is the energy
+of a cloth in air.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from wetcloth._core import GRAVITY, TENSION_ROUNDING
+
+
+def elastic_energy(stretch: np.ndarray, stiffness: np.ndarray, width: float | None) -> float:
+    """Energy (J) of springs of ``stiffness`` (N/m) stretched by ``stretch`` (m): ``k s^2 / 2`` both
+    ways (``width`` None), or the integral of the tension-only law (docs/model.md section 3), rounded
+    over its first ``width`` (m) of stretch and zero when compressed."""
+    if width is None:
+        return float(np.sum(0.5 * stiffness * stretch**2))
+    s = np.maximum(stretch, 0.0)
+    rounded = stiffness * (2 * s**3 / (3 * width) - s**4 / (4 * width**2))
+    beyond = stiffness * (5 / 12 * width**2 + (s**2 - width**2) / 2)
+    return float(np.sum(np.where(s < width, rounded, beyond)))
+
+
+def mechanical_energy(sim) -> float:
+    """Kinetic + gravitational (zero at z = 0) + elastic energy (J) of a Simulation's cloth, each spring
+    with its dry stiffness."""
+    cloth, state = sim.model.cloth, sim.state
+    mass = np.asarray(cloth.dry_mass) + state.water
+    energy = 0.5 * np.sum(mass * state.vel**2) + GRAVITY * np.sum(mass * state.pos[2])
+    for offset, rest, tension_only, stiffness in zip(cloth.offsets, cloth.rest, cloth.tension_only, cloth.stiffness):
+        i = np.flatnonzero(stiffness)
+        stretch = np.linalg.norm(state.pos[:, i] - state.pos[:, i + offset], axis=0) - rest
+        energy += elastic_energy(stretch, stiffness[i], TENSION_ROUNDING * rest if tension_only else None)
+    return float(energy)
