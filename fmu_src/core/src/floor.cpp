@@ -68,7 +68,7 @@ Index release_slipping(Index n, double friction, const double* force, double* fr
     const double* fy = force + n;
     const double* fz = force + 2 * n;
     for (Index i = 0; i < n; ++i) {
-        if (held[i] == 0.0) continue;
+        if (held[i] != 1.0) continue;  // (held on a layer: self_contact's release_from_layers)
         const double pressing = -fz[i];
         const double along = std::sqrt(fx[i] * fx[i] + fy[i] * fy[i]);
         if (pressing <= 0.0 || along > friction * pressing) {

@@ -158,6 +158,7 @@ Status step(Core& core, double remaining) {
     // Particles at rest on the floor take no part in the step (a constraint of its solve) unless its forces
     // would move them; the model's free flags are theirs again before the step ends.
     Index held = hold_resting(n, phys.floor_z, buf.pos, buf.vel, cloth.free, buf.held);
+    held += hold_on_layers(core.contact, phys.thickness, n, buf.pos, buf.vel, cloth.free, buf.held);
     double h = 0.0;
     Trial trial{};
     int rejections = 0;  // by the controller (the floor's releases are bounded by the particles held)
@@ -176,7 +177,8 @@ Status step(Core& core, double remaining) {
         h = remaining / pymax(1.0, std::ceil(remaining / planned - STEP_COUNT_SLACK));
         trial = take_step(core, h);
         if (held > 0 && trial.converged) {
-            const Index released = release_slipping(n, phys.floor_friction, core.work.force, cloth.free, buf.held);
+            const Index released = release_slipping(n, phys.floor_friction, core.work.force, cloth.free, buf.held) +
+                                   release_from_layers(core.contact, n, core.work.force, cloth.free, buf.held);
             if (released > 0) {  // redo the step with them free
                 held -= released;
                 clock[REJECTED] += 1;

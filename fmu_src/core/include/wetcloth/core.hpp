@@ -175,6 +175,8 @@ struct ContactLists {
     std::vector<Index> tiers;           // each tier's cells of the rest sheet (self_contact/tiers.hpp)
     std::vector<double> allowances;     // (tiers) m: how far each tier's windows may move beyond a rigid motion
     std::vector<double> tier_scratch;   // the tiers' sums and fits
+    std::vector<Index> resting;         // (n, 3) what a particle held on a layer rests on (-1 padding)
+    std::vector<double> resting_normal;  // (n, 3) the unit normal from that support to the particle
     Index point_triangle_count() const { return static_cast<Index>(point_triangle.size() / 2); }
     Index edge_edge_count() const { return static_cast<Index>(edge_edge.size() / 2); }
 };

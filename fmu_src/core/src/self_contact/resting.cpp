@@ -1,0 +1,129 @@
+// Layers at rest on layers (docs/model.md section 6.2): held for a step the way the floor holds the
+// particles lying on it (floor.cpp).
+//
+// A towel that sank onto the floor with a crease over itself has particles lying on the layer below.
+// Left free, gravity pulls them into that layer in every step and the self-collision stage pushes them
+// back: a kink in every step, each one restarting BDF2 at a millisecond, for ever.  Held instead, they
+// take no part in the step while the force on them presses them onto the layer within the friction
+// cone, as the floor's particles do, and the steps grow.
+#include <cmath>
+#include <vector>
+
+#include "wetcloth/self_contact.hpp"
+#include "wetcloth/self_contact/geometry.hpp"
+
+namespace wc {
+
+namespace {
+
+using self_contact::Vec3;
+
+bool all_still(const double* free, const Index* support) {
+    for (int k = 0; k < 3; ++k) {
+        if (support[k] >= 0 && free[support[k]] != 0.0) return false;
+    }
+    return true;
+}
+
+//: Hold particle p (free) on a still support (up to 3 particles, -1 padding) lying along `normal` (unit,
+//: from the support to p) at `distance` (m), if it is at rest there or coming onto it slowly enough that
+//: the self-collision response's inelastic impulse would stop it.  Returns whether it held it.
+bool hold_if_resting(ContactLists& lists, double thickness, double friction, Index n, const double* vel, double* free,
+                     double* held, Index p, const Index support[3], const Vec3& normal, double distance) {
+    if (free[p] == 0.0 || !all_still(free, support)) return false;
+    if (!(distance > 0.0 && distance <= (1.0 + RESTING_SLACK) * thickness)) return false;
+    const double vx = vel[p], vy = vel[n + p], vz = vel[2 * n + p];
+    const double approach = -(vx * normal.x + vy * normal.y + vz * normal.z);  // m/s onto the support
+    const double sx = vx + approach * normal.x, sy = vy + approach * normal.y, sz = vz + approach * normal.z;
+    const double sliding = std::sqrt(sx * sx + sy * sy + sz * sz);
+    if (approach < 0.0 || sliding > friction * approach ||
+        approach * approach + sliding * sliding > RESTING_SPEED * RESTING_SPEED) {
+        return false;
+    }
+    free[p] = 0.0;
+    held[p] = LAYER_HELD;
+    const std::size_t i = static_cast<std::size_t>(p);
+    for (int k = 0; k < 3; ++k) lists.resting[3 * i + k] = support[k];
+    lists.resting_normal[3 * i] = normal.x;
+    lists.resting_normal[3 * i + 1] = normal.y;
+    lists.resting_normal[3 * i + 2] = normal.z;
+    return true;
+}
+
+}  // namespace
+
+Index hold_on_layers(Contact& contact, double thickness, Index n, const double* pos, const double* vel, double* free,
+                     double* held) {
+    using namespace self_contact;
+    if (!contact.enabled) return 0;
+    ContactLists& lists = *contact.lists;
+    const Index points = lists.point_triangle_count();
+    const Index edges = lists.edge_edge_count();
+    if (points + edges == 0) return 0;
+    lists.resting.assign(3 * static_cast<std::size_t>(n), -1);
+    lists.resting_normal.assign(3 * static_cast<std::size_t>(n), 0.0);
+    const double friction = contact.friction;
+    Index count = 0;
+    for (Index pass = 0; pass < RESTING_PASSES; ++pass) {
+        Index added = 0;
+        for (Index j = 0; j < points; ++j) {  // a particle on a triangle
+            const Index p = lists.point_triangle[j];
+            const Index* t = contact.triangles + 3 * lists.point_triangle[points + j];
+            const Vec3 x0 = point(pos, n, p), x1 = point(pos, n, t[0]), x2 = point(pos, n, t[1]),
+                       x3 = point(pos, n, t[2]);
+            const Vec3 d = combine(closest(POINT_TRIANGLE, x0, x1, x2, x3), x0, x1, x2, x3);
+            const double length = norm(d);
+            const Vec3 normal = {d.x / length, d.y / length, d.z / length};
+            added += hold_if_resting(lists, thickness, friction, n, vel, free, held, p, t, normal, length);
+        }
+        for (Index j = 0; j < edges; ++j) {  // the ends of an edge on an edge
+            const Index* a = contact.edges + 2 * lists.edge_edge[j];
+            const Index* b = contact.edges + 2 * lists.edge_edge[edges + j];
+            const Vec3 x0 = point(pos, n, a[0]), x1 = point(pos, n, a[1]), x2 = point(pos, n, b[0]),
+                       x3 = point(pos, n, b[1]);
+            const Vec3 d = combine(closest(EDGE_EDGE, x0, x1, x2, x3), x0, x1, x2, x3);  // from b to a
+            const double length = norm(d);
+            const Vec3 up = {d.x / length, d.y / length, d.z / length};
+            const Vec3 down = {-up.x, -up.y, -up.z};
+            const Index on_b[3] = {b[0], b[1], -1};
+            const Index on_a[3] = {a[0], a[1], -1};
+            for (int k = 0; k < 2; ++k) {
+                added += hold_if_resting(lists, thickness, friction, n, vel, free, held, a[k], on_b, up, length);
+                added += hold_if_resting(lists, thickness, friction, n, vel, free, held, b[k], on_a, down, length);
+            }
+        }
+        count += added;
+        if (added == 0) break;
+    }
+    return count;
+}
+
+Index release_from_layers(Contact& contact, Index n, const double* force, double* free, double* held) {
+    if (!contact.enabled) return 0;
+    const ContactLists& lists = *contact.lists;
+    Index released = 0;
+    bool again = true;
+    while (again) {  // a particle whose support was released goes too
+        again = false;
+        for (Index p = 0; p < n; ++p) {
+            if (held[p] != LAYER_HELD) continue;
+            const std::size_t i = static_cast<std::size_t>(p);
+            const double nx = lists.resting_normal[3 * i], ny = lists.resting_normal[3 * i + 1],
+                         nz = lists.resting_normal[3 * i + 2];
+            const double fx = force[p], fy = force[n + p], fz = force[2 * n + p];
+            const double pressing = -(fx * nx + fy * ny + fz * nz);
+            const double ax = fx + pressing * nx, ay = fy + pressing * ny, az = fz + pressing * nz;
+            const double along = std::sqrt(ax * ax + ay * ay + az * az);
+            if (all_still(free, &lists.resting[3 * i]) && pressing > 0.0 && along <= contact.friction * pressing) {
+                continue;
+            }
+            held[p] = 0.0;
+            free[p] = 1.0;
+            released += 1;
+            again = true;
+        }
+    }
+    return released;
+}
+
+}  // namespace wc
