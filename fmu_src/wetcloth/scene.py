@@ -105,7 +105,8 @@ class Scene:
     # --- time integration
     integrator: str = _param(
         "bdf2", "-", "time integrator: 'bdf2' (second order, implicit, steps set by the tolerance), "
-        "'implicit_euler', 'symplectic_euler', or 'explicit_euler' (the thesis scheme)", choices=INTEGRATORS)
+        "'implicit_euler' (first order; with tolerance 0 and max_step one frame, frame-long steps that never "
+        "fail), 'symplectic_euler', or 'explicit_euler' (the thesis scheme)", choices=INTEGRATORS)
     tolerance: float = _param(
         5e-6, "-", "local position error per step relative to the cloth size; 0 = fixed steps", 0.0, 1.0
     )

@@ -178,7 +178,7 @@ Status step(Core& core, double remaining) {
         trial = take_step(core, h);
         if (held > 0 && trial.converged) {
             const Index released = release_slipping(n, phys.floor_friction, core.work.force, cloth.free, buf.held) +
-                                   release_from_layers(core.contact, n, core.work.force, cloth.free, buf.held);
+                                   release_unsupported(core.contact, n, cloth.free, buf.held);
             if (released > 0) {  // redo the step with them free
                 held -= released;
                 clock[REJECTED] += 1;
@@ -222,7 +222,10 @@ Status step(Core& core, double remaining) {
         clock[REJECTED] += 1;
         ++rejections;
     }
-    if (held > 0) release_all(n, cloth.free, buf.held);
+    if (held > 0) {
+        mark_sliding(core.contact, n, core.work.force, buf.held);
+        release_all(n, cloth.free, buf.held);
+    }
     if (std::isfinite(trial.error)) clock[LARGEST_ERROR] = pymax(clock[LARGEST_ERROR], trial.error);
     if (!(h > 0.0 && clock[TIME] + h > clock[TIME])) {  // a step that would not advance the time
         clock[FAILED_STEP] = h;

@@ -35,9 +35,14 @@ inline constexpr double LAYER_HELD = 2.0;
 Index hold_on_layers(Contact& contact, double thickness, Index n, const double* pos, const double* vel, double* free,
                      double* held);
 
-//: Release the layer-held particles that the step's force (3, n) lifts off their support, pushes along it
-//: beyond friction times the force into it, or whose support is no longer still; returns how many (the
-//: step is then to be redone).
-Index release_from_layers(Contact& contact, Index n, const double* force, double* free, double* held);
+//: Release the layer-held particles whose support is no longer still (the floor released one of its
+//: particles), and those resting on them; returns how many (the step is then to be redone).
+Index release_unsupported(Contact& contact, Index n, double* free, double* held);
+
+//: After a step is taken: the layer-held particles that its force (3, n) lifts off their support or pushes
+//: along it beyond friction times the force into it are not held in the next step (they were held in
+//: this one: their sliding starts a step late, instead of the step being taken again as the floor's
+//: releases are; on the edge-on drop into a pool, redoing them took 1.8 times the steps).  Returns how many.
+Index mark_sliding(Contact& contact, Index n, const double* force, const double* held);
 
 }  // namespace wc
