@@ -158,7 +158,11 @@ Status step(Core& core, double remaining) {
     // Particles at rest on the floor take no part in the step (a constraint of its solve) unless its forces
     // would move them; the model's free flags are theirs again before the step ends.
     Index held = hold_resting(n, phys.floor_z, buf.pos, buf.vel, cloth.free, buf.held);
-    held += hold_on_layers(core.contact, phys.thickness, n, buf.pos, buf.vel, cloth.free, buf.held);
+    const Index on_layers = hold_on_layers(core.contact, phys.thickness, n, buf.pos, buf.vel, cloth.free, buf.held);
+    if (on_layers > 0) {  // whom the forces in hand would slide off their layer go free at once
+        forces(cloth, phys, core.work, buf.pos, buf.vel, buf.water);
+        held += on_layers - release_sliding(core.contact, n, core.work.force, cloth.free, buf.held);
+    }
     double h = 0.0;
     Trial trial{};
     int rejections = 0;  // by the controller (the floor's releases are bounded by the particles held)
@@ -222,10 +226,7 @@ Status step(Core& core, double remaining) {
         clock[REJECTED] += 1;
         ++rejections;
     }
-    if (held > 0) {
-        mark_sliding(core.contact, n, core.work.force, buf.held);
-        release_all(n, cloth.free, buf.held);
-    }
+    if (held > 0) release_all(n, cloth.free, buf.held);
     if (std::isfinite(trial.error)) clock[LARGEST_ERROR] = pymax(clock[LARGEST_ERROR], trial.error);
     if (!(h > 0.0 && clock[TIME] + h > clock[TIME])) {  // a step that would not advance the time
         clock[FAILED_STEP] = h;

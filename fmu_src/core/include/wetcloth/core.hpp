@@ -177,7 +177,6 @@ struct ContactLists {
     std::vector<double> tier_scratch;   // the tiers' sums and fits
     std::vector<Index> resting;         // (n, 3) what a particle held on a layer rests on (-1 padding)
     std::vector<double> resting_normal;  // (n, 3) the unit normal from that support to the particle
-    std::vector<char> released;          // (n) 1 for a particle released from a layer in the step before
     Index point_triangle_count() const { return static_cast<Index>(point_triangle.size() / 2); }
     Index edge_edge_count() const { return static_cast<Index>(edge_edge.size() / 2); }
 };

@@ -39,10 +39,12 @@ Index hold_on_layers(Contact& contact, double thickness, Index n, const double* 
 //: particles), and those resting on them; returns how many (the step is then to be redone).
 Index release_unsupported(Contact& contact, Index n, double* free, double* held);
 
-//: After a step is taken: the layer-held particles that its force (3, n) lifts off their support or pushes
-//: along it beyond friction times the force into it are not held in the next step (they were held in
-//: this one: their sliding starts a step late, instead of the step being taken again as the floor's
-//: releases are; on the edge-on drop into a pool, redoing them took 1.8 times the steps).  Returns how many.
-Index mark_sliding(Contact& contact, Index n, const double* force, const double* held);
+//: Before a step: release the layer-held particles that the force now on them (3, n; computed at the
+//: step's start) lifts off their support or pushes along it beyond friction times the force into it,
+//: and those resting on them; returns how many.  (At the end of the step its force is checked again only
+//: for supports the floor let go: a particle held one step too many starts sliding a step late, where
+//: taking such steps again, as the floor's releases are, cost the edge-on drop into a pool 1.8 times the
+//: steps.)
+Index release_sliding(Contact& contact, Index n, const double* force, double* free, double* held);
 
 }  // namespace wc

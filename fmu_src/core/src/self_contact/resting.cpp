@@ -30,7 +30,7 @@ bool all_still(const double* free, const Index* support) {
 //: the self-collision response's inelastic impulse would stop it.  Returns whether it held it.
 bool hold_if_resting(ContactLists& lists, double thickness, double friction, Index n, const double* vel, double* free,
                      double* held, Index p, const Index support[3], const Vec3& normal, double distance) {
-    if (free[p] == 0.0 || lists.released[static_cast<std::size_t>(p)] || !all_still(free, support)) return false;
+    if (free[p] == 0.0 || !all_still(free, support)) return false;
     if (!(distance > 0.0 && distance <= (1.0 + RESTING_SLACK) * thickness)) return false;
     const double vx = vel[p], vy = vel[n + p], vz = vel[2 * n + p];
     const double approach = -(vx * normal.x + vy * normal.y + vz * normal.z);  // m/s onto the support
@@ -60,10 +60,8 @@ Index hold_on_layers(Contact& contact, double thickness, Index n, const double* 
     const Index points = lists.point_triangle_count();
     const Index edges = lists.edge_edge_count();
     if (points + edges == 0) return 0;
-    for (char& r : lists.released) r = static_cast<char>(r > 0 ? r - 1 : 0);  // released last step: 1
     lists.resting.assign(3 * static_cast<std::size_t>(n), -1);
     lists.resting_normal.assign(3 * static_cast<std::size_t>(n), 0.0);
-    lists.released.resize(static_cast<std::size_t>(n), 0);
     const double friction = contact.friction;
     Index count = 0;
     for (Index pass = 0; pass < RESTING_PASSES; ++pass) {
@@ -118,10 +116,10 @@ Index release_unsupported(Contact& contact, Index n, double* free, double* held)
     return released;
 }
 
-Index mark_sliding(Contact& contact, Index n, const double* force, const double* held) {
+Index release_sliding(Contact& contact, Index n, const double* force, double* free, double* held) {
     if (!contact.enabled) return 0;
-    ContactLists& lists = *contact.lists;
-    Index sliding = 0;
+    const ContactLists& lists = *contact.lists;
+    Index released = 0;
     for (Index p = 0; p < n; ++p) {
         if (held[p] != LAYER_HELD) continue;
         const std::size_t i = static_cast<std::size_t>(p);
@@ -131,10 +129,11 @@ Index mark_sliding(Contact& contact, Index n, const double* force, const double*
         const double pressing = -(fx * nx + fy * ny + fz * nz);
         const double ax = fx + pressing * nx, ay = fy + pressing * ny, az = fz + pressing * nz;
         if (pressing > 0.0 && std::sqrt(ax * ax + ay * ay + az * az) <= contact.friction * pressing) continue;
-        lists.released[i] = 2;
-        sliding += 1;
+        held[p] = 0.0;
+        free[p] = 1.0;
+        released += 1;
     }
-    return sliding;
+    return released + release_unsupported(contact, n, free, held);
 }
 
 }  // namespace wc
