@@ -66,6 +66,8 @@ def test_every_scene_field_is_a_variable_with_its_metadata(md):
 INTERFACE = {
     "water_level": ("Real", "input", "m"), "water_density": ("Real", "input", "kg/m3"),
     "absorption_capacity": ("Real", "input", "kg/kg"), "absorption_rate": ("Real", "input", "1/s"),
+    "wind_x": ("Real", "input", "m/s"), "wind_y": ("Real", "input", "m/s"), "wind_z": ("Real", "input", "m/s"),
+    "air_density": ("Real", "parameter", "kg/m3"),
     "centroid_x": ("Real", "output", "m"), "centroid_y": ("Real", "output", "m"),
     "centroid_z": ("Real", "output", "m"), "depth": ("Real", "output", "m"),
     "wet_mass": ("Real", "output", "kg"), "water_mass": ("Real", "output", "kg"),

@@ -58,6 +58,23 @@ def test_simulate_fmu_with_varying_inputs_equals_a_direct_run(fmu):
     assert result["water_mass"][-1] > 0 and np.ptp(result["depth"]) > 0.05  # the run did something
 
 
+def test_the_wind_inputs_act_as_in_a_direct_run(fmu):
+    """wind_x, wind_y, wind_z (m/s) are inputs as current_x is: a sheet hanging from its top edge, in a
+    wind that rises at 0.5 s and turns at 1 s, through fmpy gives the direct simulation's numbers, and
+    the wind moved it (along y, then back and up)."""
+    signal = np.array([(0.0, 0.0, 0.0, 0.0), (0.5, 0.0, 0.0, 0.0), (0.5, 1.0, 3.0, 0.0), (1.0, 1.0, 3.0, 0.0),
+                       (1.0, 0.0, -2.0, 2.0), (1.5, 0.0, -2.0, 2.0)],
+                      dtype=[("time", float), ("wind_x", float), ("wind_y", float), ("wind_z", float)])
+    values = SMALL | dict(initial_tilt=90.0, pinned_edge="y_max", initial_height=0.5)
+    result = fmpy.simulate_fmu(fmu, stop_time=1.5, output_interval=0.05, start_values=values, input=signal)
+    expected = direct_run(values, result["time"], signal)
+    for row, want in zip(result, expected):
+        assert_same_outputs({n: row[n] for n in OUTPUT_NAMES}, want)
+    still = direct_run(values, result["time"])
+    assert abs(result["centroid_y"][20] - still[20]["centroid_y"]) > 0.01  # pushed along y by t = 1 s
+    assert result["centroid_y"][-1] < result["centroid_y"][20]  # and back
+
+
 def test_a_rising_water_level_carries_a_floating_cloth_up(fmu):
     """No absorption, lighter than water: the cloth floats at depth t (s - 1/2) and rises with the water."""
     thickness, density = 0.002, 0.45
@@ -136,15 +153,21 @@ def test_any_communication_step_is_as_accurate_as_a_fine_one(fmu):
     which cuts them short, is a little more accurate; a coarse one must err by no more than 1.5 times
     the finest one's error against a run at a hundredfold tighter tolerance (measured: 1.0 to 1.4
     times), and by under the 1 mm the defaults promise.
+
+    In vacuum (air_density 0).  With the default air the errors, 0.37 to 0.70 mm, are almost all the
+    floating towel's drift along y, which nothing restores and in which the reference itself moves by
+    0.32 mm when advanced in chunks of 0.5 s instead of at once: the ratio (1.9 for 1/30 s) would
+    compare that noise, not the communication step's effect.
     """
     duration = 3.0
-    reference = wetcloth.Simulation(wetcloth.Scene(**SMALL, tolerance=1e-7))
+    vacuum = SMALL | {"air_density": 0.0}
+    reference = wetcloth.Simulation(wetcloth.Scene(**vacuum, tolerance=1e-7))
     reference.advance(duration)
     ref = reference.outputs()
     names = ("centroid_x", "centroid_y", "centroid_z")
     errors = {}
     for step in (0.01, 1.0 / 30.0, 0.5, 1.0):
-        result = fmpy.simulate_fmu(fmu, stop_time=duration, output_interval=step, start_values=SMALL)
+        result = fmpy.simulate_fmu(fmu, stop_time=duration, output_interval=step, start_values=vacuum)
         assert math.isclose(result["time"][-1], duration)
         errors[step] = max(abs(result[-1][n] - ref[n]) for n in names)
     assert errors[0.01] > 0

@@ -229,6 +229,7 @@ API long check_array(void* h, const char* name, double* out, long capacity) {
     else if (key == "grid") v = {double(c.cloth.grid_x), double(c.cloth.grid_y)};
     else if (key == "physics") v = {double(p.projected), p.wet_factor, p.water_level, p.water_density, p.thickness,
         double(p.smooth), double(p.stokes), p.drag_normal, p.drag_tangential, p.drag_linear, p.current_x, p.current_y,
+        p.air_density, p.wind_x, p.wind_y, p.wind_z,
         p.floor_z, p.floor_friction, p.absorption_capacity, p.absorption_rate, p.drying_rate, p.wicking_rate,
         p.wick_step_limit, double(p.skip_idle)};
     else if (key == "control") v = {double(k.integrator), k.tolerance, k.allowed, k.max_step, k.newton_tolerance,
@@ -352,16 +353,17 @@ def checker_library(build):
 
 #: Scenes whose set-up takes every branch: the towel; wicking and a current (presets); a grid large enough
 #: for multigrid (wider than long: band order along the columns), pinned, without bending springs, with
-#: Stokes drag, thesis damping, wet stiffening and water at the start; fixed explicit steps.
+#: Stokes drag, thesis damping, wet stiffening, water at the start and no air; fixed explicit steps in wind.
 SCENES = [
     {},
     {"preset": "wicking"},
     {"preset": "current"},
     {"nx": 50, "ny": 45, "pinned_edge": "x_min", "bend_stiffness": 0.0, "drag_model": "stokes",
      "damping_model": "thesis", "wet_stiffness_factor": 0.5, "initial_saturation": 0.3, "self_collision": "off",
-     "buoyancy_model": "thesis", "initial_tilt": -30.0},
+     "buoyancy_model": "thesis", "initial_tilt": -30.0, "air_density": 0.0},
     {"nx": 7, "ny": 3, "integrator": "explicit_euler", "tolerance": 0.0, "max_step": 0.001, "pinned_edge": "y_max",
-     "wet_stiffness_factor": -0.5, "stretch_stiffness": 500.0, "damping": 0.0},
+     "wet_stiffness_factor": -0.5, "stretch_stiffness": 500.0, "damping": 0.0, "air_density": 3.0, "wind_x": 2.0,
+     "wind_z": -0.5},
 ]
 
 
@@ -408,7 +410,7 @@ def test_model_arrays_agree_with_the_python_package_to_the_bit(checker_library, 
             assert_bitwise(ours[name], array, name)
         # Inputs change Physics, Control and the capacity (and wicking's conductances) as set_inputs does.
         inputs = dict(water_level=0.03, water_density=1020.0, absorption_capacity=2.5, absorption_rate=0.4,
-                      current_x=0.2, current_y=-0.1)
+                      current_x=0.2, current_y=-0.1, wind_x=3.0, wind_y=-1.5, wind_z=0.4)
         assert ours.set_inputs(**inputs) == 1 and ours.set_inputs(**inputs) == 0
         sim.set_inputs(**inputs)
         theirs = python_arrays(sim)
@@ -436,7 +438,7 @@ def test_snapshots_of_another_grid_or_not_finite_are_refused_and_change_nothing(
         # A NaN among the positions (checksum made to fit): refused, nothing changed.
         magic = len(b"wetcloth-native-snapshot\n")
         body = bytearray(data[magic + 12:])
-        offset = 16 + 8 * 36 + 8 * (CLOCK_SIZE + 3 + 1) + 8 * 5  # families, count, scene, clock, reference, margin; 6th x
+        offset = 16 + 8 * 40 + 8 * (CLOCK_SIZE + 3 + 1) + 8 * 5  # families, count, scene, clock, reference, margin; 6th x
         body[offset:offset + 8] = struct.pack("<d", float("nan"))
         bad = data[:magic + 4] + struct.pack("<Q", fnv1a(bytes(body))) + bytes(body)
         checker_library.check_advance(a.handle, 0.1)
@@ -465,6 +467,42 @@ def test_fmpy_runs_the_towel_as_the_python_api_does(build):
         advance_as_the_unit(sim, t)
         rows.append([sim.outputs()[n] for n in OUTPUT_NAMES])
     assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows, "fmpy FMI 2.0")
+
+
+def test_the_wind_inputs_act_as_in_the_python_api(build):
+    """wind_x, wind_y, wind_z are inputs (m/s), as current_x is; air_density a parameter (kg/m3): through
+    fmpy, a hanging sheet in a wind that rises at 0.5 s gives the Python API's outputs with the same
+    inputs set at the same communication points (fmpy sets them before each step), bit for bit."""
+    import fmpy
+    from fmpy.simulation import Input
+
+    for version in (2, 3):
+        variables = {v.name: v for v in build[version]["md"].modelVariables}
+        for name in ("wind_x", "wind_y", "wind_z"):
+            assert (variables[name].causality, variables[name].unit) == ("input", "m/s"), name
+        assert (variables["air_density"].causality, variables["air_density"].unit) == ("parameter", "kg/m3")
+    signal = np.array([(0.0, 0.0, 0.0, 0.0), (0.5, 0.0, 0.0, 0.0), (0.5, 1.0, 3.0, -0.5), (1.0, 1.0, 3.0, -0.5)],
+                      dtype=[("time", float), ("wind_x", float), ("wind_y", float), ("wind_z", float)])
+    values = {"nx": 9, "ny": 13, "initial_tilt": 90.0, "pinned_edge": "y_max", "initial_height": 0.5,
+              "air_density": 1.5}
+    result = fmpy.simulate_fmu(str(build[2]["dir"]), stop_time=1.0, output_interval=0.05, start_values=values,
+                               input=signal, model_description=build[2]["md"])
+    sim = wetcloth.Simulation(wetcloth.load_scene(**values))
+    names = signal.dtype.names[1:]
+
+    def apply(t):
+        inputs, _ = Input.interpolate(time=t, t=signal["time"], table=np.array([signal[n] for n in names]),
+                                      after_event=True)
+        sim.set_inputs(**dict(zip(names, map(float, inputs))))
+
+    apply(0.0)
+    rows = [[sim.outputs()[n] for n in OUTPUT_NAMES]]
+    for previous, t in zip(result["time"][:-1], result["time"][1:]):
+        apply(previous)
+        advance_as_the_unit(sim, t)
+        rows.append([sim.outputs()[n] for n in OUTPUT_NAMES])
+    assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows, "fmpy FMI 2.0 in wind")
+    assert result["centroid_y"][-1] - result["centroid_y"][10] > 0.01  # the wind pushed it along y
 
 
 def test_the_unit_steps_exactly_as_the_cores_simulation(build, checker_library):

@@ -11,18 +11,22 @@ from conftest import G, INTEGRATORS
 from wetcloth.energy import mechanical_energy
 
 DRY_AIR = dict(water_level=-50.0, floor_level=-100.0, initial_tilt=0.0, initial_height=0.0)
+#: Free fall's closed form holds in vacuum: without the air's drag (air_density 0), which at 1 m/s
+#: would already slow the default sheet by 16 % of g (it falls at 2.5 m/s terminal: tests/test_air.py).
+VACUUM = DRY_AIR | dict(air_density=0.0)
 
 
 @pytest.mark.parametrize("integrator", INTEGRATORS[:3])
 def test_free_fall_matches_g_t_squared_over_two(integrator):
-    """Without water, an unstretched cloth falls as one body: z(t) = z0 - g t^2 / 2.
+    """Without water and air (air_density 0: g t^2 / 2 is the fall in vacuum), an unstretched cloth
+    falls as one body: z(t) = z0 - g t^2 / 2.
 
     With fixed steps h, Euler's position after n steps is z0 - g h^2 n (n +- 1) / 2: the error
     is exactly g h t / 2 (explicit: too little fall, symplectic and implicit: too much).
     """
     h, duration = 1e-3, 1.0
     sim = wetcloth.Simulation(wetcloth.load_scene(nx=5, ny=5, integrator=integrator, tolerance=0.0, max_step=h,
-                                                  **DRY_AIR))
+                                                  **VACUUM))
     sim.advance(duration)
     fall = -sim.outputs()["centroid_z"]
     bound = G * h * duration / 2
@@ -32,12 +36,12 @@ def test_free_fall_matches_g_t_squared_over_two(integrator):
 
 
 def test_free_fall_is_exact_to_second_order_with_bdf2():
-    """BDF2 is exact for a constant acceleration once it has history; its first step (backward
+    """In vacuum (air_density 0, as above), BDF2 is exact for a constant acceleration once it has history; its first step (backward
     Euler, v1 exact, x1 too low by g h^2 / 2) leaves an offset that the recursion
     e+ = (4 e - e_prev) / 3 carries to 3/2 of it: 0.75 g h^2 (7 um at 1 ms), against Euler's
     g h t / 2 (5 mm).  We allow g h^2 (plus the Newton tolerance, 1e-6 of the cloth's size a step)."""
     h, duration = 1e-3, 1.0
-    scene = wetcloth.load_scene(nx=5, ny=5, integrator="bdf2", tolerance=0.0, max_step=h, **DRY_AIR)
+    scene = wetcloth.load_scene(nx=5, ny=5, integrator="bdf2", tolerance=0.0, max_step=h, **VACUUM)
     sim = wetcloth.Simulation(scene)
     sim.advance(duration)
     fall = -sim.outputs()["centroid_z"]
@@ -83,19 +87,22 @@ def test_frame_long_implicit_euler_steps_never_fail_and_lose_energy_in_every_fra
     solution of a dissipative system must.  Measured: it falls by at least 3.4e-3 J a frame out of
     9 J; the allowance 1e-9 J is round-off in summing the energy over 1681 particles (1e-16 relative
     each), so any rise the solver let in would show.  The error estimate reports what the frame-long
-    steps cost: centimetres here, where the default's steps err by micrometres."""
+    steps cost: millimetres to centimetres here (the largest frame's: 9 mm in air, 2.5 cm in vacuum),
+    where the default's steps err by micrometres.  The largest over the frames, not the last frame's:
+    the air damps the swing, and by the last frame the sheet barely moves (0.7 mm in air, 3 mm in vacuum)."""
     scene = wetcloth.load_scene(nx=41, ny=41, width=1.0, length=1.0, pinned_edge="y_max", initial_tilt=0.0,
                                 initial_height=2.0, water_level=-10.0, floor_level=-20.0,
                                 integrator="implicit_euler", tolerance=0.0, max_step=1 / 30)
     sim = wetcloth.Simulation(scene)
-    energies = [mechanical_energy(sim)]
+    energies, estimates = [mechanical_energy(sim)], []
     for _ in range(90):
         sim.advance(1 / 30)
         energies.append(mechanical_energy(sim))
+        estimates.append(sim.error_estimate)
     assert sim.steps == 90 and sim.rejected_steps == 0
     assert np.diff(energies).max() < 1e-9, np.diff(energies).max()
     assert energies[-1] < energies[0] - 1.0, "it fell and swung: potential energy went"
-    assert 1e-3 < sim.error_estimate < 0.1
+    assert 1e-3 < max(estimates) < 0.1
 
 
 def test_wet_mass_never_decreases_and_nothing_is_nan():

@@ -20,9 +20,11 @@ from wetcloth._core import SOLVER_COUNTERS
 Cloth = namedtuple("Cloth", "grid_x grid_y offsets rest tension_only stiffness damping free dry_mass volume "
                             "stokes_coefficient capacity wick_offsets wick_conductance")
 #: Scene parameters as the core uses them (SI units; flags as bools).  ``wet_factor`` is 0 unless
-#: wetness-dependent stiffness is active; ``floor_z`` is the lowest particle centre.
+#: wetness-dependent stiffness is active; ``air_density`` 0 switches the drag in air off; ``floor_z``
+#: is the lowest particle centre.
 Physics = namedtuple("Physics", "projected wet_factor water_level water_density thickness smooth stokes "
-                                "drag_normal drag_tangential drag_linear current_x current_y floor_z "
+                                "drag_normal drag_tangential drag_linear current_x current_y air_density "
+                                "wind_x wind_y wind_z floor_z "
                                 "floor_friction absorption_capacity absorption_rate drying_rate wicking_rate "
                                 "wick_step_limit skip_idle")
 #: Scratch and results: ``force`` (3, n) N; ``submerged`` (n) the submerged fraction of each

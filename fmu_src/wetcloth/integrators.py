@@ -87,6 +87,11 @@ class Integrator:
         else:  # the water's speed past the cloth is at most a particle's speed plus the current's
             drag_slope = sc.water_density * (sc.drag_normal + sc.drag_tangential) / sc.areal_density
             drag_offset = drag_slope * math.hypot(sc.current_x, sc.current_y) + sc.drag_linear / sc.areal_density
+        if sc.air_density > 0:  # the air's share of a triangle is what the water leaves: the larger rate bounds both
+            air_slope = sc.air_density * (sc.drag_normal + sc.drag_tangential) / sc.areal_density
+            drag_slope = max(drag_slope, air_slope)
+            wind = math.sqrt(sc.wind_x * sc.wind_x + sc.wind_y * sc.wind_y + sc.wind_z * sc.wind_z)  # as model.cpp
+            drag_offset += air_slope * wind
         allowed = sc.tolerance * size  # m of local position error per step
         newton = NEWTON_FRACTION * allowed if allowed > 0 else FIXED_STEP_NEWTON_TOLERANCE * size
         return Control(

@@ -90,6 +90,14 @@ class Scene:
     )
     current_x: float = _param(0.0, "m/s", "water velocity along x, which the drag acts relative to", -10.0, 10.0, fmu=INPUT)
     current_y: float = _param(0.0, "m/s", "water velocity along y, which the drag acts relative to", -10.0, 10.0, fmu=INPUT)
+    # --- air (docs/model.md section 4.4): face drag on the part of the cloth out of the water; on by default
+    air_density: float = _param(
+        1.2, "kg/m3", "density of the air above the water (face drag in air); 0 = off", 0.0, 1000.0
+    )
+    wind_x: float = _param(0.0, "m/s", "air velocity along x, which the drag in air acts relative to", -100.0, 100.0, fmu=INPUT)
+    wind_y: float = _param(0.0, "m/s", "air velocity along y, which the drag in air acts relative to", -100.0, 100.0, fmu=INPUT)
+    wind_z: float = _param(0.0, "m/s", "air velocity along z (up), which the drag in air acts relative to", -100.0, 100.0,
+                           fmu=INPUT)
     initial_saturation: float = _param(0.0, "-", "absorbed water at t = 0, as a fraction of the capacity", 0.0, 1.0)
     # --- initial state and surroundings
     initial_height: float = _param(0.1, "m", "z of the cloth's centre at t = 0 (cloth at rest)", -1e4, 1e4)

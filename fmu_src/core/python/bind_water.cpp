@@ -55,34 +55,36 @@ WETCLOTH_BINDINGS(m) {
     m.def(
         "face_drag",
         [](Index nx, Index ny, nb::handle pos, nb::handle vel, nb::handle s, double density, double c_normal,
-           double c_tangential, double c_linear, double current_x, double current_y, nb::handle force,
-           nb::handle cells, nb::handle skip_dry_rows) {
+           double c_tangential, double c_linear, double flow_x, double flow_y, nb::handle force, nb::handle cells,
+           nb::handle skip_dry_rows, double flow_z, nb::handle above) {
             const Index n = nx * ny;
+            const Fluid fluid{density, c_normal, c_tangential, c_linear, flow_x, flow_y, flow_z, truth(above)};
             face_drag(nx, ny, argument<const double>(pos, "pos", 3 * n), argument<const double>(vel, "vel", 3 * n),
-                      argument<const double>(s, "s", n), density, c_normal, c_tangential, c_linear, current_x,
-                      current_y, argument<double>(force, "force", 3 * n),
+                      argument<const double>(s, "s", n), fluid, argument<double>(force, "force", 3 * n),
                       argument<double>(cells, "cells", 18 * (n + nx + 1)), truth(skip_dry_rows));
         },
         nb::arg("nx"), nb::arg("ny"), nb::arg("pos"), nb::arg("vel"), nb::arg("s"), nb::arg("density"),
-        nb::arg("c_normal"), nb::arg("c_tangential"), nb::arg("c_linear"), nb::arg("current_x"),
-        nb::arg("current_y"), nb::arg("force"), nb::arg("cells"), nb::arg("skip_dry_rows") = true,
-        "Add the face-model drag to force; cells (2, 9, n + nx + 1) scratch.");
+        nb::arg("c_normal"), nb::arg("c_tangential"), nb::arg("c_linear"), nb::arg("flow_x"), nb::arg("flow_y"),
+        nb::arg("force"), nb::arg("cells"), nb::arg("skip_dry_rows") = true, nb::arg("flow_z") = 0.0,
+        nb::arg("above") = false,
+        "Add the face-model drag of a fluid flowing at (flow_x, flow_y, flow_z) m/s to force: the water's on each "
+        "triangle's submerged part, or with above=True the air's on the rest; cells (2, 9, n + nx + 1) scratch.");
 
     m.def(
         "face_drag_and_blocks",
         [](Index nx, Index ny, nb::handle pos, nb::handle vel, nb::handle s, double density, double c_normal,
-           double c_tangential, double c_linear, double current_x, double current_y, double h, nb::handle force,
-           nb::handle blocks, nb::handle cells, nb::handle skip_dry_rows) {
+           double c_tangential, double c_linear, double flow_x, double flow_y, double h, nb::handle force,
+           nb::handle blocks, nb::handle cells, nb::handle skip_dry_rows, double flow_z, nb::handle above) {
             const Index n = nx * ny;
+            const Fluid fluid{density, c_normal, c_tangential, c_linear, flow_x, flow_y, flow_z, truth(above)};
             face_drag_and_blocks(nx, ny, argument<const double>(pos, "pos", 3 * n),
-                                 argument<const double>(vel, "vel", 3 * n), argument<const double>(s, "s", n),
-                                 density, c_normal, c_tangential, c_linear, current_x, current_y, h,
-                                 argument<double>(force, "force", 3 * n), argument<double>(blocks, "blocks", 6 * n),
+                                 argument<const double>(vel, "vel", 3 * n), argument<const double>(s, "s", n), fluid,
+                                 h, argument<double>(force, "force", 3 * n), argument<double>(blocks, "blocks", 6 * n),
                                  argument<double>(cells, "cells", 18 * (n + nx + 1)), truth(skip_dry_rows));
         },
         nb::arg("nx"), nb::arg("ny"), nb::arg("pos"), nb::arg("vel"), nb::arg("s"), nb::arg("density"),
-        nb::arg("c_normal"), nb::arg("c_tangential"), nb::arg("c_linear"), nb::arg("current_x"),
-        nb::arg("current_y"), nb::arg("h"), nb::arg("force"), nb::arg("blocks"), nb::arg("cells"),
-        nb::arg("skip_dry_rows") = true,
+        nb::arg("c_normal"), nb::arg("c_tangential"), nb::arg("c_linear"), nb::arg("flow_x"), nb::arg("flow_y"),
+        nb::arg("h"), nb::arg("force"), nb::arg("blocks"), nb::arg("cells"), nb::arg("skip_dry_rows") = true,
+        nb::arg("flow_z") = 0.0, nb::arg("above") = false,
         "Face drag as face_drag, plus h times its lumped velocity Jacobian added to blocks (6, n).");
 }

@@ -46,6 +46,10 @@ Physics physics_from(nb::handle h) {
     p.drag_linear = number<double>(h, "drag_linear");
     p.current_x = number<double>(h, "current_x");
     p.current_y = number<double>(h, "current_y");
+    p.air_density = number<double>(h, "air_density");
+    p.wind_x = number<double>(h, "wind_x");
+    p.wind_y = number<double>(h, "wind_y");
+    p.wind_z = number<double>(h, "wind_z");
     p.floor_z = number<double>(h, "floor_z");
     p.floor_friction = number<double>(h, "floor_friction");
     p.absorption_capacity = number<double>(h, "absorption_capacity");

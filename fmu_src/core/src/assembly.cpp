@@ -1,8 +1,8 @@
 // The total force on every particle and, for the implicit schemes, the pieces of its Jacobian (port of
 // bf41571:fmu_src/wetcloth/kernels/assembly.py).  Each force family is one call, skipped when the scene does not need
-// it: no spring kernel without springs, no water kernels while no particle touches the water.  A new
-// force family is one more call here, adding to force and, for the implicit schemes, to the
-// per-particle blocks or to the per-spring blocks that the system matrix uses.
+// it: no spring kernel without springs, no water kernels while no particle touches the water, no drag in
+// air without air (air_density 0).  A new force family is one more call here, adding to force and, for
+// the implicit schemes, to the per-particle blocks or to the per-spring blocks that the system matrix uses.
 #include "wetcloth/assembly.hpp"
 
 #include "wetcloth/springs.hpp"
@@ -64,12 +64,10 @@ void water_forces(const Cloth& cloth, const Physics& phys, Work& work, const dou
         stokes_drag(n, s, cloth.stokes_coefficient, phys.current_x, phys.current_y, vel, force);
         if (blocks_wanted) stokes_blocks_loop(n, h, cloth.stokes_coefficient, s, blocks, blocks + n, blocks + 2 * n);
     } else if (blocks_wanted) {
-        face_drag_and_blocks(cloth.grid_x, cloth.grid_y, pos, vel, s, phys.water_density, phys.drag_normal,
-                             phys.drag_tangential, phys.drag_linear, phys.current_x, phys.current_y, h, force, blocks,
-                             work.cells, phys.skip_idle);
+        face_drag_and_blocks(cloth.grid_x, cloth.grid_y, pos, vel, s, water_fluid(phys), h, force, blocks, work.cells,
+                             phys.skip_idle);
     } else {
-        face_drag(cloth.grid_x, cloth.grid_y, pos, vel, s, phys.water_density, phys.drag_normal, phys.drag_tangential,
-                  phys.drag_linear, phys.current_x, phys.current_y, force, work.cells, phys.skip_idle);
+        face_drag(cloth.grid_x, cloth.grid_y, pos, vel, s, water_fluid(phys), force, work.cells, phys.skip_idle);
     }
     if (blocks_wanted && phys.smooth) {
         // dF_z/dz = -rho g V / thickness inside the surface slab (0 < s < 1).
@@ -81,6 +79,20 @@ void water_forces(const Cloth& cloth, const Physics& phys, Work& work, const dou
                 work.rhs[2 * n + i] -= stiffness * vel[2 * n + i];
             }
         }
+    }
+}
+
+//: The face drag of the air above the water (docs/model.md section 4.4) on the part of each triangle out
+//: of the water into work.force; with blocks_wanted its velocity Jacobian (times h) into work.blocks.
+//: Rows wholly under water are skipped (skip_idle), as the water's drag skips dry ones.
+void air_forces(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel, double h,
+                bool blocks_wanted) {
+    if (blocks_wanted) {
+        face_drag_and_blocks(cloth.grid_x, cloth.grid_y, pos, vel, work.submerged, air_fluid(phys), h, work.force,
+                             work.blocks, work.cells, phys.skip_idle);
+    } else {
+        face_drag(cloth.grid_x, cloth.grid_y, pos, vel, work.submerged, air_fluid(phys), work.force, work.cells,
+                  phys.skip_idle);
     }
 }
 
@@ -101,6 +113,7 @@ void forces(const Cloth& cloth, const Physics& phys, Work& work, const double* p
     if (submerged(phys, n, pos + 2 * n, work.submerged) > 0.0 || !phys.skip_idle) {
         water_forces(cloth, phys, work, pos, vel, 0.0, false);
     }
+    if (phys.air_density > 0.0) air_forces(cloth, phys, work, pos, vel, 0.0, false);
 }
 
 void forces_and_blocks(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
@@ -117,6 +130,7 @@ void forces_and_blocks(const Cloth& cloth, const Physics& phys, Work& work, cons
     if (submerged(phys, n, pos + 2 * n, work.submerged) > 0.0 || !phys.skip_idle) {
         water_forces(cloth, phys, work, pos, vel, h, true);
     }
+    if (phys.air_density > 0.0) air_forces(cloth, phys, work, pos, vel, h, true);
 }
 
 }  // namespace wc

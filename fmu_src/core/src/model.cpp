@@ -72,7 +72,7 @@ std::uint64_t fnv1a(const unsigned char* data, std::size_t size) {
 
 constexpr char SNAPSHOT_MAGIC[] = "wetcloth-native-snapshot\n";
 constexpr std::size_t MAGIC_SIZE = sizeof(SNAPSHOT_MAGIC) - 1;
-constexpr std::uint32_t SNAPSHOT_VERSION = 1;
+constexpr std::uint32_t SNAPSHOT_VERSION = 2;  // 2: the scene's 40 fields (air_density, wind_x/y/z added)
 constexpr std::size_t PREAMBLE = MAGIC_SIZE + 4 + 8;  // magic, version, checksum
 
 //: Doubles of a checkpoint's `values` for n particles and F spring families (see Checkpoint).
@@ -639,6 +639,10 @@ void Simulation::set_scene(const Scene& scene) {
     p.drag_linear = scene.drag_linear;
     p.current_x = scene.current_x;
     p.current_y = scene.current_y;
+    p.air_density = scene.air_density;
+    p.wind_x = scene.wind_x;
+    p.wind_y = scene.wind_y;
+    p.wind_z = scene.wind_z;
     p.floor_z = floor_z_;
     p.floor_friction = scene.floor_friction;
     p.absorption_capacity = scene.absorption_capacity;
@@ -661,6 +665,12 @@ void Simulation::set_control() {
     } else {  // the water's speed past the cloth is at most a particle's speed plus the current's
         drag_slope = sc.water_density * (sc.drag_normal + sc.drag_tangential) / sc.areal_density;
         drag_offset = drag_slope * std::hypot(sc.current_x, sc.current_y) + sc.drag_linear / sc.areal_density;
+    }
+    if (sc.air_density > 0) {  // the air's share of a triangle is what the water leaves: the larger rate bounds both
+        const double air_slope = sc.air_density * (sc.drag_normal + sc.drag_tangential) / sc.areal_density;
+        drag_slope = pymax(drag_slope, air_slope);
+        const double wind = std::sqrt(sc.wind_x * sc.wind_x + sc.wind_y * sc.wind_y + sc.wind_z * sc.wind_z);
+        drag_offset += air_slope * wind;
     }
     const double allowed = sc.tolerance * size;  // m of local position error per step
     Control& c = core_.control;

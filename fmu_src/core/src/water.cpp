@@ -1,5 +1,6 @@
-// Water forces (docs/model.md section 4): submerged fraction, buoyancy, Stokes drag and face drag
-// (port of bf41571:fmu_src/wetcloth/kernels/water.py; layout of the face-drag rows in wetcloth/water.hpp).
+// Water forces (docs/model.md section 4): submerged fraction, buoyancy, Stokes drag and face drag, the
+// latter also in the air above the water (section 4.4) (port of bf41571:fmu_src/wetcloth/kernels/water.py;
+// layout of the face-drag rows in wetcloth/water.hpp).
 #include "wetcloth/water.hpp"
 
 #include <cmath>
@@ -38,15 +39,18 @@ inline double inverse_area(double twice_area) {
 }
 
 //: Triangles (a[k], b[k], c[k]) for k < count: force (N) into fx, fy, fz and, if Blocks, the Jacobian
-//: blocks (N s/m) into xx..yz.  Per triangle: the unit normal n, and dF/du = k_normal n n^T +
-//: k_tangential (I - n n^T) + k_linear I + k_slip s s^T, with u the water's velocity relative to the
-//: triangle and s its in-plane part (the slip).  Branch-free, so the loop vectorises.  Every row is a
-//: __restrict parameter: GCC ignores __restrict on locals and struct members, and with nine written
-//: rows run-time overlap checks would be too many.
+//: blocks (N s/m) into xx..yz.  Per triangle: the unit normal n, the part of it in the fluid
+//: share_base + share_sign s_t (s_t its corners' mean submerged fraction: 0 + 1 s_t in water, 1 - 1 s_t
+//: in the air above it), and dF/du = k_normal n n^T + k_tangential (I - n n^T) + k_linear I +
+//: k_slip s s^T, with u the fluid's velocity (flow) relative to the triangle and s its in-plane part (the
+//: slip).  Branch-free, so the loop vectorises.  Every row is a __restrict parameter: GCC ignores
+//: __restrict on locals and struct members, and with nine written rows run-time overlap checks would be
+//: too many.
 template <bool Blocks>
 void drag_row_loop(Index count, double density, double c_normal, double c_tangential, double c_linear,
-                   double current_x, double current_y, const double* __restrict ax, const double* __restrict ay,
-                   const double* __restrict az, const double* __restrict avx, const double* __restrict avy,
+                   double flow_x, double flow_y, double flow_z, double share_base, double share_sign,
+                   const double* __restrict ax, const double* __restrict ay, const double* __restrict az,
+                   const double* __restrict avx, const double* __restrict avy,
                    const double* __restrict avz, const double* __restrict as, const double* __restrict bx,
                    const double* __restrict by, const double* __restrict bz, const double* __restrict bvx,
                    const double* __restrict bvy, const double* __restrict bvz, const double* __restrict bs,
@@ -56,7 +60,7 @@ void drag_row_loop(Index count, double density, double c_normal, double c_tangen
                    double* __restrict fz_, double* __restrict xx, double* __restrict yy, double* __restrict zz,
                    double* __restrict xy, double* __restrict xz, double* __restrict yz) {
     for (Index k = 0; k < count; ++k) {
-        const double st = (as[k] + bs[k] + cs[k]) * (1.0 / 3.0);
+        const double st = share_base + share_sign * ((as[k] + bs[k] + cs[k]) * (1.0 / 3.0));
         const double e1x = bx[k] - ax[k];
         const double e1y = by[k] - ay[k];
         const double e1z = bz[k] - az[k];
@@ -72,9 +76,9 @@ void drag_row_loop(Index count, double density, double c_normal, double c_tangen
         const double normal_y = cy * inv;
         const double normal_z = cz * inv;
         const double wet_area = 0.5 * twice_area * st;
-        const double ux = current_x - (avx[k] + bvx[k] + cvx[k]) * (1.0 / 3.0);
-        const double uy = current_y - (avy[k] + bvy[k] + cvy[k]) * (1.0 / 3.0);
-        const double uz = -(avz[k] + bvz[k] + cvz[k]) * (1.0 / 3.0);
+        const double ux = flow_x - (avx[k] + bvx[k] + cvx[k]) * (1.0 / 3.0);
+        const double uy = flow_y - (avy[k] + bvy[k] + cvy[k]) * (1.0 / 3.0);
+        const double uz = flow_z - (avz[k] + bvz[k] + cvz[k]) * (1.0 / 3.0);
         const double un = ux * normal_x + uy * normal_y + uz * normal_z;
         const double utx = ux - un * normal_x;
         const double uty = uy - un * normal_y;
@@ -104,18 +108,21 @@ void drag_row_loop(Index count, double density, double c_normal, double c_tangen
 
 //: drag_row_loop over corners a, b, c; out is 9 rows of `stride` from their first slot.
 template <bool Blocks>
-void drag_row(Index count, const Corner& a, const Corner& b, const Corner& c, double density, double c_normal,
-              double c_tangential, double c_linear, double current_x, double current_y, double* out, Index stride) {
-    drag_row_loop<Blocks>(count, density, c_normal, c_tangential, c_linear, current_x, current_y, a.x, a.y, a.z, a.vx,
-                          a.vy, a.vz, a.s, b.x, b.y, b.z, b.vx, b.vy, b.vz, b.s, c.x, c.y, c.z, c.vx, c.vy, c.vz, c.s,
+void drag_row(Index count, const Corner& a, const Corner& b, const Corner& c, const Fluid& fluid, double* out,
+              Index stride) {
+    const double base = fluid.above ? 1.0 : 0.0, sign = fluid.above ? -1.0 : 1.0;
+    drag_row_loop<Blocks>(count, fluid.density, fluid.c_normal, fluid.c_tangential, fluid.c_linear, fluid.flow_x,
+                          fluid.flow_y, fluid.flow_z, base, sign, a.x, a.y, a.z, a.vx, a.vy, a.vz, a.s, b.x, b.y,
+                          b.z, b.vx, b.vy, b.vz, b.s, c.x, c.y, c.z, c.vx, c.vy, c.vz, c.s,
                           out, out + stride, out + 2 * stride, out + 3 * stride, out + 4 * stride, out + 5 * stride,
                           out + 6 * stride, out + 7 * stride, out + 8 * stride);
 }
 
-//: Whether no particle from start to stop touches water.
-inline bool dry(const double* s, Index start, Index stop) {
+//: Whether no particle from start to stop is in the fluid: none touches water (s > 0) or, for the air
+//: above it (above), every one is wholly under water (s = 1).
+inline bool outside(const double* s, Index start, Index stop, bool above) {
     for (Index i = start; i < stop; ++i) {
-        if (s[i] > 0.0) return false;
+        if (above ? s[i] < 1.0 : s[i] > 0.0) return false;
     }
     return true;
 }
@@ -125,11 +132,9 @@ inline void zero(double* a, Index count) {
 }
 
 //: Every cell's drag (and, if wanted, its Jacobian) into cells; the forces gathered into force.
-void drag_forces(Index nx, Index ny, const double* pos, const double* vel, const double* s, double density,
-                 double c_normal, double c_tangential, double c_linear, double current_x, double current_y,
+void drag_forces(Index nx, Index ny, const double* pos, const double* vel, const double* s, const Fluid& fluid,
                  double* force, double* cells, bool blocks_wanted, bool skip_dry_rows) {
-    drag_rows(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, cells,
-              blocks_wanted, skip_dry_rows);
+    drag_rows(nx, ny, pos, vel, s, fluid, cells, blocks_wanted, skip_dry_rows);
     const Index n = nx * ny;
     const Index length = n + nx + 1;
     for (Index comp = 0; comp < 3; ++comp) {
@@ -202,20 +207,19 @@ void gather_cells(Index nx, Index n, const double* t1, const double* t2, double*
     gather_loop(n, scale, t1 + pad, t1 + pad - 1, t1, t2 + pad, t2, t2 + 1, out);
 }
 
-// The rows between the highest and lowest wet ones are computed in one run along the grid, as if
-// every particle began a cell (fewer, longer loops: measured faster in numba on 9 x 9 and 32 x 32);
-// the last column's, which are no cells, are then zeroed (dry triangles have zero drag anyway: their
-// wet area is zero).
-void drag_rows(Index nx, Index ny, const double* pos, const double* vel, const double* s, double density,
-               double c_normal, double c_tangential, double c_linear, double current_x, double current_y,
+// The rows between the highest and lowest ones in the fluid are computed in one run along the grid, as
+// if every particle began a cell (fewer, longer loops: measured faster in numba on 9 x 9 and 32 x 32);
+// the last column's, which are no cells, are then zeroed (triangles outside the fluid have zero drag
+// anyway: their area in it is zero).
+void drag_rows(Index nx, Index ny, const double* pos, const double* vel, const double* s, const Fluid& fluid,
                double* cells, bool blocks_wanted, bool skip_dry_rows) {
     const Index n = nx * ny;
     const Index pad = nx + 1;
     const Index length = n + pad;
     Index first = 0, last = ny - 2;
     if (skip_dry_rows) {
-        while (first <= last && dry(s, first * nx, first * nx + 2 * nx)) ++first;
-        while (last >= first && dry(s, last * nx, last * nx + 2 * nx)) --last;
+        while (first <= last && outside(s, first * nx, first * nx + 2 * nx, fluid.above)) ++first;
+        while (last >= first && outside(s, last * nx, last * nx + 2 * nx, fluid.above)) --last;
     }
     const Index below = pad + first * nx;        // cells[:, :, pad:below] = 0
     const Index above = pad + (last + 1) * nx;  // cells[:, :, above:] = 0
@@ -235,33 +239,26 @@ void drag_rows(Index nx, Index ny, const double* pos, const double* vel, const d
     double* first_triangles = cells + lo;
     double* second_triangles = cells + 9 * length + lo;
     if (blocks_wanted) {
-        drag_row<true>(count, a, b, d, density, c_normal, c_tangential, c_linear, current_x, current_y,
-                       first_triangles, length);
-        drag_row<true>(count, a, d, c, density, c_normal, c_tangential, c_linear, current_x, current_y,
-                       second_triangles, length);
+        drag_row<true>(count, a, b, d, fluid, first_triangles, length);
+        drag_row<true>(count, a, d, c, fluid, second_triangles, length);
     } else {
-        drag_row<false>(count, a, b, d, density, c_normal, c_tangential, c_linear, current_x, current_y,
-                        first_triangles, length);
-        drag_row<false>(count, a, d, c, density, c_normal, c_tangential, c_linear, current_x, current_y,
-                        second_triangles, length);
+        drag_row<false>(count, a, b, d, fluid, first_triangles, length);
+        drag_row<false>(count, a, d, c, fluid, second_triangles, length);
     }
     for (Index r = first; r < last; ++r) {
         for (Index row = 0; row < 18; ++row) cells[row * length + pad + r * nx + nx - 1] = 0.0;
     }
 }
 
-void face_drag(Index nx, Index ny, const double* pos, const double* vel, const double* s, double density,
-               double c_normal, double c_tangential, double c_linear, double current_x, double current_y,
+void face_drag(Index nx, Index ny, const double* pos, const double* vel, const double* s, const Fluid& fluid,
                double* force, double* cells, bool skip_dry_rows) {
-    drag_forces(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, force, cells,
-                false, skip_dry_rows);
+    drag_forces(nx, ny, pos, vel, s, fluid, force, cells, false, skip_dry_rows);
 }
 
-void face_drag_and_blocks(Index nx, Index ny, const double* pos, const double* vel, const double* s, double density,
-                          double c_normal, double c_tangential, double c_linear, double current_x, double current_y,
-                          double h, double* force, double* blocks, double* cells, bool skip_dry_rows) {
-    drag_forces(nx, ny, pos, vel, s, density, c_normal, c_tangential, c_linear, current_x, current_y, force, cells,
-                true, skip_dry_rows);
+void face_drag_and_blocks(Index nx, Index ny, const double* pos, const double* vel, const double* s,
+                          const Fluid& fluid, double h, double* force, double* blocks, double* cells,
+                          bool skip_dry_rows) {
+    drag_forces(nx, ny, pos, vel, s, fluid, force, cells, true, skip_dry_rows);
     const Index n = nx * ny;
     const Index length = n + nx + 1;
     for (Index comp = 0; comp < 6; ++comp) {

@@ -42,12 +42,14 @@ struct Cloth {
 };
 
 //: Scene parameters as the kernels use them (SI units).  `wet_factor` is 0 unless wetness-dependent
-//: stiffness is active; `floor_z` is the lowest particle centre (m).
+//: stiffness is active; `air_density` 0 switches the drag in air off; `floor_z` is the lowest particle
+//: centre (m).
 struct Physics {
     bool projected = false;
     double wet_factor = 0, water_level = 0, water_density = 0, thickness = 0;
     bool smooth = false, stokes = false;
     double drag_normal = 0, drag_tangential = 0, drag_linear = 0, current_x = 0, current_y = 0;
+    double air_density = 0, wind_x = 0, wind_y = 0, wind_z = 0;
     double floor_z = 0, floor_friction = 0, absorption_capacity = 0, absorption_rate = 0;
     double drying_rate = 0, wicking_rate = 0, wick_step_limit = 0;
     bool skip_idle = true;

@@ -81,6 +81,8 @@ struct Scene {
     double drying_rate = 0.0;                                    // 1/s
     double wet_stiffness_factor = 0.0;                           // -
     double current_x = 0.0, current_y = 0.0;                     // m/s (inputs)
+    double air_density = 1.2;                                    // kg/m3
+    double wind_x = 0.0, wind_y = 0.0, wind_z = 0.0;             // m/s (inputs)
     double initial_saturation = 0.0;                             // -
     double initial_height = 0.1;                                 // m
     double initial_tilt = 10.0;                                  // deg
@@ -99,15 +101,16 @@ inline constexpr const char* SCENE_FIELDS[] = {
     "nx", "ny", "width", "length", "areal_density", "thickness", "stretch_stiffness", "bend_stiffness", "damping",
     "damping_model", "water_level", "water_density", "water_viscosity", "drag_model", "drag_normal",
     "drag_tangential", "drag_linear", "buoyancy_model", "absorption_capacity", "absorption_rate", "wicking_rate",
-    "drying_rate", "wet_stiffness_factor", "current_x", "current_y", "initial_saturation", "initial_height",
-    "initial_tilt", "floor_level", "floor_friction", "self_collision", "self_friction", "pinned_edge", "integrator",
-    "tolerance", "max_step"};
+    "drying_rate", "wet_stiffness_factor", "current_x", "current_y", "air_density", "wind_x", "wind_y", "wind_z",
+    "initial_saturation", "initial_height", "initial_tilt", "floor_level", "floor_friction", "self_collision",
+    "self_friction", "pinned_edge", "integrator", "tolerance", "max_step"};
 inline constexpr Index SCENE_FIELD_COUNT = sizeof(SCENE_FIELDS) / sizeof(SCENE_FIELDS[0]);
 
 //: Whether a parameter may change while the simulation runs (scene.py's fmu=INPUT).
 constexpr bool scene_input(std::string_view field) {
     return field == "water_level" || field == "water_density" || field == "absorption_capacity" ||
-           field == "absorption_rate" || field == "current_x" || field == "current_y";
+           field == "absorption_rate" || field == "current_x" || field == "current_y" || field == "wind_x" ||
+           field == "wind_y" || field == "wind_z";
 }
 
 //: Call visit(name, member) for every field of a Scene (const or not), in SCENE_FIELDS order; member is a
@@ -124,7 +127,8 @@ void for_each_field(S& s, Visit&& visit) {
     visit("buoyancy_model", s.buoyancy_model); visit("absorption_capacity", s.absorption_capacity);
     visit("absorption_rate", s.absorption_rate); visit("wicking_rate", s.wicking_rate);
     visit("drying_rate", s.drying_rate); visit("wet_stiffness_factor", s.wet_stiffness_factor);
-    visit("current_x", s.current_x); visit("current_y", s.current_y);
+    visit("current_x", s.current_x); visit("current_y", s.current_y); visit("air_density", s.air_density);
+    visit("wind_x", s.wind_x); visit("wind_y", s.wind_y); visit("wind_z", s.wind_z);
     visit("initial_saturation", s.initial_saturation); visit("initial_height", s.initial_height);
     visit("initial_tilt", s.initial_tilt); visit("floor_level", s.floor_level);
     visit("floor_friction", s.floor_friction); visit("self_collision", s.self_collision);

@@ -1,5 +1,6 @@
-// Water forces (docs/model.md section 4): submerged fraction, buoyancy, Stokes drag and face drag
-// (port of bf41571:fmu_src/wetcloth/kernels/water.py).
+// Water forces (docs/model.md section 4): submerged fraction, buoyancy, Stokes drag and face drag, the
+// face drag serving both fluids, the water and the air above it (section 4.4) (port of
+// bf41571:fmu_src/wetcloth/kernels/water.py).
 //
 // Face drag works per grid cell, each split into two triangles (i, i+1, i+nx+1) and (i, i+nx+1, i+nx),
 // the split of Topology.triangles.  Per-triangle values go into rows of length n + nx + 1 (cell i at
@@ -23,28 +24,44 @@ void buoyancy(Index n, const double* s, const double* volume, double density, do
 void stokes_drag(Index n, const double* s, const double* coefficient, double current_x, double current_y,
                  const double* vel, double* force);
 
+//: A fluid the face drag acts in: its density (kg/m3), drag coefficients C_n, C_t (-) and c_lin (N s/m3),
+//: its velocity (m/s), and which part of each triangle it covers: the submerged fraction s_t of the
+//: triangle (the water) or, above the water (the air), 1 - s_t.
+struct Fluid {
+    double density = 0, c_normal = 0, c_tangential = 0, c_linear = 0;
+    double flow_x = 0, flow_y = 0, flow_z = 0;
+    bool above = false;
+};
+
+//: The water of a scene (docs/model.md section 4.3): flowing with the current, drag_linear its own.
+inline Fluid water_fluid(const Physics& p) {
+    return {p.water_density, p.drag_normal, p.drag_tangential, p.drag_linear, p.current_x, p.current_y, 0.0, false};
+}
+
+//: The air above the water (section 4.4): the same plate coefficients, no linear term, blowing with the wind.
+inline Fluid air_fluid(const Physics& p) {
+    return {p.air_density, p.drag_normal, p.drag_tangential, 0.0, p.wind_x, p.wind_y, p.wind_z, true};
+}
+
 //: Every particle's area-weighted share of the six triangles around it, out[v] += scale * share; t1, t2
 //: the two triangles' rows (n + nx + 1), out (n).
 void gather_cells(Index nx, Index n, const double* t1, const double* t2, double* out, double scale);
 
-//: Fill cells (2, 9, n + nx + 1) with both triangles' drag force (N) and, if blocks_wanted, the
-//: Jacobian blocks (xx, yy, zz, xy, xz, yz; N s/m) of every cell; with skip_dry_rows the rows of cells
-//: above the highest wet row and below the lowest are zeroed, not computed.
-void drag_rows(Index nx, Index ny, const double* pos, const double* vel, const double* s, double density,
-               double c_normal, double c_tangential, double c_linear, double current_x, double current_y,
+//: Fill cells (2, 9, n + nx + 1) with both triangles' drag force (N) in the fluid and, if blocks_wanted,
+//: the Jacobian blocks (xx, yy, zz, xy, xz, yz; N s/m) of every cell; with skip_dry_rows the rows of
+//: cells above the highest row in the fluid and below the lowest are zeroed, not computed.
+void drag_rows(Index nx, Index ny, const double* pos, const double* vel, const double* s, const Fluid& fluid,
                double* cells, bool blocks_wanted, bool skip_dry_rows);
 
-//: Add the face-model drag (docs/model.md section 4) on the nx x ny grid to force (3, n): density
-//: kg/m3, drag coefficients normal, tangential (-) and linear (kg/(m2 s)), current m/s; cells
-//: (2, 9, n + nx + 1) scratch.
-void face_drag(Index nx, Index ny, const double* pos, const double* vel, const double* s, double density,
-               double c_normal, double c_tangential, double c_linear, double current_x, double current_y,
+//: Add the face-model drag (docs/model.md section 4.3) of the fluid on the nx x ny grid to force (3, n);
+//: s (n) the particles' submerged fractions; cells (2, 9, n + nx + 1) scratch.
+void face_drag(Index nx, Index ny, const double* pos, const double* vel, const double* s, const Fluid& fluid,
                double* force, double* cells, bool skip_dry_rows = true);
 
 //: Face drag as face_drag, plus h (s) times its lumped velocity Jacobian added to blocks (6, n: xx, yy,
 //: zz, xy, xz, yz): each triangle's Jacobian goes to its particles with the force's weights.
-void face_drag_and_blocks(Index nx, Index ny, const double* pos, const double* vel, const double* s, double density,
-                          double c_normal, double c_tangential, double c_linear, double current_x, double current_y,
-                          double h, double* force, double* blocks, double* cells, bool skip_dry_rows = true);
+void face_drag_and_blocks(Index nx, Index ny, const double* pos, const double* vel, const double* s,
+                          const Fluid& fluid, double h, double* force, double* blocks, double* cells,
+                          bool skip_dry_rows = true);
 
 }  // namespace wc
