@@ -75,7 +75,7 @@ Trial take_step(Core& core, double h) {
     const StepEstimate step = bdf2_step(cloth, phys, core.work, solver, core.plane, buf.pos, buf.vel, buf.water,
                                         step_water, buf.prev_pos, buf.prev_vel, buf.prev_water, buf.acceleration, h,
                                         h_prev, core.control.newton_tolerance,
-                                        euler ? CG_TOLERANCE : core.control.cg_tolerance, mode, euler,
+                                        euler ? DESCENT_CG_TOLERANCE : core.control.cg_tolerance, mode, euler,
                                         clock + NEWTON_RATE,
                                         buf.trial_pos, buf.trial_vel);
     return {step.error, h_prev > 0.0 ? 2 : 1, step.converged};
