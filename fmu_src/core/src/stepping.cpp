@@ -10,6 +10,7 @@
 
 #include "wetcloth/absorption.hpp"
 #include "wetcloth/assembly.hpp"
+#include "wetcloth/colliders.hpp"
 #include "wetcloth/floor.hpp"
 #include "wetcloth/implicit.hpp"
 #include "wetcloth/integration.hpp"
@@ -234,6 +235,9 @@ Status step(Core& core, double remaining) {
     }
     const bool on_floor = floor_contact(n, phys.floor_z, phys.floor_friction, buf.trial_pos, buf.trial_vel) > 0 ||
                           held > 0;
+    const bool on_collider = phys.collider_count > 0 &&
+                             collider_contact(n, phys.collider_count, phys.colliders, 0.5 * phys.thickness, buf.pos,
+                                              buf.trial_pos, buf.trial_vel) > 0;
     const bool kinked = resolve(core.contact, phys.thickness, phys.floor_z, control.blow_up_speed, n,
                                 core.solver.mass, cloth.free, buf.pos, buf.trial_pos, buf.trial_vel, h);
     const bool exchanging = exchange_water(core, core.solver.mass, h);
@@ -251,6 +255,10 @@ Status step(Core& core, double remaining) {
     copy(n, buf.trial_water, buf.water);
     if (control.integrator == BDF2) copy(3 * n, core.solver.step_acceleration, buf.acceleration);
     if (on_floor) agree_history(n, phys.floor_z, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h);
+    if (on_collider) {
+        collider_history(n, phys.collider_count, phys.colliders, 0.5 * phys.thickness, buf.pos, buf.vel,
+                         buf.prev_pos, buf.prev_vel, h);
+    }
     clock[LAST_STEP] = kinked ? 0.0 : h;  // self-collision's push: BDF2 starts afresh
     clock[TIME] += h;
     clock[STEPS] += 1;

@@ -1,0 +1,36 @@
+// Analytic colliders: rigid shapes with Coulomb friction, kept like the floor (docs/model.md section 6.4).
+#pragma once
+#include "wetcloth/core.hpp"
+
+namespace wc {
+
+//: Shape codes (column SHAPE of a collider row); wetcloth.scene.COLLIDER_SHAPES in this order.
+enum ColliderShape : Index { PLANE = 0, BOX = 1, SPHERE = 2, CYLINDER = 3 };
+
+//: Columns of a collider row (Physics::colliders, (count, COLLIDER_COLUMNS)): shape code; centre (a point
+//: of a plane) m; radius m (sphere, cylinder); height m (cylinder, along z); edge lengths m (box, along
+//: x, y, z); unit outward normal (plane: the solid lies behind it); Coulomb friction coefficient.
+enum ColliderColumn : Index {
+    C_SHAPE = 0, C_X, C_Y, C_Z, C_RADIUS, C_HEIGHT, C_SIZE_X, C_SIZE_Y, C_SIZE_Z, C_NORMAL_X, C_NORMAL_Y, C_NORMAL_Z,
+    C_FRICTION, COLLIDER_COLUMNS
+};
+
+//: Signed distance (m, negative inside) from point p (3) to the surface of collider `row`, and the unit
+//: outward normal there (normal, 3).
+double collider_distance(const double* row, const double* p, double* normal);
+
+//: After a step: every particle (pos (3, n) at the step's end, start (3, n) where the step began, vel (3, n))
+//: whose centre is closer than `gap` m to a collider is put back at distance gap along the outward normal;
+//: its velocity into the collider is removed and its tangential velocity reduced by friction times that
+//: (never reversed), and its tangential motion during the step likewise by friction times how far the
+//: step took it in (held still within the friction cone).  Colliders whose box, grown by gap, the
+//: cloth's box does not reach are skipped.  Returns how many particles touched.
+Index collider_contact(Index n, Index count, const double* colliders, double gap, const double* start, double* pos,
+                       double* vel);
+
+//: The particles on a collider (within gap m, where collider_contact left them) get the history of a
+//: straight motion at their velocity (as the floor's agree_history).  Returns how many.
+Index collider_history(Index n, Index count, const double* colliders, double gap, const double* pos, const double* vel,
+                       double* prev_pos, double* prev_vel, double h);
+
+}  // namespace wc

@@ -1,0 +1,208 @@
+// Analytic colliders (colliders.hpp; docs/model.md section 6.4): the floor's rule (floor.cpp) against a
+// plane, an axis-aligned box, a sphere or a capped cylinder with a vertical axis.
+//
+// Contact is resolved after the step, as floor_contact does: a particle that ends the step closer than
+// gap (thickness / 2) to a collider is moved out along the outward normal, loses its velocity into the
+// collider, and its sliding speed drops by friction times that loss.  Unlike the floor, a collider holds
+// no particle during the step's solve; instead its tangential motion during the step is limited the same
+// way (removed while within friction times the depth the step took it in), so that a particle on a
+// slope within the friction cone stays put rather than creeping by g h^2 sin(angle) per step.
+#include "wetcloth/colliders.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace wc {
+
+namespace {
+
+//: Distance to an axis-aligned box of half sizes half (3) centred at the origin, from offset d (3).
+double box_distance(const double* d, const double* half, double* normal) {
+    double q[3], outside2 = 0.0;
+    Index widest = 0;
+    for (Index c = 0; c < 3; ++c) {
+        q[c] = std::abs(d[c]) - half[c];
+        if (q[c] > q[widest]) widest = c;
+        if (q[c] > 0.0) outside2 += q[c] * q[c];
+    }
+    if (outside2 > 0.0) {
+        const double dist = std::sqrt(outside2);
+        for (Index c = 0; c < 3; ++c) normal[c] = q[c] > 0.0 ? std::copysign(q[c], d[c]) / dist : 0.0;
+        return dist;
+    }
+    for (Index c = 0; c < 3; ++c) normal[c] = 0.0;
+    normal[widest] = d[widest] < 0.0 ? -1.0 : 1.0;
+    return q[widest];
+}
+
+//: The collider's axis-aligned bounding box (lo, hi (3)); false for a plane (unbounded).
+bool bounds(const double* row, double* lo, double* hi) {
+    double half[3];
+    switch (static_cast<Index>(row[C_SHAPE])) {
+        case SPHERE: half[0] = half[1] = half[2] = row[C_RADIUS]; break;
+        case CYLINDER: half[0] = half[1] = row[C_RADIUS]; half[2] = 0.5 * row[C_HEIGHT]; break;
+        case BOX: half[0] = 0.5 * row[C_SIZE_X]; half[1] = 0.5 * row[C_SIZE_Y]; half[2] = 0.5 * row[C_SIZE_Z]; break;
+        default: return false;
+    }
+    for (Index c = 0; c < 3; ++c) {
+        lo[c] = row[C_X + c] - half[c];
+        hi[c] = row[C_X + c] + half[c];
+    }
+    return true;
+}
+
+//: Whether any point of the box [lo, hi] can be closer than gap to the collider.
+bool reachable(const double* row, const double* lo, const double* hi, double gap) {
+    double clo[3], chi[3];
+    if (bounds(row, clo, chi)) {
+        for (Index c = 0; c < 3; ++c) {
+            if (hi[c] < clo[c] - gap || lo[c] > chi[c] + gap) return false;
+        }
+        return true;
+    }
+    // A plane: the box's corner deepest along -normal.
+    double depth = 0.0;
+    for (Index c = 0; c < 3; ++c) {
+        const double nc = row[C_NORMAL_X + c];
+        depth += nc * ((nc >= 0.0 ? lo[c] : hi[c]) - row[C_X + c]);
+    }
+    return depth < gap;
+}
+
+}  // namespace
+
+double collider_distance(const double* row, const double* p, double* normal) {
+    const double d[3] = {p[0] - row[C_X], p[1] - row[C_Y], p[2] - row[C_Z]};
+    switch (static_cast<Index>(row[C_SHAPE])) {
+        case SPHERE: {
+            const double r = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            if (r > 0.0) {
+                for (Index c = 0; c < 3; ++c) normal[c] = d[c] / r;
+            } else {
+                normal[0] = normal[1] = 0.0;
+                normal[2] = 1.0;
+            }
+            return r - row[C_RADIUS];
+        }
+        case CYLINDER: {
+            const double rho = std::sqrt(d[0] * d[0] + d[1] * d[1]);
+            const double radial = rho - row[C_RADIUS];
+            const double axial = std::abs(d[2]) - 0.5 * row[C_HEIGHT];
+            const double ex = rho > 0.0 ? d[0] / rho : 1.0, ey = rho > 0.0 ? d[1] / rho : 0.0;
+            const double ez = d[2] < 0.0 ? -1.0 : 1.0;
+            if (radial > 0.0 && axial > 0.0) {  // beyond the rim
+                const double dist = std::sqrt(radial * radial + axial * axial);
+                normal[0] = ex * radial / dist;
+                normal[1] = ey * radial / dist;
+                normal[2] = ez * axial / dist;
+                return dist;
+            }
+            if (radial > axial) {
+                normal[0] = ex;
+                normal[1] = ey;
+                normal[2] = 0.0;
+                return radial;
+            }
+            normal[0] = normal[1] = 0.0;
+            normal[2] = ez;
+            return axial;
+        }
+        case BOX: {
+            const double half[3] = {0.5 * row[C_SIZE_X], 0.5 * row[C_SIZE_Y], 0.5 * row[C_SIZE_Z]};
+            return box_distance(d, half, normal);
+        }
+        default: {  // PLANE
+            double dist = 0.0;
+            for (Index c = 0; c < 3; ++c) {
+                normal[c] = row[C_NORMAL_X + c];
+                dist += normal[c] * d[c];
+            }
+            return dist;
+        }
+    }
+}
+
+Index collider_contact(Index n, Index count, const double* colliders, double gap, const double* start, double* pos,
+                       double* vel) {
+    if (count == 0 || n == 0) return 0;
+    double lo[3], hi[3];
+    for (Index c = 0; c < 3; ++c) {
+        const double* x = pos + c * n;
+        const auto [a, b] = std::minmax_element(x, x + n);
+        lo[c] = *a;
+        hi[c] = *b;
+    }
+    Index touching = 0;
+    for (Index k = 0; k < count; ++k) {
+        const double* row = colliders + k * COLLIDER_COLUMNS;
+        if (!reachable(row, lo, hi, gap)) continue;
+        const double friction = row[C_FRICTION];
+        for (Index i = 0; i < n; ++i) {
+            double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+            double nrm[3];
+            const double dist = collider_distance(row, p, nrm);
+            if (!(dist < gap)) continue;
+            touching += 1;
+            // Position: out along the normal; the step's tangential motion limited by friction * depth.
+            const double depth = gap - dist;
+            double dx[3], along = 0.0;
+            for (Index c = 0; c < 3; ++c) {
+                p[c] += depth * nrm[c];
+                dx[c] = p[c] - start[c * n + i];
+                along += dx[c] * nrm[c];
+            }
+            double slid2 = 0.0;
+            for (Index c = 0; c < 3; ++c) {
+                dx[c] -= along * nrm[c];  // tangential part of the step's motion
+                slid2 += dx[c] * dx[c];
+            }
+            const double slid = std::sqrt(slid2);
+            if (slid > 0.0) {
+                const double k_pos = std::min(1.0, friction * depth / slid);
+                for (Index c = 0; c < 3; ++c) p[c] -= k_pos * dx[c];
+            }
+            // Velocity: the part into the collider removed, sliding reduced by friction times that.
+            double v[3] = {vel[i], vel[n + i], vel[2 * n + i]};
+            const double vn = v[0] * nrm[0] + v[1] * nrm[1] + v[2] * nrm[2];
+            const double dvn = vn < 0.0 ? -vn : 0.0;
+            double vt[3], vt2 = 0.0;
+            for (Index c = 0; c < 3; ++c) {
+                vt[c] = v[c] - vn * nrm[c];
+                vt2 += vt[c] * vt[c];
+            }
+            const double slide = std::sqrt(vt2);
+            double keep = 1.0;
+            if (slide > 0.0) keep = std::max(0.0, 1.0 - friction * dvn / slide);
+            const double vn_kept = vn > 0.0 ? vn : 0.0;
+            for (Index c = 0; c < 3; ++c) {
+                pos[c * n + i] = p[c];
+                vel[c * n + i] = vn_kept * nrm[c] + keep * vt[c];
+            }
+        }
+    }
+    return touching;
+}
+
+Index collider_history(Index n, Index count, const double* colliders, double gap, const double* pos, const double* vel,
+                       double* prev_pos, double* prev_vel, double h) {
+    Index agreed = 0;
+    const double reach = gap * (1.0 + 1e-9);  // where collider_contact put them, up to rounding
+    for (Index i = 0; i < n; ++i) {
+        const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+        bool on = false;
+        for (Index k = 0; k < count && !on; ++k) {
+            double nrm[3];
+            on = collider_distance(colliders + k * COLLIDER_COLUMNS, p, nrm) <= reach;
+        }
+        if (!on) continue;
+        agreed += 1;
+        for (Index c = 0; c < 3; ++c) {
+            prev_pos[c * n + i] = pos[c * n + i] - h * vel[c * n + i];
+            prev_vel[c * n + i] = vel[c * n + i];
+        }
+    }
+    return agreed;
+}
+
+}  // namespace wc
