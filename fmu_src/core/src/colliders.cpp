@@ -3,10 +3,11 @@
 //
 // Contact is resolved after the step, as floor_contact does: a particle that ends the step closer than
 // gap (thickness / 2) to a collider is moved out along the outward normal, loses its velocity into the
-// collider, and its sliding speed drops by friction times that loss.  Unlike the floor, a collider holds
-// no particle during the step's solve; instead its tangential motion during the step is limited the same
-// way (removed while within friction times the depth the step took it in), so that a particle on a
-// slope within the friction cone stays put rather than creeping by g h^2 sin(angle) per step.
+// collider, and its sliding speed drops by friction times that loss.  Its tangential motion during the
+// step is limited the same way (removed while within friction times the depth the step took it in), so
+// that a particle landing on a slope within the friction cone stops where it landed.  A particle at rest
+// on a collider is then held during the next step, as on the floor (hold_on_colliders), as long as the
+// step's force keeps it within the friction cone (release_from_colliders).
 #include "wetcloth/colliders.hpp"
 
 #include <algorithm>
@@ -182,6 +183,52 @@ Index collider_contact(Index n, Index count, const double* colliders, double gap
         }
     }
     return touching;
+}
+
+Index hold_on_colliders(Index n, Index count, const double* colliders, double gap, const double* pos,
+                        const double* vel, double* free, double* held) {
+    Index holding = 0;
+    if (count == 0) return 0;
+    const double reach = gap * (1.0 + 1e-9);
+    for (Index i = 0; i < n; ++i) {
+        if (free[i] == 0.0 || vel[i] != 0.0 || vel[n + i] != 0.0 || vel[2 * n + i] != 0.0) continue;
+        const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+        for (Index k = 0; k < count; ++k) {
+            double nrm[3];
+            if (collider_distance(colliders + k * COLLIDER_COLUMNS, p, nrm) <= reach) {
+                free[i] = 0.0;
+                held[i] = collider_held(k);
+                holding += 1;
+                break;
+            }
+        }
+    }
+    return holding;
+}
+
+Index release_from_colliders(Index n, const double* colliders, const double* pos, const double* force, double* free,
+                             double* held) {
+    Index released = 0;
+    for (Index i = 0; i < n; ++i) {
+        if (held[i] < collider_held(0)) continue;  // not on a collider (floor 1, layer 2, free 0)
+        const double* row = colliders + static_cast<Index>(held[i] - collider_held(0)) * COLLIDER_COLUMNS;
+        const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+        double nrm[3];
+        collider_distance(row, p, nrm);
+        const double f[3] = {force[i], force[n + i], force[2 * n + i]};
+        const double pressing = -(f[0] * nrm[0] + f[1] * nrm[1] + f[2] * nrm[2]);
+        double along2 = 0.0;
+        for (Index c = 0; c < 3; ++c) {
+            const double t = f[c] + pressing * nrm[c];
+            along2 += t * t;
+        }
+        if (pressing <= 0.0 || std::sqrt(along2) > row[C_FRICTION] * pressing) {
+            held[i] = 0.0;
+            free[i] = 1.0;
+            released += 1;
+        }
+    }
+    return released;
 }
 
 Index collider_history(Index n, Index count, const double* colliders, double gap, const double* pos, const double* vel,

@@ -28,6 +28,19 @@ double collider_distance(const double* row, const double* p, double* normal);
 Index collider_contact(Index n, Index count, const double* colliders, double gap, const double* start, double* pos,
                        double* vel);
 
+//: The value of Buffers::held for a particle collider k holds (the floor's is 1, a layer's 2).
+inline double collider_held(Index k) { return 3.0 + static_cast<double>(k); }
+
+//: As the floor's hold_resting: the free particles on a collider (within gap m) with zero velocity
+//: (friction stopped them) are held for the coming step (free 0, held collider_held(k)).  Returns how many.
+Index hold_on_colliders(Index n, Index count, const double* colliders, double gap, const double* pos,
+                        const double* vel, double* free, double* held);
+
+//: As the floor's release_slipping: release the particles held on a collider that the step's force (N,
+//: (3, n)) lifts off it or pushes along it above friction times the force into it.  Returns how many.
+Index release_from_colliders(Index n, const double* colliders, const double* pos, const double* force, double* free,
+                             double* held);
+
 //: The particles on a collider (within gap m, where collider_contact left them) get the history of a
 //: straight motion at their velocity (as the floor's agree_history).  Returns how many.
 Index collider_history(Index n, Index count, const double* colliders, double gap, const double* pos, const double* vel,
