@@ -1,4 +1,4 @@
-"""Analytic colliders (docs/model.md section 6.4): a plane, box, sphere or vertical cylinder that keeps the
+"""Analytic colliders (docs/model.md section 6.3): a plane, box, sphere or vertical cylinder that keeps the
 cloth's particle centres thickness/2 outside it, with Coulomb friction, as the floor does."""
 
 import math

@@ -48,7 +48,7 @@ COLLIDER_SHAPES = ("plane", "box", "sphere", "cylinder")
 
 @dataclass(frozen=True)
 class Collider:
-    """A rigid analytic collider (docs/model.md section 6.4), one ``[[collider]]`` table of a scene file.
+    """A rigid analytic collider (docs/model.md section 6.3), one ``[[collider]]`` table of a scene file.
     Its fields are addressed as ``collider<k>_<field>`` (k from 1, in file order) everywhere else."""
 
     shape: str = _param("sphere", "-", "plane (half-space), box (axis-aligned), sphere or cylinder (vertical axis)",
@@ -179,7 +179,7 @@ class Scene:
         5e-6, "-", "local position error per step relative to the cloth size; 0 = fixed steps", 0.0, 1.0
     )
     max_step: float = _param(0.1, "s", "largest internal time step", 0.0, 1.0, lo_open=True)
-    # --- analytic colliders (docs/model.md section 6.4): [[collider]] tables, flattened as collider<k>_<field>
+    # --- analytic colliders (docs/model.md section 6.3): [[collider]] tables, flattened as collider<k>_<field>
     colliders: tuple = field(default=(), metadata=dict(collider=True))
 
     def __post_init__(self):
@@ -223,6 +223,17 @@ def _field(name: str) -> dataclasses.Field:
         raise ParameterError(name, f"unknown collider field; a collider's fields are collider<k>_<field> "
                                    f"(k = 1, 2, ...) with <field> one of {fields}")
     raise ParameterError(name, did_you_mean(name, PARAMETERS, listing=PARAMETER_LISTING))
+
+
+def parameter_field(name: str) -> dataclasses.Field:
+    """The field (unit, range, doc in its metadata) of a parameter name, a collider's flattened names
+    included; a ParameterError for an unknown name."""
+    return _field(name)
+
+
+def is_parameter(name: str) -> bool:
+    """Whether ``name`` is a scene parameter or a collider field's flattened name (collider1_radius)."""
+    return name in PARAMETERS or collider_name(name) is not None
 
 
 def normalise(name: str, value):

@@ -1,4 +1,4 @@
-// Analytic colliders (colliders.hpp; docs/model.md section 6.4): the floor's rule (floor.cpp) against a
+// Analytic colliders (colliders.hpp; docs/model.md section 6.3): the floor's rule (floor.cpp) against a
 // plane, an axis-aligned box, a sphere or a capped cylinder with a vertical axis.
 //
 // Contact is resolved after the step, as floor_contact does: a particle that ends the step closer than

@@ -1,4 +1,4 @@
-// Analytic colliders: rigid shapes with Coulomb friction, kept like the floor (docs/model.md section 6.4).
+// Analytic colliders: rigid shapes with Coulomb friction, kept like the floor (docs/model.md section 6.3).
 #pragma once
 #include "wetcloth/core.hpp"
 
