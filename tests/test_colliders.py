@@ -129,3 +129,9 @@ def test_a_scene_file_with_collider_tables(tmp_path):
     path.write_text('[[collider]]\nshape = "sphere"\nradius = -1\n')
     with pytest.raises(ConfigError, match="collider1_radius"):
         load_scene(path)
+
+
+def test_the_tablecloth_preset_has_its_sphere():
+    scene = load_scene("tablecloth_sphere")
+    assert [c.shape for c in scene.colliders] == ["sphere"]
+    assert scene.to_dict()["collider1_radius"] == 0.3

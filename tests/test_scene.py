@@ -9,7 +9,7 @@ import pytest
 import wetcloth
 from wetcloth.scene import PARAMETERS, Scene, describe_range, from_dict, load_scene, preset_dir
 
-PRESETS = ["towel", "thesis_fast", "thesis_slow", "thesis_float", "thesis_sink", "tablecloth_sphere"]
+PRESETS = ["towel", "thesis_fast", "thesis_slow", "thesis_float", "thesis_sink"]
 
 
 def test_default_scene_is_the_towel_preset():
