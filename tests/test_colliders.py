@@ -135,3 +135,19 @@ def test_the_tablecloth_preset_has_its_sphere():
     scene = load_scene("tablecloth_sphere")
     assert [c.shape for c in scene.colliders] == ["sphere"]
     assert scene.to_dict()["collider1_radius"] == 0.3
+
+
+def test_a_horizontal_plane_collider_acts_as_the_floor():
+    """A tilted sheet dropped in air onto a plane collider at z = -0.1 m lands, slides and comes to rest
+    as on a floor at the same level with the same friction (the floor moved out of the way): the same
+    rule (projection, impulse, holding at rest), so the same steps and positions; asserted to 1e-12 m,
+    the rounding of the two ways of computing the contact height."""
+    base = dict(nx=15, ny=15, width=0.4, length=0.4, initial_tilt=20.0, water_level=-0.9, initial_height=0.1)
+    floor = wetcloth.Simulation(load_scene(**base, floor_level=-0.1))
+    plane = wetcloth.Simulation(load_scene(**base, floor_level=-0.5,
+                                           colliders=(dict(shape="plane", z=-0.1, friction=0.5),)))
+    for sim in (floor, plane):
+        sim.advance(3.0)
+    assert floor.sleeping and plane.sleeping
+    np.testing.assert_allclose(plane.state.pos, floor.state.pos, rtol=0, atol=1e-12)
+    assert plane.steps == floor.steps

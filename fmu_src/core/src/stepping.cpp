@@ -242,7 +242,7 @@ Status step(Core& core, double remaining) {
     const bool on_floor = floor_contact(n, phys.floor_z, phys.floor_friction, buf.trial_pos, buf.trial_vel) > 0 ||
                           held > 0;
     const bool on_collider = (phys.collider_count > 0 &&
-                              collider_contact(n, phys.collider_count, phys.colliders, 0.5 * phys.thickness, buf.pos,
+                              collider_contact(n, phys.collider_count, phys.colliders, 0.5 * phys.thickness,
                                                buf.trial_pos, buf.trial_vel) > 0) ||
                              held_on_colliders > 0;
     const bool kinked = resolve(core.contact, phys.thickness, phys.floor_z, control.blow_up_speed, n,

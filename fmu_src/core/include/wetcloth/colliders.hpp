@@ -19,14 +19,11 @@ enum ColliderColumn : Index {
 //: outward normal there (normal, 3).
 double collider_distance(const double* row, const double* p, double* normal);
 
-//: After a step: every particle (pos (3, n) at the step's end, start (3, n) where the step began, vel (3, n))
-//: whose centre is closer than `gap` m to a collider is put back at distance gap along the outward normal;
-//: its velocity into the collider is removed and its tangential velocity reduced by friction times that
-//: (never reversed), and its tangential motion during the step likewise by friction times how far the
-//: step took it in (held still within the friction cone).  Colliders whose box, grown by gap, the
-//: cloth's box does not reach are skipped.  Returns how many particles touched.
-Index collider_contact(Index n, Index count, const double* colliders, double gap, const double* start, double* pos,
-                       double* vel);
+//: After a step: every particle (pos (3, n) at the step's end, vel (3, n)) whose centre is closer than `gap`
+//: m to a collider is put back at distance gap along the outward normal; its velocity into the collider
+//: is removed and its tangential velocity reduced by friction times that (never reversed).  Colliders
+//: whose box, grown by gap, the cloth's box does not reach are skipped.  Returns how many particles touched.
+Index collider_contact(Index n, Index count, const double* colliders, double gap, double* pos, double* vel);
 
 //: The value of Buffers::held for a particle collider k holds (the floor's is 1, a layer's 2).
 inline double collider_held(Index k) { return 3.0 + static_cast<double>(k); }
