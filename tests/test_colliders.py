@@ -59,7 +59,7 @@ def test_a_collider_the_cloth_never_reaches_changes_nothing(far):
     assert with_far.steps == plain.steps
 
 
-def _on_incline(angle_deg: float, friction: float):
+def _on_incline(angle_deg: float, friction: float, integrator: str = "bdf2"):
     """A small sheet lying on a plane collider inclined by angle_deg about x, 1 micrometre above its
     contact distance, in air without drag (air_density 0: only gravity and the plane act)."""
     t = math.radians(angle_deg)
@@ -69,29 +69,34 @@ def _on_incline(angle_deg: float, friction: float):
     plane = dict(shape="plane", x=point[0], y=point[1], z=point[2], normal_x=normal[0], normal_y=normal[1],
                  normal_z=normal[2], friction=friction)
     scene = load_scene(nx=5, ny=5, width=0.1, length=0.1, initial_tilt=angle_deg, initial_height=height,
-                       thickness=thickness, water_level=-0.5, air_density=0.0, colliders=(plane,))
+                       thickness=thickness, water_level=-0.5, air_density=0.0, integrator=integrator,
+                       colliders=(plane,))
     return wetcloth.Simulation(scene)
 
 
 @pytest.mark.parametrize("angle", [15.0, 30.0])
 def test_a_sheet_on_an_incline_stays_with_friction_at_or_above_tan_angle_and_slides_below(angle):
     """Coulomb: on a plane inclined by a, gravity pulls along it with g sin a and presses with g cos a,
-    so friction >= tan a holds the sheet (moves less than 0.01 mm in 1 s: the 1 um landing) and
-    friction 0.8 tan a lets it slide with (1 - 0.8) g sin a: about 0.1 g sin a * t^2 = 0.25 m (15 deg)
-    in 1 s; asserted: more than half of that, downhill."""
+    so friction >= tan a holds the sheet: it moves less than 0.01 mm in 1 s (the 1 um landing: 1.1 and
+    1.4 um measured).  Friction 0.8 tan a lets it slide with (1 - 0.8) g sin a, 0.1 g sin a t^2 in t s:
+    implicit Euler's impulses give that within 1 % (the first step's landing).  BDF2 gives less: the
+    contact gives particles on the collider the history of a straight motion (as the floor's
+    agree_history), after which BDF2's velocity update is 2/3 of the acceleration (3 v+ - 3 v = 2 h a):
+    0.67 of the distance measured; asserted only that it slides downhill, more than half of it."""
     mu = math.tan(math.radians(angle))
     stays = _on_incline(angle, 1.001 * mu)
     start = stays.state.pos.copy()
     stays.advance(1.0)
     assert np.abs(stays.state.pos - start).max() < 1e-5
-    slides = _on_incline(angle, 0.8 * mu)
-    start = slides.state.pos.copy()
-    slides.advance(1.0)
     t = math.radians(angle)
     downhill = np.array([0.0, -math.cos(t), -math.sin(t)])
-    moved = downhill @ (slides.state.pos - start).mean(axis=1)
     expected = 0.5 * 0.2 * 9.81 * math.sin(t) * 1.0 ** 2
-    assert 0.5 * expected < moved < 1.05 * expected
+    for integrator, low in (("implicit_euler", 0.99), ("bdf2", 0.5)):
+        slides = _on_incline(angle, 0.8 * mu, integrator)
+        start = slides.state.pos.copy()
+        slides.advance(1.0)
+        moved = downhill @ (slides.state.pos - start).mean(axis=1)
+        assert low * expected < moved < 1.01 * expected, integrator
 
 
 def test_collider_fields_are_addressed_by_one_name_each():
