@@ -156,3 +156,15 @@ def test_a_horizontal_plane_collider_acts_as_the_floor():
     assert floor.sleeping and plane.sleeping
     np.testing.assert_allclose(plane.state.pos, floor.state.pos, rtol=0, atol=1e-12)
     assert plane.steps == floor.steps
+
+
+def test_params_and_study_axes_know_the_collider_names():
+    """``wetcloth params SCENE`` lists every field of the scene's colliders; a study may vary them."""
+    from wetcloth.batch.axes import check_name, typed
+    from wetcloth.commands.params import rows
+
+    listed = {r["name"]: r for r in rows("tablecloth_sphere")}
+    assert listed["collider1_radius"]["value"] == 0.3 and listed["collider1_height"]["value"] == 0.1
+    assert "0 < collider1_radius <= 10000 m" == listed["collider1_radius"]["range"]
+    check_name("collider1_radius", "axes")
+    assert typed("collider1_radius", 1, "axes") == 1.0
