@@ -21,12 +21,12 @@ Cloth = namedtuple("Cloth", "grid_x grid_y offsets rest tension_only stiffness d
                             "stokes_coefficient capacity wick_offsets wick_conductance")
 #: Scene parameters as the core uses them (SI units; flags as bools).  ``wet_factor`` is 0 unless
 #: wetness-dependent stiffness is active; ``air_density`` 0 switches the drag in air off; ``floor_z``
-#: is the lowest particle centre.
+#: is the lowest particle centre; ``colliders`` (k, 13) the analytic colliders' rows (colliders.hpp).
 Physics = namedtuple("Physics", "projected wet_factor water_level water_density thickness smooth stokes "
                                 "drag_normal drag_tangential drag_linear current_x current_y air_density "
                                 "wind_x wind_y wind_z floor_z "
                                 "floor_friction absorption_capacity absorption_rate drying_rate wicking_rate "
-                                "wick_step_limit skip_idle")
+                                "wick_step_limit skip_idle colliders")
 #: Scratch and results: ``force`` (3, n) N; ``submerged`` (n) the submerged fraction of each
 #: particle; ``saturation`` (n); ``blocks`` (6, n) per-particle symmetric 3x3 blocks (xx, yy, zz,
 #: xy, xz, yz) of the system matrix; ``diagonal_blocks`` (6, n) the springs' part of its diagonal

@@ -63,6 +63,7 @@ class Model:
             floor_friction=scene.floor_friction, absorption_capacity=scene.absorption_capacity,
             absorption_rate=scene.absorption_rate, drying_rate=scene.drying_rate, wicking_rate=scene.wicking_rate,
             wick_step_limit=self.wick_step_limit, skip_idle=self.skip_idle_work,
+            colliders=np.array([c.row() for c in scene.colliders], dtype=np.float64).reshape(-1, 13),
         )
 
     def _set_wicking(self, scene: Scene) -> None:

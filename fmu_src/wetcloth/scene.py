@@ -10,11 +10,14 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from wetcloth.errors import ConfigError, Mistakes, ParameterError, did_you_mean
 from wetcloth.run_settings import SETTINGS as RUN_SETTINGS
@@ -37,6 +40,63 @@ def _param(default, unit: str, doc: str, lo=None, hi=None, lo_open=False, choice
 INTEGRATORS = ("explicit_euler", "symplectic_euler", "implicit_euler", "bdf2")
 EDGES = ("none", "x_min", "x_max", "y_min", "y_max")
 SWITCH = ("on", "off")
+
+
+#: Collider shapes, in the order of the core's shape codes (fmu_src/core/include/wetcloth/colliders.hpp).
+COLLIDER_SHAPES = ("plane", "box", "sphere", "cylinder")
+
+
+@dataclass(frozen=True)
+class Collider:
+    """A rigid analytic collider (docs/model.md section 6.3), one ``[[collider]]`` table of a scene file.
+    Its fields are addressed as ``collider<k>_<field>`` (k from 1, in file order) everywhere else."""
+
+    shape: str = _param("sphere", "-", "plane (half-space), box (axis-aligned), sphere or cylinder (vertical axis)",
+                        choices=COLLIDER_SHAPES)
+    x: float = _param(0.0, "m", "x of the centre (plane: of a point on it)", -1e4, 1e4)
+    y: float = _param(0.0, "m", "y of the centre (plane: of a point on it)", -1e4, 1e4)
+    z: float = _param(0.0, "m", "z of the centre (plane: of a point on it)", -1e4, 1e4)
+    radius: float = _param(0.1, "m", "radius of a sphere or cylinder", 0.0, 1e4, lo_open=True)
+    height: float = _param(0.1, "m", "height of a cylinder (along z, centred on z)", 0.0, 1e4, lo_open=True)
+    size_x: float = _param(0.1, "m", "edge of a box along x", 0.0, 1e4, lo_open=True)
+    size_y: float = _param(0.1, "m", "edge of a box along y", 0.0, 1e4, lo_open=True)
+    size_z: float = _param(0.1, "m", "edge of a box along z", 0.0, 1e4, lo_open=True)
+    normal_x: float = _param(0.0, "-", "x of a plane's outward normal (the solid lies behind it)", -1.0, 1.0)
+    normal_y: float = _param(0.0, "-", "y of a plane's outward normal", -1.0, 1.0)
+    normal_z: float = _param(1.0, "-", "z of a plane's outward normal", -1.0, 1.0)
+    friction: float = _param(0.5, "-", "Coulomb friction coefficient of the collider", 0.0, 10.0)
+
+    def row(self) -> list[float]:
+        """The core's row (colliders.hpp: shape code, centre, radius, height, sizes, unit normal, friction)."""
+        normal = np.array([self.normal_x, self.normal_y, self.normal_z])
+        normal = normal / np.linalg.norm(normal)
+        return [float(COLLIDER_SHAPES.index(self.shape)), self.x, self.y, self.z, self.radius, self.height,
+                self.size_x, self.size_y, self.size_z, *map(float, normal), self.friction]
+
+    def distance(self, p: np.ndarray) -> np.ndarray:
+        """Signed distance (m, negative inside) of points p (3, m) from the surface (as the core's)."""
+        d = p - np.array([[self.x], [self.y], [self.z]])
+        if self.shape == "sphere":
+            return np.sqrt((d * d).sum(axis=0)) - self.radius
+        if self.shape == "plane":
+            normal = np.array(self.row()[9:12])
+            return normal @ d
+        if self.shape == "cylinder":
+            q = np.stack([np.hypot(d[0], d[1]) - self.radius, np.abs(d[2]) - 0.5 * self.height])
+        else:
+            q = np.abs(d) - 0.5 * np.array([[self.size_x], [self.size_y], [self.size_z]])
+        outside = np.sqrt((np.maximum(q, 0.0) ** 2).sum(axis=0))
+        return np.where(outside > 0.0, outside, q.max(axis=0))
+
+
+COLLIDER_FIELDS: dict[str, dataclasses.Field] = {f.name: f for f in dataclasses.fields(Collider)}
+_COLLIDER_NAME = re.compile(r"collider([1-9][0-9]*)_([a-z_]+)")
+
+
+def collider_name(name: str) -> tuple[int, str] | None:
+    """(k, field) of a flattened collider name such as 'collider1_radius', else None."""
+    m = _COLLIDER_NAME.fullmatch(name)
+    return (int(m.group(1)), m.group(2)) if m and m.group(2) in COLLIDER_FIELDS else None
 
 
 @dataclass(frozen=True)
@@ -119,36 +179,61 @@ class Scene:
         5e-6, "-", "local position error per step relative to the cloth size; 0 = fixed steps", 0.0, 1.0
     )
     max_step: float = _param(0.1, "s", "largest internal time step", 0.0, 1.0, lo_open=True)
+    # --- analytic colliders (docs/model.md section 6.3): [[collider]] tables, flattened as collider<k>_<field>
+    colliders: tuple = field(default=(), metadata=dict(collider=True))
 
     def __post_init__(self):
         validate(self)
 
     def replace(self, **overrides) -> "Scene":
-        """A copy with some parameters changed (validated)."""
-        return from_dict(dataclasses.asdict(self) | overrides)
+        """A copy with some parameters changed (validated); collider fields by their flattened names."""
+        return from_dict(self.to_dict() | overrides)
 
     def to_dict(self) -> dict[str, Any]:
-        return dataclasses.asdict(self)
+        """Every parameter by name, the colliders' fields flattened (collider1_shape, collider1_x, ...)."""
+        values = {name: getattr(self, name) for name in PARAMETERS}
+        for k, collider in enumerate(self.colliders, 1):
+            values |= {f"collider{k}_{name}": getattr(collider, name) for name in COLLIDER_FIELDS}
+        return values
 
 
-PARAMETERS: dict[str, dataclasses.Field] = {f.name: f for f in dataclasses.fields(Scene)}
+PARAMETERS: dict[str, dataclasses.Field] = {f.name: f for f in dataclasses.fields(Scene) if f.name != "colliders"}
 PARAMETER_LISTING = f"there are {len(PARAMETERS)}; 'wetcloth params' lists them"
 
 
-def describe_range(f: dataclasses.Field) -> str:
-    """The allowed values of a field, as a user reads them: '0 < thickness <= 1 m'."""
+def describe_range(f: dataclasses.Field, name: str | None = None) -> str:
+    """The allowed values of a field, as a user reads them: '0 < thickness <= 1 m' (``name``: the name
+    to show, e.g. a collider's flattened 'collider1_radius')."""
     md = f.metadata
     if md["choices"]:
         return "one of " + ", ".join(repr(c) for c in md["choices"])
     unit = "" if md["unit"] == "-" else f" {md['unit']}"
     lo_sign = "<" if md["lo_open"] else "<="
-    return f"{md['lo']:g} {lo_sign} {f.name} <= {md['hi']:g}{unit}"
+    return f"{md['lo']:g} {lo_sign} {name or f.name} <= {md['hi']:g}{unit}"
 
 
 def _field(name: str) -> dataclasses.Field:
-    if name not in PARAMETERS:
-        raise ParameterError(name, did_you_mean(name, PARAMETERS, listing=PARAMETER_LISTING))
-    return PARAMETERS[name]
+    if name in PARAMETERS:
+        return PARAMETERS[name]
+    flat = collider_name(name)
+    if flat is not None:
+        return COLLIDER_FIELDS[flat[1]]
+    if name.startswith("collider"):
+        fields = ", ".join(COLLIDER_FIELDS)
+        raise ParameterError(name, f"unknown collider field; a collider's fields are collider<k>_<field> "
+                                   f"(k = 1, 2, ...) with <field> one of {fields}")
+    raise ParameterError(name, did_you_mean(name, PARAMETERS, listing=PARAMETER_LISTING))
+
+
+def parameter_field(name: str) -> dataclasses.Field:
+    """The field (unit, range, doc in its metadata) of a parameter name, a collider's flattened names
+    included; a ParameterError for an unknown name."""
+    return _field(name)
+
+
+def is_parameter(name: str) -> bool:
+    """Whether ``name`` is a scene parameter or a collider field's flattened name (collider1_radius)."""
+    return name in PARAMETERS or collider_name(name) is not None
 
 
 def normalise(name: str, value):
@@ -158,14 +243,14 @@ def normalise(name: str, value):
     f = _field(name)
     if f.type == "str":
         if not isinstance(value, str):
-            raise ParameterError(name, f"expected a string, got {value!r}; allowed: {describe_range(f)}")
+            raise ParameterError(name, f"expected a string, got {value!r}; allowed: {describe_range(f, name)}")
         return value
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         hint = " (text: write the number without quotes)" if isinstance(value, str) else ""
-        raise ParameterError(name, f"expected a number, got {value!r}{hint}; allowed: {describe_range(f)}")
+        raise ParameterError(name, f"expected a number, got {value!r}{hint}; allowed: {describe_range(f, name)}")
     if f.type == "int":
         if isinstance(value, float) and not value.is_integer():
-            raise ParameterError(name, f"expected a whole number, got {value!r}; allowed: {describe_range(f)}")
+            raise ParameterError(name, f"expected a whole number, got {value!r}; allowed: {describe_range(f, name)}")
         return int(value)
     return float(value)
 
@@ -173,19 +258,19 @@ def normalise(name: str, value):
 def check_value(name: str, value):
     """One parameter's value, normalised and checked against its range alone (no cross-parameter checks)."""
     value = normalise(name, value)
-    f = PARAMETERS[name]
+    f = _field(name)
     md = f.metadata
     if f.type == "str":
         if value not in md["choices"]:
             close = difflib.get_close_matches(value, md["choices"], n=1)
             hint = f" (did you mean {close[0]!r}?)" if close else ""
-            raise ParameterError(name, f"{value!r} is not allowed{hint}; allowed: {describe_range(f)}")
+            raise ParameterError(name, f"{value!r} is not allowed{hint}; allowed: {describe_range(f, name)}")
         return value
     if not math.isfinite(value):
-        raise ParameterError(name, f"{value!r} is not a finite number; allowed: {describe_range(f)}")
+        raise ParameterError(name, f"{value!r} is not a finite number; allowed: {describe_range(f, name)}")
     below = value <= md["lo"] if md["lo_open"] else value < md["lo"]
     if below or value > md["hi"]:
-        raise ParameterError(name, f"{value!r} is out of range; allowed: {describe_range(f)}")
+        raise ParameterError(name, f"{value!r} is out of range; allowed: {describe_range(f, name)}")
     return value
 
 
@@ -200,7 +285,7 @@ def parse_text(name: str, text: str):
             return normalise(name, kind(text.strip()))
         except ValueError:
             continue
-    raise ParameterError(name, f"expected a number, got {text!r}; allowed: {describe_range(f)}")
+    raise ParameterError(name, f"expected a number, got {text!r}; allowed: {describe_range(f, name)}")
 
 
 def validate(scene: Scene) -> None:
@@ -210,6 +295,7 @@ def validate(scene: Scene) -> None:
     for name in PARAMETERS:
         with mistakes.collect():
             object.__setattr__(scene, name, check_value(name, getattr(scene, name)))
+    object.__setattr__(scene, "colliders", _checked_colliders(scene.colliders, mistakes))
     mistakes.raise_if_any()
     half_drop = 0.5 * scene.length * abs(math.sin(math.radians(scene.initial_tilt)))
     lowest = scene.initial_height - half_drop - 0.5 * scene.thickness
@@ -219,19 +305,92 @@ def validate(scene: Scene) -> None:
             f"the cloth starts at or below the floor (lowest point {lowest:g} m, floor_level "
             f"{scene.floor_level:g} m); allowed: initial_height > floor_level + {half_drop + 0.5 * scene.thickness:g} m",
         )
+    _check_collider_start(scene)
+
+
+def _checked_colliders(colliders, mistakes: Mistakes) -> tuple:
+    """The colliders as Collider objects (from Collider or dicts of fields), each field checked under its
+    flattened name."""
+    if not isinstance(colliders, (tuple, list)):
+        with mistakes.collect():
+            raise ParameterError("colliders", f"expected a list of colliders, got {colliders!r}")
+        return ()
+    out = []
+    for k, collider in enumerate(colliders, 1):
+        values = dataclasses.asdict(collider) if isinstance(collider, Collider) else collider
+        if not isinstance(values, dict):
+            with mistakes.collect():
+                raise ParameterError(f"collider{k}", f"expected a table of collider fields, got {values!r}")
+            continue
+        checked = {}
+        for name, value in values.items():
+            with mistakes.collect():
+                checked[name] = check_value(f"collider{k}_{name}", value)
+        if len(checked) != len(values):
+            continue
+        if checked.get("shape", "sphere") == "plane" and not any(
+                checked.get(f"normal_{c}", COLLIDER_FIELDS[f"normal_{c}"].default) != 0.0 for c in "xyz"):
+            with mistakes.collect():
+                raise ParameterError(f"collider{k}_normal_z", "a plane's normal is zero; allowed: a nonzero "
+                                                              "(normal_x, normal_y, normal_z)")
+            continue
+        out.append(Collider(**checked))
+    return tuple(out)
+
+
+def _check_collider_start(scene: Scene) -> None:
+    """No collider may reach into the cloth at t = 0 (closer than thickness/2 to a particle)."""
+    if not scene.colliders:
+        return
+    col, row = np.meshgrid(np.arange(scene.nx), np.arange(scene.ny))
+    x = col.ravel() * (scene.width / (scene.nx - 1)) - 0.5 * scene.width
+    y = row.ravel() * (scene.length / (scene.ny - 1)) - 0.5 * scene.length
+    tilt = math.radians(scene.initial_tilt)
+    pos = np.stack([x, y * math.cos(tilt), scene.initial_height + y * math.sin(tilt)])
+    gap = 0.5 * scene.thickness
+    mistakes = Mistakes()
+    for k, collider in enumerate(scene.colliders, 1):
+        d = collider.distance(pos)
+        i = int(np.argmin(d))
+        if d[i] < gap * (1.0 - 1e-9):
+            with mistakes.collect():
+                raise ParameterError(
+                    f"collider{k}",
+                    f"the {collider.shape} overlaps the cloth at t = 0 (particle {i} at ({pos[0, i]:g}, {pos[1, i]:g}, "
+                    f"{pos[2, i]:g}) m is {d[i]:g} m from its surface); allowed: every particle at least "
+                    f"thickness/2 = {gap:g} m outside it (move the collider or the cloth: initial_height)")
+    mistakes.raise_if_any()
 
 
 def from_dict(values: dict[str, Any]) -> Scene:
-    """A validated Scene from a mapping of parameter names to values (every mistake at once)."""
+    """A validated Scene from a mapping of parameter names to values (every mistake at once).  Colliders
+    come as ``colliders`` (Collider objects or dicts), as flattened names (collider1_radius), or both
+    (the flattened names then change the listed colliders' fields or add colliders, numbered on)."""
+    values = dict(values)
+    colliders = [dataclasses.asdict(c) if isinstance(c, Collider) else dict(c) if isinstance(c, dict) else c
+                 for c in values.pop("colliders", ())]
     mistakes = Mistakes()
-    for name in values:
+    flat: dict[int, dict[str, Any]] = {}
+    for name in list(values):
         with mistakes.collect():
             _field(name)
+            where = collider_name(name)
+            if where is not None:
+                flat.setdefault(where[0], {})[where[1]] = values.pop(name)
+    for k in sorted(flat):
+        with mistakes.collect():
+            if k > len(colliders) + 1:
+                raise ParameterError(f"collider{k}_{next(iter(flat[k]))}",
+                                     f"there is no collider {k - 1}: number colliders 1, 2, ... without gaps")
+            if k == len(colliders) + 1:
+                colliders.append({})
+            colliders[k - 1] = colliders[k - 1] | flat[k]
     mistakes.raise_if_any()
-    return Scene(**values)
+    return Scene(**values, colliders=tuple(colliders))
 
 
-#: Keys of a scene file that are not scene parameters: a description and the ``[run]`` table.
+#: Keys of a scene file that are not scene parameters: a description and the ``[run]`` table.  (``[[collider]]``
+#: tables are read into flattened names, collider1_shape ..., by read_scene_file.)
 RESERVED_KEYS = ("description", "run")
 
 
@@ -279,6 +438,14 @@ def read_scene_file(path: str | Path | None) -> dict[str, Any]:
         with mistakes.collect():
             if key == "run":
                 data[key] = check_run_table(value)
+            elif key == "collider":
+                del data[key]
+                if not isinstance(value, list) or not all(isinstance(t, dict) for t in value):
+                    raise ParameterError(key, "colliders are [[collider]] tables (an array of tables)")
+                for k, table in enumerate(value, 1):
+                    for name, item in table.items():
+                        with mistakes.collect():
+                            data[f"collider{k}_{name}"] = check_value(f"collider{k}_{name}", item)
             elif key == "description":
                 if not isinstance(value, str):
                     raise ParameterError(key, f"must be text, got {value!r}")

@@ -1,6 +1,8 @@
 // The bundles' views (convert.hpp), field by field.
 #include "convert.hpp"
 
+#include "wetcloth/colliders.hpp"
+
 namespace wc::py {
 
 std::vector<std::function<void(nb::module_&)>>& registry() {
@@ -58,6 +60,9 @@ Physics physics_from(nb::handle h) {
     p.wicking_rate = number<double>(h, "wicking_rate");
     p.wick_step_limit = number<double>(h, "wick_step_limit");
     p.skip_idle = number<bool>(h, "skip_idle");
+    p.collider_count = size_of(h.attr("colliders")) / COLLIDER_COLUMNS;
+    p.colliders = p.collider_count > 0 ? array<const double>(h, "colliders", p.collider_count * COLLIDER_COLUMNS)
+                                       : nullptr;
     return p;
 }
 

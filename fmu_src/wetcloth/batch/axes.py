@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from wetcloth.errors import ConfigError, StudyError, did_you_mean
-from wetcloth.scene import PARAMETER_LISTING, PARAMETERS, normalise
+from wetcloth.scene import PARAMETER_LISTING, PARAMETERS, is_parameter, normalise, parameter_field
 
 DISTRIBUTIONS = ("uniform", "loguniform", "normal", "integers", "choice")
 #: Random kinds and the keys each takes.
@@ -66,8 +66,8 @@ def check_count(key: str, what: str, count: float) -> None:
 
 
 def check_name(name: str, where: str) -> None:
-    """``name`` must be a scene parameter (the FMU's own parameters are not)."""
-    if name in PARAMETERS:
+    """``name`` must be a scene parameter or a collider field (the FMU's own parameters are not)."""
+    if is_parameter(name):
         return
     from wetcloth.fmu.vocabulary import variable_specs
 
@@ -121,7 +121,7 @@ def _range_values(name: str, spec: dict) -> tuple:
         count = math.floor((stop - start) / step + 1e-9) + 1
         check_count(where, f"step {step:g} from {start:g} to {stop:g} gives", count)
         values = start + step * np.arange(count)
-    if PARAMETERS[name].type == "int":
+    if parameter_field(name).type == "int":
         if not all(float(v).is_integer() for v in np.round(values, 9)):
             raise StudyError(where, f"{name} takes whole numbers; this range gives {values.tolist()}")
         return tuple(int(round(v)) for v in values)
@@ -144,7 +144,7 @@ def _parse_distribution(name: str, spec: dict) -> dict:
         if not isinstance(values, list) or not values:
             raise StudyError(where, "choice needs a non-empty list of values")
         return {"random": kind, "values": [typed(name, v, where) for v in values]}
-    if PARAMETERS[name].type == "str":
+    if parameter_field(name).type == "str":
         raise StudyError(where, f"{name} is a string parameter: use random = 'choice'")
     a, b = (spec[k] for k in needs)
     if not (is_number(a) and is_number(b) and math.isfinite(a) and math.isfinite(b)):
@@ -157,7 +157,7 @@ def _parse_distribution(name: str, spec: dict) -> dict:
         raise StudyError(where, f"normal needs std > 0, got {b!r}")
     if kind == "integers" and not (isinstance(a, int) and isinstance(b, int)):
         raise StudyError(where, f"integers needs whole-number low and high, got {a!r}, {b!r}")
-    if PARAMETERS[name].type == "int" and kind != "integers":
+    if parameter_field(name).type == "int" and kind != "integers":
         raise StudyError(where, f"{name} takes whole numbers: use random = 'integers' or 'choice'")
     return dict(spec)
 
@@ -174,9 +174,9 @@ def _bounds_distribution(name: str, spec: dict) -> dict:
     log = spec.get("log", False)
     if not isinstance(log, bool):
         raise StudyError(where, f"log must be true or false, got {log!r}")
-    if PARAMETERS[name].type == "str":
+    if parameter_field(name).type == "str":
         raise StudyError(where, f"{name} is a string parameter: give a list of values or random = 'choice'")
-    if PARAMETERS[name].type == "int":
+    if parameter_field(name).type == "int":
         if log:
             raise StudyError(where, f"{name} takes whole numbers: bounds of a whole-number parameter take no log")
         kind = "integers"
@@ -199,7 +199,7 @@ def parse_axis(name: str, spec) -> Axis:
     elif isinstance(spec, dict) and {"low", "high"} & set(spec):
         return Axis(name, distribution=_bounds_distribution(name, spec))
     elif isinstance(spec, dict):
-        if PARAMETERS[name].type == "str":
+        if parameter_field(name).type == "str":
             raise StudyError(where, f"{name} is a string parameter: give a list of values")
         values = _range_values(name, spec)
     else:

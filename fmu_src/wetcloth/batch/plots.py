@@ -15,7 +15,7 @@ import pandas as pd
 
 from wetcloth.batch.metrics import METRICS
 from wetcloth.batch.plot_spec import PlotSpec, SeriesPlotSpec
-from wetcloth.scene import PARAMETERS
+from wetcloth.scene import is_parameter, parameter_field
 from wetcloth.simulation import OUTPUTS
 
 
@@ -24,8 +24,8 @@ def _label(name: str) -> str:
         unit = METRICS[name].unit
     elif name in OUTPUTS:
         unit = OUTPUTS[name][0]
-    elif name in PARAMETERS:
-        unit = PARAMETERS[name].metadata["unit"]
+    elif is_parameter(name):
+        unit = parameter_field(name).metadata["unit"]
     else:
         unit = "-"
     return name.replace("_", " ") + ("" if unit == "-" else f" ({unit})")

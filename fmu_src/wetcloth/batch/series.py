@@ -100,9 +100,9 @@ def on_grid(curves: dict[str, np.ndarray], name: str, grid: np.ndarray) -> np.nd
 
 def _coordinate(name: str, values: Sequence[Any]) -> np.ndarray:
     """An axis's values along ``run``, typed by its parameter: float64, int64, or text (object)."""
-    from wetcloth.scene import PARAMETERS
+    from wetcloth.scene import parameter_field
 
-    default = PARAMETERS[name].default
+    default = parameter_field(name).default
     if isinstance(default, str):
         return np.array([str(v) for v in values], dtype=object)
     if isinstance(default, int) and all(isinstance(v, int) for v in values):
@@ -111,9 +111,9 @@ def _coordinate(name: str, values: Sequence[Any]) -> np.ndarray:
 
 
 def _axis_attrs(name: str) -> dict[str, str]:
-    from wetcloth.scene import PARAMETERS
+    from wetcloth.scene import parameter_field
 
-    meta = PARAMETERS[name].metadata
+    meta = parameter_field(name).metadata
     attrs = {"long_name": meta.get("doc", name)}
     if meta.get("unit", "-") != "-":
         attrs["units"] = meta["unit"]

@@ -43,7 +43,7 @@ struct Cloth {
 
 //: Scene parameters as the kernels use them (SI units).  `wet_factor` is 0 unless wetness-dependent
 //: stiffness is active; `air_density` 0 switches the drag in air off; `floor_z` is the lowest particle
-//: centre (m).
+//: centre (m); `colliders` the rows of the analytic colliders (colliders.hpp).
 struct Physics {
     bool projected = false;
     double wet_factor = 0, water_level = 0, water_density = 0, thickness = 0;
@@ -53,6 +53,8 @@ struct Physics {
     double floor_z = 0, floor_friction = 0, absorption_capacity = 0, absorption_rate = 0;
     double drying_rate = 0, wicking_rate = 0, wick_step_limit = 0;
     bool skip_idle = true;
+    Index collider_count = 0;            // analytic colliders (colliders.hpp), none by default
+    const double* colliders = nullptr;   // (collider_count, COLLIDER_COLUMNS) rows
 };
 
 //: Scratch and results: force (3, n) N; submerged (n) fraction; saturation (n); blocks (6, n)
