@@ -15,6 +15,8 @@
 #include <cmath>
 #include <limits>
 
+#include "wetcloth/floor.hpp"
+
 namespace wc {
 
 namespace {
@@ -150,20 +152,10 @@ Index collider_contact(Index n, Index count, const double* colliders, double gap
             for (Index c = 0; c < 3; ++c) p[c] += depth * nrm[c];
             // Velocity: the part into the collider removed, sliding reduced by friction times that.
             double v[3] = {vel[i], vel[n + i], vel[2 * n + i]};
-            const double vn = v[0] * nrm[0] + v[1] * nrm[1] + v[2] * nrm[2];
-            const double dvn = vn < 0.0 ? -vn : 0.0;
-            double vt[3], vt2 = 0.0;
-            for (Index c = 0; c < 3; ++c) {
-                vt[c] = v[c] - vn * nrm[c];
-                vt2 += vt[c] * vt[c];
-            }
-            const double slide = std::sqrt(vt2);
-            double keep = 1.0;
-            if (slide > 0.0) keep = std::max(0.0, 1.0 - friction * dvn / slide);
-            const double vn_kept = vn > 0.0 ? vn : 0.0;
+            coulomb_stop(v, nrm, friction);
             for (Index c = 0; c < 3; ++c) {
                 pos[c * n + i] = p[c];
-                vel[c * n + i] = vn_kept * nrm[c] + keep * vt[c];
+                vel[c * n + i] = v[c];
             }
         }
     }
@@ -201,13 +193,7 @@ Index release_from_colliders(Index n, const double* colliders, const double* pos
         double nrm[3];
         collider_distance(row, p, nrm);
         const double f[3] = {force[i], force[n + i], force[2 * n + i]};
-        const double pressing = -(f[0] * nrm[0] + f[1] * nrm[1] + f[2] * nrm[2]);
-        double along2 = 0.0;
-        for (Index c = 0; c < 3; ++c) {
-            const double t = f[c] + pressing * nrm[c];
-            along2 += t * t;
-        }
-        if (pressing <= 0.0 || std::sqrt(along2) > row[C_FRICTION] * pressing) {
+        if (slips(f, nrm, row[C_FRICTION])) {
             held[i] = 0.0;
             free[i] = 1.0;
             released += 1;
@@ -229,10 +215,7 @@ Index collider_history(Index n, Index count, const double* colliders, double gap
         }
         if (!on) continue;
         agreed += 1;
-        for (Index c = 0; c < 3; ++c) {
-            prev_pos[c * n + i] = pos[c * n + i] - h * vel[c * n + i];
-            prev_vel[c * n + i] = vel[c * n + i];
-        }
+        straight_history(n, i, pos, vel, prev_pos, prev_vel, h);
     }
     return agreed;
 }

@@ -11,7 +11,6 @@
 // is made to agree with its new velocity (agree_history).
 #include "wetcloth/floor.hpp"
 
-#include <cmath>
 
 namespace wc {
 
@@ -19,23 +18,15 @@ namespace wc {
 //: inelastic Coulomb impulse), never reversing it.
 Index floor_contact(Index n, double z_min, double friction, double* pos, double* vel) {
     Index touching = 0;
+    const double up[3] = {0.0, 0.0, 1.0};
     double* z = pos + 2 * n;
-    double* vx = vel;
-    double* vy = vel + n;
-    double* vz = vel + 2 * n;
     for (Index i = 0; i < n; ++i) {
         if (z[i] >= z_min) continue;
         touching += 1;
         z[i] = z_min;
-        const double dvn = vz[i] < 0.0 ? -vz[i] : 0.0;
-        vz[i] = 0.0 > vz[i] ? 0.0 : vz[i];  // Python's max(vz, 0.0)
-        const double slide = std::sqrt(vx[i] * vx[i] + vy[i] * vy[i]);
-        if (slide > 0.0) {
-            const double k = 1.0 - friction * dvn / slide;
-            const double keep = k > 0.0 ? k : 0.0;  // max(0.0, k)
-            vx[i] *= keep;
-            vy[i] *= keep;
-        }
+        double v[3] = {vel[i], vel[n + i], vel[2 * n + i]};
+        coulomb_stop(v, up, friction);
+        for (Index c = 0; c < 3; ++c) vel[c * n + i] = v[c];
     }
     return touching;
 }
@@ -64,14 +55,11 @@ Index hold_resting(Index n, double z_min, const double* pos, const double* vel, 
 //: still either.  Returns how many (the step is then to be redone).
 Index release_slipping(Index n, double friction, const double* force, double* free, double* held) {
     Index released = 0;
-    const double* fx = force;
-    const double* fy = force + n;
-    const double* fz = force + 2 * n;
+    const double up[3] = {0.0, 0.0, 1.0};
     for (Index i = 0; i < n; ++i) {
-        if (held[i] != 1.0) continue;  // (held on a layer: self_contact's release_from_layers)
-        const double pressing = -fz[i];
-        const double along = std::sqrt(fx[i] * fx[i] + fy[i] * fy[i]);
-        if (pressing <= 0.0 || along > friction * pressing) {
+        if (held[i] != 1.0) continue;  // (held on a layer or a collider: their own releases)
+        const double f[3] = {force[i], force[n + i], force[2 * n + i]};
+        if (slips(f, up, friction)) {
             held[i] = 0.0;
             free[i] = 1.0;
             released += 1;
@@ -99,10 +87,7 @@ Index agree_history(Index n, double z_min, const double* pos, const double* vel,
     for (Index i = 0; i < n; ++i) {
         if (pos[2 * n + i] > z_min) continue;
         count += 1;
-        for (Index c = 0; c < 3; ++c) {
-            prev_pos[c * n + i] = pos[c * n + i] - h * vel[c * n + i];
-            prev_vel[c * n + i] = vel[c * n + i];
-        }
+        straight_history(n, i, pos, vel, prev_pos, prev_vel, h);
     }
     return count;
 }

@@ -1,8 +1,55 @@
 // The tank floor: a rigid plane with Coulomb friction (port of bf41571:fmu_src/wetcloth/kernels/floor.py).
 #pragma once
+#include <cmath>
+
 #include "wetcloth/core.hpp"
 
 namespace wc {
+
+//: Coulomb's rule for a particle held still on a surface (the floor's, a collider's, a layer's): it slips
+//: unless the force f (3, N) presses it onto the surface of unit outward normal (3) and the force's part
+//: along the surface is at most `friction` times the part pressing.
+inline bool slips(const double* f, const double* normal, double friction) {
+    const double pressing = -(f[0] * normal[0] + f[1] * normal[1] + f[2] * normal[2]);
+    double along2 = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        const double t = f[c] + pressing * normal[c];
+        along2 += t * t;
+    }
+    return pressing <= 0.0 || std::sqrt(along2) > friction * pressing;
+}
+
+//: The inelastic Coulomb impulse of a surface of unit outward normal (3) on velocity v (3, m/s, in place):
+//: the part into the surface dv_n is removed and the sliding speed drops by friction * dv_n, never
+//: reversing (the floor's and the colliders' contact).
+inline void coulomb_stop(double* v, const double* normal, double friction) {
+    const double vn = v[0] * normal[0] + v[1] * normal[1] + v[2] * normal[2];
+    const double dvn = vn < 0.0 ? -vn : 0.0;
+    double vt[3];
+    double vt2 = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        vt[c] = v[c] - vn * normal[c];
+        vt2 += vt[c] * vt[c];
+    }
+    const double slide = std::sqrt(vt2);
+    double keep = 1.0;
+    if (slide > 0.0) {
+        const double k = 1.0 - friction * dvn / slide;
+        keep = k > 0.0 ? k : 0.0;
+    }
+    const double vn_kept = vn > 0.0 ? vn : 0.0;
+    for (int c = 0; c < 3; ++c) v[c] = vn_kept * normal[c] + keep * vt[c];
+}
+
+//: Particle i of pos, vel (3, n) gets the history of a straight motion at its velocity over a step of h s:
+//: prev_pos = pos - h vel, prev_vel = vel (on the floor and on colliders, after the step).
+inline void straight_history(Index n, Index i, const double* pos, const double* vel, double* prev_pos,
+                             double* prev_vel, double h) {
+    for (Index c = 0; c < 3; ++c) {
+        prev_pos[c * n + i] = pos[c * n + i] - h * vel[c * n + i];
+        prev_vel[c * n + i] = vel[c * n + i];
+    }
+}
 
 //: Keep particle centres at or above z_min (m); stop their fall and apply friction.  Returns how many touch.
 Index floor_contact(Index n, double z_min, double friction, double* pos, double* vel);

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <vector>
 
+#include "wetcloth/floor.hpp"
 #include "wetcloth/self_contact.hpp"
 #include "wetcloth/self_contact/geometry.hpp"
 
@@ -122,13 +123,8 @@ Index release_sliding(Contact& contact, Index n, const double* force, double* fr
     Index released = 0;
     for (Index p = 0; p < n; ++p) {
         if (held[p] != LAYER_HELD) continue;
-        const std::size_t i = static_cast<std::size_t>(p);
-        const double nx = lists.resting_normal[3 * i], ny = lists.resting_normal[3 * i + 1],
-                     nz = lists.resting_normal[3 * i + 2];
-        const double fx = force[p], fy = force[n + p], fz = force[2 * n + p];
-        const double pressing = -(fx * nx + fy * ny + fz * nz);
-        const double ax = fx + pressing * nx, ay = fy + pressing * ny, az = fz + pressing * nz;
-        if (pressing > 0.0 && std::sqrt(ax * ax + ay * ay + az * az) <= contact.friction * pressing) continue;
+        const double f[3] = {force[p], force[n + p], force[2 * n + p]};
+        if (!slips(f, &lists.resting_normal[3 * static_cast<std::size_t>(p)], contact.friction)) continue;
         held[p] = 0.0;
         free[p] = 1.0;
         released += 1;
