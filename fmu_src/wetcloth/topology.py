@@ -4,15 +4,22 @@ Particles sit on an ``nx`` x ``ny`` grid, index ``i = row * nx + col`` (col alon
 Springs are grouped in *families* that share one index offset: spring ``i`` of a family joins
 particle ``i`` to particle ``i + offset``.  A missing spring (across the grid's edge) has zero
 stiffness.  This layout lets every kernel loop over flat arrays with no index lists.
+
+A cloth from a mesh has no families: its springs are *listed*, each with its two particles
+(``pairs``) and its own rest length, the tension-only ones first.  A grid lists none.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from wetcloth.scene import Scene
+
+
+#: Kinds of listed springs (Topology.pair_kind): along a face's edge, across a quad, bending.
+STRETCH, SHEAR, BEND = 0, 1, 2
 
 
 @dataclass(frozen=True)
@@ -34,10 +41,31 @@ class Topology:
     spring_family_names: tuple[str, ...]
     triangles: np.ndarray  # (m, 3) int64, counter-clockwise seen from +z in the rest sheet
     pinned: np.ndarray  # (n,) bool
+    # Listed springs (a mesh's; none on a grid): spring k joins pairs[0, k] and pairs[1, k].
+    pairs: np.ndarray = field(default_factory=lambda: np.zeros((2, 0), dtype=np.int64))  # (2, S)
+    pair_rest: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (S,) m
+    pair_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (S,) N/m
+    pair_damping: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (S,) N s/m
+    pair_shape: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (S,) strip area / rest length^2
+    pair_kind: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int8))  # (S,) 0 stretch, 1 shear, 2 bend
+    pair_tension_count: int = 0  # the first pair_tension_count listed springs are tension-only
+    mesh: object = None  # a mesh cloth's faces and UVs for export; None for a grid
 
     @property
     def n(self) -> int:
-        return self.nx * self.ny
+        return self.area.shape[0]
+
+    @property
+    def is_grid(self) -> bool:
+        """Whether the springs are a grid's families (not listed), whatever file the cloth came from."""
+        return self.pairs.shape[1] == 0
+
+    def per_particle_pair_sum(self, values: np.ndarray, kinds=None) -> np.ndarray:
+        """Sum (n) onto both ends of each listed spring of a per-listed-spring quantity (S,), only the
+        springs whose kind is in ``kinds`` if given."""
+        keep = np.ones(len(values), dtype=bool) if kinds is None else np.isin(self.pair_kind, kinds)
+        return (np.bincount(self.pairs[0, keep], values[keep], minlength=self.n)
+                + np.bincount(self.pairs[1, keep], values[keep], minlength=self.n))
 
     def per_particle_sum(self, per_spring: np.ndarray, offsets: np.ndarray | None = None) -> np.ndarray:
         """Sum (n) over the springs touching each particle of a per-spring quantity (F, n), whose
@@ -53,7 +81,7 @@ class Topology:
     @property
     def spring_count(self) -> int:
         """Number of actual springs (families' zero-stiffness slots not counted)."""
-        return int(np.count_nonzero(self.spring_stiffness))
+        return int(np.count_nonzero(self.spring_stiffness)) + int(np.count_nonzero(self.pair_stiffness))
 
 
 def _edge_weights(count: int) -> np.ndarray:
