@@ -14,6 +14,7 @@ import numpy as np
 from wetcloth import _core
 from wetcloth._core import GRAVITY
 from wetcloth.bundles import Cloth, Physics, make_work
+from wetcloth.collider_meshes import no_meshes
 from wetcloth.scene import Scene
 from wetcloth.topology import STRETCH, Topology, build_topology
 
@@ -69,6 +70,7 @@ class Model:
             absorption_rate=scene.absorption_rate, drying_rate=scene.drying_rate, wicking_rate=scene.wicking_rate,
             wick_step_limit=self.wick_step_limit, skip_idle=self.skip_idle_work,
             colliders=np.array([c.row() for c in scene.colliders], dtype=np.float64).reshape(-1, 13),
+            meshes=no_meshes(),
         )
 
     def _set_wicking(self, scene: Scene) -> None:

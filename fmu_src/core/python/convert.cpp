@@ -3,6 +3,7 @@
 
 #include <stdexcept>
 
+#include "wetcloth/collider_mesh.hpp"
 #include "wetcloth/colliders.hpp"
 
 namespace wc::py {
@@ -50,6 +51,27 @@ Cloth cloth_from(nb::handle h) {
     return c;
 }
 
+namespace {
+
+ColliderMeshes meshes_from(nb::handle h) {
+    ColliderMeshes m;
+    m.count = size_of(h.attr("headers")) / MESH_COLUMNS;
+    if (m.count == 0) return m;
+    m.headers = array<const double>(h, "headers", m.count * MESH_COLUMNS);
+    m.vertex_count = size_of(h.attr("vertices")) / 3;
+    const Index triangles = size_of(h.attr("triangles")) / 3;
+    m.vertices = array<const double>(h, "vertices", 3 * m.vertex_count);
+    m.triangles = array<const Index>(h, "triangles", 3 * triangles);
+    m.face_normals = array<const double>(h, "face_normals", 3 * triangles);
+    m.edge_normals = array<const double>(h, "edge_normals", 9 * triangles);
+    m.vertex_normals = array<const double>(h, "vertex_normals", 3 * m.vertex_count);
+    m.cell_start = array<const Index>(h, "cell_start");
+    m.cell_items = array<const Index>(h, "cell_items");
+    return m;
+}
+
+}  // namespace
+
 Physics physics_from(nb::handle h) {
     Physics p;
     p.projected = number<bool>(h, "projected");
@@ -79,6 +101,7 @@ Physics physics_from(nb::handle h) {
     p.collider_count = size_of(h.attr("colliders")) / COLLIDER_COLUMNS;
     p.colliders = p.collider_count > 0 ? array<const double>(h, "colliders", p.collider_count * COLLIDER_COLUMNS)
                                        : nullptr;
+    p.meshes = meshes_from(h.attr("meshes"));
     return p;
 }
 

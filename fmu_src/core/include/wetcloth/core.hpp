@@ -64,6 +64,23 @@ inline Index cells_length(const Cloth& cloth) {
     return cloth.triangle_count > cloth.n + 1 ? cloth.triangle_count : cloth.n + 1;
 }
 
+//: The triangle meshes of mesh colliders (collider_mesh.hpp), all in one set of arrays: headers (count,
+//: MESH_COLUMNS) each mesh's grid of cells and bounds; vertices (3, V) m where the scene puts them;
+//: triangles (T, 3); the unit normals of the faces (T, 3), of their edges (T, 3, 3; edge e from corner e
+//: to e + 1: the mean of its two faces') and of the vertices (V, 3; angle-weighted); each mesh's cells
+//: as cell_start (cells + 1, from the mesh's first cell) into cell_items (triangle indices).
+struct ColliderMeshes {
+    Index count = 0, vertex_count = 0;
+    const double* headers = nullptr;
+    const double* vertices = nullptr;
+    const Index* triangles = nullptr;
+    const double* face_normals = nullptr;
+    const double* edge_normals = nullptr;
+    const double* vertex_normals = nullptr;
+    const Index* cell_start = nullptr;
+    const Index* cell_items = nullptr;
+};
+
 //: Scene parameters as the kernels use them (SI units).  `wet_factor` is 0 unless wetness-dependent
 //: stiffness is active; `air_density` 0 switches the drag in air off; `floor_z` is the lowest particle
 //: centre (m); `colliders` the rows of the analytic colliders (colliders.hpp).
@@ -78,6 +95,7 @@ struct Physics {
     bool skip_idle = true;
     Index collider_count = 0;            // analytic colliders (colliders.hpp), none by default
     const double* colliders = nullptr;   // (collider_count, COLLIDER_COLUMNS) rows
+    ColliderMeshes meshes;               // the triangles of the mesh colliders among them
 };
 
 //: Scratch and results: force (3, n) N; submerged (n) fraction; saturation (n); blocks (6, n)
