@@ -1,0 +1,224 @@
+"""A cloth from a mesh file (scene parameter ``cloth_mesh``): reading the formats, bad files, pins, scene
+files and export (docs/model.md section 2.4, docs/interface.md).  Every file is made here."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import meshio
+import numpy as np
+import pytest
+import trimesh
+
+import wetcloth
+from wetcloth.exporter import open_sequence
+from wetcloth.scene import Scene, load_scene
+from wetcloth.topology import build_topology
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "docs"))
+from make_meshes import round_cloth  # noqa: E402
+
+
+def first_appearance(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh renumbered in order of the vertices' first appearance in the triangles (as an STL file keeps it)."""
+    _, first = np.unique(triangles.ravel(), return_index=True)
+    order = np.unique(triangles.ravel())[np.argsort(first)]
+    rank = np.empty(len(points), dtype=np.int64)
+    rank[order] = np.arange(len(order))
+    return points[order], rank[triangles]
+
+
+@pytest.fixture(scope="module")
+def disc():
+    points, triangles = round_cloth(rings=6)
+    return first_appearance(points + [0.0, 0.0, 0.4], triangles)
+
+
+def write_all(folder: Path, points: np.ndarray, triangles: np.ndarray) -> dict[str, Path]:
+    paths = {}
+    for suffix in ("obj", "ply", "vtu", "off"):
+        paths[suffix] = folder / f"disc.{suffix}"
+        meshio.write(paths[suffix], meshio.Mesh(points, [("triangle", triangles.astype(np.int32))]))
+    mesh = trimesh.Trimesh(points, triangles, process=False)
+    for suffix in ("stl", "glb", "gltf"):
+        paths[suffix] = folder / f"disc.{suffix}"
+        mesh.export(paths[suffix])
+    return paths
+
+
+def test_every_format_of_the_same_mesh_gives_the_same_topology(tmp_path, disc):
+    points, triangles = disc
+    topologies = {suffix: build_topology(Scene(cloth_mesh=str(path)))
+                  for suffix, path in write_all(tmp_path, points, triangles).items()}
+    reference = topologies.pop("obj")
+    np.testing.assert_array_equal(reference.triangles, triangles)
+    assert reference.mesh.faces.shape == triangles.shape
+    for suffix, topo in topologies.items():
+        np.testing.assert_array_equal(topo.triangles, reference.triangles, err_msg=suffix)
+        np.testing.assert_array_equal(topo.pairs, reference.pairs, err_msg=suffix)
+        # text formats round coordinates (OBJ: 6 to 17 digits), glTF and STL store float32
+        np.testing.assert_allclose(topo.rest_pos, reference.rest_pos, rtol=0, atol=1e-7, err_msg=suffix)
+        np.testing.assert_allclose(topo.pair_stiffness, reference.pair_stiffness, rtol=1e-5, err_msg=suffix)
+        np.testing.assert_allclose(topo.area, reference.area, rtol=1e-5, err_msg=suffix)
+
+
+def test_quads_and_mixed_faces_are_read_and_split(tmp_path):
+    points = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0]], dtype=float)
+    path = tmp_path / "mixed.obj"
+    meshio.write(path, meshio.Mesh(points, [("quad", np.array([[0, 1, 2, 3]])), ("triangle", np.array([[1, 4, 5],
+                                                                                                       [1, 5, 2]]))]))
+    topo = build_topology(Scene(cloth_mesh=str(path)))
+    np.testing.assert_array_equal(topo.triangles, [[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]])
+    np.testing.assert_array_equal(topo.mesh.faces, topo.triangles)  # mixed: the split is exported
+    np.testing.assert_allclose(topo.area, [0.25, 0.25 + 1 / 3, 0.25 + 1 / 6, 0.25, 1 / 6, 1 / 3])  # A / corners
+
+
+BAD_FILES = {
+    "missing": (None, r"'cloth_mesh'.*cannot be read: No such file"),
+    "garbage": ("obj", r"'cloth_mesh'.*cannot be read as a mesh|'cloth_mesh'.*no faces"),
+    "empty": ("obj", r"'cloth_mesh'.*has no faces"),
+    "flat_face": ("obj", r"'cloth_mesh'.*face 1 has zero area"),
+    "three_faces_on_an_edge": ("ply", r"'cloth_mesh'.*edge between vertices 0 and 1 belongs to 3 faces"),
+    "pentagon": ("obj", r"'cloth_mesh'.*faces of 5 corners.*allowed: triangles and quads"),
+    "nan": ("ply", r"'cloth_mesh'.*vertex 2 has a coordinate that is not a finite number"),
+    "loose_vertex": ("obj", r"'cloth_mesh'.*vertex 3 belongs to no face"),
+    "unknown_format": ("xyz", r"'cloth_mesh'.*unknown mesh format '\.xyz'"),
+}
+
+
+def _bad_file(kind: str, folder: Path) -> Path:
+    suffix = BAD_FILES[kind][0]
+    path = folder / f"{kind}.{suffix or 'obj'}"
+    square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float)
+    if kind == "garbage":
+        path.write_bytes(b"\x00\xff not a mesh \x01\x02")
+    elif kind == "empty":
+        path.write_text("v 0 0 0\nv 1 0 0\n")
+    elif kind == "flat_face":
+        meshio.write(path, meshio.Mesh(np.vstack([square, [[2, 0, 0]]]), [("triangle", np.array([[0, 1, 2], [0, 1, 4], [0, 2, 3]]))]))
+    elif kind == "three_faces_on_an_edge":
+        points = np.vstack([square, [[0.5, -1, 0], [0.5, 0, 1]]])
+        meshio.write(path, meshio.Mesh(points, [("triangle", np.array([[0, 1, 2], [1, 0, 4], [0, 1, 5], [0, 2, 3]], np.int32))]))
+    elif kind == "pentagon":
+        path.write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0.5 1.5 0\nv 0 1 0\nf 1 2 3 4 5\n")
+    elif kind == "nan":
+        points = square.copy()
+        points[2, 2] = np.nan
+        meshio.write(path, meshio.Mesh(points, [("triangle", np.array([[0, 1, 2], [0, 2, 3]], np.int32))]))
+    elif kind == "loose_vertex":
+        meshio.write(path, meshio.Mesh(square, [("triangle", np.array([[0, 1, 2]]))]))
+    elif kind == "unknown_format":
+        path.write_text("0 0 0\n")
+    return path
+
+
+@pytest.mark.parametrize("kind", list(BAD_FILES))
+def test_a_bad_mesh_file_is_refused_naming_cloth_mesh(tmp_path, kind):
+    path = _bad_file(kind, tmp_path)
+    with pytest.raises(wetcloth.ParameterError, match=BAD_FILES[kind][1]) as err:
+        Scene(cloth_mesh=str(path))
+    assert err.value.name == "cloth_mesh"
+
+
+def test_a_relative_mesh_path_is_relative_to_the_scene_file(tmp_path, disc):
+    folder = tmp_path / "scenes" / "meshes"
+    folder.mkdir(parents=True)
+    meshio.write(folder / "disc.obj", meshio.Mesh(disc[0], [("triangle", disc[1])]))
+    scene_file = tmp_path / "scenes" / "drop.toml"
+    scene_file.write_text('cloth_mesh = "meshes/disc.obj"\nplace_mesh = "on"\n')
+    scene = load_scene(scene_file)
+    assert Path(scene.cloth_mesh) == (folder / "disc.obj").resolve()
+    assert build_topology(scene).n == len(disc[0])
+
+
+def test_pinned_vertices_from_a_point_attribute_of_a_ply_file(tmp_path, disc):
+    points, triangles = disc
+    pin = (points[:, 0] > 0.4).astype(np.float32)
+    path = tmp_path / "pinned.ply"
+    meshio.write(path, meshio.Mesh(points, [("triangle", triangles.astype(np.int32))],
+                                   point_data={"pin": pin, "weight": np.ones(len(points))}))
+    topo = build_topology(Scene(cloth_mesh=str(path), pinned_vertices="pin"))
+    np.testing.assert_array_equal(topo.pinned, pin != 0)
+    assert 0 < topo.pinned.sum() < len(points)
+    with pytest.raises(wetcloth.ParameterError, match=r"'pinned_vertices'.*'grip' is not a point attribute.*"
+                                                      r"'pin', 'weight'") as err:
+        Scene(cloth_mesh=str(path), pinned_vertices="grip")
+    assert err.value.name == "pinned_vertices"
+
+
+def test_pinned_vertices_from_a_box_for_a_mesh_and_for_the_grid(tmp_path, disc):
+    points, triangles = disc
+    path = tmp_path / "disc.obj"
+    meshio.write(path, meshio.Mesh(points, [("triangle", triangles)]))
+    box = "box:-1,-1,0,-0.5,1,1"
+    topo = build_topology(Scene(cloth_mesh=str(path), pinned_vertices=box))
+    np.testing.assert_array_equal(topo.pinned, points[:, 0] <= -0.5)
+    grid = Scene(nx=5, ny=5, width=1.0, length=1.0, initial_tilt=0.0, pinned_vertices="box:0.49,-1,0,1,1,1",
+                 pinned_edge="y_min")
+    pinned = build_topology(grid).pinned.reshape(5, 5)
+    assert pinned[:, -1].all() and pinned[0].all() and pinned.sum() == 9  # the x_max column and the y_min row
+
+
+@pytest.mark.parametrize("value, message", [
+    ("box:5,5,5,6,6,6", r"the box 'box:5,5,5,6,6,6' holds no vertex of the cloth at t = 0 \(it spans x -0.69\d* \.\. 0.69\d*, y "),
+    ("box:1,2,3", r"'box:1,2,3' is not a box; allowed: 'box:x0,y0,z0,x1,y1,z1'"),
+    ("box:1,0,0,0,1,1", r"a lower corner is above the upper one"),
+])
+def test_a_bad_box_is_refused_naming_pinned_vertices(tmp_path, disc, value, message):
+    path = tmp_path / "disc.obj"
+    meshio.write(path, meshio.Mesh(disc[0], [("triangle", disc[1])]))
+    with pytest.raises(wetcloth.ParameterError, match=message) as err:
+        Scene(cloth_mesh=str(path), pinned_vertices=value)
+    assert err.value.name == "pinned_vertices"
+
+
+def test_pin_names_that_need_a_mesh_and_edges_that_need_the_grid_are_refused(tmp_path, disc):
+    with pytest.raises(wetcloth.ParameterError, match=r"'pinned_vertices'.*'pin' names a point attribute, but the "
+                                                      r"cloth is the nx x ny rectangle"):
+        Scene(pinned_vertices="pin")
+    path = tmp_path / "disc.obj"
+    meshio.write(path, meshio.Mesh(disc[0], [("triangle", disc[1])]))
+    with pytest.raises(wetcloth.ParameterError, match=r"'pinned_edge'.*cloth_mesh.*allowed here: 'none'"):
+        Scene(cloth_mesh=str(path), pinned_edge="x_min")
+
+
+def test_a_mesh_below_the_floor_is_refused(tmp_path, disc):
+    path = tmp_path / "disc.obj"
+    meshio.write(path, meshio.Mesh(disc[0] - [0.0, 0.0, 2.0], [("triangle", disc[1])]))
+    with pytest.raises(wetcloth.ParameterError, match=r"'cloth_mesh'.*starts at or below the floor"):
+        Scene(cloth_mesh=str(path))
+    assert Scene(cloth_mesh=str(path), place_mesh="on").place_mesh == "on"
+    with pytest.raises(wetcloth.ParameterError, match=r"'initial_height'.*starts at or below the floor"):
+        Scene(cloth_mesh=str(path), place_mesh="on", initial_height=-1.5)
+
+
+def test_a_collider_in_the_mesh_cloth_at_the_start_is_refused(tmp_path, disc):
+    path = tmp_path / "disc.obj"
+    meshio.write(path, meshio.Mesh(disc[0], [("triangle", disc[1])]))
+    with pytest.raises(wetcloth.ParameterError, match=r"'collider1'.*overlaps the cloth at t = 0"):
+        Scene(cloth_mesh=str(path), colliders=({"shape": "sphere", "z": 0.4, "radius": 0.1},))
+
+
+@pytest.mark.parametrize("faces", ["quads", "triangles"])
+def test_the_exporter_writes_the_files_faces_and_uvs(tmp_path, faces):
+    points = np.array([[0, 0, 0], [1, 0, 0.1], [1, 1, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0.2]], dtype=float) * 0.2
+    quads = np.array([[0, 1, 2, 3], [1, 4, 5, 2]])
+    uv = np.array([[0.0, 0.0], [0.5, 0.1], [0.5, 0.9], [0.0, 1.0], [1.0, 0.0], [1.0, 1.0]])
+    path = tmp_path / "strip.ply"
+    meshio.write(path, meshio.Mesh(points, [("quad", quads.astype(np.int32))], point_data={"s": uv[:, 0], "t": uv[:, 1]}))
+    scene = Scene(cloth_mesh=str(path), place_mesh="on")
+    sim_topology = build_topology(scene)
+    out = tmp_path / "frames"
+    with open_sequence(out, fmt="ply", writer="meshio", fps=10, scene=scene, faces=faces) as sequence:
+        sequence.write_frame(np.zeros((6, 3)) + points, np.zeros(6))
+    written = meshio.read(out / "cloth_0001.ply")
+    kind, data = written.cells[0].type, written.cells[0].data
+    if faces == "quads":
+        assert kind == "quad"
+        np.testing.assert_array_equal(data, quads)
+    else:
+        np.testing.assert_array_equal(data, sim_topology.triangles)
+    stored = np.column_stack([written.point_data[k] for k in ("s", "t")])  # the exporter's UV columns
+    np.testing.assert_allclose(stored, uv, atol=1e-7)
+    np.testing.assert_allclose(written.points, points, atol=1e-7)
