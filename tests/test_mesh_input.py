@@ -222,3 +222,106 @@ def test_the_exporter_writes_the_files_faces_and_uvs(tmp_path, faces):
     stored = np.column_stack([written.point_data[k] for k in ("s", "t")])  # the exporter's UV columns
     np.testing.assert_allclose(stored, uv, atol=1e-7)
     np.testing.assert_allclose(written.points, points, atol=1e-7)
+
+
+# ----------------------------------------------------------------------------------------- FMUs
+def _grid_file_scene(folder: Path) -> Path:
+    """A scene file whose cloth is a quad mesh of a 6 x 5 grid in an OBJ file beside it (the grid's own
+    springs: it runs on any core)."""
+    scene = Scene(nx=6, ny=5, width=0.3, length=0.2)
+    col, row = np.tile(np.arange(6), 5), np.repeat(np.arange(5), 6)
+    a = np.flatnonzero((col < 5) & (row < 4))
+    meshio.write(folder / "grid.obj", meshio.Mesh(build_topology(scene).rest_pos.T,
+                                                  [("quad", np.stack([a, a + 1, a + 7, a + 6], axis=1))]))
+    path = folder / "grid.toml"
+    path.write_text('cloth_mesh = "grid.obj"\nplace_mesh = "on"\ninitial_height = 0.05\n')
+    return path
+
+
+RUN_PACKED = r"""
+import json, sys
+import fmpy
+res = fmpy.simulate_fmu(sys.argv[1], stop_time=0.2, output_interval=0.1, output=["centroid_z"])
+print(json.dumps({"centroid_z": float(res["centroid_z"][-1])}))
+"""
+
+
+def test_build_fmu_with_a_scene_packs_its_mesh_and_the_unit_runs_it_from_anywhere(tmp_path):
+    import zipfile
+
+    from fmpy import read_model_description
+    from test_fmu_support import run_child
+
+    from wetcloth.fmu.builder import build_fmu
+
+    scene_file = _grid_file_scene(tmp_path)
+    fmu = build_fmu(tmp_path / "Grid3.fmu", fmi_version=3, scene=scene_file)
+    md = read_model_description(str(fmu))
+    variables = {v.name: v for v in md.modelVariables}
+    packed = variables["cloth_mesh"].start
+    assert packed.startswith("meshes/") and packed.endswith("/grid.obj")
+    assert variables["place_mesh"].start == "on" and float(variables["initial_height"].start) == 0.05
+    assert [int(d.start) for d in variables["positions"].dimensions] == [30, 3]
+    with zipfile.ZipFile(fmu) as archive:
+        assert archive.read(f"resources/{packed}") == (tmp_path / "grid.obj").read_bytes()
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    run, _ = run_child(RUN_PACKED, fmu, cwd=elsewhere)  # the mesh comes from the unit's resources
+    sim = wetcloth.Simulation(load_scene(scene_file))
+    sim.advance(0.1)
+    sim.advance(0.1)
+    assert run[-1]["centroid_z"] == sim.outputs()["centroid_z"]
+
+
+def test_build_fmu_refuses_what_a_unit_cannot_run(tmp_path, disc):
+    from wetcloth.fmu.native import NativeBuildError, build_native_fmu
+    from wetcloth.fmu.packed_scene import pack
+
+    meshio.write(tmp_path / "disc.ply", meshio.Mesh(disc[0], [("triangle", disc[1].astype(np.int32))]))
+    scene_file = tmp_path / "disc.toml"
+    scene_file.write_text('cloth_mesh = "disc.ply"\n')
+    with pytest.raises(NativeBuildError, match=r"parameter 'cloth_mesh' = '.*disc.ply': the native unit has no "
+                                               r"cloth from a mesh file"):
+        build_native_fmu(tmp_path / "n.fmu", scene=scene_file)
+    assert not (tmp_path / "n.fmu").exists()
+    grid_pins = tmp_path / "pins.toml"
+    grid_pins.write_text('pinned_vertices = "box:-1,-1,-1,1,-0.3,1"\n')
+    with pytest.raises(NativeBuildError, match=r"parameter 'pinned_vertices' = 'box:-1,-1,-1,1,-0.3,1'"):
+        build_native_fmu(tmp_path / "n.fmu", scene=grid_pins)
+    with pytest.raises(wetcloth.ParameterError, match=r"'collider1': a unit has no colliders yet"):
+        pack("tablecloth")
+
+
+# ----------------------------------------------------------------------------------------- running
+def _core_takes_listed_springs() -> bool:
+    from wetcloth.bundles import Cloth
+
+    return "pairs" in Cloth._fields
+
+
+@pytest.mark.skipif(not _core_takes_listed_springs(), reason="the compiled core has no listed springs yet (issue 26)")
+def test_a_shuffled_quad_mesh_of_the_rectangle_moves_as_the_rectangle(tmp_path):
+    """The same cloth with its vertices in another order takes the listed springs, not the grid's families:
+    after 2 s it is where the rectangle is, within 1e-9 m (issue 26)."""
+    scene = Scene(nx=9, ny=11, self_collision="off")
+    grid = build_topology(scene)
+    shuffle = np.random.default_rng(26).permutation(grid.n)  # file vertex k is grid vertex shuffle[k]
+    rank = np.argsort(shuffle)
+    col, row = np.tile(np.arange(9), 11), np.repeat(np.arange(11), 9)
+    a = np.flatnonzero((col < 8) & (row < 10))
+    cells = rank[np.stack([a, a + 1, a + 10, a + 9], axis=1)]
+    path = tmp_path / "shuffled.ply"
+    meshio.write(path, meshio.Mesh(grid.rest_pos.T[shuffle], [("quad", cells.astype(np.int32))]), binary=True)
+    from_file = scene.replace(cloth_mesh=str(path), place_mesh="on")
+    assert build_topology(from_file).pairs.shape[1] > 0
+    rectangle, mesh = wetcloth.Simulation(scene), wetcloth.Simulation(from_file)
+    rectangle.advance(2.0)
+    mesh.advance(2.0)
+    np.testing.assert_allclose(mesh.positions, rectangle.positions[shuffle], rtol=0, atol=1e-9)
+
+
+@pytest.mark.skipif(_core_takes_listed_springs(), reason="the compiled core takes listed springs")
+def test_without_listed_springs_in_the_core_a_mesh_cloth_is_refused(tmp_path, disc):
+    meshio.write(tmp_path / "disc.obj", meshio.Mesh(disc[0], [("triangle", disc[1])]))
+    with pytest.raises(wetcloth.ParameterError, match=r"'cloth_mesh': this wetcloth's compiled core has no listed"):
+        wetcloth.Simulation(Scene(cloth_mesh=str(tmp_path / "disc.obj")))

@@ -26,6 +26,8 @@ TRIMESH_SUFFIXES = (".stl", ".gltf", ".glb")
 SUFFIXES = MESHIO_SUFFIXES + TRIMESH_SUFFIXES
 #: A face is degenerate when a triangle of it has area below this fraction of the median edge length squared.
 DEGENERATE_AREA = 1e-10
+#: Folders where a relative mesh path is looked for after the working directory (a unit's resources).
+SEARCH_FOLDERS: list[Path] = []
 #: Point-data names read as per-vertex UVs (meshio's OBJ 'vt', PLY's usual texture names).
 UV_NAMES = (("obj:vt",), ("texture_u", "texture_v"), ("s", "t"), ("u", "v"))
 
@@ -57,9 +59,18 @@ def _error(message: str) -> ParameterError:
     return ParameterError(NAME, message)
 
 
-def read_mesh_file(path: str | Path) -> MeshFile:
-    """The checked mesh of file ``path`` (read again only when the file changes)."""
+def locate(path: str | Path) -> Path:
+    """A mesh file's path: as given if absolute or found from the working directory, else in the first
+    of SEARCH_FOLDERS that holds it (else as given)."""
     path = Path(path)
+    if path.is_absolute() or path.exists():
+        return path
+    return next((folder / path for folder in SEARCH_FOLDERS if (folder / path).is_file()), path)
+
+
+def read_mesh_file(path: str | Path) -> MeshFile:
+    """The checked mesh of file ``path`` (see ``locate``; read again only when the file changes)."""
+    path = locate(path)
     if path.suffix.lower() not in SUFFIXES:
         raise _error(f"{str(path)!r}: unknown mesh format {path.suffix!r}; allowed: a file ending in "
                      + ", ".join(SUFFIXES))

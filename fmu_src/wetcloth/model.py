@@ -14,6 +14,7 @@ import numpy as np
 from wetcloth import _core
 from wetcloth._core import GRAVITY
 from wetcloth.bundles import Cloth, Physics, make_work
+from wetcloth.errors import ParameterError
 from wetcloth.scene import Scene
 from wetcloth.topology import Topology, build_topology
 
@@ -25,6 +26,10 @@ class Model:
 
     def __init__(self, scene: Scene, topology: Topology | None = None, skip_idle_work: bool = True):
         self.topology = topo = topology if topology is not None else build_topology(scene)
+        if topo.pairs.shape[1] and "pairs" not in Cloth._fields:  # until the core takes listed springs
+            raise ParameterError("cloth_mesh", "this wetcloth's compiled core has no listed springs yet (issue 26): "
+                                               "a cloth from a mesh file cannot run (a file that forms the nx x ny "
+                                               "grid can)")
         self.skip_idle_work = skip_idle_work  # False: run the water kernels on dry cloth too (benchmarks)
         self.free = (~topo.pinned).astype(np.float64)  # 1 for moving particles, 0 for pinned
         self.work = make_work(topo.n, len(topo.spring_offset), topo.nx)
