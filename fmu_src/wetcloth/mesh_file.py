@@ -179,9 +179,12 @@ def make_mesh(points, blocks, attributes=None, uv=None, shown: str = "<arrays>")
     triangles = _oriented(triangles)
     mixed = len({b.shape[1] for b in blocks}) > 1
     faces = triangles if mixed else np.concatenate(blocks)
+    attributes = {k: np.asarray(v) for k, v in attributes.items() if len(v) == n}
+    for array in (points, faces, triangles, face_of, corners, uv, *blocks, *attributes.values()):
+        if array is not None:  # shared by every reader of the (cached) file
+            array.flags.writeable = False
     return MeshFile(points=points, faces=faces, triangles=triangles, face_of=face_of, corners=corners,
-                    uv=uv, attributes={k: v for k, v in attributes.items() if len(v) == n}, source=shown,
-                    blocks=tuple(blocks))
+                    uv=uv, attributes=attributes, source=shown, blocks=tuple(blocks))
 
 
 def _split(blocks: list) -> tuple[np.ndarray, np.ndarray]:

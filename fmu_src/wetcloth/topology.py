@@ -276,7 +276,7 @@ def _mesh(scene: Scene, mesh: MeshFile, faces: MeshFaces) -> Topology:
         rest_xy=flat_coordinates(mesh.points, area, mesh.triangles), area=area,
         spring_offset=np.zeros(0, dtype=np.int64), spring_rest=np.zeros(0), spring_tension_only=np.zeros(0, dtype=bool),
         spring_stiffness=empty, spring_damping=empty.copy(), spring_shape=empty.copy(), spring_family_names=(),
-        triangles=mesh.triangles, pinned=np.zeros(n, dtype=bool), **springs, mesh=faces,
+        triangles=mesh.triangles.copy(), pinned=np.zeros(n, dtype=bool), **springs, mesh=faces,
     )
 
 
