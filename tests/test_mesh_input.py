@@ -325,3 +325,19 @@ def test_without_listed_springs_in_the_core_a_mesh_cloth_is_refused(tmp_path, di
     meshio.write(tmp_path / "disc.obj", meshio.Mesh(disc[0], [("triangle", disc[1])]))
     with pytest.raises(wetcloth.ParameterError, match=r"'cloth_mesh': this wetcloth's compiled core has no listed"):
         wetcloth.Simulation(Scene(cloth_mesh=str(tmp_path / "disc.obj")))
+
+
+def test_the_tablecloth_preset_is_a_round_triangle_mesh_placed_on_its_table():
+    scene = load_scene("tablecloth")
+    topo = build_topology(scene)
+    assert topo.mesh is not None and topo.mesh.faces.shape[1] == 3 and 1800 < topo.n < 2300
+    r = np.hypot(*topo.rest_pos[:2])
+    rim = np.sort(np.arctan2(*topo.rest_pos[1::-1, np.isclose(r, r.max(), rtol=1e-12)]))
+    gaps = np.diff(np.append(rim, rim[0] + 2 * np.pi))
+    # Delaunay covers the convex hull: the polygon of the rim's points, whose area is sum r^2 sin(gap) / 2
+    assert topo.area.sum() == pytest.approx(0.5 * r.max() ** 2 * np.sin(gaps).sum(), rel=1e-12)
+    table = scene.colliders[0]
+    from wetcloth.topology import initial_positions
+
+    pos = initial_positions(scene, topo)  # flat, 1 cm above the table top
+    np.testing.assert_allclose(pos[2] - 0.5 * scene.thickness - (table.z + 0.5 * table.height), 0.01, atol=1e-12)
