@@ -13,7 +13,7 @@ import trimesh
 
 import wetcloth
 from wetcloth.exporter import open_sequence
-from wetcloth.scene import Scene, load_scene
+from wetcloth.scene import PARAMETERS, Scene, describe_range, load_scene
 from wetcloth.topology import build_topology
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "docs"))
@@ -80,7 +80,7 @@ BAD_FILES = {
     "empty": ("obj", r"'cloth_mesh'.*has no faces"),
     "flat_face": ("obj", r"'cloth_mesh'.*face 1 has zero area"),
     "three_faces_on_an_edge": ("ply", r"'cloth_mesh'.*edge between vertices 0 and 1 belongs to 3 faces"),
-    "pentagon": ("obj", r"'cloth_mesh'.*faces of 5 corners.*allowed: triangles and quads"),
+    "pentagon": ("obj", r"'cloth_mesh'.*faces of 5 corners \(polygon\): split them into triangles or quads"),
     "nan": ("ply", r"'cloth_mesh'.*vertex 2 has a coordinate that is not a finite number"),
     "loose_vertex": ("obj", r"'cloth_mesh'.*vertex 3 belongs to no face"),
     "unknown_format": ("xyz", r"'cloth_mesh'.*unknown mesh format '\.xyz'"),
@@ -119,6 +119,7 @@ def test_a_bad_mesh_file_is_refused_naming_cloth_mesh(tmp_path, kind):
     with pytest.raises(wetcloth.ParameterError, match=BAD_FILES[kind][1]) as err:
         Scene(cloth_mesh=str(path))
     assert err.value.name == "cloth_mesh"
+    assert str(err.value).endswith(f"; allowed: {describe_range(PARAMETERS['cloth_mesh'])}")
 
 
 def test_a_relative_mesh_path_is_relative_to_the_scene_file(tmp_path, disc):
@@ -162,7 +163,7 @@ def test_pinned_vertices_from_a_box_for_a_mesh_and_for_the_grid(tmp_path, disc):
 
 @pytest.mark.parametrize("value, message", [
     ("box:5,5,5,6,6,6", r"the box 'box:5,5,5,6,6,6' holds no vertex of the cloth at t = 0 \(it spans x -0.69\d* \.\. 0.69\d*, y "),
-    ("box:1,2,3", r"'box:1,2,3' is not a box; allowed: 'box:x0,y0,z0,x1,y1,z1'"),
+    ("box:1,2,3", r"'box:1,2,3' is not a box of six numbers"),
     ("box:1,0,0,0,1,1", r"a lower corner is above the upper one"),
 ])
 def test_a_bad_box_is_refused_naming_pinned_vertices(tmp_path, disc, value, message):
@@ -171,6 +172,7 @@ def test_a_bad_box_is_refused_naming_pinned_vertices(tmp_path, disc, value, mess
     with pytest.raises(wetcloth.ParameterError, match=message) as err:
         Scene(cloth_mesh=str(path), pinned_vertices=value)
     assert err.value.name == "pinned_vertices"
+    assert str(err.value).endswith(f"; allowed: {describe_range(PARAMETERS['pinned_vertices'])}")
 
 
 def test_pin_names_that_need_a_mesh_and_edges_that_need_the_grid_are_refused(tmp_path, disc):

@@ -24,6 +24,9 @@ NAME = "cloth_mesh"
 MESHIO_SUFFIXES = (".obj", ".ply", ".off", ".vtk", ".vtu")
 TRIMESH_SUFFIXES = (".stl", ".gltf", ".glb")
 SUFFIXES = MESHIO_SUFFIXES + TRIMESH_SUFFIXES
+#: What ``cloth_mesh`` allows, as its messages say (the scene parameter's range text).
+ALLOWED = ("'' (the nx x ny rectangle) or the path of a mesh file (" + ", ".join(SUFFIXES) + ") of triangles "
+           "and quads with an area each, every vertex in a face and every edge in at most two faces")
 #: A face is degenerate when a triangle of it has area below this fraction of the median edge length squared.
 DEGENERATE_AREA = 1e-10
 #: Folders where a relative mesh path is looked for after the working directory (a unit's resources).
@@ -56,7 +59,7 @@ class MeshFile:
 
 
 def _error(message: str) -> ParameterError:
-    return ParameterError(NAME, message)
+    return ParameterError(NAME, f"{message}; allowed: {ALLOWED}")
 
 
 def locate(path: str | Path) -> Path:
@@ -72,8 +75,7 @@ def read_mesh_file(path: str | Path) -> MeshFile:
     """The checked mesh of file ``path`` (see ``locate``; read again only when the file changes)."""
     path = locate(path)
     if path.suffix.lower() not in SUFFIXES:
-        raise _error(f"{str(path)!r}: unknown mesh format {path.suffix!r}; allowed: a file ending in "
-                     + ", ".join(SUFFIXES))
+        raise _error(f"{str(path)!r}: unknown mesh format {path.suffix!r}")
     try:
         stat = path.stat()
     except OSError as exc:
@@ -104,9 +106,8 @@ def _read_meshio(path: str):
         if block.type in ("triangle", "quad"):
             blocks.append(np.asarray(block.data, dtype=np.int64))
         elif block.type.startswith("polygon") or block.dim == 2:
-            raise _error(f"{path!r} has faces of {np.asarray(block.data).shape[1]} corners ({block.type}); "
-                         "allowed: triangles and quads (split larger faces in your modeller, e.g. Blender's "
-                         "Triangulate Faces)")
+            raise _error(f"{path!r} has faces of {np.asarray(block.data).shape[1]} corners ({block.type}): split "
+                         "them into triangles or quads in your modeller (e.g. Blender's Triangulate Faces)")
     points = np.asarray(mesh.points, dtype=np.float64)
     attributes = {name: np.asarray(values) for name, values in mesh.point_data.items()}
     return points, blocks, attributes, _uv_of(attributes, len(points))
@@ -243,8 +244,7 @@ def _check_manifold(shown: str, blocks: list) -> None:
     if len(over):
         a, b = unique[over[0]].tolist()
         raise _error(f"{shown!r}: the edge between vertices {a} and {b} belongs to {counts[over[0]]} faces "
-                     f"({len(over)} such edges); allowed: at most two faces per edge (the springs cannot "
-                     "join more; split the mesh there)")
+                     f"({len(over)} such edges): the springs cannot join more; split the mesh there")
 
 
 def _oriented(triangles: np.ndarray) -> np.ndarray:

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from wetcloth.errors import ConfigError, Mistakes, ParameterError, did_you_mean
+from wetcloth.mesh_file import ALLOWED as MESH_ALLOWED
 from wetcloth.mesh_file import is_mesh_path, resolve
 from wetcloth.run_settings import SETTINGS as RUN_SETTINGS
 from wetcloth.run_settings import check_run_table
@@ -42,6 +43,9 @@ def _param(default, unit: str, doc: str, lo=None, hi=None, lo_open=False, choice
 INTEGRATORS = ("explicit_euler", "symplectic_euler", "implicit_euler", "bdf2")
 EDGES = ("none", "x_min", "x_max", "y_min", "y_max")
 SWITCH = ("on", "off")
+#: What ``pinned_vertices`` allows, as its messages say.
+PINS_ALLOWED = ("'' (none), the name of a point attribute of the mesh file (nonzero = pinned), or "
+                "'box:x0,y0,z0,x1,y1,z1' (m, x0 <= x1, y0 <= y1, z0 <= z1)")
 
 
 #: Collider shapes, in the order of the core's shape codes (fmu_src/core/include/wetcloth/colliders.hpp).
@@ -113,7 +117,7 @@ class Scene:
     cloth_mesh: str = _param(
         "", "-", "the cloth's mesh file (OBJ, PLY, STL, OFF, VTK/VTU, glTF/GLB; triangles and quads), one particle "
         "per vertex; '' = the nx x ny rectangle (then nx, ny, width, length make the cloth); a relative path is "
-        "relative to the scene file", text="a mesh file's path, or '' (the nx x ny rectangle)")
+        "relative to the scene file", text=MESH_ALLOWED)
     place_mesh: str = _param(
         "off", "-", "'off': the mesh file's coordinates as they are (m, z up); 'on': the mesh turned by initial_tilt "
         "about the x axis through its centroid, and its centroid raised to initial_height", choices=SWITCH)
@@ -182,7 +186,7 @@ class Scene:
     pinned_vertices: str = _param(
         "", "-", "vertices held fixed in space, with pinned_edge's: the name of a point attribute of the mesh file "
         "(nonzero = pinned), or 'box:x0,y0,z0,x1,y1,z1', the vertices in that box at t = 0 (m, inclusive); '' = none",
-        text="'', a point attribute of the mesh file, or 'box:x0,y0,z0,x1,y1,z1' (m)")
+        text=PINS_ALLOWED)
     # --- time integration
     integrator: str = _param(
         "bdf2", "-", "time integrator: 'bdf2' (second order, implicit, steps set by the tolerance), "
@@ -343,8 +347,8 @@ def _check_mesh_start(scene: Scene):
         name, fix = (("initial_height", "raise initial_height") if scene.place_mesh == "on"
                      else ("cloth_mesh", "raise the mesh in its file, or place it: place_mesh = 'on'"))
         raise ParameterError(name, f"the cloth starts at or below the floor (lowest point {lowest:g} m with "
-                                   f"thickness/2, floor_level {scene.floor_level:g} m); allowed: every vertex above "
-                                   f"floor_level + thickness/2 ({fix})")
+                                   f"thickness/2, floor_level {scene.floor_level:g} m): {fix}; allowed: every vertex "
+                                   f"above floor_level + thickness/2")
     return positions, mesh
 
 

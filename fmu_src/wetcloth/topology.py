@@ -20,7 +20,7 @@ import numpy as np
 
 from wetcloth.errors import ParameterError
 from wetcloth.mesh_file import MeshFile, face_edges, is_mesh_path, read_mesh_file, triangle_areas
-from wetcloth.scene import Scene
+from wetcloth.scene import PINS_ALLOWED, Scene
 
 #: Kinds of listed springs (``pair_kind``): along a face's edge, across a quad, bending.
 STRETCH, SHEAR, BEND = 0, 1, 2
@@ -409,8 +409,8 @@ def pinned_mask(scene: Scene, positions: np.ndarray, mesh: MeshFile | None) -> n
     if scene.pinned_edge != "none":
         if mesh is not None:
             raise ParameterError("pinned_edge", f"{scene.pinned_edge!r} is an edge of the nx x ny rectangle, but the "
-                                                "cloth comes from cloth_mesh; pin its vertices with pinned_vertices "
-                                                "(a point attribute or a box); allowed here: 'none'")
+                                                "cloth comes from cloth_mesh (pin its vertices with pinned_vertices: "
+                                                "a point attribute or a box); allowed here: 'none'")
         col, row = np.arange(n) % scene.nx, np.arange(n) // scene.nx
         pinned |= {"x_min": col == 0, "x_max": col == scene.nx - 1, "y_min": row == 0,
                    "y_max": row == scene.ny - 1}[scene.pinned_edge]
@@ -422,7 +422,8 @@ def pinned_mask(scene: Scene, positions: np.ndarray, mesh: MeshFile | None) -> n
     return pinned
 
 
-BOX_FORM = "'box:x0,y0,z0,x1,y1,z1' (m, x0 <= x1, y0 <= y1, z0 <= z1)"
+def _pin_error(message: str) -> ParameterError:
+    return ParameterError("pinned_vertices", f"{message}; allowed: {PINS_ALLOWED}")
 
 
 def _box(spec: str, positions: np.ndarray) -> np.ndarray:
@@ -431,29 +432,27 @@ def _box(spec: str, positions: np.ndarray) -> np.ndarray:
     except ValueError:
         values = []
     if len(values) != 6 or not all(map(math.isfinite, values)):
-        raise ParameterError("pinned_vertices", f"{spec!r} is not a box; allowed: {BOX_FORM}")
+        raise _pin_error(f"{spec!r} is not a box of six numbers")
     lo, hi = np.array(values[:3])[:, None], np.array(values[3:])[:, None]
     if (lo > hi).any():
-        raise ParameterError("pinned_vertices", f"{spec!r}: a lower corner is above the upper one; allowed: {BOX_FORM}")
+        raise _pin_error(f"{spec!r}: a lower corner is above the upper one")
     inside = ((positions >= lo) & (positions <= hi)).all(axis=0)
     if not inside.any():
         span = ", ".join(f"{c} {positions[k].min():g} .. {positions[k].max():g}" for k, c in enumerate("xyz"))
-        raise ParameterError("pinned_vertices", f"the box {spec!r} holds no vertex of the cloth at t = 0 (it spans "
-                                                f"{span} m); allowed: a box around the vertices to pin, {BOX_FORM}")
+        raise _pin_error(f"the box {spec!r} holds no vertex of the cloth at t = 0 (it spans {span} m)")
     return inside
 
 
 def _attribute(name: str, mesh: MeshFile | None) -> np.ndarray:
     if mesh is None:
-        raise ParameterError("pinned_vertices", f"{name!r} names a point attribute, but the cloth is the nx x ny "
-                                                f"rectangle (cloth_mesh is empty); allowed: '' or {BOX_FORM}")
+        raise _pin_error(f"{name!r} names a point attribute, but the cloth is the nx x ny rectangle (cloth_mesh "
+                         "is empty): pin it with a box")
     values = mesh.attributes.get(name)
     if values is None:
         available = ", ".join(repr(k) for k in mesh.attributes) or "none"
-        raise ParameterError("pinned_vertices", f"{name!r} is not a point attribute of {mesh.source!r} (its point "
-                                                f"attributes: {available}); allowed: one of those, '' or {BOX_FORM}")
+        raise _pin_error(f"{name!r} is not a point attribute of {mesh.source!r} (its point attributes: {available})")
     values = np.asarray(values).reshape(mesh.n, -1)
     if values.shape[1] != 1:
-        raise ParameterError("pinned_vertices", f"the point attribute {name!r} of {mesh.source!r} has {values.shape[1]} "
-                                                "components; allowed: a scalar attribute (nonzero = pinned)")
+        raise _pin_error(f"the point attribute {name!r} of {mesh.source!r} has {values.shape[1]} components, "
+                         "not one")
     return values[:, 0] != 0
