@@ -133,7 +133,7 @@ def test_a_relative_mesh_path_is_relative_to_the_scene_file(tmp_path, disc):
     assert build_topology(scene).n == len(disc[0])
 
 
-def test_pinned_vertices_from_a_point_attribute_of_a_ply_file(tmp_path, disc):
+def test_pinned_vertices_from_a_point_attribute_of_a_ply_or_gltf_file(tmp_path, disc):
     points, triangles = disc
     pin = (points[:, 0] > 0.4).astype(np.float32)
     path = tmp_path / "pinned.ply"
@@ -146,6 +146,11 @@ def test_pinned_vertices_from_a_point_attribute_of_a_ply_file(tmp_path, disc):
                                                       r"'pin', 'weight'") as err:
         Scene(cloth_mesh=str(path), pinned_vertices="grip")
     assert err.value.name == "pinned_vertices"
+    gltf = trimesh.Trimesh(points, triangles, process=False)
+    gltf.vertex_attributes["_pin"] = pin  # glTF's custom attributes begin with an underscore
+    gltf.export(tmp_path / "pinned.glb")
+    topo = build_topology(Scene(cloth_mesh=str(tmp_path / "pinned.glb"), pinned_vertices="_pin"))
+    np.testing.assert_array_equal(topo.pinned, pin != 0)
 
 
 def test_pinned_vertices_from_a_box_for_a_mesh_and_for_the_grid(tmp_path, disc):
