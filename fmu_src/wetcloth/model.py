@@ -16,7 +16,7 @@ from wetcloth._core import GRAVITY
 from wetcloth.bundles import Cloth, Physics, make_work
 from wetcloth.collider_meshes import no_meshes
 from wetcloth.scene import Scene
-from wetcloth.topology import STRETCH, Topology, build_topology
+from wetcloth.topology import STRETCH, Topology, build_topology, corner_shares
 
 __all__ = ["GRAVITY", "Model"]
 
@@ -28,7 +28,8 @@ class Model:
         self.topology = topo = topology if topology is not None else build_topology(scene)
         self.skip_idle_work = skip_idle_work  # False: run the water kernels on dry cloth too (benchmarks)
         self.free = (~topo.pinned).astype(np.float64)  # 1 for moving particles, 0 for pinned
-        self.grid_x, self.grid_y = (topo.nx, topo.ny) if topo.is_grid else (0, 0)
+        self.grid_x, self.grid_y = (0, 0) if topo.listed else (topo.nx, topo.ny)
+        self.corner_shares = corner_shares(topo.rest_pos, topo.triangles)
         self.work = make_work(topo.n, len(topo.spring_offset), self.grid_x, len(topo.pair_rest), len(topo.triangles))
         self.scene = scene
 
@@ -53,10 +54,11 @@ class Model:
             tension_only=topo.spring_tension_only, stiffness=topo.spring_stiffness, damping=topo.spring_damping,
             free=self.free, dry_mass=self.dry_mass, volume=self.volume, stokes_coefficient=self.stokes_coefficient,
             capacity=self.capacity, wick_offsets=self.wick_offsets, wick_conductance=self.wick_conductance,
-            pairs=topo.pairs, pair_rest=topo.pair_rest, pair_stiffness=topo.pair_stiffness,
-            pair_damping=topo.pair_damping, pair_tension_count=topo.pair_tension_count,
+            pairs=np.ascontiguousarray(topo.pairs, dtype=np.int64), pair_rest=topo.pair_rest,
+            pair_stiffness=topo.pair_stiffness, pair_damping=topo.pair_damping,
+            pair_tension_count=topo.pair_tension_count,
             wick_pairs=self.wick_pairs, wick_pair_conductance=self.wick_pair_conductance,
-            triangles=np.ascontiguousarray(topo.triangles, dtype=np.int64),
+            triangles=np.ascontiguousarray(topo.triangles, dtype=np.int64), corner_shares=self.corner_shares,
         )
         wet = scene.wet_stiffness_factor != 0.0 and scene.absorption_capacity > 0.0
         self.physics = Physics(

@@ -133,6 +133,6 @@ def make_mesh_plane(n: int, pairs: np.ndarray, tension_count: int, stiffness: np
 
 def plane_for(topology) -> Plane:
     """The preconditioner's arrays for a cloth ``topology`` (``wetcloth.topology.Topology``): a grid's or a mesh's."""
-    if topology.is_grid:
+    if not topology.listed:
         return make_plane(topology.nx, topology.ny, topology.spring_family_names, topology.spring_stiffness)
     return make_mesh_plane(topology.n, topology.pairs, topology.pair_tension_count, topology.pair_stiffness)

@@ -45,6 +45,7 @@ Cloth cloth_from(nb::handle h) {
     c.wick_pair_conductance = array<const double>(h, "wick_pair_conductance", c.wick_pair_count);
     c.triangle_count = size_of(h.attr("triangles")) / 3;
     c.triangles = array<const Index>(h, "triangles", 3 * c.triangle_count);
+    c.corner_shares = array<const double>(h, "corner_shares", 3 * c.triangle_count);
     if (c.grid_x * c.grid_y != (is_mesh(c) ? 0 : n) || c.pair_tension_count < 0 || c.pair_tension_count > c.pair_count)
         throw std::invalid_argument("cloth: grid_x * grid_y must be the particle count (0 for a mesh) and "
                                     "pair_tension_count within the listed springs");

@@ -55,8 +55,8 @@ void fill_zero(double* a, Index count) {
 void add_face_drag(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
                    const Fluid& fluid, double h, bool blocks_wanted) {
     if (is_mesh(cloth)) {
-        mesh_face_drag(cloth.n, cloth.triangle_count, cloth.triangles, pos, vel, work.submerged, fluid, h, work.force,
-                       blocks_wanted ? work.blocks : nullptr, phys.skip_idle);
+        mesh_face_drag(cloth.n, cloth.triangle_count, cloth.triangles, cloth.corner_shares, pos, vel, work.submerged,
+                       fluid, h, work.force, blocks_wanted ? work.blocks : nullptr, phys.skip_idle);
     } else if (blocks_wanted) {
         face_drag_and_blocks(cloth.grid_x, cloth.grid_y, pos, vel, work.submerged, fluid, h, work.force, work.blocks,
                              work.cells, phys.skip_idle);

@@ -309,20 +309,22 @@ void face_drag_and_blocks(Index nx, Index ny, const double* pos, const double* v
     }
 }
 
-void mesh_face_drag(Index n, Index triangle_count, const Index* triangles, const double* pos, const double* vel,
-                    const double* s, const Fluid& fluid, double h, double* force, double* blocks, bool skip_idle) {
+void mesh_face_drag(Index n, Index triangle_count, const Index* triangles, const double* shares, const double* pos,
+                    const double* vel, const double* s, const Fluid& fluid, double h, double* force, double* blocks,
+                    bool skip_idle) {
     const double base = fluid.above ? 1.0 : 0.0, sign = fluid.above ? -1.0 : 1.0;
     for (Index t = 0; t < triangle_count; ++t) {
         const Index a = triangles[3 * t], b = triangles[3 * t + 1], c = triangles[3 * t + 2];
         if (skip_idle && outside_all(s, a, b, c, fluid.above)) continue;
         const TriangleDrag d = blocks != nullptr ? mesh_triangle<true>(n, a, b, c, pos, vel, s, fluid, base, sign)
                                                  : mesh_triangle<false>(n, a, b, c, pos, vel, s, fluid, base, sign);
-        const double third = 1.0 / 3.0, block_third = h / 3.0;
         const double rows[9] = {d.fx, d.fy, d.fz, d.xx, d.yy, d.zz, d.xy, d.xz, d.yz};
-        for (const Index v : {a, b, c}) {
-            for (Index r = 0; r < 3; ++r) force[r * n + v] += third * rows[r];
+        for (Index corner = 0; corner < 3; ++corner) {
+            const Index v = triangles[3 * t + corner];
+            const double share = shares[3 * t + corner];
+            for (Index r = 0; r < 3; ++r) force[r * n + v] += share * rows[r];
             if (blocks != nullptr)
-                for (Index r = 0; r < 6; ++r) blocks[r * n + v] += block_third * rows[3 + r];
+                for (Index r = 0; r < 6; ++r) blocks[r * n + v] += (h * share) * rows[3 + r];
         }
     }
 }

@@ -52,6 +52,7 @@ struct Cloth {
     const double* wick_pair_conductance = nullptr;  // (L) kg/s
     Index triangle_count = 0;                      // a mesh's triangles (face drag)
     const Index* triangles = nullptr;              // (m, 3)
+    const double* corner_shares = nullptr;         // (m, 3) each corner's share of its triangle (sum 1)
 };
 
 //: Whether the cloth is a mesh (listed springs, drag over its triangle list) rather than a grid.

@@ -64,10 +64,11 @@ void face_drag_and_blocks(Index nx, Index ny, const double* pos, const double* v
                           const Fluid& fluid, double h, double* force, double* blocks, double* cells,
                           bool skip_dry_rows = true);
 
-//: The face drag of the fluid on a mesh's triangles (m, 3) added to force (3, n), each triangle's shared
-//: equally by its corners; unless blocks is null, h (s) times its lumped velocity Jacobian added to
-//: blocks (6, n) likewise.  With skip_idle, triangles with no corner in the fluid are skipped.
-void mesh_face_drag(Index n, Index triangle_count, const Index* triangles, const double* pos, const double* vel,
-                    const double* s, const Fluid& fluid, double h, double* force, double* blocks, bool skip_idle);
+//: The face drag of the fluid on a mesh's triangles (m, 3) added to force (3, n), each triangle's shared by
+//: its corners as `shares` (m, 3) says; unless blocks is null, h (s) times its lumped velocity Jacobian
+//: added to blocks (6, n) likewise.  With skip_idle, triangles with no corner in the fluid are skipped.
+void mesh_face_drag(Index n, Index triangle_count, const Index* triangles, const double* shares, const double* pos,
+                    const double* vel, const double* s, const Fluid& fluid, double h, double* force, double* blocks,
+                    bool skip_idle);
 
 }  // namespace wc
