@@ -208,14 +208,14 @@ Index collider_history(Index n, Index count, const double* colliders, double gap
     const double reach = gap * (1.0 + 1e-9);  // where collider_contact put them, up to rounding
     for (Index i = 0; i < n; ++i) {
         const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
-        bool on = false;
-        for (Index k = 0; k < count && !on; ++k) {
+        for (Index k = 0; k < count; ++k) {
             double nrm[3];
-            on = collider_distance(colliders + k * COLLIDER_COLUMNS, p, nrm) <= reach;
+            if (collider_distance(colliders + k * COLLIDER_COLUMNS, p, nrm) <= reach) {
+                agreed += 1;
+                normal_history(n, i, nrm, pos, vel, prev_pos, prev_vel, h);
+                break;
+            }
         }
-        if (!on) continue;
-        agreed += 1;
-        straight_history(n, i, pos, vel, prev_pos, prev_vel, h);
     }
     return agreed;
 }

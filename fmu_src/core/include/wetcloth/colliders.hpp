@@ -39,7 +39,8 @@ Index release_from_colliders(Index n, const double* colliders, const double* pos
                              double* held);
 
 //: The particles on a collider (within gap m, where collider_contact left them) get the history of a
-//: straight motion at their velocity (as the floor's agree_history).  Returns how many.
+//: straight motion at their velocity along the normal of the first collider they touch, their history
+//: along its surface kept (as the floor's agree_history).  Returns how many.
 Index collider_history(Index n, Index count, const double* colliders, double gap, const double* pos, const double* vel,
                        double* prev_pos, double* prev_vel, double h);
 
