@@ -15,6 +15,7 @@ from wetcloth import _core
 from wetcloth._core import GRAVITY
 from wetcloth.bundles import Cloth, Physics, make_work
 from wetcloth.scene import Scene
+from wetcloth.state import initial_state
 from wetcloth.topology import Topology, build_topology
 
 __all__ = ["GRAVITY", "Model"]
@@ -28,6 +29,9 @@ class Model:
         self.skip_idle_work = skip_idle_work  # False: run the water kernels on dry cloth too (benchmarks)
         self.free = (~topo.pinned).astype(np.float64)  # 1 for moving particles, 0 for pinned
         self.work = make_work(topo.n, len(topo.spring_offset), topo.nx)
+        # Where the grip's zero displacement holds the particles (m, (3, n)): their start positions (fixed
+        # parameters only); empty when nothing is pinned, so that the grip has nothing to move.
+        self.grip_origin = initial_state(scene, topo).pos if topo.pinned.any() else np.empty((3, 0))
         self.scene = scene
 
     @property
@@ -64,6 +68,9 @@ class Model:
             absorption_rate=scene.absorption_rate, drying_rate=scene.drying_rate, wicking_rate=scene.wicking_rate,
             wick_step_limit=self.wick_step_limit, skip_idle=self.skip_idle_work,
             colliders=np.array([c.row() for c in scene.colliders], dtype=np.float64).reshape(-1, 13),
+            grip_x=scene.grip_x, grip_y=scene.grip_y, grip_z=scene.grip_z,
+            grip_keys=np.array([[k.time, k.x, k.y, k.z] for k in scene.grip_keys], dtype=np.float64).reshape(-1, 4),
+            grip_origin=self.grip_origin,
         )
 
     def _set_wicking(self, scene: Scene) -> None:
