@@ -105,7 +105,7 @@ class GripKey:
     file: the pinned particles are displaced by (x, y, z) at ``time``, linearly between keys (from 0 at
     t = 0 to the first).  Its fields are addressed as ``grip_key<k>_<field>`` (k from 1) everywhere else."""
 
-    time: float = _param(1.0, "s", "time of the key", 0.0, 1e6, lo_open=True)
+    time: float = _param(None, "s", "time of the key (required: no default)", 0.0, 1e6, lo_open=True)
     x: float = _param(0.0, "m", "the grip's displacement along x at the key's time", -1e4, 1e4)
     y: float = _param(0.0, "m", "the grip's displacement along y at the key's time", -1e4, 1e4)
     z: float = _param(0.0, "m", "the grip's displacement along z (up) at the key's time", -1e4, 1e4)

@@ -69,4 +69,6 @@ def main(args) -> int:
 
 
 def _text(value) -> str:
+    if value is None:  # a field without a default (a grip key's time)
+        return "-"
     return repr(value) if isinstance(value, str) else f"{value:g}"
