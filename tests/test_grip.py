@@ -130,6 +130,20 @@ def test_the_inputs_add_to_the_keys():
     assert_each(sim.state.pos[:, pinned] - start, (0.05, 0.0, 0.1), 1e-6)
 
 
+def test_the_grip_moves_vertices_pinned_by_pinned_vertices_too():
+    """A corner pinned by ``pinned_vertices`` (a box around it at t = 0) instead of an edge: the keys lift
+    it 0.3 m in 1 s, moving at their 0.3 m/s."""
+    scene = load_scene(nx=7, ny=9, initial_tilt=0.0, pinned_vertices="box:0.2,0.3,0.0,0.3,0.4,0.2",
+                       grip_key1_time=1.0, grip_key1_z=0.3)
+    sim = wetcloth.Simulation(scene)
+    pinned = sim.model.topology.pinned
+    assert np.flatnonzero(pinned).tolist() == [7 * 9 - 1]  # the (x_max, y_max) corner
+    start = sim.state.pos[:, pinned].copy()
+    sim.advance(1.0)
+    assert_each(sim.state.pos[:, pinned] - start, (0.0, 0.0, 0.3), 1e-6)
+    assert_each(sim.state.vel[:, pinned], (0.0, 0.0, 0.3), 1e-9)
+
+
 def test_grip_keys_by_their_flattened_names_in_params_set_and_study_axes(tmp_path):
     """[[grip_key]] tables read in order as grip_key1, grip_key2; each field has one name everywhere."""
     from wetcloth.batch.axes import check_name, typed
