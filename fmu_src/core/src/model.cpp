@@ -72,7 +72,7 @@ std::uint64_t fnv1a(const unsigned char* data, std::size_t size) {
 
 constexpr char SNAPSHOT_MAGIC[] = "wetcloth-native-snapshot\n";
 constexpr std::size_t MAGIC_SIZE = sizeof(SNAPSHOT_MAGIC) - 1;
-constexpr std::uint32_t SNAPSHOT_VERSION = 3;  // 3: the scene's 43 fields (grip_x/y/z added); 2: 40 (wind)
+constexpr std::uint32_t SNAPSHOT_VERSION = 3;  // 3: the scene's 44 fields (pinned_vertices, grip_x/y/z); 2: 40 (wind)
 constexpr std::size_t PREAMBLE = MAGIC_SIZE + 4 + 8;  // magic, version, checksum
 
 //: Doubles of a checkpoint's `values` for n particles and F spring families (see Checkpoint).
