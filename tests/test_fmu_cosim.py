@@ -75,6 +75,20 @@ def test_the_wind_inputs_act_as_in_a_direct_run(fmu):
     assert result["centroid_y"][-1] < result["centroid_y"][20]  # and back
 
 
+def test_the_grip_inputs_act_as_in_a_direct_run(fmu):
+    """grip_x, grip_y, grip_z (m) are inputs: a sheet hanging from its top edge, whose grip moves from 0.5 s
+    (each value reached linearly over the communication step after it is set), through fmpy gives the
+    direct simulation's numbers, and the grip lifted it."""
+    signal = np.array([(0.0, 0.0, 0.0, 0.0), (0.5, 0.0, 0.0, 0.0), (1.5, 0.05, 0.1, 0.2)],
+                      dtype=[("time", float), ("grip_x", float), ("grip_y", float), ("grip_z", float)])
+    values = SMALL | dict(initial_tilt=90.0, pinned_edge="y_max", initial_height=0.5)
+    result = fmpy.simulate_fmu(fmu, stop_time=1.5, output_interval=0.05, start_values=values, input=signal)
+    expected = direct_run(values, result["time"], signal)
+    for row, want in zip(result, expected):
+        assert_same_outputs({n: row[n] for n in OUTPUT_NAMES}, want)
+    assert result["centroid_z"][-1] - result["centroid_z"][0] > 0.1
+
+
 def test_a_rising_water_level_carries_a_floating_cloth_up(fmu):
     """No absorption, lighter than water: the cloth floats at depth t (s - 1/2) and rises with the water."""
     thickness, density = 0.002, 0.45

@@ -231,7 +231,8 @@ API long check_array(void* h, const char* name, double* out, long capacity) {
         double(p.smooth), double(p.stokes), p.drag_normal, p.drag_tangential, p.drag_linear, p.current_x, p.current_y,
         p.air_density, p.wind_x, p.wind_y, p.wind_z,
         p.floor_z, p.floor_friction, p.absorption_capacity, p.absorption_rate, p.drying_rate, p.wicking_rate,
-        p.wick_step_limit, double(p.skip_idle)};
+        p.wick_step_limit, double(p.skip_idle), p.grip_x, p.grip_y, p.grip_z};
+    else if (key == "grip_origin") put(v, p.grip_origin, p.grip_origin != nullptr ? 3 * n : 0);
     else if (key == "control") v = {double(k.integrator), k.tolerance, k.allowed, k.max_step, k.newton_tolerance,
         k.cg_tolerance, k.omega_squared, k.buoyancy_omega_squared, k.damping_rate, k.spring_limit, k.drag_rate_offset,
         k.drag_rate_slope, k.smallest_step, k.growth, k.shrink, k.blow_up_speed, k.sleep_distance, k.sleep_after};
@@ -383,7 +384,9 @@ def python_arrays(sim: wetcloth.Simulation) -> dict[str, np.ndarray]:
     arrays["grid"] = [cloth.grid_x, cloth.grid_y]
     physics = sim.model.physics  # its scalars (the native FMU has no colliders: none in these scenes)
     assert physics.colliders.size == 0
-    arrays["physics"] = [float(v) for f, v in zip(physics._fields, physics) if f != "colliders"]
+    arrays["physics"] = [float(v) for f, v in zip(physics._fields, physics)
+                         if f not in ("colliders", "meshes", "grip_keys", "grip_origin")]
+    arrays["grip_origin"] = physics.grip_origin
     arrays["control"] = [float(getattr(control, f)) for f in control._fields if f != "scheme"]
     arrays |= {f"plane.{name}": getattr(plane, name) for name in ("slots", "shares", "stiffness", "order", "rank",
                                                                   "reference", "reference_mass", "frame", "normal")}
@@ -412,7 +415,8 @@ def test_model_arrays_agree_with_the_python_package_to_the_bit(checker_library, 
             assert_bitwise(ours[name], array, name)
         # Inputs change Physics, Control and the capacity (and wicking's conductances) as set_inputs does.
         inputs = dict(water_level=0.03, water_density=1020.0, absorption_capacity=2.5, absorption_rate=0.4,
-                      current_x=0.2, current_y=-0.1, wind_x=3.0, wind_y=-1.5, wind_z=0.4)
+                      current_x=0.2, current_y=-0.1, wind_x=3.0, wind_y=-1.5, wind_z=0.4, grip_x=0.1, grip_y=-0.2,
+                      grip_z=0.3)
         assert ours.set_inputs(**inputs) == 1 and ours.set_inputs(**inputs) == 0
         sim.set_inputs(**inputs)
         theirs = python_arrays(sim)
@@ -505,6 +509,40 @@ def test_the_wind_inputs_act_as_in_the_python_api(build):
         rows.append([sim.outputs()[n] for n in OUTPUT_NAMES])
     assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows, "fmpy FMI 2.0 in wind")
     assert result["centroid_y"][-1] - result["centroid_y"][10] > 0.01  # the wind pushed it along y
+
+
+def test_the_grip_inputs_act_as_in_the_python_api(build):
+    """grip_x, grip_y, grip_z are inputs (m): through fmpy, a hanging sheet whose grip is moved from 0.3 s
+    on (each value reached linearly over the communication step after it is set) gives the Python API's
+    outputs with the same inputs set at the same communication points, bit for bit."""
+    import fmpy
+    from fmpy.simulation import Input
+
+    for version in (2, 3):
+        variables = {v.name: v for v in build[version]["md"].modelVariables}
+        for name in ("grip_x", "grip_y", "grip_z"):
+            assert (variables[name].causality, variables[name].unit) == ("input", "m"), name
+    signal = np.array([(0.0, 0.0, 0.0, 0.0), (0.3, 0.0, 0.0, 0.0), (1.0, 0.1, -0.05, 0.3)],
+                      dtype=[("time", float), ("grip_x", float), ("grip_y", float), ("grip_z", float)])
+    values = {"nx": 9, "ny": 13, "initial_tilt": 90.0, "pinned_edge": "y_max", "initial_height": 0.5}
+    result = fmpy.simulate_fmu(str(build[2]["dir"]), stop_time=1.0, output_interval=0.05, start_values=values,
+                               input=signal, model_description=build[2]["md"])
+    sim = wetcloth.Simulation(wetcloth.load_scene(**values))
+    names = signal.dtype.names[1:]
+
+    def apply(t):
+        inputs, _ = Input.interpolate(time=t, t=signal["time"], table=np.array([signal[n] for n in names]),
+                                      after_event=True)
+        sim.set_inputs(**dict(zip(names, map(float, inputs))))
+
+    apply(0.0)
+    rows = [[sim.outputs()[n] for n in OUTPUT_NAMES]]
+    for previous, t in zip(result["time"][:-1], result["time"][1:]):
+        apply(previous)
+        advance_as_the_unit(sim, t)
+        rows.append([sim.outputs()[n] for n in OUTPUT_NAMES])
+    assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows, "fmpy FMI 2.0 with the grip")
+    assert result["centroid_z"][-1] - result["centroid_z"][0] > 0.15  # the grip lifted it
 
 
 def test_the_unit_steps_exactly_as_the_cores_simulation(build, checker_library):

@@ -16,6 +16,7 @@ from wetcloth._core import GRAVITY
 from wetcloth.bundles import Cloth, Physics, make_work
 from wetcloth.collider_meshes import meshes_of
 from wetcloth.scene import Scene
+from wetcloth.state import initial_state
 from wetcloth.topology import STRETCH, Topology, build_topology, corner_shares
 
 __all__ = ["GRAVITY", "Model"]
@@ -31,6 +32,9 @@ class Model:
         self.grid_x, self.grid_y = (0, 0) if topo.listed else (topo.nx, topo.ny)
         self.corner_shares = corner_shares(topo.rest_pos, topo.triangles)
         self.work = make_work(topo.n, len(topo.spring_offset), self.grid_x, len(topo.pair_rest), len(topo.triangles))
+        # Where the grip's zero displacement holds the particles (m, (3, n)): their start positions (fixed
+        # parameters only); empty when nothing is pinned, so that the grip has nothing to move.
+        self.grip_origin = initial_state(scene, topo).pos if topo.pinned.any() else np.empty((3, 0))
         self.scene = scene
 
     @property
@@ -73,6 +77,9 @@ class Model:
             absorption_rate=scene.absorption_rate, drying_rate=scene.drying_rate, wicking_rate=scene.wicking_rate,
             wick_step_limit=self.wick_step_limit, skip_idle=self.skip_idle_work,
             colliders=colliders, meshes=meshes,
+            grip_x=scene.grip_x, grip_y=scene.grip_y, grip_z=scene.grip_z,
+            grip_keys=np.array([[k.time, k.x, k.y, k.z] for k in scene.grip_keys], dtype=np.float64).reshape(-1, 4),
+            grip_origin=self.grip_origin,
         )
 
     def _set_wicking(self, scene: Scene) -> None:

@@ -120,6 +120,28 @@ def collider_name(name: str) -> tuple[int, str] | None:
 
 
 @dataclass(frozen=True)
+class GripKey:
+    """A key of the grip's displacement (docs/model.md section 6.4), one ``[[grip_key]]`` table of a scene
+    file: the pinned particles are displaced by (x, y, z) at ``time``, linearly between keys (from 0 at
+    t = 0 to the first).  Its fields are addressed as ``grip_key<k>_<field>`` (k from 1) everywhere else."""
+
+    time: float = _param(None, "s", "time of the key (required: no default)", 0.0, 1e6, lo_open=True)
+    x: float = _param(0.0, "m", "the grip's displacement along x at the key's time", -1e4, 1e4)
+    y: float = _param(0.0, "m", "the grip's displacement along y at the key's time", -1e4, 1e4)
+    z: float = _param(0.0, "m", "the grip's displacement along z (up) at the key's time", -1e4, 1e4)
+
+
+GRIP_KEY_FIELDS: dict[str, dataclasses.Field] = {f.name: f for f in dataclasses.fields(GripKey)}
+_GRIP_KEY_NAME = re.compile(r"grip_key([1-9][0-9]*)_([a-z]+)")
+
+
+def grip_key_name(name: str) -> tuple[int, str] | None:
+    """(k, field) of a flattened grip key name such as 'grip_key1_time', else None."""
+    m = _GRIP_KEY_NAME.fullmatch(name)
+    return (int(m.group(1)), m.group(2)) if m and m.group(2) in GRIP_KEY_FIELDS else None
+
+
+@dataclass(frozen=True)
 class Scene:
     """A cloth dropped onto water.  The defaults are the cotton towel of ``models/towel.toml``."""
 
@@ -201,6 +223,13 @@ class Scene:
         "", "-", "vertices held fixed in space, with pinned_edge's: the name of a point attribute of the mesh file "
         "(nonzero = pinned), or 'box:x0,y0,z0,x1,y1,z1', the vertices in that box at t = 0 (m, inclusive); '' = none",
         text=PINS_ALLOWED)
+    # --- the grip (docs/model.md section 6.4): moves the pinned particles; [[grip_key]] tables add keys
+    grip_x: float = _param(0.0, "m", "displacement of the pinned particles along x (reached linearly over the next "
+                           "advance)", -1e4, 1e4, fmu=INPUT)
+    grip_y: float = _param(0.0, "m", "displacement of the pinned particles along y (reached linearly over the next "
+                           "advance)", -1e4, 1e4, fmu=INPUT)
+    grip_z: float = _param(0.0, "m", "displacement of the pinned particles along z, up (reached linearly over the "
+                           "next advance)", -1e4, 1e4, fmu=INPUT)
     # --- time integration
     integrator: str = _param(
         "bdf2", "-", "time integrator: 'bdf2' (second order, implicit, steps set by the tolerance), "
@@ -212,6 +241,8 @@ class Scene:
     max_step: float = _param(0.1, "s", "largest internal time step", 0.0, 1.0, lo_open=True)
     # --- analytic colliders (docs/model.md section 6.3): [[collider]] tables, flattened as collider<k>_<field>
     colliders: tuple = field(default=(), metadata=dict(collider=True))
+    # --- the grip's keys: [[grip_key]] tables, flattened as grip_key<k>_<field>
+    grip_keys: tuple = field(default=(), metadata=dict(grip_key=True))
 
     def __post_init__(self):
         validate(self)
@@ -225,10 +256,13 @@ class Scene:
         values = {name: getattr(self, name) for name in PARAMETERS}
         for k, collider in enumerate(self.colliders, 1):
             values |= {f"collider{k}_{name}": getattr(collider, name) for name in COLLIDER_FIELDS}
+        for k, key in enumerate(self.grip_keys, 1):
+            values |= {f"grip_key{k}_{name}": getattr(key, name) for name in GRIP_KEY_FIELDS}
         return values
 
 
-PARAMETERS: dict[str, dataclasses.Field] = {f.name: f for f in dataclasses.fields(Scene) if f.name != "colliders"}
+PARAMETERS: dict[str, dataclasses.Field] = {f.name: f for f in dataclasses.fields(Scene)
+                                            if f.name not in ("colliders", "grip_keys")}
 PARAMETER_LISTING = f"there are {len(PARAMETERS)}; 'wetcloth params' lists them"
 
 
@@ -251,6 +285,12 @@ def _field(name: str) -> dataclasses.Field:
     flat = collider_name(name)
     if flat is not None:
         return COLLIDER_FIELDS[flat[1]]
+    key = grip_key_name(name)
+    if key is not None:
+        return GRIP_KEY_FIELDS[key[1]]
+    if name.startswith("grip_key"):
+        raise ParameterError(name, f"unknown grip key field; a grip key's fields are grip_key<k>_<field> "
+                                   f"(k = 1, 2, ...) with <field> one of {', '.join(GRIP_KEY_FIELDS)}")
     if name.startswith("collider"):
         fields = ", ".join(COLLIDER_FIELDS)
         raise ParameterError(name, f"unknown collider field; a collider's fields are collider<k>_<field> "
@@ -266,7 +306,7 @@ def parameter_field(name: str) -> dataclasses.Field:
 
 def is_parameter(name: str) -> bool:
     """Whether ``name`` is a scene parameter or a collider field's flattened name (collider1_radius)."""
-    return name in PARAMETERS or collider_name(name) is not None
+    return name in PARAMETERS or collider_name(name) is not None or grip_key_name(name) is not None
 
 
 def normalise(name: str, value):
@@ -331,6 +371,7 @@ def validate(scene: Scene) -> None:
         with mistakes.collect():
             object.__setattr__(scene, name, check_value(name, getattr(scene, name)))
     object.__setattr__(scene, "colliders", _checked_colliders(scene.colliders, mistakes))
+    object.__setattr__(scene, "grip_keys", _checked_grip_keys(scene, mistakes))
     mistakes.raise_if_any()
     start = _check_mesh_start(scene) if is_mesh_path(scene.cloth_mesh) else None
     if start is None:
@@ -401,6 +442,36 @@ def _checked_colliders(colliders, mistakes: Mistakes) -> tuple:
     return tuple(out)
 
 
+def _checked_grip_keys(scene: Scene, mistakes: Mistakes) -> tuple:
+    """The grip keys as GripKey objects (from GripKey or dicts of fields), each field checked under its
+    flattened name; their times must increase, and something must be pinned for them to move."""
+    keys = scene.grip_keys
+    if not isinstance(keys, (tuple, list)):
+        with mistakes.collect():
+            raise ParameterError("grip_keys", f"expected a list of grip keys, got {keys!r}")
+        return ()
+    out = []
+    for k, key in enumerate(keys, 1):
+        values = dataclasses.asdict(key) if isinstance(key, GripKey) else key
+        with mistakes.collect():
+            if not isinstance(values, dict):
+                raise ParameterError(f"grip_key{k}", f"expected a table of grip key fields, got {values!r}")
+            if "time" not in values:
+                raise ParameterError(f"grip_key{k}_time", "a grip key needs its time; allowed: "
+                                     + describe_range(GRIP_KEY_FIELDS["time"], f"grip_key{k}_time"))
+            checked = {name: check_value(f"grip_key{k}_{name}", value) for name, value in values.items()}
+            if out and checked["time"] <= out[-1].time:
+                raise ParameterError(f"grip_key{k}_time", f"{checked['time']!r} s is not after grip_key{k - 1}_time "
+                                     f"= {out[-1].time!r} s; allowed: key times that increase")
+            out.append(GripKey(**checked))
+    if out and scene.pinned_edge == "none" and not scene.pinned_vertices.strip():
+        with mistakes.collect():
+            raise ParameterError("grip_key1", "the grip moves the pinned particles, and none are pinned; allowed: "
+                                 "grip keys with pinned_edge one of 'x_min', 'x_max', 'y_min', 'y_max', or "
+                                 "pinned_vertices set")
+    return tuple(out)
+
+
 def _check_collider_start(scene: Scene, pos: np.ndarray) -> None:
     """No collider may reach into the cloth at t = 0 (closer than thickness/2 to a particle at ``pos`` (3, n) m)."""
     if not scene.colliders:
@@ -427,14 +498,28 @@ def from_dict(values: dict[str, Any]) -> Scene:
     values = dict(values)
     colliders = [dataclasses.asdict(c) if isinstance(c, Collider) else dict(c) if isinstance(c, dict) else c
                  for c in values.pop("colliders", ())]
+    keys = [dataclasses.asdict(c) if isinstance(c, GripKey) else dict(c) if isinstance(c, dict) else c
+            for c in values.pop("grip_keys", ())]
     mistakes = Mistakes()
     flat: dict[int, dict[str, Any]] = {}
+    flat_keys: dict[int, dict[str, Any]] = {}
     for name in list(values):
         with mistakes.collect():
             _field(name)
             where = collider_name(name)
             if where is not None:
                 flat.setdefault(where[0], {})[where[1]] = values.pop(name)
+            key = grip_key_name(name)
+            if key is not None:
+                flat_keys.setdefault(key[0], {})[key[1]] = values.pop(name)
+    for k in sorted(flat_keys):
+        with mistakes.collect():
+            if k > len(keys) + 1:
+                raise ParameterError(f"grip_key{k}_{next(iter(flat_keys[k]))}",
+                                     f"there is no grip key {k - 1}: number grip keys 1, 2, ... without gaps")
+            if k == len(keys) + 1:
+                keys.append({})
+            keys[k - 1] = keys[k - 1] | flat_keys[k]
     for k in sorted(flat):
         with mistakes.collect():
             if k > len(colliders) + 1:
@@ -444,11 +529,11 @@ def from_dict(values: dict[str, Any]) -> Scene:
                 colliders.append({})
             colliders[k - 1] = colliders[k - 1] | flat[k]
     mistakes.raise_if_any()
-    return Scene(**values, colliders=tuple(colliders))
+    return Scene(**values, colliders=tuple(colliders), grip_keys=tuple(keys))
 
 
 #: Keys of a scene file that are not scene parameters: a description and the ``[run]`` table.  (``[[collider]]``
-#: tables are read into flattened names, collider1_shape ..., by read_scene_file.)
+#: and ``[[grip_key]]`` tables are read into flattened names, collider1_shape ..., by read_scene_file.)
 RESERVED_KEYS = ("description", "run")
 
 
@@ -486,6 +571,27 @@ def read_toml(path: Path, what: str = "scene file") -> dict[str, Any]:
     raise ConfigError(str(path), message, label=what)
 
 
+#: The arrays of tables of a scene file ([[collider]], [[grip_key]]), read into flattened names
+#: (collider1_shape, grip_key2_time, ...), and what each is called in errors.
+TABLE_LISTS = {"collider": "colliders are [[collider]] tables", "grip_key": "grip keys are [[grip_key]] tables"}
+
+
+def _flattened_tables(key: str, value, folder: Path, mistakes: Mistakes) -> dict[str, Any]:
+    """The fields of an array of tables ``key`` as flattened names (<key><k>_<field>), each checked; a
+    collider's file relative to the scene file's ``folder``."""
+    if not isinstance(value, list) or not all(isinstance(t, dict) for t in value):
+        raise ParameterError(key, f"{TABLE_LISTS[key]} (an array of tables)")
+    out = {}
+    for k, table in enumerate(value, 1):
+        for name, item in table.items():
+            with mistakes.collect():
+                flat = f"{key}{k}_{name}"
+                out[flat] = check_value(flat, item)
+                if key == "collider" and name == "file":
+                    out[flat] = resolve(out[flat], folder)
+    return out
+
+
 def read_scene_file(path: str | Path | None) -> dict[str, Any]:
     """A scene file's contents, checked whole: parameters (normalised), ``description`` and the
     ``[run]`` table (see ``wetcloth.run_settings``).  A ConfigError names the file and every mistake."""
@@ -496,16 +602,9 @@ def read_scene_file(path: str | Path | None) -> dict[str, Any]:
         with mistakes.collect():
             if key == "run":
                 data[key] = check_run_table(value)
-            elif key == "collider":
+            elif key in TABLE_LISTS:
                 del data[key]
-                if not isinstance(value, list) or not all(isinstance(t, dict) for t in value):
-                    raise ParameterError(key, "colliders are [[collider]] tables (an array of tables)")
-                for k, table in enumerate(value, 1):
-                    for name, item in table.items():
-                        with mistakes.collect():
-                            data[f"collider{k}_{name}"] = check_value(f"collider{k}_{name}", item)
-                            if name == "file":  # relative to the scene file's folder
-                                data[f"collider{k}_file"] = resolve(data[f"collider{k}_file"], resolved.parent)
+                data.update(_flattened_tables(key, value, resolved.parent, mistakes))
             elif key == "description":
                 if not isinstance(value, str):
                     raise ParameterError(key, f"must be text, got {value!r}")

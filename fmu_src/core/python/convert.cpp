@@ -99,6 +99,12 @@ Physics physics_from(nb::handle h) {
     p.colliders = p.collider_count > 0 ? array<const double>(h, "colliders", p.collider_count * COLLIDER_COLUMNS)
                                        : nullptr;
     p.meshes = meshes_from(h.attr("meshes"));
+    p.grip_x = number<double>(h, "grip_x");
+    p.grip_y = number<double>(h, "grip_y");
+    p.grip_z = number<double>(h, "grip_z");
+    p.grip_key_count = size_of(h.attr("grip_keys")) / 4;
+    p.grip_keys = p.grip_key_count > 0 ? array<const double>(h, "grip_keys", 4 * p.grip_key_count) : nullptr;
+    p.grip_origin = size_of(h.attr("grip_origin")) > 0 ? array<const double>(h, "grip_origin") : nullptr;
     return p;
 }
 

@@ -174,13 +174,13 @@ double line_search(const Cloth& cloth, const Physics& phys, Work& work, Solver& 
 //: The error estimate is the corrector's distance from the quadratic extrapolation through x_prev, x, v
 //: (Milne's device): BDF2 errs by -(1+w)^2/(6w(1+2w)) h^3 x''', the extrapolation by (1+w)/(6w) h^3 x''',
 //: so the BDF2 error is (1+w)/(2+3w) times their difference.  Without history: h |v+ - v| / 2.  Pinned
-//: particles' positions are not estimated (they do not move).
+//: particles' positions are not estimated (they stay, or the grip moves them).
 StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solver& solver, Plane& plane,
                        const double* pos, const double* vel, const double* water, const double* step_water,
                        const double* prev_pos, const double* prev_vel, const double* prev_water,
                        const double* acceleration, double h, double h_prev, double newton_tolerance,
                        double cg_tolerance, NewtonMode mode, bool descent, double* memory, double* out_pos,
-                       double* out_vel) {
+                       double* out_vel, const double* held, const double* grip_rate) {
     const Index n = cloth.n;
     double* mass = solver.mass;
     double* hat_pos = solver.hat_pos;
@@ -215,6 +215,11 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
                 guess = hat_vel[k];
             }
             out_vel[k] = guess * free[i];
+            if (grip_rate != nullptr && free[i] == 0.0 && held[i] == 0.0) {  // the grip moves it: v+ prescribed
+                out_vel[k] = grip_rate[c];
+                hat_vel[k] = grip_rate[c];
+                hat_pos[k] = pos[k] + (h - beta * h) * grip_rate[c];  // so that x+ = x + h v+
+            }
         }
     }
     const double bh = beta * h;

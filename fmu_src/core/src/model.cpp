@@ -72,7 +72,7 @@ std::uint64_t fnv1a(const unsigned char* data, std::size_t size) {
 
 constexpr char SNAPSHOT_MAGIC[] = "wetcloth-native-snapshot\n";
 constexpr std::size_t MAGIC_SIZE = sizeof(SNAPSHOT_MAGIC) - 1;
-constexpr std::uint32_t SNAPSHOT_VERSION = 2;  // 2: the scene's 40 fields (air_density, wind_x/y/z added)
+constexpr std::uint32_t SNAPSHOT_VERSION = 3;  // 3: the scene's 44 fields (pinned_vertices, grip_x/y/z); 2: 40 (wind)
 constexpr std::size_t PREAMBLE = MAGIC_SIZE + 4 + 8;  // magic, version, checksum
 
 //: Doubles of a checkpoint's `values` for n particles and F spring families (see Checkpoint).
@@ -576,6 +576,9 @@ Simulation::Simulation(const Scene& scene) : scene_(scene), topo_(build_topology
         copy(3 * n, b.pos, b.prev_pos);
         copy(n, b.water, b.prev_water);
         copy(3 * n, b.pos, b.anchor);
+        bool pinned = false;
+        for (Index i = 0; i < n; ++i) pinned = pinned || topo_.free[i] == 0.0;
+        if (pinned) grip_origin_.assign(b.pos, b.pos + 3 * n);  // the grip's zero (Model.grip_origin)
         clock_[NEXT_STEP] = scene.max_step;
         core_.clock = clock_;
     }
@@ -651,6 +654,10 @@ void Simulation::set_scene(const Scene& scene) {
     p.wicking_rate = scene.wicking_rate;
     p.wick_step_limit = wick_step_limit_;
     p.skip_idle = true;
+    p.grip_x = scene.grip_x;
+    p.grip_y = scene.grip_y;
+    p.grip_z = scene.grip_z;
+    p.grip_origin = grip_origin_.empty() ? nullptr : grip_origin_.data();
 }
 
 void Simulation::set_control() {

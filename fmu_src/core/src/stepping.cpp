@@ -12,6 +12,7 @@
 #include "wetcloth/assembly.hpp"
 #include "wetcloth/colliders.hpp"
 #include "wetcloth/floor.hpp"
+#include "wetcloth/grip.hpp"
 #include "wetcloth/implicit.hpp"
 #include "wetcloth/integration.hpp"
 #include "wetcloth/self_contact.hpp"
@@ -37,7 +38,7 @@ struct Trial {
 
 //: The integrator's step of h s from the current state into the trial buffers; the particle masses it
 //: used are left in solver.mass.
-Trial take_step(Core& core, double h) {
+Trial take_step(Core& core, double h, const GripMove& grip) {
     const Cloth& cloth = core.cloth;
     const Physics& phys = core.phys;
     Buffers& buf = core.buf;
@@ -78,7 +79,7 @@ Trial take_step(Core& core, double h) {
                                         h_prev, core.control.newton_tolerance,
                                         euler ? DESCENT_CG_TOLERANCE : core.control.cg_tolerance, mode, euler,
                                         clock + NEWTON_RATE,
-                                        buf.trial_pos, buf.trial_vel);
+                                        buf.trial_pos, buf.trial_vel, buf.held, grip.acts ? grip.rate : nullptr);
     return {step.error, h_prev > 0.0 ? 2 : 1, step.converged};
 }
 
@@ -120,8 +121,9 @@ bool exchange_water(Core& core, const double* mass_used, double h) {
     return exchanged > 0;
 }
 
-//: Fall asleep after sleep_after s still, with no water exchange (velocities then zero).  Stillness is
-//: checked every sleep_after / 20 s of simulated time, not at every step.
+//: Fall asleep after sleep_after s still, with no water exchange and no grip moving (`exchanging`:
+//: either, in this step; velocities then zero).  Stillness is checked every sleep_after / 20 s of
+//: simulated time, not at every step.
 void maybe_sleep(Core& core, double h, bool exchanging) {
     if (!core.phys.skip_idle) return;
     double* clock = core.clock;
@@ -168,6 +170,7 @@ Status step(Core& core, double remaining) {
     }
     double h = 0.0;
     Trial trial{};
+    GripMove grip;
     int rejections = 0;  // by the controller (the floor's releases are bounded by the particles held)
     while (true) {
         if (rejections > MAX_REJECTIONS) {  // no step it accepts: a state it cannot go on from
@@ -182,7 +185,8 @@ Status step(Core& core, double remaining) {
         }
         // Equal steps to the end of the interval rather than a last sliver.
         h = remaining / pymax(1.0, std::ceil(remaining / planned - STEP_COUNT_SLACK));
-        trial = take_step(core, h);
+        grip = grip_move(n, phys, cloth.free, buf.held, buf.pos, clock[TIME], h, remaining);
+        trial = take_step(core, h, grip);
         if (held > 0 && trial.converged) {
             const Index released = release_slipping(n, phys.floor_friction, core.work.force, cloth.free, buf.held) +
                                    release_unsupported(core.contact, n, cloth.free, buf.held) +
@@ -238,6 +242,7 @@ Status step(Core& core, double remaining) {
         clock[FAILED_STEP] = h;
         return BLOWN_UP;
     }
+    place_grip(n, phys, grip, cloth.free, buf.held, buf.trial_pos, buf.trial_vel);
     const bool on_floor = floor_contact(n, phys.floor_z, phys.floor_friction, buf.trial_pos, buf.trial_vel) > 0 ||
                           held > 0;
     const bool on_collider = (phys.collider_count > 0 &&
@@ -246,6 +251,7 @@ Status step(Core& core, double remaining) {
     const bool kinked = resolve(core.contact, phys.thickness, phys.floor_z, control.blow_up_speed, n,
                                 core.solver.mass, cloth.free, buf.pos, buf.trial_pos, buf.trial_vel, h);
     const bool exchanging = exchange_water(core, core.solver.mass, h);
+    place_grip(n, phys, grip, cloth.free, buf.held, nullptr, buf.trial_vel);  // (the uptake rescaled velocities)
     const SpeedCheck check = speed_and_finiteness(n, buf.trial_pos, buf.trial_vel, buf.trial_water);
     if (!(check.finite && check.speed < control.blow_up_speed)) {
         clock[FAILED_STEP] = h;
@@ -266,7 +272,7 @@ Status step(Core& core, double remaining) {
     clock[LAST_STEP] = kinked ? 0.0 : h;  // self-collision's push: BDF2 starts afresh
     clock[TIME] += h;
     clock[STEPS] += 1;
-    maybe_sleep(core, h, exchanging);
+    maybe_sleep(core, h, exchanging || grip.moving);
     return DONE;
 }
 

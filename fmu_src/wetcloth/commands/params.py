@@ -7,7 +7,8 @@ import shutil
 import textwrap
 
 from wetcloth import run_settings
-from wetcloth.scene import COLLIDER_FIELDS, PARAMETERS, RESERVED_KEYS, collider_name, describe_range, parameter_field, read_scene_file
+from wetcloth.scene import (COLLIDER_FIELDS, GRIP_KEY_FIELDS, PARAMETERS, RESERVED_KEYS, collider_name, describe_range,
+                            grip_key_name, parameter_field, read_scene_file)
 
 
 def add_parser(sub) -> None:
@@ -31,13 +32,15 @@ def rows(scene: str | None) -> list[dict]:
         out.append(dict(name=name, table="", value=values.get(name, f.default), default=f.default, unit=md["unit"],
                         range=describe_range(f), min=md["lo"], min_exclusive=bool(md["lo_open"]), max=md["hi"],
                         choices=list(md["choices"]) or None, fmu=md["fmu"], doc=md["doc"]))
-    count = max((collider_name(n)[0] for n in values if collider_name(n)), default=0)  # the scene's [[collider]]s
-    for name in (f"collider{k}_{field}" for k in range(1, count + 1) for field in COLLIDER_FIELDS):
-        f = parameter_field(name)
-        md = f.metadata
-        out.append(dict(name=name, table="", value=values.get(name, f.default), default=f.default, unit=md["unit"],
-                        range=describe_range(f, name), min=md["lo"], min_exclusive=bool(md["lo_open"]), max=md["hi"],
-                        choices=list(md["choices"]) or None, fmu=None, doc="collider: " + md["doc"]))
+    for table, fields, flat in (("collider", COLLIDER_FIELDS, collider_name), ("grip_key", GRIP_KEY_FIELDS, grip_key_name)):
+        count = max((flat(n)[0] for n in values if flat(n)), default=0)  # the scene's [[collider]]s, [[grip_key]]s
+        for name in (f"{table}{k}_{field}" for k in range(1, count + 1) for field in fields):
+            f = parameter_field(name)
+            md = f.metadata
+            out.append(dict(name=name, table="", value=values.get(name, f.default), default=f.default, unit=md["unit"],
+                            range=describe_range(f, name), min=md["lo"], min_exclusive=bool(md["lo_open"]),
+                            max=md["hi"], choices=list(md["choices"]) or None, fmu=None,
+                            doc=table.replace("_", " ") + ": " + md["doc"]))
     run_table = run_settings.resolve(data.get("run"))
     for name, s in run_settings.SETTINGS.items():
         out.append(dict(name=name, table="run", value=getattr(run_table, name), default=s.default, unit=s.unit,
@@ -66,4 +69,6 @@ def main(args) -> int:
 
 
 def _text(value) -> str:
+    if value is None:  # a field without a default (a grip key's time)
+        return "-"
     return repr(value) if isinstance(value, str) else f"{value:g}"

@@ -84,7 +84,8 @@ struct ColliderMeshes {
 
 //: Scene parameters as the kernels use them (SI units).  `wet_factor` is 0 unless wetness-dependent
 //: stiffness is active; `air_density` 0 switches the drag in air off; `floor_z` is the lowest particle
-//: centre (m); `colliders` the rows of the analytic colliders (colliders.hpp).
+//: centre (m); `colliders` the rows of the analytic colliders (colliders.hpp); `grip_*` the grip that moves
+//: the pinned particles (grip.hpp).
 struct Physics {
     bool projected = false;
     double wet_factor = 0, water_level = 0, water_density = 0, thickness = 0;
@@ -97,6 +98,10 @@ struct Physics {
     Index collider_count = 0;            // analytic colliders (colliders.hpp), none by default
     const double* colliders = nullptr;   // (collider_count, COLLIDER_COLUMNS) rows
     ColliderMeshes meshes;               // the triangles of the mesh colliders among them
+    double grip_x = 0, grip_y = 0, grip_z = 0;  // m (inputs): the grip's displacement at the interval's end (grip.hpp)
+    Index grip_key_count = 0;            // the grip's keys (grip.hpp), none by default
+    const double* grip_keys = nullptr;   // (grip_key_count, 4) rows: time s, x, y, z m
+    const double* grip_origin = nullptr; // (3, n) m: where the grip's zero displacement holds the particles (t = 0)
 };
 
 //: Scratch and results: force (3, n) N; submerged (n) fraction; saturation (n); blocks (6, n)

@@ -89,12 +89,14 @@ struct StepEstimate {
 
 //: One step of the variable-step BDF2 (backward Euler when h_prev == 0), preconditioned as mode says, by
 //: descent or not; see implicit.cpp.
-//: memory (4) carries over from step to step (clock slots NEWTON_RATE..LAST_SOLVE).
+//: memory (4) carries over from step to step (clock slots NEWTON_RATE..LAST_SOLVE).  With grip_rate (3,
+//: m/s), the pinned particles (free 0 and held 0 in held (n)) move at that velocity during the step
+//: (grip.hpp); without, they stay where they are.
 StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solver& solver, Plane& plane,
                        const double* pos, const double* vel, const double* water, const double* step_water,
                        const double* prev_pos, const double* prev_vel, const double* prev_water,
                        const double* acceleration, double h, double h_prev, double newton_tolerance,
                        double cg_tolerance, NewtonMode mode, bool descent, double* memory, double* out_pos,
-                       double* out_vel);
+                       double* out_vel, const double* held = nullptr, const double* grip_rate = nullptr);
 
 }  // namespace wc

@@ -99,6 +99,7 @@ struct Scene {
     double self_friction = 0.4;                                  // -
     Index pinned_edge = EDGE_NONE;
     Index pinned_vertices = 0;                                   // NO_TEXT only: none
+    double grip_x = 0.0, grip_y = 0.0, grip_z = 0.0;             // m (inputs)
     Index integrator = BDF2;
     double tolerance = 5e-6;                                     // -
     double max_step = 0.1;                                       // s
@@ -111,14 +112,15 @@ inline constexpr const char* SCENE_FIELDS[] = {
     "drag_tangential", "drag_linear", "buoyancy_model", "absorption_capacity", "absorption_rate", "wicking_rate",
     "drying_rate", "wet_stiffness_factor", "current_x", "current_y", "air_density", "wind_x", "wind_y", "wind_z",
     "initial_saturation", "initial_height", "initial_tilt", "floor_level", "floor_friction", "self_collision",
-    "self_friction", "pinned_edge", "pinned_vertices", "integrator", "tolerance", "max_step"};
+    "self_friction", "pinned_edge", "pinned_vertices", "grip_x", "grip_y", "grip_z", "integrator", "tolerance",
+    "max_step"};
 inline constexpr Index SCENE_FIELD_COUNT = sizeof(SCENE_FIELDS) / sizeof(SCENE_FIELDS[0]);
 
 //: Whether a parameter may change while the simulation runs (scene.py's fmu=INPUT).
 constexpr bool scene_input(std::string_view field) {
     return field == "water_level" || field == "water_density" || field == "absorption_capacity" ||
            field == "absorption_rate" || field == "current_x" || field == "current_y" || field == "wind_x" ||
-           field == "wind_y" || field == "wind_z";
+           field == "wind_y" || field == "wind_z" || field == "grip_x" || field == "grip_y" || field == "grip_z";
 }
 
 //: Call visit(name, member) for every field of a Scene (const or not), in SCENE_FIELDS order; member is a
@@ -142,7 +144,8 @@ void for_each_field(S& s, Visit&& visit) {
     visit("initial_tilt", s.initial_tilt); visit("floor_level", s.floor_level);
     visit("floor_friction", s.floor_friction); visit("self_collision", s.self_collision);
     visit("self_friction", s.self_friction); visit("pinned_edge", s.pinned_edge);
-    visit("pinned_vertices", s.pinned_vertices); visit("integrator", s.integrator);
+    visit("pinned_vertices", s.pinned_vertices);
+    visit("grip_x", s.grip_x); visit("grip_y", s.grip_y); visit("grip_z", s.grip_z); visit("integrator", s.integrator);
     visit("tolerance", s.tolerance); visit("max_step", s.max_step);
 }
 
@@ -291,6 +294,7 @@ private:
     std::vector<double> dry_mass_, volume_, stokes_, capacity_, wick_conductance_;
     std::vector<Index> wick_offsets_;
     double wick_step_limit_ = 0.0, floor_z_ = 0.0;
+    std::vector<double> grip_origin_;  // (3, n) m, the start positions; empty when nothing is pinned
     // Integrator
     double omega_squared_ = 0.0, damping_rate_ = 0.0, spring_limit_ = 0.0;
     // Work, Solver
