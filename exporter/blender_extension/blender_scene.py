@@ -19,7 +19,7 @@ import numpy as np
 
 from wetcloth.exporter.blender_extension.caches import detach
 from wetcloth.exporter.blender_extension.geometry import GridCloth, collider_from_vertices, grid_cloth, pinned_edge
-from wetcloth.exporter.blender_extension.properties import FABRIC, SCENE
+from wetcloth.exporter.blender_extension.parameters import FABRIC, SCENE
 from wetcloth.scene import Scene, from_dict
 
 @dataclass

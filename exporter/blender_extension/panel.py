@@ -8,7 +8,7 @@ import os
 import bpy
 
 from wetcloth.exporter.blender_extension import caches
-from wetcloth.exporter.blender_extension.properties import FABRIC, SCENE
+from wetcloth.exporter.blender_extension.parameters import FABRIC, SCENE
 
 
 class WETCLOTH_PT_physics(bpy.types.Panel):

@@ -13,15 +13,8 @@ import bpy
 from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
 from wetcloth.exporter.blender_extension.fabrics import FABRICS, fabric_parameters
+from wetcloth.exporter.blender_extension.parameters import FABRIC, SCENE
 from wetcloth.scene import COLLIDER_FIELDS, PARAMETERS
-
-#: Parameters the Cloth object's plane (and its pin group) sets.
-FROM_CLOTH = ("nx", "ny", "width", "length", "initial_height", "initial_tilt", "pinned_edge")
-#: Parameters of the fabric, set on each Cloth object (its preset fills some of them).
-FABRIC = ("areal_density", "thickness", "stretch_stiffness", "bend_stiffness", "damping", "absorption_capacity",
-          "absorption_rate", "initial_saturation")
-#: The rest: settings of the whole scene (``water_level`` is the Water object's height if there is one).
-SCENE = tuple(name for name in PARAMETERS if name not in FROM_CLOTH + FABRIC)
 
 ROLES = [("NONE", "None", "Not part of the wet cloth simulation"),
          ("CLOTH", "Cloth", "A subdivided rectangular plane: the cloth"),

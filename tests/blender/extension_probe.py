@@ -14,7 +14,8 @@ tests/test_blender_extension.py):
   "cancelled": a bake with cancel_after: result, frames.json, the evaluated cloth at a frame baked
                and at the last frame;
   "moved": after moving the cache folder and opening the .blend: what the load check said;
-  "freed": free_bake's result and the files left; "refusals": the errors of scenes it cannot bake.
+  "freed": free_bake's result and the files left;
+  "rising": a bake with the water keyed to rise by "rise" m: the levels at every frame, the cloth; "refusals": the errors of scenes it cannot bake.
 """
 
 import contextlib
@@ -99,6 +100,25 @@ def cache_report(obj):
             "manifest": json.load(open(manifest)) if os.path.isfile(manifest) else None}
 
 
+def rising_water(spec, blend, frames):
+    """A bake with the water plane keyed to rise: the level at every frame, and the cloth."""
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    pool = bpy.data.objects["Pool"]
+    pool.location.z = spec["water_z"]
+    pool.keyframe_insert("location", index=2, frame=frames[0])
+    pool.location.z = spec["water_z"] + spec["rise"]
+    pool.keyframe_insert("location", index=2, frame=frames[-1])
+    out = operator(bpy.ops.wetcloth.bake)
+    towel = bpy.data.objects["Towel"]
+    out |= cache_report(towel)
+    out["levels"] = []
+    for frame in frames:
+        bpy.context.scene.frame_set(frame)
+        out["levels"].append(pool.matrix_world.translation.z)
+    out["frames"] = [evaluated_cloth(towel, f) for f in frames]
+    return out
+
+
 def refusals(spec):
     """Errors of scenes the bake cannot take: a cloth that is no grid, a collider of another shape."""
     out = {}
@@ -154,6 +174,7 @@ def main(spec_path, result_path):
         result["freed"] = operator(bpy.ops.wetcloth.free_bake)
         result["freed"] |= {"modifiers": [m.type for m in bpy.data.objects["Towel"].modifiers],
                             "left": sorted(os.listdir(os.path.dirname(cache))) if os.path.isdir(os.path.dirname(cache)) else None}
+        result["rising"] = rising_water(spec, blend, frames)
         result["refusals"] = refusals(spec)
     except Exception:
         result["error"] = traceback.format_exc()
