@@ -81,6 +81,11 @@ def grid_cloth(positions, edges, name: str = "cloth") -> GridCloth:
     across /= np.linalg.norm(across)
     if across[1] < -1e-12 or (abs(across[1]) <= 1e-12 and across[2] < 0):
         across = -across
+    step = p[edges[:, 1]] - p[edges[:, 0]]
+    off_axis = np.minimum(np.abs(step @ across), np.abs(step[:, 0]))  # an edge runs along x or across
+    if len(edges) and off_axis.max() > tol:
+        raise ValueError(f"cloth {name!r}: its edges do not run along x and across it (a plane may be tilted "
+                         "about x only; apply or clear its rotation about z)")
     col, dx = _levels(p[:, 0], tol, "along x", name)
     row, dy = _levels((p - centre) @ across, tol, "across x", name)
     nx, ny = int(col.max()) + 1, int(row.max()) + 1
@@ -88,8 +93,8 @@ def grid_cloth(positions, edges, name: str = "cloth") -> GridCloth:
     if nx * ny != len(p) or len(np.unique(order)) != len(p):
         raise ValueError(f"cloth {name!r}: its {len(p)} vertices do not fill a rectangular grid ({nx} x {ny}); "
                          "a cloth is a subdivided rectangular plane")
-    step = np.abs(col[edges[:, 0]] - col[edges[:, 1]]) + np.abs(row[edges[:, 0]] - row[edges[:, 1]])
-    if len(edges) != nx * (ny - 1) + ny * (nx - 1) or (step != 1).any():
+    hops = np.abs(col[edges[:, 0]] - col[edges[:, 1]]) + np.abs(row[edges[:, 0]] - row[edges[:, 1]])
+    if len(edges) != nx * (ny - 1) + ny * (nx - 1) or (hops != 1).any():
         raise ValueError(f"cloth {name!r}: its edges are not those of a grid of quads ({nx} x {ny} vertices); "
                          "a cloth is a subdivided plane, not triangulated")
     tilt = math.degrees(math.atan2(across[2], across[1]))
@@ -118,7 +123,7 @@ def pinned_edge(grid: GridCloth, vertices, group: str) -> str:
 def collider_from_vertices(positions, name: str = "collider") -> dict:
     """The ``[[collider]]`` fields (shape, x, y, z and its sizes, m) of a mesh's world-space vertices
     (n, 3): 8 corners of an axis-aligned box, a cylinder's two rings about a vertical axis (cap
-    centres allowed), or vertices all as far from their centre (a UV sphere)."""
+    centres allowed), or more than 8 vertices all as far from their centre (a UV sphere)."""
     p = np.unique(np.asarray(positions, dtype=np.float64).round(9), axis=0)
     lo, hi = p.min(axis=0), p.max(axis=0)
     centre, extent = 0.5 * (lo + hi), hi - lo
@@ -133,7 +138,7 @@ def collider_from_vertices(positions, name: str = "collider") -> dict:
             and abs(extent[0] - extent[1]) <= tol and extent[2] > tol):
         return dict(shape="cylinder", **where, radius=float(radial[ring].mean()), height=float(extent[2]))
     distance = np.linalg.norm(p - centre, axis=1)
-    if len(p) >= 8 and np.ptp(distance) <= tol:
+    if len(p) > 8 and np.ptp(distance) <= tol:  # (a turned cube's 8 corners are as far from its centre)
         return dict(shape="sphere", **where, radius=float(distance.mean()))
     raise ValueError(f"collider {name!r}: not a UV sphere, an axis-aligned cube or a cylinder standing on its "
                      "axis (vertical); other meshes cannot collide yet (mesh colliders are not built)")
