@@ -152,6 +152,14 @@ def test_the_cache_is_a_usd_file_beside_the_blend_with_wetness_and_the_wet_mater
     assert max(frames[0]["wetness"]) == 0.0 and max(frames[-1]["wetness"]) > 0.01
 
 
+def test_baking_again_replaces_the_cache_with_the_same_frames(baked):
+    """A second bake in the same session (Blender still reading the first one's file) succeeds and
+    plays the same frames: the run is deterministic and the cache is replaced, not appended to."""
+    rebake, bake = baked.report["rebake"], baked.report["bake"]["frames"]
+    assert rebake["result"] == ["FINISHED"]
+    assert [f["positions"] for f in rebake["frames"]] == [bake[0]["positions"], bake[-1]["positions"]]
+
+
 def test_the_saved_file_plays_the_bake_again(baked):
     """Reopened: the same frames as after the bake, and the cloth moves between them; no cache missing."""
     reopened = baked.report["reopened"]

@@ -77,7 +77,11 @@ def detach(obj, delete_files: bool = True) -> list[str]:
         return []
     path, cache = cache_path(obj), modifier.cache_file
     obj.modifiers.remove(modifier)
-    if cache is not None and cache.users == 0:
+    if cache is not None and not any(getattr(m, "cache_file", None) == cache for o in bpy.data.objects
+                                     for m in o.modifiers):
+        # (bpy.ops.cachefile.open leaves it a user more than its modifiers.)  Blender lets go of the
+        # USD file once the cache file is gone and the depsgraph updated; USD would refuse to
+        # create the file anew while it is open.
         bpy.data.batch_remove([cache])
     deleted = []
     if delete_files and path and os.path.isdir(os.path.dirname(path)):

@@ -84,8 +84,8 @@ def grid_cloth(positions, edges, name: str = "cloth") -> GridCloth:
     step = p[edges[:, 1]] - p[edges[:, 0]]
     off_axis = np.minimum(np.abs(step @ across), np.abs(step[:, 0]))  # an edge runs along x or across
     if len(edges) and off_axis.max() > tol:
-        raise ValueError(f"cloth {name!r}: its edges do not run along x and across it (a plane may be tilted "
-                         "about x only; apply or clear its rotation about z)")
+        raise ValueError(f"cloth {name!r}: its edges do not run along x and across it; a cloth is a subdivided "
+                         "rectangular plane, which may be tilted about x only (clear its rotation about z)")
     col, dx = _levels(p[:, 0], tol, "along x", name)
     row, dy = _levels((p - centre) @ across, tol, "across x", name)
     nx, ny = int(col.max()) + 1, int(row.max()) + 1

@@ -10,6 +10,7 @@ tests/test_blender_extension.py):
   "install": the operator's result and the add-on module; "names": the scripting names found;
   "bake": result, seconds, the evaluated cloth at every frame (world positions, wetness), the
           modifier, cache path as stored, material, frames.json;
+  "rebake": the same bake again at once (its result, the first and last frame);
   "reopened": the same frames after saving and opening the .blend again;
   "cancelled": a bake with cancel_after: result, frames.json, the evaluated cloth at a frame baked
                and at the last frame;
@@ -153,6 +154,8 @@ def main(spec_path, result_path):
         towel = bpy.data.objects["Towel"]
         result["bake"] |= cache_report(towel)
         result["bake"]["frames"] = [evaluated_cloth(towel, f) for f in frames]
+        result["rebake"] = operator(bpy.ops.wetcloth.bake)  # in the same session: over its own open cache
+        result["rebake"]["frames"] = [evaluated_cloth(towel, f) for f in (frames[0], frames[-1])]
         bpy.ops.wm.save_mainfile()
         bpy.ops.wm.open_mainfile(filepath=blend)
         towel = bpy.data.objects["Towel"]
