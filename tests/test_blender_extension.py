@@ -204,10 +204,25 @@ def test_a_water_plane_keyed_to_rise_raises_the_water_level(baked):
     assert np.sum(rising["frames"][-1]["wetness"]) > np.sum(still)
 
 
+def test_pin_group_preset_and_the_cloths_own_modifiers(baked):
+    """A vertex group holding the vertices of the largest y is pinned_edge y_max; the denim preset
+    sets the areal density and thickness; the plane is baked from the mesh as stored, so a Solidify
+    modifier of the towel's own stays, after the cache."""
+    from wetcloth.exporter.blender_extension.fabrics import fabric_parameters
+
+    pinned = baked.report["pinned"]
+    assert pinned["result"] == ["CANCELLED"] and pinned["manifest"]["frame_count"] == 3
+    scene = pinned["manifest"]["scene"]
+    assert scene["pinned_edge"] == "y_max"
+    assert {name: scene[name] for name in ("areal_density", "thickness")} == fabric_parameters("DENIM")
+    assert pinned["modifiers"] == ["MESH_SEQUENCE_CACHE", "SOLIDIFY"]
+
+
 def test_scenes_it_cannot_bake_are_refused_naming_the_object(baked):
     refused = baked.report["refusals"]
     assert "cloth 'Circle'" in refused["cloth"] and "subdivided" in refused["cloth"]
     assert "collider 'Suzanne'" in refused["collider"] and "mesh colliders are not built" in refused["collider"]
+    assert refused["towel_modifiers"] == ["MESH_SEQUENCE_CACHE"]  # a refused bake leaves the last one in place
 
 
 def test_the_blender_python_is_the_makefiles(baked):

@@ -127,20 +127,25 @@ def test_fabric_presets_are_valid_scenes_and_the_towel_is_the_default():
         fabric_parameters("WOOL")
 
 
-def test_the_manifest_names_the_wheel_and_the_platform():
+@pytest.mark.parametrize("pythons, first, last", [
+    (["cp311"], "4.2.0", "5.1.0"), (["cp313"], "5.1.0", None), (["cp311", "cp313"], "4.2.0", None)])
+def test_the_manifest_names_the_wheels_and_the_blenders_whose_python_they_are(pythons, first, last):
+    """Blender 4.2 to 5.0 run Python 3.11, 5.1 and later 3.13: the manifest allows the versions whose
+    Python has a wheel (blender_version_max is the first it does not)."""
     import tomllib
 
-    text = build.manifest("0.1.0", "wetcloth-0.1.0-cp311-cp311-linux_x86_64.whl", "linux-x64")
-    manifest = tomllib.loads(text)
-    assert manifest["wheels"] == ["./wheels/wetcloth-0.1.0-cp311-cp311-linux_x86_64.whl"]
+    names = [f"wetcloth-0.1.0-{tag}-{tag}-linux_x86_64.whl" for tag in pythons]
+    manifest = tomllib.loads(build.manifest("0.1.0", names, "linux-x64"))
+    assert manifest["wheels"] == [f"./wheels/{name}" for name in names]
     assert manifest["platforms"] == ["linux-x64"] and manifest["id"] == "wetcloth"
+    assert (manifest["blender_version_min"], manifest.get("blender_version_max")) == (first, last)
     assert len(manifest["tagline"]) <= 64 and not manifest["tagline"].endswith(".")  # Blender's rules
 
 
 @pytest.mark.parametrize("name, message", [
     ("numpy-1.26.4-cp311-cp311-linux_x86_64.whl", "not a wetcloth wheel"),
     ("wetcloth-9.9.9-cp311-cp311-linux_x86_64.whl", "version 9.9.9"),
-    ("wetcloth-0.1.0-cp312-cp312-linux_x86_64.whl", "Python 3.11"),
+    ("wetcloth-0.1.0-cp312-cp312-linux_x86_64.whl", "built for cp312"),
 ])
 def test_a_wheel_blender_cannot_load_is_refused(tmp_path, capsys, name, message):
     wheel = tmp_path / name
@@ -151,11 +156,17 @@ def test_a_wheel_blender_cannot_load_is_refused(tmp_path, capsys, name, message)
     assert not (tmp_path / "out" / "wetcloth-0.1.0.zip").exists()
 
 
-def test_a_given_wheel_is_bundled_as_it_is(tmp_path):
-    wheel = tmp_path / "wetcloth-0.1.0-cp311-cp311-linux_x86_64.whl"
-    with zipfile.ZipFile(wheel, "w") as archive:
-        archive.writestr("wetcloth/__init__.py", "")
-    assert cli_main(["blender-extension", "--out", str(tmp_path), "--wheel", str(wheel)]) == 0
+def test_given_wheels_are_bundled_as_they_are_one_per_python(tmp_path, capsys):
+    wheels = []
+    for tag in ("cp311", "cp313"):
+        wheels.append(tmp_path / f"wetcloth-0.1.0-{tag}-{tag}-linux_x86_64.whl")
+        with zipfile.ZipFile(wheels[-1], "w") as archive:
+            archive.writestr("wetcloth/__init__.py", tag)
+    given = [arg for wheel in wheels for arg in ("--wheel", str(wheel))]
+    assert cli_main(["blender-extension", "--out", str(tmp_path), *given]) == 0
     with zipfile.ZipFile(tmp_path / "wetcloth-0.1.0.zip") as archive:
-        assert sorted(archive.namelist()) == ["__init__.py", "blender_manifest.toml", f"wheels/{wheel.name}"]
-        assert archive.read(f"wheels/{wheel.name}") == wheel.read_bytes()
+        assert sorted(archive.namelist()) == ["__init__.py", "blender_manifest.toml"] + [
+            f"wheels/{wheel.name}" for wheel in wheels]
+        assert all(archive.read(f"wheels/{wheel.name}") == wheel.read_bytes() for wheel in wheels)
+    assert cli_main(["blender-extension", "--out", str(tmp_path / "again"), *given[:2], *given[:2]]) == 2
+    assert "two wheels for one Python" in capsys.readouterr().err

@@ -1,8 +1,8 @@
 """The Blender scene as wetcloth sees it: one ``ClothJob`` (a Scene and where its cache goes) per Cloth object.
 
-Geometry is read from the objects' evaluated meshes in world space at the first frame of the
-scene's range (the bake's own cache modifier left out): the Cloth plane gives the grid
-(``geometry.grid_cloth``), Collider objects the analytic colliders, the Water plane
+Geometry is read in world space at the first frame of the scene's range: the Cloth object's mesh
+as stored (its modifiers apply after the cache) gives the grid
+(``geometry.grid_cloth``), Collider objects' evaluated meshes the analytic colliders, the Water plane
 ``water_level`` (and, if it is animated, the level over every frame).  Parameters come from
 ``scene.wetcloth`` and the cloth's ``obj.wetcloth``; Blender keeps them as 32-bit floats, which
 are read back as the shortest decimal that rounds to them (0.45, not 0.4499999881).
@@ -17,7 +17,6 @@ from dataclasses import dataclass, replace
 import bpy
 import numpy as np
 
-from wetcloth.exporter.blender_extension.caches import detach
 from wetcloth.exporter.blender_extension.geometry import GridCloth, collider_from_vertices, grid_cloth, pinned_edge
 from wetcloth.exporter.blender_extension.parameters import FABRIC, SCENE
 from wetcloth.scene import Scene, from_dict
@@ -48,19 +47,30 @@ def prefix_of(obj) -> str:
     return name or "cloth"
 
 
+def _vertices(obj, mesh) -> tuple[np.ndarray, np.ndarray]:
+    co = np.empty(len(mesh.vertices) * 3)
+    mesh.vertices.foreach_get("co", co)
+    edges = np.empty(len(mesh.edges) * 2, dtype=np.int64)
+    mesh.edges.foreach_get("vertices", edges)
+    matrix = np.array(obj.matrix_world)
+    return co.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3], edges.reshape(-1, 2)
+
+
 def world_vertices(obj, depsgraph) -> tuple[np.ndarray, np.ndarray]:
     """The evaluated mesh's vertex positions (n, 3) in world space (m) and edges (e, 2)."""
     evaluated = obj.evaluated_get(depsgraph)
     mesh = evaluated.to_mesh()
     try:
-        co = np.empty(len(mesh.vertices) * 3)
-        mesh.vertices.foreach_get("co", co)
-        edges = np.empty(len(mesh.edges) * 2, dtype=np.int64)
-        mesh.edges.foreach_get("vertices", edges)
+        return _vertices(obj, mesh)
     finally:
         evaluated.to_mesh_clear()
-    matrix = np.array(obj.matrix_world)
-    return co.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3], edges.reshape(-1, 2)
+
+
+def cloth_vertices(obj) -> tuple[np.ndarray, np.ndarray]:
+    """The cloth's plane: its mesh as stored, in world space (m), and its edges.  Not the evaluated
+    mesh: the cache modifier comes first in the stack, so the object's own modifiers (Subdivision,
+    Solidify) apply to the baked cloth, not to the plane it is baked from."""
+    return _vertices(obj, obj.data)
 
 
 def cache_directory(scene) -> str:
@@ -107,7 +117,6 @@ def cloth_jobs(context) -> list[ClothJob]:
     for obj in cloths:
         if obj.type != "MESH":
             raise ValueError(f"cloth {obj.name!r} is not a mesh (a subdivided plane)")
-        detach(obj, delete_files=False)  # the plane, not the last bake (and USD lets go of its file)
     scene.frame_set(scene.frame_start)
     depsgraph = context.evaluated_depsgraph_get()
     depsgraph.update()
@@ -122,7 +131,7 @@ def cloth_jobs(context) -> list[ClothJob]:
     directory = cache_directory(scene)
     jobs = []
     for obj in cloths:
-        positions, edges = world_vertices(obj, depsgraph)
+        positions, edges = cloth_vertices(obj)
         grid = grid_cloth(positions, edges, obj.name)
         grid = replace(grid, width=clean(grid.width), length=clean(grid.length),
                        centre=tuple(clean(c) for c in grid.centre), tilt=clean(grid.tilt))

@@ -28,10 +28,12 @@ class Baking:
 
     def __init__(self, context):
         scene = context.scene
-        self.scene = scene
         self.fps = scene.render.fps / scene.render.fps_base
         count = scene.frame_end - scene.frame_start + 1
-        self.jobs = cloth_jobs(context)
+        self.jobs = cloth_jobs(context)  # the scene checked whole before the last bake is touched
+        for job in self.jobs:
+            caches.detach(job.obj, delete_files=False)
+        context.evaluated_depsgraph_get().update()  # Blender lets go of the old USD files
         self.bakes = [ClothBake(job.scene, job.grid, job.directory, job.prefix, self.fps, scene.frame_start, count,
                                 to_local=job.to_local, water_levels=job.water_levels) for job in self.jobs]
         self.total = count * len(self.bakes)
@@ -89,7 +91,7 @@ class WETCLOTH_OT_bake(bpy.types.Operator):
         return None
 
     def _finish(self, context, stopped: str | None) -> set:
-        baking = self.baking
+        baking, self.baking = self.baking, None  # (Blender keeps the last operator: not its simulations)
         summary = baking.close()
         context.scene.frame_set(context.scene.frame_start)
         if stopped is None:

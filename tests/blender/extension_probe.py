@@ -16,6 +16,7 @@ tests/test_blender_extension.py):
                and at the last frame;
   "moved": after moving the cache folder and opening the .blend: what the load check said;
   "freed": free_bake's result and the files left;
+  "pinned": a short bake of the towel pinned by a vertex group, of denim, with a Solidify modifier of its own;
   "rising": a bake with the water keyed to rise by "rise" m: the levels at every frame, the cloth; "refusals": the errors of scenes it cannot bake.
 """
 
@@ -120,6 +121,22 @@ def rising_water(spec, blend, frames):
     return out
 
 
+def pinned_with_modifiers(blend):
+    """The towel pinned by a vertex group (the vertices of its largest y), of the denim preset, with a
+    Solidify modifier of its own: a short bake (cancel_after=3)."""
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    towel = bpy.data.objects["Towel"]
+    top = max(v.co.y for v in towel.data.vertices)
+    group = towel.vertex_groups.new(name="Hem")
+    group.add([v.index for v in towel.data.vertices if abs(v.co.y - top) < 1e-6], 1.0, "REPLACE")
+    towel.wetcloth.pin_group = "Hem"
+    towel.wetcloth.preset = "DENIM"
+    towel.modifiers.new("Solidify", "SOLIDIFY")
+    out = operator(bpy.ops.wetcloth.bake, cancel_after=3)
+    out |= cache_report(towel)
+    return out
+
+
 def refusals(spec):
     """Errors of scenes the bake cannot take: a cloth that is no grid, a collider of another shape."""
     out = {}
@@ -132,6 +149,7 @@ def refusals(spec):
     bpy.ops.mesh.primitive_monkey_add(location=(2, 2, 0))
     bpy.context.object.wetcloth.role = "COLLIDER"
     out["collider"] = operator(bpy.ops.wetcloth.bake)["error"]
+    out["towel_modifiers"] = [m.type for m in bpy.data.objects["Towel"].modifiers]  # its last bake, kept
     return out
 
 
@@ -178,6 +196,7 @@ def main(spec_path, result_path):
         result["freed"] |= {"modifiers": [m.type for m in bpy.data.objects["Towel"].modifiers],
                             "left": sorted(os.listdir(os.path.dirname(cache))) if os.path.isdir(os.path.dirname(cache)) else None}
         result["rising"] = rising_water(spec, blend, frames)
+        result["pinned"] = pinned_with_modifiers(blend)
         result["refusals"] = refusals(spec)
     except Exception:
         result["error"] = traceback.format_exc()
