@@ -1,5 +1,5 @@
 """Inside bpy (run by bench/blender_bake.py): install the Wet Cloth extension, build the bench scene
-and time ``bpy.ops.wetcloth.bake()`` --repeats times.
+and time ``bpy.ops.wetcloth.bake()`` ("repeats" times in the spec).
 
     BLENDER_USER_RESOURCES=DIR .venv-blender/bin/python bench/_blender_bake_probe.py SPEC.json RESULT.json
 """
