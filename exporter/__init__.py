@@ -7,7 +7,7 @@
 
 One module per format and writer (``ply_trimesh``, ``ply_meshio``, ``obj_trimesh``, ``obj_meshio``,
 ``usd``) behind ``open_sequence``; all write the same :class:`Frame`, with quads (one per grid cell)
-or triangles.  Beside the frames go ``frames.json`` (fps, frame count, units, scene parameters, the
+or triangles (a cloth from a mesh file: its file's faces and UVs).  Beside the frames go ``frames.json`` (fps, frame count, units, scene parameters, the
 Blender import options) and ``load_in_blender.py``.
 """
 
@@ -16,6 +16,7 @@ from wetcloth.exporter.frame import (
     COLORMAP,
     FACES,
     Frame,
+    cloth_faces,
     make_frame,
     quads_from_triangles,
     sheet_uv,
@@ -38,6 +39,6 @@ from wetcloth.exporter.sequence import (
 
 __all__ = [
     "COLORMAP", "ExportError", "FORMATS", "Frame", "FrameSequence", "LOADER", "MANIFEST", "WRITERS",
-    "check_directory", "frame_file_name", "make_frame", "open_sequence", "previous_run_files", "resume_sequence",
+    "check_directory", "cloth_faces", "frame_file_name", "make_frame", "open_sequence", "previous_run_files", "resume_sequence",
     "sequence_files", "sheet_uv", "wetness_colors", "wetness_lut",
 ]

@@ -3,7 +3,8 @@
 All writers (PLY and OBJ through trimesh or meshio, USD through usd-core) take a :class:`Frame`, so
 they write the same numbers: the normals, UVs and colours are computed here once, not per writer.
 The faces they write are the simulation's triangles or, by default, quads: one per grid cell, made
-of the cell's two triangles (:func:`quads_from_triangles`).
+of the cell's two triangles (:func:`quads_from_triangles`); for a cloth from a mesh file, by default
+the file's own faces and UVs (:func:`cloth_faces`).
 """
 
 from __future__ import annotations
@@ -60,6 +61,17 @@ def sheet_uv(rest_xy: np.ndarray) -> np.ndarray:
     span = rest_xy.max(axis=1, keepdims=True) - lo
     span[span == 0.0] = 1.0
     return ((rest_xy - lo) / span).T.astype(np.float32)
+
+
+def cloth_faces(topology) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """A cloth's triangles (m, 3), UVs (n, 2) float32 and the faces of its mesh file ((k, 3) or (k, 4), or
+    None for the built-in grid), from its ``wetcloth.topology.Topology``: the file's UVs where it has
+    them, else those of the flat rest sheet (:func:`sheet_uv`)."""
+    mesh = topology.mesh
+    if mesh is None:
+        return topology.triangles, sheet_uv(topology.rest_xy), None
+    uv = sheet_uv(topology.rest_xy) if mesh.uv is None else np.asarray(mesh.uv, dtype=np.float32)
+    return topology.triangles, uv, mesh.faces
 
 
 def vertex_normals(positions: np.ndarray, triangles: np.ndarray) -> np.ndarray:

@@ -24,7 +24,7 @@ import numpy as np
 
 from wetcloth.exporter.blender_options import MAX_FRAME, OPTIONS, blender_options
 from wetcloth.exporter.errors import ExportError
-from wetcloth.exporter.frame import COLORMAP, FACES, Frame, make_frame, quads_from_triangles, sheet_uv, wetness_lut
+from wetcloth.exporter.frame import COLORMAP, FACES, Frame, cloth_faces, make_frame, quads_from_triangles, wetness_lut
 from wetcloth.files import whole_file
 from wetcloth.files import write_text as write_whole_text
 
@@ -213,7 +213,8 @@ class FrameSequence:
         self.replaced: list[str] = []  # files of an earlier sequence that open_sequence replaced
         self._triangles = None if triangles is None else np.asarray(triangles)
         self._uv = None if uv is None else np.asarray(uv, dtype=np.float32)
-        self._faces: np.ndarray | None = None  # what is written: the triangles or their quads
+        self._faces: np.ndarray | None = None  # what is written: the triangles, their quads or the file's faces
+        self._file_faces: np.ndarray | None = None  # a mesh cloth's faces as in its file
         self._first_time: float | None = None
         self._last_time: float | None = None
         self._shape: tuple[int, int] | None = None
@@ -260,24 +261,23 @@ class FrameSequence:
                 f"written in order, one per call, starting at 0 (export directory {self.directory})"
             )
         if self._triangles is None:
-            self._triangles = sim.triangles
-            self._uv = sheet_uv(sim.model.topology.rest_xy)
+            self._triangles, self._uv, self._file_faces = cloth_faces(sim.model.topology)
         self.write_frame(sim.positions, sim.wetness, time=sim.time, velocities=sim.velocities)
 
     def _topology(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The triangles, the faces to write (the triangles or their quads) and the UVs."""
+        """The triangles, the faces to write (the triangles, or by default their quads or a mesh cloth's
+        faces as in its file) and the UVs."""
         if self._triangles is None:
             if self.scene is None:
                 raise ExportError("write_frame needs the cloth's triangles: pass scene= or triangles= and uv=")
             from wetcloth.topology import build_topology
 
-            topology = build_topology(self.scene)
-            self._triangles = topology.triangles
-            self._uv = sheet_uv(topology.rest_xy)
+            self._triangles, self._uv, self._file_faces = cloth_faces(build_topology(self.scene))
         if self._uv is None:
             raise ExportError("write_frame needs UVs with the triangles: pass uv= (n, 2) in 0..1")
         if self._faces is None:
-            self._faces = (quads_from_triangles(self._triangles, self._uv) if self.faces == "quads"
+            self._faces = (self._file_faces if self.faces == "quads" and self._file_faces is not None
+                           else quads_from_triangles(self._triangles, self._uv) if self.faces == "quads"
                            else self._triangles)
         return self._triangles, self._faces, self._uv
 
@@ -425,7 +425,8 @@ def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: flo
     overwrite: replace the earlier sequence that the directory's own frames.json describes instead
     of refusing it (never other files); exclusive: refuse a directory holding any file that is not
     part of that sequence (``sequence.replaced`` lists the files replaced);
-    faces: ``quads`` (default: one per grid cell, made of its two triangles) or ``triangles``;
+    faces: ``quads`` (default: one per grid cell, made of its two triangles; a cloth from a mesh file: the
+    file's faces) or ``triangles``;
     first_frame: number of the first frame (file ``<prefix>_0001``, USD time code 1 by default);
     blender: options of ``load_in_blender.py`` (see ``blender_options.OPTIONS``: solidify,
     subdivision, smooth, material, first_frame, timeline), recorded in frames.json.

@@ -512,9 +512,10 @@ def native_checker(tmp_path_factory):
 
 
 #: Where a native snapshot's values begin (after magic, version and checksum: families, count, the
-#: scene's 40 values, the clock, the preconditioner's reference and the contact margin), and the
-#: order of its arrays (model.cpp, Simulation::save).
-NATIVE_SCENE_FIELDS = 40
+#: scene's values (one per field of wetcloth.scene, as model.hpp's Scene has), the clock, the
+#: preconditioner's reference and the contact margin), and the order of its arrays (model.cpp,
+#: Simulation::save).
+NATIVE_SCENE_FIELDS = len(wetcloth.scene.PARAMETERS)
 NATIVE_ARRAYS = [("state.pos", 3), ("state.vel", 3), ("state.water", 1), ("prev_pos", 3), ("prev_vel", 3),
                  ("prev_water", 1), ("acceleration", 3), ("anchor", 3)]
 NATIVE_SLOTS = {"state.time": 0, "next_step": 1, "last_step": 2, "speed": 3, "calm_time": 4}

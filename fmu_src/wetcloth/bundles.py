@@ -16,24 +16,32 @@ from wetcloth._core import SOLVER_COUNTERS
 
 #: The fixed cloth: grid size, spring families (offset, rest length m, tension only, stiffness N/m,
 #: damping N s/m per spring), 1 for moving particles, dry mass kg, envelope volume m3, Stokes
-#: coefficient 6 pi a eta (N s/m), water capacity kg, wicking links (offsets, conductance kg/s).
+#: coefficient 6 pi a eta (N s/m), water capacity kg, wicking links (offsets, conductance kg/s).  A
+#: mesh (grid_x = grid_y = 0, no families) lists its springs instead: ``pairs`` (2, S) int64 their
+#: ends, ``pair_rest`` m, ``pair_stiffness`` N/m, ``pair_damping`` N s/m (S), the first
+#: ``pair_tension_count`` tension-only; its wicking links ``wick_pairs`` (2, L) with
+#: ``wick_pair_conductance`` (L) kg/s; ``triangles`` (m, 3) int64 for its face drag, shared among their
+#: corners as ``corner_shares`` (m, 3) say.
 Cloth = namedtuple("Cloth", "grid_x grid_y offsets rest tension_only stiffness damping free dry_mass volume "
-                            "stokes_coefficient capacity wick_offsets wick_conductance")
+                            "stokes_coefficient capacity wick_offsets wick_conductance pairs pair_rest pair_stiffness "
+                            "pair_damping pair_tension_count wick_pairs wick_pair_conductance triangles corner_shares")
 #: Scene parameters as the core uses them (SI units; flags as bools).  ``wet_factor`` is 0 unless
 #: wetness-dependent stiffness is active; ``air_density`` 0 switches the drag in air off; ``floor_z``
-#: is the lowest particle centre; ``colliders`` (k, 13) the analytic colliders' rows (colliders.hpp).
+#: is the lowest particle centre; ``colliders`` (k, 13) the colliders' rows (colliders.hpp), ``meshes`` the
+#: mesh colliders' triangles (wetcloth.collider_meshes.ColliderMeshes).
 Physics = namedtuple("Physics", "projected wet_factor water_level water_density thickness smooth stokes "
                                 "drag_normal drag_tangential drag_linear current_x current_y air_density "
                                 "wind_x wind_y wind_z floor_z "
                                 "floor_friction absorption_capacity absorption_rate drying_rate wicking_rate "
-                                "wick_step_limit skip_idle colliders")
+                                "wick_step_limit skip_idle colliders meshes")
 #: Scratch and results: ``force`` (3, n) N; ``submerged`` (n) the submerged fraction of each
 #: particle; ``saturation`` (n); ``blocks`` (6, n) per-particle symmetric 3x3 blocks (xx, yy, zz,
 #: xy, xz, yz) of the system matrix; ``diagonal_blocks`` (6, n) the springs' part of its diagonal
 #: blocks; ``direction`` (F, 3, n), ``along``, ``across`` (F, n) each spring's block; ``rhs`` (3, n);
-#: ``buf`` (4, n); ``cells`` (2, 9, n + nx + 1) face-drag rows; ``wick_buffer`` (6, n).
+#: ``buf`` (4, n); ``cells`` (2, 9, n + nx + 1) a grid's face-drag rows; ``wick_buffer`` (6, n);
+#: ``pair_direction`` (3, S), ``pair_along``, ``pair_across`` (S) the listed springs' blocks.
 Work = namedtuple("Work", "force submerged saturation blocks diagonal_blocks direction along across rhs buf cells "
-                          "wick_buffer")
+                          "wick_buffer pair_direction pair_along pair_across")
 #: Integrator and controller settings: ``integrator`` (code: ``wetcloth.integrators.INTEGRATORS``),
 #: ``tolerance`` (-), ``allowed`` local position error per step (m, 0 = fixed steps of ``max_step``
 #: s); ``newton_tolerance`` (m); ``cg_tolerance`` (-, BDF2's linear solves, relative to the
@@ -57,12 +65,15 @@ Buffers = namedtuple("Buffers", "pos vel water trial_pos trial_vel trial_water p
 Solver = namedtuple("Solver", "mass rhs dv r z p ap hat_pos hat_vel predicted step_acceleration counters")
 
 
-def make_work(n: int, families: int, grid_x: int) -> Work:
-    """Zeroed scratch for n particles, ``families`` spring families and rows of ``grid_x`` particles."""
+def make_work(n: int, families: int, grid_x: int, pairs: int = 0, triangles: int = 0) -> Work:
+    """Zeroed scratch for n particles, ``families`` spring families and rows of ``grid_x`` particles (0:
+    a mesh, with ``pairs`` listed springs and ``triangles`` triangles)."""
+    cells = n + grid_x + 1 if grid_x > 0 else max(n + 1, triangles)  # the core's cells_length
     return Work(force=np.zeros((3, n)), submerged=np.zeros(n), saturation=np.zeros(n), blocks=np.zeros((6, n)),
                 diagonal_blocks=np.zeros((6, n)), direction=np.zeros((families, 3, n)),
                 along=np.zeros((families, n)), across=np.zeros((families, n)), rhs=np.zeros((3, n)),
-                buf=np.zeros((4, n)), cells=np.zeros((2, 9, n + grid_x + 1)), wick_buffer=np.zeros((6, n)))
+                buf=np.zeros((4, n)), cells=np.zeros((2, 9, cells)), wick_buffer=np.zeros((6, n)),
+                pair_direction=np.zeros((3, pairs)), pair_along=np.zeros(pairs), pair_across=np.zeros(pairs))
 
 
 def make_solver(n: int) -> Solver:

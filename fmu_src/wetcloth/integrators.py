@@ -60,14 +60,17 @@ class Integrator:
         dry = model.dry_mass
         stiffest = 1.0 + max(model.scene.wet_stiffness_factor, 0.0)  # a saturated, stiffened cloth
         # Gershgorin: the eigenvalues of M^-1 K are at most 2 * sum_j k_ij / m_i.
-        self.omega_squared = 2.0 * stiffest * float(np.max(topo.per_particle_sum(topo.spring_stiffness) / dry))
-        self.damping_rate = 2.0 * float(np.max(topo.per_particle_sum(topo.spring_damping) / dry))
+        stiffness = topo.per_particle_sum(topo.spring_stiffness) + topo.per_particle_pair_sum(topo.pair_stiffness)
+        damping = topo.per_particle_sum(topo.spring_damping) + topo.per_particle_pair_sum(topo.pair_damping)
+        self.omega_squared = 2.0 * stiffest * float(np.max(stiffness / dry))
+        self.damping_rate = 2.0 * float(np.max(damping / dry))
         # Forward Euler on a damped spring is stable only for h < c/k (the disc |1 + h lambda| < 1),
         # and on pure damping for h < 2 m / c.  Undamped springs it can never hold.
-        springs = topo.spring_stiffness > 0
+        k = np.concatenate([topo.spring_stiffness.ravel(), topo.pair_stiffness])
+        c = np.concatenate([topo.spring_damping.ravel(), topo.pair_damping])
+        springs = k > 0
         with np.errstate(over="ignore"):  # a vanishing stiffness (say 1e-320 N/m) limits nothing: inf
-            limit = (float((topo.spring_damping[springs] / topo.spring_stiffness[springs]).min()) / stiffest
-                     if springs.any() else math.inf)
+            limit = float((c[springs] / k[springs]).min()) / stiffest if springs.any() else math.inf
         if self.omega_squared > 0:
             # Below 0.1/omega an unstable mode grows by at most 0.5% a step: the damping is then too
             # weak to matter, and a smaller limit would only stall (damping -> 0 gives h -> 0).

@@ -14,8 +14,9 @@ import numpy as np
 from wetcloth import _core
 from wetcloth._core import GRAVITY
 from wetcloth.bundles import Cloth, Physics, make_work
+from wetcloth.collider_meshes import no_meshes
 from wetcloth.scene import Scene
-from wetcloth.topology import Topology, build_topology
+from wetcloth.topology import STRETCH, Topology, build_topology, corner_shares
 
 __all__ = ["GRAVITY", "Model"]
 
@@ -27,7 +28,9 @@ class Model:
         self.topology = topo = topology if topology is not None else build_topology(scene)
         self.skip_idle_work = skip_idle_work  # False: run the water kernels on dry cloth too (benchmarks)
         self.free = (~topo.pinned).astype(np.float64)  # 1 for moving particles, 0 for pinned
-        self.work = make_work(topo.n, len(topo.spring_offset), topo.nx)
+        self.grid_x, self.grid_y = (0, 0) if topo.listed else (topo.nx, topo.ny)
+        self.corner_shares = corner_shares(topo.rest_pos, topo.triangles)
+        self.work = make_work(topo.n, len(topo.spring_offset), self.grid_x, len(topo.pair_rest), len(topo.triangles))
         self.scene = scene
 
     @property
@@ -47,10 +50,15 @@ class Model:
         self.capacity = scene.absorption_capacity * self.dry_mass  # kg of water each particle holds at most
         self._set_wicking(scene)
         self.cloth = Cloth(
-            grid_x=topo.nx, grid_y=topo.ny, offsets=topo.spring_offset, rest=topo.spring_rest,
+            grid_x=self.grid_x, grid_y=self.grid_y, offsets=topo.spring_offset, rest=topo.spring_rest,
             tension_only=topo.spring_tension_only, stiffness=topo.spring_stiffness, damping=topo.spring_damping,
             free=self.free, dry_mass=self.dry_mass, volume=self.volume, stokes_coefficient=self.stokes_coefficient,
             capacity=self.capacity, wick_offsets=self.wick_offsets, wick_conductance=self.wick_conductance,
+            pairs=np.ascontiguousarray(topo.pairs, dtype=np.int64), pair_rest=topo.pair_rest,
+            pair_stiffness=topo.pair_stiffness, pair_damping=topo.pair_damping,
+            pair_tension_count=topo.pair_tension_count,
+            wick_pairs=self.wick_pairs, wick_pair_conductance=self.wick_pair_conductance,
+            triangles=np.ascontiguousarray(topo.triangles, dtype=np.int64), corner_shares=self.corner_shares,
         )
         wet = scene.wet_stiffness_factor != 0.0 and scene.absorption_capacity > 0.0
         self.physics = Physics(
@@ -64,18 +72,24 @@ class Model:
             absorption_rate=scene.absorption_rate, drying_rate=scene.drying_rate, wicking_rate=scene.wicking_rate,
             wick_step_limit=self.wick_step_limit, skip_idle=self.skip_idle_work,
             colliders=np.array([c.row() for c in scene.colliders], dtype=np.float64).reshape(-1, 13),
+            meshes=no_meshes(),
         )
 
     def _set_wicking(self, scene: Scene) -> None:
-        """Conductances (kg/s per unit saturation difference) of the axis neighbours' links, and the
-        sub-steps (s) that keep wicking's explicit update within the maximum principle."""
+        """Conductances (kg/s per unit saturation difference) of the links between neighbours (a grid's
+        axis neighbours, a mesh's edges), and the sub-steps (s) that keep wicking's explicit update
+        within the maximum principle."""
         topo = self.topology
         structural = [f for f, name in enumerate(topo.spring_family_names) if name.startswith("structural")]
+        edges = topo.pair_kind == STRETCH
         self.wick_offsets = topo.spring_offset[structural]
+        self.wick_pairs = np.ascontiguousarray(topo.pairs[:, edges])
         # Finite volumes: flux = D * (water per area at saturation) * d(sat)/dl * strip width.
-        self.wick_conductance = (scene.wicking_rate * scene.absorption_capacity * scene.areal_density
-                                 * topo.spring_shape[structural])
-        links = topo.per_particle_sum(topo.spring_shape[structural], self.wick_offsets)
+        per_shape = scene.wicking_rate * scene.absorption_capacity * scene.areal_density
+        self.wick_conductance = per_shape * topo.spring_shape[structural]
+        self.wick_pair_conductance = per_shape * topo.pair_shape[edges]
+        links = (topo.per_particle_sum(topo.spring_shape[structural], self.wick_offsets)
+                 + topo.per_particle_pair_sum(topo.pair_shape, kinds=(STRETCH,)))
         # new sat_i = sat_i + dt sum_j g_ij (sat_j - sat_i) / Q_i is a weighted mean while dt <= Q_i / sum g_ij
         with np.errstate(divide="ignore"):
             self.wick_step_limit = float(np.min(topo.area / (scene.wicking_rate * links)))

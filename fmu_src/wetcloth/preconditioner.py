@@ -100,3 +100,39 @@ def make_plane(grid_x: int, grid_y: int, family_names: tuple, stiffness: np.ndar
                  reference_mass=np.zeros(n), shares=shares, jacobian_along=np.zeros((families, n)),
                  jacobian_mass=np.zeros(n), frame=np.repeat(np.eye(3)[:, :, None], n, axis=2), normal=np.ones(n),
                  local=np.zeros((COMPONENTS, n_c)))
+
+
+def make_mesh_plane(n: int, pairs: np.ndarray, tension_count: int, stiffness: np.ndarray) -> Plane:
+    """The preconditioner's arrays for a mesh of n particles whose listed springs join ``pairs`` (2, S),
+    the first ``tension_count`` tension-only with rest ``stiffness`` (S,) N/m (the core's mesh_plane.cpp).
+
+    Its systems are band matrices over the tension-only springs, in the reverse Cuthill-McKee order of
+    their graph (scipy), which keeps the band narrow: ``order`` lists the particles in band order,
+    ``rank`` is each particle's band position, ``kd`` the widest spring's reach in that order.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+    first, second = pairs[:, :tension_count]
+    graph = coo_matrix((np.ones(tension_count), (first, second)), shape=(n, n)).tocsr()
+    order = np.asarray(reverse_cuthill_mckee(graph, symmetric_mode=False), dtype=np.int64)
+    rank = np.empty(n, dtype=np.int64)
+    rank[order] = np.arange(n)
+    kd = int(np.abs(rank[first] - rank[second]).max()) if tension_count else 0
+    kd = max(1, min(kd, n - 1))
+    grid = Hierarchy(levels=np.zeros((0, 4), dtype=np.int64), coef=np.zeros((COMPONENTS, 9, 0)),
+                     inverse_diagonal=np.zeros((COMPONENTS, 0)), x=np.zeros((COMPONENTS, 0)),
+                     b=np.zeros((COMPONENTS, 0)), r=np.zeros((COMPONENTS, 0)), row=np.zeros(0))
+    count = pairs.shape[1]
+    return Plane(stiffness=np.ascontiguousarray(stiffness, dtype=float), slots=np.zeros(0, dtype=np.int64), grid=grid,
+                 order=order, rank=rank, bands=np.zeros((COMPONENTS, n, kd + 1)), rows=np.zeros((COMPONENTS, n, kd + 1)),
+                 reference=np.zeros(4), reference_mass=np.zeros(n), shares=np.zeros((2, 0)),
+                 jacobian_along=np.zeros(count), jacobian_mass=np.zeros(n), frame=np.repeat(np.eye(3)[:, :, None], n, axis=2),
+                 normal=np.ones(n), local=np.zeros((COMPONENTS, n)))
+
+
+def plane_for(topology) -> Plane:
+    """The preconditioner's arrays for a cloth ``topology`` (``wetcloth.topology.Topology``): a grid's or a mesh's."""
+    if not topology.listed:
+        return make_plane(topology.nx, topology.ny, topology.spring_family_names, topology.spring_stiffness)
+    return make_mesh_plane(topology.n, topology.pairs, topology.pair_tension_count, topology.pair_stiffness)

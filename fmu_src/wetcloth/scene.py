@@ -20,6 +20,8 @@ from typing import Any
 import numpy as np
 
 from wetcloth.errors import ConfigError, Mistakes, ParameterError, did_you_mean
+from wetcloth.mesh_file import ALLOWED as MESH_ALLOWED
+from wetcloth.mesh_file import is_mesh_path, resolve
 from wetcloth.run_settings import SETTINGS as RUN_SETTINGS
 from wetcloth.run_settings import check_run_table
 
@@ -29,17 +31,21 @@ INPUT = "input"
 PARAMETER = "parameter"
 
 
-def _param(default, unit: str, doc: str, lo=None, hi=None, lo_open=False, choices=(), fmu=PARAMETER):
-    """A scene field with its unit, documentation and allowed range in the field metadata."""
+def _param(default, unit: str, doc: str, lo=None, hi=None, lo_open=False, choices=(), fmu=PARAMETER, text=None):
+    """A scene field with its unit, documentation and allowed range in the field metadata; ``text``: a
+    string field that takes free text, and what it allows (checked with the scene as a whole)."""
     return field(
         default=default,
-        metadata=dict(unit=unit, doc=doc, lo=lo, hi=hi, lo_open=lo_open, choices=tuple(choices), fmu=fmu),
+        metadata=dict(unit=unit, doc=doc, lo=lo, hi=hi, lo_open=lo_open, choices=tuple(choices), fmu=fmu, text=text),
     )
 
 
 INTEGRATORS = ("explicit_euler", "symplectic_euler", "implicit_euler", "bdf2")
 EDGES = ("none", "x_min", "x_max", "y_min", "y_max")
 SWITCH = ("on", "off")
+#: What ``pinned_vertices`` allows, as its messages say.
+PINS_ALLOWED = ("'' (none), the name of a point attribute of the mesh file (nonzero = pinned), or "
+                "'box:x0,y0,z0,x1,y1,z1' (m, x0 <= x1, y0 <= y1, z0 <= z1)")
 
 
 #: Collider shapes, in the order of the core's shape codes (fmu_src/core/include/wetcloth/colliders.hpp).
@@ -108,6 +114,13 @@ class Scene:
     ny: int = _param(29, "-", "particles along the length (y)", 2, 1024)
     width: float = _param(0.5, "m", "cloth size along x", 0.0, 100.0, lo_open=True)
     length: float = _param(0.7, "m", "cloth size along y", 0.0, 100.0, lo_open=True)
+    cloth_mesh: str = _param(
+        "", "-", "the cloth's mesh file (OBJ, PLY, STL, OFF, VTK/VTU, glTF/GLB; triangles and quads), one particle "
+        "per vertex; '' = the nx x ny rectangle (then nx, ny, width, length make the cloth); a relative path is "
+        "relative to the scene file", text=MESH_ALLOWED)
+    place_mesh: str = _param(
+        "off", "-", "'off': the mesh file's coordinates as they are (m, z up); 'on': the mesh turned by initial_tilt "
+        "about the x axis through its centroid, and its centroid raised to initial_height", choices=SWITCH)
     # --- fabric
     areal_density: float = _param(0.45, "kg/m2", "dry fabric mass per area", 0.0, 100.0, lo_open=True)
     thickness: float = _param(
@@ -170,6 +183,10 @@ class Scene:
         "'off' skips it (a cloth that cannot fold saves its small cost)", choices=SWITCH)
     self_friction: float = _param(0.4, "-", "Coulomb friction coefficient between layers of the cloth", 0.0, 10.0)
     pinned_edge: str = _param("none", "-", "edge held fixed in space: none, x_min, x_max, y_min, y_max", choices=EDGES)
+    pinned_vertices: str = _param(
+        "", "-", "vertices held fixed in space, with pinned_edge's: the name of a point attribute of the mesh file "
+        "(nonzero = pinned), or 'box:x0,y0,z0,x1,y1,z1', the vertices in that box at t = 0 (m, inclusive); '' = none",
+        text=PINS_ALLOWED)
     # --- time integration
     integrator: str = _param(
         "bdf2", "-", "time integrator: 'bdf2' (second order, implicit, steps set by the tolerance), "
@@ -205,6 +222,8 @@ def describe_range(f: dataclasses.Field, name: str | None = None) -> str:
     """The allowed values of a field, as a user reads them: '0 < thickness <= 1 m' (``name``: the name
     to show, e.g. a collider's flattened 'collider1_radius')."""
     md = f.metadata
+    if md.get("text"):
+        return md["text"]
     if md["choices"]:
         return "one of " + ", ".join(repr(c) for c in md["choices"])
     unit = "" if md["unit"] == "-" else f" {md['unit']}"
@@ -261,6 +280,8 @@ def check_value(name: str, value):
     f = _field(name)
     md = f.metadata
     if f.type == "str":
+        if md.get("text"):
+            return value
         if value not in md["choices"]:
             close = difflib.get_close_matches(value, md["choices"], n=1)
             hint = f" (did you mean {close[0]!r}?)" if close else ""
@@ -297,15 +318,38 @@ def validate(scene: Scene) -> None:
             object.__setattr__(scene, name, check_value(name, getattr(scene, name)))
     object.__setattr__(scene, "colliders", _checked_colliders(scene.colliders, mistakes))
     mistakes.raise_if_any()
-    half_drop = 0.5 * scene.length * abs(math.sin(math.radians(scene.initial_tilt)))
-    lowest = scene.initial_height - half_drop - 0.5 * scene.thickness
+    start = _check_mesh_start(scene) if is_mesh_path(scene.cloth_mesh) else None
+    if start is None:
+        half_drop = 0.5 * scene.length * abs(math.sin(math.radians(scene.initial_tilt)))
+        lowest = scene.initial_height - half_drop - 0.5 * scene.thickness
+        if lowest <= scene.floor_level:
+            raise ParameterError(
+                "initial_height",
+                f"the cloth starts at or below the floor (lowest point {lowest:g} m, floor_level "
+                f"{scene.floor_level:g} m); allowed: initial_height > floor_level + {half_drop + 0.5 * scene.thickness:g} m",
+            )
+    if scene.colliders or scene.pinned_vertices.strip() or scene.pinned_edge != "none":
+        from wetcloth.topology import pinned_mask, start_positions
+
+        positions, mesh = start_positions(scene) if start is None else start
+        pinned_mask(scene, positions, mesh)
+        _check_collider_start(scene, positions)
+
+
+def _check_mesh_start(scene: Scene):
+    """The mesh cloth's positions at t = 0 (3, n) m and its mesh file; a ParameterError for a mesh file that
+    cannot be read or used, or a cloth that starts at or below the floor."""
+    from wetcloth.topology import start_positions
+
+    positions, mesh = start_positions(scene)
+    lowest = float(positions[2].min()) - 0.5 * scene.thickness
     if lowest <= scene.floor_level:
-        raise ParameterError(
-            "initial_height",
-            f"the cloth starts at or below the floor (lowest point {lowest:g} m, floor_level "
-            f"{scene.floor_level:g} m); allowed: initial_height > floor_level + {half_drop + 0.5 * scene.thickness:g} m",
-        )
-    _check_collider_start(scene)
+        name, fix = (("initial_height", "raise initial_height") if scene.place_mesh == "on"
+                     else ("cloth_mesh", "raise the mesh in its file, or place it: place_mesh = 'on'"))
+        raise ParameterError(name, f"the cloth starts at or below the floor (lowest point {lowest:g} m with "
+                                   f"thickness/2, floor_level {scene.floor_level:g} m): {fix}; allowed: every vertex "
+                                   f"above floor_level + thickness/2")
+    return positions, mesh
 
 
 def _checked_colliders(colliders, mistakes: Mistakes) -> tuple:
@@ -338,15 +382,10 @@ def _checked_colliders(colliders, mistakes: Mistakes) -> tuple:
     return tuple(out)
 
 
-def _check_collider_start(scene: Scene) -> None:
-    """No collider may reach into the cloth at t = 0 (closer than thickness/2 to a particle)."""
+def _check_collider_start(scene: Scene, pos: np.ndarray) -> None:
+    """No collider may reach into the cloth at t = 0 (closer than thickness/2 to a particle at ``pos`` (3, n) m)."""
     if not scene.colliders:
         return
-    col, row = np.meshgrid(np.arange(scene.nx), np.arange(scene.ny))
-    x = col.ravel() * (scene.width / (scene.nx - 1)) - 0.5 * scene.width
-    y = row.ravel() * (scene.length / (scene.ny - 1)) - 0.5 * scene.length
-    tilt = math.radians(scene.initial_tilt)
-    pos = np.stack([x, y * math.cos(tilt), scene.initial_height + y * math.sin(tilt)])
     gap = 0.5 * scene.thickness
     mistakes = Mistakes()
     for k, collider in enumerate(scene.colliders, 1):
@@ -453,6 +492,8 @@ def read_scene_file(path: str | Path | None) -> dict[str, Any]:
                 raise ParameterError(key, f"is a run setting: put it in the [run] table ({key} = {value!r} under [run])")
             else:
                 data[key] = check_value(key, value)
+                if key == "cloth_mesh":  # relative to the scene file's folder
+                    data[key] = resolve(data[key], resolved.parent)
     mistakes.raise_if_any()
     return data
 

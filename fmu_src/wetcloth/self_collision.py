@@ -51,14 +51,28 @@ def grid_edges(triangles: np.ndarray) -> np.ndarray:
     return np.unique(edges, axis=0).astype(np.int64)
 
 
+def smallest_altitude(points: np.ndarray, triangles: np.ndarray) -> float:
+    """The smallest altitude (m) of any of the triangles (m, 3) of points (3, n) m: a corner's distance from
+    the opposite edge's line (on a grid, ``rest_gap``)."""
+    p = points.T[triangles]
+    double_area = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    longest = np.max([np.linalg.norm(p[:, (k + 1) % 3] - p[:, k], axis=1) for k in range(3)], axis=0)
+    return float(np.min(double_area / longest))
+
+
 def make_contact(topology, enabled: bool, friction: float) -> Contact:
-    """The stage's arrays for a cloth ``topology`` (``wetcloth.topology.Topology``)."""
+    """The stage's arrays for a cloth ``topology`` (``wetcloth.topology.Topology``).  A mesh's rest gap is
+    the smallest altitude of its triangles in the flat rest sheet, its least margin MARGIN_FRACTION of that."""
     n = topology.n
     rest = np.zeros((3, n))
     rest[:2] = topology.rest_xy
+    if topology.pairs.shape[1] == 0:  # the grid's families (also of a file that forms the grid)
+        gap, least = rest_gap(topology.dx, topology.dy), MARGIN_FRACTION * min(topology.dx, topology.dy)
+    else:
+        gap = smallest_altitude(rest, topology.triangles)
+        least = MARGIN_FRACTION * gap
     return Contact(
-        enabled=bool(enabled), friction=float(friction), least_margin=MARGIN_FRACTION * min(topology.dx, topology.dy),
-        rest_gap=rest_gap(topology.dx, topology.dy),
+        enabled=bool(enabled), friction=float(friction), least_margin=least, rest_gap=gap,
         triangles=np.ascontiguousarray(topology.triangles, dtype=np.int64), edges=grid_edges(topology.triangles),
         rest=rest, reference=np.zeros((3, n)), margin=np.zeros(1), zone=np.arange(n, dtype=np.int64),
         zone_sums=np.zeros((ZONE_ROWS, n)), counters=np.zeros(CONTACT_COUNTERS, dtype=np.int64),

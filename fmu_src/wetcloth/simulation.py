@@ -16,9 +16,10 @@ from wetcloth.bundles import Buffers, make_solver
 from wetcloth.errors import BlowUpError, ParameterError
 from wetcloth.integrators import make_integrator
 from wetcloth.model import Model
-from wetcloth.preconditioner import make_plane
+from wetcloth.preconditioner import plane_for
 from wetcloth.scene import INPUT, PARAMETERS, Scene, load_scene
 from wetcloth.state import State, initial_state
+from wetcloth.topology import Topology
 
 #: The outputs (docs/model.md section 8), as the FMU publishes them: name -> (unit, meaning).
 OUTPUTS = {
@@ -56,10 +57,11 @@ class Simulation:
     every step is ``max_step``, and only the blow-up guard watches.
     """
 
-    def __init__(self, scene: Scene | None = None, skip_idle_work: bool = True):
-        """``skip_idle_work=False`` computes every kernel at every step (for benchmarks of the skips)."""
+    def __init__(self, scene: Scene | None = None, skip_idle_work: bool = True, topology: Topology | None = None):
+        """``skip_idle_work=False`` computes every kernel at every step (for benchmarks of the skips);
+        ``topology`` replaces the one built from the scene (same particles)."""
         scene = load_scene() if scene is None else scene
-        self.model = model = Model(scene, skip_idle_work=skip_idle_work)
+        self.model = model = Model(scene, topology=topology, skip_idle_work=skip_idle_work)
         topo = model.topology
         start = initial_state(scene, topo)
         self._buffers = Buffers(
@@ -74,7 +76,7 @@ class Simulation:
         self.integrator = make_integrator(scene.integrator, model)
         self._control = self.integrator.control()
         self._solver = make_solver(topo.n)
-        self._plane = make_plane(topo.nx, topo.ny, topo.spring_family_names, topo.spring_stiffness)
+        self._plane = plane_for(topo)
         self._contact = self_collision.make_contact(topo, scene.self_collision == "on", scene.self_friction)
         self.skip_idle_work = skip_idle_work
         #: The compiled step loop over these arrays (it keeps them alive and views them in place).

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from wetcloth.scene import Scene
-from wetcloth.topology import Topology
+from wetcloth.topology import Topology, initial_positions
 
 
 @dataclass
@@ -35,13 +34,9 @@ class State:
 
 
 def initial_state(scene: Scene, topo: Topology) -> State:
-    """The cloth at rest, flat, centred over the origin at ``initial_height``, tilted about x, holding
+    """The cloth at rest where ``topology.initial_positions`` puts it (the grid flat, centred over the
+    origin at ``initial_height``, tilted about x; a mesh file as placed by ``place_mesh``), holding
     ``initial_saturation`` of its capacity of water."""
-    tilt = math.radians(scene.initial_tilt)
-    x, y = topo.rest_xy
-    pos = np.empty((3, topo.n))
-    pos[0] = x
-    pos[1] = y * math.cos(tilt)
-    pos[2] = scene.initial_height + y * math.sin(tilt)
+    pos = initial_positions(scene, topo)
     water = scene.initial_saturation * scene.absorption_capacity * scene.areal_density * topo.area
     return State(time=0.0, pos=pos, vel=np.zeros((3, topo.n)), water=water)

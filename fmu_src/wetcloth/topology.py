@@ -1,29 +1,59 @@
 """The cloth's fixed structure: particle areas and masses, springs and triangles, built once per scene.
 
-Particles sit on an ``nx`` x ``ny`` grid, index ``i = row * nx + col`` (col along x, row along y).
-Springs are grouped in *families* that share one index offset: spring ``i`` of a family joins
-particle ``i`` to particle ``i + offset``.  A missing spring (across the grid's edge) has zero
-stiffness.  This layout lets every kernel loop over flat arrays with no index lists.
+The built-in cloth (``cloth_mesh = ""``) is an ``nx`` x ``ny`` grid, particle ``i = row * nx + col``
+(col along x, row along y).  Its springs are grouped in *families* that share one index offset:
+spring ``i`` of a family joins particle ``i`` to particle ``i + offset``.  A missing spring (across
+the grid's edge) has zero stiffness.  This layout lets every kernel loop over flat arrays with no
+index lists.
+
+A cloth from a mesh file (``cloth_mesh``, docs/model.md section 2.4) has one particle per vertex of
+the file, in the file's order, and *listed springs*: explicit index pairs (``pairs``), tension-only
+ones first.  A file whose vertices form the built-in grid exactly gets the grid's topology.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from wetcloth.scene import Scene
+from wetcloth.errors import ParameterError
+from wetcloth.mesh_file import MeshFile, face_edges, is_mesh_path, read_mesh_file, triangle_areas
+from wetcloth.scene import PINS_ALLOWED, Scene
+
+#: Kinds of listed springs (``pair_kind``): along a face's edge, across a quad, bending.
+STRETCH, SHEAR, BEND = 0, 1, 2
+#: A vertex's two edges carry a quad mesh's bending spring when they make an angle above this (deg).
+BEND_ANGLE = 120.0
+#: Relative tolerance of the test that a file's vertices form the built-in grid.
+GRID_TOLERANCE = 1e-9
+
+
+@dataclass(frozen=True)
+class MeshFaces:
+    """What a cloth from a mesh file exports: ``faces`` (k, 3) or (k, 4) int64 as in the file (a file
+    that mixes triangles and quads: the triangles of their split), ``uv`` (n, 2) per-vertex UVs of
+    the file or None, ``source`` the file's path."""
+
+    faces: np.ndarray
+    uv: np.ndarray | None
+    source: str
 
 
 @dataclass(frozen=True)
 class Topology:
-    """Grid connectivity and per-particle constants (SI units)."""
+    """Connectivity and per-particle constants (SI units).
+
+    For a mesh cloth ``nx`` = n, ``ny`` = 1 and ``dx`` = ``dy`` = the median edge length (m): they
+    mean nothing else there, and its spring families are empty (F = 0)."""
 
     nx: int
     ny: int
     dx: float  # m, rest spacing along x
     dy: float  # m, rest spacing along y
-    rest_xy: np.ndarray  # (2, n) m, particle coordinates in the flat rest sheet, centred on 0
+    rest_pos: np.ndarray  # (3, n) m, rest positions (grid: rest_xy with z 0; mesh: the file's coordinates)
+    rest_xy: np.ndarray  # (2, n) m, a flat parameterisation of the rest sheet, centred on 0
     area: np.ndarray  # (n,) m2, each particle's share of the sheet
     spring_offset: np.ndarray  # (F,) int64, index offset of each family
     spring_rest: np.ndarray  # (F,) m, rest length of each family
@@ -32,12 +62,31 @@ class Topology:
     spring_damping: np.ndarray  # (F, n) N s/m
     spring_shape: np.ndarray  # (F, n) strip area / rest length^2 (-): stiffness = modulus * shape
     spring_family_names: tuple[str, ...]
-    triangles: np.ndarray  # (m, 3) int64, counter-clockwise seen from +z in the rest sheet
+    triangles: np.ndarray  # (m, 3) int64, consistently oriented (grid: counter-clockwise seen from +z)
     pinned: np.ndarray  # (n,) bool
+    pairs: np.ndarray  # (2, S) int64, listed springs' particles (tension-only ones first)
+    pair_rest: np.ndarray  # (S,) m
+    pair_stiffness: np.ndarray  # (S,) N/m
+    pair_damping: np.ndarray  # (S,) N s/m
+    pair_shape: np.ndarray  # (S,) strip area / rest length^2 (-)
+    pair_kind: np.ndarray  # (S,) int8: STRETCH, SHEAR or BEND
+    pair_tension_count: int  # the first this many listed springs are tension-only
+    mesh: MeshFaces | None  # None for the built-in grid
 
     @property
     def n(self) -> int:
-        return self.nx * self.ny
+        return self.rest_pos.shape[1]
+
+    @property
+    def is_grid(self) -> bool:
+        """True for the built-in grid (not for a file, even one that forms a grid)."""
+        return self.mesh is None
+
+    @property
+    def listed(self) -> bool:
+        """Whether the springs are listed (a mesh's) rather than a grid's families: the core's mesh path
+        (a file whose vertices form the built-in grid takes the grid's)."""
+        return self.pairs.shape[1] > 0
 
     def per_particle_sum(self, per_spring: np.ndarray, offsets: np.ndarray | None = None) -> np.ndarray:
         """Sum (n) over the springs touching each particle of a per-spring quantity (F, n), whose
@@ -50,10 +99,19 @@ class Topology:
             total[off:] += values[: n - off]
         return total
 
+    def per_particle_pair_sum(self, values: np.ndarray, kinds=None) -> np.ndarray:
+        """Sum (n) onto both ends of each listed spring of a per-listed-spring quantity (S,), over the
+        springs of ``kinds`` (a sequence of STRETCH, SHEAR, BEND; default all)."""
+        values = np.asarray(values, dtype=np.float64)
+        if kinds is not None:
+            values = np.where(np.isin(self.pair_kind, kinds), values, 0.0)
+        n = self.n
+        return np.bincount(self.pairs[0], values, minlength=n) + np.bincount(self.pairs[1], values, minlength=n)
+
     @property
     def spring_count(self) -> int:
-        """Number of actual springs (families' zero-stiffness slots not counted)."""
-        return int(np.count_nonzero(self.spring_stiffness))
+        """Number of actual springs: the families' (zero-stiffness slots not counted) and the listed ones."""
+        return int(np.count_nonzero(self.spring_stiffness)) + self.pairs.shape[1]
 
 
 def _edge_weights(count: int) -> np.ndarray:
@@ -64,14 +122,28 @@ def _edge_weights(count: int) -> np.ndarray:
 
 
 def build_topology(scene: Scene) -> Topology:
-    """Build the grid topology and per-spring constants of ``scene``."""
-    nx, ny = scene.nx, scene.ny
+    """The topology and per-spring constants of ``scene``: the nx x ny grid, or its ``cloth_mesh``."""
+    mesh = None if not is_mesh_path(scene.cloth_mesh) else read_mesh_file(scene.cloth_mesh)
+    if mesh is None:
+        topo = _grid(scene, scene.nx, scene.ny, scene.width, scene.length)
+    else:
+        faces = MeshFaces(faces=mesh.faces, uv=mesh.uv, source=mesh.source)
+        grid = file_grid(mesh)
+        if grid is not None:  # the grid's own springs and preconditioner, the file's faces for export
+            topo = replace(_grid(scene, *grid), rest_pos=mesh.points.T.copy(), mesh=faces)
+        else:
+            topo = _mesh(scene, mesh, faces)
+    return replace(topo, pinned=pinned_mask(scene, initial_positions(scene, topo), mesh))
+
+
+def _grid(scene: Scene, nx: int, ny: int, width: float, length: float) -> Topology:
+    """The topology of an nx x ny grid of size width x length (m), nothing pinned."""
     n = nx * ny
-    dx = scene.width / (nx - 1)
-    dy = scene.length / (ny - 1)
+    dx = width / (nx - 1)
+    dy = length / (ny - 1)
     col = np.tile(np.arange(nx), ny)
     row = np.repeat(np.arange(ny), nx)
-    rest_xy = np.stack([col * dx - 0.5 * scene.width, row * dy - 0.5 * scene.length])
+    rest_xy = np.stack([col * dx - 0.5 * width, row * dy - 0.5 * length])
     wc = _edge_weights(nx)[col]
     wr = _edge_weights(ny)[row]
     area = dx * dy * wc * wr
@@ -111,6 +183,7 @@ def build_topology(scene: Scene) -> Topology:
         ny=ny,
         dx=dx,
         dy=dy,
+        rest_pos=np.vstack([rest_xy, np.zeros(n)]),
         rest_xy=rest_xy,
         area=area,
         spring_offset=np.array(offsets, dtype=np.int64),
@@ -121,15 +194,296 @@ def build_topology(scene: Scene) -> Topology:
         spring_shape=np.array(shapes, dtype=np.float64).reshape(len(shapes), n),
         spring_family_names=tuple(names),
         triangles=triangles.astype(np.int64),
-        pinned=_pinned_mask(scene.pinned_edge, col, row, nx, ny),
+        pinned=np.zeros(n, dtype=bool),
+        **_no_pairs(),
+        mesh=None,
     )
 
 
-def _pinned_mask(edge: str, col: np.ndarray, row: np.ndarray, nx: int, ny: int) -> np.ndarray:
-    return {
-        "none": np.zeros(col.shape, dtype=bool),
-        "x_min": col == 0,
-        "x_max": col == nx - 1,
-        "y_min": row == 0,
-        "y_max": row == ny - 1,
-    }[edge]
+def _no_pairs() -> dict:
+    return dict(pairs=np.zeros((2, 0), dtype=np.int64), pair_rest=np.zeros(0), pair_stiffness=np.zeros(0),
+                pair_damping=np.zeros(0), pair_shape=np.zeros(0), pair_kind=np.zeros(0, dtype=np.int8),
+                pair_tension_count=0)
+
+
+# ----------------------------------------------------------------------------------------- mesh cloth
+def file_grid(mesh: MeshFile) -> tuple[int, int, float, float] | None:
+    """(nx, ny, width, length) if the file's vertices form the built-in grid exactly (quads only, vertex
+    i = row * nx + col with x fastest, in a plane z = const, uniform spacings; the quads its cells),
+    else None."""
+    if len(mesh.blocks) != 1 or mesh.blocks[0].shape[1] != 4:
+        return None
+    p = mesh.points
+    n = len(p)
+    size = float(np.ptp(p[:, :2], axis=0).max())
+    tol = GRID_TOLERANCE * size
+    off_row = np.flatnonzero(np.abs(p[:, 1] - p[0, 1]) > tol)
+    nx = int(off_row[0]) if len(off_row) else n
+    ny = n // nx
+    if nx < 2 or ny < 2 or nx * ny != n or np.ptp(p[:, 2]) > tol:
+        return None
+    width, length = p[nx - 1, 0] - p[0, 0], p[n - 1, 1] - p[0, 1]
+    if width <= tol or length <= tol:
+        return None
+    col, row = np.tile(np.arange(nx), ny), np.repeat(np.arange(ny), nx)
+    expected = np.stack([p[0, 0] + col * (width / (nx - 1)), p[0, 1] + row * (length / (ny - 1))], axis=1)
+    if np.abs(p[:, :2] - expected).max() > tol:
+        return None
+    a = np.flatnonzero((col < nx - 1) & (row < ny - 1))
+    cells = np.stack([a, a + 1, a + nx + 1, a + nx], axis=1)
+    faces = mesh.blocks[0]
+    if len(faces) != len(cells):
+        return None
+    same = np.array_equal(np.unique(np.sort(faces, axis=1), axis=0), np.unique(np.sort(cells, axis=1), axis=0))
+    return (nx, ny, float(width), float(length)) if same else None
+
+
+def face_areas(mesh: MeshFile) -> np.ndarray:
+    """Each face's area (k,) m2: a quad's is that of its two triangles."""
+    return np.bincount(mesh.face_of, triangle_areas(mesh.points, mesh.triangles), minlength=len(mesh.corners))
+
+
+def vertex_areas(mesh: MeshFile) -> np.ndarray:
+    """Each vertex's area (n,) m2: every face's area shared equally by its corners."""
+    share = face_areas(mesh) / mesh.corners
+    area, start = np.zeros(mesh.n), 0
+    for b in mesh.blocks:
+        area += np.bincount(b.ravel(), np.repeat(share[start:start + len(b)], b.shape[1]), minlength=mesh.n)
+        start += len(b)
+    return area
+
+
+def flat_coordinates(points: np.ndarray, area: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """The points (n, 3) projected onto their best-fitting plane (area-weighted principal axes, centred on the
+    area-weighted centroid) (2, n) m.  The plane's normal points along the triangles' mean normal; its first
+    axis is the x axis's projection (the y axis's for a plane nearly across x), so a mesh in the xy plane keeps
+    its x and y."""
+    centroid = area @ points / area.sum()
+    d = points - centroid
+    normal = np.linalg.eigh((d.T * area) @ d)[1][:, 0]
+    p = points[triangles]
+    if normal @ np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]).sum(axis=0) < 0.0:
+        normal = -normal
+    axis = np.eye(3)[0] if abs(normal[0]) < 0.9 else np.eye(3)[1]
+    first = axis - (axis @ normal) * normal
+    first /= np.linalg.norm(first)
+    second = np.cross(normal, first)
+    return np.stack([d @ first, d @ second])
+
+
+def _mesh(scene: Scene, mesh: MeshFile, faces: MeshFaces) -> Topology:
+    n = mesh.n
+    area = vertex_areas(mesh)
+    springs = listed_springs(mesh, scene)
+    length = float(np.median(springs["pair_rest"][springs["pair_kind"] == STRETCH]))
+    empty = np.zeros((0, n))
+    return Topology(
+        nx=n, ny=1, dx=length, dy=length, rest_pos=mesh.points.T.copy(),
+        rest_xy=flat_coordinates(mesh.points, area, mesh.triangles), area=area,
+        spring_offset=np.zeros(0, dtype=np.int64), spring_rest=np.zeros(0), spring_tension_only=np.zeros(0, dtype=bool),
+        spring_stiffness=empty, spring_damping=empty.copy(), spring_shape=empty.copy(), spring_family_names=(),
+        triangles=mesh.triangles.copy(), pinned=np.zeros(n, dtype=bool), **springs, mesh=faces,
+    )
+
+
+def listed_springs(mesh: MeshFile, scene: Scene) -> dict:
+    """The listed springs of a mesh (docs/model.md section 2.4), as Topology's ``pair_*`` fields.
+
+    Each face spreads three times its area evenly over its springs: a triangle over its 3 edges, a
+    quad over its 4 edges and 2 diagonals; an edge's strip area a_s sums its faces'.  Stretch springs
+    along every edge and shear springs along each quad's diagonals are tension-only; bending springs
+    join a and b across a vertex v whose edges (v, a), (v, b) lie on quads only, share no face and make
+    an angle above BEND_ANGLE (strip a_s(v, a) + a_s(v, b)), and the opposite corners of two triangles
+    that share an edge (strip: their areas).  k = modulus * a_s / l^2, c = damping * a_s / l^2."""
+    p = mesh.points
+    area = face_areas(mesh)
+    rows, owner = face_edges(mesh.blocks)
+    quad = mesh.corners[owner] == 4
+    edges, first, inverse = np.unique(rows, axis=0, return_index=True, return_inverse=True)
+    inverse = inverse.ravel()
+    strip = np.bincount(inverse, np.where(quad, 0.5, 1.0) * area[owner], minlength=len(edges))
+    # the second row of each edge shared by two faces
+    second = np.full(len(edges), -1)
+    others = np.flatnonzero(np.arange(len(rows)) != first[inverse])
+    second[inverse[others]] = others
+    face1, face2 = owner[first], np.where(second >= 0, owner[np.maximum(second, 0)], -1)
+
+    groups = [(edges, strip, STRETCH)]
+    quads = [b for b in mesh.blocks if b.shape[1] == 4]
+    if quads:
+        q = np.concatenate(quads)
+        quad_area = area[mesh.corners == 4]
+        diagonals = np.concatenate([q[:, [0, 2]], q[:, [1, 3]]])
+        groups.append((np.sort(diagonals, axis=1), np.tile(0.5 * quad_area, 2), SHEAR))
+    if scene.bend_stiffness != 0.0:
+        quad_only = np.bincount(inverse, ~quad, minlength=len(edges)) == 0
+        groups.append(_vertex_bends(p, edges, strip, face1, face2, quad_only))
+        groups.append(_edge_bends(mesh, rows, first, second, face1, face2, area))
+
+    pairs = np.concatenate([g[0] for g in groups]).T.astype(np.int64)
+    strips = np.concatenate([g[1] for g in groups])
+    kind = np.concatenate([np.full(len(g[0]), g[2], dtype=np.int8) for g in groups])
+    rest = np.linalg.norm(p[pairs[1]] - p[pairs[0]], axis=1)
+    shape = strips / rest**2
+    modulus = np.where(kind == BEND, scene.bend_stiffness, scene.stretch_stiffness)
+    return dict(pairs=pairs, pair_rest=rest, pair_stiffness=modulus * shape, pair_damping=scene.damping * shape,
+                pair_shape=shape, pair_kind=kind, pair_tension_count=int(np.count_nonzero(kind != BEND)))
+
+
+def _vertex_bends(p, edges, strip, face1, face2, quad_only):
+    """Bending springs across the vertices of the quads (see listed_springs)."""
+    e = np.flatnonzero(quad_only)
+    centre = np.concatenate([edges[e, 0], edges[e, 1]])
+    end = np.concatenate([edges[e, 1], edges[e, 0]])
+    edge = np.concatenate([e, e])
+    order = np.argsort(centre, kind="stable")
+    centre, end, edge = centre[order], end[order], edge[order]
+    limit = math.cos(math.radians(BEND_ANGLE))
+    found_a, found_b = [], []
+    for gap in range(1, int(np.bincount(centre).max(initial=1))):
+        i = np.flatnonzero(centre[:-gap] == centre[gap:])
+        a, b = i, i + gap
+        ea, eb = edge[a], edge[b]
+        share = ((face1[ea] == face1[eb]) | (face1[ea] == face2[eb])
+                 | ((face2[ea] >= 0) & ((face2[ea] == face1[eb]) | (face2[ea] == face2[eb]))))
+        u, w = p[end[a]] - p[centre[a]], p[end[b]] - p[centre[b]]
+        cos = np.einsum("ij,ij->i", u, w) / (np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1))
+        keep = ~share & (cos < limit)
+        found_a.append(a[keep])
+        found_b.append(b[keep])
+    a = np.concatenate(found_a) if found_a else np.zeros(0, dtype=np.int64)
+    b = np.concatenate(found_b) if found_b else np.zeros(0, dtype=np.int64)
+    return np.sort(np.stack([end[a], end[b]], axis=1), axis=1).reshape(-1, 2), strip[edge[a]] + strip[edge[b]], BEND
+
+
+def _edge_bends(mesh: MeshFile, rows, first, second, face1, face2, area):
+    """Bending springs across the edges that two triangles share (see listed_springs)."""
+    corners = mesh.corners
+    opposite = np.full(len(rows), -1)
+    start = 0
+    for b in mesh.blocks:
+        if b.shape[1] == 3:  # edge j (corner j to j + 1) faces corner j + 2
+            opposite[start:start + 3 * len(b)] = np.roll(b, -2, axis=1).ravel()
+        start += b.size
+    shared = np.flatnonzero((second >= 0) & (corners[face1] == 3) & (corners[np.maximum(face2, 0)] == 3))
+    ends = np.stack([opposite[first[shared]], opposite[second[shared]]], axis=1)
+    return np.sort(ends, axis=1).reshape(-1, 2), area[face1[shared]] + area[face2[shared]], BEND
+
+
+# ----------------------------------------------------------------------------------------- placement, pins
+def initial_positions(scene: Scene, topo: Topology) -> np.ndarray:
+    """Particle positions (3, n) m at t = 0 (docs/model.md section 2.4).  The built-in grid: flat,
+    centred over the origin at ``initial_height``, tilted by ``initial_tilt`` about x.  A mesh file: its
+    coordinates (place_mesh 'off'), or (place_mesh 'on') turned by ``initial_tilt`` about the x axis
+    through its area-weighted centroid, and shifted so that the centroid is at ``initial_height``."""
+    tilt = math.radians(scene.initial_tilt)
+    pos = np.empty((3, topo.n))
+    if topo.mesh is None:
+        x, y = topo.rest_xy
+        pos[0] = x
+        pos[1] = y * math.cos(tilt)
+        pos[2] = scene.initial_height + y * math.sin(tilt)
+        return pos
+    return placed(scene, topo.rest_pos, topo.area)
+
+
+def placed(scene: Scene, rest_pos: np.ndarray, area: np.ndarray) -> np.ndarray:
+    """A mesh's rest positions (3, n) m placed by the rule of ``initial_positions``."""
+    if scene.place_mesh == "off":
+        return rest_pos.copy()
+    tilt = math.radians(scene.initial_tilt)
+    centre = rest_pos @ area / area.sum()
+    y, z = rest_pos[1] - centre[1], rest_pos[2] - centre[2]
+    return np.stack([rest_pos[0].copy(), centre[1] + y * math.cos(tilt) - z * math.sin(tilt),
+                     scene.initial_height + y * math.sin(tilt) + z * math.cos(tilt)])
+
+
+def start_positions(scene: Scene) -> tuple[np.ndarray, MeshFile | None]:
+    """The particle positions (3, n) m at t = 0 and the mesh file (None for the built-in grid), without
+    building the springs (for the scene's checks)."""
+    if not is_mesh_path(scene.cloth_mesh):
+        return initial_positions(scene, _grid(scene, scene.nx, scene.ny, scene.width, scene.length)), None
+    mesh = read_mesh_file(scene.cloth_mesh)
+    return placed(scene, mesh.points.T, vertex_areas(mesh)), mesh
+
+
+def pinned_mask(scene: Scene, positions: np.ndarray, mesh: MeshFile | None) -> np.ndarray:
+    """The pinned particles (n,) bool: ``pinned_edge`` (the built-in grid only) and ``pinned_vertices``
+    (a point attribute of the mesh file, nonzero pinned, or a box over ``positions`` (3, n) m at t = 0)."""
+    n = positions.shape[1]
+    pinned = np.zeros(n, dtype=bool)
+    if scene.pinned_edge != "none":
+        if mesh is not None:
+            raise ParameterError("pinned_edge", f"{scene.pinned_edge!r} is an edge of the nx x ny rectangle, but the "
+                                                "cloth comes from cloth_mesh (pin its vertices with pinned_vertices: "
+                                                "a point attribute or a box); allowed here: 'none'")
+        col, row = np.arange(n) % scene.nx, np.arange(n) // scene.nx
+        pinned |= {"x_min": col == 0, "x_max": col == scene.nx - 1, "y_min": row == 0,
+                   "y_max": row == scene.ny - 1}[scene.pinned_edge]
+    spec = scene.pinned_vertices.strip()
+    if spec.startswith("box:"):
+        pinned |= _box(spec, positions)
+    elif spec:
+        pinned |= _attribute(spec, mesh)
+    return pinned
+
+
+def _pin_error(message: str) -> ParameterError:
+    return ParameterError("pinned_vertices", f"{message}; allowed: {PINS_ALLOWED}")
+
+
+def _box(spec: str, positions: np.ndarray) -> np.ndarray:
+    try:
+        values = [float(v) for v in spec[4:].split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 6 or not all(map(math.isfinite, values)):
+        raise _pin_error(f"{spec!r} is not a box of six numbers")
+    lo, hi = np.array(values[:3])[:, None], np.array(values[3:])[:, None]
+    if (lo > hi).any():
+        raise _pin_error(f"{spec!r}: a lower corner is above the upper one")
+    inside = ((positions >= lo) & (positions <= hi)).all(axis=0)
+    if not inside.any():
+        span = ", ".join(f"{c} {positions[k].min():g} .. {positions[k].max():g}" for k, c in enumerate("xyz"))
+        raise _pin_error(f"the box {spec!r} holds no vertex of the cloth at t = 0 (it spans {span} m)")
+    return inside
+
+
+def _attribute(name: str, mesh: MeshFile | None) -> np.ndarray:
+    if mesh is None:
+        raise _pin_error(f"{name!r} names a point attribute, but the cloth is the nx x ny rectangle (cloth_mesh "
+                         "is empty): pin it with a box")
+    values = mesh.attributes.get(name)
+    if values is None:
+        available = ", ".join(repr(k) for k in mesh.attributes) or "none"
+        raise _pin_error(f"{name!r} is not a point attribute of {mesh.source!r} (its point attributes: {available})")
+    values = np.asarray(values).reshape(mesh.n, -1)
+    if values.shape[1] != 1:
+        raise _pin_error(f"the point attribute {name!r} of {mesh.source!r} has {values.shape[1]} components, "
+                         "not one")
+    return values[:, 0] != 0
+
+
+def corner_shares(rest_pos: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Each corner's share (m, 3) of its triangle, by the rest sheet's mixed Voronoi areas (Meyer et al.
+    2003): in a triangle without an obtuse angle the part of it nearer that corner than the others; in an
+    obtuse one 1/2 to the obtuse corner and 1/4 to each other.  A grid's right triangles give the grid's
+    1/2 to the right-angle corner and 1/4 to the others.  (The core shares a triangle's drag so.)"""
+    p = [rest_pos[:, triangles[:, k]].T for k in range(3)]  # corners (m, 3) each
+    shares = np.empty((len(triangles), 3))
+    cot = np.empty_like(shares)
+    for k in range(3):
+        u, w = p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]
+        cot[:, k] = np.einsum("ij,ij->i", u, w) / np.linalg.norm(np.cross(u, w), axis=1)
+    for k in range(3):
+        far1, far2 = (k + 1) % 3, (k + 2) % 3  # Voronoi: (|e_k,far1|^2 cot(far2) + |e_k,far2|^2 cot(far1)) / 8
+        shares[:, k] = (np.sum((p[far1] - p[k]) ** 2, axis=1) * cot[:, far2]
+                        + np.sum((p[far2] - p[k]) ** 2, axis=1) * cot[:, far1]) / 8.0
+    area = 0.5 * np.linalg.norm(np.cross(p[1] - p[0], p[2] - p[0]), axis=1)
+    shares /= area[:, None]
+    obtuse = cot < 0.0  # cot of the angle at each corner
+    for k in range(3):
+        rows = obtuse[:, k]
+        shares[rows] = 0.25
+        shares[rows, k] = 0.5
+    return shares

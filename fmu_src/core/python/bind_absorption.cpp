@@ -55,21 +55,15 @@ WETCLOTH_BINDINGS(m) {
         nb::arg("rate"), nb::arg("h"), nb::arg("water"));
     m.def(
         "wick",
-        [](nb::handle offsets, nb::handle conductance, nb::handle capacity, nb::handle dry_mass, Index substeps,
-           double h, nb::handle water, nb::handle vel, nb::handle buf) {
-            Cloth cloth;
-            cloth.n = size_of(water);
-            const Index n = cloth.n;
-            cloth.wick_families = size_of(offsets);
-            cloth.wick_offsets = argument<const Index>(offsets, "offsets");
-            cloth.wick_conductance = argument<const double>(conductance, "conductance", cloth.wick_families * n);
-            cloth.capacity = argument<const double>(capacity, "capacity", n);
-            cloth.dry_mass = argument<const double>(dry_mass, "dry_mass", n);
-            return wick(cloth, substeps, h, argument<double>(water, "water", n), argument<double>(vel, "vel", 3 * n),
+        [](nb::handle cloth, Index substeps, double h, nb::handle water, nb::handle vel, nb::handle buf) {
+            const Cloth c = cloth_from(cloth);
+            const Index n = c.n;
+            return wick(c, substeps, h, argument<double>(water, "water", n), argument<double>(vel, "vel", 3 * n),
                         argument<double>(buf, "buf", 6 * n));
         },
-        nb::arg("offsets"), nb::arg("conductance"), nb::arg("capacity"), nb::arg("dry_mass"), nb::arg("substeps"),
-        nb::arg("h"), nb::arg("water"), nb::arg("vel"), nb::arg("buf"));
+        nb::arg("cloth"), nb::arg("substeps"), nb::arg("h"), nb::arg("water"), nb::arg("vel"), nb::arg("buf"),
+        "Wick water (kg, (n)) between the cloth's neighbours over h (s) in `substeps` sub-steps, carrying momentum "
+        "(vel (3, n) m/s); buf (6, n) scratch.  Returns the largest amount moved over one link in one sub-step (kg).");
 }
 
 }  // namespace wc::py

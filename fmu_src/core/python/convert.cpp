@@ -1,6 +1,9 @@
 // The bundles' views (convert.hpp), field by field.
 #include "convert.hpp"
 
+#include <stdexcept>
+
+#include "wetcloth/collider_mesh.hpp"
 #include "wetcloth/colliders.hpp"
 
 namespace wc::py {
@@ -14,7 +17,7 @@ Cloth cloth_from(nb::handle h) {
     Cloth c;
     c.grid_x = number<Index>(h, "grid_x");
     c.grid_y = number<Index>(h, "grid_y");
-    c.n = c.grid_x * c.grid_y;
+    c.n = size_of(h.attr("dry_mass"));
     const Index n = c.n;
     c.offsets = array<const Index>(h, "offsets");
     c.families = size_of(h.attr("offsets"));
@@ -31,8 +34,44 @@ Cloth cloth_from(nb::handle h) {
     c.wick_offsets = array<const Index>(h, "wick_offsets");
     c.wick_families = size_of(h.attr("wick_offsets"));
     c.wick_conductance = array<const double>(h, "wick_conductance", c.wick_families * n);
+    c.pair_count = size_of(h.attr("pair_rest"));
+    c.pair_tension_count = number<Index>(h, "pair_tension_count");
+    c.pairs = array<const Index>(h, "pairs", 2 * c.pair_count);
+    c.pair_rest = array<const double>(h, "pair_rest", c.pair_count);
+    c.pair_stiffness = array<const double>(h, "pair_stiffness", c.pair_count);
+    c.pair_damping = array<const double>(h, "pair_damping", c.pair_count);
+    c.wick_pair_count = size_of(h.attr("wick_pair_conductance"));
+    c.wick_pairs = array<const Index>(h, "wick_pairs", 2 * c.wick_pair_count);
+    c.wick_pair_conductance = array<const double>(h, "wick_pair_conductance", c.wick_pair_count);
+    c.triangle_count = size_of(h.attr("triangles")) / 3;
+    c.triangles = array<const Index>(h, "triangles", 3 * c.triangle_count);
+    c.corner_shares = array<const double>(h, "corner_shares", 3 * c.triangle_count);
+    if (c.grid_x * c.grid_y != (is_mesh(c) ? 0 : n) || c.pair_tension_count < 0 || c.pair_tension_count > c.pair_count)
+        throw std::invalid_argument("cloth: grid_x * grid_y must be the particle count (0 for a mesh) and "
+                                    "pair_tension_count within the listed springs");
     return c;
 }
+
+namespace {
+
+ColliderMeshes meshes_from(nb::handle h) {
+    ColliderMeshes m;
+    m.count = size_of(h.attr("headers")) / MESH_COLUMNS;
+    if (m.count == 0) return m;
+    m.headers = array<const double>(h, "headers", m.count * MESH_COLUMNS);
+    m.vertex_count = size_of(h.attr("vertices")) / 3;
+    const Index triangles = size_of(h.attr("triangles")) / 3;
+    m.vertices = array<const double>(h, "vertices", 3 * m.vertex_count);
+    m.triangles = array<const Index>(h, "triangles", 3 * triangles);
+    m.face_normals = array<const double>(h, "face_normals", 3 * triangles);
+    m.edge_normals = array<const double>(h, "edge_normals", 9 * triangles);
+    m.vertex_normals = array<const double>(h, "vertex_normals", 3 * m.vertex_count);
+    m.cell_start = array<const Index>(h, "cell_start");
+    m.cell_items = array<const Index>(h, "cell_items");
+    return m;
+}
+
+}  // namespace
 
 Physics physics_from(nb::handle h) {
     Physics p;
@@ -63,6 +102,7 @@ Physics physics_from(nb::handle h) {
     p.collider_count = size_of(h.attr("colliders")) / COLLIDER_COLUMNS;
     p.colliders = p.collider_count > 0 ? array<const double>(h, "colliders", p.collider_count * COLLIDER_COLUMNS)
                                        : nullptr;
+    p.meshes = meshes_from(h.attr("meshes"));
     return p;
 }
 
@@ -102,8 +142,11 @@ Work work_from(nb::handle h, const Cloth& cloth) {
     w.across = array<double>(h, "across", f * n);
     w.rhs = array<double>(h, "rhs", 3 * n);
     w.buf = array<double>(h, "buf", 4 * n);
-    w.cells = array<double>(h, "cells", 2 * 9 * (n + cloth.grid_x + 1));
+    w.cells = array<double>(h, "cells", 2 * 9 * cells_length(cloth));
     w.wick_buffer = array<double>(h, "wick_buffer", 6 * n);
+    w.pair_direction = array<double>(h, "pair_direction", 3 * cloth.pair_count);
+    w.pair_along = array<double>(h, "pair_along", cloth.pair_count);
+    w.pair_across = array<double>(h, "pair_across", cloth.pair_count);
     return w;
 }
 
@@ -134,16 +177,16 @@ Hierarchy hierarchy_from(nb::handle h) {
     g.x = array<double>(h, "x", COMPONENTS * g.size);
     g.b = array<double>(h, "b", COMPONENTS * g.size);
     g.r = array<double>(h, "r", COMPONENTS * g.size);
-    g.row = array<double>(h, "row", g.levels[NX] + 3);
+    g.row = g.level_count > 0 ? array<double>(h, "row", g.levels[NX] + 3) : nullptr;
     return g;
 }
 
 Plane plane_from(nb::handle h, Index n) {
     Plane p;
     p.stiffness = array<const double>(h, "stiffness");
-    p.families = size_of(h.attr("stiffness")) / n;
-    p.slots = array<const Index>(h, "slots", p.families);
     p.grid = hierarchy_from(h.attr("grid"));
+    p.families = p.grid.level_count > 0 ? size_of(h.attr("stiffness")) / n : 0;  // a mesh's: (S) listed springs
+    p.slots = array<const Index>(h, "slots", p.families);
     p.order = array<const Index>(h, "order");
     p.coarse_n = size_of(h.attr("order"));
     p.kd = size_of(h.attr("bands")) / (COMPONENTS * p.coarse_n) - 1;
@@ -154,7 +197,8 @@ Plane plane_from(nb::handle h, Index n) {
     p.reference = array<double>(h, "reference", 4);
     p.reference_mass = array<double>(h, "reference_mass", n);
     p.shares = array<const double>(h, "shares", 2 * p.families);
-    p.jacobian_along = array<double>(h, "jacobian_along", p.families * n);
+    p.jacobian_along = array<double>(h, "jacobian_along", p.families > 0 ? p.families * n
+                                                                          : size_of(h.attr("jacobian_along")));
     p.jacobian_mass = array<double>(h, "jacobian_mass", n);
     p.frame = array<double>(h, "frame", 9 * n);
     p.normal = array<double>(h, "normal", n);

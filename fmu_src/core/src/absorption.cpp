@@ -108,6 +108,19 @@ double wick(const Cloth& cloth, Index substeps, double h, double* water, double*
     double largest = 0.0;
     for (Index step = 0; step < substeps; ++step) {
         for (Index i = 0; i < n; ++i) saturation[i] = water[i] / capacity[i];
+        for (Index k = 0; k < cloth.wick_pair_count; ++k) {  // a mesh's listed links, one at a time
+            const Index i = cloth.wick_pairs[k], j = cloth.wick_pairs[cloth.wick_pair_count + k];
+            const double moved = dt * cloth.wick_pair_conductance[k] * (saturation[j] - saturation[i]);
+            const double a = std::fabs(moved);
+            largest = a > largest ? a : largest;
+            water[i] += moved;
+            water[j] -= moved;
+            const Index donor = moved > 0.0 ? j : i;
+            for (Index c = 0; c < 3; ++c) {
+                momentum[c * n + i] += moved * vel[c * n + donor];
+                momentum[c * n + j] -= moved * vel[c * n + donor];
+            }
+        }
         for (Index f = 0; f < cloth.wick_families; ++f) {
             const Index off = cloth.wick_offsets[f];
             const Index m = n - off;

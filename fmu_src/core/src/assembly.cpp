@@ -50,6 +50,21 @@ void fill_zero(double* a, Index count) {
     for (Index i = 0; i < count; ++i) a[i] = 0.0;
 }
 
+//: The face drag of `fluid` into work.force (on a grid's cells or a mesh's triangles) and, with
+//: blocks_wanted, h times its velocity Jacobian into work.blocks.
+void add_face_drag(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
+                   const Fluid& fluid, double h, bool blocks_wanted) {
+    if (is_mesh(cloth)) {
+        mesh_face_drag(cloth.n, cloth.triangle_count, cloth.triangles, cloth.corner_shares, pos, vel, work.submerged,
+                       fluid, h, work.force, blocks_wanted ? work.blocks : nullptr, phys.skip_idle);
+    } else if (blocks_wanted) {
+        face_drag_and_blocks(cloth.grid_x, cloth.grid_y, pos, vel, work.submerged, fluid, h, work.force, work.blocks,
+                             work.cells, phys.skip_idle);
+    } else {
+        face_drag(cloth.grid_x, cloth.grid_y, pos, vel, work.submerged, fluid, work.force, work.cells, phys.skip_idle);
+    }
+}
+
 //: Buoyancy and drag (Stokes or face) into work.force; with blocks_wanted their velocity Jacobian
 //: (times h) into work.blocks and, for smooth buoyancy, its position Jacobian (times h^2) into
 //: work.blocks and work.rhs.
@@ -63,11 +78,8 @@ void water_forces(const Cloth& cloth, const Physics& phys, Work& work, const dou
     if (phys.stokes) {
         stokes_drag(n, s, cloth.stokes_coefficient, phys.current_x, phys.current_y, vel, force);
         if (blocks_wanted) stokes_blocks_loop(n, h, cloth.stokes_coefficient, s, blocks, blocks + n, blocks + 2 * n);
-    } else if (blocks_wanted) {
-        face_drag_and_blocks(cloth.grid_x, cloth.grid_y, pos, vel, s, water_fluid(phys), h, force, blocks, work.cells,
-                             phys.skip_idle);
     } else {
-        face_drag(cloth.grid_x, cloth.grid_y, pos, vel, s, water_fluid(phys), force, work.cells, phys.skip_idle);
+        add_face_drag(cloth, phys, work, pos, vel, water_fluid(phys), h, blocks_wanted);
     }
     if (blocks_wanted && phys.smooth) {
         // dF_z/dz = -rho g V / thickness inside the surface slab (0 < s < 1).
@@ -82,20 +94,6 @@ void water_forces(const Cloth& cloth, const Physics& phys, Work& work, const dou
     }
 }
 
-//: The face drag of the air above the water (docs/model.md section 4.4) on the part of each triangle out
-//: of the water into work.force; with blocks_wanted its velocity Jacobian (times h) into work.blocks.
-//: Rows wholly under water are skipped (skip_idle), as the water's drag skips dry ones.
-void air_forces(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel, double h,
-                bool blocks_wanted) {
-    if (blocks_wanted) {
-        face_drag_and_blocks(cloth.grid_x, cloth.grid_y, pos, vel, work.submerged, air_fluid(phys), h, work.force,
-                             work.blocks, work.cells, phys.skip_idle);
-    } else {
-        face_drag(cloth.grid_x, cloth.grid_y, pos, vel, work.submerged, air_fluid(phys), work.force, work.cells,
-                  phys.skip_idle);
-    }
-}
-
 }  // namespace
 
 double submerged(const Physics& phys, Index n, const double* z, double* out) {
@@ -106,14 +104,15 @@ void forces(const Cloth& cloth, const Physics& phys, Work& work, const double* p
             const double* water) {
     const Index n = cloth.n;
     start_with_gravity(cloth, water, work.force);
-    if (cloth.families > 0) {
+    if (cloth.families > 0 || cloth.pair_count > 0) {
         update_saturation(cloth, phys, water, work.saturation);
         spring_forces(cloth, phys, work.saturation, pos, vel, work.force, work.buf);
     }
     if (submerged(phys, n, pos + 2 * n, work.submerged) > 0.0 || !phys.skip_idle) {
         water_forces(cloth, phys, work, pos, vel, 0.0, false);
     }
-    if (phys.air_density > 0.0) air_forces(cloth, phys, work, pos, vel, 0.0, false);
+    // The air above the water (docs/model.md section 4.4) on the part of each triangle out of it.
+    if (phys.air_density > 0.0) add_face_drag(cloth, phys, work, pos, vel, air_fluid(phys), 0.0, false);
 }
 
 void forces_and_blocks(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
@@ -123,14 +122,14 @@ void forces_and_blocks(const Cloth& cloth, const Physics& phys, Work& work, cons
     fill_zero(work.rhs, 3 * n);
     fill_zero(work.diagonal_blocks, 6 * n);
     fill_zero(work.blocks, 6 * n);
-    if (cloth.families > 0) {
+    if (cloth.families > 0 || cloth.pair_count > 0) {
         update_saturation(cloth, phys, water, work.saturation);
         spring_forces_and_blocks(cloth, phys, work.saturation, pos, vel, h, slack_slope, work);
     }
     if (submerged(phys, n, pos + 2 * n, work.submerged) > 0.0 || !phys.skip_idle) {
         water_forces(cloth, phys, work, pos, vel, h, true);
     }
-    if (phys.air_density > 0.0) air_forces(cloth, phys, work, pos, vel, h, true);
+    if (phys.air_density > 0.0) add_face_drag(cloth, phys, work, pos, vel, air_fluid(phys), h, true);
 }
 
 }  // namespace wc

@@ -1,5 +1,5 @@
-// Analytic colliders (colliders.hpp; docs/model.md section 6.3): the floor's rule (floor.cpp) against a
-// plane, an axis-aligned box, a sphere or a capped cylinder with a vertical axis.
+// Colliders (colliders.hpp; docs/model.md section 6.3): the floor's rule (floor.cpp) against a plane, an
+// axis-aligned box, a sphere, a capped cylinder with a vertical axis or a triangle mesh (collider_mesh.cpp).
 //
 // Contact is resolved after the step, as floor_contact does: a particle that ends the step closer than
 // gap (thickness / 2) to a collider is moved out along the outward normal, loses its velocity into the
@@ -15,6 +15,7 @@
 #include <cmath>
 #include <limits>
 
+#include "wetcloth/collider_mesh.hpp"
 #include "wetcloth/floor.hpp"
 
 namespace wc {
@@ -41,9 +42,14 @@ double box_distance(const double* d, const double* half, double* normal) {
 }
 
 //: The collider's axis-aligned bounding box (lo, hi (3)); false for a plane (unbounded).
-bool bounds(const double* row, double* lo, double* hi) {
+bool bounds(const Physics& phys, const double* row, double* lo, double* hi) {
     double half[3];
     switch (static_cast<Index>(row[C_SHAPE])) {
+        case MESH: {
+            const double* header = phys.meshes.headers + static_cast<Index>(row[C_RADIUS]) * MESH_COLUMNS;
+            for (Index c = 0; c < 3; ++c) lo[c] = header[M_LO_X + c], hi[c] = header[M_HI_X + c];
+            return true;
+        }
         case SPHERE: half[0] = half[1] = half[2] = row[C_RADIUS]; break;
         case CYLINDER: half[0] = half[1] = row[C_RADIUS]; half[2] = 0.5 * row[C_HEIGHT]; break;
         case BOX: half[0] = 0.5 * row[C_SIZE_X]; half[1] = 0.5 * row[C_SIZE_Y]; half[2] = 0.5 * row[C_SIZE_Z]; break;
@@ -57,9 +63,9 @@ bool bounds(const double* row, double* lo, double* hi) {
 }
 
 //: Whether any point of the box [lo, hi] can be closer than gap to the collider.
-bool reachable(const double* row, const double* lo, const double* hi, double gap) {
+bool reachable(const Physics& phys, const double* row, const double* lo, const double* hi, double gap) {
     double clo[3], chi[3];
-    if (bounds(row, clo, chi)) {
+    if (bounds(phys, row, clo, chi)) {
         for (Index c = 0; c < 3; ++c) {
             if (hi[c] < clo[c] - gap || lo[c] > chi[c] + gap) return false;
         }
@@ -76,9 +82,11 @@ bool reachable(const double* row, const double* lo, const double* hi, double gap
 
 }  // namespace
 
-double collider_distance(const double* row, const double* p, double* normal) {
+double collider_distance(const Physics& phys, Index k, const double* p, double reach, double* normal) {
+    const double* row = phys.colliders + k * COLLIDER_COLUMNS;
     const double d[3] = {p[0] - row[C_X], p[1] - row[C_Y], p[2] - row[C_Z]};
     switch (static_cast<Index>(row[C_SHAPE])) {
+        case MESH: return mesh_distance(phys.meshes, static_cast<Index>(row[C_RADIUS]), p, reach, normal);
         case SPHERE: {
             const double r = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             if (r > 0.0) {
@@ -127,29 +135,52 @@ double collider_distance(const double* row, const double* p, double* normal) {
     }
 }
 
-Index collider_contact(Index n, Index count, const double* colliders, double gap, double* pos, double* vel) {
-    if (count == 0 || n == 0) return 0;
-    double lo[3], hi[3];
+namespace {
+
+//: The box (lo, hi (3)) of the particles' paths from start to pos (both (3, n)).
+void path_box(Index n, const double* start, const double* pos, double* lo, double* hi) {
     for (Index c = 0; c < 3; ++c) {
-        const double* x = pos + c * n;
-        const auto [a, b] = std::minmax_element(x, x + n);
-        lo[c] = *a;
-        hi[c] = *b;
+        const auto [a, b] = std::minmax_element(pos + c * n, pos + (c + 1) * n);
+        const auto [e, f] = std::minmax_element(start + c * n, start + (c + 1) * n);
+        lo[c] = std::min(*a, *e);
+        hi[c] = std::max(*b, *f);
     }
+}
+
+//: Where particle i's path from a to p crossed mesh collider `row`'s surface: p goes back to the side it
+//: came from, gap off the crossed triangle (normal: that side's).  Returns whether it crossed.
+bool undo_crossing(const Physics& phys, const double* row, const double* a, double gap, double* p, double* normal) {
+    double hit[3];
+    if (!mesh_crossing(phys.meshes, static_cast<Index>(row[C_RADIUS]), a, p, hit, normal)) return false;
+    for (Index c = 0; c < 3; ++c) p[c] = hit[c] + gap * normal[c];
+    return true;
+}
+
+}  // namespace
+
+Index collider_contact(Index n, const Physics& phys, const double* start, double* pos, double* vel) {
+    if (phys.collider_count == 0 || n == 0) return 0;
+    const double gap = 0.5 * phys.thickness;
+    double lo[3], hi[3];
+    path_box(n, start, pos, lo, hi);
     Index touching = 0;
-    for (Index k = 0; k < count; ++k) {
-        const double* row = colliders + k * COLLIDER_COLUMNS;
-        if (!reachable(row, lo, hi, gap)) continue;
+    for (Index k = 0; k < phys.collider_count; ++k) {
+        const double* row = phys.colliders + k * COLLIDER_COLUMNS;
+        if (!reachable(phys, row, lo, hi, gap)) continue;
+        const bool mesh = static_cast<Index>(row[C_SHAPE]) == MESH;
         const double friction = row[C_FRICTION];
         for (Index i = 0; i < n; ++i) {
             double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+            const double a[3] = {start[i], start[n + i], start[2 * n + i]};
             double nrm[3];
-            const double dist = collider_distance(row, p, nrm);
-            if (!(dist < gap)) continue;
+            if (!(mesh && undo_crossing(phys, row, a, gap, p, nrm))) {
+                const double dist = collider_distance(phys, k, p, gap, nrm);
+                if (!(dist < gap)) continue;
+                // Position: out along the normal, to the contact distance.
+                const double depth = gap - dist;
+                for (Index c = 0; c < 3; ++c) p[c] += depth * nrm[c];
+            }
             touching += 1;
-            // Position: out along the normal, to the contact distance.
-            const double depth = gap - dist;
-            for (Index c = 0; c < 3; ++c) p[c] += depth * nrm[c];
             // Velocity: the part into the collider removed, sliding reduced by friction times that.
             double v[3] = {vel[i], vel[n + i], vel[2 * n + i]};
             coulomb_stop(v, nrm, friction);
@@ -162,17 +193,16 @@ Index collider_contact(Index n, Index count, const double* colliders, double gap
     return touching;
 }
 
-Index hold_on_colliders(Index n, Index count, const double* colliders, double gap, const double* pos,
-                        const double* vel, double* free, double* held) {
+Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const double* vel, double* free, double* held) {
     Index holding = 0;
-    if (count == 0) return 0;
-    const double reach = gap * (1.0 + 1e-9);
+    if (phys.collider_count == 0) return 0;
+    const double reach = 0.5 * phys.thickness * (1.0 + 1e-9);
     for (Index i = 0; i < n; ++i) {
         if (free[i] == 0.0 || vel[i] != 0.0 || vel[n + i] != 0.0 || vel[2 * n + i] != 0.0) continue;
         const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
-        for (Index k = 0; k < count; ++k) {
+        for (Index k = 0; k < phys.collider_count; ++k) {
             double nrm[3];
-            if (collider_distance(colliders + k * COLLIDER_COLUMNS, p, nrm) <= reach) {
+            if (collider_distance(phys, k, p, 2.0 * reach, nrm) <= reach) {
                 free[i] = 0.0;
                 held[i] = collider_held(k);
                 holding += 1;
@@ -183,17 +213,18 @@ Index hold_on_colliders(Index n, Index count, const double* colliders, double ga
     return holding;
 }
 
-Index release_from_colliders(Index n, const double* colliders, const double* pos, const double* force, double* free,
+Index release_from_colliders(Index n, const Physics& phys, const double* pos, const double* force, double* free,
                              double* held) {
     Index released = 0;
+    const double reach = phys.thickness;  // a held particle sits at thickness / 2
     for (Index i = 0; i < n; ++i) {
         if (held[i] < collider_held(0)) continue;  // not on a collider (floor 1, layer 2, free 0)
-        const double* row = colliders + static_cast<Index>(held[i] - collider_held(0)) * COLLIDER_COLUMNS;
+        const Index k = static_cast<Index>(held[i] - collider_held(0));
         const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
         double nrm[3];
-        collider_distance(row, p, nrm);
+        const bool on = collider_distance(phys, k, p, reach, nrm) < reach;  // a mesh's is not looked for farther
         const double f[3] = {force[i], force[n + i], force[2 * n + i]};
-        if (slips(f, nrm, row[C_FRICTION])) {
+        if (!on || slips(f, nrm, phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION])) {
             held[i] = 0.0;
             free[i] = 1.0;
             released += 1;
@@ -202,20 +233,20 @@ Index release_from_colliders(Index n, const double* colliders, const double* pos
     return released;
 }
 
-Index collider_history(Index n, Index count, const double* colliders, double gap, const double* pos, const double* vel,
-                       double* prev_pos, double* prev_vel, double h) {
+Index collider_history(Index n, const Physics& phys, const double* pos, const double* vel, double* prev_pos,
+                       double* prev_vel, double h) {
     Index agreed = 0;
-    const double reach = gap * (1.0 + 1e-9);  // where collider_contact put them, up to rounding
+    const double reach = 0.5 * phys.thickness * (1.0 + 1e-9);  // where collider_contact put them, up to rounding
     for (Index i = 0; i < n; ++i) {
         const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
-        bool on = false;
-        for (Index k = 0; k < count && !on; ++k) {
+        for (Index k = 0; k < phys.collider_count; ++k) {
             double nrm[3];
-            on = collider_distance(colliders + k * COLLIDER_COLUMNS, p, nrm) <= reach;
+            if (collider_distance(phys, k, p, 2.0 * reach, nrm) <= reach) {
+                agreed += 1;
+                normal_history(n, i, nrm, pos, vel, prev_pos, prev_vel, h);
+                break;
+            }
         }
-        if (!on) continue;
-        agreed += 1;
-        straight_history(n, i, pos, vel, prev_pos, prev_vel, h);
     }
     return agreed;
 }

@@ -77,17 +77,20 @@ void release_all(Index n, double* free, double* held) {
     }
 }
 
-//: After a step of h s: the particles on the floor (centre at z_min, m) get the history of a straight
-//: motion at their present velocity (prev_pos = pos - h vel, prev_vel = vel), so that a multistep scheme
-//: does not carry on the fall the floor stopped, and its error estimate does not see the stop as a
-//: large error at the next step.
+//: After a step of h s: the particles on the floor (centre at z_min, m) get the vertical history of a
+//: straight motion at their present velocity (prev z = z - h v_z, prev v_z = v_z), so that a multistep
+//: scheme does not carry on the fall the floor stopped, and its error estimate does not see the stop as a
+//: large error at the next step.  Their horizontal history is kept: a sliding particle's friction
+//: deceleration is then the Coulomb value mu g (with a straight history there too, BDF2's velocity
+//: update would take only 2/3 of each step's acceleration, the floor's impulse with it).
 Index agree_history(Index n, double z_min, const double* pos, const double* vel, double* prev_pos, double* prev_vel,
                     double h) {
     Index count = 0;
+    const double up[3] = {0.0, 0.0, 1.0};
     for (Index i = 0; i < n; ++i) {
         if (pos[2 * n + i] > z_min) continue;
         count += 1;
-        straight_history(n, i, pos, vel, prev_pos, prev_vel, h);
+        normal_history(n, i, up, pos, vel, prev_pos, prev_vel, h);
     }
     return count;
 }

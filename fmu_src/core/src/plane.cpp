@@ -15,6 +15,7 @@
 
 #include "wetcloth/band.hpp"
 #include "wetcloth/multigrid.hpp"
+#include "wetcloth/plane_parts.hpp"
 
 namespace wc {
 
@@ -58,6 +59,7 @@ void diagonal_stencil(Plane& plane, Index n, Index c, const double* diagonal) {
 //: Cholesky factors of the coarsest.  Returns 0, or band_factor's info if a matrix was not positive
 //: definite.
 Index factor(Plane& plane, const Cloth& cloth, const double* mass, double scale, const double* weights) {
+    if (mesh_plane(plane)) return mesh_factor(plane, cloth, mass, scale, weights);
     const Index n = cloth.n;
     Hierarchy& grid = plane.grid;
     const Index* levels = grid.levels;
@@ -127,7 +129,8 @@ bool jacobian_refresh_pays(const Plane& plane, double iterations) {
 
 Index refresh_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const double* along) {
     const Index n = cloth.n;
-    for (Index e = 0; e < cloth.families * n; ++e) plane.jacobian_along[e] = along[e];
+    const Index count = mesh_plane(plane) ? cloth.pair_count : cloth.families * n;
+    for (Index e = 0; e < count; ++e) plane.jacobian_along[e] = along[e];
     for (Index i = 0; i < n; ++i) plane.jacobian_mass[i] = mass[i];
     if (factor(plane, cloth, mass, 1.0, plane.jacobian_along) != 0) {
         plane.reference[1] = 0.0;
@@ -138,6 +141,7 @@ Index refresh_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass
 }
 
 void follow_cloth(Plane& plane, const Cloth& cloth, const double* pos) {
+    if (mesh_plane(plane)) return mesh_follow_cloth(plane, cloth, pos);
     // t1 along the row, n normal to row and column (central differences, one-sided at the edges),
     // t2 = n x t1; the axes where that is degenerate.
     const Index n = cloth.n, grid_x = cloth.grid_x;
@@ -187,25 +191,6 @@ void follow_cloth(Plane& plane, const Cloth& cloth, const double* pos) {
 
 namespace {
 
-//: out[i] = mass_i + t_i^T (D_i + B_i) t_i for the frame's axis c (t1, t2, n); without WITH_SPRINGS
-//: D (the springs' part of the diagonal blocks) is left out.
-template <bool WITH_SPRINGS>
-void axis_diagonal(const Plane& plane, Index n, Index c, const double* mass, const double* diagonal_blocks,
-                   const double* blocks, double* __restrict out) {
-    const double* __restrict t0 = plane.frame + (3 * c) * n;
-    const double* __restrict t1 = plane.frame + (3 * c + 1) * n;
-    const double* __restrict t2 = plane.frame + (3 * c + 2) * n;
-    const double* __restrict d = diagonal_blocks;
-    const double* __restrict b = blocks;
-    for (Index i = 0; i < n; ++i) {
-        double e[6];
-        for (Index slot = 0; slot < 6; ++slot) e[slot] = WITH_SPRINGS ? d[slot * n + i] + b[slot * n + i] : b[slot * n + i];
-        const double tx = t0[i], ty = t1[i], tz = t2[i];
-        out[i] = mass[i] + (e[0] * tx * tx + e[1] * ty * ty + e[2] * tz * tz +
-                            2.0 * (e[3] * tx * ty + e[4] * tx * tz + e[5] * ty * tz));
-    }
-}
-
 //: Component c's level-0 stencil from the Jacobian: on the diagonal `diagonal` (the mass and the
 //: particle's own blocks) plus t_i^T S t_i of each spring the stencil reaches, and between its ends
 //: -t_i^T S t_j, S = across I + (along - across) u u^T the spring's block.  Springs it does not reach
@@ -232,19 +217,15 @@ void jacobian_stencil(Plane& plane, const Cloth& cloth, const Work& work, Index 
         for (Index i = 0; i < n - off; ++i) {
             const Index j = i + off;
             if (along[i] == 0.0 && across[i] == 0.0) continue;
-            const double ti_u = tx[i] * ux[i] + ty[i] * uy[i] + tz[i] * uz[i];
-            const double tj_u = tx[j] * ux[i] + ty[j] * uy[i] + tz[j] * uz[i];
-            const double ti_tj = tx[i] * tx[j] + ty[i] * ty[j] + tz[i] * tz[j];
-            const double ti_ti = tx[i] * tx[i] + ty[i] * ty[i] + tz[i] * tz[i];
-            const double tj_tj = tx[j] * tx[j] + ty[j] * ty[j] + tz[j] * tz[j];
-            const double stiff = along[i] - across[i];
+            const Coupling s = spring_coupling(tx[i], ty[i], tz[i], tx[j], ty[j], tz[j], ux[i], uy[i], uz[i], along[i],
+                                               across[i]);
             const Index p = padded_index(grid.levels, 0, i % grid_x, i / grid_x);
             const Index q = padded_index(grid.levels, 0, j % grid_x, j / grid_x);
-            coef[CENTRE * size + p] += across[i] * ti_ti + stiff * ti_u * ti_u;
-            coef[CENTRE * size + q] += across[i] * tj_tj + stiff * tj_u * tj_u;
+            coef[CENTRE * size + p] += s.at_i;
+            coef[CENTRE * size + q] += s.at_j;
             if (free[i] == 0.0 || free[j] == 0.0) continue;  // a pinned end holds: no coupling (Dirichlet)
-            coef[k * size + p] -= across[i] * ti_tj + stiff * ti_u * tj_u;
-            coef[(8 - k) * size + q] -= across[i] * ti_tj + stiff * ti_u * tj_u;
+            coef[k * size + p] += s.between;
+            coef[(8 - k) * size + q] += s.between;
         }
     }
 }
@@ -258,6 +239,7 @@ void set_normal_diagonal(Plane& plane, Index n, const double* mass, const double
 }
 
 Index set_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const Work& work) {
+    if (mesh_plane(plane)) return mesh_systems_from_jacobian(plane, cloth, mass, work);
     const Index n = cloth.n;
     plane.reference[1] = plane.reference[2] = 0.0;  // the rest-stiffness factors are overwritten
     plane.reference[3] = 1.0;
@@ -299,6 +281,7 @@ void combine_row(double* __restrict zc, const double* __restrict weight, const d
 }  // namespace
 
 void apply(Plane& plane, Index n, const double* free, const double* r, double* z) {
+    if (mesh_plane(plane)) return mesh_apply(plane, n, free, r, z);
     // Loops over rows of the grid (vectorised).  The normal component goes through the cycle and the
     // band solves when it has a system (set_systems_from_jacobian), else it is divided by its diagonal.
     const double* f = plane.frame;  // f[(3 a + c) n + i]

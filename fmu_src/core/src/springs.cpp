@@ -10,75 +10,13 @@
 // (numba's LLVM needed few written rows for its checks; here any number vectorises).
 #include "wetcloth/springs.hpp"
 
-#include <cmath>
-#include <limits>
+#include "wetcloth/listed_springs.hpp"
+#include "wetcloth/spring_law.hpp"
 
 namespace wc {
 namespace {
 
-constexpr double TINY_LENGTH = 1e-12;  // m; below this a spring has no direction
-
-//: numba's (Python's) max(a, b): b if b > a else a.
-inline double py_max(double a, double b) { return b > a ? b : a; }
-
-//: 1 / max(length, TINY_LENGTH) as min(1 / length, 1 / TINY_LENGTH), numba's min: the same value for
-//: every length >= 0, inf or NaN (division rounds monotonically; NaN stays NaN), with the division
-//: outside the select.  GCC folds 1 / TINY_LENGTH in the select's one branch and then may not
-//: speculate the other's division (-ftrapping-math): the loop would not vectorise.
-constexpr double INV_TINY_LENGTH = 1.0 / TINY_LENGTH;
-inline double inverse_length(double length) {
-    const double inv = 1.0 / length;
-    return INV_TINY_LENGTH < inv ? INV_TINY_LENGTH : inv;
-}
-
-//: numba's (Python's) min(a, b): b if b < a else a.
-inline double py_min(double a, double b) { return b < a ? b : a; }
-
-//: How a family's springs pull: both ways; tension only, through pulling_stretch_clamped (rest
-//: length > 0 and finite) or through pulling_stretch itself (any other rest length).
-enum class Law { BOTH_WAYS, CLAMPED, EXACT };
-
-//: pulling_stretch for 0 < width < inf without branches, bit for bit (NaN and inf included): r = s / w
-//: clamped to [0, 1] (by comparisons on r itself), then the cubic, which gives s and 1 at r = 1, and
-//: +-0 at r = +-0, made +0 by the + 0.0.  Written with its branches (or with literal bounds, which GCC
-//: propagates into split copies of the loop's tail), GCC computes the division or the products in
-//: one branch only and, -ftrapping-math being its default, may then not execute them
-//: unconditionally: the loop does not vectorise.  Hence the bounds 0 and 1 as width - width and
-//: width / width, exact for a finite width > 0 and unknown to the compiler.
-inline Stretch pulling_stretch_clamped(double stretch, double width) {
-    const double zero = width - width, one = width / width;
-    const double r = py_min(py_max(stretch / width, zero), one);
-    return {stretch * r * (2.0 - r) + 0.0, r * (4.0 - 3.0 * r) + 0.0};
-}
-
-template <Law L>
-inline Stretch pulled(double stretch, double width) {
-    if (L == Law::CLAMPED) return pulling_stretch_clamped(stretch, width);
-    if (L == Law::EXACT) return pulling_stretch(stretch, width);
-    return {stretch, 1.0};
-}
-
-//: The law of a family with rest length l0 (m).
-inline Law law_of(bool tension_only, double l0) {
-    if (!tension_only) return Law::BOTH_WAYS;
-    const double width = TENSION_ROUNDING * l0;
-    return width > 0.0 && width <= std::numeric_limits<double>::max() ? Law::CLAMPED : Law::EXACT;
-}
-
-//: Separation d = x_i - x_j (m), length L (m), 1 / L (1/m; finite for a spring of no length) and
-//: stiffness kf (N/m) scaled by the saturations si, sj of both ends.
-struct Geometry {
-    double dx, dy, dz, length, inv, stiffness;
-};
-
-inline Geometry spring_geometry(double xi, double yi, double zi, double xj, double yj, double zj, double kf, double si,
-                                double sj, double wet_factor) {
-    const double dx = xi - xj;
-    const double dy = yi - yj;
-    const double dz = zi - zj;
-    const double length = std::sqrt(dx * dx + dy * dy + dz * dz);
-    return {dx, dy, dz, length, inverse_length(length), kf * (1.0 + wet_factor * 0.5 * (si + sj))};
-}
+using namespace spring_law;
 
 // The loops below take every row as a __restrict parameter (GCC ignores __restrict on locals and
 // struct members; on an inlined function's parameters it keeps it).  "First" rows (xi, ...) start at
@@ -98,10 +36,8 @@ void tension_loop(Index m, double l0, double damp, double wet_factor, const doub
     const double width = TENSION_ROUNDING * l0;
     for (Index k = 0; k < m; ++k) {
         const Geometry g = spring_geometry(xi[k], yi[k], zi[k], xj[k], yj[k], zj[k], kf[k], si[k], sj[k], wet_factor);
-        double stretch = g.length - l0;
-        if (L != Law::BOTH_WAYS) stretch = pulled<L>(stretch, width).value;
         const double rate = (vxi[k] - vxj[k]) * g.dx + (vyi[k] - vyj[k]) * g.dy + (vzi[k] - vzj[k]) * g.dz;
-        t[k] = -(g.stiffness * stretch * g.inv + damp * cf[k] * rate * g.inv * g.inv);
+        t[k] = tension<L>(g, l0, width, damp, cf[k], rate);
     }
 }
 
@@ -156,30 +92,17 @@ void coefficients_loop(Index m, double l0, bool projected, double wet_factor, do
                        const double* __restrict vxj, const double* __restrict vyj, const double* __restrict vzj,
                        double* __restrict t, double* __restrict ux, double* __restrict uy, double* __restrict uz,
                        double* __restrict along, double* __restrict across) {
-    const double damp_along = projected ? 1.0 : 0.0;
-    const double damp_across = projected ? 0.0 : 1.0;
     const double width = TENSION_ROUNDING * l0;
-    const double h2 = h * h;
     for (Index k = 0; k < m; ++k) {
         const Geometry g = spring_geometry(xi[k], yi[k], zi[k], xj[k], yj[k], zj[k], kf[k], si[k], sj[k], wet_factor);
-        const double ex = g.dx * g.inv;
-        const double ey = g.dy * g.inv;
-        const double ez = g.dz * g.inv;
-        ux[k] = ex;
-        uy[k] = ey;
-        uz[k] = ez;
-        double stretch = g.length - l0;
-        double slope = 1.0;
-        if (L != Law::BOTH_WAYS) {
-            const Stretch s = pulled<L>(stretch, width);
-            stretch = s.value;
-            slope = py_max(s.slope, slack_slope);
-        }
-        const double rate = (vxi[k] - vxj[k]) * ex + (vyi[k] - vyj[k]) * ey + (vzi[k] - vzj[k]) * ez;
-        t[k] = -(g.stiffness * stretch * g.inv + damp_along * cf[k] * rate * g.inv);
-        // Geometric stiffness k s / L only while pulling, so every block stays positive.
-        along[k] = h * cf[k] + h2 * g.stiffness * slope;
-        across[k] = damp_across * h * cf[k] + h2 * g.stiffness * py_max(stretch, 0.0) * g.inv;
+        const Coefficients c = spring_law::coefficients<L>(g, l0, width, projected, h, slack_slope, cf[k],
+                                                           vxi[k] - vxj[k], vyi[k] - vyj[k], vzi[k] - vzj[k]);
+        t[k] = c.t;
+        ux[k] = c.ux;
+        uy[k] = c.uy;
+        uz[k] = c.uz;
+        along[k] = c.along;
+        across[k] = c.across;
     }
 }
 
@@ -203,15 +126,11 @@ inline void stiffness_times_velocity_loop(Index m, double h, double thesis, doub
                                           const double* __restrict vzj, double* __restrict rx, double* __restrict ry,
                                           double* __restrict rz) {
     for (Index k = 0; k < m; ++k) {
-        const double damping = h * cf[k];
-        const double k_across = across[k] - thesis * damping;
-        const double dvx = vxi[k] - vxj[k];
-        const double dvy = vyi[k] - vyj[k];
-        const double dvz = vzi[k] - vzj[k];
-        const double along_part = (along[k] - damping - k_across) * (dvx * ux[k] + dvy * uy[k] + dvz * uz[k]);
-        rx[k] -= sign * (k_across * dvx + along_part * ux[k]);
-        ry[k] -= sign * (k_across * dvy + along_part * uy[k]);
-        rz[k] -= sign * (k_across * dvz + along_part * uz[k]);
+        const Vec kv = stiffness_times_velocity(h, thesis, cf[k], along[k], across[k], ux[k], uy[k], uz[k],
+                                                vxi[k] - vxj[k], vyi[k] - vyj[k], vzi[k] - vzj[k]);
+        rx[k] -= sign * kv.x;
+        ry[k] -= sign * kv.y;
+        rz[k] -= sign * kv.z;
     }
 }
 
@@ -228,17 +147,6 @@ inline void add_stiffness_times_velocity(Index n, Index off, double h, bool proj
                                       u + n, u + 2 * n, vel, vel + n, vel + 2 * n, vel + off, vel + n + off,
                                       vel + 2 * n + off, rhs + start, rhs + n + start, rhs + 2 * n + start);
     }
-}
-
-struct Block {
-    double xx, yy, zz, xy, xz, yz;
-};
-
-//: A spring's block across I + (along - across) u u^T (kg) as its six slots.
-inline Block spring_block(double along, double across, double x, double y, double z) {
-    const double iso = across;
-    const double aniso = along - iso;
-    return {iso + aniso * x * x, iso + aniso * y * y, iso + aniso * z * z, aniso * x * y, aniso * x * z, aniso * y * z};
 }
 
 //: Rows xx..yz[j] += the block of spring j (along, across, u from that spring on), j < count.
@@ -355,6 +263,7 @@ void spring_forces(const Cloth& cloth, const Physics& phys, const double* satura
         }
         add_spring_forces(n, off, t, phys.projected, cf, pos, vel, force);
     }
+    if (cloth.pair_count > 0) listed_spring_forces(cloth, phys, saturation, pos, vel, force);
 }
 
 void spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos,
@@ -387,6 +296,7 @@ void spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const dou
         add_stiffness_times_velocity(n, off, h, phys.projected, cf, along, across, u, vel, work.rhs);
         add_blocks(n, off, along, across, u, work.diagonal_blocks);
     }
+    if (cloth.pair_count > 0) listed_spring_forces_and_blocks(cloth, phys, saturation, pos, vel, h, slack_slope, work);
 }
 
 // One loop per row and spring end, through a scratch row: in numba, loops writing all three rows at
@@ -408,6 +318,7 @@ void spring_matvec(const Cloth& cloth, const Work& work, const double* p, double
             add_to_both_ends(n, scratch, off, out + c * n, -1.0);
         }
     }
+    if (cloth.pair_count > 0) listed_spring_matvec(cloth, work, p, out);
 }
 
 }  // namespace wc

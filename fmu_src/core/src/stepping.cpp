@@ -159,8 +159,7 @@ Status step(Core& core, double remaining) {
     // Particles at rest on the floor take no part in the step (a constraint of its solve) unless its forces
     // would move them; the model's free flags are theirs again before the step ends.
     Index held = hold_resting(n, phys.floor_z, buf.pos, buf.vel, cloth.free, buf.held);
-    const Index held_on_colliders = hold_on_colliders(n, phys.collider_count, phys.colliders, 0.5 * phys.thickness,
-                                                      buf.pos, buf.vel, cloth.free, buf.held);
+    const Index held_on_colliders = hold_on_colliders(n, phys, buf.pos, buf.vel, cloth.free, buf.held);
     held += held_on_colliders;
     const Index on_layers = hold_on_layers(core.contact, phys.thickness, n, buf.pos, buf.vel, cloth.free, buf.held);
     if (on_layers > 0) {  // whom the forces in hand would slide off their layer go free at once
@@ -187,8 +186,8 @@ Status step(Core& core, double remaining) {
         if (held > 0 && trial.converged) {
             const Index released = release_slipping(n, phys.floor_friction, core.work.force, cloth.free, buf.held) +
                                    release_unsupported(core.contact, n, cloth.free, buf.held) +
-                                   (held_on_colliders > 0 ? release_from_colliders(n, phys.colliders, buf.pos,
-                                                                                   core.work.force, cloth.free, buf.held)
+                                   (held_on_colliders > 0 ? release_from_colliders(n, phys, buf.pos, core.work.force,
+                                                                                   cloth.free, buf.held)
                                                           : 0);
             if (released > 0) {  // redo the step with them free
                 held -= released;
@@ -242,8 +241,7 @@ Status step(Core& core, double remaining) {
     const bool on_floor = floor_contact(n, phys.floor_z, phys.floor_friction, buf.trial_pos, buf.trial_vel) > 0 ||
                           held > 0;
     const bool on_collider = (phys.collider_count > 0 &&
-                              collider_contact(n, phys.collider_count, phys.colliders, 0.5 * phys.thickness,
-                                               buf.trial_pos, buf.trial_vel) > 0) ||
+                              collider_contact(n, phys, buf.pos, buf.trial_pos, buf.trial_vel) > 0) ||
                              held_on_colliders > 0;
     const bool kinked = resolve(core.contact, phys.thickness, phys.floor_z, control.blow_up_speed, n,
                                 core.solver.mass, cloth.free, buf.pos, buf.trial_pos, buf.trial_vel, h);
@@ -263,8 +261,7 @@ Status step(Core& core, double remaining) {
     if (control.integrator == BDF2) copy(3 * n, core.solver.step_acceleration, buf.acceleration);
     if (on_floor) agree_history(n, phys.floor_z, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h);
     if (on_collider) {
-        collider_history(n, phys.collider_count, phys.colliders, 0.5 * phys.thickness, buf.pos, buf.vel,
-                         buf.prev_pos, buf.prev_vel, h);
+        collider_history(n, phys, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h);
     }
     clock[LAST_STEP] = kinked ? 0.0 : h;  // self-collision's push: BDF2 starts afresh
     clock[TIME] += h;

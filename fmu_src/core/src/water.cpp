@@ -38,14 +38,70 @@ inline double inverse_area(double twice_area) {
     return INV_TINY_AREA < inv ? INV_TINY_AREA : inv;
 }
 
-//: Triangles (a[k], b[k], c[k]) for k < count: force (N) into fx, fy, fz and, if Blocks, the Jacobian
-//: blocks (N s/m) into xx..yz.  Per triangle: the unit normal n, the part of it in the fluid
-//: share_base + share_sign s_t (s_t its corners' mean submerged fraction: 0 + 1 s_t in water, 1 - 1 s_t
-//: in the air above it), and dF/du = k_normal n n^T + k_tangential (I - n n^T) + k_linear I +
-//: k_slip s s^T, with u the fluid's velocity (flow) relative to the triangle and s its in-plane part (the
-//: slip).  Branch-free, so the loop vectorises.  Every row is a __restrict parameter: GCC ignores
-//: __restrict on locals and struct members, and with nine written rows run-time overlap checks would be
-//: too many.
+//: One triangle's drag (N) and, if Blocks, its Jacobian blocks (N s/m: xx, yy, zz, xy, xz, yz), from its
+//: corners' positions (a, b, c), velocities and submerged fractions.  The unit normal n, the part of it
+//: in the fluid share_base + share_sign s_t (s_t its corners' mean submerged fraction: 0 + 1 s_t in
+//: water, 1 - 1 s_t in the air above it), and dF/du = k_normal n n^T + k_tangential (I - n n^T) +
+//: k_linear I + k_slip s s^T, with u the fluid's velocity (flow) relative to the triangle and s its
+//: in-plane part (the slip).  Branch-free, so the grid's loop vectorises around it.
+struct TriangleDrag {
+    double fx, fy, fz, xx, yy, zz, xy, xz, yz;
+};
+
+template <bool Blocks>
+inline TriangleDrag triangle_drag(double density, double c_normal, double c_tangential, double c_linear,
+                                  double flow_x, double flow_y, double flow_z, double share_base, double share_sign,
+                                  double ax, double ay, double az, double avx, double avy, double avz, double as,
+                                  double bx, double by, double bz, double bvx, double bvy, double bvz, double bs,
+                                  double cx_, double cy_, double cz_, double cvx, double cvy, double cvz, double cs) {
+    const double st = share_base + share_sign * ((as + bs + cs) * (1.0 / 3.0));
+    const double e1x = bx - ax;
+    const double e1y = by - ay;
+    const double e1z = bz - az;
+    const double e2x = cx_ - ax;
+    const double e2y = cy_ - ay;
+    const double e2z = cz_ - az;
+    const double cx = e1y * e2z - e1z * e2y;
+    const double cy = e1z * e2x - e1x * e2z;
+    const double cz = e1x * e2y - e1y * e2x;
+    const double twice_area = std::sqrt(cx * cx + cy * cy + cz * cz);
+    const double inv = inverse_area(twice_area);
+    const double normal_x = cx * inv;
+    const double normal_y = cy * inv;
+    const double normal_z = cz * inv;
+    const double wet_area = 0.5 * twice_area * st;
+    const double ux = flow_x - (avx + bvx + cvx) * (1.0 / 3.0);
+    const double uy = flow_y - (avy + bvy + cvy) * (1.0 / 3.0);
+    const double uz = flow_z - (avz + bvz + cvz) * (1.0 / 3.0);
+    const double un = ux * normal_x + uy * normal_y + uz * normal_z;
+    const double utx = ux - un * normal_x;
+    const double uty = uy - un * normal_y;
+    const double utz = uz - un * normal_z;
+    const double ut = std::sqrt(utx * utx + uty * uty + utz * utz);
+    const double q = 0.5 * density * wet_area;
+    const double kn = q * c_normal * std::fabs(un);
+    const double kt = q * c_tangential * ut;
+    const double kl = c_linear * wet_area;
+    TriangleDrag d{kn * un * normal_x + kt * utx + kl * ux, kn * un * normal_y + kt * uty + kl * uy,
+                   kn * un * normal_z + kt * utz + kl * uz, 0, 0, 0, 0, 0, 0};
+    if (Blocks) {
+        // d(|w| w)/dw = |w| I + w w^T / |w|: along w twice the force's coefficient, across it once.
+        const double ks = q * c_tangential / py_max(ut, 1e-300);
+        const double diff = 2.0 * kn - kt;
+        const double iso = kt + kl;
+        d.xx = iso + diff * normal_x * normal_x + ks * utx * utx;
+        d.yy = iso + diff * normal_y * normal_y + ks * uty * uty;
+        d.zz = iso + diff * normal_z * normal_z + ks * utz * utz;
+        d.xy = diff * normal_x * normal_y + ks * utx * uty;
+        d.xz = diff * normal_x * normal_z + ks * utx * utz;
+        d.yz = diff * normal_y * normal_z + ks * uty * utz;
+    }
+    return d;
+}
+
+//: Triangles (a[k], b[k], c[k]) for k < count (triangle_drag): force (N) into fx, fy, fz and, if Blocks,
+//: the Jacobian blocks (N s/m) into xx..yz.  Every row is a __restrict parameter: GCC ignores __restrict
+//: on locals and struct members, and with nine written rows run-time overlap checks would be too many.
 template <bool Blocks>
 void drag_row_loop(Index count, double density, double c_normal, double c_tangential, double c_linear,
                    double flow_x, double flow_y, double flow_z, double share_base, double share_sign,
@@ -60,48 +116,20 @@ void drag_row_loop(Index count, double density, double c_normal, double c_tangen
                    double* __restrict fz_, double* __restrict xx, double* __restrict yy, double* __restrict zz,
                    double* __restrict xy, double* __restrict xz, double* __restrict yz) {
     for (Index k = 0; k < count; ++k) {
-        const double st = share_base + share_sign * ((as[k] + bs[k] + cs[k]) * (1.0 / 3.0));
-        const double e1x = bx[k] - ax[k];
-        const double e1y = by[k] - ay[k];
-        const double e1z = bz[k] - az[k];
-        const double e2x = cx_[k] - ax[k];
-        const double e2y = cy_[k] - ay[k];
-        const double e2z = cz_[k] - az[k];
-        const double cx = e1y * e2z - e1z * e2y;
-        const double cy = e1z * e2x - e1x * e2z;
-        const double cz = e1x * e2y - e1y * e2x;
-        const double twice_area = std::sqrt(cx * cx + cy * cy + cz * cz);
-        const double inv = inverse_area(twice_area);
-        const double normal_x = cx * inv;
-        const double normal_y = cy * inv;
-        const double normal_z = cz * inv;
-        const double wet_area = 0.5 * twice_area * st;
-        const double ux = flow_x - (avx[k] + bvx[k] + cvx[k]) * (1.0 / 3.0);
-        const double uy = flow_y - (avy[k] + bvy[k] + cvy[k]) * (1.0 / 3.0);
-        const double uz = flow_z - (avz[k] + bvz[k] + cvz[k]) * (1.0 / 3.0);
-        const double un = ux * normal_x + uy * normal_y + uz * normal_z;
-        const double utx = ux - un * normal_x;
-        const double uty = uy - un * normal_y;
-        const double utz = uz - un * normal_z;
-        const double ut = std::sqrt(utx * utx + uty * uty + utz * utz);
-        const double q = 0.5 * density * wet_area;
-        const double kn = q * c_normal * std::fabs(un);
-        const double kt = q * c_tangential * ut;
-        const double kl = c_linear * wet_area;
-        fx_[k] = kn * un * normal_x + kt * utx + kl * ux;
-        fy_[k] = kn * un * normal_y + kt * uty + kl * uy;
-        fz_[k] = kn * un * normal_z + kt * utz + kl * uz;
+        const TriangleDrag d = triangle_drag<Blocks>(
+            density, c_normal, c_tangential, c_linear, flow_x, flow_y, flow_z, share_base, share_sign, ax[k], ay[k],
+            az[k], avx[k], avy[k], avz[k], as[k], bx[k], by[k], bz[k], bvx[k], bvy[k], bvz[k], bs[k], cx_[k], cy_[k],
+            cz_[k], cvx[k], cvy[k], cvz[k], cs[k]);
+        fx_[k] = d.fx;
+        fy_[k] = d.fy;
+        fz_[k] = d.fz;
         if (Blocks) {
-            // d(|w| w)/dw = |w| I + w w^T / |w|: along w twice the force's coefficient, across it once.
-            const double ks = q * c_tangential / py_max(ut, 1e-300);
-            const double diff = 2.0 * kn - kt;
-            const double iso = kt + kl;
-            xx[k] = iso + diff * normal_x * normal_x + ks * utx * utx;
-            yy[k] = iso + diff * normal_y * normal_y + ks * uty * uty;
-            zz[k] = iso + diff * normal_z * normal_z + ks * utz * utz;
-            xy[k] = diff * normal_x * normal_y + ks * utx * uty;
-            xz[k] = diff * normal_x * normal_z + ks * utx * utz;
-            yz[k] = diff * normal_y * normal_z + ks * uty * utz;
+            xx[k] = d.xx;
+            yy[k] = d.yy;
+            zz[k] = d.zz;
+            xy[k] = d.xy;
+            xz[k] = d.xz;
+            yz[k] = d.yz;
         }
     }
 }
@@ -140,6 +168,21 @@ void drag_forces(Index nx, Index ny, const double* pos, const double* vel, const
     for (Index comp = 0; comp < 3; ++comp) {
         gather_cells(nx, n, cells + comp * length, cells + (9 + comp) * length, force + comp * n, 1.0);
     }
+}
+
+//: Whether none of corners a, b, c is in the fluid (as `outside`).
+inline bool outside_all(const double* s, Index a, Index b, Index c, bool above) {
+    return above ? (s[a] >= 1.0 && s[b] >= 1.0 && s[c] >= 1.0) : (s[a] <= 0.0 && s[b] <= 0.0 && s[c] <= 0.0);
+}
+
+//: triangle_drag of a mesh's triangle (a, b, c), its corners gathered from pos, vel (3, n) and s (n).
+template <bool Blocks>
+inline TriangleDrag mesh_triangle(Index n, Index a, Index b, Index c, const double* pos, const double* vel,
+                                  const double* s, const Fluid& f, double base, double sign) {
+    return triangle_drag<Blocks>(f.density, f.c_normal, f.c_tangential, f.c_linear, f.flow_x, f.flow_y, f.flow_z,
+                                 base, sign, pos[a], pos[n + a], pos[2 * n + a], vel[a], vel[n + a], vel[2 * n + a],
+                                 s[a], pos[b], pos[n + b], pos[2 * n + b], vel[b], vel[n + b], vel[2 * n + b], s[b],
+                                 pos[c], pos[n + c], pos[2 * n + c], vel[c], vel[n + c], vel[2 * n + c], s[c]);
 }
 
 }  // namespace
@@ -263,6 +306,26 @@ void face_drag_and_blocks(Index nx, Index ny, const double* pos, const double* v
     const Index length = n + nx + 1;
     for (Index comp = 0; comp < 6; ++comp) {
         gather_cells(nx, n, cells + (3 + comp) * length, cells + (9 + 3 + comp) * length, blocks + comp * n, h);
+    }
+}
+
+void mesh_face_drag(Index n, Index triangle_count, const Index* triangles, const double* shares, const double* pos,
+                    const double* vel, const double* s, const Fluid& fluid, double h, double* force, double* blocks,
+                    bool skip_idle) {
+    const double base = fluid.above ? 1.0 : 0.0, sign = fluid.above ? -1.0 : 1.0;
+    for (Index t = 0; t < triangle_count; ++t) {
+        const Index a = triangles[3 * t], b = triangles[3 * t + 1], c = triangles[3 * t + 2];
+        if (skip_idle && outside_all(s, a, b, c, fluid.above)) continue;
+        const TriangleDrag d = blocks != nullptr ? mesh_triangle<true>(n, a, b, c, pos, vel, s, fluid, base, sign)
+                                                 : mesh_triangle<false>(n, a, b, c, pos, vel, s, fluid, base, sign);
+        const double rows[9] = {d.fx, d.fy, d.fz, d.xx, d.yy, d.zz, d.xy, d.xz, d.yz};
+        for (Index corner = 0; corner < 3; ++corner) {
+            const Index v = triangles[3 * t + corner];
+            const double share = shares[3 * t + corner];
+            for (Index r = 0; r < 3; ++r) force[r * n + v] += share * rows[r];
+            if (blocks != nullptr)
+                for (Index r = 0; r < 6; ++r) blocks[r * n + v] += (h * share) * rows[3 + r];
+        }
     }
 }
 

@@ -84,9 +84,21 @@ def dask_client(client=None, scheduler: str | None = None, workers: int | None =
                 n_workers=workers or CPU_COUNT, threads_per_worker=1, processes=True, dashboard_address=LOCAL_HTTP,
                 silence_logs=logging.ERROR, preload=[__name__]))
             c = stack.enter_context(Client(cluster, set_as_default=False))
+            stack.push(_quiet_when_interrupted)  # closes first: before the client and the cluster
         if announce is not None:
             announce(dashboard_line(c))
         yield c
+
+
+def _quiet_when_interrupted(exc_type, exc, tb) -> bool:
+    """On Ctrl-C, silence Dask's logs before the cluster closes: the scheduler's comms to the client close
+    under it as it stops, and it may log that as an error with a traceback, noise to a user who
+    stopped the study (the command says what it kept).  Lets the exception through."""
+    if exc_type is not None and issubclass(exc_type, KeyboardInterrupt):
+        for name in ["distributed", *logging.root.manager.loggerDict]:
+            if name.startswith("distributed"):
+                logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+    return False
 
 
 def dask_setup(worker) -> None:

@@ -11,6 +11,7 @@ documentation folder; ``build_fmu`` stages what the unit needs:
 * a manifest: the copy's file digests (by which the bootstrap picks the host's identical wetcloth
   or a per-user cached copy of its own), the variable names (a wetcloth whose variables differ
   from the model description is refused) and the requirements (named when one is missing);
+* with ``scene``: the scene's values as start values and its mesh file (``packed_scene``);
 * ``documentation/index.html``, generated from the same variable list as the model description,
   and the icon (``model.png``; FMI 3.0: ``terminalsAndIcons/icon.png``).
 """
@@ -33,7 +34,7 @@ from string import Template
 import wetcloth
 import wetcloth.fmu as fmu_package
 from wetcloth.files import whole_file
-from wetcloth.fmu import MODEL_NAME, default_fmu_path
+from wetcloth.fmu import MODEL_NAME, default_fmu_path, packed_scene
 from wetcloth.fmu.bootstrap import MANIFEST_NAME, MODULE_NAME, bundle_digest, digest
 from wetcloth.fmu.vocabulary import VariableSpec, fmi_unit_name, variable_specs
 
@@ -161,6 +162,11 @@ def documentation_html(specs: list[VariableSpec], fmi_version: int = 2) -> str:
     )
 
 
+def _top_level(folder: Path, files: list[Path]) -> list[Path]:
+    """The entries of ``folder`` that hold ``files`` (project files are copied whole, folders with their contents)."""
+    return list(dict.fromkeys(folder / f.relative_to(folder).parts[0] for f in files))
+
+
 def _pythonfmu_builder(fmi_version: int):
     """pythonfmu's (FMI 2.0) or pythonfmu3's (FMI 3.0) ``FmuBuilder``."""
     if fmi_version == 2:
@@ -179,14 +185,16 @@ def content_token(fmi_version: int, files: list[Path]) -> str:
     return "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, hashlib.sha256(text.encode()).hexdigest())) + "}"
 
 
-def build_fmu(out: str | Path | None = None, fmi_version: int = 2) -> Path:
+def build_fmu(out: str | Path | None = None, fmi_version: int = 2, scene: str | Path | None = None) -> Path:
     """Build the co-simulation unit (FMI ``fmi_version`` 2 or 3) at ``out`` (default
-    ``default_fmu_path(fmi_version)``); return its path."""
+    ``default_fmu_path(fmi_version)``); return its path.  ``scene``: a scene file (or preset name) whose
+    values become the start values, its mesh file packed into the resources (``packed_scene``)."""
     if fmi_version not in SLAVE_SCRIPTS:
         raise ValueError(f"FMI version must be one of {sorted(SLAVE_SCRIPTS)}, got {fmi_version!r}")
+    packed = None if scene is None else packed_scene.pack(scene)
     out = Path(default_fmu_path(fmi_version) if out is None else out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    specs = variable_specs(fmi_version=fmi_version)
+    specs = variable_specs(fmi_version=fmi_version, packed=packed)
     slave = SLAVE_SCRIPTS[fmi_version]
     cached = slave.stem in sys.modules
     with tempfile.TemporaryDirectory(prefix="wetcloth_fmu_") as tmp:
@@ -198,6 +206,7 @@ def build_fmu(out: str | Path | None = None, fmi_version: int = 2) -> Path:
         bootstrap = source / f"{MODULE_NAME}.py"
         shutil.copy2(HERE / "bootstrap.py", bootstrap)
         package_files, bundle_files = _stage_package(source)
+        scene_files = [] if packed is None else packed_scene.write(packed, source)
         manifest = source / MANIFEST_NAME
         manifest.write_text(json.dumps({
             "wetcloth_version": wetcloth.__version__, "fmi_version": fmi_version,
@@ -208,10 +217,12 @@ def build_fmu(out: str | Path | None = None, fmi_version: int = 2) -> Path:
         docs.mkdir()
         (docs / "index.html").write_text(documentation_html(specs, fmi_version), encoding="utf-8")
         saved_path = list(sys.path)
-        fmu_package.BUILD_TOKEN = content_token(fmi_version, [script, bootstrap, manifest, docs / "index.html"])
+        fmu_package.BUILD_TOKEN = content_token(fmi_version, [script, bootstrap, manifest, docs / "index.html",
+                                                              *scene_files])
         try:
             built = Path(_pythonfmu_builder(fmi_version).build_FMU(
-                script, dest=stage / "fmu", project_files=[source / "wetcloth", manifest, bootstrap],
+                script, dest=stage / "fmu", project_files=[source / "wetcloth", manifest, bootstrap,
+                                                           *_top_level(source, scene_files)],
                 documentation_folder=docs, **CAPABILITIES[fmi_version]))
         finally:
             fmu_package.BUILD_TOKEN = None

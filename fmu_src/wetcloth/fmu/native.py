@@ -60,6 +60,8 @@ CXX_FLAGS = ("-std=c++17", "-O3", "-DNDEBUG", "-fno-math-errno", "-ffp-contract=
 #: undefined symbol left, stripped.
 LINK_FLAGS = ("-shared", "-static-libstdc++", "-static-libgcc", "-Wl,--exclude-libs,ALL", "-Wl,-z,defs",
               "-Wl,-O1", "-s")
+#: Why the native unit takes only '' for a free-text parameter (``cloth_mesh``, ``pinned_vertices``).
+NO_TEXT_REASON = "the native unit has no cloth from a mesh file and no pinned_vertices: use WetCloth.fmu"
 #: The generated variable table (included by ``fmu/unit.cpp``).
 VARIABLES_HEADER = "wetcloth_fmu_variables.hpp"
 #: Binary folder in the archive, by FMI version.
@@ -182,9 +184,12 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
                 choices = f'scene_choices("{spec.name}").names'
                 count = f'scene_choices("{spec.name}").count'
                 start_text = _c_string(spec.start)
+                allowed = md["choices"] or ("",)  # free text (a mesh file, pins by name): only '' natively
+                if md["text"]:
+                    range_text = _c_string(f"'' ({NO_TEXT_REASON})")
                 names = " && ".join(f'same_text(scene_choices("{spec.name}").names[{k}], {_c_string(c)})'
-                                    for k, c in enumerate(md["choices"]))
-                checks.append(f'static_assert(scene_choices("{spec.name}").count == {len(md["choices"])} && {names},\n'
+                                    for k, c in enumerate(allowed))
+                checks.append(f'static_assert(scene_choices("{spec.name}").count == {len(allowed)} && {names},\n'
                               f'              "model.hpp: the choices of {spec.name} are not those of wetcloth.scene");')
             else:
                 ranged, lo, hi = "true", _c_double(md["lo"]), _c_double(md["hi"])
@@ -492,18 +497,36 @@ def check_platform() -> None:
 
 
 # ----------------------------------------------------------------------------------------- the unit
+def native_scene(scene: str | Path):
+    """The packed scene (``packed_scene.pack``) of a scene file for the native unit; NativeBuildError for a
+    parameter it does not support (a free-text one: cloth_mesh, pinned_vertices)."""
+    from wetcloth.fmu.packed_scene import pack
+    from wetcloth.scene import PARAMETERS
+
+    packed = pack(scene)
+    for name, value in packed.starts.items():
+        if PARAMETERS[name].metadata["text"] and value:
+            shown = str(packed.mesh) if name == "cloth_mesh" else value
+            raise NativeBuildError(f"scene {str(scene)!r}: parameter '{name}' = {shown!r}: {NO_TEXT_REASON} "
+                                   f"(wetcloth build-fmu --scene {scene})")
+    return packed
+
+
 def build_native_fmu(out: str | Path | None = None, fmi_version: int = 2, build_dir: str | Path | None = None,
-                     jobs: int | None = None) -> Path:
+                     jobs: int | None = None, scene: str | Path | None = None) -> Path:
     """Build the native unit (FMI ``fmi_version`` 2 or 3) at ``out`` (default ``native_fmu_path``); return
     its path.  ``build_dir`` keeps the compiled objects for the next build (which recompiles only what
-    changed); without it they go with a temporary folder.  NativeBuildError if it cannot be built here."""
+    changed); without it they go with a temporary folder.  ``scene``: a scene file (or preset name) whose
+    values become the start values.  NativeBuildError if it cannot be built here, or for a scene the
+    native unit cannot run (a cloth from a mesh file, pinned_vertices)."""
     if fmi_version not in (2, 3):
         raise ValueError(f"FMI version must be 2 or 3, got {fmi_version!r}")
+    packed = None if scene is None else native_scene(scene)
     check_platform()
     core = core_dir()
     compiler = find_compiler()
     out = Path(native_fmu_path(fmi_version) if out is None else out)
-    specs = variable_specs(fmi_version=fmi_version)
+    specs = variable_specs(fmi_version=fmi_version, packed=packed)
     files = _sources(core, fmi_version)
     sources = [name for _, name in files if name.endswith(".cpp")]
     # The instantiation token: a digest of the table and every source, so that a rebuild of the same

@@ -23,7 +23,7 @@ from pathlib import Path
 from wetcloth import run_settings
 from wetcloth._core import MAX_TIME
 from wetcloth.errors import ParameterError
-from wetcloth.fmu import bootstrap, checkpoint
+from wetcloth.fmu import bootstrap, checkpoint, packed_scene
 from wetcloth.fmu.checkpoint import Checkpoint, StateError
 from wetcloth.fmu.vocabulary import check_variable, variable_specs
 from wetcloth.scene import from_dict, read_scene_file
@@ -63,7 +63,8 @@ class WetClothUnit:
         # each unit's binary is made to exit safely, and its own manifest checked, here too.
         if self.resources:  # through the bootstrap the script ran, if any: it knows the units checked
             sys.modules.get(bootstrap.MODULE_NAME, bootstrap).load_wetcloth(Path(self.resources))
-        self.specs = {spec.name: spec for spec in variable_specs(fmi_version=self.FMI_VERSION)}
+        self.packed = packed_scene.load(self.resources)  # a scene built in (build-fmu --scene), or None
+        self.specs = {spec.name: spec for spec in variable_specs(fmi_version=self.FMI_VERSION, packed=self.packed)}
         self.values = {name: spec.start for name, spec in self.specs.items() if spec.causality in ("parameter", "input")}
         self.refused: dict[str, str] = {}  # variable -> why its value was refused (pending)
         self.initialized = False
@@ -161,6 +162,8 @@ class WetClothUnit:
                 check_directory(directory, overwrite=True, exclusive=True)
             except ExportError as exc:
                 problems.append(f"parameter 'mesh_output_dir': {exc}")
+        if scene is not None and self.FMI_VERSION == 3:
+            problems += self._array_problems(scene)
         if problems:
             message = "initialization refused: " + "; ".join(dict.fromkeys(problems))
             self._report("error", message)
@@ -169,6 +172,22 @@ class WetClothUnit:
         self._preview = None
         self._read.clear()
         self.initialized = True
+
+    def _array_problems(self, scene) -> list[str]:
+        """Why the FMI 3.0 arrays, sized when the unit was built, cannot hold ``scene``'s cloth (or none)."""
+        vertices = None if self.packed is None else self.packed.vertices
+        if vertices is None and scene.cloth_mesh:
+            return ["parameter 'cloth_mesh': this unit's array outputs are ny x nx (the rectangle); for a cloth "
+                    "from a mesh file build the unit with 'wetcloth build-fmu --fmi 3 --scene SCENE'"]
+        if vertices is not None:
+            from wetcloth.topology import build_topology
+
+            n = build_topology(scene).n
+            if n != vertices:
+                return [f"parameter 'cloth_mesh': this unit's array outputs hold the {vertices} vertices of the "
+                        f"mesh it was built with, {scene.cloth_mesh!r} has {n}; allowed: a mesh of {vertices} "
+                        "vertices (or build the unit with the scene of this mesh)"]
+        return []
 
     def step(self, current_time: float, step_size: float) -> str:
         """Advance from ``current_time`` by ``step_size`` s: OK, or DISCARD (the unit stays at

@@ -28,8 +28,8 @@ MESH_FORMATS = ("ply", "obj")
 MESH_FORMAT_RANGE = "one of " + ", ".join(repr(f) for f in MESH_FORMATS)
 
 #: The FMI 3.0 unit's array outputs: the cloth mesh of the current step, in the vertex order of the
-#: exported frames (vertex ``row * nx + col``): name -> (unit, meaning, dimensions; a name is the
-#: grid parameter holding that size).  ``Simulation`` has a property of each name.
+#: exported frames (vertex ``row * nx + col``; a cloth from a mesh file: the file's order, and its vertex
+#: count for ny, nx): name -> (unit, meaning, dimensions; a name is the grid parameter holding that size).  ``Simulation`` has a property of each name.
 MESH_OUTPUTS = {
     "positions": ("m", "vertex positions x, y, z; vertex row * nx + col (z is up)", ("ny", "nx", 3)),
     "wetness": ("-", "saturation of each vertex, absorbed water over capacity (0 to 1)", ("ny", "nx")),
@@ -109,19 +109,26 @@ FMU_PARAMETERS = {
 }
 
 
-def variable_specs(fields: Iterable[dataclasses.Field] | None = None, fmi_version: int = 2) -> list[VariableSpec]:
+def variable_specs(fields: Iterable[dataclasses.Field] | None = None, fmi_version: int = 2,
+                   packed=None) -> list[VariableSpec]:
     """All FMU variables in value-reference order: Scene fields, mesh parameters, outputs (and, for
-    FMI 3.0, the mesh array outputs)."""
+    FMI 3.0, the mesh array outputs).  ``packed``: the scene built into the unit
+    (``packed_scene.PackedScene``), whose values are the start values; a mesh cloth's arrays have
+    its vertex count as their first dimension instead of the grid's ny, nx."""
     fields = PARAMETERS.values() if fields is None else fields
     specs = [scene_spec(f) for f in fields]
+    if packed is not None:
+        specs = [dataclasses.replace(s, start=packed.starts[s.name]) if s.name in packed.starts else s for s in specs]
     specs += [VariableSpec(name, "String", "parameter", "fixed", doc, start=start, scene=False)
               for name, (start, doc) in FMU_PARAMETERS.items()]
     nominal = output_nominals()
     specs += [VariableSpec(n, "Real", "output", "continuous", doc, unit=u, scene=False, nominal=nominal[n])
               for n, (u, doc) in OUTPUTS.items()]
     if fmi_version == 3:
-        specs += [VariableSpec(n, "Real", "output", "continuous", doc, unit=u, scene=False, dimensions=dims,
-                               nominal=nominal[n]) for n, (u, doc, dims) in MESH_OUTPUTS.items()]
+        vertices = None if packed is None else packed.vertices
+        specs += [VariableSpec(n, "Real", "output", "continuous", doc, unit=u, scene=False, nominal=nominal[n],
+                               dimensions=dims if vertices is None else (vertices, *dims[2:]))
+                  for n, (u, doc, dims) in MESH_OUTPUTS.items()]
         specs.append(VariableSpec("time", "Real", "independent", "continuous", "simulation time (the FMI 3.0 "
                                   "independent variable)", unit="s", scene=False, nominal=1.0))
     return specs

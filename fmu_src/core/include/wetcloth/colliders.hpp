@@ -1,46 +1,50 @@
-// Analytic colliders: rigid shapes with Coulomb friction, kept like the floor (docs/model.md section 6.3).
+// Colliders: rigid shapes with Coulomb friction, kept like the floor (docs/model.md section 6.3): analytic
+// (plane, box, sphere, cylinder) or a triangle mesh (collider_mesh.hpp).
 #pragma once
 #include "wetcloth/core.hpp"
 
 namespace wc {
 
 //: Shape codes (column SHAPE of a collider row); wetcloth.scene.COLLIDER_SHAPES in this order.
-enum ColliderShape : Index { PLANE = 0, BOX = 1, SPHERE = 2, CYLINDER = 3 };
+enum ColliderShape : Index { PLANE = 0, BOX = 1, SPHERE = 2, CYLINDER = 3, MESH = 4 };
 
 //: Columns of a collider row (Physics::colliders, (count, COLLIDER_COLUMNS)): shape code; centre (a point
 //: of a plane) m; radius m (sphere, cylinder); height m (cylinder, along z); edge lengths m (box, along
-//: x, y, z); unit outward normal (plane: the solid lies behind it); Coulomb friction coefficient.
+//: x, y, z); unit outward normal (plane: the solid lies behind it); Coulomb friction coefficient.  A mesh
+//: collider's centre is where its file's origin went (its vertices are placed already) and its C_RADIUS
+//: column holds its index among Physics::meshes.
 enum ColliderColumn : Index {
     C_SHAPE = 0, C_X, C_Y, C_Z, C_RADIUS, C_HEIGHT, C_SIZE_X, C_SIZE_Y, C_SIZE_Z, C_NORMAL_X, C_NORMAL_Y, C_NORMAL_Z,
     C_FRICTION, COLLIDER_COLUMNS
 };
 
-//: Signed distance (m, negative inside) from point p (3) to the surface of collider `row`, and the unit
-//: outward normal there (normal, 3).
-double collider_distance(const double* row, const double* p, double* normal);
+//: Signed distance (m, negative inside) from point p (3) to the surface of collider k of phys, and the unit
+//: outward normal there (normal, 3); a mesh collider's is at most reach (m): farther, it is not looked for.
+double collider_distance(const Physics& phys, Index k, const double* p, double reach, double* normal);
 
-//: After a step: every particle (pos (3, n) at the step's end, vel (3, n)) whose centre is closer than `gap`
-//: m to a collider is put back at distance gap along the outward normal; its velocity into the collider
-//: is removed and its tangential velocity reduced by friction times that (never reversed).  Colliders
-//: whose box, grown by gap, the cloth's box does not reach are skipped.  Returns how many particles touched.
-Index collider_contact(Index n, Index count, const double* colliders, double gap, double* pos, double* vel);
+//: After a step from start (3, n) to pos (3, n): every particle whose centre is closer than gap =
+//: thickness / 2 to a collider is put back at distance gap along the outward normal; one whose path
+//: crossed a mesh collider's triangle goes back to the side it came from, gap off that triangle.  Its
+//: velocity into the collider is removed and its tangential velocity reduced by friction times that (never
+//: reversed).  Colliders whose box, grown by gap, the cloth's path does not reach are skipped.  Returns how
+//: many particles touched.
+Index collider_contact(Index n, const Physics& phys, const double* start, double* pos, double* vel);
 
 //: The value of Buffers::held for a particle collider k holds (the floor's is 1, a layer's 2).
 inline double collider_held(Index k) { return 3.0 + static_cast<double>(k); }
 
 //: As the floor's hold_resting: the free particles on a collider (within gap m) with zero velocity
 //: (friction stopped them) are held for the coming step (free 0, held collider_held(k)).  Returns how many.
-Index hold_on_colliders(Index n, Index count, const double* colliders, double gap, const double* pos,
-                        const double* vel, double* free, double* held);
+Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const double* vel, double* free, double* held);
 
 //: As the floor's release_slipping: release the particles held on a collider that the step's force (N,
 //: (3, n)) lifts off it or pushes along it above friction times the force into it.  Returns how many.
-Index release_from_colliders(Index n, const double* colliders, const double* pos, const double* force, double* free,
+Index release_from_colliders(Index n, const Physics& phys, const double* pos, const double* force, double* free,
                              double* held);
 
 //: The particles on a collider (within gap m, where collider_contact left them) get the history of a
-//: straight motion at their velocity (as the floor's agree_history).  Returns how many.
-Index collider_history(Index n, Index count, const double* colliders, double gap, const double* pos, const double* vel,
-                       double* prev_pos, double* prev_vel, double h);
+//: straight motion along its normal (as the floor's agree_history).  Returns how many.
+Index collider_history(Index n, const Physics& phys, const double* pos, const double* vel, double* prev_pos,
+                       double* prev_vel, double h);
 
 }  // namespace wc

@@ -23,8 +23,11 @@ inline constexpr double GRAVITY = 9.81;
 //: The fixed cloth: grid size, spring families (offset, rest length m, tension only, stiffness N/m,
 //: damping N s/m per spring), 1 for moving particles, dry mass kg, envelope volume m3, Stokes
 //: coefficient 6 pi a eta (N s/m), water capacity kg, wicking links (offsets, conductance kg/s).
+//: A cloth from a mesh (grid_x = grid_y = 0, no families) has its springs and wicking links listed
+//: instead (listed.hpp): each joins the particles of a column of `pairs` (2, count), the tension-only
+//: springs first; its face drag goes over `triangles` (m, 3).  A grid lists none.
 struct Cloth {
-    Index grid_x = 0, grid_y = 0, n = 0;  // particles per row, rows, particles
+    Index grid_x = 0, grid_y = 0, n = 0;  // particles per row, rows (both 0 for a mesh), particles
     Index families = 0;                   // F
     const Index* offsets = nullptr;       // (F)
     const double* rest = nullptr;         // (F) m
@@ -39,6 +42,44 @@ struct Cloth {
     Index wick_families = 0;              // W
     const Index* wick_offsets = nullptr;  // (W)
     const double* wick_conductance = nullptr;  // (W, n) kg/s
+    Index pair_count = 0, pair_tension_count = 0;  // listed springs S, the first T of them tension-only
+    const Index* pairs = nullptr;                  // (2, S) first ends, then second ends
+    const double* pair_rest = nullptr;             // (S) m
+    const double* pair_stiffness = nullptr;        // (S) N/m
+    const double* pair_damping = nullptr;          // (S) N s/m
+    Index wick_pair_count = 0;                     // listed wicking links L
+    const Index* wick_pairs = nullptr;             // (2, L)
+    const double* wick_pair_conductance = nullptr;  // (L) kg/s
+    Index triangle_count = 0;                      // a mesh's triangles (face drag)
+    const Index* triangles = nullptr;              // (m, 3)
+    const double* corner_shares = nullptr;         // (m, 3) each corner's share of its triangle (sum 1)
+};
+
+//: Whether the cloth is a mesh (listed springs, drag over its triangle list) rather than a grid.
+inline bool is_mesh(const Cloth& cloth) { return cloth.grid_x == 0; }
+
+//: Length of each of the 18 face-drag rows of Work::cells: a grid's n + grid_x + 1 slots (water.hpp),
+//: a mesh's one per triangle (at least n + 1).
+inline Index cells_length(const Cloth& cloth) {
+    if (!is_mesh(cloth)) return cloth.n + cloth.grid_x + 1;
+    return cloth.triangle_count > cloth.n + 1 ? cloth.triangle_count : cloth.n + 1;
+}
+
+//: The triangle meshes of mesh colliders (collider_mesh.hpp), all in one set of arrays: headers (count,
+//: MESH_COLUMNS) each mesh's grid of cells and bounds; vertices (3, V) m where the scene puts them;
+//: triangles (T, 3); the unit normals of the faces (T, 3), of their edges (T, 3, 3; edge e from corner e
+//: to e + 1: the mean of its two faces') and of the vertices (V, 3; angle-weighted); each mesh's cells
+//: as cell_start (cells + 1, from the mesh's first cell) into cell_items (triangle indices).
+struct ColliderMeshes {
+    Index count = 0, vertex_count = 0;
+    const double* headers = nullptr;
+    const double* vertices = nullptr;
+    const Index* triangles = nullptr;
+    const double* face_normals = nullptr;
+    const double* edge_normals = nullptr;
+    const double* vertex_normals = nullptr;
+    const Index* cell_start = nullptr;
+    const Index* cell_items = nullptr;
 };
 
 //: Scene parameters as the kernels use them (SI units).  `wet_factor` is 0 unless wetness-dependent
@@ -55,13 +96,15 @@ struct Physics {
     bool skip_idle = true;
     Index collider_count = 0;            // analytic colliders (colliders.hpp), none by default
     const double* colliders = nullptr;   // (collider_count, COLLIDER_COLUMNS) rows
+    ColliderMeshes meshes;               // the triangles of the mesh colliders among them
 };
 
 //: Scratch and results: force (3, n) N; submerged (n) fraction; saturation (n); blocks (6, n)
 //: per-particle symmetric 3x3 blocks (xx, yy, zz, xy, xz, yz) of the system matrix;
 //: diagonal_blocks (6, n) the springs' part of its diagonal blocks; direction (F, 3, n), along,
 //: across (F, n) each spring's block; rhs (3, n); buf (4, n); cells (2, 9, n + grid_x + 1)
-//: face-drag rows; wick_buffer (6, n).
+//: face-drag rows (cells_length); wick_buffer (6, n);
+//: pair_direction (3, S), pair_along, pair_across (S) the listed springs' blocks.
 struct Work {
     double* force = nullptr;
     double* submerged = nullptr;
@@ -75,6 +118,9 @@ struct Work {
     double* buf = nullptr;
     double* cells = nullptr;
     double* wick_buffer = nullptr;
+    double* pair_direction = nullptr;
+    double* pair_along = nullptr;
+    double* pair_across = nullptr;
 };
 
 //: Integrator codes (Control::integrator).

@@ -41,13 +41,22 @@ inline void coulomb_stop(double* v, const double* normal, double friction) {
     for (int c = 0; c < 3; ++c) v[c] = vn_kept * normal[c] + keep * vt[c];
 }
 
-//: Particle i of pos, vel (3, n) gets the history of a straight motion at its velocity over a step of h s:
-//: prev_pos = pos - h vel, prev_vel = vel (on the floor and on colliders, after the step).
-inline void straight_history(Index n, Index i, const double* pos, const double* vel, double* prev_pos,
-                             double* prev_vel, double h) {
+//: Particle i of pos, vel (3, n), in contact with a surface of unit outward normal (3), gets the history of
+//: a straight motion at its velocity across the surface over a step of h s: the parts of prev_pos and
+//: prev_vel along the normal become those of pos - h vel and vel; the parts along the surface are left as
+//: they were, so that sliding keeps its history (on the floor and on colliders, after the step).
+inline void normal_history(Index n, Index i, const double* normal, const double* pos, const double* vel,
+                           double* prev_pos, double* prev_vel, double h) {
+    double dp = 0.0;
+    double dv = 0.0;
     for (Index c = 0; c < 3; ++c) {
-        prev_pos[c * n + i] = pos[c * n + i] - h * vel[c * n + i];
-        prev_vel[c * n + i] = vel[c * n + i];
+        const Index k = c * n + i;
+        dp += (pos[k] - h * vel[k] - prev_pos[k]) * normal[c];
+        dv += (vel[k] - prev_vel[k]) * normal[c];
+    }
+    for (Index c = 0; c < 3; ++c) {
+        prev_pos[c * n + i] += dp * normal[c];
+        prev_vel[c * n + i] += dv * normal[c];
     }
 }
 
@@ -63,7 +72,7 @@ Index release_slipping(Index n, double friction, const double* force, double* fr
 //: Give the held particles back their free flag after the step.
 void release_all(Index n, double* free, double* held);
 
-//: Particles on the floor get the history of a straight motion at their velocity; returns how many.
+//: Particles on the floor get the vertical history of a straight motion at their velocity; returns how many.
 Index agree_history(Index n, double z_min, const double* pos, const double* vel, double* prev_pos, double* prev_vel,
                     double h);
 

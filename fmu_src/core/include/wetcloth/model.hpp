@@ -35,6 +35,9 @@ inline constexpr const char* BUOYANCY_MODELS[] = {"smooth", "thesis"};
 inline constexpr const char* SWITCHES[] = {"on", "off"};
 inline constexpr const char* EDGES[] = {"none", "x_min", "x_max", "y_min", "y_max"};
 inline constexpr const char* INTEGRATOR_NAMES[] = {"explicit_euler", "symplectic_euler", "implicit_euler", "bdf2"};
+//: The one value the native model takes of a free-text parameter (cloth_mesh, pinned_vertices): none.  A
+//: cloth from a mesh file and pins by attribute or box are the Python package's alone.
+inline constexpr const char* NO_TEXT[] = {""};
 enum DampingModel : Index { DAMPING_PROJECTED = 0, DAMPING_THESIS = 1 };
 enum DragModel : Index { DRAG_FACE = 0, DRAG_STOKES = 1 };
 enum BuoyancyModel : Index { BUOYANCY_SMOOTH = 0, BUOYANCY_THESIS = 1 };
@@ -54,6 +57,8 @@ constexpr Choices scene_choices(std::string_view field) {
     if (field == "self_collision") return {SWITCHES, 2};
     if (field == "pinned_edge") return {EDGES, 5};
     if (field == "integrator") return {INTEGRATOR_NAMES, 4};
+    if (field == "place_mesh") return {SWITCHES, 2};
+    if (field == "cloth_mesh" || field == "pinned_vertices") return {NO_TEXT, 1};
     return {};
 }
 
@@ -63,6 +68,8 @@ constexpr Choices scene_choices(std::string_view field) {
 struct Scene {
     Index nx = 21, ny = 29;                                      // particles along x, y
     double width = 0.5, length = 0.7;                            // m
+    Index cloth_mesh = 0;                                        // NO_TEXT only: the nx x ny rectangle
+    Index place_mesh = SWITCH_OFF;
     double areal_density = 0.45;                                 // kg/m2
     double thickness = 0.002;                                    // m
     double stretch_stiffness = 2000.0, bend_stiffness = 20.0;    // N/m
@@ -91,6 +98,7 @@ struct Scene {
     Index self_collision = SWITCH_ON;
     double self_friction = 0.4;                                  // -
     Index pinned_edge = EDGE_NONE;
+    Index pinned_vertices = 0;                                   // NO_TEXT only: none
     Index integrator = BDF2;
     double tolerance = 5e-6;                                     // -
     double max_step = 0.1;                                       // s
@@ -98,12 +106,12 @@ struct Scene {
 
 //: The field names of Scene, in its order (the generated FMU variable table checks them against Python's).
 inline constexpr const char* SCENE_FIELDS[] = {
-    "nx", "ny", "width", "length", "areal_density", "thickness", "stretch_stiffness", "bend_stiffness", "damping",
+    "nx", "ny", "width", "length", "cloth_mesh", "place_mesh", "areal_density", "thickness", "stretch_stiffness", "bend_stiffness", "damping",
     "damping_model", "water_level", "water_density", "water_viscosity", "drag_model", "drag_normal",
     "drag_tangential", "drag_linear", "buoyancy_model", "absorption_capacity", "absorption_rate", "wicking_rate",
     "drying_rate", "wet_stiffness_factor", "current_x", "current_y", "air_density", "wind_x", "wind_y", "wind_z",
     "initial_saturation", "initial_height", "initial_tilt", "floor_level", "floor_friction", "self_collision",
-    "self_friction", "pinned_edge", "integrator", "tolerance", "max_step"};
+    "self_friction", "pinned_edge", "pinned_vertices", "integrator", "tolerance", "max_step"};
 inline constexpr Index SCENE_FIELD_COUNT = sizeof(SCENE_FIELDS) / sizeof(SCENE_FIELDS[0]);
 
 //: Whether a parameter may change while the simulation runs (scene.py's fmu=INPUT).
@@ -118,6 +126,7 @@ constexpr bool scene_input(std::string_view field) {
 template <class S, class Visit>
 void for_each_field(S& s, Visit&& visit) {
     visit("nx", s.nx); visit("ny", s.ny); visit("width", s.width); visit("length", s.length);
+    visit("cloth_mesh", s.cloth_mesh); visit("place_mesh", s.place_mesh);
     visit("areal_density", s.areal_density); visit("thickness", s.thickness);
     visit("stretch_stiffness", s.stretch_stiffness); visit("bend_stiffness", s.bend_stiffness);
     visit("damping", s.damping); visit("damping_model", s.damping_model); visit("water_level", s.water_level);
@@ -132,7 +141,8 @@ void for_each_field(S& s, Visit&& visit) {
     visit("initial_saturation", s.initial_saturation); visit("initial_height", s.initial_height);
     visit("initial_tilt", s.initial_tilt); visit("floor_level", s.floor_level);
     visit("floor_friction", s.floor_friction); visit("self_collision", s.self_collision);
-    visit("self_friction", s.self_friction); visit("pinned_edge", s.pinned_edge); visit("integrator", s.integrator);
+    visit("self_friction", s.self_friction); visit("pinned_edge", s.pinned_edge);
+    visit("pinned_vertices", s.pinned_vertices); visit("integrator", s.integrator);
     visit("tolerance", s.tolerance); visit("max_step", s.max_step);
 }
 

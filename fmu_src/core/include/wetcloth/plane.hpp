@@ -25,13 +25,14 @@ inline constexpr Index COARSEST_SIDE = 12;
 //: Returns 1 if it factored, 0 if not, -1 if a matrix was not positive definite.
 Index refresh(Plane& plane, const Cloth& cloth, const double* mass, double scale);
 
-//: Whether the in-plane systems are solved by the banded factors alone (no multigrid cycle).
-inline bool banded(const Plane& plane) { return plane.grid.level_count == 1; }
+//: Whether the in-plane systems are solved by the banded factors alone (no multigrid cycle: a small
+//: grid, or a mesh, whose Plane has no grid levels).
+inline bool banded(const Plane& plane) { return plane.grid.level_count <= 1; }
 
 //: Whether factoring from the Jacobian pays after a solve of `iterations` CG iterations.
 bool jacobian_refresh_pays(const Plane& plane, double iterations);
 
-//: Factor M + L(along) (along (F, n) kg); returns 1, or -1 if a matrix was not positive definite.
+//: Factor M + L(along) (along (F, n) kg; a mesh's (S)); returns 1, or -1 if a matrix was not positive definite.
 Index refresh_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const double* along);
 
 //: Set each particle's frame (t1, t2, n) from positions pos (3, n).

@@ -2,7 +2,7 @@
 // face drag serving both fluids, the water and the air above it (section 4.4) (port of
 // bf41571:fmu_src/wetcloth/kernels/water.py).
 //
-// Face drag works per grid cell, each split into two triangles (i, i+1, i+nx+1) and (i, i+nx+1, i+nx),
+// On a grid, face drag works per grid cell, each split into two triangles (i, i+1, i+nx+1) and (i, i+nx+1, i+nx),
 // the split of Topology.triangles.  Per-triangle values go into rows of length n + nx + 1 (cell i at
 // slot i + nx + 1; slots of non-cells stay zero), and each particle gathers its share of its six
 // triangles' values with the weights of its area: the right-angle corner 1/2, the other two 1/4 each.
@@ -63,5 +63,12 @@ void face_drag(Index nx, Index ny, const double* pos, const double* vel, const d
 void face_drag_and_blocks(Index nx, Index ny, const double* pos, const double* vel, const double* s,
                           const Fluid& fluid, double h, double* force, double* blocks, double* cells,
                           bool skip_dry_rows = true);
+
+//: The face drag of the fluid on a mesh's triangles (m, 3) added to force (3, n), each triangle's shared by
+//: its corners as `shares` (m, 3) says; unless blocks is null, h (s) times its lumped velocity Jacobian
+//: added to blocks (6, n) likewise.  With skip_idle, triangles with no corner in the fluid are skipped.
+void mesh_face_drag(Index n, Index triangle_count, const Index* triangles, const double* shares, const double* pos,
+                    const double* vel, const double* s, const Fluid& fluid, double h, double* force, double* blocks,
+                    bool skip_idle);
 
 }  // namespace wc

@@ -1,0 +1,27 @@
+// Mesh colliders (docs/model.md section 6.3): a rigid triangle mesh, a solid if it is closed, else a
+// shell (a bucket's wall) whose two sides both keep the cloth off.  Distances go to the nearest triangle
+// within reach, found through a uniform grid of cells over the mesh (built with the scene, Python's
+// wetcloth.collider_meshes), so a far collider costs a box test.
+#pragma once
+#include "wetcloth/core.hpp"
+
+namespace wc {
+
+//: Columns of ColliderMeshes::headers: the mesh's first cell in cell_start; its grid's origin (m), cell
+//: side (m) and cells along x, y, z; 1 for a closed mesh (a solid), 0 for a shell; its bounding box.
+enum MeshColumn : Index {
+    M_FIRST_CELL = 0, M_ORIGIN_X, M_ORIGIN_Y, M_ORIGIN_Z, M_CELL, M_CELLS_X, M_CELLS_Y, M_CELLS_Z, M_SOLID,
+    M_LO_X, M_LO_Y, M_LO_Z, M_HI_X, M_HI_Y, M_HI_Z, MESH_COLUMNS
+};
+
+//: Distance (m) from point p (3) to mesh `mesh`'s nearest triangle, if one is within reach (m), with the
+//: unit normal from the surface towards p (normal, 3); reach itself if none is.  Negative inside a solid
+//: (its outward normal then), from the pseudo-normal of the nearest feature (face, edge or vertex).
+double mesh_distance(const ColliderMeshes& meshes, Index mesh, const double* p, double reach, double* normal);
+
+//: Whether the segment from a to b (3 each) crosses a triangle of mesh `mesh`: the first crossing's point
+//: (hit, 3) and the unit normal of its face towards a (normal, 3).
+bool mesh_crossing(const ColliderMeshes& meshes, Index mesh, const double* a, const double* b, double* hit,
+                   double* normal);
+
+}  // namespace wc

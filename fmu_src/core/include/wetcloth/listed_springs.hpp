@@ -1,0 +1,21 @@
+// A mesh's springs, listed (docs/model.md section 3.3): spring k joins particles pairs[k] and
+// pairs[S + k], with its own rest length, stiffness and damping; the first T are tension-only.  The
+// same law as the grid's families (spring_law.hpp), gathered and scattered through the index lists.
+#pragma once
+#include "wetcloth/core.hpp"
+
+namespace wc {
+
+//: Add the listed springs' tension and damping to force (3, n).
+void listed_spring_forces(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos,
+                          const double* vel, double* force);
+
+//: As listed_spring_forces, plus their pieces of a Newton step (as spring_forces_and_blocks): adds to
+//: work.force, work.rhs and work.diagonal_blocks; writes work.pair_direction, pair_along, pair_across.
+void listed_spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const double* saturation,
+                                     const double* pos, const double* vel, double h, double slack_slope, Work& work);
+
+//: Add the listed springs' part of the system matrix times p (3, n) to out.
+void listed_spring_matvec(const Cloth& cloth, const Work& work, const double* p, double* out);
+
+}  // namespace wc

@@ -1,0 +1,299 @@
+"""A cloth's mesh file (scene parameter ``cloth_mesh``): its vertices, faces, UVs and point attributes.
+
+OBJ, PLY, OFF and VTK/VTU are read with meshio, which keeps the file's vertex order, its quads and
+its point data; glTF/GLB (which meshio does not read) and STL with trimesh.  An STL file stores each
+triangle's own corners: its exactly equal vertices are merged, numbered in order of first appearance.
+Triangles and quads may be mixed; a face of more corners, a mesh without faces, a non-finite
+coordinate, a zero-area face, a vertex in no face and an edge in more than two faces are refused
+with a ParameterError naming ``cloth_mesh`` (the springs need each edge in at most two faces).
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from wetcloth.errors import ParameterError
+
+NAME = "cloth_mesh"
+#: File suffixes read with meshio and with trimesh.
+MESHIO_SUFFIXES = (".obj", ".ply", ".off", ".vtk", ".vtu")
+TRIMESH_SUFFIXES = (".stl", ".gltf", ".glb")
+SUFFIXES = MESHIO_SUFFIXES + TRIMESH_SUFFIXES
+#: What ``cloth_mesh`` allows, as its messages say (the scene parameter's range text).
+ALLOWED = ("'' (the nx x ny rectangle) or the path of a mesh file (" + ", ".join(SUFFIXES) + ") of triangles "
+           "and quads with an area each, every vertex in a face and every edge in at most two faces")
+#: A face is degenerate when a triangle of it has area below this fraction of the median edge length squared.
+DEGENERATE_AREA = 1e-10
+#: Folders where a relative mesh path is looked for after the working directory (a unit's resources).
+SEARCH_FOLDERS: list[Path] = []
+#: Point-data names read as per-vertex UVs (meshio's OBJ 'vt', PLY's usual texture names).
+UV_NAMES = (("obj:vt",), ("texture_u", "texture_v"), ("s", "t"), ("u", "v"))
+
+
+@dataclass(frozen=True)
+class MeshFile:
+    """A cloth mesh as read: ``points`` (n, 3) float64 m; ``faces`` (k, 3) or (k, 4) int64 in file order
+    (mixed triangles and quads: the triangles of their split); ``triangles`` (m, 3) int64 (each quad
+    (a, b, c, d) split into (a, b, c), (a, c, d)), oriented consistently; ``face_of`` (m,) the face of
+    each triangle; ``corners`` (k,) 3 or 4; ``uv`` (n, 2) or None; ``attributes`` name -> (n,) point data;
+    ``source`` the path; ``blocks`` the faces as read, runs of triangles (j, 3) and quads (j, 4) in file order."""
+
+    points: np.ndarray
+    faces: np.ndarray
+    triangles: np.ndarray
+    face_of: np.ndarray
+    corners: np.ndarray
+    uv: np.ndarray | None
+    attributes: dict
+    source: str
+    blocks: tuple
+
+    @property
+    def n(self) -> int:
+        return len(self.points)
+
+
+def _error(message: str) -> ParameterError:
+    return ParameterError(NAME, f"{message}; allowed: {ALLOWED}")
+
+
+def locate(path: str | Path) -> Path:
+    """A mesh file's path: as given if absolute or found from the working directory, else in the first
+    of SEARCH_FOLDERS that holds it (else as given)."""
+    path = Path(path)
+    if path.is_absolute() or path.exists():
+        return path
+    return next((folder / path for folder in SEARCH_FOLDERS if (folder / path).is_file()), path)
+
+
+def read_mesh_file(path: str | Path) -> MeshFile:
+    """The checked mesh of file ``path`` (see ``locate``; read again only when the file changes)."""
+    path = locate(path)
+    if path.suffix.lower() not in SUFFIXES:
+        raise _error(f"{str(path)!r}: unknown mesh format {path.suffix!r}")
+    try:
+        stat = path.stat()
+    except OSError as exc:
+        raise _error(f"{str(path)!r} cannot be read: {exc.strerror or exc}") from None
+    return _read_cached(str(path.resolve()), stat.st_mtime_ns, stat.st_size, str(path))
+
+
+@functools.lru_cache(maxsize=8)
+def _read_cached(resolved: str, mtime_ns: int, size: int, shown: str) -> MeshFile:
+    try:
+        if Path(resolved).suffix.lower() in MESHIO_SUFFIXES:
+            points, blocks, attributes, uv = _read_meshio(resolved)
+        else:
+            points, blocks, attributes, uv = _read_trimesh(resolved)
+    except ParameterError:
+        raise
+    except Exception as exc:  # the readers raise many kinds of errors for a damaged file
+        raise _error(f"{shown!r} cannot be read as a mesh: {type(exc).__name__}: {exc}") from None
+    return make_mesh(points, blocks, attributes, uv, shown)
+
+
+def _read_meshio(path: str):
+    import meshio
+
+    mesh = meshio.read(path)
+    blocks = []
+    for block in mesh.cells:
+        if block.type in ("triangle", "quad"):
+            blocks.append(np.asarray(block.data, dtype=np.int64))
+        elif block.type.startswith("polygon") or block.dim == 2:
+            raise _error(f"{path!r} has faces of {np.asarray(block.data).shape[1]} corners ({block.type}): split "
+                         "them into triangles or quads in your modeller (e.g. Blender's Triangulate Faces)")
+    points = np.asarray(mesh.points, dtype=np.float64)
+    attributes = {name: np.asarray(values) for name, values in mesh.point_data.items()}
+    return points, blocks, attributes, _uv_of(attributes, len(points))
+
+
+def _uv_of(attributes: dict, n: int) -> np.ndarray | None:
+    for names in UV_NAMES:
+        if all(name in attributes for name in names):
+            values = (attributes[names[0]] if len(names) == 1
+                      else np.stack([attributes[name] for name in names], axis=1))
+            values = np.asarray(values, dtype=np.float64).reshape(n, -1)
+            if values.shape[1] >= 2:
+                return values[:, :2].copy()
+    return None
+
+
+def _read_trimesh(path: str):
+    import trimesh
+
+    mesh = trimesh.load(path, force="mesh", process=False)
+    points = np.asarray(mesh.vertices, dtype=np.float64)
+    faces = np.asarray(mesh.faces, dtype=np.int64).reshape(-1, 3)
+    attributes = {name: np.asarray(values).reshape(len(points), -1)[:, 0]
+                  for name, values in getattr(mesh, "vertex_attributes", {}).items()}
+    uv = getattr(mesh.visual, "uv", None)
+    uv = None if uv is None or len(uv) != len(points) else np.asarray(uv, dtype=np.float64)
+    if path.lower().endswith(".stl"):
+        points, faces = _merged(points, faces)
+    return points, [faces], attributes, uv
+
+
+def _merged(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Exactly equal vertices merged, numbered in order of first appearance."""
+    _, first, inverse = np.unique(points, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first)  # unique rows by first appearance
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    return points[first[order]], rank[inverse.ravel()][faces]
+
+
+def make_mesh(points, blocks, attributes=None, uv=None, shown: str = "<arrays>") -> MeshFile:
+    """The checked mesh of ``points`` (n, 3) m and faces ``blocks`` (a list of (j, 3) and (j, 4) integer
+    arrays in file order), with point ``attributes`` (name -> (n,)) and ``uv`` (n, 2) or None; ``shown``
+    names it in errors."""
+    points = np.asarray(points, dtype=np.float64)
+    blocks = [np.asarray(b, dtype=np.int64) for b in blocks]
+    attributes = {} if attributes is None else attributes
+    n = len(points)
+    if points.ndim != 2 or points.shape[1] < 2:
+        raise _error(f"{shown!r} has no vertex coordinates")
+    if points.shape[1] == 2:
+        points = np.column_stack([points, np.zeros(n)])
+    points = np.ascontiguousarray(points[:, :3])
+    if not np.isfinite(points).all():
+        bad = int(np.flatnonzero(~np.isfinite(points).all(axis=1))[0])
+        raise _error(f"{shown!r}: vertex {bad} has a coordinate that is not a finite number ({points[bad].tolist()})")
+    blocks = [b for b in blocks if len(b)]
+    if not blocks:
+        raise _error(f"{shown!r} has no faces (a cloth needs triangles or quads)")
+    corners = np.concatenate([np.full(len(b), b.shape[1]) for b in blocks])
+    if any(b.min() < 0 or b.max() >= n for b in blocks):
+        raise _error(f"{shown!r} has faces whose vertex indices are outside 0..{n - 1}")
+    triangles, face_of = _split(blocks)
+    unused = np.setdiff1d(np.arange(n), triangles)
+    if len(unused):
+        raise _error(f"{shown!r}: vertex {int(unused[0])} belongs to no face ({len(unused)} such vertices); "
+                     "remove loose vertices (a particle needs a face for its mass)")
+    _check_areas(shown, points, triangles, face_of)
+    _check_manifold(shown, blocks)
+    triangles = _oriented(triangles)
+    mixed = len({b.shape[1] for b in blocks}) > 1
+    faces = triangles if mixed else np.concatenate(blocks)
+    attributes = {k: np.asarray(v) for k, v in attributes.items() if len(v) == n}
+    for array in (points, faces, triangles, face_of, corners, uv, *blocks, *attributes.values()):
+        if array is not None:  # shared by every reader of the (cached) file
+            array.flags.writeable = False
+    return MeshFile(points=points, faces=faces, triangles=triangles, face_of=face_of, corners=corners,
+                    uv=uv, attributes=attributes, source=shown, blocks=tuple(blocks))
+
+
+def _split(blocks: list) -> tuple[np.ndarray, np.ndarray]:
+    """Triangles (m, 3) of the faces in file order, each quad (a, b, c, d) as (a, b, c), (a, c, d), and
+    the face (m,) each came from."""
+    triangles, face_of, start = [], [], 0
+    for b in blocks:
+        index = np.arange(start, start + len(b))
+        if b.shape[1] == 3:
+            triangles.append(b)
+            face_of.append(index)
+        else:
+            pair = np.stack([b[:, [0, 1, 2]], b[:, [0, 2, 3]]], axis=1).reshape(-1, 3)
+            triangles.append(pair)
+            face_of.append(np.repeat(index, 2))
+        start += len(b)
+    return np.concatenate(triangles).astype(np.int64), np.concatenate(face_of).astype(np.int64)
+
+
+def triangle_areas(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Areas (m,) m2 of triangles (m, 3) of points (n, 3) m."""
+    p = points[triangles]
+    return 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+
+
+def _check_areas(shown: str, points: np.ndarray, triangles: np.ndarray, face_of: np.ndarray) -> None:
+    edges = points[triangles[:, [1, 2, 0]]] - points[triangles]
+    scale = float(np.median(np.linalg.norm(edges, axis=2)))
+    areas = triangle_areas(points, triangles)
+    flat = np.flatnonzero(areas <= DEGENERATE_AREA * scale**2)
+    if len(flat):
+        face = int(face_of[flat[0]])
+        raise _error(f"{shown!r}: face {face} has zero area (a triangle of corners "
+                     f"{triangles[flat[0]].tolist()} of area {areas[flat[0]]:.3g} m2; "
+                     f"{len(np.unique(face_of[flat]))} such faces); remove degenerate faces (Blender: Merge by Distance)")
+
+
+def face_edges(blocks) -> tuple[np.ndarray, np.ndarray]:
+    """One row per edge of every face of ``blocks`` (arrays of faces of 3 or 4 corners, in file order),
+    (lower index, higher index), and the face of each row; a face's rows follow its corners (edge j
+    from corner j to corner j + 1)."""
+    edges, owner, start = [], [], 0
+    for b in blocks:
+        k = b.shape[1]
+        e = np.stack([b, np.roll(b, -1, axis=1)], axis=2).reshape(-1, 2)
+        edges.append(np.sort(e, axis=1))
+        owner.append(np.repeat(np.arange(start, start + len(b)), k))
+        start += len(b)
+    return np.concatenate(edges), np.concatenate(owner)
+
+
+def _check_manifold(shown: str, blocks: list) -> None:
+    edges, _ = face_edges(blocks)
+    unique, counts = np.unique(edges, axis=0, return_counts=True)
+    over = np.flatnonzero(counts > 2)
+    if len(over):
+        a, b = unique[over[0]].tolist()
+        raise _error(f"{shown!r}: the edge between vertices {a} and {b} belongs to {counts[over[0]]} faces "
+                     f"({len(over)} such edges): the springs cannot join more; split the mesh there")
+
+
+def _oriented(triangles: np.ndarray) -> np.ndarray:
+    """The triangles with a consistent orientation: each connected piece keeps its first triangle's, and
+    a triangle that runs a shared edge the same way as its neighbour is turned over.  A piece that
+    cannot be oriented (a Moebius strip) keeps the orientation its faces reach first."""
+    m = len(triangles)
+    directed = np.stack([triangles, np.roll(triangles, -1, axis=1)], axis=2).reshape(-1, 2)
+    key = np.sort(directed, axis=1)
+    order = np.lexsort((key[:, 1], key[:, 0]))
+    same = (key[order[1:]] == key[order[:-1]]).all(axis=1)
+    first, second = order[:-1][same], order[1:][same]  # half-edges of one edge, in two triangles
+    t1, t2 = first // 3, second // 3
+    parallel = directed[first, 0] == directed[second, 0]  # both run the edge the same way
+    neighbours = [[] for _ in range(m)]
+    for a, b, p in zip(t1.tolist(), t2.tolist(), parallel.tolist()):
+        neighbours[a].append((b, p))
+        neighbours[b].append((a, p))
+    flip = np.zeros(m, dtype=bool)
+    seen = np.zeros(m, dtype=bool)
+    for start in range(m):
+        if seen[start]:
+            continue
+        seen[start] = True
+        stack = [start]
+        while stack:
+            t = stack.pop()
+            for u, p in neighbours[t]:
+                if not seen[u]:
+                    seen[u] = True
+                    flip[u] = flip[t] ^ p
+                    stack.append(u)
+    out = triangles.copy()
+    out[flip] = out[flip][:, [0, 2, 1]]
+    return out
+
+
+def mesh_area(mesh: MeshFile) -> float:
+    """The mesh's area (m2): the sum of its triangles'."""
+    return float(triangle_areas(mesh.points, mesh.triangles).sum())
+
+
+def is_mesh_path(value: str) -> bool:
+    """Whether a ``cloth_mesh`` value names a file (else the nx x ny rectangle)."""
+    return bool(value) and not value.isspace()
+
+
+def resolve(value: str, base: str | Path | None) -> str:
+    """``value`` made absolute against folder ``base`` if it is relative (no change without a base)."""
+    if not is_mesh_path(value) or base is None or os.path.isabs(value):
+        return value
+    return str((Path(base) / value).resolve())
