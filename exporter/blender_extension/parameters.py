@@ -5,8 +5,10 @@ from __future__ import annotations
 
 from wetcloth.scene import PARAMETERS
 
-#: Parameters the Cloth object's plane (and its pin group) sets.
-FROM_CLOTH = ("nx", "ny", "width", "length", "initial_height", "initial_tilt", "pinned_edge")
+#: Parameters the Cloth object's plane (and its pin group) sets; the plane is the built-in rectangle,
+#: so the mesh-file parameters keep their defaults (no file, no placement, no listed pins).
+FROM_CLOTH = ("nx", "ny", "width", "length", "initial_height", "initial_tilt", "pinned_edge", "cloth_mesh",
+              "place_mesh", "pinned_vertices")
 #: Parameters of the fabric, set on each Cloth object (its preset fills some of them).
 FABRIC = ("areal_density", "thickness", "stretch_stiffness", "bend_stiffness", "damping", "absorption_capacity",
           "absorption_rate", "initial_saturation")

@@ -32,6 +32,8 @@ def parameter_property(name: str, field=None):
     if md["choices"]:
         return EnumProperty(name=label, description=description, default=f.default,
                             items=[(choice, choice, "") for choice in md["choices"]])
+    if f.type == "str":
+        return StringProperty(name=label, description=description, default=f.default)
     if f.type == "int":
         return IntProperty(name=label, description=description, default=f.default, min=int(md["lo"]),
                            max=int(md["hi"]))
