@@ -10,11 +10,13 @@ looks only at the triangles near it and a collider the cloth does not come near 
 
 from __future__ import annotations
 
+import functools
 from collections import namedtuple
 
 import numpy as np
 
-from wetcloth._core import MESH_COLUMNS
+from wetcloth._core import COLLIDER_COLUMNS, MESH_COLUMNS
+from wetcloth.errors import ParameterError
 
 #: All mesh colliders' arrays, as the core's ColliderMeshes: ``headers`` (k, MESH_COLUMNS) each mesh's
 #: first cell, grid origin (m), cell side (m), cells along x, y, z, solid flag and bounding box;
@@ -133,3 +135,76 @@ def pack(meshes: list[tuple[np.ndarray, np.ndarray]]) -> ColliderMeshes:
         cell_start=np.append(np.concatenate(starts), item_offset).astype(np.int64) if starts else np.zeros(1, np.int64),
         cell_items=np.concatenate(items).astype(np.int64) if items else np.zeros(0, np.int64),
     )
+
+
+def mesh_of(collider, name: str = "collider_file") -> tuple[np.ndarray, np.ndarray]:
+    """A mesh collider's points (V, 3) m, moved by its x, y, z, and triangles (T, 3), from its file
+    (trimesh: OBJ, PLY, STL, OFF, glTF/GLB; coincident vertices merged so that a closed surface reads as
+    closed, faces of no area left out).  A ParameterError names ``name`` for a file that is missing,
+    unreadable or has no faces."""
+    from wetcloth.mesh_file import locate
+
+    path = locate(collider.file) if collider.file else None
+    if path is None or not path.is_file():
+        raise ParameterError(name, f"a mesh collider needs its mesh file; {str(collider.file)!r} is not a file; "
+                                   "allowed: the path of a mesh file (OBJ, PLY, STL, OFF, glTF, GLB)")
+    points, triangles = _read(str(path.resolve()), path.stat().st_mtime_ns, name)
+    return points + np.array([collider.x, collider.y, collider.z]), triangles
+
+
+@functools.lru_cache(maxsize=8)
+def _read(path: str, mtime_ns: int, name: str) -> tuple[np.ndarray, np.ndarray]:
+    import trimesh
+
+    try:
+        mesh = trimesh.load(path, force="mesh")
+    except Exception as exc:  # the readers raise many kinds of errors for a damaged file
+        raise ParameterError(name, f"{path!r} cannot be read as a mesh: {type(exc).__name__}: {exc}; allowed: a "
+                                   "mesh file (OBJ, PLY, STL, OFF, glTF, GLB) of triangles") from None
+    faces = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64)
+    points = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=np.float64)
+    if len(faces):
+        faces = faces[np.linalg.norm(np.cross(points[faces[:, 1]] - points[faces[:, 0]],
+                                              points[faces[:, 2]] - points[faces[:, 0]]), axis=1) > 0.0]
+    if not len(faces) or not np.isfinite(points).all():
+        raise ParameterError(name, f"{path!r} has no faces with an area, or coordinates that are not finite numbers; "
+                                   "allowed: a mesh file of triangles")
+    points.flags.writeable = faces.flags.writeable = False  # shared by every reader of the (cached) file
+    return points, faces
+
+
+def meshes_of(colliders) -> tuple[np.ndarray, ColliderMeshes]:
+    """The core's collider rows (k, 13) of a scene's ``colliders`` and its mesh colliders' arrays (each mesh
+    collider's row holds its index among them in the radius column)."""
+    rows = np.array([c.row() for c in colliders], dtype=np.float64).reshape(-1, COLLIDER_COLUMNS)
+    meshes = []
+    for k, collider in enumerate(colliders):
+        if collider.shape == "mesh":
+            rows[k, 4] = len(meshes)
+            meshes.append(mesh_of(collider, f"collider{k + 1}_file"))
+    return rows, _packed(_key(meshes)) if meshes else no_meshes()
+
+
+@functools.lru_cache(maxsize=4)
+def _packed(key) -> ColliderMeshes:
+    """pack() of the meshes in key (their bytes and shapes): a scene whose other parameters change (an FMU
+    input) reuses the same arrays."""
+    return pack([(np.frombuffer(p).reshape(ps), np.frombuffer(t, dtype=np.int64).reshape(ts)) for p, t, ps, ts in key])
+
+
+def distance_to_mesh(collider, points: np.ndarray, reach: float) -> np.ndarray:
+    """The core's signed distance (m) of points (3, m) from mesh collider ``collider``'s surface, up to
+    ``reach`` m (farther points get reach)."""
+    from wetcloth import _core
+
+    row = np.zeros((1, COLLIDER_COLUMNS))
+    row[0, 0] = 4  # MESH, its mesh the first
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    distance, normal = np.zeros(points.shape[1]), np.zeros_like(points)
+    _core.collider_distance(row, _packed(_key([mesh_of(collider, "collider_file")])), 0, points, reach, distance, normal)
+    return distance
+
+
+def _key(meshes) -> tuple:
+    """A hashable key of meshes [(points, triangles)] for _packed."""
+    return tuple((p.tobytes(), t.tobytes(), p.shape, t.shape) for p, t in meshes)

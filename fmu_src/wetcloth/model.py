@@ -14,7 +14,7 @@ import numpy as np
 from wetcloth import _core
 from wetcloth._core import GRAVITY
 from wetcloth.bundles import Cloth, Physics, make_work
-from wetcloth.collider_meshes import no_meshes
+from wetcloth.collider_meshes import meshes_of
 from wetcloth.scene import Scene
 from wetcloth.topology import STRETCH, Topology, build_topology, corner_shares
 
@@ -60,6 +60,7 @@ class Model:
             wick_pairs=self.wick_pairs, wick_pair_conductance=self.wick_pair_conductance,
             triangles=np.ascontiguousarray(topo.triangles, dtype=np.int64), corner_shares=self.corner_shares,
         )
+        colliders, meshes = meshes_of(scene.colliders)
         wet = scene.wet_stiffness_factor != 0.0 and scene.absorption_capacity > 0.0
         self.physics = Physics(
             projected=scene.damping_model == "projected", wet_factor=scene.wet_stiffness_factor if wet else 0.0,
@@ -71,8 +72,7 @@ class Model:
             floor_friction=scene.floor_friction, absorption_capacity=scene.absorption_capacity,
             absorption_rate=scene.absorption_rate, drying_rate=scene.drying_rate, wicking_rate=scene.wicking_rate,
             wick_step_limit=self.wick_step_limit, skip_idle=self.skip_idle_work,
-            colliders=np.array([c.row() for c in scene.colliders], dtype=np.float64).reshape(-1, 13),
-            meshes=no_meshes(),
+            colliders=colliders, meshes=meshes,
         )
 
     def _set_wicking(self, scene: Scene) -> None:

@@ -48,18 +48,27 @@ PINS_ALLOWED = ("'' (none), the name of a point attribute of the mesh file (nonz
                 "'box:x0,y0,z0,x1,y1,z1' (m, x0 <= x1, y0 <= y1, z0 <= z1)")
 
 
+#: How far (m) Collider.distance looks for a mesh collider's surface.
+MESH_REACH = 0.05
+
 #: Collider shapes, in the order of the core's shape codes (fmu_src/core/include/wetcloth/colliders.hpp).
-COLLIDER_SHAPES = ("plane", "box", "sphere", "cylinder")
+COLLIDER_SHAPES = ("plane", "box", "sphere", "cylinder", "mesh")
 
 
 @dataclass(frozen=True)
 class Collider:
-    """A rigid analytic collider (docs/model.md section 6.3), one ``[[collider]]`` table of a scene file.
-    Its fields are addressed as ``collider<k>_<field>`` (k from 1, in file order) everywhere else."""
+    """A rigid collider (docs/model.md section 6.3), one ``[[collider]]`` table of a scene file: an analytic
+    shape or a triangle mesh from a file.  Its fields are addressed as ``collider<k>_<field>`` (k from 1,
+    in file order) everywhere else."""
 
-    shape: str = _param("sphere", "-", "plane (half-space), box (axis-aligned), sphere or cylinder (vertical axis)",
-                        choices=COLLIDER_SHAPES)
-    x: float = _param(0.0, "m", "x of the centre (plane: of a point on it)", -1e4, 1e4)
+    shape: str = _param("sphere", "-", "plane (half-space), box (axis-aligned), sphere, cylinder (vertical axis) "
+                        "or mesh (a triangle mesh from `file`)", choices=COLLIDER_SHAPES)
+    file: str = _param(
+        "", "-", "a mesh collider's file (any format cloth_mesh reads; m, z up), moved by x, y, z: a closed mesh is "
+        "a solid, an open one a shell (a bucket's wall) kept off on both sides; relative to the scene file",
+        text="a mesh file's path (for shape = 'mesh'), or ''")
+    x: float = _param(0.0, "m", "x of the centre (plane: of a point on it; mesh: where its file's origin goes)",
+                      -1e4, 1e4)
     y: float = _param(0.0, "m", "y of the centre (plane: of a point on it)", -1e4, 1e4)
     z: float = _param(0.0, "m", "z of the centre (plane: of a point on it)", -1e4, 1e4)
     radius: float = _param(0.1, "m", "radius of a sphere or cylinder", 0.0, 1e4, lo_open=True)
@@ -80,8 +89,13 @@ class Collider:
                 self.size_x, self.size_y, self.size_z, *map(float, normal), self.friction]
 
     def distance(self, p: np.ndarray) -> np.ndarray:
-        """Signed distance (m, negative inside) of points p (3, m) from the surface (as the core's)."""
+        """Signed distance (m, negative inside) of points p (3, m) from the surface (as the core's; a
+        mesh's up to MESH_REACH: points farther away get MESH_REACH)."""
         d = p - np.array([[self.x], [self.y], [self.z]])
+        if self.shape == "mesh":
+            from wetcloth.collider_meshes import distance_to_mesh
+
+            return distance_to_mesh(self, p, MESH_REACH)
         if self.shape == "sphere":
             return np.sqrt((d * d).sum(axis=0)) - self.radius
         if self.shape == "plane":
@@ -372,6 +386,11 @@ def _checked_colliders(colliders, mistakes: Mistakes) -> tuple:
                 checked[name] = check_value(f"collider{k}_{name}", value)
         if len(checked) != len(values):
             continue
+        if checked.get("shape", "sphere") == "mesh":
+            with mistakes.collect():
+                from wetcloth.collider_meshes import mesh_of
+
+                mesh_of(Collider(**checked), f"collider{k}_file")  # readable, with faces
         if checked.get("shape", "sphere") == "plane" and not any(
                 checked.get(f"normal_{c}", COLLIDER_FIELDS[f"normal_{c}"].default) != 0.0 for c in "xyz"):
             with mistakes.collect():
@@ -485,6 +504,8 @@ def read_scene_file(path: str | Path | None) -> dict[str, Any]:
                     for name, item in table.items():
                         with mistakes.collect():
                             data[f"collider{k}_{name}"] = check_value(f"collider{k}_{name}", item)
+                            if name == "file":  # relative to the scene file's folder
+                                data[f"collider{k}_file"] = resolve(data[f"collider{k}_file"], resolved.parent)
             elif key == "description":
                 if not isinstance(value, str):
                     raise ParameterError(key, f"must be text, got {value!r}")

@@ -10,8 +10,12 @@ WETCLOTH_BINDINGS(m) {
     m.attr("MESH_COLUMNS") = static_cast<Index>(MESH_COLUMNS);
     m.def(
         "collider_distance",
-        [](nb::handle physics, Index k, nb::handle points, double reach, nb::handle distance, nb::handle normal) {
-            const Physics phys = physics_from(physics);
+        [](nb::handle colliders, nb::handle meshes, Index k, nb::handle points, double reach, nb::handle distance,
+           nb::handle normal) {
+            Physics phys;
+            phys.collider_count = size_of(colliders) / COLLIDER_COLUMNS;
+            phys.colliders = argument<const double>(colliders, "colliders", phys.collider_count * COLLIDER_COLUMNS);
+            phys.meshes = meshes_from(meshes);
             if (k < 0 || k >= phys.collider_count) throw std::out_of_range("collider index out of range");
             const Index count = size_of(distance);
             const double* p = argument<const double>(points, "points", 3 * count);
@@ -24,9 +28,11 @@ WETCLOTH_BINDINGS(m) {
                 for (Index c = 0; c < 3; ++c) nrm[c * count + i] = out[c];
             }
         },
-        nb::arg("physics"), nb::arg("k"), nb::arg("points"), nb::arg("reach"), nb::arg("distance"), nb::arg("normal"),
-        "Signed distance (m) of points (3, m) to collider k of physics into distance (m), the outward normals into "
-        "normal (3, m); a mesh collider's at most reach (m).");
+        nb::arg("colliders"), nb::arg("meshes"), nb::arg("k"), nb::arg("points"), nb::arg("reach"), nb::arg("distance"),
+        nb::arg("normal"),
+        "Signed distance (m) of points (3, m) to collider k of the rows colliders (k, COLLIDER_COLUMNS) into distance "
+        "(m), the outward normals into normal (3, m); a mesh collider's (its triangles in meshes, a ColliderMeshes) "
+        "at most reach (m).");
 }
 
 }  // namespace wc::py

@@ -52,8 +52,6 @@ Cloth cloth_from(nb::handle h) {
     return c;
 }
 
-namespace {
-
 ColliderMeshes meshes_from(nb::handle h) {
     ColliderMeshes m;
     m.count = size_of(h.attr("headers")) / MESH_COLUMNS;
@@ -70,8 +68,6 @@ ColliderMeshes meshes_from(nb::handle h) {
     m.cell_items = array<const Index>(h, "cell_items");
     return m;
 }
-
-}  // namespace
 
 Physics physics_from(nb::handle h) {
     Physics p;

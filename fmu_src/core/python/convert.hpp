@@ -65,6 +65,7 @@ T number(nb::handle bundle, const char* field) {
 
 Cloth cloth_from(nb::handle cloth);
 Physics physics_from(nb::handle phys);
+ColliderMeshes meshes_from(nb::handle meshes);
 Control control_from(nb::handle control);
 Work work_from(nb::handle work, const Cloth& cloth);
 Solver solver_from(nb::handle solver, Index n);
