@@ -382,8 +382,8 @@ def python_arrays(sim: wetcloth.Simulation) -> dict[str, np.ndarray]:
                                                       "wick_offsets", "wick_conductance")}
     arrays["grid"] = [cloth.grid_x, cloth.grid_y]
     physics = sim.model.physics  # its scalars (the native FMU has no colliders: none in these scenes)
-    assert physics.colliders.size == 0
-    arrays["physics"] = [float(v) for f, v in zip(physics._fields, physics) if f != "colliders"]
+    assert physics.colliders.size == 0 and len(physics.meshes.headers) == 0
+    arrays["physics"] = [float(v) for f, v in zip(physics._fields, physics) if f not in ("colliders", "meshes")]
     arrays["control"] = [float(getattr(control, f)) for f in control._fields if f != "scheme"]
     arrays |= {f"plane.{name}": getattr(plane, name) for name in ("slots", "shares", "stiffness", "order", "rank",
                                                                   "reference", "reference_mass", "frame", "normal")}

@@ -141,4 +141,5 @@ def collider_from_vertices(positions, name: str = "collider") -> dict:
     if len(p) > 8 and np.ptp(distance) <= tol:  # (a turned cube's 8 corners are as far from its centre)
         return dict(shape="sphere", **where, radius=float(distance.mean()))
     raise ValueError(f"collider {name!r}: not a UV sphere, an axis-aligned cube or a cylinder standing on its "
-                     "axis (vertical); other meshes cannot collide yet (mesh colliders are not built)")
+                     "axis (vertical); other meshes cannot collide from Blender yet (wetcloth reads mesh colliders "
+                     "from files with trimesh, which Blender does not ship)")
