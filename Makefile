@@ -1,6 +1,7 @@
 # wetcloth: the two commands of the README, and what they need.
 #   make demo   build the FMU, co-simulate the default towel, write meshes, CSV and a plot to out/demo/
 #   make test   run the whole test suite
+#   make extension   the Blender extension dist/wetcloth-VERSION.zip (docs/blender.md section 8)
 # Both create the virtual environment .venv on first use.
 
 PYTHON ?= python3
@@ -22,7 +23,7 @@ BLENDER_WHEELS ?= $(HOME)/.cache/wetcloth/wheels
 # (installed as wetcloth.presets) reinstalls; Python sources are used in place (editable install).
 CORE_FILES := CMakeLists.txt $(shell find fmu_src/core -name '*.cpp' -o -name '*.hpp') $(wildcard models/*.toml models/studies/*.toml)
 
-.PHONY: demo test bench clean
+.PHONY: demo test bench extension clean
 
 $(STAMP): pyproject.toml $(CORE_FILES)
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -43,6 +44,9 @@ demo: $(STAMP)
 test: $(STAMP) $(BLENDER_STAMP)
 	WETCLOTH_REQUIRE_BLENDER=1 $(BIN)/python -m pytest -q
 
+extension: $(STAMP)
+	$(BIN)/wetcloth blender-extension --out dist
+
 # The quicker benchmarks; docs/benchmarks.md lists every one with its command.
 bench: $(STAMP)
 	$(BIN)/python bench/step_speed.py
@@ -51,4 +55,4 @@ bench: $(STAMP)
 	$(BIN)/python bench/fmu_overhead.py
 
 clean:
-	rm -rf out build .pytest_cache
+	rm -rf out build dist .pytest_cache

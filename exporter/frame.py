@@ -24,13 +24,26 @@ LUT_SIZE = 256
 FACES = ("quads", "triangles")
 
 
+#: The 'Blues' colour map's anchors (ColorBrewer's 9-class Blues, 8-bit sRGB), evenly spaced from
+#: wetness 0 to 1, as matplotlib defines it; the table interpolates them linearly as matplotlib does,
+#: so frames need no matplotlib (Blender's Python has none).  tests/test_export.py checks it against
+#: matplotlib's own table.
+BLUES = ((247, 251, 255), (222, 235, 247), (198, 219, 239), (158, 202, 225), (107, 174, 214),
+         (66, 146, 198), (33, 113, 181), (8, 81, 156), (8, 48, 107))
+
+
 @lru_cache(maxsize=1)
 def wetness_lut() -> np.ndarray:
     """The wetness colour table: (LUT_SIZE, 4) uint8 sRGB(A), entry k for wetness k / (LUT_SIZE - 1)."""
-    import matplotlib
-
-    rgba = matplotlib.colormaps[COLORMAP](np.linspace(0.0, 1.0, LUT_SIZE))
-    lut = np.round(rgba * 255.0).astype(np.uint8)
+    anchors = np.asarray(BLUES, dtype=np.float64) / 255.0
+    x = np.linspace(0.0, 1.0, LUT_SIZE)
+    at = np.linspace(0.0, 1.0, len(anchors))
+    # matplotlib's _create_lookup_table: the anchor below plus the fraction of the way to the next
+    upper = np.clip(np.searchsorted(at, x[1:-1]), 1, len(at) - 1)
+    fraction = (x[1:-1] - at[upper - 1]) / (at[upper] - at[upper - 1])
+    inner = fraction[:, None] * (anchors[upper] - anchors[upper - 1]) + anchors[upper - 1]
+    rgb = np.clip(np.concatenate([anchors[:1], inner, anchors[-1:]]), 0.0, 1.0)
+    lut = np.round(np.column_stack([rgb, np.ones(LUT_SIZE)]) * 255.0).astype(np.uint8)
     lut.flags.writeable = False
     return lut
 
@@ -62,15 +75,32 @@ def cloth_faces(topology) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
 
 
 def vertex_normals(positions: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """Unit vertex normals (n, 3) float32 of a triangle mesh, as trimesh computes them (angle-weighted).
+    """Unit vertex normals (n, 3) float32 of a triangle mesh: the triangles' normals weighted by each
+    triangle's angle at the vertex (Thuermer and Wuethrich 1998, as trimesh computes them).
 
-    A vertex whose triangles are all degenerate gets trimesh's fallback (a zero-area normal is
-    replaced so the result stays unit length).
+    Degenerate triangles (zero area) are left out; a vertex with no other gets (0, 0, 1), the rest
+    sheet's normal.  Numpy only: frames are written inside Blender too, which has no trimesh.
     """
-    import trimesh
-
-    mesh = trimesh.Trimesh(vertices=positions, faces=triangles, process=False, validate=False)
-    return np.asarray(mesh.vertex_normals, dtype=np.float32)
+    p = np.asarray(positions, dtype=np.float64)
+    t = np.asarray(triangles, dtype=np.int64)
+    corners = p[t]  # (m, 3, 3)
+    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    area2 = np.linalg.norm(cross, axis=1)
+    ok = area2 > 1e-12 * max(float(np.abs(p).max(initial=0.0)), 1.0) ** 2
+    normal = cross[ok] / area2[ok, None]
+    corners, t = corners[ok], t[ok]
+    summed = np.zeros_like(p)
+    for k in range(3):
+        a = corners[:, (k + 1) % 3] - corners[:, k]
+        b = corners[:, (k + 2) % 3] - corners[:, k]
+        cosine = np.einsum("ij,ij->i", a, b) / np.maximum(np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1),
+                                                         1e-300)
+        np.add.at(summed, t[:, k], normal * np.arccos(np.clip(cosine, -1.0, 1.0))[:, None])
+    length = np.linalg.norm(summed, axis=1)
+    out = np.tile([0.0, 0.0, 1.0], (len(p), 1))
+    good = length > 0.0
+    out[good] = summed[good] / length[good, None]
+    return out.astype(np.float32)
 
 
 def quads_from_triangles(triangles: np.ndarray, uv: np.ndarray) -> np.ndarray:

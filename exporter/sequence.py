@@ -12,6 +12,7 @@ count (a full disk) is removed again.
 
 from __future__ import annotations
 
+import importlib
 import json
 import math
 import pprint
@@ -21,7 +22,6 @@ from typing import Any, Callable
 
 import numpy as np
 
-from wetcloth.exporter import obj_meshio, obj_trimesh, ply_meshio, ply_trimesh
 from wetcloth.exporter.blender_options import MAX_FRAME, OPTIONS, blender_options
 from wetcloth.exporter.errors import ExportError
 from wetcloth.exporter.frame import COLORMAP, FACES, Frame, cloth_faces, make_frame, quads_from_triangles, wetness_lut
@@ -32,12 +32,22 @@ from wetcloth.files import write_text as write_whole_text
 FORMATS = ("ply", "obj", "usd")
 #: Writers of the per-frame formats (USD is always written by usd-core).
 WRITERS = ("trimesh", "meshio")
+
+
+def _imported_when_used(module: str) -> Callable[[Path, Frame], None]:
+    """``module.write``, importing the module at the first frame: a USD sequence (written inside
+    Blender too) then needs neither trimesh nor meshio."""
+    def write(path: Path, frame: Frame) -> None:
+        importlib.import_module(module).write(path, frame)
+    return write
+
+
 #: One module per (format, writer), each with ``write(path, frame)``.
 FRAME_WRITERS: dict[tuple[str, str], Callable[[Path, Frame], None]] = {
-    ("ply", "trimesh"): ply_trimesh.write,
-    ("ply", "meshio"): ply_meshio.write,
-    ("obj", "trimesh"): obj_trimesh.write,
-    ("obj", "meshio"): obj_meshio.write,
+    ("ply", "trimesh"): _imported_when_used("wetcloth.exporter.ply_trimesh"),
+    ("ply", "meshio"): _imported_when_used("wetcloth.exporter.ply_meshio"),
+    ("obj", "trimesh"): _imported_when_used("wetcloth.exporter.obj_trimesh"),
+    ("obj", "meshio"): _imported_when_used("wetcloth.exporter.obj_meshio"),
 }
 MANIFEST = "frames.json"
 LOADER = "load_in_blender.py"

@@ -307,6 +307,46 @@ def test_wetness_colour_map_goes_from_light_to_dark():
     assert (np.diff(lightness) <= 0).all() and lightness[0] - lightness[-1] > 500
 
 
+def test_wetness_colour_table_is_matplotlibs_blues():
+    """The table is built without matplotlib (Blender's Python has none), entry for entry the same
+    8-bit colours as matplotlib's 'Blues' sampled at the table's wetness values."""
+    import matplotlib
+
+    expected = np.round(matplotlib.colormaps["Blues"](np.linspace(0.0, 1.0, len(wetness_lut()))) * 255.0)
+    assert_array_equal(wetness_lut(), expected.astype(np.uint8))
+
+
+def test_vertex_normals_are_trimeshs_angle_weighted_normals():
+    """Numpy's normals of a crumpled sheet (with a degenerate triangle) against trimesh's: the same
+    unit vectors to float32 rounding (a few units of 2**-24 in the summed components)."""
+    from wetcloth.exporter.frame import vertex_normals
+
+    scene = wetcloth.load_scene(nx=9, ny=7)
+    sim = wetcloth.Simulation(scene)
+    rng = np.random.default_rng(3)
+    positions = sim.positions + rng.normal(scale=0.02, size=sim.positions.shape)
+    positions[1] = positions[0]  # triangles touching particles 0 and 1 lose their area
+    triangles = sim.triangles
+    mesh = trimesh.Trimesh(vertices=positions, faces=triangles, process=False, validate=False)
+    assert np.abs(vertex_normals(positions, triangles) - mesh.vertex_normals).max() < 1e-6
+
+
+def test_a_usd_sequence_needs_neither_trimesh_meshio_nor_matplotlib(tmp_path):
+    """Inside Blender (numpy and USD only) a USD sequence is written with no other library: the
+    per-frame writers are imported at their first frame."""
+    import subprocess
+    import sys
+
+    code = (f"import sys, wetcloth\nfrom wetcloth.exporter import open_sequence\n"
+            f"scene = wetcloth.load_scene(nx=4, ny=3)\nsim = wetcloth.Simulation(scene)\n"
+            f"with open_sequence({str(tmp_path / 'usd')!r}, fmt='usd', fps=10, scene=scene) as s:\n"
+            f"    s.on_frame(0, sim)\n"
+            f"print(sorted(m for m in ('trimesh', 'meshio', 'matplotlib', 'scipy', 'tqdm') if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"
+
+
 @pytest.mark.parametrize("bad, message", [
     (dict(positions=np.zeros((4, 2))), "positions"),
     (dict(positions=np.full((4, 3), np.nan)), "non-finite"),

@@ -383,7 +383,7 @@ def python_arrays(sim: wetcloth.Simulation) -> dict[str, np.ndarray]:
                                                       "wick_offsets", "wick_conductance")}
     arrays["grid"] = [cloth.grid_x, cloth.grid_y]
     physics = sim.model.physics  # its scalars (the native FMU has no colliders: none in these scenes)
-    assert physics.colliders.size == 0
+    assert physics.colliders.size == 0 and len(physics.meshes.headers) == 0
     arrays["physics"] = [float(v) for f, v in zip(physics._fields, physics)
                          if f not in ("colliders", "meshes", "grip_keys", "grip_origin")]
     arrays["grip_origin"] = physics.grip_origin

@@ -18,6 +18,7 @@ COMMAND_MODULES = (
     "wetcloth.commands.demo",
     "wetcloth.commands.batch",
     "wetcloth.commands.fit",
+    "wetcloth.commands.blender_extension",
 )
 
 

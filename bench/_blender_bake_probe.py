@@ -1,0 +1,52 @@
+"""Inside bpy (run by bench/blender_bake.py): install the Wet Cloth extension, build the bench scene
+and time ``bpy.ops.wetcloth.bake()`` ("repeats" times in the spec).
+
+    BLENDER_USER_RESOURCES=DIR .venv-blender/bin/python bench/_blender_bake_probe.py SPEC.json RESULT.json
+"""
+
+import json
+import os
+import sys
+import time
+
+import bpy  # first: bpy makes bmesh importable
+import bmesh  # noqa: E402
+
+
+def build_scene(spec):
+    bpy.ops.wm.read_homefile(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.fps, scene.render.fps_base = spec["fps"], 1.0
+    scene.frame_start, scene.frame_end = 1, spec["frames"]
+    bpy.ops.mesh.primitive_plane_add(size=spec["size"], location=(0.0, 0.0, spec["height"]))
+    cloth = bpy.context.object
+    bm = bmesh.new()
+    bm.from_mesh(cloth.data)
+    bmesh.ops.subdivide_edges(bm, edges=bm.edges[:], cuts=spec["cuts"], use_grid_fill=True)
+    bm.to_mesh(cloth.data)
+    bm.free()
+    cloth.wetcloth.role = "CLOTH"
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=spec["radius"], location=(0.0, 0.0, 0.0))
+    bpy.context.object.wetcloth.role = "COLLIDER"
+    bpy.ops.mesh.primitive_plane_add(size=3.0, location=(0.0, 0.0, spec["water"]))
+    bpy.context.object.wetcloth.role = "WATER"
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(spec["work"], "bench.blend"))
+    return cloth
+
+
+def main(spec_path, result_path):
+    spec = json.load(open(spec_path))
+    bpy.ops.extensions.package_install_files(filepath=spec["zip"], repo="user_default", enable_on_install=True)
+    cloth = build_scene(spec)
+    seconds = []
+    for _ in range(spec["repeats"]):
+        started = time.perf_counter()
+        bpy.ops.wetcloth.bake()
+        seconds.append(time.perf_counter() - started)
+    path = bpy.path.abspath(cloth.modifiers["Wet Cloth cache"].cache_file.filepath)
+    json.dump({"seconds": seconds, "manifest": os.path.join(os.path.dirname(path), "frames.json"),
+               "blender": bpy.app.version_string}, open(result_path, "w"))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], sys.argv[2])

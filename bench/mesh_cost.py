@@ -1,0 +1,72 @@
+"""Cost per vertex of a cloth from an irregular triangle mesh against the built-in rectangle (issue 26:
+at most 1.5x).
+
+    .venv/bin/python bench/mesh_cost.py [--vertices 10000] [--duration 0.5]
+
+The mesh is docs/make_meshes.py's irregular disc (rings of jittered points, Delaunay) with about
+``--vertices`` vertices and the area of the square it is compared with: a square grid of as many
+particles.  Both drop flat from 5 cm onto water (the default towel's fabric, air and water), and hang
+in air from the part of them at y >= 0.6 m (pinned by a box); CPU seconds, steps, Newton and CG iterations
+for each, and the ratio of CPU time per vertex.  The mesh takes the core's listed springs and its
+banded preconditioner in reverse Cuthill-McKee order (mesh_plane.cpp); the grid its families and
+multigrid.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # idle BLAS threads would spin on the CPU clock
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs"))
+import make_meshes  # noqa: E402
+
+import wetcloth  # noqa: E402
+
+
+def run(scene: wetcloth.Scene, duration: float) -> tuple[float, wetcloth.Simulation]:
+    sim = wetcloth.Simulation(scene)
+    start = time.process_time()
+    sim.advance(duration)
+    return time.process_time() - start, sim
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--vertices", type=int, default=10000)
+    parser.add_argument("--duration", type=float, default=0.5, help="simulated seconds (default 0.5)")
+    args = parser.parse_args()
+    rings = round(math.sqrt(args.vertices / math.pi))
+    points, triangles = make_meshes.round_cloth(radius=make_meshes.RADIUS, rings=rings)
+    side = round(math.sqrt(len(points)))
+    size = math.sqrt(math.pi) * make_meshes.RADIUS  # the square of the disc's area
+    path = Path(tempfile.mkdtemp()) / "disc.ply"
+    make_meshes.write(path, points, triangles)
+    grid = dict(nx=side, ny=side, width=size, length=size)
+    mesh = dict(cloth_mesh=str(path), place_mesh="on")
+    cases = {
+        "landing on water": dict(initial_tilt=0.0, initial_height=0.05),
+        "hanging in air": dict(initial_tilt=0.0, initial_height=2.0, water_level=-10.0, floor_level=-20.0),
+    }
+    print(f"disc of {len(points)} vertices ({rings} rings) against a {side} x {side} grid, {args.duration} s")
+    for label, base in cases.items():
+        results = {}
+        for kind, shape in (("grid", grid), ("mesh", mesh)):
+            extra = dict(pinned_vertices="box:-9,0.6,-9,9,9,9") if label.startswith("hanging") else {}
+            seconds, sim = run(wetcloth.load_scene(**base, **shape, **extra), args.duration)
+            n = sim.model.topology.n
+            results[kind] = seconds / n
+            c = sim.solver_counts
+            print(f"  {label:<17} {kind}: {n:6d} vertices  {seconds:7.1f} s CPU  steps {sim.steps:5d}  rejected "
+                  f"{sim.rejected_steps:4d}  Newton {c['newton_iterations']:5d}  CG {c['cg_iterations']:6d}", flush=True)
+        print(f"  {label:<17} mesh / grid per vertex: {results['mesh'] / results['grid']:.2f}x", flush=True)
+
+
+if __name__ == "__main__":
+    main()

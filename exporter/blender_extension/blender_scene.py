@@ -1,0 +1,154 @@
+"""The Blender scene as wetcloth sees it: one ``ClothJob`` (a Scene and where its cache goes) per Cloth object.
+
+Geometry is read in world space at the first frame of the scene's range: the Cloth object's mesh
+as stored (its modifiers apply after the cache) gives the grid
+(``geometry.grid_cloth``), Collider objects' evaluated meshes the analytic colliders, the Water plane
+``water_level`` (and, if it is animated, the level over every frame).  Parameters come from
+``scene.wetcloth`` and the cloth's ``obj.wetcloth``; Blender keeps them as 32-bit floats, which
+are read back as the shortest decimal that rounds to them (0.45, not 0.4499999881).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass, replace
+
+import bpy
+import numpy as np
+
+from wetcloth.exporter.blender_extension.geometry import GridCloth, collider_from_vertices, grid_cloth, pinned_edge
+from wetcloth.exporter.blender_extension.parameters import FABRIC, SCENE
+from wetcloth.scene import Scene, from_dict
+
+@dataclass
+class ClothJob:
+    """One cloth to bake: its object, scene, plane and where its USD file goes."""
+
+    obj: bpy.types.Object
+    scene: Scene
+    grid: GridCloth
+    directory: str  # absolute
+    prefix: str
+    to_local: np.ndarray
+    water_levels: list | None
+
+
+def clean(value):
+    """A value Blender stored as float32, as the shortest decimal that rounds to it; others unchanged."""
+    if isinstance(value, float):
+        return float(str(np.float32(value)))
+    return value
+
+
+def prefix_of(obj) -> str:
+    """The cache's file prefix of an object: its name in letters, digits, '.', '_' and '-'."""
+    name = re.sub(r"[^A-Za-z0-9._-]+", "_", obj.name).strip("._-")
+    return name or "cloth"
+
+
+def _vertices(obj, mesh) -> tuple[np.ndarray, np.ndarray]:
+    co = np.empty(len(mesh.vertices) * 3)
+    mesh.vertices.foreach_get("co", co)
+    edges = np.empty(len(mesh.edges) * 2, dtype=np.int64)
+    mesh.edges.foreach_get("vertices", edges)
+    matrix = np.array(obj.matrix_world)
+    return co.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3], edges.reshape(-1, 2)
+
+
+def world_vertices(obj, depsgraph) -> tuple[np.ndarray, np.ndarray]:
+    """The evaluated mesh's vertex positions (n, 3) in world space (m) and edges (e, 2)."""
+    evaluated = obj.evaluated_get(depsgraph)
+    mesh = evaluated.to_mesh()
+    try:
+        return _vertices(obj, mesh)
+    finally:
+        evaluated.to_mesh_clear()
+
+
+def cloth_vertices(obj) -> tuple[np.ndarray, np.ndarray]:
+    """The cloth's plane: its mesh as stored, in world space (m), and its edges.  Not the evaluated
+    mesh: the cache modifier comes first in the stack, so the object's own modifiers (Subdivision,
+    Solidify) apply to the baked cloth, not to the plane it is baked from."""
+    return _vertices(obj, obj.data)
+
+
+def cache_directory(scene) -> str:
+    """The absolute cache folder; ValueError for a folder relative to an unsaved .blend."""
+    folder = scene.wetcloth.cache_directory
+    if folder.startswith("//") and not bpy.data.filepath:
+        raise ValueError("save the .blend file first: the bake writes its cache beside it "
+                         f"(scene.wetcloth.cache_directory = {folder!r})")
+    return os.path.normpath(bpy.path.abspath(folder))
+
+
+def _water(scene, waters, depsgraph) -> tuple[float, list | None]:
+    """The water level at the first frame and, if the Water object is animated, over every frame."""
+    if not waters:
+        return clean(scene.wetcloth.water_level), None
+    if len(waters) > 1:
+        raise ValueError(f"{len(waters)} objects have the role Water surface "
+                         f"({', '.join(o.name for o in waters)}); there is one water surface")
+    water = waters[0]
+    if water.type != "MESH":
+        raise ValueError(f"water surface {water.name!r} is not a mesh (a horizontal plane)")
+    points, _ = world_vertices(water, depsgraph)
+    if len(points) == 0 or np.ptp(points[:, 2]) > 1e-4 * max(np.ptp(points, axis=0).max(), 1e-9):
+        raise ValueError(f"water surface {water.name!r} is not a horizontal plane (its vertices' heights differ)")
+    level = clean(float(points[:, 2].mean()))
+    if water.animation_data is None:
+        return level, None
+    local = water.data.vertices[0].co.copy()  # any vertex: the plane is level
+    levels = []
+    for frame in range(scene.frame_start, scene.frame_end):  # the level from frame k to k + 1
+        scene.frame_set(frame)
+        levels.append(clean(float((water.matrix_world @ local).z)))
+    scene.frame_set(scene.frame_start)
+    return level, levels
+
+
+def cloth_jobs(context) -> list[ClothJob]:
+    """One job per Cloth object of the scene; ValueError naming the object or parameter at fault."""
+    scene = context.scene
+    objects = [o for o in scene.objects if o.wetcloth.role != "NONE"]
+    cloths = [o for o in objects if o.wetcloth.role == "CLOTH"]
+    if not cloths:
+        raise ValueError("no object has the role Cloth (Physics properties > Wet Cloth > Role)")
+    for obj in cloths:
+        if obj.type != "MESH":
+            raise ValueError(f"cloth {obj.name!r} is not a mesh (a subdivided plane)")
+    scene.frame_set(scene.frame_start)
+    depsgraph = context.evaluated_depsgraph_get()
+    depsgraph.update()
+    water_level, water_levels = _water(scene, [o for o in objects if o.wetcloth.role == "WATER"], depsgraph)
+    colliders = []
+    for obj in (o for o in objects if o.wetcloth.role == "COLLIDER"):
+        if obj.type != "MESH":
+            raise ValueError(f"collider {obj.name!r} is not a mesh (a UV sphere, cube or cylinder)")
+        collider = collider_from_vertices(world_vertices(obj, depsgraph)[0], obj.name)
+        colliders.append({key: clean(value) for key, value in collider.items()} | {"friction": clean(obj.wetcloth.friction)})
+    settings = {name: clean(getattr(scene.wetcloth, name)) for name in SCENE} | {"water_level": water_level}
+    directory = cache_directory(scene)
+    jobs = []
+    for obj in cloths:
+        positions, edges = cloth_vertices(obj)
+        grid = grid_cloth(positions, edges, obj.name)
+        grid = replace(grid, width=clean(grid.width), length=clean(grid.length),
+                       centre=tuple(clean(c) for c in grid.centre), tilt=clean(grid.tilt))
+        pins = "none"
+        if obj.wetcloth.pin_group:
+            group = obj.vertex_groups.get(obj.wetcloth.pin_group)
+            if group is None:
+                raise ValueError(f"cloth {obj.name!r}: no vertex group {obj.wetcloth.pin_group!r} (Pin group)")
+            members = [v.index for v in obj.data.vertices if any(g.group == group.index and g.weight > 0
+                                                                 for g in v.groups)]
+            pins = pinned_edge(grid, members, group.name)
+        fabric = {name: clean(getattr(obj.wetcloth, name)) for name in FABRIC}
+        shift = grid.shift
+        moved = [c | {"x": clean(c["x"] - shift[0]), "y": clean(c["y"] - shift[1])} for c in colliders]
+        values = settings | fabric | grid.scene_values() | {"pinned_edge": pins, "colliders": moved}
+        prefix = prefix_of(obj)
+        jobs.append(ClothJob(obj=obj, scene=from_dict(values), grid=grid, directory=os.path.join(directory, prefix),
+                             prefix=prefix, to_local=np.array(obj.matrix_world.inverted()),
+                             water_levels=water_levels))
+    return jobs

@@ -1,0 +1,145 @@
+"""``wetcloth blender-extension``: the Blender extension, ``wetcloth-VERSION.zip`` (Blender 4.2+ format).
+
+The zip holds ``blender_manifest.toml`` (schema 1.0.0, id ``wetcloth``), a five-line ``__init__.py``
+that registers the add-on, and ``wheels/``: wetcloth itself (the compiled core, this package and
+the add-on, ``wetcloth.exporter.blender_extension``) built for the running Python and platform, and
+for any other Python given.  Blender installs the wheel of its own Python when the extension is
+installed; the bake needs nothing else from outside (numpy and USD come with Blender).  The
+Blender versions the manifest allows are those whose Python has a wheel (``BLENDER_VERSIONS``).
+"""
+
+from __future__ import annotations
+
+import platform
+import subprocess
+import sys
+import tempfile
+import zipfile
+from pathlib import Path
+
+import wetcloth
+
+#: The extension's id (its module is ``bl_ext.<repository>.wetcloth``).
+EXTENSION_ID = "wetcloth"
+#: Blender versions (first, and first not) whose Python a wheel's tag is: 4.2 (the first with the
+#: extension format) to 5.0 ship Python 3.11, 5.1 and later Python 3.13.
+BLENDER_VERSIONS = {"cp311": ("4.2.0", "5.1.0"), "cp313": ("5.1.0", None)}
+#: Blender's platform names of the machines a wheel can be built on here.
+PLATFORMS = {("Linux", "x86_64"): "linux-x64", ("Linux", "aarch64"): "linux-arm64",
+             ("Darwin", "arm64"): "macos-arm64", ("Darwin", "x86_64"): "macos-x64",
+             ("Windows", "AMD64"): "windows-x64"}
+
+INIT_SOURCE = '''"""Wet Cloth: bake a wetcloth simulation (cloth that soaks up water and sinks) in the scene.
+The add-on's code is in the bundled wheel, module wetcloth.exporter.blender_extension."""
+
+
+def register():
+    from wetcloth.exporter import blender_extension
+    blender_extension.register()
+
+
+def unregister():
+    from wetcloth.exporter import blender_extension
+    blender_extension.unregister()
+'''
+
+
+def blender_platform() -> str:
+    """Blender's name of this machine's platform (``linux-x64``); a ValueError where there is none."""
+    key = (platform.system(), platform.machine())
+    if key not in PLATFORMS:
+        raise ValueError(f"no Blender platform for {key[0]} {key[1]}; wetcloth builds the extension on "
+                         + ", ".join(f"{s} {m}" for s, m in PLATFORMS))
+    return PLATFORMS[key]
+
+
+def blender_range(wheel_names) -> tuple[str, str | None]:
+    """The first Blender the wheels serve and the first they do not (None: every later one); the
+    table's ranges meet, so any set of its Pythons covers one stretch of versions."""
+    ranges = sorted(BLENDER_VERSIONS[name.split("-")[2]] for name in wheel_names)
+    return ranges[0][0], ranges[-1][1]
+
+
+def manifest(version: str, wheel_names, blender_platform_name: str) -> str:
+    """The text of ``blender_manifest.toml``."""
+    first, last = blender_range(wheel_names)
+    upper = f'blender_version_max = "{last}"\n' if last else ""
+    wheels = ", ".join(f'"./wheels/{name}"' for name in wheel_names)
+    return f'''schema_version = "1.0.0"
+id = "{EXTENSION_ID}"
+version = "{version}"
+name = "Wet Cloth"
+tagline = "Bake cloth that soaks up water, floats and sinks"
+maintainer = "wetcloth"
+type = "add-on"
+tags = ["Physics", "Animation"]
+blender_version_min = "{first}"
+{upper}license = ["SPDX:MIT"]
+platforms = ["{blender_platform_name}"]
+wheels = [{wheels}]
+
+[permissions]
+files = "Writes the baked cloth (USD caches) beside the .blend file"
+'''
+
+
+def source_tree() -> Path:
+    """The project folder this wetcloth runs from (an editable install), which pip can build a wheel of."""
+    root = Path(wetcloth.__file__).resolve().parents[2]
+    if not (root / "pyproject.toml").is_file() or not (root / "fmu_src" / "core").is_dir():
+        raise ValueError(f"wetcloth is not running from its source tree (no pyproject.toml in {root}): "
+                         "pass --wheel with a wetcloth wheel for Blender's Python")
+    return root
+
+
+def build_wheel(directory: Path, python: str | Path = sys.executable) -> Path:
+    """``pip wheel --no-deps`` of the source tree by interpreter ``python`` into ``directory``; the wheel."""
+    before = set(directory.glob("wetcloth-*.whl"))
+    done = subprocess.run([str(python), "-m", "pip", "wheel", "--no-deps", "--quiet", str(source_tree()),
+                           "-w", str(directory)], capture_output=True, text=True)
+    wheels = sorted(set(directory.glob("wetcloth-*.whl")) - before)
+    if done.returncode != 0 or len(wheels) != 1:
+        raise ValueError(f"pip wheel of {source_tree()} by {python} failed (exit {done.returncode}):\n"
+                         f"{done.stderr[-2000:]}")
+    return wheels[0]
+
+
+def check_wheel(wheel: Path) -> None:
+    """Refuse a wheel no Blender can load: another project or version, or a Python no Blender ships."""
+    parts = wheel.name[:-len(".whl")].split("-")
+    if wheel.suffix != ".whl" or len(parts) != 5 or parts[0] != "wetcloth":
+        raise ValueError(f"wheel {wheel}: not a wetcloth wheel (wetcloth-VERSION-PYTHON-ABI-PLATFORM.whl)")
+    if parts[1] != wetcloth.__version__:
+        raise ValueError(f"wheel {wheel}: version {parts[1]}, this wetcloth is {wetcloth.__version__}")
+    if parts[2] not in BLENDER_VERSIONS:
+        raise ValueError(f"wheel {wheel}: built for {parts[2]}; Blender ships Python 3.11 (4.2 to 5.0, cp311) "
+                         "or 3.13 (5.1 and later, cp313)")
+
+
+def build_extension(out: Path | None = None, wheels=(), pythons=()) -> Path:
+    """Write ``wetcloth-VERSION.zip`` into the folder ``out`` (default: the current one); its path.
+
+    ``wheels``: wetcloth wheels to bundle as they are; ``pythons``: interpreters to build one with
+    each.  With neither, the wheel is built now from the source tree by this Python."""
+    out = Path(out or ".")
+    with tempfile.TemporaryDirectory() as tmp:
+        wheels = [Path(w) for w in wheels]
+        for wheel in wheels:
+            check_wheel(wheel)
+        for python in (pythons or ([] if wheels else [sys.executable])):
+            wheels.append(build_wheel(Path(tmp), python))
+            check_wheel(wheels[-1])
+        names = [w.name for w in wheels]
+        if len(set(name.split("-")[2] for name in names)) != len(names):
+            raise ValueError(f"two wheels for one Python: {', '.join(names)}")
+        text = manifest(wetcloth.__version__, names, blender_platform())
+        out.mkdir(parents=True, exist_ok=True)
+        target = out / f"{EXTENSION_ID}-{wetcloth.__version__}.zip"
+        partial = target.with_name(target.name + ".part")
+        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
+            archive.writestr("blender_manifest.toml", text)
+            archive.writestr("__init__.py", INIT_SOURCE)
+            for wheel in wheels:
+                archive.write(wheel, f"wheels/{wheel.name}")
+        partial.replace(target)
+    return target

@@ -1,0 +1,145 @@
+"""What the Blender objects are, read from their vertices in world space (m, z up); numpy only.
+
+* the cloth: a subdivided rectangular plane is wetcloth's grid cloth (``grid_cloth``): its
+  particle counts, size, centre and tilt, and which grid particle each Blender vertex is;
+* pins: a vertex group that is one whole edge of the grid is ``pinned_edge``;
+* colliders: a UV sphere, a cube (axis-aligned) or a cylinder (vertical axis) is the analytic
+  collider of that shape (``collider_from_vertices``, the fields of a ``[[collider]]`` table).
+
+Each refuses anything else with a ValueError that names the object and says what is accepted.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Positions agree when within this fraction of the object's size (Blender stores float32 coordinates).
+RELATIVE_TOLERANCE = 1e-4
+#: pinned_edge names of the grid's four edges: (column or row, which end).
+EDGES = {"x_min": ("col", 0), "x_max": ("col", -1), "y_min": ("row", 0), "y_max": ("row", -1)}
+
+
+@dataclass(frozen=True)
+class GridCloth:
+    """A plane of nx x ny vertices, width along x and length across it, tilted about x by ``tilt``
+    (deg), centred at ``centre`` (m); ``order[k]`` is the grid particle (row * nx + col) of vertex k."""
+
+    nx: int
+    ny: int
+    width: float
+    length: float
+    centre: tuple[float, float, float]
+    tilt: float
+    order: np.ndarray
+
+    def scene_values(self) -> dict:
+        """The scene parameters the plane sets (the simulation's cloth is centred on x = y = 0)."""
+        return {"nx": self.nx, "ny": self.ny, "width": self.width, "length": self.length,
+                "initial_height": self.centre[2], "initial_tilt": self.tilt}
+
+    @property
+    def shift(self) -> np.ndarray:
+        """What is added to the simulation's positions (m) to put them in the world: the plane's x, y."""
+        return np.array([self.centre[0], self.centre[1], 0.0])
+
+
+def _levels(values: np.ndarray, tol: float, what: str, name: str) -> tuple[np.ndarray, float]:
+    """Index (0..count-1) of each value on a row of equally spaced levels, and the spacing."""
+    ordered = np.sort(values)
+    starts = np.concatenate([[0], np.flatnonzero(np.diff(ordered) > tol) + 1])
+    levels = ordered[starts]
+    if len(levels) < 2:
+        raise ValueError(f"cloth {name!r}: the plane has no extent {what}")
+    spacing = (levels[-1] - levels[0]) / (len(levels) - 1)
+    if np.abs(levels - (levels[0] + spacing * np.arange(len(levels)))).max() > tol:
+        raise ValueError(f"cloth {name!r}: its vertices are not equally spaced {what}; a cloth is a plane "
+                         "subdivided evenly (Add > Mesh > Grid, or a Plane subdivided)")
+    index = np.rint((values - levels[0]) / spacing).astype(np.int64)
+    return index, spacing
+
+
+def grid_cloth(positions, edges, name: str = "cloth") -> GridCloth:
+    """The grid cloth of a subdivided plane: vertex ``positions`` (n, 3) in world space (m) and its
+    ``edges`` (e, 2).  The plane's edges must run along x and across it (a plane turned about z or
+    y is refused); it may be tilted about x (``initial_tilt``)."""
+    p = np.asarray(positions, dtype=np.float64)
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    if p.ndim != 2 or p.shape[1] != 3 or len(p) < 4:
+        raise ValueError(f"cloth {name!r}: needs a plane of at least 2 x 2 vertices, got {len(p)} vertices")
+    size = float(np.ptp(p, axis=0).max())
+    tol = RELATIVE_TOLERANCE * max(size, 1e-9)
+    centre = p.mean(axis=0)
+    _, _, axes = np.linalg.svd(p - centre, full_matrices=False)
+    normal = axes[2]
+    if abs(normal[0]) > RELATIVE_TOLERANCE or np.abs((p - centre) @ normal).max() > tol:
+        raise ValueError(f"cloth {name!r}: not a flat plane with edges along x (a plane may be tilted about x "
+                         "only; apply or clear its rotation about z and y)")
+    across = np.cross(normal, [1.0, 0.0, 0.0])
+    across /= np.linalg.norm(across)
+    if across[1] < -1e-12 or (abs(across[1]) <= 1e-12 and across[2] < 0):
+        across = -across
+    step = p[edges[:, 1]] - p[edges[:, 0]]
+    off_axis = np.minimum(np.abs(step @ across), np.abs(step[:, 0]))  # an edge runs along x or across
+    if len(edges) and off_axis.max() > tol:
+        raise ValueError(f"cloth {name!r}: its edges do not run along x and across it; a cloth is a subdivided "
+                         "rectangular plane, which may be tilted about x only (clear its rotation about z)")
+    col, dx = _levels(p[:, 0], tol, "along x", name)
+    row, dy = _levels((p - centre) @ across, tol, "across x", name)
+    nx, ny = int(col.max()) + 1, int(row.max()) + 1
+    order = row * nx + col
+    if nx * ny != len(p) or len(np.unique(order)) != len(p):
+        raise ValueError(f"cloth {name!r}: its {len(p)} vertices do not fill a rectangular grid ({nx} x {ny}); "
+                         "a cloth is a subdivided rectangular plane")
+    hops = np.abs(col[edges[:, 0]] - col[edges[:, 1]]) + np.abs(row[edges[:, 0]] - row[edges[:, 1]])
+    if len(edges) != nx * (ny - 1) + ny * (nx - 1) or (hops != 1).any():
+        raise ValueError(f"cloth {name!r}: its edges are not those of a grid of quads ({nx} x {ny} vertices); "
+                         "a cloth is a subdivided plane, not triangulated")
+    tilt = math.degrees(math.atan2(across[2], across[1]))
+    return GridCloth(nx=nx, ny=ny, width=dx * (nx - 1), length=dy * (ny - 1), centre=tuple(map(float, centre)),
+                     tilt=tilt, order=order)
+
+
+def pinned_edge(grid: GridCloth, vertices, group: str) -> str:
+    """The ``pinned_edge`` that vertex group ``group`` (Blender vertex indices ``vertices``) is:
+    'none' for no vertices, else the grid edge whose particles are exactly these."""
+    chosen = set(int(grid.order[k]) for k in vertices)
+    if not chosen:
+        return "none"
+    index = np.arange(grid.nx * grid.ny)
+    col, row = index % grid.nx, index // grid.nx
+    for edge, (axis, end) in EDGES.items():
+        along = col if axis == "col" else row
+        last = (grid.nx if axis == "col" else grid.ny) - 1
+        if chosen == set(index[along == (last if end == -1 else 0)].tolist()):
+            return edge
+    raise ValueError(f"pin group {group!r}: its {len(chosen)} vertices are not one whole edge of the cloth; "
+                     f"pins are one edge for now ({', '.join(EDGES)}: the vertices of the first or last "
+                     "column along x, or the first or last row along y)")
+
+
+def collider_from_vertices(positions, name: str = "collider") -> dict:
+    """The ``[[collider]]`` fields (shape, x, y, z and its sizes, m) of a mesh's world-space vertices
+    (n, 3): 8 corners of an axis-aligned box, a cylinder's two rings about a vertical axis (cap
+    centres allowed), or more than 8 vertices all as far from their centre (a UV sphere)."""
+    p = np.unique(np.asarray(positions, dtype=np.float64).round(9), axis=0)
+    lo, hi = p.min(axis=0), p.max(axis=0)
+    centre, extent = 0.5 * (lo + hi), hi - lo
+    tol = RELATIVE_TOLERANCE * max(float(extent.max()), 1e-9)
+    where = dict(x=float(centre[0]), y=float(centre[1]), z=float(centre[2]))
+    at_bounds = (np.abs(p - lo) <= tol) | (np.abs(p - hi) <= tol)
+    if len(p) == 8 and at_bounds.all() and (extent > tol).all():
+        return dict(shape="box", **where, size_x=float(extent[0]), size_y=float(extent[1]), size_z=float(extent[2]))
+    radial = np.hypot(p[:, 0] - centre[0], p[:, 1] - centre[1])
+    ring = radial > tol
+    if (at_bounds[:, 2].all() and ring.sum() >= 6 and np.ptp(radial[ring]) <= tol
+            and abs(extent[0] - extent[1]) <= tol and extent[2] > tol):
+        return dict(shape="cylinder", **where, radius=float(radial[ring].mean()), height=float(extent[2]))
+    distance = np.linalg.norm(p - centre, axis=1)
+    if len(p) > 8 and np.ptp(distance) <= tol:  # (a turned cube's 8 corners are as far from its centre)
+        return dict(shape="sphere", **where, radius=float(distance.mean()))
+    raise ValueError(f"collider {name!r}: not a UV sphere, an axis-aligned cube or a cylinder standing on its "
+                     "axis (vertical); other meshes cannot collide from Blender yet (wetcloth reads mesh colliders "
+                     "from files with trimesh, which Blender does not ship)")

@@ -1,0 +1,208 @@
+"""Runs in bpy (PyPI's bpy, background): installs the Wet Cloth extension and bakes a scene with it.
+
+    BLENDER_USER_RESOURCES=DIR .venv-blender/bin/python tests/blender/extension_probe.py SPEC.json RESULT.json
+
+SPEC: {"zip": the extension, "work": a folder, "frames": frame count, "fps": .., "cuts": plane cuts,
+       "sphere": {"radius", "z"}, "cloth": {"size", "z"}, "water_z": .., "cancel_after": ..}.
+The scene: a plane subdivided into a grid (role Cloth) above a UV sphere (Collider) standing in a
+water plane (Water surface), saved as WORK/scene.blend.  RESULT (the assertions are in
+tests/test_blender_extension.py):
+  "install": the operator's result and the add-on module; "names": the scripting names found;
+  "bake": result, seconds, the evaluated cloth at every frame (world positions, wetness), the
+          modifier, cache path as stored, material, frames.json;
+  "rebake": the same bake again at once (its result, the first and last frame);
+  "reopened": the same frames after saving and opening the .blend again;
+  "cancelled": a bake with cancel_after: result, frames.json, the evaluated cloth at a frame baked
+               and at the last frame;
+  "moved": after moving the cache folder and opening the .blend: what the load check said;
+  "freed": free_bake's result and the files left;
+  "pinned": a short bake of the towel pinned by a vertex group, of denim, with a Solidify modifier of its own;
+  "rising": a bake with the water keyed to rise by "rise" m: the levels at every frame, the cloth; "refusals": the errors of scenes it cannot bake.
+"""
+
+import contextlib
+import io
+import json
+import os
+import shutil
+import sys
+import time
+import traceback
+
+import bpy  # first: bpy makes bmesh importable
+import bmesh  # noqa: E402
+import numpy as np
+
+
+def evaluated_cloth(obj, frame):
+    bpy.context.scene.frame_set(frame)
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    evaluated = obj.evaluated_get(depsgraph)
+    mesh = evaluated.to_mesh()
+    co = np.empty(len(mesh.vertices) * 3)
+    mesh.vertices.foreach_get("co", co)
+    matrix = np.array(obj.matrix_world)
+    world = co.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3]
+    wetness = None
+    if "wetness" in mesh.attributes:
+        values = np.empty(len(mesh.vertices), dtype=np.float32)
+        mesh.attributes["wetness"].data.foreach_get("value", values)
+        wetness = values.tolist()
+    attribute = mesh.attributes.get("wetness")
+    out = {"frame": frame, "positions": world.tolist(), "wetness": wetness,
+           "wetness_domain": [attribute.domain, attribute.data_type] if attribute else None}
+    evaluated.to_mesh_clear()
+    return out
+
+
+def build_scene(spec):
+    bpy.ops.wm.read_homefile(use_empty=True)  # keeps the preferences (the add-on); factory settings would not
+    scene = bpy.context.scene
+    scene.render.fps, scene.render.fps_base = spec["fps"], 1.0
+    scene.frame_start, scene.frame_end = 1, spec["frames"]
+    bpy.ops.mesh.primitive_plane_add(size=spec["cloth"]["size"], location=(0.0, 0.0, spec["cloth"]["z"]))
+    cloth = bpy.context.object
+    cloth.name = "Towel"
+    bm = bmesh.new()
+    bm.from_mesh(cloth.data)
+    bmesh.ops.subdivide_edges(bm, edges=bm.edges[:], cuts=spec["cuts"], use_grid_fill=True)
+    bm.to_mesh(cloth.data)
+    bm.free()
+    cloth.wetcloth.role = "CLOTH"
+    cloth.wetcloth.preset = "COTTON_TERRY_TOWEL"
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=spec["sphere"]["radius"], location=(0.0, 0.0, spec["sphere"]["z"]))
+    bpy.context.object.name = "Ball"
+    bpy.context.object.wetcloth.role = "COLLIDER"
+    bpy.ops.mesh.primitive_plane_add(size=3.0, location=(0.0, 0.0, spec["water_z"]))
+    bpy.context.object.name = "Pool"
+    bpy.context.object.wetcloth.role = "WATER"
+    scene.wetcloth.self_collision = "off"
+    path = os.path.join(spec["work"], "scene.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=path)
+    return path
+
+
+def operator(call, **kwargs):
+    """The operator's result and the messages it reported (bpy raises RuntimeError for errors)."""
+    try:
+        return {"result": sorted(call(**kwargs)), "error": None}
+    except RuntimeError as exc:
+        return {"result": ["ERROR"], "error": str(exc)}
+
+
+def cache_report(obj):
+    modifier = obj.modifiers.get("Wet Cloth cache")
+    if modifier is None:
+        return {"modifiers": [m.type for m in obj.modifiers]}
+    path = bpy.path.abspath(modifier.cache_file.filepath)
+    manifest = os.path.join(os.path.dirname(path), "frames.json")
+    return {"modifiers": [m.type for m in obj.modifiers], "stored_path": modifier.cache_file.filepath,
+            "path": path, "object_path": modifier.object_path,
+            "materials": [s.material.name for s in obj.material_slots if s.material],
+            "manifest": json.load(open(manifest)) if os.path.isfile(manifest) else None}
+
+
+def rising_water(spec, blend, frames):
+    """A bake with the water plane keyed to rise: the level at every frame, and the cloth."""
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    pool = bpy.data.objects["Pool"]
+    pool.location.z = spec["water_z"]
+    pool.keyframe_insert("location", index=2, frame=frames[0])
+    pool.location.z = spec["water_z"] + spec["rise"]
+    pool.keyframe_insert("location", index=2, frame=frames[-1])
+    out = operator(bpy.ops.wetcloth.bake)
+    towel = bpy.data.objects["Towel"]
+    out |= cache_report(towel)
+    out["levels"] = []
+    for frame in frames:
+        bpy.context.scene.frame_set(frame)
+        out["levels"].append(pool.matrix_world.translation.z)
+    out["frames"] = [evaluated_cloth(towel, f) for f in frames]
+    return out
+
+
+def pinned_with_modifiers(blend):
+    """The towel pinned by a vertex group (the vertices of its largest y), of the denim preset, with a
+    Solidify modifier of its own: a short bake (cancel_after=3)."""
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    towel = bpy.data.objects["Towel"]
+    top = max(v.co.y for v in towel.data.vertices)
+    group = towel.vertex_groups.new(name="Hem")
+    group.add([v.index for v in towel.data.vertices if abs(v.co.y - top) < 1e-6], 1.0, "REPLACE")
+    towel.wetcloth.pin_group = "Hem"
+    towel.wetcloth.preset = "DENIM"
+    towel.modifiers.new("Solidify", "SOLIDIFY")
+    out = operator(bpy.ops.wetcloth.bake, cancel_after=3)
+    out |= cache_report(towel)
+    return out
+
+
+def refusals(spec):
+    """Errors of scenes the bake cannot take: a cloth that is no grid, a collider of another shape."""
+    out = {}
+    bpy.ops.wm.open_mainfile(filepath=os.path.join(spec["work"], "scene.blend"))
+    bpy.data.objects["Towel"].wetcloth.role = "NONE"
+    bpy.ops.mesh.primitive_circle_add(radius=0.3, fill_type="NGON", location=(0, 0, 0.5))
+    bpy.context.object.wetcloth.role = "CLOTH"
+    out["cloth"] = operator(bpy.ops.wetcloth.bake)["error"]
+    bpy.ops.wm.open_mainfile(filepath=os.path.join(spec["work"], "scene.blend"))
+    bpy.ops.mesh.primitive_monkey_add(location=(2, 2, 0))
+    bpy.context.object.wetcloth.role = "COLLIDER"
+    out["collider"] = operator(bpy.ops.wetcloth.bake)["error"]
+    out["towel_modifiers"] = [m.type for m in bpy.data.objects["Towel"].modifiers]  # its last bake, kept
+    return out
+
+
+def main(spec_path, result_path):
+    spec = json.load(open(spec_path))
+    result = {"blender": bpy.app.version_string}
+    frames = list(range(1, spec["frames"] + 1))
+    try:
+        result["install"] = operator(bpy.ops.extensions.package_install_files, filepath=spec["zip"],
+                                     repo="user_default", enable_on_install=True)
+        result["install"]["addons"] = [name for name in bpy.context.preferences.addons.keys() if "wetcloth" in name]
+        blend = build_scene(spec)
+        result["names"] = {"bake": hasattr(bpy.ops.wetcloth, "bake"), "free_bake": hasattr(bpy.ops.wetcloth, "free_bake"),
+                           "roles": [item.identifier for item in
+                                     bpy.types.Object.bl_rna.properties["wetcloth"].fixed_type.properties["role"].enum_items],
+                           "scene": sorted(bpy.context.scene.wetcloth.bl_rna.properties.keys())}
+        started = time.perf_counter()
+        result["bake"] = operator(bpy.ops.wetcloth.bake)
+        result["bake"]["seconds"] = time.perf_counter() - started
+        towel = bpy.data.objects["Towel"]
+        result["bake"] |= cache_report(towel)
+        result["bake"]["frames"] = [evaluated_cloth(towel, f) for f in frames]
+        result["rebake"] = operator(bpy.ops.wetcloth.bake)  # in the same session: over its own open cache
+        result["rebake"]["frames"] = [evaluated_cloth(towel, f) for f in (frames[0], frames[-1])]
+        bpy.ops.wm.save_mainfile()
+        bpy.ops.wm.open_mainfile(filepath=blend)
+        towel = bpy.data.objects["Towel"]
+        result["reopened"] = {"frames": [evaluated_cloth(towel, f) for f in frames],
+                              "missing": bpy.app.driver_namespace.get("wetcloth_missing_caches")}
+        result["cancelled"] = operator(bpy.ops.wetcloth.bake, cancel_after=spec["cancel_after"])
+        result["cancelled"] |= cache_report(towel)
+        result["cancelled"]["frames"] = [evaluated_cloth(towel, f) for f in (spec["cancel_after"], frames[-1])]
+        bpy.ops.wm.save_mainfile()
+        cache = os.path.dirname(cache_report(towel)["path"])
+        shutil.move(cache, cache + "_moved")
+        stderr = io.StringIO()
+        with contextlib.redirect_stderr(stderr):
+            bpy.ops.wm.open_mainfile(filepath=blend)
+        result["moved"] = {"missing": bpy.app.driver_namespace.get("wetcloth_missing_caches"),
+                           "stderr": stderr.getvalue()}
+        shutil.move(cache + "_moved", cache)
+        bpy.ops.wm.open_mainfile(filepath=blend)
+        result["freed"] = operator(bpy.ops.wetcloth.free_bake)
+        result["freed"] |= {"modifiers": [m.type for m in bpy.data.objects["Towel"].modifiers],
+                            "left": sorted(os.listdir(os.path.dirname(cache))) if os.path.isdir(os.path.dirname(cache)) else None}
+        result["rising"] = rising_water(spec, blend, frames)
+        result["pinned"] = pinned_with_modifiers(blend)
+        result["refusals"] = refusals(spec)
+    except Exception:
+        result["error"] = traceback.format_exc()
+    with open(result_path, "w") as fh:
+        json.dump(result, fh)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], sys.argv[2])

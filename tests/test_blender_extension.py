@@ -1,0 +1,230 @@
+"""The Blender extension in a real Blender (bpy 5.0.1 from PyPI, .venv-blender): build the zip,
+install it, bake a towel over a ball in a pool, and check what Blender plays against wetcloth.
+
+``wetcloth blender-extension`` builds the zip; one Blender process (tests/blender/extension_probe.py,
+with its own user folder) installs it, builds the scene (a subdivided plane as the cloth, a UV
+sphere collider, a water plane), bakes 48 frames, saves and reopens, bakes again cancelled after
+20 frames, moves the cache away, frees the bake, bakes with the water keyed to rise, and tries two
+scenes it must refuse.  The reference is wetcloth itself, run here on the scene the bake recorded
+(frames.json): the same compiled core on the same machine.
+
+Without ``.venv-blender/bin/python`` the tests are skipped with the reason (and fail under
+WETCLOTH_REQUIRE_BLENDER=1, as ``make test`` sets), as in tests/test_blender.py.
+"""
+
+import json
+import os
+import subprocess
+import zipfile
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from support.blender import BLENDER_PYTHON, require_blender_python
+from wetcloth.cli import main as cli_main
+from wetcloth.exporter.blender_extension.parameters import SCENE
+from wetcloth.scene import from_dict
+from wetcloth.simulation import Simulation
+
+PROBE = Path(__file__).with_name("blender") / "extension_probe.py"
+FRAMES, FPS, CUTS = 48, 24, 11  # 13 x 13 particles
+CANCEL_AFTER = 20
+SPEC = {"frames": FRAMES, "fps": FPS, "cuts": CUTS, "sphere": {"radius": 0.2, "z": 0.0},
+        "cloth": {"size": 0.6, "z": 0.215}, "water_z": 0.06, "rise": 0.1, "cancel_after": CANCEL_AFTER}
+#: Blender plays float32 positions (USD points): within 6e-8 m of wetcloth's below 1 m; the cloth
+#: plane's centre, read from float32 vertices, is within 1e-7 m of the origin.
+POSITION_TOL = 1e-6
+#: No particle centre closer to the ball than thickness/2 less 0.1 mm (as tests/test_colliders.py:
+#: the contact puts particles back at exactly thickness/2 at the end of each step).
+CONTACT_TOL = 1e-4
+
+
+@pytest.fixture(scope="module")
+def baked(tmp_path_factory):
+    python = require_blender_python()
+    root = tmp_path_factory.mktemp("extension")
+    assert cli_main(["blender-extension", "--out", str(root)]) == 0
+    (root / "work").mkdir()
+    (root / "user").mkdir()
+    spec = SPEC | {"zip": str(next(root.glob("wetcloth-*.zip"))), "work": str(root / "work")}
+    (root / "spec.json").write_text(json.dumps(spec))
+    env = os.environ | {"BLENDER_USER_RESOURCES": str(root / "user")}  # not the developer's Blender folder
+    done = subprocess.run([str(python), str(PROBE), str(root / "spec.json"), str(root / "result.json")],
+                          capture_output=True, text=True, timeout=600, env=env, cwd=root)
+    if done.returncode != 0 or not (root / "result.json").exists():
+        pytest.fail(f"the Blender probe failed (exit {done.returncode}):\n{done.stderr[-4000:]}")
+    report = json.loads((root / "result.json").read_text())
+    if "error" in report:
+        pytest.fail(f"the Blender probe stopped:\n{report['error']}")
+    return SimpleNamespace(report=report, root=root, zip=Path(spec["zip"]))
+
+
+def as_float32_decimal(value: float) -> float:
+    """What the extension reads from a Blender float (float32): the shortest decimal rounding to it."""
+    return float(str(np.float32(value)))
+
+
+def reference(manifest: dict, levels=None) -> tuple[list, list]:
+    """wetcloth's positions (n, 3) and wetness at every frame of the bake's scene (frames.json),
+    stepped as the bake steps: frame by frame, the water level of each frame until the next."""
+    sim = Simulation(from_dict(manifest["scene"]))
+    times = np.arange(manifest["frame_count"]) / manifest["fps"]
+    positions, wetness = [sim.positions], [sim.wetness]
+    for k in range(1, len(times)):
+        if levels is not None:
+            sim.set_inputs(water_level=as_float32_decimal(levels[k - 1]))
+        sim.sample(times[k:k + 1])
+        positions.append(sim.positions)
+        wetness.append(sim.wetness)
+    return positions, wetness
+
+
+def blender_order(blender_positions: np.ndarray, particles: np.ndarray) -> np.ndarray:
+    """The particle at each Blender vertex, found where they start (each exactly one particle)."""
+    distance = np.linalg.norm(blender_positions[:, None, :] - particles[None, :, :], axis=2)
+    order = distance.argmin(axis=1)
+    assert distance.min(axis=1).max() <= POSITION_TOL and len(set(order.tolist())) == len(order)
+    return order
+
+
+def check_against_reference(frames, manifest, levels=None):
+    positions, wetness = reference(manifest, levels)
+    order = blender_order(np.array(frames[0]["positions"]), positions[0])
+    for frame, p, w in zip(frames, positions, wetness):
+        assert np.abs(np.array(frame["positions"]) - p[order]).max() <= POSITION_TOL, frame["frame"]
+        assert np.abs(np.array(frame["wetness"]) - w[order].astype(np.float32)).max() == 0.0, frame["frame"]
+
+
+def test_the_zip_is_a_blender_extension_with_the_core_as_a_wheel(baked):
+    """blender_manifest.toml (schema 1.0.0, id wetcloth, linux-x64, the wheel listed), the add-on's
+    __init__.py and the wheel, which holds the compiled core."""
+    import tomllib
+
+    with zipfile.ZipFile(baked.zip) as archive:
+        names = archive.namelist()
+        manifest = tomllib.loads(archive.read("blender_manifest.toml").decode())
+        wheel = next(name for name in names if name.startswith("wheels/"))
+        with zipfile.ZipFile(archive.open(wheel)) as inner:
+            assert any(name.startswith("wetcloth/_core") and name.endswith(".so") for name in inner.namelist())
+    assert baked.zip.name == "wetcloth-0.1.0.zip"
+    assert (manifest["schema_version"], manifest["id"], manifest["type"]) == ("1.0.0", "wetcloth", "add-on")
+    assert manifest["blender_version_min"] == "4.2.0" and "linux-x64" in manifest["platforms"]
+    assert manifest["wheels"] == [f"./{wheel}"] and "__init__.py" in names
+
+
+def test_it_installs_and_registers_its_scripting_names(baked):
+    """package_install_files (what Preferences > Install from Disk runs) enables it; the operators,
+    the four roles and one scene property per scene parameter exist."""
+    install, names = baked.report["install"], baked.report["names"]
+    assert install["result"] == ["FINISHED"] and install["addons"] == ["bl_ext.user_default.wetcloth"]
+    assert names["bake"] and names["free_bake"]
+    assert names["roles"] == ["NONE", "CLOTH", "COLLIDER", "WATER"]
+    assert set(SCENE) <= set(names["scene"])
+
+
+def test_the_towel_drapes_over_the_ball_without_entering_it(baked):
+    """48 frames: what Blender plays is wetcloth's run of the same scene; no particle enters the
+    ball; the middle lies on its top and the edges hang down to the water."""
+    bake = baked.report["bake"]
+    manifest = bake["manifest"]
+    assert bake["result"] == ["FINISHED"] and manifest["frame_count"] == FRAMES and manifest["complete"]
+    assert manifest["scene"]["collider1_shape"] == "sphere"
+    check_against_reference(bake["frames"], manifest)
+    gap = 0.5 * manifest["scene"]["thickness"]
+    radius = manifest["scene"]["collider1_radius"]
+    for frame in bake["frames"]:
+        distance = np.linalg.norm(np.array(frame["positions"]), axis=1) - radius
+        assert distance.min() >= gap - CONTACT_TOL
+    last = np.array(bake["frames"][-1]["positions"])
+    assert abs(last[:, 2].max() - (radius + gap)) <= CONTACT_TOL  # the middle on top of the ball
+    assert last[:, 2].min() < SPEC["water_z"] + gap  # the edges reach the water
+
+
+def test_the_cache_is_a_usd_file_beside_the_blend_with_wetness_and_the_wet_material(baked):
+    bake = baked.report["bake"]
+    assert bake["modifiers"] == ["MESH_SEQUENCE_CACHE"]
+    assert bake["stored_path"] == "//wetcloth_cache/Towel/Towel.usd" and bake["object_path"] == "/wetcloth/Towel"
+    assert bake["materials"] == ["wetcloth wetness"]
+    frames = bake["frames"]
+    assert all(frame["wetness_domain"] == ["POINT", "FLOAT"] for frame in frames)
+    assert max(frames[0]["wetness"]) == 0.0 and max(frames[-1]["wetness"]) > 0.01
+
+
+def test_baking_again_replaces_the_cache_with_the_same_frames(baked):
+    """A second bake in the same session (Blender still reading the first one's file) succeeds and
+    plays the same frames: the run is deterministic and the cache is replaced, not appended to."""
+    rebake, bake = baked.report["rebake"], baked.report["bake"]["frames"]
+    assert rebake["result"] == ["FINISHED"]
+    assert [f["positions"] for f in rebake["frames"]] == [bake[0]["positions"], bake[-1]["positions"]]
+
+
+def test_the_saved_file_plays_the_bake_again(baked):
+    """Reopened: the same frames as after the bake, and the cloth moves between them; no cache missing."""
+    reopened = baked.report["reopened"]
+    assert reopened["missing"] == []
+    for frame, before in zip(reopened["frames"], baked.report["bake"]["frames"]):
+        assert frame["positions"] == before["positions"] and frame["wetness"] == before["wetness"]
+    first, last = (np.array(reopened["frames"][k]["positions"]) for k in (0, -1))
+    assert np.abs(last - first).max() > 0.1
+
+
+def test_a_cancelled_bake_keeps_the_frames_it_baked(baked):
+    """cancel_after=20 (what Esc does, from a script): 20 frames in the cache, frames.json marked
+    incomplete, frame 20 as the full bake had it; later frames hold the last one baked."""
+    cancelled, full = baked.report["cancelled"], baked.report["bake"]["frames"]
+    assert cancelled["result"] == ["CANCELLED"]
+    assert cancelled["manifest"]["frame_count"] == CANCEL_AFTER and not cancelled["manifest"]["complete"]
+    at_cancel, at_end = cancelled["frames"]
+    assert at_cancel["positions"] == full[CANCEL_AFTER - 1]["positions"]
+    assert at_end["positions"] == at_cancel["positions"]
+
+
+def test_a_moved_cache_is_reported_when_the_file_opens(baked):
+    moved = baked.report["moved"]
+    path = str(baked.root / "work" / "wetcloth_cache" / "Towel" / "Towel.usd")
+    assert moved["missing"] == [["Towel", path]]
+    assert "Wet Cloth: the cache of 'Towel' is missing" in moved["stderr"] and path in moved["stderr"]
+
+
+def test_free_bake_removes_the_modifier_and_the_cache_files(baked):
+    freed = baked.report["freed"]
+    assert freed["result"] == ["FINISHED"] and freed["modifiers"] == [] and freed["left"] == []
+
+
+def test_a_water_plane_keyed_to_rise_raises_the_water_level(baked):
+    """The level follows the keys frame by frame (wetcloth with the same levels as inputs); the cloth
+    ends wetter than under the still water."""
+    rising = baked.report["rising"]
+    levels = rising["levels"]
+    assert levels[-1] - levels[0] == pytest.approx(SPEC["rise"], abs=1e-6)
+    check_against_reference(rising["frames"], rising["manifest"], levels)
+    still = baked.report["bake"]["frames"][-1]["wetness"]
+    assert np.sum(rising["frames"][-1]["wetness"]) > np.sum(still)
+
+
+def test_pin_group_preset_and_the_cloths_own_modifiers(baked):
+    """A vertex group holding the vertices of the largest y is pinned_edge y_max; the denim preset
+    sets the areal density and thickness; the plane is baked from the mesh as stored, so a Solidify
+    modifier of the towel's own stays, after the cache."""
+    from wetcloth.exporter.blender_extension.fabrics import fabric_parameters
+
+    pinned = baked.report["pinned"]
+    assert pinned["result"] == ["CANCELLED"] and pinned["manifest"]["frame_count"] == 3
+    scene = pinned["manifest"]["scene"]
+    assert scene["pinned_edge"] == "y_max"
+    assert {name: scene[name] for name in ("areal_density", "thickness")} == fabric_parameters("DENIM")
+    assert pinned["modifiers"] == ["MESH_SEQUENCE_CACHE", "SOLIDIFY"]
+
+
+def test_scenes_it_cannot_bake_are_refused_naming_the_object(baked):
+    refused = baked.report["refusals"]
+    assert "cloth 'Circle'" in refused["cloth"] and "subdivided" in refused["cloth"]
+    assert "collider 'Suzanne'" in refused["collider"] and "cannot collide from Blender yet" in refused["collider"]
+    assert refused["towel_modifiers"] == ["MESH_SEQUENCE_CACHE"]  # a refused bake leaves the last one in place
+
+
+def test_the_blender_python_is_the_makefiles(baked):
+    """The probe ran in the bpy this suite pins (another one can be tried with WETCLOTH_BLENDER_PYTHON)."""
+    assert BLENDER_PYTHON.exists() and baked.report["blender"].startswith("5.0")

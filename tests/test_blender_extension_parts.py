@@ -1,0 +1,172 @@
+"""The Blender extension's parts that need no Blender: reading a grid, pins and colliders from
+vertices, the fabric presets, where each scene parameter lives, and the zip's build checks."""
+
+import itertools
+import math
+import zipfile
+
+import numpy as np
+import pytest
+
+import wetcloth
+from wetcloth.cli import main as cli_main
+from wetcloth.exporter.blender_extension import build
+from wetcloth.exporter.blender_extension.fabrics import FABRICS, fabric_parameters
+from wetcloth.exporter.blender_extension.geometry import collider_from_vertices, grid_cloth, pinned_edge
+from wetcloth.exporter.blender_extension.parameters import FABRIC, FROM_CLOTH, SCENE
+from wetcloth.scene import PARAMETERS, from_dict
+from wetcloth.simulation import Simulation
+
+
+def plane(nx, ny, width, length, centre=(0.0, 0.0, 0.0), tilt=0.0, seed=0):
+    """A subdivided plane as Blender could store it: vertices (shuffled) and the grid's edges."""
+    col, row = np.meshgrid(np.arange(nx), np.arange(ny))
+    col, row = col.ravel(), row.ravel()
+    a = col * width / (nx - 1) - width / 2
+    b = row * length / (ny - 1) - length / 2
+    t = math.radians(tilt)
+    points = np.column_stack([a, b * math.cos(t), b * math.sin(t)]) + centre
+    shuffle = np.random.default_rng(seed).permutation(nx * ny)
+    position_of = np.empty_like(shuffle)
+    position_of[shuffle] = np.arange(nx * ny)
+    grid = row * nx + col
+    edges = [(g, g + 1) for g in grid if g % nx < nx - 1] + [(g, g + nx) for g in grid if g // nx < ny - 1]
+    return points[shuffle], position_of[np.array(edges)], shuffle
+
+
+@pytest.mark.parametrize("tilt", [0.0, 25.0, -40.0])
+def test_a_subdivided_plane_is_the_grid_cloth_with_its_vertex_order(tilt):
+    """The plane's counts, size, height and tilt; and each vertex is the particle wetcloth puts there
+    (the simulation of those parameters, moved by the plane's x and y, lands on the vertices)."""
+    points, edges, shuffle = plane(7, 5, 0.6, 0.4, centre=(0.3, -0.2, 0.5), tilt=tilt)
+    grid = grid_cloth(points, edges, "towel")
+    assert (grid.nx, grid.ny) == (7, 5)
+    assert grid.width == pytest.approx(0.6, abs=1e-12) and grid.length == pytest.approx(0.4, abs=1e-12)
+    assert grid.tilt == pytest.approx(tilt, abs=1e-9) and grid.centre[2] == pytest.approx(0.5, abs=1e-12)
+    assert (grid.order == shuffle).all()
+    sim = Simulation(from_dict(grid.scene_values() | {"floor_level": -1.0}))
+    assert np.abs(sim.positions[grid.order] + grid.shift - points).max() < 1e-12
+
+
+@pytest.mark.parametrize("change, message", [
+    ("rotate", "rotation about z"),
+    ("uneven", "not equally spaced"),
+    ("diagonal", "not those of a grid of quads"),
+    ("hole", "do not fill a rectangular grid"),
+])
+def test_anything_but_a_grid_plane_is_refused_naming_the_object(change, message):
+    points, edges, _ = plane(5, 4, 0.5, 0.3)
+    if change == "rotate":  # 30 degrees about z
+        c, s = math.cos(0.5), math.sin(0.5)
+        points = points @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]).T
+    elif change == "uneven":
+        points[:, 0] = np.where(points[:, 0] > 0.2, points[:, 0] + 0.05, points[:, 0])
+    elif change == "diagonal":
+        edges = np.vstack([edges, [[0, 1]]])
+    else:
+        keep = ~((np.abs(points[:, 0]) < 1e-9) & (np.abs(points[:, 1]) < 0.06))
+        points = points[keep]
+        edges = np.zeros((0, 2), dtype=int)
+    with pytest.raises(ValueError, match=f"cloth 'sheet'.*{message}"):
+        grid_cloth(points, edges, "sheet")
+
+
+def test_a_pin_group_that_is_one_edge_is_that_pinned_edge():
+    points, edges, shuffle = plane(5, 4, 0.5, 0.3)
+    grid = grid_cloth(points, edges)
+    blender_vertex = np.argsort(shuffle)  # Blender vertex of each grid particle
+    assert pinned_edge(grid, [], "pins") == "none"
+    assert pinned_edge(grid, blender_vertex[[0, 5, 10, 15]], "pins") == "x_min"
+    assert pinned_edge(grid, blender_vertex[15:20], "pins") == "y_max"
+    with pytest.raises(ValueError, match="pin group 'pins'.*not one whole edge"):
+        pinned_edge(grid, blender_vertex[[0, 1]], "pins")
+
+
+def uv_sphere(radius, centre, segments=32, rings=16):
+    theta = np.linspace(0, math.pi, rings + 1)[1:-1]
+    phi = np.arange(segments) * 2 * math.pi / segments
+    t, p = np.meshgrid(theta, phi)
+    ring = np.column_stack([np.sin(t.ravel()) * np.cos(p.ravel()), np.sin(t.ravel()) * np.sin(p.ravel()),
+                            np.cos(t.ravel())])
+    return np.vstack([ring, [[0, 0, 1], [0, 0, -1]]]) * radius + centre
+
+
+def test_primitives_are_the_analytic_colliders():
+    """Positions are compared after rounding to 1e-9 m (merging a mesh's coincident vertices)."""
+    sphere = collider_from_vertices(uv_sphere(0.3, (1.0, 2.0, 0.5)), "ball")
+    assert sphere["shape"] == "sphere" and sphere["radius"] == pytest.approx(0.3, abs=1e-9)
+    assert (sphere["x"], sphere["y"], sphere["z"]) == pytest.approx((1.0, 2.0, 0.5), abs=1e-9)
+    corners = np.array(list(itertools.product([-0.1, 0.3], [0.0, 0.2], [1.0, 1.5])))
+    box = collider_from_vertices(corners, "crate")
+    assert box["shape"] == "box" and (box["size_x"], box["size_y"], box["size_z"]) == pytest.approx((0.4, 0.2, 0.5))
+    phi = np.arange(32) * 2 * math.pi / 32
+    ring = np.column_stack([0.25 * np.cos(phi), 0.25 * np.sin(phi)])
+    can = np.vstack([np.column_stack([ring, np.full(32, z)]) for z in (0.0, 0.4)] + [[[0, 0, 0], [0, 0, 0.4]]])
+    cylinder = collider_from_vertices(can, "can")
+    assert cylinder["shape"] == "cylinder" and cylinder["radius"] == pytest.approx(0.25)
+    assert cylinder["height"] == pytest.approx(0.4) and cylinder["z"] == pytest.approx(0.2)
+    tilted = corners @ np.array([[1, 0, 0], [0, math.cos(0.3), -math.sin(0.3)], [0, math.sin(0.3), math.cos(0.3)]]).T
+    with pytest.raises(ValueError, match="collider 'crate': not a UV sphere, an axis-aligned cube"):
+        collider_from_vertices(tilted, "crate")
+
+
+def test_each_scene_parameter_has_one_place():
+    """Every scene parameter is set by the cloth object, its fabric or the scene, and by one only."""
+    places = FROM_CLOTH + FABRIC + SCENE
+    assert sorted(places) == sorted(PARAMETERS) and len(set(places)) == len(places)
+
+
+def test_fabric_presets_are_valid_scenes_and_the_towel_is_the_default():
+    assert list(FABRICS) == ["COTTON_TERRY_TOWEL", "COTTON_JERSEY", "DENIM", "POLYESTER", "SILK"]
+    defaults = wetcloth.Scene()
+    towel = fabric_parameters("COTTON_TERRY_TOWEL")
+    assert towel == {"areal_density": defaults.areal_density, "thickness": defaults.thickness}
+    for key in FABRICS:
+        wetcloth.Scene(**fabric_parameters(key))  # within every range
+    with pytest.raises(ValueError, match="unknown fabric preset 'WOOL'"):
+        fabric_parameters("WOOL")
+
+
+@pytest.mark.parametrize("pythons, first, last", [
+    (["cp311"], "4.2.0", "5.1.0"), (["cp313"], "5.1.0", None), (["cp311", "cp313"], "4.2.0", None)])
+def test_the_manifest_names_the_wheels_and_the_blenders_whose_python_they_are(pythons, first, last):
+    """Blender 4.2 to 5.0 run Python 3.11, 5.1 and later 3.13: the manifest allows the versions whose
+    Python has a wheel (blender_version_max is the first it does not)."""
+    import tomllib
+
+    names = [f"wetcloth-0.1.0-{tag}-{tag}-linux_x86_64.whl" for tag in pythons]
+    manifest = tomllib.loads(build.manifest("0.1.0", names, "linux-x64"))
+    assert manifest["wheels"] == [f"./wheels/{name}" for name in names]
+    assert manifest["platforms"] == ["linux-x64"] and manifest["id"] == "wetcloth"
+    assert (manifest["blender_version_min"], manifest.get("blender_version_max")) == (first, last)
+    assert len(manifest["tagline"]) <= 64 and not manifest["tagline"].endswith(".")  # Blender's rules
+
+
+@pytest.mark.parametrize("name, message", [
+    ("numpy-1.26.4-cp311-cp311-linux_x86_64.whl", "not a wetcloth wheel"),
+    ("wetcloth-9.9.9-cp311-cp311-linux_x86_64.whl", "version 9.9.9"),
+    ("wetcloth-0.1.0-cp312-cp312-linux_x86_64.whl", "built for cp312"),
+])
+def test_a_wheel_blender_cannot_load_is_refused(tmp_path, capsys, name, message):
+    wheel = tmp_path / name
+    with zipfile.ZipFile(wheel, "w"):
+        pass
+    assert cli_main(["blender-extension", "--out", str(tmp_path / "out"), "--wheel", str(wheel)]) == 2
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "out" / "wetcloth-0.1.0.zip").exists()
+
+
+def test_given_wheels_are_bundled_as_they_are_one_per_python(tmp_path, capsys):
+    wheels = []
+    for tag in ("cp311", "cp313"):
+        wheels.append(tmp_path / f"wetcloth-0.1.0-{tag}-{tag}-linux_x86_64.whl")
+        with zipfile.ZipFile(wheels[-1], "w") as archive:
+            archive.writestr("wetcloth/__init__.py", tag)
+    given = [arg for wheel in wheels for arg in ("--wheel", str(wheel))]
+    assert cli_main(["blender-extension", "--out", str(tmp_path), *given]) == 0
+    with zipfile.ZipFile(tmp_path / "wetcloth-0.1.0.zip") as archive:
+        assert sorted(archive.namelist()) == ["__init__.py", "blender_manifest.toml"] + [
+            f"wheels/{wheel.name}" for wheel in wheels]
+        assert all(archive.read(f"wheels/{wheel.name}") == wheel.read_bytes() for wheel in wheels)
+    assert cli_main(["blender-extension", "--out", str(tmp_path / "again"), *given[:2], *given[:2]]) == 2
+    assert "two wheels for one Python" in capsys.readouterr().err
