@@ -214,7 +214,7 @@ Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const d
 }
 
 Index release_from_colliders(Index n, const Physics& phys, const double* pos, const double* force, double* free,
-                             double* held) {
+                             double* held, double cone) {
     Index released = 0;
     const double reach = phys.thickness;  // a held particle sits at thickness / 2
     for (Index i = 0; i < n; ++i) {
@@ -224,7 +224,7 @@ Index release_from_colliders(Index n, const Physics& phys, const double* pos, co
         double nrm[3];
         const bool on = collider_distance(phys, k, p, reach, nrm) < reach;  // a mesh's is not looked for farther
         const double f[3] = {force[i], force[n + i], force[2 * n + i]};
-        if (!on || slips(f, nrm, phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION])) {
+        if (!on || slips(f, nrm, cone * phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION])) {
             held[i] = 0.0;
             free[i] = 1.0;
             released += 1;

@@ -193,8 +193,13 @@ Status step(Core& core, double remaining) {
                                    (held_on_colliders > 0 ? release_from_colliders(n, phys, buf.pos, core.work.force,
                                                                                    cloth.free, buf.held)
                                                           : 0);
-            if (released > 0) {  // redo the step with them free
-                held -= released;
+            if (released > 0) {  // redo the step with them free, and with them those near slipping too
+                held -= released + release_slipping(n, RELEASE_ROUND_CONE * phys.floor_friction, core.work.force,
+                                                    cloth.free, buf.held);
+                if (held_on_colliders > 0) {
+                    held -= release_from_colliders(n, phys, buf.pos, core.work.force, cloth.free, buf.held,
+                                                   RELEASE_ROUND_CONE);
+                }
                 clock[REJECTED] += 1;
                 continue;
             }

@@ -38,9 +38,10 @@ inline double collider_held(Index k) { return 3.0 + static_cast<double>(k); }
 Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const double* vel, double* free, double* held);
 
 //: As the floor's release_slipping: release the particles held on a collider that the step's force (N,
-//: (3, n)) lifts off it or pushes along it above friction times the force into it.  Returns how many.
+//: (3, n)) lifts off it or pushes along it above cone times friction times the force into it.  Returns
+//: how many.
 Index release_from_colliders(Index n, const Physics& phys, const double* pos, const double* force, double* free,
-                             double* held);
+                             double* held, double cone = 1.0);
 
 //: The particles on a collider (within gap m, where collider_contact left them) get the history of a
 //: straight motion along its normal (as the floor's agree_history).  Returns how many.

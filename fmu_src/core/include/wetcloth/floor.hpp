@@ -6,6 +6,12 @@
 
 namespace wc {
 
+//: When a step must be taken again because held particles slip, the particles held on the floor or a
+//: collider whose force is beyond RELEASE_ROUND_CONE of their friction cone go free with them: the next
+//: to slip, they would otherwise cost a round each (a tablecloth pulled over a table's edge: 1.7x faster
+//: with 0.5, bench/tablecloth_drape.py; the sensitivity study unchanged, within its noise).
+inline constexpr double RELEASE_ROUND_CONE = 0.5;
+
 //: Coulomb's rule for a particle held still on a surface (the floor's, a collider's, a layer's): it slips
 //: unless the force f (3, N) presses it onto the surface of unit outward normal (3) and the force's part
 //: along the surface is at most `friction` times the part pressing.
