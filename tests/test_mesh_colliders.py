@@ -163,3 +163,12 @@ def test_bad_mesh_colliders_are_refused_naming_the_field(tmp_path):
     bad.write_text("solid nothing\nendsolid nothing\n")
     with pytest.raises(ParameterError, match="collider1_file"):
         load_scene(colliders=({"shape": "mesh", "file": str(bad)},))
+
+
+def test_a_mesh_collider_that_overlaps_the_cloth_at_the_start_is_refused(tmp_path):
+    """A ball mesh whose top reaches into the flat sheet at t = 0: an error naming the collider."""
+    path = tmp_path / "ball.stl"
+    trimesh.creation.icosphere(subdivisions=2, radius=0.15).export(path)
+    with pytest.raises(ParameterError, match=r"collider1.*overlaps the cloth"):
+        load_scene(nx=15, ny=15, width=0.4, length=0.4, initial_tilt=0.0, water_level=-0.5, initial_height=0.14,
+                   colliders=({"shape": "mesh", "file": str(path)},))
