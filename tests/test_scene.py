@@ -3,6 +3,7 @@
 import dataclasses
 import math
 import re
+from pathlib import Path
 
 import pytest
 
@@ -175,3 +176,12 @@ def test_run_settings_one_rule(tmp_path):
     assert Study.from_dict({"scene": str(bare)}).duration == run_settings.DEFAULTS["duration"]
     assert Study.from_dict({"scene": "thesis_fast"}).duration == 90.0  # thesis_fast.toml [run]
     assert Study.from_dict({"scene": "thesis_fast", "duration": 5}).duration == 5.0
+
+
+@pytest.mark.parametrize("name", sorted(p.stem for p in (Path(__file__).resolve().parents[1] / "models").glob("*.toml")))
+def test_every_preset_runs_a_moment(name):
+    """Each scene preset in models/ loads by name and runs 0.05 s to a finite state."""
+    sim = wetcloth.Simulation(load_scene(name))
+    sim.advance(0.05)
+    assert sim.state.is_finite()
+
