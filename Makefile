@@ -23,7 +23,13 @@ BLENDER_WHEELS ?= $(HOME)/.cache/wetcloth/wheels
 # (installed as wetcloth.presets) reinstalls; Python sources are used in place (editable install).
 CORE_FILES := CMakeLists.txt $(shell find fmu_src/core -name '*.cpp' -o -name '*.hpp') $(wildcard models/*.toml models/studies/*.toml)
 
-.PHONY: demo test bench extension clean
+# The Blender tests once more on the newest bpy on PyPI (5.3.0, Python 3.13), by hand: make test-newest-blender
+# (BLENDER_NEWEST_PYTHON=/path/to/python3.13 if python3.13 is not on the PATH).
+BLENDER_NEWEST_PYTHON ?= python3.13
+BLENDER_NEWEST_VENV := .venv-blender-newest
+BPY_NEWEST := 5.3.0
+
+.PHONY: demo test test-newest-blender bench extension clean
 
 $(STAMP): pyproject.toml $(CORE_FILES)
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -43,6 +49,15 @@ demo: $(STAMP)
 
 test: $(STAMP) $(BLENDER_STAMP)
 	WETCLOTH_REQUIRE_BLENDER=1 $(BIN)/python -m pytest -q
+
+$(BLENDER_NEWEST_VENV)/.installed:
+	test -x $(BLENDER_NEWEST_VENV)/bin/python || $(BLENDER_NEWEST_PYTHON) -m venv $(BLENDER_NEWEST_VENV)
+	ls $(BLENDER_WHEELS)/bpy-$(BPY_NEWEST)-*.whl >/dev/null 2>&1 || $(BLENDER_NEWEST_VENV)/bin/python -m pip download --quiet --no-deps --dest $(BLENDER_WHEELS) bpy==$(BPY_NEWEST)
+	$(BLENDER_NEWEST_VENV)/bin/python -m pip install --quiet --find-links $(BLENDER_WHEELS) bpy==$(BPY_NEWEST)
+	touch $@
+
+test-newest-blender: $(STAMP) $(BLENDER_NEWEST_VENV)/.installed
+	WETCLOTH_REQUIRE_BLENDER=1 WETCLOTH_BLENDER_PYTHON=$(CURDIR)/$(BLENDER_NEWEST_VENV)/bin/python $(BIN)/python -m pytest -q tests/test_blender.py tests/test_blender_extension.py
 
 extension: $(STAMP)
 	$(BIN)/wetcloth blender-extension --out dist
