@@ -185,3 +185,14 @@ def test_every_preset_runs_a_moment(name):
     sim.advance(0.05)
     assert sim.state.is_finite()
 
+
+
+def test_a_new_collider_or_grip_key_list_replaces_the_scenes_whole():
+    """``colliders=()`` (or another list) and ``grip_keys=()`` replace a scene's table lists, from a file or a
+    Scene; a flattened name changes one field of one collider."""
+    assert load_scene("bucket", colliders=()).colliders == ()
+    assert load_scene("bucket").replace(colliders=()).colliders == ()
+    assert load_scene("lift").replace(grip_keys=()).grip_keys == ()
+    sphere = load_scene("tablecloth_sphere", colliders=({"shape": "sphere", "radius": 0.05},))
+    assert [c.radius for c in sphere.colliders] == [0.05]
+    assert load_scene("tablecloth", collider1_radius=0.3).colliders[0].radius == 0.3

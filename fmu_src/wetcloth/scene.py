@@ -248,8 +248,9 @@ class Scene:
         validate(self)
 
     def replace(self, **overrides) -> "Scene":
-        """A copy with some parameters changed (validated); collider fields by their flattened names."""
-        return from_dict(self.to_dict() | overrides)
+        """A copy with some parameters changed (validated); collider fields by their flattened names.  A
+        new ``colliders`` or ``grip_keys`` replaces the scene's whole (``colliders=()``: none)."""
+        return from_dict(_overridden(self.to_dict(), overrides))
 
     def to_dict(self) -> dict[str, Any]:
         """Every parameter by name, the colliders' fields flattened (collider1_shape, collider1_x, ...)."""
@@ -622,4 +623,13 @@ def load_scene(path: str | Path | None = None, **overrides) -> Scene:
     """Load a scene from TOML (default: the towel preset), with parameter overrides."""
     data = read_scene_file(path)
     values = {k: v for k, v in data.items() if k not in RESERVED_KEYS}
-    return from_dict(values | overrides)
+    return from_dict(_overridden(values, overrides))
+
+
+def _overridden(values: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
+    """``values`` with ``overrides``: a new ``colliders`` or ``grip_keys`` replaces the whole table list
+    (its flattened names in ``values`` dropped; ``colliders=()``: none)."""
+    for table, prefix in (("colliders", "collider"), ("grip_keys", "grip_key")):
+        if table in overrides:
+            values = {name: v for name, v in values.items() if not re.fullmatch(rf"{prefix}[0-9]+_.+", name)}
+    return values | overrides

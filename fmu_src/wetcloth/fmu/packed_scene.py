@@ -1,23 +1,24 @@
 """A scene built into a unit (``wetcloth build-fmu --scene SCENE``): its parameter values become the
-variables' start values, and its mesh file (``cloth_mesh``) goes into the unit's resources.
+variables' start values, its colliders are built in (fixed: they are not variables), and its mesh
+files (``cloth_mesh``, mesh colliders' ``file``) go into the unit's resources.
 
-The builder writes ``resources/wetcloth_scene.json``: ``{"starts": {name: value}, "vertices": n or null}``.
-A mesh file is packed as ``resources/meshes/<digest>/<file name>`` and ``cloth_mesh`` starts as that
-relative path, which the unit finds in its resources (``mesh_file.SEARCH_FOLDERS``); the digest in the
-path means that two units holding the same relative path hold the same file.  ``vertices`` (a mesh
-cloth's vertex count) sizes the FMI 3.0 unit's array outputs instead of the grid's ``ny`` and ``nx``.
+The builder writes ``resources/wetcloth_scene.json``: ``{"starts": {name: value}, "vertices": n or null,
+"colliders": [{field: value}]}``.  A mesh file is packed as ``resources/meshes/<digest>/<file name>``
+and named by that relative path, which the unit finds in its resources (``mesh_file.SEARCH_FOLDERS``);
+the digest in the path means that two units holding the same relative path hold the same file.
+``vertices`` (a mesh cloth's vertex count) sizes the FMI 3.0 unit's array outputs instead of the
+grid's ``ny`` and ``nx``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import shutil
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
-
-from wetcloth.errors import ParameterError
 
 #: The file in the unit's resources folder.
 SCENE_NAME = "wetcloth_scene.json"
@@ -27,12 +28,23 @@ MESH_FOLDER = "meshes"
 
 @dataclass(frozen=True)
 class PackedScene:
-    """Start values by scene parameter, a mesh cloth's vertex count (else None) and, when building, the
-    mesh file to pack (else None)."""
+    """Start values by scene parameter, a mesh cloth's vertex count (else None), the colliders (their fields,
+    mesh files by their packed paths) and, when building, the mesh files to pack (packed path -> file)."""
 
     starts: dict[str, Any]
     vertices: int | None = None
-    mesh: Path | None = None
+    colliders: tuple = ()
+    files: dict = field(default_factory=dict)
+
+    @property
+    def mesh(self) -> Path | None:
+        """The cloth's mesh file being packed, if any."""
+        return self.files.get(self.starts.get("cloth_mesh"))
+
+
+def _packed_path(path: Path) -> str:
+    """Where mesh file ``path`` goes in the resources (by its contents' digest)."""
+    return f"{MESH_FOLDER}/{hashlib.sha256(path.read_bytes()).hexdigest()[:16]}/{path.name}"
 
 
 def pack(scene_path: str | Path) -> PackedScene:
@@ -44,27 +56,34 @@ def pack(scene_path: str | Path) -> PackedScene:
 
     data = read_scene_file(scene_path)
     scene = from_dict({k: v for k, v in data.items() if k not in RESERVED_KEYS})
-    if scene.colliders:
-        raise ParameterError("collider1", "a unit has no colliders yet (they are not FMU variables): run this "
-                                          "scene with 'wetcloth run', or remove its [[collider]] tables")
     starts = {name: getattr(scene, name) for name in PARAMETERS}
-    if not is_mesh_path(scene.cloth_mesh):
-        return PackedScene(starts)
-    mesh = locate(scene.cloth_mesh)
-    digest = hashlib.sha256(mesh.read_bytes()).hexdigest()[:16]
-    starts["cloth_mesh"] = f"{MESH_FOLDER}/{digest}/{mesh.name}"
-    return PackedScene(starts, vertices=build_topology(scene).n, mesh=mesh)
+    files, colliders = {}, []
+    for collider in scene.colliders:
+        fields = dataclasses.asdict(collider)
+        if collider.shape == "mesh":
+            source = locate(collider.file)
+            fields["file"] = _packed_path(source)
+            files[fields["file"]] = source
+        colliders.append(fields)
+    vertices = None
+    if is_mesh_path(scene.cloth_mesh):
+        mesh = locate(scene.cloth_mesh)
+        starts["cloth_mesh"] = _packed_path(mesh)
+        files[starts["cloth_mesh"]] = mesh
+        vertices = build_topology(scene).n
+    return PackedScene(starts, vertices=vertices, colliders=tuple(colliders), files=files)
 
 
 def write(packed: PackedScene, resources: Path) -> list[Path]:
     """Write ``packed`` into a unit's ``resources`` folder; the files written (the scene file first)."""
     target = resources / SCENE_NAME
-    target.write_text(json.dumps({"starts": packed.starts, "vertices": packed.vertices}, indent=1), encoding="utf-8")
+    target.write_text(json.dumps({"starts": packed.starts, "vertices": packed.vertices,
+                                  "colliders": list(packed.colliders)}, indent=1), encoding="utf-8")
     written = [target]
-    if packed.mesh is not None:
-        copy = resources / packed.starts["cloth_mesh"]
+    for relative, source in packed.files.items():
+        copy = resources / relative
         copy.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copy2(packed.mesh, copy)
+        shutil.copy2(source, copy)
         written.append(copy)
     return written
 
@@ -83,4 +102,4 @@ def load(resources: str | Path | None) -> PackedScene | None:
     folder = Path(resources).resolve()
     if folder not in mesh_file.SEARCH_FOLDERS:
         mesh_file.SEARCH_FOLDERS.append(folder)
-    return PackedScene(dict(data["starts"]), data.get("vertices"))
+    return PackedScene(dict(data["starts"]), data.get("vertices"), tuple(data.get("colliders", ())))

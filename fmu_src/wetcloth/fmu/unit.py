@@ -133,7 +133,11 @@ class WetClothUnit:
         return self._read[name]
 
     def _scene_values(self) -> dict:
-        return {name: value for name, value in self.values.items() if self.specs[name].scene}
+        """The scene's parameters as the variables hold them, with the colliders built in (--scene)."""
+        values = {name: value for name, value in self.values.items() if self.specs[name].scene}
+        if self.packed is not None and self.packed.colliders:
+            values["colliders"] = list(self.packed.colliders)
+        return values
 
     # ------------------------------------------------------------------ life cycle
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):  # pythonfmu's call
