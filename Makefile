@@ -57,7 +57,7 @@ $(BLENDER_NEWEST_VENV)/.installed:
 	touch $@
 
 test-newest-blender: $(STAMP) $(BLENDER_NEWEST_VENV)/.installed
-	WETCLOTH_REQUIRE_BLENDER=1 WETCLOTH_BLENDER_PYTHON=$(CURDIR)/$(BLENDER_NEWEST_VENV)/bin/python $(BIN)/python -m pytest -q tests/test_blender.py tests/test_blender_extension.py
+	WETCLOTH_REQUIRE_BLENDER=1 WETCLOTH_BLENDER_PYTHON=$(CURDIR)/$(BLENDER_NEWEST_VENV)/bin/python $(BIN)/python -m pytest -q tests/test_blender.py tests/test_blender_extension.py tests/test_blender_roundtrip.py
 
 extension: $(STAMP)
 	$(BIN)/wetcloth blender-extension --out dist
