@@ -101,11 +101,28 @@ def _quiet_when_interrupted(exc_type, exc, tb) -> bool:
     return False
 
 
+class _ClosedCommFilter(logging.Filter):
+    """Drops the log records of a connection closed under a local worker: its scheduler, in the process
+    that started it, stopping (a heartbeat then fails with a traceback, noise after Ctrl-C)."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        from distributed.comm.core import CommClosedError
+
+        return not (record.exc_info and isinstance(record.exc_info[1], CommClosedError))
+
+
 def dask_setup(worker) -> None:
     """Preload of the local cluster's workers (Dask calls it in each worker process as it starts):
-    ignore SIGINT.  Ctrl-C in a terminal reaches every process of the group; this process then
-    cancels the runs and stops the workers, which would otherwise each print a traceback."""
+    ignore SIGINT, and leave out the logs of the connection to the scheduler closing.  Ctrl-C in a
+    terminal reaches every process of the group; this process then cancels the runs and stops the
+    workers, which would otherwise each print a traceback."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    closed = _ClosedCommFilter()
+    for name in ("distributed", "distributed.worker", "distributed.core", "distributed.comm"):
+        logger = logging.getLogger(name)
+        logger.addFilter(closed)
+        for handler in logger.handlers:
+            handler.addFilter(closed)
 
 
 @contextmanager
