@@ -475,12 +475,33 @@ def test_fmpy_runs_the_towel_as_the_python_api_does(build):
     assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows, "fmpy FMI 2.0")
 
 
+
+def python_run_with_inputs(values: dict, signal: np.ndarray, times) -> list:
+    """The outputs (rows of OUTPUT_NAMES) of the Python API on scene ``values`` at ``times``, the inputs of
+    ``signal`` (time, then one column per input) set at each communication point as fmpy sets them."""
+    from fmpy.simulation import Input
+
+    sim = wetcloth.Simulation(wetcloth.load_scene(**values))
+    names = signal.dtype.names[1:]
+
+    def apply(t):
+        inputs, _ = Input.interpolate(time=t, t=signal["time"], table=np.array([signal[n] for n in names]),
+                                      after_event=True)
+        sim.set_inputs(**dict(zip(names, map(float, inputs))))
+
+    apply(0.0)
+    rows = [[sim.outputs()[n] for n in OUTPUT_NAMES]]
+    for previous, t in zip(times[:-1], times[1:]):
+        apply(previous)
+        advance_as_the_unit(sim, t)
+        rows.append([sim.outputs()[n] for n in OUTPUT_NAMES])
+    return rows
+
 def test_the_wind_inputs_act_as_in_the_python_api(build):
     """wind_x, wind_y, wind_z are inputs (m/s), as current_x is; air_density a parameter (kg/m3): through
     fmpy, a hanging sheet in a wind that rises at 0.5 s gives the Python API's outputs with the same
     inputs set at the same communication points (fmpy sets them before each step), bit for bit."""
     import fmpy
-    from fmpy.simulation import Input
 
     for version in (2, 3):
         variables = {v.name: v for v in build[version]["md"].modelVariables}
@@ -493,20 +514,7 @@ def test_the_wind_inputs_act_as_in_the_python_api(build):
               "air_density": 1.5}
     result = fmpy.simulate_fmu(str(build[2]["dir"]), stop_time=1.0, output_interval=0.05, start_values=values,
                                input=signal, model_description=build[2]["md"])
-    sim = wetcloth.Simulation(wetcloth.load_scene(**values))
-    names = signal.dtype.names[1:]
-
-    def apply(t):
-        inputs, _ = Input.interpolate(time=t, t=signal["time"], table=np.array([signal[n] for n in names]),
-                                      after_event=True)
-        sim.set_inputs(**dict(zip(names, map(float, inputs))))
-
-    apply(0.0)
-    rows = [[sim.outputs()[n] for n in OUTPUT_NAMES]]
-    for previous, t in zip(result["time"][:-1], result["time"][1:]):
-        apply(previous)
-        advance_as_the_unit(sim, t)
-        rows.append([sim.outputs()[n] for n in OUTPUT_NAMES])
+    rows = python_run_with_inputs(values, signal, result["time"])
     assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows, "fmpy FMI 2.0 in wind")
     assert result["centroid_y"][-1] - result["centroid_y"][10] > 0.01  # the wind pushed it along y
 
@@ -516,7 +524,6 @@ def test_the_grip_inputs_act_as_in_the_python_api(build):
     on (each value reached linearly over the communication step after it is set) gives the Python API's
     outputs with the same inputs set at the same communication points, bit for bit."""
     import fmpy
-    from fmpy.simulation import Input
 
     for version in (2, 3):
         variables = {v.name: v for v in build[version]["md"].modelVariables}
@@ -527,20 +534,7 @@ def test_the_grip_inputs_act_as_in_the_python_api(build):
     values = {"nx": 9, "ny": 13, "initial_tilt": 90.0, "pinned_edge": "y_max", "initial_height": 0.5}
     result = fmpy.simulate_fmu(str(build[2]["dir"]), stop_time=1.0, output_interval=0.05, start_values=values,
                                input=signal, model_description=build[2]["md"])
-    sim = wetcloth.Simulation(wetcloth.load_scene(**values))
-    names = signal.dtype.names[1:]
-
-    def apply(t):
-        inputs, _ = Input.interpolate(time=t, t=signal["time"], table=np.array([signal[n] for n in names]),
-                                      after_event=True)
-        sim.set_inputs(**dict(zip(names, map(float, inputs))))
-
-    apply(0.0)
-    rows = [[sim.outputs()[n] for n in OUTPUT_NAMES]]
-    for previous, t in zip(result["time"][:-1], result["time"][1:]):
-        apply(previous)
-        advance_as_the_unit(sim, t)
-        rows.append([sim.outputs()[n] for n in OUTPUT_NAMES])
+    rows = python_run_with_inputs(values, signal, result["time"])
     assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows, "fmpy FMI 2.0 with the grip")
     assert result["centroid_z"][-1] - result["centroid_z"][0] > 0.15  # the grip lifted it
 
