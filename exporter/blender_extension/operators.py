@@ -168,12 +168,4 @@ class WETCLOTH_OT_free_bake(bpy.types.Operator):
 
 CLASSES = (WETCLOTH_OT_bake, WETCLOTH_OT_free_bake)
 
-
-def register() -> None:
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister() -> None:
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(CLASSES)

@@ -69,12 +69,4 @@ class WETCLOTH_PT_scene(bpy.types.Panel):
 
 CLASSES = (WETCLOTH_PT_physics, WETCLOTH_PT_scene)
 
-
-def register() -> None:
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister() -> None:
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(CLASSES)
