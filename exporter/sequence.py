@@ -27,6 +27,7 @@ from wetcloth.exporter.errors import ExportError
 from wetcloth.exporter.frame import COLORMAP, FACES, Frame, cloth_faces, make_frame, quads_from_triangles, wetness_lut
 from wetcloth.files import whole_file
 from wetcloth.files import write_text as write_whole_text
+from wetcloth.mesh_file import as_text
 
 #: Mesh formats; ``usd`` is one animated file, the others one file per frame.
 FORMATS = ("ply", "obj", "usd")
@@ -197,7 +198,7 @@ class FrameSequence:
 
     def __init__(self, directory: Path, fmt: str, writer: str, fps: float, scene=None,
                  triangles=None, uv=None, prefix: str = "cloth", digits: int = MIN_DIGITS,
-                 faces: str = "quads", first_frame: int = 1, blender: dict | None = None):
+                 faces: str = "quads", first_frame: int = 1, blender: dict | None = None, polygons=None):
         self.directory = directory
         self.format = fmt
         self.writer = "usd-core" if fmt == "usd" else writer
@@ -222,7 +223,8 @@ class FrameSequence:
         if fmt == "usd":
             from wetcloth.exporter.usd import UsdSequence
 
-            self._usd = UsdSequence(self.usd_path, self.fps, name=prefix, metadata=self._usd_metadata())
+            self._usd = UsdSequence(self.usd_path, self.fps, name=prefix, metadata=self._usd_metadata(),
+                                    polygons=polygons)
 
     # ------------------------------------------------------------------ names
     @property
@@ -354,7 +356,7 @@ class FrameSequence:
             },
             "colormap": COLORMAP,
             "blender": self.blender,
-            "scene": self.scene.to_dict() if self.scene is not None else None,
+            "scene": None if self.scene is None else {name: as_text(v) for name, v in self.scene.to_dict().items()},
         }
 
     def write_manifest(self, complete: bool) -> Path:
@@ -411,10 +413,24 @@ class FrameSequence:
         self.close(complete=exc_type is None)
 
 
+def _checked_polygons(polygons, fmt: str) -> tuple[np.ndarray, np.ndarray]:
+    """``polygons`` (counts, indices) as int arrays; ExportError unless fmt is usd, every count is 3 or more
+    and the counts add up to the indices (which write_frame's vertex count bounds)."""
+    if fmt != "usd":
+        raise ExportError(f"polygons apply to usd only, not {fmt!r}")
+    counts, indices = (np.asarray(a) for a in polygons)
+    if (counts.ndim != 1 or indices.ndim != 1 or not np.issubdtype(counts.dtype, np.integer)
+            or not np.issubdtype(indices.dtype, np.integer) or (counts < 3).any() or counts.sum() != len(indices)
+            or (len(indices) and indices.min() < 0)):
+        raise ExportError("polygons must be (corner counts, each 3 or more, and as many vertex indices >= 0 as the "
+                          "counts add up to)")
+    return counts.astype(np.int64), indices.astype(np.int64)
+
+
 def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: float = 30.0, scene=None, *,
                   triangles=None, uv=None, prefix: str = "cloth", digits: int = MIN_DIGITS,
                   overwrite: bool = False, exclusive: bool = False, faces: str = "quads", first_frame: int = 1,
-                  blender: dict | None = None) -> FrameSequence:
+                  blender: dict | None = None, polygons=None) -> FrameSequence:
     """Start a frame sequence in ``directory``, checked now: ExportError if it cannot be used.
 
     fmt: ``ply`` (binary, default), ``obj`` or ``usd``; writer: ``trimesh`` or ``meshio`` (ply and
@@ -429,7 +445,9 @@ def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: flo
     file's faces) or ``triangles``;
     first_frame: number of the first frame (file ``<prefix>_0001``, USD time code 1 by default);
     blender: options of ``load_in_blender.py`` (see ``blender_options.OPTIONS``: solidify,
-    subdivision, smooth, material, first_frame, timeline), recorded in frames.json.
+    subdivision, smooth, material, first_frame, timeline), recorded in frames.json;
+    polygons: ``usd`` only, (corner counts (k,), vertex indices) of faces of any corner count to write
+    instead of ``faces`` (a Blender object's own, so that its Mesh Sequence Cache keeps them).
 
     The directory is created if missing.  Refused up front (see ``check_directory``): a path that
     is a file, a directory that cannot be created or written, and one that already holds frames
@@ -456,6 +474,8 @@ def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: flo
     if not (isinstance(first_frame, int) and not isinstance(first_frame, bool) and 0 <= first_frame <= MAX_FRAME):
         raise ExportError(f"first_frame must be a whole number from 0 to {MAX_FRAME}, got {first_frame!r}")
     blender_options(blender, first_frame)  # checked before the directory is touched
+    if polygons is not None:
+        polygons = _checked_polygons(polygons, fmt)
     if directory is None or str(directory) == "":
         raise ExportError("no export directory given")
     directory = Path(directory)
@@ -463,7 +483,8 @@ def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: flo
     _make_directory(directory)
     _remove(replaced)
     sequence = FrameSequence(directory, fmt, writer, fps, scene=scene, triangles=triangles, uv=uv,
-                             prefix=prefix, digits=digits, faces=faces, first_frame=first_frame, blender=blender)
+                             prefix=prefix, digits=digits, faces=faces, first_frame=first_frame, blender=blender,
+                             polygons=polygons)
     sequence.replaced = [p.name for p in replaced]
     sequence.write_manifest(complete=False)  # also proves the directory is writable
     sequence.write_loader()

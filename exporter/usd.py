@@ -1,10 +1,10 @@
 """One animated USD file through usd-core: time-sampled points, velocities and a ``wetness`` primvar.
 
 The stage (``DIR/<prefix>.usd``, binary crate) holds a mesh ``/wetcloth/<prefix>`` whose topology
-(quads or triangles) and UVs (``primvars:st``) are written once, and whose ``points``,
-``velocities``, ``normals``, ``extent``, ``primvars:wetness`` (float, vertex) and
-``primvars:displayColor`` (linear RGB of the wetness colour map) are time-sampled, one sample per
-frame at time code = frame number (first frame 1 unless chosen otherwise), with
+(quads or triangles, or given polygons of any corner count) and UVs (``primvars:st``) are written
+once, and whose ``points``, ``velocities``, ``normals``, ``extent``, ``primvars:wetness`` (float,
+vertex) and ``primvars:displayColor`` (linear RGB of the wetness colour map) are time-sampled, one
+sample per frame at time code = frame number (first frame 1 unless chosen otherwise), with
 ``timeCodesPerSecond = fps``.  Units: metres (``metersPerUnit = 1``), z up; ``velocities`` in
 metres per second, as USD defines them (stage units per second, whatever timeCodesPerSecond is),
 which renderers use for motion blur.
@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, Vt
 
+from wetcloth.exporter.errors import ExportError
 from wetcloth.exporter.frame import Frame
 
 #: Frames between two saves of the layer (bounds the memory the unsaved samples take).
@@ -37,8 +38,11 @@ def srgb_to_linear(colors: np.ndarray) -> np.ndarray:
 class UsdSequence:
     """Writes frames as time samples of one mesh in one USD file; ``close()`` finishes the file."""
 
-    def __init__(self, path: Path, fps: float, name: str = "cloth", metadata: dict | None = None):
+    def __init__(self, path: Path, fps: float, name: str = "cloth", metadata: dict | None = None, polygons=None):
+        """``polygons``: (corner counts (k,), vertex indices (sum of counts,)) to write as the faces instead
+        of the frames' (a Blender object's own faces: its cache then keeps the object's topology)."""
         self.path = Path(path)
+        self.polygons = polygons
         self.fps = float(fps)
         self.name = name
         self.metadata = metadata or {}
@@ -62,8 +66,11 @@ class UsdSequence:
         mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
         mesh.CreateDoubleSidedAttr(True)
         faces = frame.faces
-        mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(faces), faces.shape[1], dtype=np.int32)))
-        mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(faces.reshape(-1).copy()))
+        counts, indices = self.polygons or (np.full(len(faces), faces.shape[1]), faces.reshape(-1))
+        if len(indices) and indices.max() >= frame.vertex_count:
+            raise ExportError(f"polygons index vertices outside 0..{frame.vertex_count - 1}")
+        mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.asarray(counts, dtype=np.int32)))
+        mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.asarray(indices, dtype=np.int32)))
         mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
         primvars = UsdGeom.PrimvarsAPI(mesh)
         st = primvars.CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex)

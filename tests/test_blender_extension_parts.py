@@ -1,5 +1,5 @@
-"""The Blender extension's parts that need no Blender: reading a grid, pins and colliders from
-vertices, the fabric presets, where each scene parameter lives, and the zip's build checks."""
+"""The Blender extension's parts that need no Blender: reading a grid or a mesh cloth, pins and colliders
+from vertices and faces, the fabric presets, where each scene parameter lives, and the zip's build checks."""
 
 import itertools
 import math
@@ -12,7 +12,8 @@ import wetcloth
 from wetcloth.cli import main as cli_main
 from wetcloth.exporter.blender_extension import build
 from wetcloth.exporter.blender_extension.fabrics import FABRICS, fabric_parameters
-from wetcloth.exporter.blender_extension.geometry import collider_from_vertices, grid_cloth, pinned_edge
+from wetcloth.exporter.blender_extension.geometry import (PIN_ATTRIBUTE, GridCloth, MeshCloth, analytic_collider,
+                                                          cloth_of, collider_of, face_blocks, grid_cloth, pinned_edge)
 from wetcloth.exporter.blender_extension.parameters import FABRIC, FROM_CLOTH, SCENE
 from wetcloth.scene import PARAMETERS, from_dict
 from wetcloth.simulation import Simulation
@@ -93,21 +94,97 @@ def uv_sphere(radius, centre, segments=32, rings=16):
 
 def test_primitives_are_the_analytic_colliders():
     """Positions are compared after rounding to 1e-9 m (merging a mesh's coincident vertices)."""
-    sphere = collider_from_vertices(uv_sphere(0.3, (1.0, 2.0, 0.5)), "ball")
+    sphere = analytic_collider(uv_sphere(0.3, (1.0, 2.0, 0.5)))
     assert sphere["shape"] == "sphere" and sphere["radius"] == pytest.approx(0.3, abs=1e-9)
     assert (sphere["x"], sphere["y"], sphere["z"]) == pytest.approx((1.0, 2.0, 0.5), abs=1e-9)
     corners = np.array(list(itertools.product([-0.1, 0.3], [0.0, 0.2], [1.0, 1.5])))
-    box = collider_from_vertices(corners, "crate")
+    box = analytic_collider(corners)
     assert box["shape"] == "box" and (box["size_x"], box["size_y"], box["size_z"]) == pytest.approx((0.4, 0.2, 0.5))
     phi = np.arange(32) * 2 * math.pi / 32
     ring = np.column_stack([0.25 * np.cos(phi), 0.25 * np.sin(phi)])
     can = np.vstack([np.column_stack([ring, np.full(32, z)]) for z in (0.0, 0.4)] + [[[0, 0, 0], [0, 0, 0.4]]])
-    cylinder = collider_from_vertices(can, "can")
+    cylinder = analytic_collider(can)
     assert cylinder["shape"] == "cylinder" and cylinder["radius"] == pytest.approx(0.25)
     assert cylinder["height"] == pytest.approx(0.4) and cylinder["z"] == pytest.approx(0.2)
     tilted = corners @ np.array([[1, 0, 0], [0, math.cos(0.3), -math.sin(0.3)], [0, math.sin(0.3), math.cos(0.3)]]).T
-    with pytest.raises(ValueError, match="collider 'crate': not a UV sphere, an axis-aligned cube"):
-        collider_from_vertices(tilted, "crate")
+    assert analytic_collider(tilted) is None
+
+
+def cylinder_wall(segments=16, radius=0.2, height=0.3, bottom=True):
+    """An open cylinder (a cup if ``bottom``): rings at z = 0 and height, quads split in two, a fan bottom."""
+    phi = np.arange(segments) * 2 * math.pi / segments
+    ring = np.column_stack([radius * np.cos(phi), radius * np.sin(phi)])
+    points = np.vstack([np.column_stack([ring, np.full(segments, z)]) for z in (0.0, height)] + [[[0, 0, 0]]])
+    i = np.arange(segments)
+    j = (i + 1) % segments
+    triangles = [np.column_stack([i, j, j + segments]), np.column_stack([i, j + segments, i + segments])]
+    if bottom:
+        triangles.append(np.column_stack([np.full(segments, 2 * segments), j, i]))
+    return points, np.concatenate(triangles)
+
+
+def test_other_meshes_and_open_primitives_are_mesh_colliders_of_their_triangles():
+    """An open cylinder has a closed can's vertices, but it is a shell (a cup), not the solid cylinder; a
+    turned box is no analytic box.  Both collide as meshes of the triangles given, where they are."""
+    points, triangles = cylinder_wall()
+    cup = collider_of(points, triangles, "cup")
+    assert cup["shape"] == "mesh" and (cup["x"], cup["y"], cup["z"]) == (0.0, 0.0, 0.0)
+    assert np.array_equal(cup["file"].points, points) and np.array_equal(cup["file"].triangles, triangles)
+    assert cup["file"].source == "collider 'cup'"
+    corners = np.array(list(itertools.product([-0.1, 0.3], [0.0, 0.2], [1.0, 1.5])))
+    closed = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                       [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    assert collider_of(corners, closed, "crate")["shape"] == "box"
+    tilted = corners @ np.array([[1, 0, 0], [0, math.cos(0.3), -math.sin(0.3)], [0, math.sin(0.3), math.cos(0.3)]]).T
+    assert collider_of(tilted, closed, "crate")["shape"] == "mesh"
+    with pytest.raises(ValueError, match="collider 'dots' has no faces"):
+        collider_of(corners, np.zeros((0, 3)), "dots")
+
+
+def test_faces_keep_quads_and_split_ngons_into_their_loop_triangles():
+    """A quad, a triangle and a pentagon (with its 3 loop triangles) in Blender's corner lists."""
+    sizes = [4, 3, 5]
+    loops = [0, 1, 2, 3, 1, 4, 2, 2, 4, 5, 6, 3]
+    loop_triangles = [[0, 1, 2], [0, 2, 3], [1, 4, 2], [2, 4, 5], [2, 5, 6], [2, 6, 3]]
+    triangles, quads = face_blocks(sizes, loops, loop_triangles, [0, 0, 1, 2, 2, 2])
+    assert quads.tolist() == [[0, 1, 2, 3]]
+    assert triangles.tolist() == [[1, 4, 2], [2, 4, 5], [2, 5, 6], [2, 6, 3]]
+
+
+def test_a_plane_turned_about_z_or_pinned_off_an_edge_is_a_mesh_cloth_in_blenders_order():
+    """The grid takes a plane along x pinned on one edge; a plane turned about z, or pinned at two
+    vertices, is a mesh cloth of the same vertices, in the same order, its pins a point attribute."""
+    points, edges, shuffle = plane(5, 4, 0.5, 0.3)
+    grid_particle = shuffle  # of each Blender vertex
+    blender_vertex = np.argsort(shuffle)
+    cells = np.array([[g, g + 1, g + 6, g + 5] for g in range(15) if g % 5 < 4])
+    quads = blender_vertex[cells]
+    faces = ([4] * len(quads), quads.ravel()), (np.zeros((0, 3)), [])  # (polygons, loop triangles of n-gons)
+    cloth, pins = cloth_of(points, edges, *faces, blender_vertex[[0, 5, 10, 15]], "sheet")
+    assert isinstance(cloth, GridCloth) and pins == "x_min" and (cloth.order == grid_particle).all()
+    cloth, pins = cloth_of(points, edges, *faces, blender_vertex[[0, 1]], "sheet")
+    assert isinstance(cloth, MeshCloth) and pins == "none"
+    assert np.array_equal(cloth.mesh.points, points) and (cloth.order == np.arange(20)).all()
+    assert np.array_equal(cloth.polygons[1], quads.ravel())  # the cache's faces: the object's own
+    assert np.flatnonzero(cloth.mesh.attributes[PIN_ATTRIBUTE]).tolist() == sorted(blender_vertex[[0, 1]].tolist())
+    assert cloth.scene_values()["pinned_vertices"] == PIN_ATTRIBUTE
+    c, s = math.cos(0.5), math.sin(0.5)
+    turned = points @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]).T
+    cloth, pins = cloth_of(turned, edges, *faces, [], "sheet")
+    assert isinstance(cloth, MeshCloth) and cloth.scene_values()["pinned_vertices"] == ""
+    sim = Simulation(from_dict(cloth.scene_values() | {"floor_level": -1.0}))
+    assert np.array_equal(sim.positions, turned)  # particle k is Blender vertex k, where Blender has it
+
+
+def test_a_cloth_no_spring_can_join_is_refused_naming_the_object():
+    """Three quads on one edge (non-manifold), and a loose vertex."""
+    points = np.array([[0, 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 0], [-1, 0, 0], [-1, 1, 0], [0, 0, 1], [0, 1, 1.0]])
+    fin = np.array([[0, 2, 3, 1], [4, 0, 1, 5], [0, 6, 7, 1]])
+    no_ngons = (np.zeros((0, 3)), [])
+    with pytest.raises(ValueError, match="cloth 'Fin' cannot be the cloth: .*belongs to 3 faces"):
+        cloth_of(points, np.zeros((0, 2)), ([4, 4, 4], fin.ravel()), no_ngons, [], "Fin")
+    with pytest.raises(ValueError, match="cloth 'Dot' cannot be the cloth: .*belongs to no face"):
+        cloth_of(points, np.zeros((0, 2)), ([4, 4], fin[:2].ravel()), no_ngons, [], "Dot")
 
 
 def test_each_scene_parameter_has_one_place():
@@ -156,7 +233,11 @@ def test_a_wheel_blender_cannot_load_is_refused(tmp_path, capsys, name, message)
     assert not (tmp_path / "out" / "wetcloth-0.1.0.zip").exists()
 
 
-def test_given_wheels_are_bundled_as_they_are_one_per_python(tmp_path, capsys):
+def test_given_wheels_are_bundled_as_they_are_one_per_python_with_scipy_for_each(tmp_path, capsys):
+    """The wetcloth wheels given, and a scipy wheel (the version this Python runs) for each one's Python
+    (from the wheel cache, downloaded there by pip the first time)."""
+    import scipy
+
     wheels = []
     for tag in ("cp311", "cp313"):
         wheels.append(tmp_path / f"wetcloth-0.1.0-{tag}-{tag}-linux_x86_64.whl")
@@ -165,8 +246,12 @@ def test_given_wheels_are_bundled_as_they_are_one_per_python(tmp_path, capsys):
     given = [arg for wheel in wheels for arg in ("--wheel", str(wheel))]
     assert cli_main(["blender-extension", "--out", str(tmp_path), *given]) == 0
     with zipfile.ZipFile(tmp_path / "wetcloth-0.1.0.zip") as archive:
-        assert sorted(archive.namelist()) == ["__init__.py", "blender_manifest.toml"] + [
+        names = archive.namelist()
+        scipy_wheels = [name for name in names if name.startswith("wheels/scipy-")]
+        assert sorted(set(names) - set(scipy_wheels)) == ["__init__.py", "blender_manifest.toml"] + [
             f"wheels/{wheel.name}" for wheel in wheels]
         assert all(archive.read(f"wheels/{wheel.name}") == wheel.read_bytes() for wheel in wheels)
+        assert [name.split("-")[1:3] for name in sorted(scipy_wheels)] == [[scipy.__version__, "cp311"],
+                                                                           [scipy.__version__, "cp313"]]
     assert cli_main(["blender-extension", "--out", str(tmp_path / "again"), *given[:2], *given[:2]]) == 2
     assert "two wheels for one Python" in capsys.readouterr().err

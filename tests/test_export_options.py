@@ -99,6 +99,26 @@ def test_triangle_usd_has_three_corners_per_face(triangles):
     assert_array_equal(np.asarray(mesh.GetFaceVertexIndicesAttr().Get()).reshape(-1, 3), expected)
 
 
+def test_usd_polygons_are_written_instead_of_the_faces(tmp_path):
+    """A quad and a pentagon of 7 vertices (a Blender object's own faces) over its 5 triangles."""
+    from pxr import Usd, UsdGeom
+
+    triangles = np.array([[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 6], [1, 6, 2]])
+    counts, indices = [4, 5], [0, 1, 2, 3, 1, 4, 5, 6, 2]
+    sequence = open_sequence(tmp_path / "usd", fmt="usd", triangles=triangles, uv=np.zeros((7, 2)), faces="triangles",
+                             polygons=(counts, indices))
+    sequence.write_frame(np.random.default_rng(1).random((7, 3)), np.zeros(7))
+    sequence.close()
+    stage = Usd.Stage.Open(str(tmp_path / "usd" / "cloth.usd"))
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/wetcloth/cloth"))
+    assert list(mesh.GetFaceVertexCountsAttr().Get()) == counts
+    assert list(mesh.GetFaceVertexIndicesAttr().Get()) == indices
+    sequence = open_sequence(tmp_path / "bad", fmt="usd", triangles=triangles, uv=np.zeros((7, 2)), faces="triangles",
+                             polygons=([3], [0, 1, 7]))
+    with pytest.raises(ExportError, match="polygons index vertices outside 0..6"):
+        sequence.write_frame(np.zeros((7, 3)), np.zeros(7))
+
+
 def test_first_frame_numbers_the_files_the_usd_time_codes_and_the_manifest(tmp_path):
     """first_frame=101: files cloth_0101.ply.., USD time codes 101.. (frame 101 is t = 0), recorded in
     frames.json and as the Blender loader's first frame; a resumed run counts from it too."""
@@ -184,6 +204,9 @@ def test_blender_options_are_recorded_with_their_defaults(tmp_path):
     (dict(blender={"smooth": "yes"}), "option smooth must be true or false"),
     (dict(blender={"timeline": "always"}), "option timeline must be one of auto, set, keep"),
     (dict(blender={"colour": 1}), "unknown Blender import option 'colour'"),
+    (dict(fmt="ply", polygons=([3], [0, 1, 2])), "polygons apply to usd only, not 'ply'"),
+    (dict(fmt="usd", polygons=([3, 2], [0, 1, 2, 0, 1])), "polygons must be .corner counts, each 3 or more"),
+    (dict(fmt="usd", polygons=([4], [0, 1, 2])), "polygons must be"),
 ])
 def test_bad_export_options_are_refused_before_anything_is_written(tmp_path, kwargs, message):
     with pytest.raises(ExportError, match=message):

@@ -1,8 +1,9 @@
 """The Blender scene as wetcloth sees it: one ``ClothJob`` (a Scene and where its cache goes) per Cloth object.
 
 Geometry is read in world space at the first frame of the scene's range: the Cloth object's mesh
-as stored (its modifiers apply after the cache) gives the grid
-(``geometry.grid_cloth``), Collider objects' evaluated meshes the analytic colliders, the Water plane
+as stored (its modifiers apply after the cache) gives the grid or the mesh cloth (``geometry.cloth_of``),
+handed to wetcloth as arrays in Blender's vertex order; Collider objects' evaluated meshes the
+analytic or mesh colliders (``geometry.collider_of``, their triangles as arrays), the Water plane
 ``water_level`` (and, if it is animated, the level over every frame).  Parameters come from
 ``scene.wetcloth`` and the cloth's ``obj.wetcloth``; Blender keeps them as 32-bit floats, which
 are read back as the shortest decimal that rounds to them (0.45, not 0.4499999881).
@@ -17,17 +18,17 @@ from dataclasses import dataclass, replace
 import bpy
 import numpy as np
 
-from wetcloth.exporter.blender_extension.geometry import GridCloth, collider_from_vertices, grid_cloth, pinned_edge
+from wetcloth.exporter.blender_extension.geometry import GridCloth, MeshCloth, cloth_of, collider_of
 from wetcloth.exporter.blender_extension.parameters import FABRIC, SCENE
 from wetcloth.scene import Scene, from_dict
 
 @dataclass
 class ClothJob:
-    """One cloth to bake: its object, scene, plane and where its USD file goes."""
+    """One cloth to bake: its object, scene, cloth (grid or mesh) and where its USD file goes."""
 
     obj: bpy.types.Object
     scene: Scene
-    grid: GridCloth
+    cloth: GridCloth | MeshCloth
     directory: str  # absolute
     prefix: str
     to_local: np.ndarray
@@ -56,21 +57,50 @@ def _vertices(obj, mesh) -> tuple[np.ndarray, np.ndarray]:
     return co.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3], edges.reshape(-1, 2)
 
 
-def world_vertices(obj, depsgraph) -> tuple[np.ndarray, np.ndarray]:
-    """The evaluated mesh's vertex positions (n, 3) in world space (m) and edges (e, 2)."""
+def _triangles(mesh) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh's loop triangles' vertices (t, 3) and the face (t,) each splits."""
+    mesh.calc_loop_triangles()
+    triangles = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int64)
+    mesh.loop_triangles.foreach_get("vertices", triangles)
+    faces = np.empty(len(mesh.loop_triangles), dtype=np.int64)
+    mesh.loop_triangles.foreach_get("polygon_index", faces)
+    return triangles.reshape(-1, 3), faces
+
+
+def world_vertices(obj, depsgraph, triangles: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """The evaluated mesh's vertex positions (n, 3) in world space (m) and edges (e, 2), or
+    (``triangles``) its triangles (t, 3)."""
     evaluated = obj.evaluated_get(depsgraph)
     mesh = evaluated.to_mesh()
     try:
-        return _vertices(obj, mesh)
+        points, edges = _vertices(obj, mesh)
+        return (points, _triangles(mesh)[0]) if triangles else (points, edges)
     finally:
         evaluated.to_mesh_clear()
 
 
-def cloth_vertices(obj) -> tuple[np.ndarray, np.ndarray]:
-    """The cloth's plane: its mesh as stored, in world space (m), and its edges.  Not the evaluated
-    mesh: the cache modifier comes first in the stack, so the object's own modifiers (Subdivision,
-    Solidify) apply to the baked cloth, not to the plane it is baked from."""
-    return _vertices(obj, obj.data)
+def cloth_mesh(obj) -> tuple:
+    """The cloth: its mesh as stored, in world space (m), its edges, its faces (corner counts, corner
+    vertices) and loop triangles (vertices, faces), as geometry.cloth_of takes them.
+    Not the evaluated mesh: the cache modifier comes first in the stack, so the object's own modifiers
+    (Subdivision, Solidify) apply to the baked cloth, not to the mesh it is baked from."""
+    mesh = obj.data
+    positions, edges = _vertices(obj, mesh)
+    sizes = np.empty(len(mesh.polygons), dtype=np.int64)
+    mesh.polygons.foreach_get("loop_total", sizes)
+    loops = np.empty(len(mesh.loops), dtype=np.int64)
+    mesh.loops.foreach_get("vertex_index", loops)
+    return positions, edges, (sizes, loops), _triangles(mesh)
+
+
+def pin_members(obj) -> list[int]:
+    """The vertices of the cloth's pin group (weight above 0); ValueError if the group is missing."""
+    if not obj.wetcloth.pin_group:
+        return []
+    group = obj.vertex_groups.get(obj.wetcloth.pin_group)
+    if group is None:
+        raise ValueError(f"cloth {obj.name!r}: no vertex group {obj.wetcloth.pin_group!r} (Pin group)")
+    return [v.index for v in obj.data.vertices if any(g.group == group.index and g.weight > 0 for g in v.groups)]
 
 
 def cache_directory(scene) -> str:
@@ -116,7 +146,7 @@ def cloth_jobs(context) -> list[ClothJob]:
         raise ValueError("no object has the role Cloth (Physics properties > Wet Cloth > Role)")
     for obj in cloths:
         if obj.type != "MESH":
-            raise ValueError(f"cloth {obj.name!r} is not a mesh (a subdivided plane)")
+            raise ValueError(f"cloth {obj.name!r} is not a mesh")
     scene.frame_set(scene.frame_start)
     depsgraph = context.evaluated_depsgraph_get()
     depsgraph.update()
@@ -124,31 +154,23 @@ def cloth_jobs(context) -> list[ClothJob]:
     colliders = []
     for obj in (o for o in objects if o.wetcloth.role == "COLLIDER"):
         if obj.type != "MESH":
-            raise ValueError(f"collider {obj.name!r} is not a mesh (a UV sphere, cube or cylinder)")
-        collider = collider_from_vertices(world_vertices(obj, depsgraph)[0], obj.name)
+            raise ValueError(f"collider {obj.name!r} is not a mesh")
+        collider = collider_of(*world_vertices(obj, depsgraph, triangles=True), obj.name)
         colliders.append({key: clean(value) for key, value in collider.items()} | {"friction": clean(obj.wetcloth.friction)})
     settings = {name: clean(getattr(scene.wetcloth, name)) for name in SCENE} | {"water_level": water_level}
     directory = cache_directory(scene)
     jobs = []
     for obj in cloths:
-        positions, edges = cloth_vertices(obj)
-        grid = grid_cloth(positions, edges, obj.name)
-        grid = replace(grid, width=clean(grid.width), length=clean(grid.length),
-                       centre=tuple(clean(c) for c in grid.centre), tilt=clean(grid.tilt))
-        pins = "none"
-        if obj.wetcloth.pin_group:
-            group = obj.vertex_groups.get(obj.wetcloth.pin_group)
-            if group is None:
-                raise ValueError(f"cloth {obj.name!r}: no vertex group {obj.wetcloth.pin_group!r} (Pin group)")
-            members = [v.index for v in obj.data.vertices if any(g.group == group.index and g.weight > 0
-                                                                 for g in v.groups)]
-            pins = pinned_edge(grid, members, group.name)
+        cloth, pins = cloth_of(*cloth_mesh(obj), pin_members(obj), obj.name)
+        if isinstance(cloth, GridCloth):
+            cloth = replace(cloth, width=clean(cloth.width), length=clean(cloth.length),
+                            centre=tuple(clean(c) for c in cloth.centre), tilt=clean(cloth.tilt))
         fabric = {name: clean(getattr(obj.wetcloth, name)) for name in FABRIC}
-        shift = grid.shift
+        shift = cloth.shift
         moved = [c | {"x": clean(c["x"] - shift[0]), "y": clean(c["y"] - shift[1])} for c in colliders]
-        values = settings | fabric | grid.scene_values() | {"pinned_edge": pins, "colliders": moved}
+        values = settings | fabric | cloth.scene_values() | {"pinned_edge": pins, "colliders": moved}
         prefix = prefix_of(obj)
-        jobs.append(ClothJob(obj=obj, scene=from_dict(values), grid=grid, directory=os.path.join(directory, prefix),
+        jobs.append(ClothJob(obj=obj, scene=from_dict(values), cloth=cloth, directory=os.path.join(directory, prefix),
                              prefix=prefix, to_local=np.array(obj.matrix_world.inverted()),
                              water_levels=water_levels))
     return jobs

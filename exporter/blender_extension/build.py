@@ -3,15 +3,18 @@
 The zip holds ``blender_manifest.toml`` (schema 1.0.0, id ``wetcloth``), a five-line ``__init__.py``
 that registers the add-on, and ``wheels/``: wetcloth itself (the compiled core, this package and
 the add-on, ``wetcloth.exporter.blender_extension``) built for the running Python and platform, and
-for any other Python given.  Blender installs the wheel of its own Python when the extension is
-installed; the bake needs nothing else from outside (numpy and USD come with Blender).  The
-Blender versions the manifest allows are those whose Python has a wheel (``BLENDER_VERSIONS``).
+for any other Python given, and for each of those Pythons a wheel of every ``DEPENDENCIES``.  Blender
+installs the wheels of its own Python when the extension is installed; the bake needs nothing else
+from outside (numpy and USD come with Blender).  The Blender versions the manifest allows are those
+whose Python has a wetcloth wheel (``BLENDER_VERSIONS``).
 """
 
 from __future__ import annotations
 
+import os
 import platform
 import subprocess
+from importlib import metadata
 import sys
 import tempfile
 import zipfile
@@ -24,6 +27,11 @@ EXTENSION_ID = "wetcloth"
 #: Blender versions (first, and first not) whose Python a wheel's tag is: 4.2 (the first with the
 #: extension format) to 5.0 ship Python 3.11, 5.1 and later Python 3.13.
 BLENDER_VERSIONS = {"cp311": ("4.2.0", "5.1.0"), "cp313": ("5.1.0", None)}
+#: What the bake needs beyond Blender's own numpy and USD, bundled as wheels (the version this Python runs):
+#: scipy, with which a mesh cloth's preconditioner orders its particles (reverse Cuthill-McKee).
+DEPENDENCIES = ("scipy",)
+#: Where dependency wheels are kept once pip has downloaded them (as the Makefile keeps bpy's).
+WHEEL_CACHE = Path(os.environ.get("WETCLOTH_WHEELS", Path.home() / ".cache" / "wetcloth" / "wheels"))
 #: Blender's platform names of the machines a wheel can be built on here.
 PLATFORMS = {("Linux", "x86_64"): "linux-x64", ("Linux", "aarch64"): "linux-arm64",
              ("Darwin", "arm64"): "macos-arm64", ("Darwin", "x86_64"): "macos-x64",
@@ -60,11 +68,11 @@ def blender_range(wheel_names) -> tuple[str, str | None]:
     return ranges[0][0], ranges[-1][1]
 
 
-def manifest(version: str, wheel_names, blender_platform_name: str) -> str:
-    """The text of ``blender_manifest.toml``."""
+def manifest(version: str, wheel_names, blender_platform_name: str, dependencies=()) -> str:
+    """The text of ``blender_manifest.toml``: wetcloth's wheels ``wheel_names`` and ``dependencies``' wheels."""
     first, last = blender_range(wheel_names)
     upper = f'blender_version_max = "{last}"\n' if last else ""
-    wheels = ", ".join(f'"./wheels/{name}"' for name in wheel_names)
+    wheels = ", ".join(f'"./wheels/{name}"' for name in [*wheel_names, *dependencies])
     return f'''schema_version = "1.0.0"
 id = "{EXTENSION_ID}"
 version = "{version}"
@@ -116,6 +124,21 @@ def check_wheel(wheel: Path) -> None:
                          "or 3.13 (5.1 and later, cp313)")
 
 
+def dependency_wheel(name: str, tag: str) -> Path:
+    """The wheel of package ``name`` (the version this Python runs) for Python ``tag`` (cp311) on this
+    platform: from WHEEL_CACHE, where pip downloads it the first time."""
+    version = metadata.version(name)
+    pattern = f"{name}-{version}-{tag}-{tag}-*.whl"
+    if not any(WHEEL_CACHE.glob(pattern)):
+        done = subprocess.run([sys.executable, "-m", "pip", "download", "--quiet", "--no-deps", "--only-binary=:all:",
+                               "--python-version", f"{tag[2]}.{tag[3:]}", "--dest", str(WHEEL_CACHE),
+                               f"{name}=={version}"], capture_output=True, text=True)
+        if done.returncode != 0 or not any(WHEEL_CACHE.glob(pattern)):
+            raise ValueError(f"no wheel of {name} {version} for {tag} in {WHEEL_CACHE}, and pip could not download "
+                             f"one (exit {done.returncode}):\n{done.stderr[-2000:]}")
+    return sorted(WHEEL_CACHE.glob(pattern))[-1]
+
+
 def build_extension(out: Path | None = None, wheels=(), pythons=()) -> Path:
     """Write ``wetcloth-VERSION.zip`` into the folder ``out`` (default: the current one); its path.
 
@@ -130,9 +153,11 @@ def build_extension(out: Path | None = None, wheels=(), pythons=()) -> Path:
             wheels.append(build_wheel(Path(tmp), python))
             check_wheel(wheels[-1])
         names = [w.name for w in wheels]
-        if len(set(name.split("-")[2] for name in names)) != len(names):
+        tags = [name.split("-")[2] for name in names]
+        if len(set(tags)) != len(names):
             raise ValueError(f"two wheels for one Python: {', '.join(names)}")
-        text = manifest(wetcloth.__version__, names, blender_platform())
+        wheels += [dependency_wheel(name, tag) for tag in tags for name in DEPENDENCIES]
+        text = manifest(wetcloth.__version__, names, blender_platform(), [w.name for w in wheels[len(names):]])
         out.mkdir(parents=True, exist_ok=True)
         target = out / f"{EXTENSION_ID}-{wetcloth.__version__}.zip"
         partial = target.with_name(target.name + ".part")

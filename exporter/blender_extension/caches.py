@@ -48,7 +48,8 @@ def _relative(path: str) -> str:
 
 
 def attach(obj, usd_path: str, prefix: str) -> None:
-    """Play ``usd_path`` on ``obj``: a new cache file, the modifier first in the stack, the wet material."""
+    """Play ``usd_path`` on ``obj``: a new cache file, the modifier first in the stack reading the points and
+    their attributes (the cache's vertices are the object's, in its order), the wet material."""
     detach(obj, delete_files=False)
     before = set(bpy.data.cache_files)
     bpy.ops.cachefile.open(filepath=usd_path)
@@ -58,6 +59,7 @@ def attach(obj, usd_path: str, prefix: str) -> None:
     modifier = obj.modifiers.new(MODIFIER, "MESH_SEQUENCE_CACHE")
     modifier.cache_file = cache
     modifier.object_path = f"/wetcloth/{prefix}"
+    modifier.read_data = {"VERT", "ATTRIBUTES"}  # positions and wetness: the object keeps its faces and UVs
     obj.modifiers.move(len(obj.modifiers) - 1, 0)
     if not any(slot.material for slot in obj.material_slots):
         from wetcloth.exporter.blender_loader import make_material

@@ -1,12 +1,15 @@
-"""What the Blender objects are, read from their vertices in world space (m, z up); numpy only.
+"""What the Blender objects are, read from their vertices and faces in world space (m, z up); numpy only.
 
-* the cloth: a subdivided rectangular plane is wetcloth's grid cloth (``grid_cloth``): its
-  particle counts, size, centre and tilt, and which grid particle each Blender vertex is;
-* pins: a vertex group that is one whole edge of the grid is ``pinned_edge``;
-* colliders: a UV sphere, a cube (axis-aligned) or a cylinder (vertical axis) is the analytic
-  collider of that shape (``collider_from_vertices``, the fields of a ``[[collider]]`` table).
+* the cloth (``cloth_of``): a subdivided rectangular plane pinned along one whole edge or not at all
+  is wetcloth's grid cloth (``grid_cloth``: its particle counts, size, centre and tilt, and which grid
+  particle each Blender vertex is; ``pinned_edge``), which is exact for a plane and has the grid's
+  faster solver; any other mesh of triangles, quads and n-gons is a mesh cloth (``MeshCloth``: its
+  vertices in Blender's order, n-gons split into triangles, the pin group a point attribute);
+* colliders (``collider_of``): a closed UV sphere, cube (axis-aligned) or cylinder (vertical axis) is
+  the analytic collider of that shape (``analytic_collider``); any other mesh a mesh collider of its
+  triangles (a solid if closed, else a shell).
 
-Each refuses anything else with a ValueError that names the object and says what is accepted.
+Each refuses what it cannot take with a ValueError that names the object.
 """
 
 from __future__ import annotations
@@ -16,8 +19,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wetcloth.errors import ParameterError
+from wetcloth.mesh_file import MeshFile, make_mesh, surface
+
 #: Positions agree when within this fraction of the object's size (Blender stores float32 coordinates).
 RELATIVE_TOLERANCE = 1e-4
+#: The point attribute of a mesh cloth that holds its pin group (1 pinned, 0 free): pinned_vertices.
+PIN_ATTRIBUTE = "pin_group"
 #: pinned_edge names of the grid's four edges: (column or row, which end).
 EDGES = {"x_min": ("col", 0), "x_max": ("col", -1), "y_min": ("row", 0), "y_max": ("row", -1)}
 
@@ -44,6 +52,36 @@ class GridCloth:
     def shift(self) -> np.ndarray:
         """What is added to the simulation's positions (m) to put them in the world: the plane's x, y."""
         return np.array([self.centre[0], self.centre[1], 0.0])
+
+    #: The cache's faces: the grid's cells (the plane's own quads).
+    faces = "quads"
+    polygons = None
+
+
+@dataclass(frozen=True)
+class MeshCloth:
+    """Any mesh as the cloth: ``mesh`` its vertices in world space (m) in Blender's order (particle k is
+    vertex k) and faces; ``pinned`` whether a pin group pins some of them (point attribute PIN_ATTRIBUTE);
+    ``polygons`` the object's own faces (corner counts, vertices), which the cache is written with."""
+
+    mesh: MeshFile
+    pinned: bool
+    polygons: tuple
+
+    def scene_values(self) -> dict:
+        """The scene parameters the mesh sets: the mesh where it is, its pins."""
+        return {"cloth_mesh": self.mesh, "place_mesh": "off", "pinned_vertices": PIN_ATTRIBUTE if self.pinned else ""}
+
+    @property
+    def order(self) -> np.ndarray:
+        return np.arange(self.mesh.n)
+
+    @property
+    def shift(self) -> np.ndarray:
+        return np.zeros(3)
+
+    #: The cache's faces if not its polygons: the simulation's triangles.
+    faces = "triangles"
 
 
 def _levels(values: np.ndarray, tol: float, what: str, name: str) -> tuple[np.ndarray, float]:
@@ -120,11 +158,67 @@ def pinned_edge(grid: GridCloth, vertices, group: str) -> str:
                      "column along x, or the first or last row along y)")
 
 
-def collider_from_vertices(positions, name: str = "collider") -> dict:
+def face_blocks(sizes, loops, triangles, triangle_faces) -> list[np.ndarray]:
+    """A Blender mesh's faces as make_mesh's blocks: its triangles and n-gons (split into Blender's
+    loop triangles) as one (j, 3) block, its quads as one (j, 4) block.  ``sizes`` (k,) the corners of
+    each face, ``loops`` the vertex of each corner, face after face; ``triangles`` (t, 3) the loop
+    triangles' vertices and ``triangle_faces`` (t,) the face each splits."""
+    sizes = np.asarray(sizes, dtype=np.int64)
+    loops = np.asarray(loops, dtype=np.int64)
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+    quads = starts[sizes == 4][:, None] + np.arange(4)
+    split = sizes[np.asarray(triangle_faces, dtype=np.int64)] != 4
+    blocks = [np.asarray(triangles, dtype=np.int64).reshape(-1, 3)[split], loops[quads].reshape(-1, 4)]
+    return [b for b in blocks if len(b)]
+
+
+def cloth_of(positions, edges, polygons, loop_triangles, pins, name: str = "cloth"):
+    """The cloth of a Cloth object: a GridCloth (and its pinned_edge) if the mesh is a subdivided plane
+    and ``pins`` (the pin group's vertex indices) are none or one whole edge of it, else a MeshCloth
+    (and 'none') of vertex ``positions`` (n, 3) in world space (m) and faces ``polygons`` (corner counts,
+    corner vertices), n-gons split as ``loop_triangles`` (vertices, faces) are (face_blocks); ``edges``
+    (e, 2).  A ValueError naming the object for a mesh no cloth can be (non-manifold, loose vertices)."""
+    try:
+        grid = grid_cloth(positions, edges, name)
+        return grid, pinned_edge(grid, pins, "pins")
+    except ValueError:
+        pass
+    pinned = np.zeros(len(positions))
+    pinned[np.asarray(pins, dtype=np.int64)] = 1.0
+    try:
+        mesh = make_mesh(positions, face_blocks(*polygons, *loop_triangles), {PIN_ATTRIBUTE: pinned}, None, name)
+    except ParameterError as exc:
+        raise ValueError(f"cloth {name!r} cannot be the cloth: {exc.problems[0][2]}") from None
+    polygons = tuple(np.asarray(a, dtype=np.int64) for a in polygons)
+    return MeshCloth(mesh=mesh, pinned=bool(pinned.any()), polygons=polygons), "none"
+
+
+def is_closed(triangles) -> bool:
+    """Whether every edge of ``triangles`` (t, 3) joins exactly two of them (a closed surface)."""
+    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    edges = np.sort(np.stack([t, np.roll(t, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
+    return len(t) > 0 and bool((np.unique(edges, axis=0, return_counts=True)[1] == 2).all())
+
+
+def collider_of(positions, triangles, name: str = "collider") -> dict:
+    """The ``[[collider]]`` fields of a Collider object's world-space vertices (n, 3) m and triangles
+    (t, 3): an analytic shape if it is a closed primitive (``analytic_collider``), else a mesh collider
+    of these triangles (mesh_file.surface; x, y, z 0: the points are where the scene puts them)."""
+    found = analytic_collider(positions) if is_closed(triangles) else None
+    if found is not None:
+        return found
+    if not len(np.asarray(triangles).reshape(-1, 3)):
+        raise ValueError(f"collider {name!r} has no faces: a collider is a surface (a mesh with faces)")
+    return dict(shape="mesh", file=surface(positions, triangles, f"collider {name!r}"), x=0.0, y=0.0, z=0.0)
+
+
+def analytic_collider(positions) -> dict | None:
     """The ``[[collider]]`` fields (shape, x, y, z and its sizes, m) of a mesh's world-space vertices
-    (n, 3): 8 corners of an axis-aligned box, a cylinder's two rings about a vertical axis (cap
-    centres allowed), or more than 8 vertices all as far from their centre (a UV sphere)."""
+    (n, 3) if they are 8 corners of an axis-aligned box, a cylinder's two rings about a vertical axis
+    (cap centres allowed), or more than 8 vertices all as far from their centre (a UV sphere); else None."""
     p = np.unique(np.asarray(positions, dtype=np.float64).round(9), axis=0)
+    if len(p) == 0:
+        return None
     lo, hi = p.min(axis=0), p.max(axis=0)
     centre, extent = 0.5 * (lo + hi), hi - lo
     tol = RELATIVE_TOLERANCE * max(float(extent.max()), 1e-9)
@@ -140,6 +234,4 @@ def collider_from_vertices(positions, name: str = "collider") -> dict:
     distance = np.linalg.norm(p - centre, axis=1)
     if len(p) > 8 and np.ptp(distance) <= tol:  # (a turned cube's 8 corners are as far from its centre)
         return dict(shape="sphere", **where, radius=float(distance.mean()))
-    raise ValueError(f"collider {name!r}: not a UV sphere, an axis-aligned cube or a cylinder standing on its "
-                     "axis (vertical); other meshes cannot collide from Blender yet (wetcloth reads mesh colliders "
-                     "from files with trimesh, which Blender does not ship)")
+    return None

@@ -34,7 +34,7 @@ class Baking:
         for job in self.jobs:
             caches.detach(job.obj, delete_files=False)
         context.evaluated_depsgraph_get().update()  # Blender lets go of the old USD files
-        self.bakes = [ClothBake(job.scene, job.grid, job.directory, job.prefix, self.fps, scene.frame_start, count,
+        self.bakes = [ClothBake(job.scene, job.cloth, job.directory, job.prefix, self.fps, scene.frame_start, count,
                                 to_local=job.to_local, water_levels=job.water_levels) for job in self.jobs]
         self.total = count * len(self.bakes)
         self.done = 0

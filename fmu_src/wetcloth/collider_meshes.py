@@ -140,10 +140,14 @@ def pack(meshes: list[tuple[np.ndarray, np.ndarray]]) -> ColliderMeshes:
 def mesh_of(collider, name: str = "collider_file") -> tuple[np.ndarray, np.ndarray]:
     """A mesh collider's points (V, 3) m, moved by its x, y, z, and triangles (T, 3), from its file
     (trimesh: OBJ, PLY, STL, OFF, glTF/GLB; coincident vertices merged so that a closed surface reads as
-    closed, faces of no area left out).  A ParameterError names ``name`` for a file that is missing,
-    unreadable or has no faces."""
-    from wetcloth.mesh_file import locate
+    closed) or its surface given as arrays (mesh_file.surface: as given, no trimesh); faces of no area
+    left out.  A ParameterError names ``name`` for a file that is missing, unreadable or has no faces,
+    and for arrays without faces or with indices out of range."""
+    from wetcloth.mesh_file import MeshFile, locate
 
+    if isinstance(collider.file, MeshFile):
+        points, triangles = _given(collider.file, name)
+        return points + np.array([collider.x, collider.y, collider.z]), triangles
     path = locate(collider.file) if collider.file else None
     if path is None or not path.is_file():
         raise ParameterError(name, f"a mesh collider needs its mesh file; {str(collider.file)!r} is not a file; "
@@ -163,14 +167,30 @@ def _read(path: str, mtime_ns: int, name: str) -> tuple[np.ndarray, np.ndarray]:
                                    "mesh file (OBJ, PLY, STL, OFF, glTF, GLB) of triangles") from None
     faces = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64)
     points = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=np.float64)
+    return _with_area(points, faces, repr(path), "a mesh file of triangles", name)
+
+
+def _with_area(points: np.ndarray, faces: np.ndarray, shown: str, allowed: str, name: str):
+    """``points`` and the ``faces`` that have an area; a ParameterError naming ``name`` if none has or a
+    coordinate is not a finite number."""
     if len(faces):
         faces = faces[np.linalg.norm(np.cross(points[faces[:, 1]] - points[faces[:, 0]],
                                               points[faces[:, 2]] - points[faces[:, 0]]), axis=1) > 0.0]
     if not len(faces) or not np.isfinite(points).all():
-        raise ParameterError(name, f"{path!r} has no faces with an area, or coordinates that are not finite numbers; "
-                                   "allowed: a mesh file of triangles")
-    points.flags.writeable = faces.flags.writeable = False  # shared by every reader of the (cached) file
+        raise ParameterError(name, f"{shown} has no faces with an area, or coordinates that are not finite numbers; "
+                                   f"allowed: {allowed}")
+    points.flags.writeable = faces.flags.writeable = False  # shared by every reader (a cached file)
     return points, faces
+
+
+def _given(mesh, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """The points and triangles with an area of a surface given as arrays (mesh_file.surface)."""
+    allowed = "a surface of points (V, 3) and triangles (T, 3) indexing them (wetcloth.mesh_file.surface)"
+    points, faces = np.array(mesh.points, dtype=np.float64), np.array(mesh.triangles, dtype=np.int64)
+    if points.ndim != 2 or points.shape[1] != 3 or (len(faces) and (faces.min() < 0 or faces.max() >= len(points))):
+        raise ParameterError(name, f"{mesh.source}: points of shape {points.shape} and triangles whose indices are "
+                                   f"not all in 0..{len(points) - 1}; allowed: {allowed}")
+    return _with_area(points, faces, mesh.source, allowed, name)
 
 
 def meshes_of(colliders) -> tuple[np.ndarray, ColliderMeshes]:

@@ -1,5 +1,10 @@
 """A cloth's mesh file (scene parameter ``cloth_mesh``): its vertices, faces, UVs and point attributes.
 
+From Python a mesh may also be given as arrays, with no file: ``cloth_mesh`` takes the MeshFile that
+``make_mesh`` builds (checked as a file's mesh is), a mesh collider's ``file`` the one ``surface`` builds
+(checked where a collider file's triangles are, ``collider_meshes.mesh_of``).  The Blender extension
+bakes its objects so, as Blender ships neither meshio nor trimesh.
+
 OBJ, PLY, OFF and VTK/VTU are read with meshio, which keeps the file's vertex order, its quads and
 its point data; glTF/GLB (which meshio does not read) and STL with trimesh.  An STL file stores each
 triangle's own corners: its exactly equal vertices are merged, numbered in order of first appearance.
@@ -26,7 +31,8 @@ TRIMESH_SUFFIXES = (".stl", ".gltf", ".glb")
 SUFFIXES = MESHIO_SUFFIXES + TRIMESH_SUFFIXES
 #: What ``cloth_mesh`` allows, as its messages say (the scene parameter's range text).
 ALLOWED = ("'' (the nx x ny rectangle) or the path of a mesh file (" + ", ".join(SUFFIXES) + ") of triangles "
-           "and quads with an area each, every vertex in a face and every edge in at most two faces")
+           "and quads with an area each, every vertex in a face and every edge in at most two faces (from Python "
+           "also such a mesh as arrays: wetcloth.mesh_file.make_mesh)")
 #: A face is degenerate when a triangle of it has area below this fraction of the median edge length squared.
 DEGENERATE_AREA = 1e-10
 #: Folders where a relative mesh path is looked for after the working directory (a unit's resources).
@@ -35,9 +41,11 @@ SEARCH_FOLDERS: list[Path] = []
 UV_NAMES = (("obj:vt",), ("texture_u", "texture_v"), ("s", "t"), ("u", "v"))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class MeshFile:
-    """A cloth mesh as read: ``points`` (n, 3) float64 m; ``faces`` (k, 3) or (k, 4) int64 in file order
+    """A cloth mesh as read, or given as arrays (compared by identity, as a scene's value).
+
+    ``points`` (n, 3) float64 m; ``faces`` (k, 3) or (k, 4) int64 in file order
     (mixed triangles and quads: the triangles of their split); ``triangles`` (m, 3) int64 (each quad
     (a, b, c, d) split into (a, b, c), (a, c, d)), oriented consistently; ``face_of`` (m,) the face of
     each triangle; ``corners`` (k,) 3 or 4; ``uv`` (n, 2) or None; ``attributes`` name -> (n,) point data;
@@ -71,8 +79,11 @@ def locate(path: str | Path) -> Path:
     return next((folder / path for folder in SEARCH_FOLDERS if (folder / path).is_file()), path)
 
 
-def read_mesh_file(path: str | Path) -> MeshFile:
-    """The checked mesh of file ``path`` (see ``locate``; read again only when the file changes)."""
+def read_mesh_file(path: "str | Path | MeshFile") -> MeshFile:
+    """The checked mesh of file ``path`` (see ``locate``; read again only when the file changes), or
+    ``path`` itself if it is a mesh given as arrays (a MeshFile)."""
+    if isinstance(path, MeshFile):
+        return path
     path = locate(path)
     if path.suffix.lower() not in SUFFIXES:
         raise _error(f"{str(path)!r}: unknown mesh format {path.suffix!r}")
@@ -287,13 +298,31 @@ def mesh_area(mesh: MeshFile) -> float:
     return float(triangle_areas(mesh.points, mesh.triangles).sum())
 
 
-def is_mesh_path(value: str) -> bool:
-    """Whether a ``cloth_mesh`` value names a file (else the nx x ny rectangle)."""
-    return bool(value) and not value.isspace()
+def surface(points, triangles, shown: str = "<arrays>") -> MeshFile:
+    """A mesh collider's surface given as arrays (its ``file`` from Python): ``points`` (V, 3) m where the
+    scene puts them (before the collider's x, y, z), ``triangles`` (T, 3) indices into them; ``shown``
+    names it in errors.  Any triangles: collider_meshes.mesh_of checks them as a file's."""
+    points = np.array(points, dtype=np.float64)
+    triangles = np.array(triangles, dtype=np.int64).reshape(-1, 3)
+    for array in (points, triangles):
+        array.flags.writeable = False
+    return MeshFile(points=points, faces=triangles, triangles=triangles, face_of=np.arange(len(triangles)),
+                    corners=np.full(len(triangles), 3), uv=None, attributes={}, source=shown, blocks=(triangles,))
+
+
+def is_mesh(value) -> bool:
+    """Whether a ``cloth_mesh`` value is a mesh (a file's path, or a MeshFile given as arrays), else the nx x ny
+    rectangle."""
+    return isinstance(value, MeshFile) or (bool(value) and not value.isspace())
+
+
+def as_text(value):
+    """A ``cloth_mesh`` or collider ``file`` value as text (a mesh given as arrays: its ``source``)."""
+    return value.source if isinstance(value, MeshFile) else value
 
 
 def resolve(value: str, base: str | Path | None) -> str:
     """``value`` made absolute against folder ``base`` if it is relative (no change without a base)."""
-    if not is_mesh_path(value) or base is None or os.path.isabs(value):
+    if isinstance(value, MeshFile) or not is_mesh(value) or base is None or os.path.isabs(value):
         return value
     return str((Path(base) / value).resolve())

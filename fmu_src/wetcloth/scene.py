@@ -21,7 +21,7 @@ import numpy as np
 
 from wetcloth.errors import ConfigError, Mistakes, ParameterError, did_you_mean
 from wetcloth.mesh_file import ALLOWED as MESH_ALLOWED
-from wetcloth.mesh_file import is_mesh_path, resolve
+from wetcloth.mesh_file import MeshFile, is_mesh, resolve
 from wetcloth.run_settings import SETTINGS as RUN_SETTINGS
 from wetcloth.run_settings import check_run_table
 
@@ -31,12 +31,15 @@ INPUT = "input"
 PARAMETER = "parameter"
 
 
-def _param(default, unit: str, doc: str, lo=None, hi=None, lo_open=False, choices=(), fmu=PARAMETER, text=None):
+def _param(default, unit: str, doc: str, lo=None, hi=None, lo_open=False, choices=(), fmu=PARAMETER, text=None,
+           mesh=False):
     """A scene field with its unit, documentation and allowed range in the field metadata; ``text``: a
-    string field that takes free text, and what it allows (checked with the scene as a whole)."""
+    string field that takes free text, and what it allows (checked with the scene as a whole); ``mesh``:
+    a mesh's path that also takes, from Python, the mesh as arrays (a wetcloth.mesh_file.MeshFile)."""
     return field(
         default=default,
-        metadata=dict(unit=unit, doc=doc, lo=lo, hi=hi, lo_open=lo_open, choices=tuple(choices), fmu=fmu, text=text),
+        metadata=dict(unit=unit, doc=doc, lo=lo, hi=hi, lo_open=lo_open, choices=tuple(choices), fmu=fmu, text=text,
+                      mesh=mesh),
     )
 
 
@@ -66,7 +69,8 @@ class Collider:
     file: str = _param(
         "", "-", "a mesh collider's file (any format cloth_mesh reads; m, z up), moved by x, y, z: a closed mesh is "
         "a solid, an open one a shell (a bucket's wall) kept off on both sides; relative to the scene file",
-        text="a mesh file's path (for shape = 'mesh'), or ''")
+        text="a mesh file's path (for shape = 'mesh'), or '' (from Python also a surface as arrays: "
+             "wetcloth.mesh_file.surface)", mesh=True)
     x: float = _param(0.0, "m", "x of the centre (plane: of a point on it; mesh: where its file's origin goes)",
                       -1e4, 1e4)
     y: float = _param(0.0, "m", "y of the centre (plane: of a point on it)", -1e4, 1e4)
@@ -153,7 +157,7 @@ class Scene:
     cloth_mesh: str = _param(
         "", "-", "the cloth's mesh file (OBJ, PLY, STL, OFF, VTK/VTU, glTF/GLB; triangles and quads), one particle "
         "per vertex; '' = the nx x ny rectangle (then nx, ny, width, length make the cloth); a relative path is "
-        "relative to the scene file", text=MESH_ALLOWED)
+        "relative to the scene file", text=MESH_ALLOWED, mesh=True)
     place_mesh: str = _param(
         "off", "-", "'off': the mesh file's coordinates as they are (m, z up); 'on': the mesh turned by initial_tilt "
         "about the x axis through its centroid, and its centroid raised to initial_height", choices=SWITCH)
@@ -316,6 +320,8 @@ def normalise(name: str, value):
     number (never text or a boolean), a whole-number one also a float that is whole (3.0 -> 3)."""
     f = _field(name)
     if f.type == "str":
+        if f.metadata.get("mesh") and isinstance(value, MeshFile):
+            return value
         if not isinstance(value, str):
             raise ParameterError(name, f"expected a string, got {value!r}; allowed: {describe_range(f, name)}")
         return value
@@ -374,7 +380,7 @@ def validate(scene: Scene) -> None:
     object.__setattr__(scene, "colliders", _checked_colliders(scene.colliders, mistakes))
     object.__setattr__(scene, "grip_keys", _checked_grip_keys(scene, mistakes))
     mistakes.raise_if_any()
-    start = _check_mesh_start(scene) if is_mesh_path(scene.cloth_mesh) else None
+    start = _check_mesh_start(scene) if is_mesh(scene.cloth_mesh) else None
     if start is None:
         half_drop = 0.5 * scene.length * abs(math.sin(math.radians(scene.initial_tilt)))
         lowest = scene.initial_height - half_drop - 0.5 * scene.thickness
@@ -408,6 +414,11 @@ def _check_mesh_start(scene: Scene):
     return positions, mesh
 
 
+def _fields(collider: Collider) -> dict[str, Any]:
+    """A collider's fields by name (not dataclasses.asdict, which would take a mesh given as arrays apart)."""
+    return {name: getattr(collider, name) for name in COLLIDER_FIELDS}
+
+
 def _checked_colliders(colliders, mistakes: Mistakes) -> tuple:
     """The colliders as Collider objects (from Collider or dicts of fields), each field checked under its
     flattened name."""
@@ -417,7 +428,7 @@ def _checked_colliders(colliders, mistakes: Mistakes) -> tuple:
         return ()
     out = []
     for k, collider in enumerate(colliders, 1):
-        values = dataclasses.asdict(collider) if isinstance(collider, Collider) else collider
+        values = _fields(collider) if isinstance(collider, Collider) else collider
         if not isinstance(values, dict):
             with mistakes.collect():
                 raise ParameterError(f"collider{k}", f"expected a table of collider fields, got {values!r}")
@@ -497,7 +508,7 @@ def from_dict(values: dict[str, Any]) -> Scene:
     come as ``colliders`` (Collider objects or dicts), as flattened names (collider1_radius), or both
     (the flattened names then change the listed colliders' fields or add colliders, numbered on)."""
     values = dict(values)
-    colliders = [dataclasses.asdict(c) if isinstance(c, Collider) else dict(c) if isinstance(c, dict) else c
+    colliders = [_fields(c) if isinstance(c, Collider) else dict(c) if isinstance(c, dict) else c
                  for c in values.pop("colliders", ())]
     keys = [dataclasses.asdict(c) if isinstance(c, GripKey) else dict(c) if isinstance(c, dict) else c
             for c in values.pop("grip_keys", ())]

@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from wetcloth.errors import ParameterError
-from wetcloth.mesh_file import MeshFile, face_edges, is_mesh_path, read_mesh_file, triangle_areas
+from wetcloth.mesh_file import MeshFile, face_edges, is_mesh, read_mesh_file, triangle_areas
 from wetcloth.scene import PINS_ALLOWED, Scene
 
 #: Kinds of listed springs (``pair_kind``): along a face's edge, across a quad, bending.
@@ -123,7 +123,7 @@ def _edge_weights(count: int) -> np.ndarray:
 
 def build_topology(scene: Scene) -> Topology:
     """The topology and per-spring constants of ``scene``: the nx x ny grid, or its ``cloth_mesh``."""
-    mesh = None if not is_mesh_path(scene.cloth_mesh) else read_mesh_file(scene.cloth_mesh)
+    mesh = None if not is_mesh(scene.cloth_mesh) else read_mesh_file(scene.cloth_mesh)
     if mesh is None:
         topo = _grid(scene, scene.nx, scene.ny, scene.width, scene.length)
     else:
@@ -401,7 +401,7 @@ def placed(scene: Scene, rest_pos: np.ndarray, area: np.ndarray) -> np.ndarray:
 def start_positions(scene: Scene) -> tuple[np.ndarray, MeshFile | None]:
     """The particle positions (3, n) m at t = 0 and the mesh file (None for the built-in grid), without
     building the springs (for the scene's checks)."""
-    if not is_mesh_path(scene.cloth_mesh):
+    if not is_mesh(scene.cloth_mesh):
         return initial_positions(scene, _grid(scene, scene.nx, scene.ny, scene.width, scene.length)), None
     mesh = read_mesh_file(scene.cloth_mesh)
     return placed(scene, mesh.points.T, vertex_areas(mesh)), mesh

@@ -17,7 +17,12 @@ tests/test_blender_extension.py):
   "moved": after moving the cache folder and opening the .blend: what the load check said;
   "freed": free_bake's result and the files left;
   "pinned": a short bake of the towel pinned by a vertex group, of denim, with a Solidify modifier of its own;
-  "rising": a bake with the water keyed to rise by "rise" m: the levels at every frame, the cloth; "refusals": the errors of scenes it cannot bake.
+  "rising": a bake with the water keyed to rise by "rise" m: the levels at every frame, the cloth;
+  "refusals": the errors of scenes it cannot bake;
+  "mesh": a round cloth of quads and an n-gon (a filled circle inset a few times), two vertices pinned, over a
+          cup (a cylinder without its top face: a mesh collider), baked for "mesh_frames" frames: the
+          cloth's and the cup's arrays as Blender holds them, the evaluated cloth at every frame, the
+          object's faces after the bake, frames.json, and whether meshio or trimesh were imported.
 """
 
 import contextlib
@@ -138,18 +143,92 @@ def pinned_with_modifiers(blend):
 
 
 def refusals(spec):
-    """Errors of scenes the bake cannot take: a cloth that is no grid, a collider of another shape."""
+    """Errors of scenes the bake cannot take: a cloth with an edge in three faces, a collider with no faces."""
     out = {}
     bpy.ops.wm.open_mainfile(filepath=os.path.join(spec["work"], "scene.blend"))
     bpy.data.objects["Towel"].wetcloth.role = "NONE"
-    bpy.ops.mesh.primitive_circle_add(radius=0.3, fill_type="NGON", location=(0, 0, 0.5))
-    bpy.context.object.wetcloth.role = "CLOTH"
+    mesh = bpy.data.meshes.new("Fin")
+    mesh.from_pydata([(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0), (-1, 0, 0), (-1, 1, 0), (0, 0, 1), (0, 1, 1)], [],
+                     [(0, 2, 3, 1), (4, 0, 1, 5), (0, 6, 7, 1)])
+    fin = bpy.data.objects.new("Fin", mesh)
+    fin.location.z = 0.5
+    bpy.context.scene.collection.objects.link(fin)
+    fin.wetcloth.role = "CLOTH"
     out["cloth"] = operator(bpy.ops.wetcloth.bake)["error"]
     bpy.ops.wm.open_mainfile(filepath=os.path.join(spec["work"], "scene.blend"))
-    bpy.ops.mesh.primitive_monkey_add(location=(2, 2, 0))
-    bpy.context.object.wetcloth.role = "COLLIDER"
+    mesh = bpy.data.meshes.new("Dots")
+    mesh.from_pydata([(2, 2, 0), (2, 3, 0)], [(0, 1)], [])
+    dots = bpy.data.objects.new("Dots", mesh)
+    bpy.context.scene.collection.objects.link(dots)
+    dots.wetcloth.role = "COLLIDER"
     out["collider"] = operator(bpy.ops.wetcloth.bake)["error"]
     out["towel_modifiers"] = [m.type for m in bpy.data.objects["Towel"].modifiers]  # its last bake, kept
+    return out
+
+
+def arrays(obj, evaluated=False):
+    """An object's mesh as Blender holds it (evaluated: after its modifiers): local vertices, the world
+    matrix, edges, each face's corner count, the corners' vertices, the loop triangles and their faces."""
+    owner = obj.evaluated_get(bpy.context.evaluated_depsgraph_get()) if evaluated else obj
+    mesh = owner.to_mesh() if evaluated else obj.data
+    mesh.calc_loop_triangles()
+    out = {"co": [tuple(v.co) for v in mesh.vertices], "matrix": [list(row) for row in obj.matrix_world],
+           "edges": [tuple(e.vertices) for e in mesh.edges], "sizes": [p.loop_total for p in mesh.polygons],
+           "loops": [loop.vertex_index for loop in mesh.loops],
+           "triangles": [tuple(t.vertices) for t in mesh.loop_triangles],
+           "triangle_faces": [t.polygon_index for t in mesh.loop_triangles]}
+    if evaluated:
+        owner.to_mesh_clear()
+    return out
+
+
+def mesh_cloth_over_a_cup(spec):
+    """A round cloth of quads around an n-gon, pinned at two rim vertices, over a cup (a mesh collider)."""
+    bpy.ops.wm.read_homefile(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.fps, scene.render.fps_base = spec["fps"], 1.0
+    scene.frame_start, scene.frame_end = 1, spec["mesh_frames"]
+    cup = spec["cup"]
+    bpy.ops.mesh.primitive_cylinder_add(vertices=24, radius=cup["radius"], depth=cup["depth"], end_fill_type="NGON",
+                                        location=(0.0, 0.0, cup["z"]))
+    collider = bpy.context.object
+    collider.name = "Cup"
+    bm = bmesh.new()
+    bm.from_mesh(collider.data)
+    top = max(bm.faces, key=lambda f: f.calc_center_median().z)
+    bmesh.ops.delete(bm, geom=[top], context="FACES_ONLY")
+    bm.to_mesh(collider.data)
+    bm.free()
+    collider.wetcloth.role = "COLLIDER"
+    round_cloth = spec["round_cloth"]
+    bpy.ops.mesh.primitive_circle_add(vertices=round_cloth["segments"], radius=round_cloth["radius"], fill_type="NGON",
+                                      location=(0.0, 0.0, round_cloth["z"]))
+    cloth = bpy.context.object
+    cloth.name = "Tablecloth"
+    bm = bmesh.new()
+    bm.from_mesh(cloth.data)
+    for _ in range(round_cloth["insets"]):  # rings of quads around the n-gon
+        bmesh.ops.inset_region(bm, faces=[max(bm.faces, key=lambda f: len(f.verts))], thickness=round_cloth["inset"],
+                               use_boundary=True)
+    bm.to_mesh(cloth.data)
+    bm.free()
+    rim = sorted(range(len(cloth.data.vertices)), key=lambda k: -cloth.data.vertices[k].co.length)
+    pinned = [k for k in rim[:round_cloth["segments"]] if abs(cloth.data.vertices[k].co.y) < 1e-6]
+    group = cloth.vertex_groups.new(name="Pins")
+    group.add(pinned, 1.0, "REPLACE")
+    cloth.wetcloth.role = "CLOTH"
+    cloth.wetcloth.pin_group = "Pins"
+    scene.wetcloth.self_collision = "off"
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(spec["work"], "mesh.blend"))
+    out = {"cloth": arrays(cloth), "cup": arrays(collider, evaluated=True), "pinned": pinned}
+    started = time.perf_counter()
+    out |= operator(bpy.ops.wetcloth.bake)
+    out["seconds"] = time.perf_counter() - started
+    out |= cache_report(cloth)
+    out["frames"] = [evaluated_cloth(cloth, f) for f in range(1, spec["mesh_frames"] + 1)]
+    evaluated = cloth.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    out["played_faces"] = sorted(p.loop_total for p in evaluated.data.polygons)
+    out["imported"] = sorted(name for name in ("meshio", "trimesh") if name in sys.modules)
     return out
 
 
@@ -198,6 +277,7 @@ def main(spec_path, result_path):
         result["rising"] = rising_water(spec, blend, frames)
         result["pinned"] = pinned_with_modifiers(blend)
         result["refusals"] = refusals(spec)
+        result["mesh"] = mesh_cloth_over_a_cup(spec)
     except Exception:
         result["error"] = traceback.format_exc()
     with open(result_path, "w") as fh:

@@ -50,7 +50,7 @@ def _packed_path(path: Path) -> str:
 def pack(scene_path: str | Path) -> PackedScene:
     """The packed form of scene file ``scene_path`` (a path or preset name), checked whole; a
     ParameterError (ConfigError) for a scene the unit cannot start from."""
-    from wetcloth.mesh_file import is_mesh_path, locate
+    from wetcloth.mesh_file import is_mesh, locate
     from wetcloth.scene import PARAMETERS, RESERVED_KEYS, from_dict, read_scene_file
     from wetcloth.topology import build_topology
 
@@ -66,7 +66,7 @@ def pack(scene_path: str | Path) -> PackedScene:
             files[fields["file"]] = source
         colliders.append(fields)
     vertices = None
-    if is_mesh_path(scene.cloth_mesh):
+    if is_mesh(scene.cloth_mesh):
         mesh = locate(scene.cloth_mesh)
         starts["cloth_mesh"] = _packed_path(mesh)
         files[starts["cloth_mesh"]] = mesh
