@@ -1,12 +1,12 @@
-"""Where each scene parameter lives in Blender (no bpy): the Cloth object's plane, the cloth's
+"""Where each scene parameter lives in Blender (no bpy): the Cloth object (its mesh), the cloth's
 fabric settings (``obj.wetcloth``), or the scene's settings (``scene.wetcloth``)."""
 
 from __future__ import annotations
 
 from wetcloth.scene import PARAMETERS
 
-#: Parameters the Cloth object's plane (and its pin group) sets; the plane is the built-in rectangle,
-#: so the mesh-file parameters keep their defaults (no file, no placement, no listed pins).
+#: Parameters the Cloth object (and its pin group) sets: a subdivided plane the grid's, any other mesh the
+#: mesh's (geometry.cloth_of).
 FROM_CLOTH = ("nx", "ny", "width", "length", "initial_height", "initial_tilt", "pinned_edge", "cloth_mesh",
               "place_mesh", "pinned_vertices")
 #: Parameters of the fabric, set on each Cloth object (its preset fills some of them).

@@ -3,8 +3,8 @@ a collider's friction) and ``scene.wetcloth`` (every other scene parameter, the 
 
 Scene parameters are generated from ``wetcloth.scene.Scene``'s field metadata: each is a property
 under the parameter's own name, with its unit and meaning as the tooltip and its range as limits.
-Those the objects give are not properties: the cloth's grid, size, height and tilt come from the
-Cloth object, ``pinned_edge`` from its pin group, the colliders from Collider objects.
+Those the objects give are not properties: the cloth (a grid's size, height and tilt, or a mesh) comes
+from the Cloth object, its pins from its pin group, the colliders from Collider objects.
 """
 
 from __future__ import annotations
@@ -17,8 +17,9 @@ from wetcloth.exporter.blender_extension.parameters import FABRIC, SCENE
 from wetcloth.scene import COLLIDER_FIELDS, PARAMETERS
 
 ROLES = [("NONE", "None", "Not part of the wet cloth simulation"),
-         ("CLOTH", "Cloth", "A subdivided rectangular plane: the cloth"),
-         ("COLLIDER", "Collider", "A UV sphere, cube or cylinder the cloth collides with"),
+         ("CLOTH", "Cloth", "Any mesh of triangles, quads and n-gons, each edge in at most two faces: the cloth"),
+         ("COLLIDER", "Collider", "Any mesh the cloth collides with: closed (a solid) or open (a shell, such as "
+                                  "a cup)"),
          ("WATER", "Water surface", "A horizontal plane: its height is water_level (keys on it: a rising or "
                                     "falling level)")]
 
@@ -53,8 +54,7 @@ def _object_annotations() -> dict:
         "preset": EnumProperty(name="Fabric", description="Fabric preset: sets the areal density and thickness",
                                items=[(key, label, source) for key, (label, _, source) in FABRICS.items()],
                                default="COTTON_TERRY_TOWEL", update=_apply_preset),
-        "pin_group": StringProperty(name="Pin group", description="Vertex group of the vertices held fixed "
-                                                                  "(one whole edge of the cloth)"),
+        "pin_group": StringProperty(name="Pin group", description="Vertex group of the vertices held fixed"),
         "friction": parameter_property("friction", COLLIDER_FIELDS["friction"]),
     }
     annotations.update({name: parameter_property(name) for name in FABRIC})
