@@ -4,9 +4,10 @@ install it, bake a towel over a ball in a pool, and check what Blender plays aga
 ``wetcloth blender-extension`` builds the zip; one Blender process (tests/blender/extension_probe.py,
 with its own user folder) installs it, builds the scene (a subdivided plane as the cloth, a UV
 sphere collider, a water plane), bakes 48 frames, saves and reopens, bakes again cancelled after
-20 frames, moves the cache away, frees the bake, bakes with the water keyed to rise, and tries two
-scenes it must refuse.  The reference is wetcloth itself, run here on the scene the bake recorded
-(frames.json): the same compiled core on the same machine.
+20 frames, moves the cache away, frees the bake, bakes with the water keyed to rise, tries two
+scenes it must refuse, and bakes a round mesh cloth over a cup (a mesh collider).  The reference is
+wetcloth itself, run here on the scene the bake recorded (frames.json; for the mesh cloth, with the
+arrays Blender held): the same compiled core on the same machine.
 
 Without ``.venv-blender/bin/python`` the tests are skipped with the reason (and fail under
 WETCLOTH_REQUIRE_BLENDER=1, as ``make test`` sets), as in tests/test_blender.py.
