@@ -153,9 +153,9 @@ def pinned_edge(grid: GridCloth, vertices, group: str) -> str:
         last = (grid.nx if axis == "col" else grid.ny) - 1
         if chosen == set(index[along == (last if end == -1 else 0)].tolist()):
             return edge
-    raise ValueError(f"pin group {group!r}: its {len(chosen)} vertices are not one whole edge of the cloth; "
-                     f"pins are one edge for now ({', '.join(EDGES)}: the vertices of the first or last "
-                     "column along x, or the first or last row along y)")
+    raise ValueError(f"pin group {group!r}: its {len(chosen)} vertices are not one whole edge of the grid "
+                     f"({', '.join(EDGES)}: the vertices of the first or last column along x, or the first or "
+                     "last row along y)")
 
 
 def face_blocks(sizes, loops, triangles, triangle_faces) -> list[np.ndarray]:
