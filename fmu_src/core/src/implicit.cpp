@@ -153,6 +153,25 @@ double line_search(const Cloth& cloth, const Physics& phys, Work& work, Solver& 
     return a;
 }
 
+//: Whether a backward Euler step at velocities v+ = out_vel, whose residual (minus the gradient of the
+//: incremental potential) is in rhs, has settled its energy: the work the unsolved residual would do
+//: over the step, |v+ . rhs| (J), is at most DESCENT_ENERGY_FRACTION of the kinetic energy the scheme's
+//: own damping removes, 1/2 sum m |v+ - v^|^2 (J).
+bool energy_settled(Index n, const double* mass, const double* free, const double* out_vel, const double* hat_vel,
+                    const double* rhs) {
+    double work = 0.0;
+    double damped = 0.0;
+    for (Index c = 0; c < 3; ++c) {
+        for (Index i = 0; i < n; ++i) {
+            const Index k = c * n + i;
+            const double change = out_vel[k] - hat_vel[k];
+            work += out_vel[k] * rhs[k];
+            damped += 0.5 * free[i] * mass[i] * change * change;
+        }
+    }
+    return std::fabs(work) <= DESCENT_ENERGY_FRACTION * damped;
+}
+
 }  // namespace
 
 //: With w = h / h_prev, y+ = y^ + b h f(y+) for y = (x, p), where y^ = ((1 + w)^2 y - w^2 y_prev) / (1 + 2w)
@@ -230,7 +249,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
         factored = refresh(plane, cloth, mass, bh * bh);
         solver.counters[FACTORISATIONS] += factored > 0;
     }
-    follow_cloth(plane, cloth, pos);
+    if (adaptive) follow_cloth(plane, cloth, pos);
     const double slack_slope = descent && !adaptive ? DESCENT_SLACK_SLOPE : 0.0;
     const Index iterations = descent ? DESCENT_NEWTON_ITERATIONS : NEWTON_ITERATIONS_MAX;
     bool converged = false;
@@ -241,7 +260,8 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
         if (!residual_ready) {
             newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh, slack_slope);
         }
-        if (!adaptive) {
+        if (!adaptive) {  // the frame where the step ends (a frame-long step turns the cloth)
+            follow_cloth(plane, cloth, out_pos);
             set_systems_from_jacobian(plane, cloth, mass, work);
             solver.counters[FACTORISATIONS] += 1;
         } else {
@@ -278,6 +298,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
         }
         correction = largest;
         if (!std::isfinite(largest)) break;
+        if (descent && !adaptive && energy_settled(n, mass, free, out_vel, hat_vel, rhs)) break;
         // The velocity's tolerance: an error left in every step's velocity is not random and adds up, so
         // it is held to a fraction of the velocity and of its change over the step, or to what moves a
         // particle by the position tolerance in NEWTON_VELOCITY_TIME.
