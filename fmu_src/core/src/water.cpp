@@ -146,11 +146,14 @@ void drag_row(Index count, const Corner& a, const Corner& b, const Corner& c, co
                           out + 6 * stride, out + 7 * stride, out + 8 * stride);
 }
 
-//: Whether no particle from start to stop is in the fluid: none touches water (s > 0) or, for the air
-//: above it (above), every one is wholly under water (s = 1).
+//: Whether a particle with submerged fraction s is out of the fluid: it does not touch water (s = 0)
+//: or, for the air above it (above), it is wholly under water (s = 1).
+inline bool out_of_fluid(double s, bool above) { return above ? s >= 1.0 : s <= 0.0; }
+
+//: Whether no particle from start to stop is in the fluid.
 inline bool outside(const double* s, Index start, Index stop, bool above) {
     for (Index i = start; i < stop; ++i) {
-        if (above ? s[i] < 1.0 : s[i] > 0.0) return false;
+        if (!out_of_fluid(s[i], above)) return false;
     }
     return true;
 }
@@ -170,9 +173,9 @@ void drag_forces(Index nx, Index ny, const double* pos, const double* vel, const
     }
 }
 
-//: Whether none of corners a, b, c is in the fluid (as `outside`).
+//: Whether none of corners a, b, c is in the fluid.
 inline bool outside_all(const double* s, Index a, Index b, Index c, bool above) {
-    return above ? (s[a] >= 1.0 && s[b] >= 1.0 && s[c] >= 1.0) : (s[a] <= 0.0 && s[b] <= 0.0 && s[c] <= 0.0);
+    return out_of_fluid(s[a], above) && out_of_fluid(s[b], above) && out_of_fluid(s[c], above);
 }
 
 //: triangle_drag of a mesh's triangle (a, b, c), its corners gathered from pos, vel (3, n) and s (n).
