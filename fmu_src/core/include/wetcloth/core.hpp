@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstddef>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -232,6 +233,9 @@ struct ContactLists {
     std::vector<double> tier_scratch;   // the tiers' sums and fits
     std::vector<Index> resting;         // (n, 3) what a particle held on a layer rests on (-1 padding)
     std::vector<double> resting_normal;  // (n, 3) the unit normal from that support to the particle
+    std::vector<std::array<Index, 6>> collider_pairs;  // the cloth's pairs with mesh colliders' features (collider_edges.hpp)
+    std::vector<Index> collider_items;   // their search's scratch
+    std::vector<double> collider_start;  // (count) their distances at the step's start, m
     Index point_triangle_count() const { return static_cast<Index>(point_triangle.size() / 2); }
     Index edge_edge_count() const { return static_cast<Index>(edge_edge.size() / 2); }
 };
