@@ -105,8 +105,8 @@ Motion motion_of(const Pair& pair, const ColliderMeshes& m, Index n, const doubl
 
 //: The pairs of the cloth's elements of `width` particles (rows of `elements`, nullptr: the particles) with the
 //: features of mesh collider k's triangles whose boxes reach the elements' path boxes from x0 to x1 grown by
-//: pad (m), that are nearer than their distance (target_of) plus pad at the start less their motion's bound
-//: (the pushes may move them by pad before they are gathered again); each with its start
+//: 2 pad (m), that are nearer than their distance (target_of) plus pad at the start less their motion's bound
+//: (pushes that move no particle more than pad / 4 leave the others out of reach); each with its start
 //: distance's bits.  stamp: scratch, the last element that saw each triangle (+ 1).
 void gather(const Index* elements, Index count, int width, Index k, Index mesh, const ColliderMeshes& m, Index n,
             const double* x0, const double* x1, double pad, std::vector<Index>& near,
@@ -122,7 +122,7 @@ void gather(const Index* elements, Index count, int width, Index k, Index mesh, 
     std::fill(stamp.begin(), stamp.end(), 0);
     for (Index e = 0; e < count; ++e) {
         const Index* idx = elements ? elements + e * width : &e;
-        const Box box = path_box(idx, width, n, x0, x1, pad);
+        const Box box = path_box(idx, width, n, x0, x1, 2.0 * pad);  // the farthest a pair kept can be
         near.clear();
         mesh_triangles_in(m, mesh, box.lo, box.hi, near);
         for (const Index t : near) {
@@ -252,8 +252,8 @@ int collider_edge_contact(const Contact& contact, ContactLists& lists, const Phy
     std::vector<Pair>& pairs = lists.collider_pairs;
     const std::vector<double>& start = lists.collider_start;
     int result = UNTOUCHED;
-    // The pairs that may need a push; gathered again if the pushes moved a particle farther than reach from
-    // where it was when they were.
+    // The pairs that may need a push; gathered again if the pushes moved a particle farther than reach / 4
+    // from where it was when they were (the pairs left out stay out of reach then).
     for (int attempt = 0; attempt < ATTEMPTS; ++attempt) {
         pairs_for_step(contact, lists, phys, n, x0, x1, reach);
         if (pairs.empty()) break;
@@ -272,7 +272,7 @@ int collider_edge_contact(const Contact& contact, ContactLists& lists, const Phy
             for (Index c = 0; c < 3; ++c) d2 += (x1[c * n + i] - gathered[c * n + i]) * (x1[c * n + i] - gathered[c * n + i]);
             moved2 = py_max(moved2, d2);
         }
-        if (moved2 <= reach * reach) break;
+        if (moved2 <= 0.0625 * reach * reach) break;  // a pair's motion bound grows by at most 4 times the move
         if (attempt + 1 < ATTEMPTS) continue;
         pairs_for_step(contact, lists, phys, n, x0, x1, reach);  // for the last resort
     }
