@@ -28,6 +28,8 @@ using namespace self_contact;
 //: Columns of a pair in ContactLists::collider_pairs: its kind, its four points (a cloth particle i >= 0,
 //: a collider vertex v as -1 - v), its collider, the bits of its distance at the step's start (m).
 enum PairColumn : Index { P_KIND = 0, P_POINTS = 1, P_COLLIDER = 5, P_START = 6, PAIR_COLUMNS = 7 };
+using Pair = decltype(ContactLists::collider_pairs)::value_type;
+static_assert(std::tuple_size<Pair>::value == PAIR_COLUMNS, "ContactLists::collider_pairs rows");
 
 inline Index vertex_slot(Index v) { return -1 - v; }
 
@@ -77,14 +79,11 @@ inline constexpr double EDGE_GAP = 0.1;
 
 //: The distance (m) pair is kept apart: reach (thickness / 2, m) for a particle and a triangle, else
 //: EDGE_GAP times that.
-inline double target_of(const std::array<Index, PAIR_COLUMNS>& pair, double reach) {
+inline double target_of(const Pair& pair, double reach) {
     return pair[P_KIND] == POINT_TRIANGLE && pair[P_POINTS] >= 0 ? reach : EDGE_GAP * reach;
 }
 
-using Pair = std::array<Index, PAIR_COLUMNS>;
-static_assert(std::tuple_size<Pair>::value == PAIR_COLUMNS, "ContactLists::collider_pairs rows");
-
-//: A pair's start points, motions over the step and inverse masses.
+//: A pair's start points, motions over the step and inverse masses (0 without mass, kg, and free).
 struct Motion {
     int kind;
     Vec3 x[4], p[4];
@@ -111,9 +110,8 @@ Motion motion_of(const Pair& pair, const ColliderMeshes& m, Index n, const doubl
 void gather(const Index* elements, Index count, int width, Index k, Index mesh, const ColliderMeshes& m, Index n,
             const double* x0, const double* x1, double pad, std::vector<Index>& near,
             std::vector<Index>& stamp, std::vector<Pair>& pairs) {
-    const double no_mass[1] = {1.0};
     auto add = [&](const Pair& pair) {
-        const Motion mo = motion_of(pair, m, n, nullptr, no_mass, x0, x1);
+        const Motion mo = motion_of(pair, m, n, nullptr, nullptr, x0, x1);
         const double d = distance(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
         if (d - motion_bound(mo.kind, mo.p[0], mo.p[1], mo.p[2], mo.p[3]) >= target_of(pair, pad) + pad) return;
         pairs.push_back(pair);
