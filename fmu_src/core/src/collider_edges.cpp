@@ -244,8 +244,6 @@ int collider_edge_contact(const Contact& contact, ContactLists& lists, const Phy
     if (phys.meshes.count == 0 || n == 0) return UNTOUCHED;
     const double reach = 0.5 * phys.thickness;  // the particles' contact distance: the pairs are gathered within it
     const std::size_t size = static_cast<std::size_t>(n);
-    lists.collider_pushed.assign(size, 0);
-    lists.collider_normals.resize(3 * size);
     std::vector<double>& gathered = lists.collider_end;
     std::vector<Pair>& pairs = lists.collider_pairs;
     const std::vector<double>& start = lists.collider_start;
@@ -255,6 +253,10 @@ int collider_edge_contact(const Contact& contact, ContactLists& lists, const Phy
     for (int attempt = 0; attempt < ATTEMPTS; ++attempt) {
         pairs_for_step(contact, lists, phys, n, x0, x1, reach);
         if (pairs.empty()) break;
+        if (attempt == 0) {
+            lists.collider_pushed.assign(size, 0);
+            lists.collider_normals.resize(3 * size);
+        }
         gathered.assign(x1, x1 + 3 * n);
         for (int pass = 0; pass < PASSES_MAX; ++pass) {
             Index treated = 0;
@@ -274,6 +276,7 @@ int collider_edge_contact(const Contact& contact, ContactLists& lists, const Phy
         if (attempt + 1 < ATTEMPTS) continue;
         pairs_for_step(contact, lists, phys, n, x0, x1, reach);  // for the last resort
     }
+    if (pairs.empty()) return result;
     // The last resort: the particles of a pair whose motion is still not shown safe stay where they started.
     std::vector<Index>& stopped = lists.collider_items;
     stopped.assign(size, 0);
