@@ -156,4 +156,11 @@ bool mesh_crossing(const ColliderMeshes& m, Index mesh, const double* a, const d
     return true;
 }
 
+void mesh_triangles_in(const ColliderMeshes& m, Index mesh, const double* lo, const double* hi,
+                       std::vector<Index>& out) {
+    const double* header = m.headers + mesh * MESH_COLUMNS;
+    CellRange r;
+    if (cells_of(header, lo, hi, r)) for_each_triangle(m, header, r, [&](Index t) { out.push_back(t); });
+}
+
 }  // namespace wc

@@ -10,6 +10,7 @@
 
 #include "wetcloth/absorption.hpp"
 #include "wetcloth/assembly.hpp"
+#include "wetcloth/collider_edges.hpp"
 #include "wetcloth/colliders.hpp"
 #include "wetcloth/floor.hpp"
 #include "wetcloth/grip.hpp"
@@ -149,6 +150,13 @@ void maybe_sleep(Core& core, double h, bool exchanging) {
     }
 }
 
+//: collider_edge_contact over the step from x0 to x1 (velocities v1).
+int collider_edges(Core& core, const double* x0, double* x1, double* v1) {
+    if (core.phys.meshes.count == 0 || core.contact.lists == nullptr) return UNTOUCHED;
+    return collider_edge_contact(core.contact, *core.contact.lists, core.phys, core.cloth.n, core.solver.mass,
+                                 core.cloth.free, x0, x1, v1);
+}
+
 //: Take one accepted step of at most `remaining` s.  Returns DONE or BLOWN_UP.
 Status step(Core& core, double remaining) {
     Cloth& cloth = core.cloth;
@@ -253,8 +261,13 @@ Status step(Core& core, double remaining) {
     const bool on_collider = (phys.collider_count > 0 &&
                               collider_contact(n, phys, buf.pos, buf.trial_pos, buf.trial_vel) > 0) ||
                              held_on_colliders > 0;
-    const bool kinked = resolve(core.contact, phys.thickness, phys.floor_z, control.blow_up_speed, n,
-                                core.solver.mass, cloth.free, buf.pos, buf.trial_pos, buf.trial_vel, h);
+    // The cloth's edges and triangles against mesh colliders' edges and vertices, before self-collision and
+    // again after it if it moved the cloth.
+    int edged = collider_edges(core, buf.pos, buf.trial_pos, buf.trial_vel);
+    bool kinked = resolve(core.contact, phys.thickness, phys.floor_z, control.blow_up_speed, n, core.solver.mass,
+                          cloth.free, buf.pos, buf.trial_pos, buf.trial_vel, h);
+    if (kinked) edged |= collider_edges(core, buf.pos, buf.trial_pos, buf.trial_vel);
+    kinked = kinked || (edged & STOPPED) != 0;
     const bool exchanging = exchange_water(core, core.solver.mass, h);
     place_grip(n, phys, grip, cloth.free, buf.held, nullptr, buf.trial_vel);  // (the uptake rescaled velocities)
     const SpeedCheck check = speed_and_finiteness(n, buf.trial_pos, buf.trial_vel, buf.trial_water);
@@ -274,6 +287,7 @@ Status step(Core& core, double remaining) {
     if (on_collider) {
         collider_history(n, phys, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h);
     }
+    if (edged & PUSHED) collider_edge_history(*core.contact.lists, n, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h);
     clock[LAST_STEP] = kinked ? 0.0 : h;  // self-collision's push: BDF2 starts afresh
     clock[TIME] += h;
     clock[STEPS] += 1;

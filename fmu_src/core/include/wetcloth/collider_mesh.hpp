@@ -3,6 +3,8 @@
 // within reach, found through a uniform grid of cells over the mesh (built with the scene, Python's
 // wetcloth.collider_meshes), so a far collider costs a box test.
 #pragma once
+#include <vector>
+
 #include "wetcloth/core.hpp"
 
 namespace wc {
@@ -23,5 +25,10 @@ double mesh_distance(const ColliderMeshes& meshes, Index mesh, const double* p, 
 //: (hit, 3) and the unit normal of its face towards a (normal, 3).
 bool mesh_crossing(const ColliderMeshes& meshes, Index mesh, const double* a, const double* b, double* hit,
                    double* normal);
+
+//: Appends to `out` the triangles of mesh `mesh` listed in the cells that the box [lo, hi] (3 each, m)
+//: overlaps (a triangle in several cells more than once).
+void mesh_triangles_in(const ColliderMeshes& meshes, Index mesh, const double* lo, const double* hi,
+                       std::vector<Index>& out);
 
 }  // namespace wc

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstddef>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -232,6 +233,13 @@ struct ContactLists {
     std::vector<double> tier_scratch;   // the tiers' sums and fits
     std::vector<Index> resting;         // (n, 3) what a particle held on a layer rests on (-1 padding)
     std::vector<double> resting_normal;  // (n, 3) the unit normal from that support to the particle
+    std::vector<std::array<Index, 7>> collider_pairs;  // the cloth's pairs with mesh colliders' features (collider_edges.hpp)
+    std::vector<Index> collider_items;   // their search's scratch
+    std::vector<Index> collider_stamp;  // (mesh triangles) scratch: the last element that saw each
+    std::vector<double> collider_start;  // (count) their distances at the step's start, m
+    std::vector<double> collider_end;    // (3, n) the end positions when they were gathered, m
+    std::vector<Index> collider_pushed;  // (n) 1 for the particles they pushed
+    std::vector<double> collider_normals;  // (3, n) the direction of each one's last push
     Index point_triangle_count() const { return static_cast<Index>(point_triangle.size() / 2); }
     Index edge_edge_count() const { return static_cast<Index>(edge_edge.size() / 2); }
 };

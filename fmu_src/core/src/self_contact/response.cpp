@@ -46,11 +46,6 @@ inline Candidate candidate(const Contact& contact, Index j) {
     return {EDGE_EDGE, {contact.edges[2 * a], contact.edges[2 * a + 1], contact.edges[2 * b], contact.edges[2 * b + 1]}};
 }
 
-struct Inverse {
-    double m[4];
-    double sum() const { return m[0] + m[1] + m[2] + m[3]; }
-};
-
 inline Inverse inverse_masses(const Index idx[4], const double* mass, const double* free) {
     return {{free[idx[0]] / mass[idx[0]], free[idx[1]] / mass[idx[1]], free[idx[2]] / mass[idx[2]],
              free[idx[3]] / mass[idx[3]]}};
@@ -88,9 +83,8 @@ inline ContactTime contact_time(int kind, const Index idx[4], double start_dista
 //: Particle k's inverse mass in a push, 0 if it is held (bit k of `held`).
 inline double share(const Inverse& inverse, int held, int k) { return (held >> k) & 1 ? 0.0 : inverse.m[k]; }
 
-//: Move the end positions so that the pair's separation along `normal` (closest-point weights w kept) is
-//: `target` (m); then remove its approaching velocity and apply Coulomb friction.  A particle on the floor
-//: (or that the push would take below floor_z) takes no share of a push downwards.
+}  // namespace
+
 void push_apart(const Index idx[4], const Weights& weights, const Vec3& normal, double target,
                 const Inverse& inverse, double friction, double floor_z, Index n, double* x1, double* v1) {
     const double w[4] = {weights.w0, weights.w1, weights.w2, weights.w3};
@@ -158,6 +152,8 @@ void push_apart(const Index idx[4], const Weights& weights, const Vec3& normal, 
         v1z[i] -= s * (approach * nz + keep * tz);
     }
 }
+
+namespace {
 
 //: Treat one pair if it needs it (see the file's head); returns whether it did.
 bool settle_pair(const Candidate& p, double start_distance, const Contact& contact, double thickness, double floor_z,

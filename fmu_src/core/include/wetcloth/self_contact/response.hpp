@@ -4,6 +4,7 @@
 #pragma once
 
 #include "wetcloth/core.hpp"
+#include "wetcloth/self_contact/geometry.hpp"
 
 namespace wc::self_contact {
 
@@ -25,6 +26,19 @@ inline constexpr int ATTEMPTS = 6;
 //: members.
 enum ZoneRow : Index { MASS = 0, POS = 1, MOVE = 4, HELD = 7, MOMENT = 8, INERTIA = 11, SPIN = 17, MEMBERS = 20 };
 static_assert(MEMBERS + 1 == ZONE_ROWS, "Contact::zone_sums rows");
+
+//: The inverse masses (1/kg) of a pair's four particles (0: pinned, held or immovable).
+struct Inverse {
+    double m[4];
+    double sum() const { return m[0] + m[1] + m[2] + m[3]; }
+};
+
+//: Move the end positions x1 (3, n) of the pair's particles idx so that its separation along `normal`
+//: (closest-point weights kept) is `target` (m); then remove its approaching velocity (v1 (3, n), m/s) and
+//: apply Coulomb friction.  A particle on the floor (or that the push would take below floor_z) takes no
+//: share of a push downwards.
+void push_apart(const Index idx[4], const Weights& weights, const Vec3& normal, double target,
+                const Inverse& inverse, double friction, double floor_z, Index n, double* x1, double* v1);
 
 //: Whether the step's blow-up guard will refuse it: a value not finite, or a particle at blow_up_speed
 //: (m/s) or faster.

@@ -1,0 +1,34 @@
+// The cloth's edges and triangles against mesh colliders' edges and vertices (docs/model.md section 6.3):
+// the particles' contact (colliders.hpp) keeps every particle off a mesh, but a sharp collider edge (a
+// bucket's rim) can still pass between two particles and slice the cloth.  This pass treats the three
+// kinds of pair between a cloth element and a collider feature as self-collision treats its pairs
+// (self_contact/geometry.hpp, response.hpp), the collider immovable: a particle and a collider triangle, a
+// cloth edge and a collider edge, a collider vertex and a cloth triangle.
+#pragma once
+#include "wetcloth/core.hpp"
+
+namespace wc {
+
+//: What collider_edge_contact did: nothing, pushed particles (collider_edge_history then gives them the
+//: history of a motion along their push), or, as a last resort, kept particles where they started.
+enum EdgeContact : int { UNTOUCHED = 0, PUSHED = 1, STOPPED = 2 };
+
+//: After collider_contact, for the step from x0 to x1 (both (3, n), m; x1 and the end velocities v1 (m/s)
+//: changed in place; mass (n) kg, free (n)): every pair of the cloth's elements (contact's edges and
+//: triangles) and a mesh collider's features that the straight-line motion brings closer than its distance
+//: (a particle and a collider triangle thickness / 2, the others EDGE_GAP times that) is treated as
+//: self-collision treats a pair at the thickness: pushed apart to that distance (the collider not moving),
+//: its approaching velocity removed, its sliding reduced by the collider's friction times that.  Pairs whose
+//: motion still comes closer than a tenth of it (or half their start distance) then have their particles
+//: stay where they started, at rest.  Colliders whose box the cloth's path box, grown by thickness / 2,
+//: does not reach cost that test.  Returns EdgeContact flags; lists holds the pairs, the pushes and scratch.
+int collider_edge_contact(const Contact& contact, ContactLists& lists, const Physics& phys, Index n,
+                          const double* mass, const double* free, const double* x0, double* x1, double* v1);
+
+//: After the step is taken (pos, vel its end, prev_pos, prev_vel its start, (3, n)): the particles that
+//: collider_edge_contact pushed get the history of a straight motion along their last push (as the
+//: floor's normal_history), so that BDF2 goes on.
+void collider_edge_history(const ContactLists& lists, Index n, const double* pos, const double* vel, double* prev_pos,
+                           double* prev_vel, double h);
+
+}  // namespace wc

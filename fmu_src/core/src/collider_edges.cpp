@@ -1,0 +1,323 @@
+// The cloth's elements against mesh colliders' features (wetcloth/collider_edges.hpp; docs/model.md
+// section 6.3).  A pair is four points, as self-collision's are (self_contact/geometry.hpp), each a cloth
+// particle or a collider vertex (immovable: inverse mass 0): a particle and a collider triangle and a
+// collider vertex and a cloth triangle (POINT_TRIANGLE), a cloth edge and a collider edge (EDGE_EDGE).
+// If the cloth's start positions are kept apart from the collider by a positive distance and no pair
+// comes closer than a positive distance along the step's straight-line motion, no cloth edge crosses a
+// collider triangle and no collider edge a cloth triangle at its end: a crossing can only begin where a
+// vertex meets a triangle or an edge meets an edge.
+#include "wetcloth/collider_edges.hpp"
+
+#include <algorithm>
+#include <array>
+#include <limits>
+
+#include "wetcloth/collider_mesh.hpp"
+#include "wetcloth/colliders.hpp"
+#include "wetcloth/floor.hpp"
+#include "wetcloth/self_contact/elements.hpp"
+#include "wetcloth/self_contact/geometry.hpp"
+#include "wetcloth/self_contact/response.hpp"
+
+namespace wc {
+
+namespace {
+
+using namespace self_contact;
+
+//: Columns of a pair in ContactLists::collider_pairs: its kind, its four points (a cloth particle i >= 0,
+//: a collider vertex v as -1 - v), its collider, the bits of its distance at the step's start (m).
+enum PairColumn : Index { P_KIND = 0, P_POINTS = 1, P_COLLIDER = 5, P_START = 6, PAIR_COLUMNS = 7 };
+using Pair = decltype(ContactLists::collider_pairs)::value_type;
+static_assert(std::tuple_size<Pair>::value == PAIR_COLUMNS, "ContactLists::collider_pairs rows");
+
+inline Index vertex_slot(Index v) { return -1 - v; }
+
+//: Point s of a pair at positions x (3, n): a particle's, or a collider vertex's.
+inline Vec3 at(const ColliderMeshes& m, const double* x, Index n, Index s) {
+    if (s >= 0) return point(x, n, s);
+    const Index v = -1 - s;
+    return {m.vertices[v], m.vertices[m.vertex_count + v], m.vertices[2 * m.vertex_count + v]};
+}
+
+//: A box (lo, hi (3), m).
+struct Box {
+    double lo[3], hi[3];
+    bool holds(const Vec3& p) const {
+        return p.x >= lo[0] && p.x <= hi[0] && p.y >= lo[1] && p.y <= hi[1] && p.z >= lo[2] && p.z <= hi[2];
+    }
+    bool meets(const Vec3& a, const Vec3& b) const {  // the box of segment ab overlaps this one
+        return std::max(a.x, b.x) >= lo[0] && std::min(a.x, b.x) <= hi[0] && std::max(a.y, b.y) >= lo[1] &&
+               std::min(a.y, b.y) <= hi[1] && std::max(a.z, b.z) >= lo[2] && std::min(a.z, b.z) <= hi[2];
+    }
+};
+
+//: The box of the paths from x0 to x1 of `width` particles idx (nullptr: particles 0 .. width - 1), grown
+//: by pad (m).
+Box path_box(const Index* idx, Index width, Index n, const double* x0, const double* x1, double pad) {
+    Box b{};
+    for (Index c = 0; c < 3; ++c) {
+        b.lo[c] = std::numeric_limits<double>::infinity();
+        b.hi[c] = -b.lo[c];
+        for (Index k = 0; k < width; ++k) {
+            const Index i = idx ? idx[k] : k;
+            const double a = x0[c * n + i], e = x1[c * n + i];
+            b.lo[c] = std::min(b.lo[c], std::min(a, e));
+            b.hi[c] = std::max(b.hi[c], std::max(a, e));
+        }
+        b.lo[c] -= pad, b.hi[c] += pad;
+    }
+    return b;
+}
+
+//: The distance the pass keeps a cloth edge from a collider edge and a collider vertex from a cloth
+//: triangle, as a fraction of thickness / 2 (a particle and a collider triangle: thickness / 2, the
+//: particles' own rule): where the cloth lies on a curved collider, its edges between particles kept
+//: thickness / 2 off dip closer by their sagitta (0.7 mm for particles 3 cm apart on a sphere of radius
+//: 15 cm), which the pass leaves alone.
+inline constexpr double EDGE_GAP = 0.1;
+
+//: The distance (m) pair is kept apart: reach (thickness / 2, m) for a particle and a triangle, else
+//: EDGE_GAP times that.
+inline double target_of(const Pair& pair, double reach) {
+    return pair[P_KIND] == POINT_TRIANGLE && pair[P_POINTS] >= 0 ? reach : EDGE_GAP * reach;
+}
+
+//: A pair's start points, motions over the step and inverse masses (0 without mass, kg, and free).
+struct Motion {
+    int kind;
+    Vec3 x[4], p[4];
+    Inverse inverse;
+};
+
+Motion motion_of(const Pair& pair, const ColliderMeshes& m, Index n, const double* mass, const double* free,
+                 const double* x0, const double* x1) {
+    Motion mo{static_cast<int>(pair[P_KIND]), {}, {}, {{0.0, 0.0, 0.0, 0.0}}};
+    for (int k = 0; k < 4; ++k) {
+        const Index s = pair[P_POINTS + k];
+        mo.x[k] = at(m, x0, n, s);
+        mo.p[k] = s >= 0 ? sub(point(x1, n, s), mo.x[k]) : Vec3{0.0, 0.0, 0.0};
+        mo.inverse.m[k] = s >= 0 && mass ? free[s] / mass[s] : 0.0;
+    }
+    return mo;
+}
+
+//: The pairs of the cloth's elements of `width` particles (rows of `elements`, nullptr: the particles) with the
+//: features of mesh collider k's triangles whose boxes reach the elements' path boxes from x0 to x1 grown by
+//: 2 pad (m), that are nearer than their distance (target_of) plus pad at the start less their motion's bound
+//: (pushes that move no particle more than pad / 4 leave the others out of reach); each with its start
+//: distance's bits.  stamp: scratch, the last element that saw each triangle (+ 1).
+void gather(const Index* elements, Index count, int width, Index k, Index mesh, const ColliderMeshes& m, Index n,
+            const double* x0, const double* x1, double pad, std::vector<Index>& near,
+            std::vector<Index>& stamp, std::vector<Pair>& pairs) {
+    auto add = [&](const Pair& pair) {
+        const Motion mo = motion_of(pair, m, n, nullptr, nullptr, x0, x1);
+        const double d = distance(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
+        if (d - motion_bound(mo.kind, mo.p[0], mo.p[1], mo.p[2], mo.p[3]) >= target_of(pair, pad) + pad) return;
+        pairs.push_back(pair);
+        pairs.back()[P_START] = gap_bits(d);
+    };
+    std::fill(stamp.begin(), stamp.end(), 0);
+    for (Index e = 0; e < count; ++e) {
+        const Index* idx = elements ? elements + e * width : &e;
+        const Box box = path_box(idx, width, n, x0, x1, 2.0 * pad);  // the farthest a pair kept can be
+        near.clear();
+        mesh_triangles_in(m, mesh, box.lo, box.hi, near);
+        for (const Index t : near) {
+            if (static_cast<Index>(stamp.size()) <= t) stamp.resize(static_cast<std::size_t>(t + 1), 0);
+            if (stamp[static_cast<std::size_t>(t)] == e + 1) continue;  // seen through another cell
+            stamp[static_cast<std::size_t>(t)] = e + 1;
+            const Index* v = m.triangles + 3 * t;
+            const Vec3 p[3] = {at(m, nullptr, 0, vertex_slot(v[0])), at(m, nullptr, 0, vertex_slot(v[1])),
+                               at(m, nullptr, 0, vertex_slot(v[2]))};
+            if (width == 1) {  // a particle and the triangle
+                Box tb{{p[0].x, p[0].y, p[0].z}, {p[0].x, p[0].y, p[0].z}};
+                for (int j = 1; j < 3; ++j) {
+                    const double q[3] = {p[j].x, p[j].y, p[j].z};
+                    for (Index c = 0; c < 3; ++c) tb.lo[c] = std::min(tb.lo[c], q[c]), tb.hi[c] = std::max(tb.hi[c], q[c]);
+                }
+                const bool overlap = tb.lo[0] <= box.hi[0] && tb.hi[0] >= box.lo[0] && tb.lo[1] <= box.hi[1] &&
+                                     tb.hi[1] >= box.lo[1] && tb.lo[2] <= box.hi[2] && tb.hi[2] >= box.lo[2];
+                if (overlap) add({POINT_TRIANGLE, idx[0], vertex_slot(v[0]), vertex_slot(v[1]), vertex_slot(v[2]), k, 0});
+            } else if (width == 2) {  // the edge and each of the triangle's edges
+                for (int j = 0; j < 3; ++j) {
+                    if (!box.meets(p[j], p[(j + 1) % 3])) continue;
+                    const Index a = std::min(v[j], v[(j + 1) % 3]), b = std::max(v[j], v[(j + 1) % 3]);
+                    add({EDGE_EDGE, idx[0], idx[1], vertex_slot(a), vertex_slot(b), k, 0});
+                }
+            } else {  // each of the triangle's corners and the cloth triangle
+                for (int j = 0; j < 3; ++j) {
+                    if (box.holds(p[j])) add({POINT_TRIANGLE, vertex_slot(v[j]), idx[0], idx[1], idx[2], k, 0});
+                }
+            }
+        }
+    }
+}
+
+//: When along the step the pair must be treated (time_of_contact), or CLEAR; `near` whether its motion
+//: can bring it within `gap` (m) at all.
+double contact_when(const Motion& mo, double start, double gap, bool& near) {
+    near = start - motion_bound(mo.kind, mo.p[0], mo.p[1], mo.p[2], mo.p[3]) < gap;
+    if (!near) return CLEAR;
+    const double minimum = py_min(SAFE_FRACTION * gap, 0.5 * start);
+    return time_of_contact(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3], mo.p[0], mo.p[1], mo.p[2], mo.p[3], start,
+                           minimum);
+}
+
+//: Treat one pair if it needs it (as self-collision's settle_pair, at distance gap); returns whether it did.
+bool settle_pair(const Pair& pair, double start, const Physics& phys, double gap, Index n, const double* mass,
+                 const double* free, const double* x0, double* x1, double* v1, ContactLists& lists) {
+    const Motion mo = motion_of(pair, phys.meshes, n, mass, free, x0, x1);
+    if (mo.inverse.sum() == 0.0) return false;
+    bool near = false;
+    const double when = contact_when(mo, start, gap, near);
+    if (!near) return false;
+    const double t = when == CLEAR ? 1.0 : when;
+    Vec3 q[4];
+    for (int k = 0; k < 4; ++k) q[k] = along(mo.x[k], t, mo.p[k]);
+    const Weights w = closest(mo.kind, q[0], q[1], q[2], q[3]);
+    const Vec3 d = combine(w, q[0], q[1], q[2], q[3]);
+    const double length = norm(d);
+    if (when == CLEAR && length >= (1.0 - SLACK) * gap) return false;
+    if (!(length > 0.0)) return false;  // no side to push to: left to the last resort
+    const Vec3 normal = {d.x / length, d.y / length, d.z / length};
+    // The four points as particles 0..3 of their own (3, 4) arrays, the collider's at rest.
+    double x[12], v[12];
+    for (int k = 0; k < 4; ++k) {
+        const Index s = pair[P_POINTS + k];
+        const Vec3 e = s >= 0 ? point(x1, n, s) : mo.x[k];
+        x[k] = e.x, x[4 + k] = e.y, x[8 + k] = e.z;
+        for (Index c = 0; c < 3; ++c) v[4 * c + k] = s >= 0 ? v1[c * n + s] : 0.0;
+    }
+    const Index idx[4] = {0, 1, 2, 3};
+    const double friction = phys.colliders[pair[P_COLLIDER] * COLLIDER_COLUMNS + C_FRICTION];
+    push_apart(idx, w, normal, gap, mo.inverse, friction, phys.floor_z, 4, x, v);
+    const double side[4] = {w.w0, w.w1, w.w2, w.w3};
+    for (int k = 0; k < 4; ++k) {
+        const Index s = pair[P_POINTS + k];
+        if (s < 0) continue;
+        for (Index c = 0; c < 3; ++c) x1[c * n + s] = x[4 * c + k], v1[c * n + s] = v[4 * c + k];
+        if (side[k] == 0.0 || mo.inverse.m[k] == 0.0) continue;
+        const double sign = side[k] > 0.0 ? 1.0 : -1.0;  // the point side moves along the normal, the other against it
+        lists.collider_pushed[static_cast<std::size_t>(s)] = 1;
+        lists.collider_normals[static_cast<std::size_t>(s)] = sign * normal.x;
+        lists.collider_normals[static_cast<std::size_t>(n + s)] = sign * normal.y;
+        lists.collider_normals[static_cast<std::size_t>(2 * n + s)] = sign * normal.z;
+    }
+    return true;
+}
+
+//: The pairs near enough to need a look over the step from x0 to x1 (gather, pad reach m), with their start
+//: distances, in lists.
+void pairs_for_step(const Contact& contact, ContactLists& lists, const Physics& phys, Index n, const double* x0,
+                    const double* x1, double reach) {
+    std::vector<Pair>& pairs = lists.collider_pairs;
+    pairs.clear();
+    const Box cloth = path_box(nullptr, n, n, x0, x1, reach);  // a mesh it does not reach costs this pass
+    for (Index k = 0; k < phys.collider_count; ++k) {
+        const double* row = phys.colliders + k * COLLIDER_COLUMNS;
+        if (static_cast<Index>(row[C_SHAPE]) != MESH) continue;
+        const Index mesh = static_cast<Index>(row[C_RADIUS]);
+        const double* header = phys.meshes.headers + mesh * MESH_COLUMNS;
+        bool reached = true;
+        for (Index c = 0; c < 3; ++c)
+            reached = reached && cloth.hi[c] >= header[M_LO_X + c] && cloth.lo[c] <= header[M_HI_X + c];
+        if (!reached) continue;
+        std::vector<Index>& stamp = lists.collider_stamp;
+        gather(nullptr, n, 1, k, mesh, phys.meshes, n, x0, x1, reach, lists.collider_items, stamp, pairs);
+        gather(contact.edges, contact.edge_count, 2, k, mesh, phys.meshes, n, x0, x1, reach,
+               lists.collider_items, stamp, pairs);
+        gather(contact.triangles, contact.triangle_count, 3, k, mesh, phys.meshes, n, x0, x1, reach,
+               lists.collider_items, stamp, pairs);
+    }
+    std::sort(pairs.begin(), pairs.end());
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    std::vector<double>& start = lists.collider_start;
+    start.resize(pairs.size());
+    for (std::size_t j = 0; j < pairs.size(); ++j) start[j] = gap_of(pairs[j][P_START]);
+}
+
+}  // namespace
+
+int collider_edge_contact(const Contact& contact, ContactLists& lists, const Physics& phys, Index n,
+                          const double* mass, const double* free, const double* x0, double* x1, double* v1) {
+    if (phys.meshes.count == 0 || n == 0) return UNTOUCHED;
+    const double reach = 0.5 * phys.thickness;  // the particles' contact distance: the pairs are gathered within it
+    const std::size_t size = static_cast<std::size_t>(n);
+    std::vector<double>& gathered = lists.collider_end;
+    std::vector<Pair>& pairs = lists.collider_pairs;
+    const std::vector<double>& start = lists.collider_start;
+    int result = UNTOUCHED;
+    // The pairs that may need a push; gathered again if the pushes moved a particle farther than reach / 4
+    // from where it was when they were (the pairs left out stay out of reach then).
+    for (int attempt = 0; attempt < ATTEMPTS; ++attempt) {
+        pairs_for_step(contact, lists, phys, n, x0, x1, reach);
+        if (pairs.empty()) break;
+        if (attempt == 0) {
+            lists.collider_pushed.assign(size, 0);
+            lists.collider_normals.resize(3 * size);
+        }
+        gathered.assign(x1, x1 + 3 * n);
+        for (int pass = 0; pass < PASSES_MAX; ++pass) {
+            Index treated = 0;
+            for (std::size_t j = 0; j < pairs.size(); ++j)
+                treated += settle_pair(pairs[j], start[j], phys, target_of(pairs[j], reach), n, mass, free, x0, x1,
+                                       v1, lists);
+            if (treated == 0) break;
+            result |= PUSHED;
+        }
+        double moved2 = 0.0;
+        for (Index i = 0; i < n; ++i) {
+            double d2 = 0.0;
+            for (Index c = 0; c < 3; ++c) d2 += (x1[c * n + i] - gathered[c * n + i]) * (x1[c * n + i] - gathered[c * n + i]);
+            moved2 = py_max(moved2, d2);
+        }
+        if (moved2 <= 0.0625 * reach * reach) break;  // a pair's motion bound grows by at most 4 times the move
+        if (attempt + 1 < ATTEMPTS) continue;
+        pairs_for_step(contact, lists, phys, n, x0, x1, reach);  // for the last resort
+    }
+    if (pairs.empty()) return result;
+    // The last resort: the particles of a pair whose motion is still not shown safe stay where they started.
+    std::vector<Index>& stopped = lists.collider_items;
+    stopped.assign(size, 0);
+    for (Index round = 0; round < n; ++round) {
+        Index unsafe = 0;
+        for (std::size_t j = 0; j < pairs.size(); ++j) {
+            const Pair& pair = pairs[j];
+            bool movable = false;
+            for (int k = 0; k < 4; ++k) {
+                const Index s = pair[P_POINTS + k];
+                movable = movable || (s >= 0 && free[s] != 0.0 && stopped[static_cast<std::size_t>(s)] == 0);
+            }
+            if (!movable) continue;
+            bool near = false;
+            const Motion mo = motion_of(pair, phys.meshes, n, mass, free, x0, x1);
+            if (contact_when(mo, start[j], target_of(pair, reach), near) == CLEAR) continue;
+            unsafe += 1;
+            for (int k = 0; k < 4; ++k) {
+                const Index s = pair[P_POINTS + k];
+                if (s < 0 || free[s] == 0.0) continue;
+                stopped[static_cast<std::size_t>(s)] = 1;
+                lists.collider_pushed[static_cast<std::size_t>(s)] = 0;
+                for (Index c = 0; c < 3; ++c) x1[c * n + s] = x0[c * n + s], v1[c * n + s] = 0.0;
+            }
+        }
+        if (unsafe == 0) break;
+        result |= STOPPED;
+    }
+    return result;
+}
+
+void collider_edge_history(const ContactLists& lists, Index n, const double* pos, const double* vel, double* prev_pos,
+                           double* prev_vel, double h) {
+    if (static_cast<Index>(lists.collider_pushed.size()) != n) return;
+    for (Index i = 0; i < n; ++i) {
+        if (lists.collider_pushed[static_cast<std::size_t>(i)] == 0) continue;
+        const double normal[3] = {lists.collider_normals[static_cast<std::size_t>(i)],
+                                  lists.collider_normals[static_cast<std::size_t>(n + i)],
+                                  lists.collider_normals[static_cast<std::size_t>(2 * n + i)]};
+        normal_history(n, i, normal, pos, vel, prev_pos, prev_vel, h);
+    }
+}
+
+}  // namespace wc
