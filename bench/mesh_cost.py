@@ -8,8 +8,7 @@ The mesh is docs/make_meshes.py's irregular disc (rings of jittered points, Dela
 particles.  Both drop flat from 5 cm onto water (the default towel's fabric, air and water), and hang
 in air from the part of them at y >= 0.6 m (pinned by a box); CPU seconds, steps, Newton and CG iterations
 for each, and the ratio of CPU time per vertex.  The mesh takes the core's listed springs and its
-banded preconditioner in reverse Cuthill-McKee order (mesh_plane.cpp); the grid its families and
-multigrid.
+algebraic multigrid preconditioner (mesh_plane.cpp); the grid its families and geometric multigrid.
 """
 
 from __future__ import annotations

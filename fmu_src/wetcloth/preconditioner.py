@@ -10,7 +10,10 @@ each particle's frame (t1, t2, n) the t1 and t2 components each get a scalar mat
 direction in that component), factored only when the step or the masses changed much; the normal
 component gets the normal-normal entry of each particle's diagonal block of A.  Small grids solve the
 two systems exactly with banded factors; on grids whose shorter side exceeds MULTIGRID_SIDE one
-multigrid V-cycle approximates their inverse, with the banded factors on its coarsest grid only.
+multigrid V-cycle approximates their inverse, with the banded factors on its coarsest grid only.  A
+mesh's systems (``make_mesh_plane``) are sparse, over its listed springs, and on large meshes an
+algebraic multigrid cycle (pyamg's smoothed aggregation of the spring graph) takes the geometric one's
+place.
 """
 
 from __future__ import annotations

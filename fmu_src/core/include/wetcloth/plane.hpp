@@ -23,8 +23,10 @@ inline constexpr Index COARSEST_SIDE = 12;
 
 //: An algebraic multigrid hierarchy on meshes of more than ALGEBRAIC_SIZE particles, coarsened until
 //: a level has at most COARSEST_SIZE (make_mesh_plane, Python); smaller meshes are solved by the band
-//: factors alone.
-inline constexpr Index ALGEBRAIC_SIZE = 1000;
+//: factors alone.  Irregular discs landing on water and hanging in air, 1 s (docs/benchmarks.md): at
+//: 347 vertices the band took 0.24 / 0.28 s, the hierarchy 0.21 / 0.44 s; at 661 both 0.47 / 1.05 s;
+//: at 1076 the band 1.07 / 2.63 s, the hierarchy 0.83 / 2.12 s (bench/mesh_preconditioner.py).
+inline constexpr Index ALGEBRAIC_SIZE = 700;
 inline constexpr Index COARSEST_SIZE = 100;
 
 //: Factor M + scale L_c (scale = (beta h)^2, s^2) unless the factors in hand are close enough.
