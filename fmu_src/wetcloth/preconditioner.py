@@ -170,10 +170,13 @@ def make_algebraic(patterns: list, prolongators: list) -> Algebraic:
 def aggregation(laplacian, coarsest_size: int = COARSEST_SIZE) -> list:
     """The prolongators (scipy CSR, finest first) of pyamg's smoothed aggregation of a spring graph's
     ``laplacian`` (weighted by the springs' rest stiffness), coarsened until a level has at most
-    ``coarsest_size`` points; the constants its near null space."""
+    ``coarsest_size`` points; the constants its near null space.  The prolongators' Jacobi smoothing
+    is weighted row by row (Gershgorin): pyamg's default estimates a spectral radius from a random
+    vector, which would make each process's hierarchy, and so its runs, differ in the last digits."""
     import pyamg
 
     hierarchy = pyamg.smoothed_aggregation_solver(laplacian, B=np.ones((laplacian.shape[0], 1)),
+                                                  smooth=("jacobi", {"omega": 4.0 / 3.0, "weighting": "local"}),
                                                   max_coarse=coarsest_size)
     return [level.P.tocsr() for level in hierarchy.levels[:-1]]
 
