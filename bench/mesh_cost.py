@@ -8,8 +8,10 @@ The mesh is docs/make_meshes.py's irregular disc (rings of jittered points, Dela
 particles.  Both drop flat from 5 cm onto water (the default towel's fabric, air and water), and hang
 in air from the part of them at y >= 0.6 m (pinned by a box); CPU seconds, steps, Newton and CG iterations
 for each, and the ratio of CPU time per vertex.  The mesh takes the core's listed springs and its
-banded preconditioner in reverse Cuthill-McKee order (mesh_plane.cpp); the grid its families and
-multigrid.
+algebraic multigrid preconditioner (mesh_plane.cpp); the grid its families and geometric multigrid.
+Between them the grid's own cloth as a quad mesh file ("quads"), its vertices numbered along the columns
+(``--shuffle``: in a random order) rather than in the grid's order, so that it takes the mesh path:
+listed springs, face drag over triangles, the algebraic multigrid.
 """
 
 from __future__ import annotations
@@ -27,7 +29,11 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # idle BLAS threads would sp
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs"))
 import make_meshes  # noqa: E402
 
+import meshio  # noqa: E402
+import numpy as np  # noqa: E402
+
 import wetcloth  # noqa: E402
+from wetcloth.topology import build_topology  # noqa: E402
 
 
 def run(scene: wetcloth.Scene, duration: float) -> tuple[float, wetcloth.Simulation]:
@@ -37,10 +43,27 @@ def run(scene: wetcloth.Scene, duration: float) -> tuple[float, wetcloth.Simulat
     return time.process_time() - start, sim
 
 
+def rectangle_file(path: Path, scene: wetcloth.Scene, shuffle: bool) -> Path:
+    """The scene's rectangle as a quad mesh file at ``path``, its vertices along the columns or shuffled."""
+    nx, ny = scene.nx, scene.ny
+    if shuffle:  # file vertex k is grid vertex order[k]
+        order = np.random.default_rng(26).permutation(nx * ny)
+    else:
+        order = np.arange(nx * ny).reshape(ny, nx).T.ravel()
+    rank = np.argsort(order)
+    col, row = np.tile(np.arange(nx), ny), np.repeat(np.arange(ny), nx)
+    a = np.flatnonzero((col < nx - 1) & (row < ny - 1))
+    cells = rank[np.stack([a, a + 1, a + nx + 1, a + nx], axis=1)]
+    meshio.write(path, meshio.Mesh(build_topology(scene).rest_pos.T[order], [("quad", cells.astype(np.int32))]),
+                 binary=True)
+    return path
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--vertices", type=int, default=10000)
     parser.add_argument("--duration", type=float, default=0.5, help="simulated seconds (default 0.5)")
+    parser.add_argument("--shuffle", action="store_true", help="the quad mesh's vertices in a random order")
     args = parser.parse_args()
     rings = round(math.sqrt(args.vertices / math.pi))
     points, triangles = make_meshes.round_cloth(radius=make_meshes.RADIUS, rings=rings)
@@ -50,6 +73,8 @@ def main() -> None:
     make_meshes.write(path, points, triangles)
     grid = dict(nx=side, ny=side, width=size, length=size)
     mesh = dict(cloth_mesh=str(path), place_mesh="on")
+    quads = dict(cloth_mesh=str(rectangle_file(path.with_name("square.ply"), wetcloth.load_scene(**grid), args.shuffle)),
+                 place_mesh="on")
     cases = {
         "landing on water": dict(initial_tilt=0.0, initial_height=0.05),
         "hanging in air": dict(initial_tilt=0.0, initial_height=2.0, water_level=-10.0, floor_level=-20.0),
@@ -57,7 +82,7 @@ def main() -> None:
     print(f"disc of {len(points)} vertices ({rings} rings) against a {side} x {side} grid, {args.duration} s")
     for label, base in cases.items():
         results = {}
-        for kind, shape in (("grid", grid), ("mesh", mesh)):
+        for kind, shape in (("grid", grid), ("quads", quads), ("mesh", mesh)):
             extra = dict(pinned_vertices="box:-9,0.6,-9,9,9,9") if label.startswith("hanging") else {}
             seconds, sim = run(wetcloth.load_scene(**base, **shape, **extra), args.duration)
             n = sim.model.topology.n
@@ -65,7 +90,8 @@ def main() -> None:
             c = sim.solver_counts
             print(f"  {label:<17} {kind}: {n:6d} vertices  {seconds:7.1f} s CPU  steps {sim.steps:5d}  rejected "
                   f"{sim.rejected_steps:4d}  Newton {c['newton_iterations']:5d}  CG {c['cg_iterations']:6d}", flush=True)
-        print(f"  {label:<17} mesh / grid per vertex: {results['mesh'] / results['grid']:.2f}x", flush=True)
+        print(f"  {label:<17} per vertex: mesh / grid {results['mesh'] / results['grid']:.2f}x, quads / grid "
+              f"{results['quads'] / results['grid']:.2f}x", flush=True)
 
 
 if __name__ == "__main__":

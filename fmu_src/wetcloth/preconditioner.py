@@ -10,7 +10,10 @@ each particle's frame (t1, t2, n) the t1 and t2 components each get a scalar mat
 direction in that component), factored only when the step or the masses changed much; the normal
 component gets the normal-normal entry of each particle's diagonal block of A.  Small grids solve the
 two systems exactly with banded factors; on grids whose shorter side exceeds MULTIGRID_SIDE one
-multigrid V-cycle approximates their inverse, with the banded factors on its coarsest grid only.
+multigrid V-cycle approximates their inverse, with the banded factors on its coarsest grid only.  A
+mesh's systems (``make_mesh_plane``) are sparse, over its listed springs, and on large meshes an
+algebraic multigrid cycle (pyamg's smoothed aggregation of the spring graph) takes the geometric one's
+place.
 """
 
 from __future__ import annotations
@@ -19,7 +22,8 @@ from collections import namedtuple
 
 import numpy as np
 
-from wetcloth._core import COARSEST_SIDE, COMPONENTS, MULTIGRID_SIDE
+from wetcloth._core import (ALGEBRAIC_COLUMNS, ALGEBRAIC_SIZE, COARSEST_SIDE, COARSEST_SIZE, COMPONENTS,
+                            MULTIGRID_SIDE)
 
 #: Share of each stretch-spring family's stiffness in the t1 and t2 components.  The bending springs
 #: (1 % of the stretch stiffness in the presets) are left out: they would double the bandwidth
@@ -45,9 +49,21 @@ Hierarchy = namedtuple("Hierarchy", "levels coef inverse_diagonal x b r row")
 #: and ``reference_mass`` (n) kg of the last factorisation with the rest stiffness; ``shares``
 #: (2, F) each family's share in t1, t2; ``jacobian_along`` (F, n) kg and ``jacobian_mass`` (n) kg
 #: of the last factorisation from the Jacobian; ``frame`` (3, 3, n) each particle's axes t1, t2, n;
-#: ``normal`` (n) the normal component's diagonal; ``local`` (2, n_c) scratch of the band solves.
+#: ``normal`` (n) the normal component's diagonal; ``local`` (2, n_c) scratch of the band solves;
+#: ``algebraic`` a mesh's ``Algebraic`` hierarchy (no levels on a grid).  On a mesh ``order`` and
+#: ``rank`` are those of its coarsest algebraic level's band.
 Plane = namedtuple("Plane", "stiffness slots grid order rank bands rows reference reference_mass shares "
-                            "jacobian_along jacobian_mass frame normal local")
+                            "jacobian_along jacobian_mass frame normal local algebraic")
+
+#: A mesh's algebraic multigrid hierarchy (the core's mesh_plane.cpp; core.hpp's Algebraic): ``levels``
+#: (L, ALGEBRAIC_COLUMNS) int64 each level's size, first index in the per-level vectors, and first
+#: index in ``a_start``, ``p_start``, ``r_start``; every level's matrix in CSR (``a_start`` absolute
+#: positions in ``a_column``, level-local columns, ``a_value`` (COMPONENTS, entries)); ``diagonal``
+#: each row's diagonal position; the prolongators P and their transposes R in CSR; ``spring_entries``
+#: (2, T) the positions of each tension-only spring's (i, j) and (j, i) at level 0;
+#: ``inverse_diagonal``, ``x``, ``b`` (COMPONENTS, vectors); ``marker`` (n) int64 scratch.
+Algebraic = namedtuple("Algebraic", "levels a_start a_column a_value diagonal p_start p_column p_value r_start "
+                                    "r_column r_value spring_entries inverse_diagonal x b marker")
 
 
 def level_sizes(nx: int, ny: int, coarsest_side: int) -> list[tuple[int, int]]:
@@ -99,36 +115,127 @@ def make_plane(grid_x: int, grid_y: int, family_names: tuple, stiffness: np.ndar
                  bands=np.zeros((COMPONENTS, n_c, kd + 1)), rows=np.zeros((COMPONENTS, n_c, kd + 1)), reference=np.zeros(4),
                  reference_mass=np.zeros(n), shares=shares, jacobian_along=np.zeros((families, n)),
                  jacobian_mass=np.zeros(n), frame=np.repeat(np.eye(3)[:, :, None], n, axis=2), normal=np.ones(n),
-                 local=np.zeros((COMPONENTS, n_c)))
+                 local=np.zeros((COMPONENTS, n_c)), algebraic=make_algebraic([], []))
 
 
-def make_mesh_plane(n: int, pairs: np.ndarray, tension_count: int, stiffness: np.ndarray) -> Plane:
+def _csr_parts(matrix) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(indptr, indices, data) of a scipy matrix in canonical CSR (sorted, no duplicates)."""
+    matrix = matrix.tocsr()
+    matrix.sum_duplicates()
+    matrix.sort_indices()
+    return matrix.indptr.astype(np.int64), matrix.indices.astype(np.int64), matrix.data.astype(float)
+
+
+def make_algebraic(patterns: list, prolongators: list) -> Algebraic:
+    """The hierarchy's arrays for the matrices' ``patterns`` (scipy, finest first, each holding its
+    diagonal and every entry of R A P of the one before) and the ``prolongators`` (scipy) between them;
+    both empty on a grid."""
+    sizes = [pattern.shape[0] for pattern in patterns]
+    levels = np.zeros((len(sizes), ALGEBRAIC_COLUMNS), dtype=np.int64)
+    a_start, a_column, diagonal, p_start, p_column, p_value, r_start, r_column, r_value = ([] for _ in range(9))
+    entries = p_entries = r_entries = vector = a_rows = p_rows = r_rows = 0
+    for level, pattern in enumerate(patterns):
+        levels[level] = sizes[level], vector, a_rows, p_rows, r_rows
+        indptr, indices, _ = _csr_parts(pattern)
+        diagonal.append(entries + _positions(indptr, indices, np.arange(sizes[level]), np.arange(sizes[level])))
+        a_start.append(entries + indptr)
+        a_column.append(indices)
+        entries += len(indices)
+        vector += sizes[level]
+        a_rows += sizes[level] + 1
+        if level < len(prolongators):
+            for transpose, (starts, columns, values) in ((False, (p_start, p_column, p_value)),
+                                                         (True, (r_start, r_column, r_value))):
+                indptr, indices, data = _csr_parts(prolongators[level].T if transpose else prolongators[level])
+                base = r_entries if transpose else p_entries
+                starts.append(base + indptr)
+                columns.append(indices)
+                values.append(data)
+            p_entries += len(p_column[-1])
+            r_entries += len(r_column[-1])
+            p_rows += sizes[level] + 1
+            r_rows += sizes[level + 1] + 1
+
+    def joined(parts, dtype=np.int64):
+        return np.concatenate(parts).astype(dtype) if parts else np.zeros(0, dtype=dtype)
+
+    return Algebraic(levels=levels, a_start=joined(a_start), a_column=joined(a_column),
+                     a_value=np.zeros((COMPONENTS, entries)), diagonal=joined(diagonal), p_start=joined(p_start),
+                     p_column=joined(p_column), p_value=joined(p_value, float), r_start=joined(r_start),
+                     r_column=joined(r_column), r_value=joined(r_value, float),
+                     spring_entries=np.zeros((2, 0), dtype=np.int64), inverse_diagonal=np.zeros((COMPONENTS, vector)),
+                     x=np.zeros((COMPONENTS, vector)), b=np.zeros((COMPONENTS, vector)), marker=np.zeros(max(sizes, default=0), dtype=np.int64))
+
+
+def aggregation(laplacian, coarsest_size: int = COARSEST_SIZE) -> list:
+    """The prolongators (scipy CSR, finest first) of pyamg's smoothed aggregation of a spring graph's
+    ``laplacian`` (weighted by the springs' rest stiffness), coarsened until a level has at most
+    ``coarsest_size`` points; the constants its near null space.  The prolongators' Jacobi smoothing
+    is weighted row by row (Gershgorin): pyamg's default estimates a spectral radius from a random
+    vector, which would make each process's hierarchy, and so its runs, differ in the last digits."""
+    import pyamg
+
+    hierarchy = pyamg.smoothed_aggregation_solver(laplacian, B=np.ones((laplacian.shape[0], 1)),
+                                                  smooth=("jacobi", {"omega": 4.0 / 3.0, "weighting": "local"}),
+                                                  max_coarse=coarsest_size)
+    return [level.P.tocsr() for level in hierarchy.levels[:-1]]
+
+
+def make_mesh_plane(n: int, pairs: np.ndarray, tension_count: int, stiffness: np.ndarray,
+                    algebraic_size: int = ALGEBRAIC_SIZE) -> Plane:
     """The preconditioner's arrays for a mesh of n particles whose listed springs join ``pairs`` (2, S),
     the first ``tension_count`` tension-only with rest ``stiffness`` (S,) N/m (the core's mesh_plane.cpp).
 
-    Its systems are band matrices over the tension-only springs, in the reverse Cuthill-McKee order of
-    their graph (scipy), which keeps the band narrow: ``order`` lists the particles in band order,
-    ``rank`` is each particle's band position, ``kd`` the widest spring's reach in that order.
+    Its systems are sparse matrices over the tension-only springs; on more than ``algebraic_size``
+    particles (default ALGEBRAIC_SIZE) a smoothed aggregation of their graph (``aggregation``) gives
+    the coarser levels.  The coarsest level's matrices are band matrices in the reverse Cuthill-McKee
+    order of its graph (scipy), which keeps the band narrow: ``order`` lists its points in band order,
+    ``rank`` is each point's band position, ``kd`` the widest entry's reach in that order.
     """
-    from scipy.sparse import coo_matrix
+    from scipy.sparse import coo_matrix, identity
     from scipy.sparse.csgraph import reverse_cuthill_mckee
 
     first, second = pairs[:, :tension_count]
-    graph = coo_matrix((np.ones(tension_count), (first, second)), shape=(n, n)).tocsr()
-    order = np.asarray(reverse_cuthill_mckee(graph, symmetric_mode=False), dtype=np.int64)
-    rank = np.empty(n, dtype=np.int64)
-    rank[order] = np.arange(n)
-    kd = int(np.abs(rank[first] - rank[second]).max()) if tension_count else 0
-    kd = max(1, min(kd, n - 1))
+    k = stiffness[:tension_count]
+    laplacian = coo_matrix((np.concatenate([k, k, -k, -k]), (np.concatenate([first, second, first, second]),
+                                                              np.concatenate([first, second, second, first]))),
+                           shape=(n, n)).tocsr()
+    ones = coo_matrix((np.ones(2 * tension_count), (np.concatenate([first, second]), np.concatenate([second, first]))),
+                      shape=(n, n)) + identity(n)
+    patterns = [ones.tocsr()]
+    prolongators = aggregation(laplacian) if n > algebraic_size else []
+    for prolongator in prolongators:
+        magnitude = abs(prolongator)
+        patterns.append((magnitude.T @ patterns[-1] @ magnitude).tocsr())
+    algebraic = make_algebraic(patterns, prolongators)
+    indptr, indices, _ = _csr_parts(patterns[0])
+    coarsest = patterns[-1]
+    n_c = coarsest.shape[0]
+    graph = coo_matrix((np.ones(tension_count), (first, second)), shape=(n, n)) if not prolongators else coarsest
+    order = np.asarray(reverse_cuthill_mckee(graph.tocsr(), symmetric_mode=False), dtype=np.int64)
+    rank = np.empty(n_c, dtype=np.int64)
+    rank[order] = np.arange(n_c)
+    rows, columns = coarsest.nonzero()
+    kd = int(np.abs(rank[rows] - rank[columns]).max()) if n_c > 1 else 0
+    kd = max(1, min(kd, n_c - 1))
     grid = Hierarchy(levels=np.zeros((0, 4), dtype=np.int64), coef=np.zeros((COMPONENTS, 9, 0)),
                      inverse_diagonal=np.zeros((COMPONENTS, 0)), x=np.zeros((COMPONENTS, 0)),
                      b=np.zeros((COMPONENTS, 0)), r=np.zeros((COMPONENTS, 0)), row=np.zeros(0))
     count = pairs.shape[1]
     return Plane(stiffness=np.ascontiguousarray(stiffness, dtype=float), slots=np.zeros(0, dtype=np.int64), grid=grid,
-                 order=order, rank=rank, bands=np.zeros((COMPONENTS, n, kd + 1)), rows=np.zeros((COMPONENTS, n, kd + 1)),
-                 reference=np.zeros(4), reference_mass=np.zeros(n), shares=np.zeros((2, 0)),
-                 jacobian_along=np.zeros(count), jacobian_mass=np.zeros(n), frame=np.repeat(np.eye(3)[:, :, None], n, axis=2),
-                 normal=np.ones(n), local=np.zeros((COMPONENTS, n)))
+                 order=order, rank=rank, bands=np.zeros((COMPONENTS, n_c, kd + 1)),
+                 rows=np.zeros((COMPONENTS, n_c, kd + 1)), reference=np.zeros(4), reference_mass=np.zeros(n),
+                 shares=np.zeros((2, 0)), jacobian_along=np.zeros(count), jacobian_mass=np.zeros(n),
+                 frame=np.repeat(np.eye(3)[:, :, None], n, axis=2), normal=np.ones(n), local=np.zeros((COMPONENTS, n_c)),
+                 algebraic=algebraic._replace(spring_entries=np.vstack([_positions(indptr, indices, first, second),
+                                                                        _positions(indptr, indices, second, first)])))
+
+
+def _positions(indptr: np.ndarray, indices: np.ndarray, rows: np.ndarray, columns: np.ndarray) -> np.ndarray:
+    """Positions of the entries (rows, columns) in a canonical CSR pattern (each present)."""
+    size = len(indptr) - 1
+    keys = np.repeat(np.arange(size, dtype=np.int64), np.diff(indptr)) * size + indices  # ascending
+    return np.searchsorted(keys, np.asarray(rows, dtype=np.int64) * size + columns).astype(np.int64)
 
 
 def plane_for(topology) -> Plane:

@@ -31,6 +31,9 @@ WETCLOTH_BINDINGS(m) {
     m.attr("JACOBIAN_REFRESH_AFTER") = JACOBIAN_REFRESH_AFTER;
     m.attr("MULTIGRID_SIDE") = MULTIGRID_SIDE;
     m.attr("COARSEST_SIDE") = COARSEST_SIDE;
+    m.attr("ALGEBRAIC_SIZE") = ALGEBRAIC_SIZE;
+    m.attr("COARSEST_SIZE") = COARSEST_SIZE;
+    m.attr("ALGEBRAIC_COLUMNS") = static_cast<Index>(ALGEBRAIC_COLUMNS);
     m.attr("COMPONENTS") = COMPONENTS;
     m.attr("NORMAL") = NORMAL;
     m.def("refresh", [](nb::handle plane, nb::handle cloth, nb::handle mass, double scale) {

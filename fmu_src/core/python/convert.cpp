@@ -183,6 +183,30 @@ Hierarchy hierarchy_from(nb::handle h) {
     return g;
 }
 
+Algebraic algebraic_from(nb::handle h) {
+    Algebraic a;
+    a.levels = array<const Index>(h, "levels");
+    a.level_count = size_of(h.attr("levels")) / ALGEBRAIC_COLUMNS;
+    a.entries = size_of(h.attr("a_column"));
+    a.vectors = size_of(h.attr("diagonal"));
+    a.a_start = array<const Index>(h, "a_start");
+    a.a_column = array<const Index>(h, "a_column");
+    a.a_value = array<double>(h, "a_value", COMPONENTS * a.entries);
+    a.diagonal = array<const Index>(h, "diagonal");
+    a.p_start = array<const Index>(h, "p_start");
+    a.p_column = array<const Index>(h, "p_column");
+    a.p_value = array<const double>(h, "p_value", size_of(h.attr("p_column")));
+    a.r_start = array<const Index>(h, "r_start");
+    a.r_column = array<const Index>(h, "r_column");
+    a.r_value = array<const double>(h, "r_value", size_of(h.attr("r_column")));
+    a.spring_entries = array<const Index>(h, "spring_entries");
+    a.inverse_diagonal = array<double>(h, "inverse_diagonal", COMPONENTS * a.vectors);
+    a.x = array<double>(h, "x", COMPONENTS * a.vectors);
+    a.b = array<double>(h, "b", COMPONENTS * a.vectors);
+    a.marker = array<Index>(h, "marker");
+    return a;
+}
+
 Plane plane_from(nb::handle h, Index n) {
     Plane p;
     p.stiffness = array<const double>(h, "stiffness");
@@ -205,6 +229,7 @@ Plane plane_from(nb::handle h, Index n) {
     p.frame = array<double>(h, "frame", 9 * n);
     p.normal = array<double>(h, "normal", n);
     p.local = array<double>(h, "local", COMPONENTS * p.coarse_n);
+    p.algebraic = algebraic_from(h.attr("algebraic"));
     return p;
 }
 

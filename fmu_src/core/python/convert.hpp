@@ -70,6 +70,7 @@ Control control_from(nb::handle control);
 Work work_from(nb::handle work, const Cloth& cloth);
 Solver solver_from(nb::handle solver, Index n);
 Hierarchy hierarchy_from(nb::handle grid);
+Algebraic algebraic_from(nb::handle algebraic);
 Plane plane_from(nb::handle plane, Index n);
 //: The lists are the caller's (kept with the views as long as they are used).
 Contact contact_from(nb::handle contact, Index n, ContactLists* lists);

@@ -1,60 +1,223 @@
 // The plane preconditioner on a mesh (wetcloth/plane_parts.hpp): the same three components in each
 // particle's frame as on a grid (plane.cpp), each a scalar system over the mesh's tension-only springs,
-// stored as band matrices in the order that narrows their band (reverse Cuthill-McKee, computed when
-// the cloth is built), factored by band.cpp.
+// approximately inverted by one algebraic multigrid V-cycle: the prolongators of a smoothed aggregation
+// of the spring graph (built once with the cloth, preconditioner.py), Galerkin coarse matrices R A P
+// computed here at every rebuild, Gauss-Seidel sweeps as on the grid (multigrid.hpp's SWEEPS, forward
+// before the coarse correction, backward after it: the cycle is symmetric positive definite), and the
+// coarsest level's band factors (band.cpp) in the reverse Cuthill-McKee order of its graph.  A mesh of
+// at most ALGEBRAIC_SIZE particles has one level: its band factors solve the systems exactly.
 #include <cmath>
 #include <vector>
 
 #include "wetcloth/band.hpp"
+#include "wetcloth/multigrid.hpp"
 #include "wetcloth/plane.hpp"
 #include "wetcloth/plane_parts.hpp"
 
 namespace wc {
 namespace {
 
+//: Column `column` (AlgebraicColumn) of `level`'s row of the hierarchy's table.
+inline Index level_of(const Algebraic& h, Index level, Index column) { return h.levels[level * ALGEBRAIC_COLUMNS + column]; }
+
 //: Band storage of component c: row p holds entries (p, p) .. (p, p + kd) of the band order.
 inline double* band_of(Plane& plane, Index c) { return plane.bands + c * plane.coarse_n * (plane.kd + 1); }
 inline double* rows_of(Plane& plane, Index c) { return plane.rows + c * plane.coarse_n * (plane.kd + 1); }
 
-//: Component c's band zeroed, diagonal (n) on its diagonal.
-void diagonal_band(Plane& plane, Index n, Index c, const double* diagonal) {
-    const Index width = plane.kd + 1;
-    double* band = band_of(plane, c);
-    for (Index e = 0; e < n * width; ++e) band[e] = 0.0;
-    for (Index i = 0; i < n; ++i) band[plane.rank[i] * width] = diagonal[i];
-}
-
-//: Add value to entry (i, j) of component c's band, i != j particles.
-inline void add_between(Plane& plane, Index c, Index i, Index j, double value) {
-    const Index p = plane.rank[i], q = plane.rank[j];
-    const Index lo = p < q ? p : q, hi = p < q ? q : p;
-    band_of(plane, c)[lo * (plane.kd + 1) + hi - lo] += value;
+//: Component c's level-0 matrix zeroed, diagonal (n) on its diagonal.
+void diagonal_matrix(Plane& plane, Index n, Index c, const double* diagonal) {
+    Algebraic& h = plane.algebraic;
+    double* a = h.a_value + c * h.entries;
+    for (Index e = 0; e < h.a_start[n]; ++e) a[e] = 0.0;
+    for (Index i = 0; i < n; ++i) a[h.diagonal[i]] = diagonal[i];
 }
 
 inline void add_diagonal(Plane& plane, Index c, Index i, double value) {
-    band_of(plane, c)[plane.rank[i] * (plane.kd + 1)] += value;
+    plane.algebraic.a_value[c * plane.algebraic.entries + plane.algebraic.diagonal[i]] += value;
 }
 
-//: Factor component c's band; returns band_factor's info.
-Index factor_band(Plane& plane, Index c) {
-    return band_factor(band_of(plane, c), rows_of(plane, c), plane.coarse_n, plane.kd);
+//: Add value to the entries (i, j) and (j, i) of component c's level-0 matrix, i, j the ends of
+//: tension-only spring k of T.
+inline void add_between(Plane& plane, Index c, Index k, Index tension_count, double value) {
+    Algebraic& h = plane.algebraic;
+    double* a = h.a_value + c * h.entries;
+    a[h.spring_entries[k]] += value;
+    a[h.spring_entries[tension_count + k]] += value;
+}
+
+//: Component c's matrix of level + 1, R A P of `level`'s, and the inverse diagonal of `level`.  Row
+//: by row of R: marker maps each column of the coarse row to its entry (the coarse patterns hold every
+//: product, preconditioner.py).
+void galerkin(Algebraic& h, Index level, Index c) {
+    const Index n = level_of(h, level, SIZE), first = level_of(h, level, VECTOR);
+    const Index* a_rows = h.a_start + level_of(h, level, A_ROWS);
+    const Index* coarse_rows = h.a_start + level_of(h, level + 1, A_ROWS);
+    const Index* p_rows = h.p_start + level_of(h, level, P_ROWS);
+    const Index* r_rows = h.r_start + level_of(h, level, R_ROWS);
+    double* a = h.a_value + c * h.entries;  // both levels' entries (at their own positions)
+    double* inverse = h.inverse_diagonal + c * h.vectors + first;
+    for (Index i = 0; i < n; ++i) inverse[i] = 1.0 / a[h.diagonal[first + i]];
+    Index* marker = h.marker;
+    const Index coarse_n = level_of(h, level + 1, SIZE);
+    for (Index row = 0; row < coarse_n; ++row) {
+        for (Index q = coarse_rows[row]; q < coarse_rows[row + 1]; ++q) {
+            marker[h.a_column[q]] = q;
+            a[q] = 0.0;
+        }
+        for (Index t = r_rows[row]; t < r_rows[row + 1]; ++t) {
+            const Index k = h.r_column[t];
+            const double weight = h.r_value[t];
+            for (Index s = a_rows[k]; s < a_rows[k + 1]; ++s) {
+                const Index i = h.a_column[s];
+                const double ra = weight * a[s];
+                for (Index u = p_rows[i]; u < p_rows[i + 1]; ++u) a[marker[h.p_column[u]]] += ra * h.p_value[u];
+            }
+        }
+    }
+}
+
+//: Component c's coarsest matrix into its band (in the order of plane.order), factored; returns
+//: band_factor's info.
+Index factor_coarsest(Plane& plane, Index c) {
+    const Algebraic& h = plane.algebraic;
+    const Index last = h.level_count - 1, width = plane.kd + 1;
+    const Index* rows = h.a_start + level_of(h, last, A_ROWS);
+    const double* a = h.a_value + c * h.entries;
+    double* band = band_of(plane, c);
+    for (Index e = 0; e < plane.coarse_n * width; ++e) band[e] = 0.0;
+    for (Index position = 0; position < plane.coarse_n; ++position) {
+        const Index i = plane.order[position];
+        for (Index e = rows[i]; e < rows[i + 1]; ++e) {
+            const Index other = plane.rank[h.a_column[e]];
+            if (other >= position) band[position * width + other - position] = a[e];
+        }
+    }
+    return band_factor(band, rows_of(plane, c), plane.coarse_n, plane.kd);
+}
+
+//: Component c's coarse matrices from its level-0 matrix, and the coarsest one's band factors.
+Index factor_component(Plane& plane, Index c) {
+    for (Index level = 0; level + 1 < plane.algebraic.level_count; ++level) galerkin(plane.algebraic, level, c);
+    return factor_coarsest(plane, c);
+}
+
+//: The V-cycle's loops over a level's rows do C components side by side (2: t1 and t2; 3: and the
+//: normal): one pass over the pattern for all, and independent chains in each row's sums.
+template <Index C>
+struct Rows {
+    const Index* start;   // the level's rows in a_start
+    const Index* column;  // a_column
+    const Index* diagonal;
+    const double* a[C];
+    const double* inverse[C];
+    double* x[C];
+    double* b[C];
+    Index n;
+    Rows(Algebraic& h, Index level)
+        : start(h.a_start + level_of(h, level, A_ROWS)), column(h.a_column),
+          diagonal(h.diagonal + level_of(h, level, VECTOR)), n(level_of(h, level, SIZE)) {
+        const Index first = level_of(h, level, VECTOR);
+        for (Index c = 0; c < C; ++c) {
+            a[c] = h.a_value + c * h.entries;
+            inverse[c] = h.inverse_diagonal + c * h.vectors + first;
+            x[c] = h.x + c * h.vectors + first;
+            b[c] = h.b + c * h.vectors + first;
+        }
+    }
+};
+
+//: Down one level: a forward Gauss-Seidel sweep from x = 0 (only the entries left of the diagonal
+//: meet values already set), then the residual b - A x, which that sweep leaves as -U x (U the
+//: entries right of the diagonal), restricted to b of level + 1 (P^T, row by row of P).
+template <Index C>
+void down(Algebraic& h, Index level) {
+    static_assert(SWEEPS == 1, "the residual is -U x after one sweep from zero");
+    const Rows<C> m(h, level);
+    const Index coarse_first = level_of(h, level + 1, VECTOR), coarse_n = level_of(h, level + 1, SIZE);
+    const Index* p_rows = h.p_start + level_of(h, level, P_ROWS);
+    double* coarse_b[C];
+    for (Index c = 0; c < C; ++c) {
+        coarse_b[c] = h.b + c * h.vectors + coarse_first;
+        for (Index k = 0; k < coarse_n; ++k) coarse_b[c][k] = 0.0;
+    }
+    for (Index i = 0; i < m.n; ++i) {
+        double s[C];
+        for (Index c = 0; c < C; ++c) s[c] = m.b[c][i];
+        for (Index e = m.start[i]; e < m.diagonal[i]; ++e)
+            for (Index c = 0; c < C; ++c) s[c] -= m.a[c][e] * m.x[c][m.column[e]];
+        for (Index c = 0; c < C; ++c) m.x[c][i] = s[c] * m.inverse[c][i];
+    }
+    for (Index i = 0; i < m.n; ++i) {
+        double s[C] = {};
+        for (Index e = m.diagonal[i] + 1; e < m.start[i + 1]; ++e)
+            for (Index c = 0; c < C; ++c) s[c] -= m.a[c][e] * m.x[c][m.column[e]];
+        for (Index u = p_rows[i]; u < p_rows[i + 1]; ++u)
+            for (Index c = 0; c < C; ++c) coarse_b[c][h.p_column[u]] += h.p_value[u] * s[c];
+    }
+}
+
+//: Up one level, once x of level + 1 holds its correction: x += P x of level + 1, then a backward
+//: Gauss-Seidel sweep.
+template <Index C>
+void up(Algebraic& h, Index level) {
+    const Rows<C> m(h, level);
+    const Index coarse_first = level_of(h, level + 1, VECTOR);
+    const Index* p_rows = h.p_start + level_of(h, level, P_ROWS);
+    const double* coarse_x[C];
+    for (Index c = 0; c < C; ++c) coarse_x[c] = h.x + c * h.vectors + coarse_first;
+    for (Index i = 0; i < m.n; ++i)
+        for (Index u = p_rows[i]; u < p_rows[i + 1]; ++u)
+            for (Index c = 0; c < C; ++c) m.x[c][i] += h.p_value[u] * coarse_x[c][h.p_column[u]];
+    for (Index i = m.n - 1; i >= 0; --i) {
+        double s[C];
+        for (Index c = 0; c < C; ++c) s[c] = m.b[c][i];
+        for (Index e = m.start[i]; e < m.start[i + 1]; ++e)
+            for (Index c = 0; c < C; ++c) s[c] -= m.a[c][e] * m.x[c][m.column[e]];
+        for (Index c = 0; c < C; ++c) m.x[c][i] += s[c] * m.inverse[c][i];
+    }
+}
+
+//: First half of the V-cycle from b of level 0, for the first `components` components: leaves the
+//: coarsest level's right-hand side in b.
+void cycle_down(Algebraic& h, Index components) {
+    for (Index level = 0; level + 1 < h.level_count; ++level) {
+        if (components == COMPONENTS) {
+            down<COMPONENTS>(h, level);
+        } else {
+            down<NORMAL>(h, level);
+        }
+    }
+}
+
+//: Second half, once x of the coarsest level holds its solution; leaves the result in x of level 0.
+void cycle_up(Algebraic& h, Index components) {
+    for (Index level = h.level_count - 2; level >= 0; --level) {
+        if (components == COMPONENTS) {
+            up<COMPONENTS>(h, level);
+        } else {
+            up<NORMAL>(h, level);
+        }
+    }
 }
 
 }  // namespace
 
 Index mesh_factor(Plane& plane, const Cloth& cloth, const double* mass, double scale, const double* weights) {
-    const Index n = cloth.n, count = cloth.pair_count, width = plane.kd + 1;
-    diagonal_band(plane, n, 0, mass);
-    for (Index k = 0; k < cloth.pair_tension_count; ++k) {
+    const Index n = cloth.n, count = cloth.pair_count, tension = cloth.pair_tension_count;
+    diagonal_matrix(plane, n, 0, mass);
+    for (Index k = 0; k < tension; ++k) {
         const double w = 0.5 * scale * weights[k];
         const Index i = cloth.pairs[k], j = cloth.pairs[count + k];
         add_diagonal(plane, 0, i, w);
         add_diagonal(plane, 0, j, w);
-        add_between(plane, 0, i, j, -w);
+        add_between(plane, 0, k, tension, -w);
     }
-    const Index info = factor_band(plane, 0);
+    const Index info = factor_component(plane, 0);
     if (info != 0) return info;
-    for (Index e = 0; e < n * width; ++e) {  // t2's system is t1's
+    Algebraic& h = plane.algebraic;  // t2's system is t1's
+    for (Index e = 0; e < h.entries; ++e) h.a_value[h.entries + e] = h.a_value[e];
+    for (Index e = 0; e < h.vectors; ++e) h.inverse_diagonal[h.vectors + e] = h.inverse_diagonal[e];
+    for (Index e = 0; e < plane.coarse_n * (plane.kd + 1); ++e) {
         band_of(plane, 1)[e] = band_of(plane, 0)[e];
         rows_of(plane, 1)[e] = rows_of(plane, 0)[e];
     }
@@ -95,7 +258,7 @@ void mesh_follow_cloth(Plane& plane, const Cloth& cloth, const double* pos) {
 }
 
 Index mesh_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const Work& work) {
-    const Index n = cloth.n, count = cloth.pair_count;
+    const Index n = cloth.n, count = cloth.pair_count, tension = cloth.pair_tension_count;
     plane.reference[1] = plane.reference[2] = 0.0;  // the rest-stiffness factors are overwritten
     plane.reference[3] = 1.0;
     Index result = 1;
@@ -104,9 +267,9 @@ Index mesh_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double*
     for (Index c = 0; c < COMPONENTS; ++c) {
         double* diagonal = c == NORMAL ? plane.normal : in_plane.data();
         axis_diagonal<false>(plane, n, c, mass, nullptr, work.blocks, diagonal);
-        diagonal_band(plane, n, c, diagonal);
+        diagonal_matrix(plane, n, c, diagonal);
         const double* t = plane.frame + 3 * c * n;
-        for (Index k = 0; k < cloth.pair_tension_count; ++k) {  // bending left out whole, as on a grid
+        for (Index k = 0; k < tension; ++k) {  // bending left out whole, as on a grid
             const Index i = cloth.pairs[k], j = cloth.pairs[count + k];
             const double along = work.pair_along[k], across = work.pair_across[k];
             if (along == 0.0 && across == 0.0) continue;
@@ -114,32 +277,47 @@ Index mesh_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double*
                                                u[count + k], u[2 * count + k], along, across);
             add_diagonal(plane, c, i, s.at_i);
             add_diagonal(plane, c, j, s.at_j);
-            if (cloth.free[i] != 0.0 && cloth.free[j] != 0.0) add_between(plane, c, i, j, s.between);
+            if (cloth.free[i] != 0.0 && cloth.free[j] != 0.0) add_between(plane, c, k, tension, s.between);
         }
-        if (factor_band(plane, c) == 0) continue;
-        diagonal_band(plane, n, c, diagonal);  // not positive definite (round-off on a crumpled cloth)
-        if (factor_band(plane, c) != 0) result = -1;
+        if (factor_component(plane, c) == 0) continue;
+        diagonal_matrix(plane, n, c, diagonal);  // not positive definite (round-off on a crumpled cloth)
+        if (factor_component(plane, c) != 0) result = -1;
     }
     return result;
 }
 
 void mesh_apply(Plane& plane, Index n, const double* free, const double* r, double* z) {
+    // The normal component goes through the cycle and the band solves when it has a system
+    // (mesh_systems_from_jacobian), else it is divided by its diagonal.
     const double* f = plane.frame;
-    double* local = plane.local;  // (3, n) in band order
-    const bool normal_system = plane.reference[3] != 0.0;
-    for (Index i = 0; i < n; ++i) {
-        const Index p = plane.rank[i];
-        for (Index c = 0; c < COMPONENTS; ++c)
-            local[c * n + p] = f[3 * c * n + i] * r[i] + f[(3 * c + 1) * n + i] * r[n + i] + f[(3 * c + 2) * n + i] * r[2 * n + i];
-        if (!normal_system) local[NORMAL * n + p] /= plane.normal[i];
+    Algebraic& h = plane.algebraic;
+    const Index components = plane.reference[3] != 0.0 ? COMPONENTS : NORMAL;
+    for (Index c = 0; c < COMPONENTS; ++c) {
+        double* b = h.b + c * h.vectors;
+        for (Index i = 0; i < n; ++i)
+            b[i] = f[3 * c * n + i] * r[i] + f[(3 * c + 1) * n + i] * r[n + i] + f[(3 * c + 2) * n + i] * r[2 * n + i];
     }
-    band_solve_two(plane.bands, plane.rows, local, n, plane.kd);
-    if (normal_system) band_solve_one(band_of(plane, NORMAL), rows_of(plane, NORMAL), local + NORMAL * n, n, plane.kd);
-    for (Index i = 0; i < n; ++i) {
-        const Index p = plane.rank[i];
-        const double x0 = local[p], x1 = local[n + p], x2 = local[2 * n + p];
-        for (Index c = 0; c < 3; ++c) z[c * n + i] = free[i] * (f[c * n + i] * x0 + f[(3 + c) * n + i] * x1 + f[(6 + c) * n + i] * x2);
-    }
+    double* normal = h.x + NORMAL * h.vectors;
+    if (components == NORMAL)
+        for (Index i = 0; i < n; ++i) normal[i] = h.b[NORMAL * h.vectors + i] / plane.normal[i];
+    cycle_down(h, components);
+    const Index coarse_n = plane.coarse_n, last = level_of(h, h.level_count - 1, VECTOR);
+    double* local = plane.local;  // (COMPONENTS, n_c) in band order
+    for (Index c = 0; c < components; ++c)
+        for (Index position = 0; position < coarse_n; ++position)
+            local[c * coarse_n + position] = h.b[c * h.vectors + last + plane.order[position]];
+    band_solve_two(plane.bands, plane.rows, local, coarse_n, plane.kd);
+    if (components == COMPONENTS)
+        band_solve_one(band_of(plane, NORMAL), rows_of(plane, NORMAL), local + NORMAL * coarse_n, coarse_n, plane.kd);
+    for (Index c = 0; c < components; ++c)
+        for (Index position = 0; position < coarse_n; ++position)
+            h.x[c * h.vectors + last + plane.order[position]] = local[c * coarse_n + position];
+    cycle_up(h, components);
+    const double* x0 = h.x;
+    const double* x1 = h.x + h.vectors;
+    for (Index i = 0; i < n; ++i)
+        for (Index c = 0; c < 3; ++c)
+            z[c * n + i] = free[i] * (f[c * n + i] * x0[i] + f[(3 + c) * n + i] * x1[i] + f[(6 + c) * n + i] * normal[i]);
 }
 
 }  // namespace wc

@@ -123,7 +123,9 @@ Index refresh(Plane& plane, const Cloth& cloth, const double* mass, double scale
 }
 
 bool jacobian_refresh_pays(const Plane& plane, double iterations) {
-    // On banded grids only: a multigrid hierarchy's Galerkin products would cost more.
+    // On banded grids and meshes only: a multigrid hierarchy's Galerkin products would cost more.  On a
+    // mesh's algebraic hierarchy (10k-vertex disc, 0.4 s landing; 0.25 s hanging) refreshing after every
+    // solve of more than 1 CG iteration cut the CG iterations by 21 % (10 %) but took 12 % (10 %) more time.
     return banded(plane) && iterations > JACOBIAN_REFRESH_AFTER * 0.25 * static_cast<double>(plane.kd);
 }
 

@@ -189,6 +189,39 @@ struct Hierarchy {
     double* row = nullptr;
 };
 
+//: Columns of Algebraic::levels.
+enum AlgebraicColumn : Index { SIZE = 0, VECTOR = 1, A_ROWS = 2, P_ROWS = 3, R_ROWS = 4, ALGEBRAIC_COLUMNS = 5 };
+
+//: A mesh's algebraic multigrid hierarchy (mesh_plane.cpp; aggregation from the spring graph, built once
+//: in Python): levels (L, ALGEBRAIC_COLUMNS) int64 per level its size n_l, its first index in the
+//: per-level vectors, and its first index in a_start, p_start and r_start.  Level l's matrix in CSR:
+//: rows a_start[A_ROWS + i] .. a_start[A_ROWS + i + 1] of a_column (level-local columns) and of
+//: a_value (COMPONENTS, entries); diagonal (vectors) the position of each row's diagonal entry.  For
+//: l < L - 1 the prolongator P_l (n_l, n_{l+1}) in p_start, p_column, p_value and its transpose R_l in
+//: r_start, r_column, r_value.  spring_entries (2, T) the positions of each tension-only spring's
+//: (i, j) and (j, i) entries at level 0; inverse_diagonal, x, b, r (COMPONENTS, vectors); marker
+//: (n_0) scratch.  The coarsest level is solved by the plane's band factors.  A grid has none (L = 0).
+struct Algebraic {
+    Index level_count = 0;
+    Index entries = 0, vectors = 0;
+    const Index* levels = nullptr;
+    const Index* a_start = nullptr;
+    const Index* a_column = nullptr;
+    double* a_value = nullptr;
+    const Index* diagonal = nullptr;
+    const Index* p_start = nullptr;
+    const Index* p_column = nullptr;
+    const double* p_value = nullptr;
+    const Index* r_start = nullptr;
+    const Index* r_column = nullptr;
+    const double* r_value = nullptr;
+    const Index* spring_entries = nullptr;
+    double* inverse_diagonal = nullptr;
+    double* x = nullptr;
+    double* b = nullptr;
+    Index* marker = nullptr;
+};
+
 //: The plane preconditioner (plane.cpp): per-spring stiffness (F, n) N/m; slots (F) each family's
 //: stencil slot (-1: left out); the hierarchy; on the coarsest level order (n_c) the padded index
 //: of each band position and rank (rank_size) its inverse (-1 off the grid); bands and rows
@@ -196,7 +229,8 @@ struct Hierarchy {
 //: s2, factored?, from the Jacobian?, normal component by its system (1) or its diagonal (0)?],
 //: reference_mass (n) kg; shares (2, F); jacobian_along (F, n)
 //: kg, jacobian_mass (n) kg; frame (3, 3, n) each particle's axes t1, t2, n; normal (n) the normal
-//: component's diagonal (kg); local (COMPONENTS, n_c).
+//: component's diagonal (kg); local (COMPONENTS, n_c); algebraic a mesh's hierarchy, whose coarsest
+//: level order and rank number (a mesh has no grid levels).
 struct Plane {
     Index families = 0;
     const double* stiffness = nullptr;
@@ -217,6 +251,7 @@ struct Plane {
     double* frame = nullptr;
     double* normal = nullptr;
     double* local = nullptr;
+    Algebraic algebraic;  // a mesh's hierarchy (mesh_plane.cpp)
 };
 
 //: Self-collision's candidate lists and scratch, owned by the core (self_contact/*.cpp): the

@@ -21,13 +21,21 @@ inline constexpr double JACOBIAN_REFRESH_AFTER = 1.0;
 inline constexpr Index MULTIGRID_SIDE = 40;
 inline constexpr Index COARSEST_SIDE = 12;
 
+//: An algebraic multigrid hierarchy on meshes of more than ALGEBRAIC_SIZE particles, coarsened until
+//: a level has at most COARSEST_SIZE (make_mesh_plane, Python); smaller meshes are solved by the band
+//: factors alone.  Irregular discs landing on water and hanging in air, 1 s (docs/benchmarks.md): at
+//: 347 vertices the band took 0.24 / 0.28 s, the hierarchy 0.21 / 0.44 s; at 661 both 0.47 / 1.05 s;
+//: at 1076 the band 1.07 / 2.63 s, the hierarchy 0.83 / 2.12 s (bench/mesh_preconditioner.py).
+inline constexpr Index ALGEBRAIC_SIZE = 700;
+inline constexpr Index COARSEST_SIZE = 100;
+
 //: Factor M + scale L_c (scale = (beta h)^2, s^2) unless the factors in hand are close enough.
 //: Returns 1 if it factored, 0 if not, -1 if a matrix was not positive definite.
 Index refresh(Plane& plane, const Cloth& cloth, const double* mass, double scale);
 
 //: Whether the in-plane systems are solved by the banded factors alone (no multigrid cycle: a small
-//: grid, or a mesh, whose Plane has no grid levels).
-inline bool banded(const Plane& plane) { return plane.grid.level_count <= 1; }
+//: grid, or a small mesh, whose Plane has no grid levels and one algebraic level).
+inline bool banded(const Plane& plane) { return plane.grid.level_count <= 1 && plane.algebraic.level_count <= 1; }
 
 //: Whether factoring from the Jacobian pays after a solve of `iterations` CG iterations.
 bool jacobian_refresh_pays(const Plane& plane, double iterations);

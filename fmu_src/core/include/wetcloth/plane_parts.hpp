@@ -5,8 +5,8 @@
 
 namespace wc {
 
-//: Whether a Plane is a mesh's: no grid hierarchy; its band positions order (n) particles, rank (n)
-//: is each particle's band position, and its in-plane components share one system.
+//: Whether a Plane is a mesh's: no grid hierarchy but an algebraic one (core.hpp's Algebraic), whose
+//: coarsest level's points the band positions order (order (n_c), rank (n_c) each point's position).
 inline bool mesh_plane(const Plane& plane) { return plane.grid.level_count == 0; }
 
 //: out[i] = mass_i + t_i^T (D_i + B_i) t_i for the frame's axis c (t1, t2, n); without WITH_SPRINGS
@@ -47,8 +47,9 @@ inline Coupling spring_coupling(double tix, double tiy, double tiz, double tjx, 
 }
 
 //: A mesh's M + scale L / 2 (L the Laplacian of its tension-only springs weighted by `weights` (S),
-//: bending left out as on the grid), factored for both in-plane components: half of every spring's
-//: stiffness in each, whatever its direction.  Returns 0, or band_factor's info.
+//: bending left out as on the grid), its coarse levels and coarsest band factors, for both in-plane
+//: components: half of every spring's stiffness in each, whatever its direction.  Returns 0, or
+//: band_factor's info.
 Index mesh_factor(Plane& plane, const Cloth& cloth, const double* mass, double scale, const double* weights);
 
 //: Each particle's frame: n the normal of its triangles (area-weighted), t1, t2 completing it

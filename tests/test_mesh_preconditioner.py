@@ -1,0 +1,150 @@
+"""A mesh's plane preconditioner (the core's ``mesh_plane.cpp``): the algebraic multigrid V-cycle of
+large meshes (smoothed aggregation of the spring graph, Galerkin coarse matrices, Gauss-Seidel sweeps,
+band factors on the coarsest level) against the matrices it approximates, assembled here with scipy,
+and the band factors alone that small meshes keep."""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse
+
+import wetcloth
+from wetcloth import _core
+from wetcloth._core import ALGEBRAIC_SIZE
+from wetcloth.model import Model
+from wetcloth.preconditioner import make_mesh_plane
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs"))
+import make_meshes  # noqa: E402
+
+EPS = np.finfo(float).eps
+#: The step of a 1/30 s BDF2 step (beta = 2/3); 20 rings: ~1260 vertices, more than ALGEBRAIC_SIZE.
+SCALE = (2.0 / 3.0 / 30.0) ** 2
+RINGS = 20
+
+
+@pytest.fixture(scope="module")
+def disc(tmp_path_factory):
+    """(model, unevenly wet masses (n) kg, (band factors alone, algebraic hierarchy)) of an irregular
+    triangle disc, both preconditioners factored for those masses and SCALE."""
+    points, triangles = make_meshes.round_cloth(rings=RINGS)
+    path = tmp_path_factory.mktemp("cloth") / "disc.ply"
+    make_meshes.write(path, points, triangles)
+    model = Model(wetcloth.load_scene(cloth_mesh=str(path), place_mesh="on"))
+    topology = model.topology
+    assert topology.n > ALGEBRAIC_SIZE
+    mass = model.dry_mass * np.random.default_rng(7).uniform(1.0, 4.0, topology.n)
+    planes = []
+    for size in (topology.n, ALGEBRAIC_SIZE):
+        planes.append(make_mesh_plane(topology.n, topology.pairs, topology.pair_tension_count, topology.pair_stiffness,
+                                      algebraic_size=size))
+        assert _core.refresh(planes[-1], model.cloth, mass, SCALE) == 1
+    return model, mass, planes
+
+
+def system(topology, mass):
+    """``M + s L / 2``, L the Laplacian of the tension-only springs weighted by their stiffness: each
+    in-plane component's matrix (half of every spring in each), assembled here with scipy."""
+    t = topology.pair_tension_count
+    i, j = topology.pairs[:, :t]
+    w = 0.5 * SCALE * topology.pair_stiffness[:t]
+    laplacian = scipy.sparse.coo_matrix((np.concatenate([w, w, -w, -w]), (np.concatenate([i, j, i, j]),
+                                                                         np.concatenate([i, j, j, i]))),
+                                        shape=(topology.n, topology.n))
+    return (laplacian + scipy.sparse.diags(mass)).tocsr()
+
+
+def level_matrices(plane, component):
+    """Each level's matrix of ``component`` and each prolongator, as scipy matrices read from the plane."""
+    h = plane.algebraic
+    matrices, prolongators = [], []
+    for level, (size, _, a_rows, p_rows, _) in enumerate(h.levels):
+        start = h.a_start[a_rows:a_rows + size + 1]
+        entries = slice(start[0], start[-1])
+        matrices.append(scipy.sparse.csr_matrix((h.a_value[component, entries], h.a_column[entries], start - start[0]),
+                                                shape=(size, size)))
+        if level + 1 < len(h.levels):
+            start = h.p_start[p_rows:p_rows + size + 1]
+            entries = slice(start[0], start[-1])
+            prolongators.append(scipy.sparse.csr_matrix((h.p_value[entries], h.p_column[entries], start - start[0]),
+                                                        shape=(size, h.levels[level + 1, 0])))
+    return matrices, prolongators
+
+
+def test_coarse_matrices_are_the_galerkin_products(disc):
+    """Level 0 is M + s L / 2: the same positive terms (a mass and fewer than 10 springs) added in
+    another order, so within 10 eps of the largest entry (measured 1.3 eps).  Each coarser level is
+    P^T A P of the one before: a coarse entry sums at most a few hundred products, so its rounding is
+    at most that many eps times the sum of their magnitudes, (|P|^T |A| |P|) entrywise: 1e3 eps of it
+    (measured 1.7 eps)."""
+    model, mass, (_, plane) = disc
+    matrices, prolongators = level_matrices(plane, 0)
+    assert len(matrices) >= 3 and matrices[-1].shape[0] <= 100
+    exact = system(model.topology, mass)
+    assert abs(matrices[0] - exact).max() <= 10 * EPS * abs(exact).max()
+    for fine, coarse, p in zip(matrices, matrices[1:], prolongators):
+        bound = (abs(p).T @ abs(fine) @ abs(p)).toarray()
+        assert np.all(np.abs(coarse.toarray() - (p.T @ fine @ p).toarray()) <= 1e3 * EPS * bound)
+    second, _ = level_matrices(plane, 1)  # t2's system is t1's
+    assert all((a != b).nnz == 0 for a, b in zip(matrices, second))
+
+
+def test_v_cycle_reduces_the_error_of_its_own_matrix(disc):
+    """With flat frames P^-1 = (B^-1, B^-1, 1 / normal) on the t1, t2, n components, B = M + s L / 2.
+    The band factors alone invert it to round-off (relative 1e-10: condition number of B 3e3 times
+    eps; measured 1e-15); one V-cycle of the hierarchy leaves at most a quarter of the error in the
+    B-norm (measured 0.085 and 0.089: a V(1,1) cycle of smoothed aggregation on a 2D Laplacian, as the
+    grid's geometric cycle's 0.11-0.13 in test_preconditioner.py)."""
+    model, mass, planes = disc
+    n = model.topology.n
+    matrix = system(model.topology, mass)
+    errors = np.random.default_rng(3).standard_normal((2, n))
+    r = np.vstack([matrix @ errors[0], matrix @ errors[1], np.ones(n)])
+    for plane, bound in zip(planes, (1e-10, 0.25)):
+        z = np.zeros_like(r)
+        _core.apply(plane, np.ones(n), r, z)
+        for c in range(2):
+            left = errors[c] - z[c]
+            reduction = np.sqrt(left @ matrix @ left / (errors[c] @ matrix @ errors[c]))
+            assert reduction <= bound, (len(plane.algebraic.levels), c, reduction)
+        assert np.array_equal(z[2], r[2] / plane.normal)
+
+
+def test_v_cycle_is_symmetric_positive_definite(disc):
+    """x^T P^-1 y = y^T P^-1 x for random x, y, and x^T P^-1 x > 0, in crumpled frames with the normal
+    component's own system (as the fixed steps set it): what CG needs of a preconditioner.  P^-1 is
+    applied in about 100 rounded operations per value (frames, two sweeps, restriction and interpolation
+    on each of 3 levels, the band solve), so the products agree within 100 eps |x| |P^-1 y|."""
+    model, mass, (_, plane) = disc
+    topology, n = model.topology, model.topology.n
+    rng = np.random.default_rng(1)
+    pos = topology.rest_pos + rng.normal(scale=3e-3, size=(3, n))
+    _core.follow_cloth(plane, model.cloth, pos)
+    _core.refresh(plane, model.cloth, mass, SCALE)
+    h = plane.algebraic
+    h.a_value[2] = h.a_value[0]  # the normal component: the in-plane system scaled by a positive diagonal
+    h.inverse_diagonal[2] = h.inverse_diagonal[0]
+    plane.bands[2], plane.rows[2] = plane.bands[0], plane.rows[0]
+    plane.reference[3] = 1.0
+    free = np.ones(n)
+    for _ in range(5):
+        x, y = rng.standard_normal((2, 3, n))
+        px, py = np.zeros_like(x), np.zeros_like(y)
+        _core.apply(plane, free, x, px)
+        _core.apply(plane, free, y, py)
+        assert abs(np.sum(x * py) - np.sum(y * px)) <= 100 * EPS * np.linalg.norm(x) * np.linalg.norm(py)
+        assert np.sum(x * px) > 0.0
+
+
+def test_the_hierarchy_is_the_same_every_time_it_is_built(disc):
+    """pyamg's default smoothing of the prolongators starts a spectral radius estimate from a random
+    vector; the weighting preconditioner.aggregation asks for does not, so that every process builds the
+    same prolongators and repeats the same run to the bit."""
+    model, _, (_, plane) = disc
+    topology = model.topology
+    np.random.seed(1)  # whatever the global random state
+    again = make_mesh_plane(topology.n, topology.pairs, topology.pair_tension_count, topology.pair_stiffness)
+    for name in ("levels", "a_start", "a_column", "p_start", "p_column", "p_value", "r_value", "spring_entries"):
+        assert np.array_equal(getattr(again.algebraic, name), getattr(plane.algebraic, name)), name
