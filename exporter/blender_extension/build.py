@@ -28,8 +28,9 @@ EXTENSION_ID = "wetcloth"
 #: extension format) to 5.0 ship Python 3.11, 5.1 and later Python 3.13.
 BLENDER_VERSIONS = {"cp311": ("4.2.0", "5.1.0"), "cp313": ("5.1.0", None)}
 #: What the bake needs beyond Blender's own numpy and USD, bundled as wheels (the version this Python runs):
-#: scipy, with which a mesh cloth's preconditioner orders its particles (reverse Cuthill-McKee).
-DEPENDENCIES = ("scipy",)
+#: scipy, with which a mesh cloth's preconditioner orders its particles (reverse Cuthill-McKee), and
+#: pyamg, whose aggregation gives the multigrid levels of a mesh of more than ALGEBRAIC_SIZE vertices.
+DEPENDENCIES = ("scipy", "pyamg")
 #: Where dependency wheels are kept once pip has downloaded them (as the Makefile keeps bpy's).
 WHEEL_CACHE = Path(os.environ.get("WETCLOTH_WHEELS", Path.home() / ".cache" / "wetcloth" / "wheels"))
 #: Blender's platform names of the machines a wheel can be built on here.

@@ -26,6 +26,7 @@ tests/test_blender_extension.py):
 """
 
 import contextlib
+import importlib.util
 import io
 import json
 import os
@@ -229,6 +230,7 @@ def mesh_cloth_over_a_cup(spec):
     evaluated = cloth.evaluated_get(bpy.context.evaluated_depsgraph_get())
     out["played_faces"] = sorted(p.loop_total for p in evaluated.data.polygons)
     out["imported"] = sorted(name for name in ("meshio", "trimesh") if name in sys.modules)
+    out["importable"] = {name: importlib.util.find_spec(name) is not None for name in ("pyamg", "scipy")}
     return out
 
 
