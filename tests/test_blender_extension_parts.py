@@ -233,10 +233,10 @@ def test_a_wheel_blender_cannot_load_is_refused(tmp_path, capsys, name, message)
     assert not (tmp_path / "out" / "wetcloth-0.1.0.zip").exists()
 
 
-def test_given_wheels_are_bundled_as_they_are_one_per_python_with_scipy_for_each(tmp_path, capsys):
-    """The wetcloth wheels given, and a scipy wheel (the version this Python runs) for each one's Python
-    (from the wheel cache, downloaded there by pip the first time)."""
-    import scipy
+def test_given_wheels_are_bundled_as_they_are_one_per_python_with_dependencies_for_each(tmp_path, capsys):
+    """The wetcloth wheels given, and a scipy and a pyamg wheel (the versions this Python runs) for each
+    one's Python (from the wheel cache, downloaded there by pip the first time)."""
+    from importlib import metadata
 
     wheels = []
     for tag in ("cp311", "cp313"):
@@ -247,11 +247,13 @@ def test_given_wheels_are_bundled_as_they_are_one_per_python_with_scipy_for_each
     assert cli_main(["blender-extension", "--out", str(tmp_path), *given]) == 0
     with zipfile.ZipFile(tmp_path / "wetcloth-0.1.0.zip") as archive:
         names = archive.namelist()
-        scipy_wheels = [name for name in names if name.startswith("wheels/scipy-")]
-        assert sorted(set(names) - set(scipy_wheels)) == ["__init__.py", "blender_manifest.toml"] + [
+        bundled = {name: [n for n in names if n.startswith(f"wheels/{name}-")] for name in ("scipy", "pyamg")}
+        dependencies = [n for found in bundled.values() for n in found]
+        assert sorted(set(names) - set(dependencies)) == ["__init__.py", "blender_manifest.toml"] + [
             f"wheels/{wheel.name}" for wheel in wheels]
         assert all(archive.read(f"wheels/{wheel.name}") == wheel.read_bytes() for wheel in wheels)
-        assert [name.split("-")[1:3] for name in sorted(scipy_wheels)] == [[scipy.__version__, "cp311"],
-                                                                           [scipy.__version__, "cp313"]]
+        for name, found in bundled.items():
+            version = metadata.version(name)
+            assert [n.split("-")[1:3] for n in sorted(found)] == [[version, "cp311"], [version, "cp313"]]
     assert cli_main(["blender-extension", "--out", str(tmp_path / "again"), *given[:2], *given[:2]]) == 2
     assert "two wheels for one Python" in capsys.readouterr().err
