@@ -193,22 +193,32 @@ Index collider_contact(Index n, const Physics& phys, const double* start, double
     return touching;
 }
 
+namespace {
+
+//: The first collider that particle i of pos (3, n) touches: within thickness / 2 of it, up to rounding
+//: (where collider_contact puts a particle), its normal there into nrm; -1 if none.
+Index touched_collider(const Physics& phys, Index n, Index i, const double* pos, double* nrm) {
+    const double reach = 0.5 * phys.thickness * (1.0 + 1e-9);
+    const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+    for (Index k = 0; k < phys.collider_count; ++k) {
+        if (collider_distance(phys, k, p, 2.0 * reach, nrm) <= reach) return k;
+    }
+    return -1;
+}
+
+}  // namespace
+
 Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const double* vel, double* free, double* held) {
     Index holding = 0;
     if (phys.collider_count == 0) return 0;
-    const double reach = 0.5 * phys.thickness * (1.0 + 1e-9);
     for (Index i = 0; i < n; ++i) {
         if (free[i] == 0.0 || vel[i] != 0.0 || vel[n + i] != 0.0 || vel[2 * n + i] != 0.0) continue;
-        const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
-        for (Index k = 0; k < phys.collider_count; ++k) {
-            double nrm[3];
-            if (collider_distance(phys, k, p, 2.0 * reach, nrm) <= reach) {
-                free[i] = 0.0;
-                held[i] = collider_held(k);
-                holding += 1;
-                break;
-            }
-        }
+        double nrm[3];
+        const Index k = touched_collider(phys, n, i, pos, nrm);
+        if (k < 0) continue;
+        free[i] = 0.0;
+        held[i] = collider_held(k);
+        holding += 1;
     }
     return holding;
 }
@@ -236,17 +246,11 @@ Index release_from_colliders(Index n, const Physics& phys, const double* pos, co
 Index collider_history(Index n, const Physics& phys, const double* pos, const double* vel, double* prev_pos,
                        double* prev_vel, double h) {
     Index agreed = 0;
-    const double reach = 0.5 * phys.thickness * (1.0 + 1e-9);  // where collider_contact put them, up to rounding
     for (Index i = 0; i < n; ++i) {
-        const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
-        for (Index k = 0; k < phys.collider_count; ++k) {
-            double nrm[3];
-            if (collider_distance(phys, k, p, 2.0 * reach, nrm) <= reach) {
-                agreed += 1;
-                normal_history(n, i, nrm, pos, vel, prev_pos, prev_vel, h);
-                break;
-            }
-        }
+        double nrm[3];
+        if (touched_collider(phys, n, i, pos, nrm) < 0) continue;
+        agreed += 1;
+        normal_history(n, i, nrm, pos, vel, prev_pos, prev_vel, h);
     }
     return agreed;
 }
