@@ -154,24 +154,14 @@ void gather(const Index* elements, Index count, int width, Index k, Index mesh, 
     }
 }
 
-//: When along the step the pair must be treated (time_of_contact), or CLEAR; `near` whether its motion
-//: can bring it within `gap` (m) at all.
-double contact_when(const Motion& mo, double start, double gap, bool& near) {
-    near = start - motion_bound(mo.kind, mo.p[0], mo.p[1], mo.p[2], mo.p[3]) < gap;
-    if (!near) return CLEAR;
-    const double minimum = py_min(SAFE_FRACTION * gap, 0.5 * start);
-    return time_of_contact(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3], mo.p[0], mo.p[1], mo.p[2], mo.p[3], start,
-                           minimum);
-}
-
 //: Treat one pair if it needs it (as self-collision's settle_pair, at distance gap); returns whether it did.
 bool settle_pair(const Pair& pair, double start, const Physics& phys, double gap, Index n, const double* mass,
                  const double* free, const double* x0, double* x1, double* v1, ContactLists& lists) {
     const Motion mo = motion_of(pair, phys.meshes, n, mass, free, x0, x1);
     if (mo.inverse.sum() == 0.0) return false;
-    bool near = false;
-    const double when = contact_when(mo, start, gap, near);
-    if (!near) return false;
+    const ContactTime ct = contact_time(mo.kind, mo.x, mo.p, start, gap);
+    if (!ct.near) return false;
+    const double when = ct.when;
     const double t = when == CLEAR ? 1.0 : when;
     Vec3 q[4];
     for (int k = 0; k < 4; ++k) q[k] = along(mo.x[k], t, mo.p[k]);
@@ -290,9 +280,8 @@ int collider_edge_contact(const Contact& contact, ContactLists& lists, const Phy
                 movable = movable || (s >= 0 && free[s] != 0.0 && stopped[static_cast<std::size_t>(s)] == 0);
             }
             if (!movable) continue;
-            bool near = false;
             const Motion mo = motion_of(pair, phys.meshes, n, mass, free, x0, x1);
-            if (contact_when(mo, start[j], target_of(pair, reach), near) == CLEAR) continue;
+            if (contact_time(mo.kind, mo.x, mo.p, start[j], target_of(pair, reach)).when == CLEAR) continue;
             unsafe += 1;
             for (int k = 0; k < 4; ++k) {
                 const Index s = pair[P_POINTS + k];

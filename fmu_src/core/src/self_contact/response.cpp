@@ -64,20 +64,16 @@ void start_distances(const Contact& contact, Index n, const double* x0, Index co
     }
 }
 
-struct ContactTime {
-    double when;  // fraction of the step at which the pair must be treated, or CLEAR
-    bool near;    // whether it can come within the thickness at all
-};
-
+//: The ContactTime of candidate particles idx, start_distance (m) apart at the step's start, to be kept
+//: `thickness` apart over the step from x0 to x1.
 inline ContactTime contact_time(int kind, const Index idx[4], double start_distance, double thickness, Index n,
                                 const double* x0, const double* x1) {
-    const Vec3 a0 = point(x0, n, idx[0]), b0 = point(x0, n, idx[1]), c0 = point(x0, n, idx[2]),
-               d0 = point(x0, n, idx[3]);
-    const Vec3 pa = motion(x0, x1, n, idx[0]), pb = motion(x0, x1, n, idx[1]), pc = motion(x0, x1, n, idx[2]),
-               pd = motion(x0, x1, n, idx[3]);
-    if (start_distance - motion_bound(kind, pa, pb, pc, pd) >= thickness) return {CLEAR, false};
-    const double minimum = py_min(SAFE_FRACTION * thickness, 0.5 * start_distance);
-    return {time_of_contact(kind, a0, b0, c0, d0, pa, pb, pc, pd, start_distance, minimum), true};
+    Vec3 x[4], p[4];
+    for (int k = 0; k < 4; ++k) {
+        x[k] = point(x0, n, idx[k]);
+        p[k] = motion(x0, x1, n, idx[k]);
+    }
+    return contact_time(kind, x, p, start_distance, thickness);
 }
 
 //: Particle k's inverse mass in a push, 0 if it is held (bit k of `held`).
