@@ -17,6 +17,7 @@ import numpy as np
 
 from wetcloth._core import COLLIDER_COLUMNS, MESH_COLUMNS
 from wetcloth.errors import ParameterError
+from wetcloth.mesh_file import MeshFile, locate, triangle_areas
 
 #: All mesh colliders' arrays, as the core's ColliderMeshes: ``headers`` (k, MESH_COLUMNS) each mesh's
 #: first cell, grid origin (m), cell side (m), cells along x, y, z, solid flag and bounding box;
@@ -143,8 +144,6 @@ def mesh_of(collider, name: str = "collider_file") -> tuple[np.ndarray, np.ndarr
     closed) or its surface given as arrays (mesh_file.surface: as given, no trimesh); faces of no area
     left out.  A ParameterError names ``name`` for a file that is missing, unreadable or has no faces,
     and for arrays without faces or with indices out of range."""
-    from wetcloth.mesh_file import MeshFile, locate
-
     if isinstance(collider.file, MeshFile):
         points, triangles = _given(collider.file, name)
         return points + np.array([collider.x, collider.y, collider.z]), triangles
@@ -174,8 +173,7 @@ def _with_area(points: np.ndarray, faces: np.ndarray, shown: str, allowed: str, 
     """``points`` and the ``faces`` that have an area; a ParameterError naming ``name`` if none has or a
     coordinate is not a finite number."""
     if len(faces):
-        faces = faces[np.linalg.norm(np.cross(points[faces[:, 1]] - points[faces[:, 0]],
-                                              points[faces[:, 2]] - points[faces[:, 0]]), axis=1) > 0.0]
+        faces = faces[triangle_areas(points, faces) > 0.0]
     if not len(faces) or not np.isfinite(points).all():
         raise ParameterError(name, f"{shown} has no faces with an area, or coordinates that are not finite numbers; "
                                    f"allowed: {allowed}")
