@@ -95,11 +95,11 @@ class Collider:
     def distance(self, p: np.ndarray) -> np.ndarray:
         """Signed distance (m, negative inside) of points p (3, m) from the surface (as the core's; a
         mesh's up to MESH_REACH: points farther away get MESH_REACH)."""
-        d = p - np.array([[self.x], [self.y], [self.z]])
         if self.shape == "mesh":
             from wetcloth.collider_meshes import distance_to_mesh
 
             return distance_to_mesh(self, p, MESH_REACH)
+        d = p - np.array([[self.x], [self.y], [self.z]])
         if self.shape == "sphere":
             return np.sqrt((d * d).sum(axis=0)) - self.radius
         if self.shape == "plane":
