@@ -254,3 +254,31 @@ def test_a_mesh_collider_that_overlaps_the_cloth_at_the_start_is_refused(tmp_pat
     with pytest.raises(ParameterError, match=r"collider1.*overlaps the cloth"):
         load_scene(nx=15, ny=15, width=0.4, length=0.4, initial_tilt=0.0, water_level=-0.5, initial_height=0.14,
                    colliders=({"shape": "mesh", "file": str(path)},))
+
+
+def test_a_collider_file_of_quads_and_hexagons_reads_as_the_closed_prism_it_is(tmp_path):
+    """A hexagonal prism in OBJ (two hexagon caps, six quad sides) is read as the cloth's files are and its
+    faces fanned into triangles: closed, of area 2 (3 sqrt(3) / 2) R^2 + 6 R H and volume (3 sqrt(3) / 2) R^2 H,
+    and the core finds its centre inside, min(H / 2, R sqrt(3) / 2) deep."""
+    from wetcloth.collider_meshes import mesh_of, meshes_of
+    from wetcloth.mesh_file import triangle_areas
+
+    radius, height = 0.2, 0.1
+    angles = np.arange(6) * np.pi / 3
+    ring = np.column_stack([radius * np.cos(angles), radius * np.sin(angles)])
+    lines = [f"v {x} {y} {z}" for z in (0.0, height) for x, y in ring]
+    lines.append("f " + " ".join(str(k) for k in range(6, 0, -1)))  # the bottom, turned down
+    lines.append("f " + " ".join(str(k) for k in range(7, 13)))
+    lines += [f"f {k + 1} {(k + 1) % 6 + 1} {(k + 1) % 6 + 7} {k + 7}" for k in range(6)]
+    path = tmp_path / "prism.obj"
+    path.write_text("\n".join(lines) + "\n")
+    scene = load_scene(water_level=-0.5, colliders=({"shape": "mesh", "file": str(path), "z": -1.0},))
+    points, triangles = mesh_of(scene.colliders[0])
+    hexagon = 1.5 * np.sqrt(3.0) * radius**2
+    assert len(triangles) == 2 * 4 + 6 * 2 and is_closed(triangles)
+    assert triangle_areas(points, triangles).sum() == pytest.approx(2 * hexagon + 6 * radius * height, rel=1e-12)
+    a, b, c = (points[triangles[:, k]] for k in range(3))
+    assert np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0 == pytest.approx(hexagon * height, rel=1e-12)
+    rows, meshes = meshes_of(scene.colliders)
+    d, _ = distances((rows, meshes), 0, np.array([[0.0], [0.0], [-1.0 + height / 2]]), 1.0)
+    assert d[0] == pytest.approx(-min(height / 2, radius * np.sqrt(3.0) / 2), rel=1e-9)

@@ -12,12 +12,13 @@ from __future__ import annotations
 
 import functools
 from collections import namedtuple
+from pathlib import Path
 
 import numpy as np
 
 from wetcloth._core import COLLIDER_COLUMNS, MESH_COLUMNS
 from wetcloth.errors import ParameterError
-from wetcloth.mesh_file import MeshFile, locate, triangle_areas
+from wetcloth.mesh_file import SUFFIXES, MeshFile, fan_triangles, locate, merged, read_faces, triangle_areas
 
 #: All mesh colliders' arrays, as the core's ColliderMeshes: ``headers`` (k, MESH_COLUMNS) each mesh's
 #: first cell, grid origin (m), cell side (m), cells along x, y, z, solid flag and bounding box;
@@ -140,9 +141,9 @@ def pack(meshes: list[tuple[np.ndarray, np.ndarray]]) -> ColliderMeshes:
 
 def mesh_of(collider, name: str = "collider_file") -> tuple[np.ndarray, np.ndarray]:
     """A mesh collider's points (V, 3) m, moved by its x, y, z, and triangles (T, 3), from its file
-    (trimesh: OBJ, PLY, STL, OFF, glTF/GLB; coincident vertices merged so that a closed surface reads as
-    closed) or its surface given as arrays (mesh_file.surface: as given, no trimesh); faces of no area
-    left out.  A ParameterError names ``name`` for a file that is missing, unreadable or has no faces,
+    (read as a cloth's is, mesh_file.read_faces; faces of any number of corners fanned into triangles,
+    exactly equal vertices merged so that a closed surface reads as closed) or its surface given as
+    arrays (mesh_file.surface: as given); faces of no area left out.  A ParameterError names ``name`` for a file that is missing, unreadable or has no faces,
     and for arrays without faces or with indices out of range."""
     if isinstance(collider.file, MeshFile):
         points, triangles = _given(collider.file, name)
@@ -150,23 +151,20 @@ def mesh_of(collider, name: str = "collider_file") -> tuple[np.ndarray, np.ndarr
     path = locate(collider.file) if collider.file else None
     if path is None or not path.is_file():
         raise ParameterError(name, f"a mesh collider needs its mesh file; {str(collider.file)!r} is not a file; "
-                                   "allowed: the path of a mesh file (OBJ, PLY, STL, OFF, glTF, GLB)")
+                                   f"allowed: the path of a mesh file ({', '.join(SUFFIXES)})")
     points, triangles = _read(str(path.resolve()), path.stat().st_mtime_ns, name)
     return points + np.array([collider.x, collider.y, collider.z]), triangles
 
 
 @functools.lru_cache(maxsize=8)
 def _read(path: str, mtime_ns: int, name: str) -> tuple[np.ndarray, np.ndarray]:
-    import trimesh
-
-    try:
-        mesh = trimesh.load(path, force="mesh")
-    except Exception as exc:  # the readers raise many kinds of errors for a damaged file
-        raise ParameterError(name, f"{path!r} cannot be read as a mesh: {type(exc).__name__}: {exc}; allowed: a "
-                                   "mesh file (OBJ, PLY, STL, OFF, glTF, GLB) of triangles") from None
-    faces = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64)
-    points = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=np.float64)
-    return _with_area(points, faces, repr(path), "a mesh file of triangles", name)
+    allowed = "a mesh file (" + ", ".join(SUFFIXES) + ") of faces"
+    if Path(path).suffix.lower() not in SUFFIXES:
+        raise ParameterError(name, f"{path!r}: unknown mesh format {Path(path).suffix!r}; allowed: {allowed}")
+    points, blocks, _, _ = read_faces(path, path, name, allowed, polygons=True)
+    blocks = [b for b in blocks if len(b)]
+    faces = fan_triangles(blocks)[0] if blocks else np.zeros((0, 3), dtype=np.int64)
+    return _with_area(*merged(points, faces), repr(path), allowed, name)
 
 
 def _with_area(points: np.ndarray, faces: np.ndarray, shown: str, allowed: str, name: str):

@@ -96,25 +96,33 @@ def read_mesh_file(path: "str | Path | MeshFile") -> MeshFile:
 
 @functools.lru_cache(maxsize=8)
 def _read_cached(resolved: str, mtime_ns: int, size: int, shown: str) -> MeshFile:
-    try:
-        if Path(resolved).suffix.lower() in MESHIO_SUFFIXES:
-            points, blocks, attributes, uv = _read_meshio(resolved)
-        else:
-            points, blocks, attributes, uv = _read_trimesh(resolved)
-    except ParameterError:
-        raise
-    except Exception as exc:  # the readers raise many kinds of errors for a damaged file
-        raise _error(f"{shown!r} cannot be read as a mesh: {type(exc).__name__}: {exc}") from None
+    points, blocks, attributes, uv = read_faces(resolved, shown, NAME, ALLOWED)
     return make_mesh(points, blocks, attributes, uv, shown)
 
 
-def _read_meshio(path: str):
+def read_faces(path: str, shown: str, name: str, allowed: str, polygons: bool = False):
+    """A mesh file's vertices (n, 3) m, its faces as runs (j, 3) and (j, 4) in file order (with
+    ``polygons``, faces of more corners too, as runs (j, k)), its point attributes and UVs (or None),
+    unchecked: the one reader of cloth and collider files (meshio or trimesh by the suffix, see the
+    module).  A file no reader understands raises a ParameterError naming ``name``, ``allowed`` its range."""
+    try:
+        if Path(path).suffix.lower() in MESHIO_SUFFIXES:
+            return _read_meshio(path, polygons)
+        return _read_trimesh(path)
+    except ParameterError:
+        raise
+    except Exception as exc:  # the readers raise many kinds of errors for a damaged file
+        raise ParameterError(name, f"{shown!r} cannot be read as a mesh: {type(exc).__name__}: {exc}; "
+                                   f"allowed: {allowed}") from None
+
+
+def _read_meshio(path: str, polygons: bool):
     import meshio
 
     mesh = meshio.read(path)
     blocks = []
     for block in mesh.cells:
-        if block.type in ("triangle", "quad"):
+        if block.type in ("triangle", "quad") or (polygons and block.type.startswith("polygon")):
             blocks.append(np.asarray(block.data, dtype=np.int64))
         elif block.type.startswith("polygon") or block.dim == 2:
             raise _error(f"{path!r} has faces of {np.asarray(block.data).shape[1]} corners ({block.type}): split "
@@ -146,12 +154,13 @@ def _read_trimesh(path: str):
     uv = getattr(mesh.visual, "uv", None)
     uv = None if uv is None or len(uv) != len(points) else np.asarray(uv, dtype=np.float64)
     if path.lower().endswith(".stl"):
-        points, faces = _merged(points, faces)
+        points, faces = merged(points, faces)
     return points, [faces], attributes, uv
 
 
-def _merged(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Exactly equal vertices merged, numbered in order of first appearance."""
+def merged(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Exactly equal vertices of ``points`` merged, numbered in order of first appearance, and ``faces``
+    (an integer array of any shape) indexing them."""
     _, first, inverse = np.unique(points, axis=0, return_index=True, return_inverse=True)
     order = np.argsort(first)  # unique rows by first appearance
     rank = np.empty_like(order)
@@ -181,7 +190,7 @@ def make_mesh(points, blocks, attributes=None, uv=None, shown: str = "<arrays>")
     corners = np.concatenate([np.full(len(b), b.shape[1]) for b in blocks])
     if any(b.min() < 0 or b.max() >= n for b in blocks):
         raise _error(f"{shown!r} has faces whose vertex indices are outside 0..{n - 1}")
-    triangles, face_of = _split(blocks)
+    triangles, face_of = fan_triangles(blocks)
     unused = np.setdiff1d(np.arange(n), triangles)
     if len(unused):
         raise _error(f"{shown!r}: vertex {int(unused[0])} belongs to no face ({len(unused)} such vertices); "
@@ -199,19 +208,15 @@ def make_mesh(points, blocks, attributes=None, uv=None, shown: str = "<arrays>")
                     uv=uv, attributes=attributes, source=shown, blocks=tuple(blocks))
 
 
-def _split(blocks: list) -> tuple[np.ndarray, np.ndarray]:
-    """Triangles (m, 3) of the faces in file order, each quad (a, b, c, d) as (a, b, c), (a, c, d), and
-    the face (m,) each came from."""
+def fan_triangles(blocks: list) -> tuple[np.ndarray, np.ndarray]:
+    """Triangles (m, 3) of the faces in file order, each face (a, b, c, ...) fanned from its first corner:
+    (a, b, c), (a, c, d), ...; and the face (m,) each came from."""
     triangles, face_of, start = [], [], 0
     for b in blocks:
-        index = np.arange(start, start + len(b))
-        if b.shape[1] == 3:
-            triangles.append(b)
-            face_of.append(index)
-        else:
-            pair = np.stack([b[:, [0, 1, 2]], b[:, [0, 2, 3]]], axis=1).reshape(-1, 3)
-            triangles.append(pair)
-            face_of.append(np.repeat(index, 2))
+        k = b.shape[1]
+        fan = np.stack([b[:, [0, j, j + 1]] for j in range(1, k - 1)], axis=1).reshape(-1, 3)
+        triangles.append(fan)
+        face_of.append(np.repeat(np.arange(start, start + len(b)), k - 2))
         start += len(b)
     return np.concatenate(triangles).astype(np.int64), np.concatenate(face_of).astype(np.int64)
 
