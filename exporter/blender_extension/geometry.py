@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wetcloth.collider_meshes import is_closed
 from wetcloth.errors import ParameterError
 from wetcloth.mesh_file import MeshFile, make_mesh, surface
 
@@ -193,18 +194,11 @@ def cloth_of(positions, edges, polygons, loop_triangles, pins, name: str = "clot
     return MeshCloth(mesh=mesh, pinned=bool(pinned.any()), polygons=polygons), "none"
 
 
-def is_closed(triangles) -> bool:
-    """Whether every edge of ``triangles`` (t, 3) joins exactly two of them (a closed surface)."""
-    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
-    edges = np.sort(np.stack([t, np.roll(t, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
-    return len(t) > 0 and bool((np.unique(edges, axis=0, return_counts=True)[1] == 2).all())
-
-
 def collider_of(positions, triangles, name: str = "collider") -> dict:
     """The ``[[collider]]`` fields of a Collider object's world-space vertices (n, 3) m and triangles
     (t, 3): an analytic shape if it is a closed primitive (``analytic_collider``), else a mesh collider
     of these triangles (mesh_file.surface; x, y, z 0: the points are where the scene puts them)."""
-    found = analytic_collider(positions) if is_closed(triangles) else None
+    found = analytic_collider(positions) if is_closed(triangles, turned=False) else None
     if found is not None:
         return found
     if not len(np.asarray(triangles).reshape(-1, 3)):

@@ -42,12 +42,15 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return np.divide(v, length, out=np.zeros_like(v), where=length > 0)
 
 
-def is_closed(triangles: np.ndarray) -> bool:
-    """Whether every edge of ``triangles`` (T, 3) joins exactly two faces that run along it in opposite
-    directions (a closed, consistently turned surface)."""
-    directed = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+def is_closed(triangles: np.ndarray, turned: bool = True) -> bool:
+    """Whether ``triangles`` (T, 3) are some and every edge of them joins exactly two faces, which (with
+    ``turned``) run along it in opposite directions: a closed surface (consistently turned)."""
+    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    directed = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
+    if not turned:
+        return len(t) > 0 and bool((np.unique(np.sort(directed, axis=1), axis=0, return_counts=True)[1] == 2).all())
     unique, counts = np.unique(directed, axis=0, return_counts=True)
-    if (counts != 1).any():
+    if not len(t) or (counts != 1).any():
         return False  # an edge run the same way twice: inconsistent turns, or more than two faces
     reverse = {tuple(e) for e in unique[:, ::-1]}
     return all(tuple(e) in reverse for e in unique)
