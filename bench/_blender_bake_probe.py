@@ -1,5 +1,6 @@
 """Inside bpy (run by bench/blender_bake.py): install the Wet Cloth extension, build the bench scene
-and time ``bpy.ops.wetcloth.bake()`` ("repeats" times in the spec).
+and time ``bpy.ops.wetcloth.bake()`` ("repeats" times in the spec).  With "round" in the spec the cloth
+is the tests' round mesh cloth (tests/blender/extension_probe.py), and the result holds its arrays.
 
     BLENDER_USER_RESOURCES=DIR .venv-blender/bin/python bench/_blender_bake_probe.py SPEC.json RESULT.json
 """
@@ -8,9 +9,13 @@ import json
 import os
 import sys
 import time
+from pathlib import Path
 
 import bpy  # first: bpy makes bmesh importable
 import bmesh  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "blender"))
+from extension_probe import arrays, round_cloth  # noqa: E402
 
 
 def build_scene(spec):
@@ -18,14 +23,17 @@ def build_scene(spec):
     scene = bpy.context.scene
     scene.render.fps, scene.render.fps_base = spec["fps"], 1.0
     scene.frame_start, scene.frame_end = 1, spec["frames"]
-    bpy.ops.mesh.primitive_plane_add(size=spec["size"], location=(0.0, 0.0, spec["height"]))
-    cloth = bpy.context.object
-    bm = bmesh.new()
-    bm.from_mesh(cloth.data)
-    bmesh.ops.subdivide_edges(bm, edges=bm.edges[:], cuts=spec["cuts"], use_grid_fill=True)
-    bm.to_mesh(cloth.data)
-    bm.free()
-    cloth.wetcloth.role = "CLOTH"
+    if "round" in spec:
+        cloth = round_cloth(spec["round"], "Towel")
+    else:
+        bpy.ops.mesh.primitive_plane_add(size=spec["size"], location=(0.0, 0.0, spec["height"]))
+        cloth = bpy.context.object
+        bm = bmesh.new()
+        bm.from_mesh(cloth.data)
+        bmesh.ops.subdivide_edges(bm, edges=bm.edges[:], cuts=spec["cuts"], use_grid_fill=True)
+        bm.to_mesh(cloth.data)
+        bm.free()
+        cloth.wetcloth.role = "CLOTH"
     bpy.ops.mesh.primitive_uv_sphere_add(radius=spec["radius"], location=(0.0, 0.0, 0.0))
     bpy.context.object.wetcloth.role = "COLLIDER"
     bpy.ops.mesh.primitive_plane_add(size=3.0, location=(0.0, 0.0, spec["water"]))
@@ -45,7 +53,8 @@ def main(spec_path, result_path):
         seconds.append(time.perf_counter() - started)
     path = bpy.path.abspath(cloth.modifiers["Wet Cloth cache"].cache_file.filepath)
     json.dump({"seconds": seconds, "manifest": os.path.join(os.path.dirname(path), "frames.json"),
-               "blender": bpy.app.version_string}, open(result_path, "w"))
+               "blender": bpy.app.version_string, "cloth": arrays(cloth) if "round" in spec else None},
+              open(result_path, "w"))
 
 
 if __name__ == "__main__":

@@ -183,6 +183,24 @@ def arrays(obj, evaluated=False):
     return out
 
 
+def round_cloth(shape: dict, name: str):
+    """A Cloth object ``name``: a filled circle of shape["segments"] vertices, shape["radius"] m, at height
+    shape["z"] m, inset shape["insets"] times by shape["inset"] m (rings of quads around an n-gon)."""
+    bpy.ops.mesh.primitive_circle_add(vertices=shape["segments"], radius=shape["radius"], fill_type="NGON",
+                                      location=(0.0, 0.0, shape["z"]))
+    cloth = bpy.context.object
+    cloth.name = name
+    bm = bmesh.new()
+    bm.from_mesh(cloth.data)
+    for _ in range(shape["insets"]):  # rings of quads around the n-gon
+        bmesh.ops.inset_region(bm, faces=[max(bm.faces, key=lambda f: len(f.verts))], thickness=shape["inset"],
+                               use_boundary=True)
+    bm.to_mesh(cloth.data)
+    bm.free()
+    cloth.wetcloth.role = "CLOTH"
+    return cloth
+
+
 def mesh_cloth_over_a_cup(spec):
     """A round cloth of quads around an n-gon, pinned at two rim vertices, over a cup (a mesh collider)."""
     bpy.ops.wm.read_homefile(use_empty=True)
@@ -201,23 +219,11 @@ def mesh_cloth_over_a_cup(spec):
     bm.to_mesh(collider.data)
     bm.free()
     collider.wetcloth.role = "COLLIDER"
-    round_cloth = spec["round_cloth"]
-    bpy.ops.mesh.primitive_circle_add(vertices=round_cloth["segments"], radius=round_cloth["radius"], fill_type="NGON",
-                                      location=(0.0, 0.0, round_cloth["z"]))
-    cloth = bpy.context.object
-    cloth.name = "Tablecloth"
-    bm = bmesh.new()
-    bm.from_mesh(cloth.data)
-    for _ in range(round_cloth["insets"]):  # rings of quads around the n-gon
-        bmesh.ops.inset_region(bm, faces=[max(bm.faces, key=lambda f: len(f.verts))], thickness=round_cloth["inset"],
-                               use_boundary=True)
-    bm.to_mesh(cloth.data)
-    bm.free()
+    cloth = round_cloth(spec["round_cloth"], "Tablecloth")
     rim = sorted(range(len(cloth.data.vertices)), key=lambda k: -cloth.data.vertices[k].co.length)
-    pinned = [k for k in rim[:round_cloth["segments"]] if abs(cloth.data.vertices[k].co.y) < 1e-6]
+    pinned = [k for k in rim[:spec["round_cloth"]["segments"]] if abs(cloth.data.vertices[k].co.y) < 1e-6]
     group = cloth.vertex_groups.new(name="Pins")
     group.add(pinned, 1.0, "REPLACE")
-    cloth.wetcloth.role = "CLOTH"
     cloth.wetcloth.pin_group = "Pins"
     scene.wetcloth.self_collision = "off"
     bpy.ops.wm.save_as_mainfile(filepath=os.path.join(spec["work"], "mesh.blend"))
