@@ -243,6 +243,44 @@ Index release_from_colliders(Index n, const Physics& phys, const double* pos, co
     return released;
 }
 
+double slip_on_supports(Index n, const Physics& phys, const double* force, const double* mass, double h, double limit,
+                        double* free, double* held, double* pos, double* vel) {
+    const double up[3] = {0.0, 0.0, 1.0};
+    double farthest = 0.0;
+    for (int pass = 0; pass < 2; ++pass) {  // first: how far each would move; second: move them
+        for (Index i = 0; i < n; ++i) {
+            const bool on_floor = held[i] == 1.0;
+            if (!on_floor && held[i] < collider_held(0)) continue;  // free, or on a layer
+            double nrm[3] = {up[0], up[1], up[2]};
+            double friction = phys.floor_friction;
+            if (!on_floor) {
+                const Index k = static_cast<Index>(held[i] - collider_held(0));
+                const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+                if (collider_distance(phys, k, p, phys.thickness, nrm) >= phys.thickness) return -1.0;  // off it
+                friction = phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
+            }
+            const double f[3] = {force[i], force[n + i], force[2 * n + i]};
+            if (!slips(f, nrm, friction)) continue;
+            double excess[3];
+            slip_force(f, nrm, friction, excess);
+            const double move = 0.5 * std::sqrt(excess[0] * excess[0] + excess[1] * excess[1] + excess[2] * excess[2]) /
+                                mass[i] * h * h;
+            if (pass == 0) {
+                if (move > limit) return -1.0;
+                farthest = std::max(farthest, move);
+                continue;
+            }
+            for (int c = 0; c < 3; ++c) {
+                pos[c * n + i] += 0.5 * excess[c] / mass[i] * h * h;
+                vel[c * n + i] += excess[c] / mass[i] * h;
+            }
+            held[i] = 0.0;
+            free[i] = 1.0;
+        }
+    }
+    return farthest;
+}
+
 Index collider_history(Index n, const Physics& phys, const double* pos, const double* vel, double* prev_pos,
                        double* prev_vel, double h) {
     Index agreed = 0;

@@ -196,11 +196,21 @@ Status step(Core& core, double remaining) {
         grip = grip_move(n, phys, cloth.free, buf.held, buf.pos, clock[TIME], h, remaining);
         trial = take_step(core, h, grip);
         if (held > 0 && trial.converged) {
-            const Index released = release_slipping(n, phys.floor_friction, core.work.force, cloth.free, buf.held) +
-                                   release_unsupported(core.contact, n, cloth.free, buf.held) +
-                                   (held_on_colliders > 0 ? release_from_colliders(n, phys, buf.pos, core.work.force,
-                                                                                   cloth.free, buf.held)
-                                                          : 0);
+            // Slips on the floor or a collider that move no particle farther than the step's allowed error
+            // need no second try: they are made now (most are: a draping cloth releases a few every step).
+            Index released = release_unsupported(core.contact, n, cloth.free, buf.held);
+            const double slipped = released == 0 && adaptive
+                ? slip_on_supports(n, phys, core.work.force, core.solver.mass, h, control.allowed, cloth.free, buf.held,
+                                   buf.trial_pos, buf.trial_vel)
+                : -1.0;
+            if (slipped >= 0.0) {
+                trial.error = pymax(trial.error, slipped);
+            } else {
+                released += release_slipping(n, phys.floor_friction, core.work.force, cloth.free, buf.held) +
+                            (held_on_colliders > 0
+                                 ? release_from_colliders(n, phys, buf.pos, core.work.force, cloth.free, buf.held)
+                                 : 0);
+            }
             if (released > 0) {  // redo the step with them free, and with them those near slipping too
                 held -= released + release_slipping(n, RELEASE_ROUND_CONE * phys.floor_friction, core.work.force,
                                                     cloth.free, buf.held);

@@ -43,6 +43,16 @@ Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const d
 Index release_from_colliders(Index n, const Physics& phys, const double* pos, const double* force, double* free,
                              double* held, double cone = 1.0);
 
+//: Instead of taking the step again: the particles held on the floor or a collider that the step's force
+//: (N, (3, n)) would have slipped or lifted (release_slipping's and release_from_colliders's test) move
+//: as they would have from rest over the step of h s under the force's excess beyond friction
+//: (slip_force; a = excess / m, mass (n) kg): pos (3, n) by a h^2 / 2 and vel by a h, and are released;
+//: provided each of them moves at most `limit` m (the error the step may make) and a collider's is
+//: still on it.  Returns the farthest such move (m, 0 if none slips), or -1 with nothing changed when
+//: one would move farther (the step is then to be taken again).  Layers' holds are not looked at.
+double slip_on_supports(Index n, const Physics& phys, const double* force, const double* mass, double h, double limit,
+                        double* free, double* held, double* pos, double* vel);
+
 //: The particles on a collider (within gap m, where collider_contact left them) get the history of a
 //: straight motion along its normal (as the floor's agree_history).  Returns how many.
 Index collider_history(Index n, const Physics& phys, const double* pos, const double* vel, double* prev_pos,

@@ -25,6 +25,18 @@ inline bool slips(const double* f, const double* normal, double friction) {
     return pressing <= 0.0 || std::sqrt(along2) > friction * pressing;
 }
 
+//: The part of force f (3, N) that a surface of unit outward normal (3) and `friction` does not hold, into
+//: excess (3): all of f if it lifts the particle off, else its part along the surface less friction times
+//: the part pressing (zero if that is within the cone: slips is false).
+inline void slip_force(const double* f, const double* normal, double friction, double* excess) {
+    const double pressing = -(f[0] * normal[0] + f[1] * normal[1] + f[2] * normal[2]);
+    for (int c = 0; c < 3; ++c) excess[c] = pressing > 0.0 ? f[c] + pressing * normal[c] : f[c];
+    if (pressing <= 0.0) return;
+    const double along = std::sqrt(excess[0] * excess[0] + excess[1] * excess[1] + excess[2] * excess[2]);
+    const double kept = along > friction * pressing ? 1.0 - friction * pressing / along : 0.0;
+    for (int c = 0; c < 3; ++c) excess[c] *= kept;
+}
+
 //: The inelastic Coulomb impulse of a surface of unit outward normal (3) on velocity v (3, m/s, in place):
 //: the part into the surface dv_n is removed and the sliding speed drops by friction * dv_n, never
 //: reversing (the floor's and the colliders' contact).
