@@ -56,7 +56,8 @@ def test_a_sunk_towel_at_rest_sleeps_while_it_absorbs_and_wakes_as_its_weight_gr
     harder onto the floor.  Asleep nothing moves and no step is taken, but each particle's water still
     follows the Buras law from where it was (exact over any time, so to rounding: rtol 1e-12).  It wakes
     when a particle has grown 2 % (SLEEP_WEIGHT_GROWTH) heavier than at its last step: at
-    ``C/R ln((Q - q) / (Q - q_w))``, ``q_w = 1.02 (m0 + q_last) - m0``, taken at 0.05 s either side."""
+    ``C/R ln((Q - q) / (Q - q_w))``, ``q_w = 1.02 (m0 + q_last) - m0``, taken at 0.05 s either side.  A
+    snapshot taken asleep, restored, repeats the run across the wake to the bit."""
     scene = wetcloth.load_scene(**SUNK_ABSORBING)
     sim = wetcloth.Simulation(scene)
     while not sim.sleeping:
@@ -74,6 +75,9 @@ def test_a_sunk_towel_at_rest_sleeps_while_it_absorbs_and_wakes_as_its_weight_gr
     np.testing.assert_allclose(sim.state.water, buras(water, m0, capacity, rate, sim.time - asleep_at), rtol=1e-12)
     sim.advance(0.1)
     assert sim.steps > steps, "awake again, to find the rest of its new weight"
+    sim.restore(snap)  # asleep, across the wake: a restored run repeats to the bit
+    assert sim.sleeping
+    assert_restored_run_repeats(sim, snap, wake + 0.5)
 
 
 def test_a_floating_towel_does_not_sleep_while_it_absorbs():
