@@ -14,7 +14,8 @@ ON_FLOOR = dict(nx=7, ny=7, width=0.3, length=0.3, initial_tilt=0.0, initial_hei
 
 
 def test_a_cloth_resting_on_the_floor_takes_steps_of_max_step_and_stays_on_it():
-    """A sunk towel that keeps absorbing (so it never falls asleep) lands on the floor and lies there.
+    """A sunk towel that keeps absorbing lands on the floor and lies there (sleep off, so that every step
+    is taken: a sunk towel may sleep while it absorbs, the next test).
 
     At rest every particle's centre is exactly on the floor (``floor_z``: the floor puts it there and
     holds it), none below it, and nothing moves along the floor.  Before particles at rest were held,
@@ -24,7 +25,7 @@ def test_a_cloth_resting_on_the_floor_takes_steps_of_max_step_and_stays_on_it():
     (here 0.5 s) that does not divide into whole steps."""
     scene = wetcloth.load_scene(nx=9, ny=9, initial_tilt=5.0, initial_height=-0.9, floor_level=-1.0,
                                 initial_saturation=0.95, absorption_capacity=4.0, absorption_rate=0.2)
-    sim = wetcloth.Simulation(scene)
+    sim = wetcloth.Simulation(scene, skip_idle_work=False)
     floor = sim.model.floor_z
     sim.advance(3.5)  # lands at ~1.5 s and settles by ~2.5 s
     assert (sim.state.pos[2] == floor).all()
@@ -33,9 +34,67 @@ def test_a_cloth_resting_on_the_floor_takes_steps_of_max_step_and_stays_on_it():
     for _ in range(int(duration / 0.5)):
         sim.advance(0.5)
         assert (sim.state.pos[2] >= floor).all()
-    assert not sim.sleeping and sim.state.water.sum() > water  # held by the floor, not asleep
+    assert sim.state.water.sum() > water  # held by the floor, still absorbing
     np.testing.assert_array_equal(sim.state.pos, resting)
     assert sim.steps - steps <= duration / scene.max_step + duration / 0.5
+
+
+#: The towel of the test above (sunk, absorbing, landing on the floor at ~1.5 s).
+SUNK_ABSORBING = dict(nx=9, ny=9, initial_tilt=5.0, initial_height=-0.9, floor_level=-1.0, initial_saturation=0.95,
+                      absorption_capacity=4.0, absorption_rate=0.2)
+
+
+def buras(water, dry_mass, capacity, rate, t):
+    """The Buras law's water (kg) after t s under water from ``water``: Q - (Q - q) exp(-R t / C)."""
+    full = capacity * dry_mass
+    return full - (full - water) * np.exp(-rate * t / capacity)
+
+
+def test_a_sunk_towel_at_rest_sleeps_while_it_absorbs_and_wakes_as_its_weight_grows():
+    """A towel at rest on the floor, wholly under water and heavier than the water it displaces, falls
+    asleep although it still absorbs (docs/model.md section 7): its growing weight only presses it
+    harder onto the floor.  Asleep nothing moves and no step is taken, but each particle's water still
+    follows the Buras law from where it was (exact over any time, so to rounding: rtol 1e-12).  It wakes
+    when a particle has grown 2 % (SLEEP_WEIGHT_GROWTH) heavier than at its last step: at
+    ``C/R ln((Q - q) / (Q - q_w))``, ``q_w = 1.02 (m0 + q_last) - m0``, taken at 0.05 s either side.  A
+    snapshot taken asleep, restored, repeats the run across the wake to the bit."""
+    scene = wetcloth.load_scene(**SUNK_ABSORBING)
+    sim = wetcloth.Simulation(scene)
+    while not sim.sleeping:
+        assert sim.time < 6.0, "asleep within a few seconds of landing (at ~1.5 s)"
+        sim.advance(0.1)
+    snap = sim.snapshot()
+    m0, water, last = sim.model.dry_mass, sim.state.water.copy(), snap["prev_water"]
+    rate, capacity = scene.absorption_rate, scene.absorption_capacity
+    full, wake_at = capacity * m0, 1.02 * (m0 + last) - m0
+    wake = (capacity / rate * np.log((full - water) / (full - wake_at))).min()  # s from now
+    asleep_at, positions, steps = sim.time, sim.positions, sim.steps
+    sim.advance(wake - 0.05)
+    assert sim.sleeping and sim.steps == steps
+    np.testing.assert_array_equal(sim.positions, positions)
+    np.testing.assert_allclose(sim.state.water, buras(water, m0, capacity, rate, sim.time - asleep_at), rtol=1e-12)
+    sim.advance(0.1)
+    assert sim.steps > steps, "awake again, to find the rest of its new weight"
+    sim.restore(snap)  # asleep, across the wake: a restored run repeats to the bit
+    assert sim.sleeping
+    assert_restored_run_repeats(sim, snap, wake + 0.5)
+
+
+def test_a_floating_towel_does_not_sleep_while_it_absorbs():
+    """Afloat, a towel that absorbs grows heavier and sinks deeper: it must not fall asleep however
+    still it lies (this towel, the sensitivity example's, floats nearly still from ~4 s and sinks from
+    ~7 s; it fell asleep afloat, by 10 s, when the rule ignored the uptake)."""
+    sim = wetcloth.Simulation(wetcloth.load_scene(**FLOATS_THEN_SINKS))
+    for _ in range(100):
+        sim.advance(0.1)
+        assert not sim.sleeping
+    assert sim.outputs()["centroid_z"] < -0.1, "sinking"
+
+
+#: A 5 x 7 towel of the sensitivity example (models/studies/towel_sink_sensitivity.toml).
+FLOATS_THEN_SINKS = dict(nx=5, ny=7, absorption_rate=0.7383830841998982, absorption_capacity=7.015019977465272,
+                         areal_density=0.4833177274093032, thickness=0.00201255202293396,
+                         initial_tilt=17.183734118007123, drag_normal=1.293426938354969)
 
 
 @pytest.mark.parametrize("integrator", ["bdf2", "symplectic_euler"])

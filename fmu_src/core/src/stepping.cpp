@@ -122,6 +122,24 @@ bool exchange_water(Core& core, const double* mass_used, double h) {
     return exchanged > 0;
 }
 
+//: Whether the water the cloth still takes up can only press it harder onto whatever holds it up, so that it
+//: may sleep while it absorbs (docs/model.md section 7): the uptake is its only exchange (no wicking; drying
+//: acts in air only), its stiffness does not depend on it, and every particle lies wholly under water (its
+//: buoyancy then no longer depends on its height) and weighs more than the water it displaces.
+bool sunk(const Core& core) {
+    const Cloth& cloth = core.cloth;
+    const Physics& phys = core.phys;
+    if (phys.wicking_rate > 0.0 || phys.wet_factor != 0.0) return false;
+    const Index n = cloth.n;
+    const double* z = core.buf.pos + 2 * n;
+    const double* water = core.buf.water;
+    for (Index i = 0; i < n; ++i) {
+        const bool under = phys.smooth ? z[i] <= phys.water_level - 0.5 * phys.thickness : z[i] < phys.water_level;
+        if (!under || !(cloth.dry_mass[i] + water[i] > phys.water_density * cloth.volume[i])) return false;
+    }
+    return true;
+}
+
 //: Fall asleep after sleep_after s still, with no water exchange and no grip moving (`exchanging`:
 //: either, in this step; velocities then zero).  Stillness is checked every sleep_after / 20 s of
 //: simulated time, not at every step.
@@ -301,7 +319,7 @@ Status step(Core& core, double remaining) {
     clock[LAST_STEP] = kinked ? 0.0 : h;  // self-collision's push: BDF2 starts afresh
     clock[TIME] += h;
     clock[STEPS] += 1;
-    maybe_sleep(core, h, exchanging || grip.moving);
+    maybe_sleep(core, h, (exchanging && !sunk(core)) || grip.moving);
     return DONE;
 }
 
@@ -464,6 +482,56 @@ WallClock::time_point deadline_after(double seconds) {
     return WallClock::now() + std::chrono::duration_cast<WallClock::duration>(std::chrono::duration<double>(capped));
 }
 
+//: Time (s, from now) at which the uptake of a sleeping cloth has made a particle SLEEP_WEIGHT_GROWTH
+//: heavier than at the last step it took (prev_water), or infinity.  Each particle under the surface holds
+//: q(t) = Q - (Q - q) exp(-R t / C) (the uptake is exact over any time).
+double wake_time(const Core& core) {
+    const Cloth& cloth = core.cloth;
+    const Physics& phys = core.phys;
+    const Buffers& buf = core.buf;
+    const Index n = cloth.n;
+    const double level = surface(phys);
+    double soonest = std::numeric_limits<double>::infinity();
+    if (!absorbing(phys)) return soonest;
+    for (Index i = 0; i < n; ++i) {
+        if (!(buf.pos[2 * n + i] < level)) continue;
+        const double full = phys.absorption_capacity * cloth.dry_mass[i];
+        const double limit = (1.0 + SLEEP_WEIGHT_GROWTH) * (cloth.dry_mass[i] + buf.prev_water[i]) - cloth.dry_mass[i];
+        if (buf.water[i] >= limit) return 0.0;
+        if (limit >= full) continue;  // it fills up first
+        soonest = pymin(soonest, phys.absorption_capacity / phys.absorption_rate *
+                                     std::log((full - buf.water[i]) / (full - limit)));
+    }
+    return soonest;
+}
+
+//: Let a sleeping cloth's time pass towards target (s): what it takes up meanwhile (exactly: it does not
+//: move), until target or until its weight has grown enough to wake it (wake_time).  Returns whether it woke.
+bool sleep_until(Core& core, double target) {
+    double* clock = core.clock;
+    Buffers& buf = core.buf;
+    const Index n = core.cloth.n;
+    const double wake = wake_time(core);
+    const double remaining = target - clock[TIME];
+    const bool wakes = wake < remaining;
+    const double h = wakes ? wake : remaining;
+    if (absorbing(core.phys) && h > 0.0) {
+        const double* z = buf.pos + 2 * n;
+        const double* vz = buf.vel + 2 * n;  // zero: asleep
+        uptake(n, z, z, vz, vz, surface(core.phys), core.cloth.dry_mass, core.phys.absorption_capacity,
+               core.phys.absorption_rate, h, buf.water, buf.trial_water);
+        copy(n, buf.trial_water, buf.water);
+    }
+    if (!wakes) return false;
+    clock[TIME] += h;
+    clock[SLEEPING] = 0.0;
+    clock[CALM_TIME] = 0.0;
+    clock[UNCHECKED_TIME] = 0.0;
+    clock[EXCHANGING] = 0.0;
+    copy(3 * n, buf.pos, buf.anchor);
+    return true;
+}
+
 //: advance up to a wall-clock deadline.  The clock is read every `stride` steps, a few microseconds of
 //: work apart at least (a step costs some tens of nanoseconds per particle), and after the first step:
 //: a call always makes progress.
@@ -471,7 +539,8 @@ Status advance_until(Core& core, double target, Index max_steps, WallClock::time
     double* clock = core.clock;
     const Index stride = std::max<Index>(1, 1024 / std::max<Index>(1, core.cloth.n));
     Index taken = 0;
-    while (target - clock[TIME] > 1e-12 * pymax(1.0, std::fabs(target)) && clock[SLEEPING] == 0.0) {
+    while (target - clock[TIME] > 1e-12 * pymax(1.0, std::fabs(target))) {
+        if (clock[SLEEPING] != 0.0 && !sleep_until(core, target)) break;
         if (taken >= max_steps) return PAUSED;
         if (taken > 0 && taken % stride == 0 && WallClock::now() >= deadline) return PAUSED;
         if (step(core, target - clock[TIME]) != DONE) return BLOWN_UP;

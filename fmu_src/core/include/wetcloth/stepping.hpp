@@ -33,6 +33,10 @@ inline constexpr int MAX_REJECTIONS = 100;
 //: sees signals (Ctrl-C) in time.  Where a call returns never changes what is computed.
 inline constexpr double PAUSE_AFTER = 0.1;
 
+//: A cloth asleep while it absorbs (sunk: docs/model.md section 7) wakes once a particle has grown this
+//: fraction heavier than at its last step, to find the rest of its new weight.
+inline constexpr double SLEEP_WEIGHT_GROWTH = 0.02;
+
 //: Bounds of a state the step loop goes on from (state_problem): simulated time (s), any coordinate (m),
 //: and the water a particle holds per kg of its dry mass (kg/kg: absorption_capacity's largest value;
 //: the capacity is an input, so a cloth may hold more than the current one allows).
