@@ -11,11 +11,10 @@ import sys
 import time
 from pathlib import Path
 
-import bpy  # first: bpy makes bmesh importable
-import bmesh  # noqa: E402
+import bpy
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "blender"))
-from extension_probe import arrays, round_cloth  # noqa: E402
+from extension_probe import arrays, round_cloth, subdivided_plane  # noqa: E402
 
 
 def build_scene(spec):
@@ -26,14 +25,7 @@ def build_scene(spec):
     if "round" in spec:
         cloth = round_cloth(spec["round"], "Towel")
     else:
-        bpy.ops.mesh.primitive_plane_add(size=spec["size"], location=(0.0, 0.0, spec["height"]))
-        cloth = bpy.context.object
-        bm = bmesh.new()
-        bm.from_mesh(cloth.data)
-        bmesh.ops.subdivide_edges(bm, edges=bm.edges[:], cuts=spec["cuts"], use_grid_fill=True)
-        bm.to_mesh(cloth.data)
-        bm.free()
-        cloth.wetcloth.role = "CLOTH"
+        cloth = subdivided_plane(spec["size"], spec["height"], spec["cuts"], "Towel")
     bpy.ops.mesh.primitive_uv_sphere_add(radius=spec["radius"], location=(0.0, 0.0, 0.0))
     bpy.context.object.wetcloth.role = "COLLIDER"
     bpy.ops.mesh.primitive_plane_add(size=3.0, location=(0.0, 0.0, spec["water"]))

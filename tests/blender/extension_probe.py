@@ -61,20 +61,26 @@ def evaluated_cloth(obj, frame):
     return out
 
 
+def subdivided_plane(size: float, z: float, cuts: int, name: str):
+    """A Cloth object ``name``: a plane of side ``size`` m at height ``z`` m, its edges cut ``cuts`` times."""
+    bpy.ops.mesh.primitive_plane_add(size=size, location=(0.0, 0.0, z))
+    cloth = bpy.context.object
+    cloth.name = name
+    bm = bmesh.new()
+    bm.from_mesh(cloth.data)
+    bmesh.ops.subdivide_edges(bm, edges=bm.edges[:], cuts=cuts, use_grid_fill=True)
+    bm.to_mesh(cloth.data)
+    bm.free()
+    cloth.wetcloth.role = "CLOTH"
+    return cloth
+
+
 def build_scene(spec):
     bpy.ops.wm.read_homefile(use_empty=True)  # keeps the preferences (the add-on); factory settings would not
     scene = bpy.context.scene
     scene.render.fps, scene.render.fps_base = spec["fps"], 1.0
     scene.frame_start, scene.frame_end = 1, spec["frames"]
-    bpy.ops.mesh.primitive_plane_add(size=spec["cloth"]["size"], location=(0.0, 0.0, spec["cloth"]["z"]))
-    cloth = bpy.context.object
-    cloth.name = "Towel"
-    bm = bmesh.new()
-    bm.from_mesh(cloth.data)
-    bmesh.ops.subdivide_edges(bm, edges=bm.edges[:], cuts=spec["cuts"], use_grid_fill=True)
-    bm.to_mesh(cloth.data)
-    bm.free()
-    cloth.wetcloth.role = "CLOTH"
+    cloth = subdivided_plane(spec["cloth"]["size"], spec["cloth"]["z"], spec["cuts"], "Towel")
     cloth.wetcloth.preset = "COTTON_TERRY_TOWEL"
     bpy.ops.mesh.primitive_uv_sphere_add(radius=spec["sphere"]["radius"], location=(0.0, 0.0, spec["sphere"]["z"]))
     bpy.context.object.name = "Ball"
