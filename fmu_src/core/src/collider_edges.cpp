@@ -269,7 +269,8 @@ void mark_near(const Index* elements, Index count, int width, Index mesh, const 
 
 //: Gather the kept list for the step from x0 to x1: its reference their midpoint; a particle near a mesh
 //: may move twice the step's largest motion of those particles, at least LEAST_MARGIN of reach (thickness / 2,
-//: m), the others FAR_MARGIN of reach (or the near ones' margin if more).
+//: m), the others FAR_MARGIN of reach (or the near ones' margin if more); a cloth whose box is far from
+//: every mesh's box keeps an empty list while no particle moves more than what that distance allows.
 void keep_list(const Contact& contact, ContactLists& lists, const Physics& phys, Index n, const double* x0,
                const double* x1, double reach) {
     std::vector<double>& x = lists.collider_reference;
@@ -278,6 +279,31 @@ void keep_list(const Contact& contact, ContactLists& lists, const Physics& phys,
     std::vector<double>& near = lists.collider_allowance;  // first 1 for the particles near a mesh
     near.assign(static_cast<std::size_t>(n), 0.0);
     std::vector<Index>& found = lists.collider_items;
+    std::vector<Pair>& pairs = lists.collider_list;
+    pairs.clear();
+    lists.collider_key[0] = phys.meshes.vertices;
+    lists.collider_key[1] = phys.colliders;
+    // Far from every mesh's box (no pair within 2 reach + LIST_MARGINS allowances): no pairs, and every
+    // particle may move that allowance.
+    const Box whole = path_box(nullptr, n, n, x.data(), x.data(), 0.0);
+    double gap = std::numeric_limits<double>::infinity();
+    for (Index k = 0; k < phys.collider_count; ++k) {
+        const double* row = phys.colliders + k * COLLIDER_COLUMNS;
+        if (static_cast<Index>(row[C_SHAPE]) != MESH) continue;
+        const double* header = phys.meshes.headers + static_cast<Index>(row[C_RADIUS]) * MESH_COLUMNS;
+        double gap2 = 0.0;
+        for (Index c = 0; c < 3; ++c) {
+            const double g = py_max(0.0, py_max(header[M_LO_X + c] - whole.hi[c], whole.lo[c] - header[M_HI_X + c]));
+            gap2 += g * g;
+        }
+        gap = py_min(gap, std::sqrt(gap2));
+    }
+    const double clear = (gap - 2.0 * reach) / LIST_MARGINS;
+    if (clear >= LEAST_MARGIN * reach) {
+        near.assign(static_cast<std::size_t>(n), py_min(clear, std::numeric_limits<double>::max()));
+        lists.collider_margin = near[0];
+        return;
+    }
     std::vector<Index> reached;  // the meshes the cloth's box, grown by the far pad, reaches
     double far = FAR_MARGIN * reach;
     const double far_pad = 2.0 * reach + LIST_MARGINS * far;
@@ -306,8 +332,6 @@ void keep_list(const Contact& contact, ContactLists& lists, const Physics& phys,
     far = py_max(far, margin);  // (a far pad too small for it: every particle near)
     for (double& a : near) a = a != 0.0 || far == margin ? margin : far;
     const double extra = reach + LIST_MARGINS * margin;
-    std::vector<Pair>& pairs = lists.collider_list;
-    pairs.clear();
     for (const Index k : reached) {
         const Index mesh = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_RADIUS]);
         std::vector<Index>& stamp = lists.collider_stamp;
@@ -319,8 +343,6 @@ void keep_list(const Contact& contact, ContactLists& lists, const Physics& phys,
     std::sort(pairs.begin(), pairs.end());
     pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
     lists.collider_margin = margin;
-    lists.collider_key[0] = phys.meshes.vertices;
-    lists.collider_key[1] = phys.colliders;
 }
 
 //: The pairs near enough to need a look over the step from x0 to x1, in lists.collider_pairs with their
