@@ -20,8 +20,10 @@ enum EdgeContact : int { UNTOUCHED = 0, PUSHED = 1, STOPPED = 2 };
 //: self-collision treats a pair at the thickness: pushed apart to that distance (the collider not moving),
 //: its approaching velocity removed, its sliding reduced by the collider's friction times that.  Pairs whose
 //: motion still comes closer than a tenth of it (or half their start distance) then have their particles
-//: stay where they started, at rest.  Colliders whose box the cloth's path box, grown by thickness / 2,
-//: does not reach cost that test.  Returns EdgeContact flags; lists holds the pairs, the pushes and scratch.
+//: stay where they started, at rest.  The pairs come from a list kept across steps (gathered again when a
+//: particle moves beyond its allowance; docs/model.md section 6.3), which changes no result; a cloth far
+//: from every mesh's box costs a look at each particle's move.  Particles with free 0 (pinned, or held for
+//: the step) are not moved.  Returns EdgeContact flags; lists holds the pairs, the pushes and scratch.
 int collider_edge_contact(const Contact& contact, ContactLists& lists, const Physics& phys, Index n,
                           const double* mass, const double* free, const double* x0, double* x1, double* v1);
 
