@@ -118,6 +118,33 @@ def make_plane(grid_x: int, grid_y: int, family_names: tuple, stiffness: np.ndar
                  local=np.zeros((COMPONENTS, n_c)), algebraic=make_algebraic([], []))
 
 
+def reverse_cuthill_mckee(graph) -> np.ndarray:
+    """The reverse Cuthill-McKee order (int64) of the points of sparse ``graph`` (its pattern, made
+    symmetric): breadth first from a point of least degree in each component, neighbours by ascending
+    degree, ties by index.  (scipy's own breaks ties by numpy's unstable argsort, whose order differs
+    between numpy versions: Blender's numpy 1.26 and 2.x gave a mesh cloth different preconditioners.)"""
+    pattern = (abs(graph) + abs(graph).T).tocsr()
+    indptr, indices = pattern.indptr, pattern.indices
+    degree = np.diff(indptr)
+    seen = np.zeros(pattern.shape[0], dtype=bool)
+    order = []
+    for start in np.argsort(degree, kind="stable"):
+        if seen[start]:
+            continue
+        seen[start] = True
+        queue, head = [int(start)], 0
+        while head < len(queue):
+            point = queue[head]
+            head += 1
+            near = np.unique(indices[indptr[point]:indptr[point + 1]])
+            near = near[~seen[near]]
+            near = near[np.argsort(degree[near], kind="stable")]
+            seen[near] = True
+            queue.extend(near.tolist())
+        order.extend(queue)
+    return np.array(order[::-1], dtype=np.int64)
+
+
 def _csr_parts(matrix) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(indptr, indices, data) of a scipy matrix in canonical CSR (sorted, no duplicates)."""
     matrix = matrix.tocsr()
@@ -193,7 +220,6 @@ def make_mesh_plane(n: int, pairs: np.ndarray, tension_count: int, stiffness: np
     ``rank`` is each point's band position, ``kd`` the widest entry's reach in that order.
     """
     from scipy.sparse import coo_matrix, identity
-    from scipy.sparse.csgraph import reverse_cuthill_mckee
 
     first, second = pairs[:, :tension_count]
     k = stiffness[:tension_count]
@@ -212,7 +238,7 @@ def make_mesh_plane(n: int, pairs: np.ndarray, tension_count: int, stiffness: np
     coarsest = patterns[-1]
     n_c = coarsest.shape[0]
     graph = coo_matrix((np.ones(tension_count), (first, second)), shape=(n, n)) if not prolongators else coarsest
-    order = np.asarray(reverse_cuthill_mckee(graph.tocsr(), symmetric_mode=False), dtype=np.int64)
+    order = reverse_cuthill_mckee(graph)
     rank = np.empty(n_c, dtype=np.int64)
     rank[order] = np.arange(n_c)
     rows, columns = coarsest.nonzero()

@@ -10,11 +10,13 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <limits>
 
 #include "wetcloth/collider_mesh.hpp"
 #include "wetcloth/colliders.hpp"
 #include "wetcloth/floor.hpp"
+#include "wetcloth/self_contact.hpp"
 #include "wetcloth/self_contact/elements.hpp"
 #include "wetcloth/self_contact/geometry.hpp"
 #include "wetcloth/self_contact/response.hpp"
@@ -102,25 +104,38 @@ Motion motion_of(const Pair& pair, const ColliderMeshes& m, Index n, const doubl
     return mo;
 }
 
+//: A lower bound (m) on the distance of a pair's points x[0..3] (kind's): that of the boxes of its two sides.
+double box_gap(int kind, const Vec3 x[4]) {
+    const int split = kind == POINT_TRIANGLE ? 1 : 2;  // points [0, split) against [split, 4)
+    double gap2 = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        auto coord = [&](int k) { return c == 0 ? x[k].x : c == 1 ? x[k].y : x[k].z; };
+        double alo = coord(0), ahi = alo, blo = coord(3), bhi = blo;
+        for (int k = 1; k < split; ++k) alo = std::min(alo, coord(k)), ahi = std::max(ahi, coord(k));
+        for (int k = split; k < 3; ++k) blo = std::min(blo, coord(k)), bhi = std::max(bhi, coord(k));
+        const double g = std::max(0.0, std::max(blo - ahi, alo - bhi));
+        gap2 += g * g;
+    }
+    return std::sqrt(gap2);
+}
+
 //: The pairs of the cloth's elements of `width` particles (rows of `elements`, nullptr: the particles) with the
-//: features of mesh collider k's triangles whose boxes reach the elements' path boxes from x0 to x1 grown by
-//: 2 pad (m), that are nearer than their distance (target_of) plus pad at the start less their motion's bound
-//: (pushes that move no particle more than pad / 4 leave the others out of reach); each with its start
-//: distance's bits.  stamp: scratch, the last element that saw each triangle (+ 1).
+//: features of mesh collider k's triangles whose boxes reach the elements' boxes at positions x grown by
+//: reach + extra (m), that are nearer than their distance (target_of, from reach) plus extra.  stamp:
+//: scratch, the last element that saw each triangle (+ 1).
 void gather(const Index* elements, Index count, int width, Index k, Index mesh, const ColliderMeshes& m, Index n,
-            const double* x0, const double* x1, double pad, std::vector<Index>& near,
-            std::vector<Index>& stamp, std::vector<Pair>& pairs) {
+            const double* x, double reach, double extra, std::vector<Index>& near, std::vector<Index>& stamp,
+            std::vector<Pair>& pairs) {
     auto add = [&](const Pair& pair) {
-        const Motion mo = motion_of(pair, m, n, nullptr, nullptr, x0, x1);
-        const double d = distance(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
-        if (d - motion_bound(mo.kind, mo.p[0], mo.p[1], mo.p[2], mo.p[3]) >= target_of(pair, pad) + pad) return;
-        pairs.push_back(pair);
-        pairs.back()[P_START] = gap_bits(d);
+        const Motion mo = motion_of(pair, m, n, nullptr, nullptr, x, x);
+        if (distance(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3]) < target_of(pair, reach) + extra) {
+            pairs.push_back(pair);
+        }
     };
     std::fill(stamp.begin(), stamp.end(), 0);
     for (Index e = 0; e < count; ++e) {
         const Index* idx = elements ? elements + e * width : &e;
-        const Box box = path_box(idx, width, n, x0, x1, 2.0 * pad);  // the farthest a pair kept can be
+        const Box box = path_box(idx, width, n, x, x, reach + extra);  // the farthest a pair kept can be
         near.clear();
         mesh_triangles_in(m, mesh, box.lo, box.hi, near);
         for (const Index t : near) {
@@ -197,31 +212,159 @@ bool settle_pair(const Pair& pair, double start, const Physics& phys, double gap
     return true;
 }
 
-//: The pairs near enough to need a look over the step from x0 to x1 (gather, pad reach m), with their start
-//: distances, in lists.
-void pairs_for_step(const Contact& contact, ContactLists& lists, const Physics& phys, Index n, const double* x0,
-                    const double* x1, double reach) {
-    std::vector<Pair>& pairs = lists.collider_pairs;
+//: The kept list (ContactLists::collider_list) holds every pair nearer than its distance plus reach +
+//: LIST_MARGINS margins at the reference positions.  While no particle is farther than the margin from its
+//: reference at a step's start and end, a pair's start distance is at most a margin less than there and
+//: its motion's bound (motion_bound: at most 2.5 times the largest motion of its cloth points, each at most
+//: 2 margins) at most 5 margins: the list holds every pair pairs_for_step would keep.  A particle whose
+//: elements' boxes are farther than 2 reach + LIST_MARGINS far margins from every mesh triangle's cell
+//: may move by the far margin.
+inline constexpr double LIST_MARGINS = 6.0;
+//: The least margin of a list, and the far margin, as fractions of thickness / 2: a cloth lying still keeps
+//: its list while its parts away from the mesh swing.
+inline constexpr double LEAST_MARGIN = 1.0;
+inline constexpr double FAR_MARGIN = 4.0;
+
+//: The largest distance (m) of a particle of x (3, n) from its place in y (3, n).
+double largest_move(Index n, const double* x, const double* y) {
+    double most2 = 0.0;
+    for (Index i = 0; i < n; ++i) {
+        double d2 = 0.0;
+        for (Index c = 0; c < 3; ++c) d2 += (x[c * n + i] - y[c * n + i]) * (x[c * n + i] - y[c * n + i]);
+        most2 = py_max(most2, d2);
+    }
+    return std::sqrt(most2);
+}
+
+//: Whether the kept list, gathered from phys's meshes, holds at positions x (3, n): no particle farther from
+//: its reference than its allowance.
+bool list_holds(const ContactLists& lists, const Physics& phys, Index n, const double* x) {
+    if (!(lists.collider_margin > 0.0) || lists.collider_key[0] != phys.meshes.vertices ||
+        lists.collider_key[1] != phys.colliders) {
+        return false;
+    }
+    const double* ref = lists.collider_reference.data();
+    const double* allowance = lists.collider_allowance.data();
+    for (Index i = 0; i < n; ++i) {
+        double d2 = 0.0;
+        for (Index c = 0; c < 3; ++c) d2 += (x[c * n + i] - ref[c * n + i]) * (x[c * n + i] - ref[c * n + i]);
+        if (!(d2 <= allowance[i] * allowance[i])) return false;
+    }
+    return true;
+}
+
+//: Mark (near = 1) the particles of the cloth's elements of `width` particles (as gather's) whose boxes at x,
+//: grown by pad (m), overlap a cell of mesh `mesh` that lists a triangle.
+void mark_near(const Index* elements, Index count, int width, Index mesh, const ColliderMeshes& m, Index n,
+               const double* x, double pad, std::vector<Index>& found, std::vector<double>& near) {
+    for (Index e = 0; e < count; ++e) {
+        const Index* idx = elements ? elements + e * width : &e;
+        const Box box = path_box(idx, width, n, x, x, pad);
+        found.clear();
+        mesh_triangles_in(m, mesh, box.lo, box.hi, found);
+        if (found.empty()) continue;
+        for (int k = 0; k < width; ++k) near[static_cast<std::size_t>(idx[k])] = 1.0;
+    }
+}
+
+//: Gather the kept list for the step from x0 to x1: its reference their midpoint; a particle near a mesh
+//: may move twice the step's largest motion of those particles, at least LEAST_MARGIN of reach (thickness / 2,
+//: m), the others FAR_MARGIN of reach (or the near ones' margin if more); a cloth whose box is far from
+//: every mesh's box keeps an empty list while no particle moves more than what that distance allows.
+void keep_list(const Contact& contact, ContactLists& lists, const Physics& phys, Index n, const double* x0,
+               const double* x1, double reach) {
+    std::vector<double>& x = lists.collider_reference;
+    x.resize(3 * static_cast<std::size_t>(n));
+    for (Index k = 0; k < 3 * n; ++k) x[static_cast<std::size_t>(k)] = 0.5 * (x0[k] + x1[k]);
+    std::vector<double>& near = lists.collider_allowance;  // first 1 for the particles near a mesh
+    near.assign(static_cast<std::size_t>(n), 0.0);
+    std::vector<Index>& found = lists.collider_items;
+    std::vector<Pair>& pairs = lists.collider_list;
     pairs.clear();
-    const Box cloth = path_box(nullptr, n, n, x0, x1, reach);  // a mesh it does not reach costs this pass
+    lists.collider_key[0] = phys.meshes.vertices;
+    lists.collider_key[1] = phys.colliders;
+    // Far from every mesh's box (no pair within 2 reach + LIST_MARGINS allowances): no pairs, and every
+    // particle may move that allowance.
+    const Box whole = path_box(nullptr, n, n, x.data(), x.data(), 0.0);
+    double gap = std::numeric_limits<double>::infinity();
+    for (Index k = 0; k < phys.collider_count; ++k) {
+        const double* row = phys.colliders + k * COLLIDER_COLUMNS;
+        if (static_cast<Index>(row[C_SHAPE]) != MESH) continue;
+        const double* header = phys.meshes.headers + static_cast<Index>(row[C_RADIUS]) * MESH_COLUMNS;
+        double gap2 = 0.0;
+        for (Index c = 0; c < 3; ++c) {
+            const double g = py_max(0.0, py_max(header[M_LO_X + c] - whole.hi[c], whole.lo[c] - header[M_HI_X + c]));
+            gap2 += g * g;
+        }
+        gap = py_min(gap, std::sqrt(gap2));
+    }
+    const double clear = (gap - 2.0 * reach) / LIST_MARGINS;
+    if (clear >= LEAST_MARGIN * reach) {
+        near.assign(static_cast<std::size_t>(n), py_min(clear, std::numeric_limits<double>::max()));
+        lists.collider_margin = near[0];
+        return;
+    }
+    std::vector<Index> reached;  // the meshes the cloth's box, grown by the far pad, reaches
+    double far = FAR_MARGIN * reach;
+    const double far_pad = 2.0 * reach + LIST_MARGINS * far;
+    const Box cloth = path_box(nullptr, n, n, x.data(), x.data(), far_pad);  // a mesh it does not reach costs this
     for (Index k = 0; k < phys.collider_count; ++k) {
         const double* row = phys.colliders + k * COLLIDER_COLUMNS;
         if (static_cast<Index>(row[C_SHAPE]) != MESH) continue;
         const Index mesh = static_cast<Index>(row[C_RADIUS]);
         const double* header = phys.meshes.headers + mesh * MESH_COLUMNS;
-        bool reached = true;
-        for (Index c = 0; c < 3; ++c)
-            reached = reached && cloth.hi[c] >= header[M_LO_X + c] && cloth.lo[c] <= header[M_HI_X + c];
-        if (!reached) continue;
+        bool meets = true;
+        for (Index c = 0; c < 3; ++c) meets = meets && cloth.hi[c] >= header[M_LO_X + c] && cloth.lo[c] <= header[M_HI_X + c];
+        if (!meets) continue;
+        reached.push_back(k);
+        mark_near(nullptr, n, 1, mesh, phys.meshes, n, x.data(), far_pad, found, near);
+        mark_near(contact.edges, contact.edge_count, 2, mesh, phys.meshes, n, x.data(), far_pad, found, near);
+        mark_near(contact.triangles, contact.triangle_count, 3, mesh, phys.meshes, n, x.data(), far_pad, found, near);
+    }
+    double motion2 = 0.0;
+    for (Index i = 0; i < n; ++i) {
+        if (near[static_cast<std::size_t>(i)] == 0.0) continue;
+        double d2 = 0.0;
+        for (Index c = 0; c < 3; ++c) d2 += (x1[c * n + i] - x0[c * n + i]) * (x1[c * n + i] - x0[c * n + i]);
+        motion2 = py_max(motion2, d2);
+    }
+    const double margin = py_max(LEAST_MARGIN * reach, 2.0 * std::sqrt(motion2));
+    far = py_max(far, margin);  // (a far pad too small for it: every particle near)
+    for (double& a : near) a = a != 0.0 || far == margin ? margin : far;
+    const double extra = reach + LIST_MARGINS * margin;
+    for (const Index k : reached) {
+        const Index mesh = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_RADIUS]);
         std::vector<Index>& stamp = lists.collider_stamp;
-        gather(nullptr, n, 1, k, mesh, phys.meshes, n, x0, x1, reach, lists.collider_items, stamp, pairs);
-        gather(contact.edges, contact.edge_count, 2, k, mesh, phys.meshes, n, x0, x1, reach,
-               lists.collider_items, stamp, pairs);
-        gather(contact.triangles, contact.triangle_count, 3, k, mesh, phys.meshes, n, x0, x1, reach,
-               lists.collider_items, stamp, pairs);
+        gather(nullptr, n, 1, k, mesh, phys.meshes, n, x.data(), reach, extra, found, stamp, pairs);
+        gather(contact.edges, contact.edge_count, 2, k, mesh, phys.meshes, n, x.data(), reach, extra, found, stamp, pairs);
+        gather(contact.triangles, contact.triangle_count, 3, k, mesh, phys.meshes, n, x.data(), reach, extra, found,
+               stamp, pairs);
     }
     std::sort(pairs.begin(), pairs.end());
     pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    lists.collider_margin = margin;
+}
+
+//: The pairs near enough to need a look over the step from x0 to x1, in lists.collider_pairs with their
+//: start distances: those of the kept list (gathered again unless it holds at x0 and x1) nearer than their
+//: distance (target_of) plus reach (m) at the start less their motion's bound (pushes that move no particle
+//: more than reach / 4 leave the others out of reach).  Which list they come from changes nothing: a pair
+//: kept beyond them is never treated.
+void pairs_for_step(const Contact& contact, ContactLists& lists, const Physics& phys, Index n, const double* x0,
+                    const double* x1, double reach) {
+    if (!list_holds(lists, phys, n, x0) || !list_holds(lists, phys, n, x1)) keep_list(contact, lists, phys, n, x0, x1, reach);
+    std::vector<Pair>& pairs = lists.collider_pairs;
+    pairs.clear();
+    for (const Pair& pair : lists.collider_list) {
+        const Motion mo = motion_of(pair, phys.meshes, n, nullptr, nullptr, x0, x1);
+        const double bound = motion_bound(mo.kind, mo.p[0], mo.p[1], mo.p[2], mo.p[3]);
+        const double within = target_of(pair, reach) + reach;
+        if (box_gap(mo.kind, mo.x) - bound >= within) continue;  // (the cheap test first)
+        const double d = distance(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
+        if (d - bound >= within) continue;
+        pairs.push_back(pair);
+        pairs.back()[P_START] = gap_bits(d);
+    }
     std::vector<double>& start = lists.collider_start;
     start.resize(pairs.size());
     for (std::size_t j = 0; j < pairs.size(); ++j) start[j] = gap_of(pairs[j][P_START]);
@@ -256,13 +399,7 @@ int collider_edge_contact(const Contact& contact, ContactLists& lists, const Phy
             if (treated == 0) break;
             result |= PUSHED;
         }
-        double moved2 = 0.0;
-        for (Index i = 0; i < n; ++i) {
-            double d2 = 0.0;
-            for (Index c = 0; c < 3; ++c) d2 += (x1[c * n + i] - gathered[c * n + i]) * (x1[c * n + i] - gathered[c * n + i]);
-            moved2 = py_max(moved2, d2);
-        }
-        if (moved2 <= 0.0625 * reach * reach) break;  // a pair's motion bound grows by at most 4 times the move
+        if (largest_move(n, x1, gathered.data()) <= 0.25 * reach) break;  // a pair's motion bound grows by at most 4 times the move
         if (attempt + 1 < ATTEMPTS) continue;
         pairs_for_step(contact, lists, phys, n, x0, x1, reach);  // for the last resort
     }
@@ -295,6 +432,55 @@ int collider_edge_contact(const Contact& contact, ContactLists& lists, const Phy
         result |= STOPPED;
     }
     return result;
+}
+
+Index hold_on_collider_edges(const Contact& contact, ContactLists& lists, const Physics& phys, Index n, const double* pos,
+                             const double* vel, double* free, double* held) {
+    if (phys.meshes.count == 0 || n == 0) return 0;
+    const double reach = 0.5 * phys.thickness;
+    if (!list_holds(lists, phys, n, pos)) keep_list(contact, lists, phys, n, pos, pos, reach);
+    lists.collider_rest.resize(4 * static_cast<std::size_t>(n));
+    Index count = 0;
+    for (const Pair& pair : lists.collider_list) {
+        if (pair[P_KIND] == POINT_TRIANGLE && pair[P_POINTS] >= 0) continue;  // a particle: the particles' contact
+        const Motion mo = motion_of(pair, phys.meshes, n, nullptr, nullptr, pos, pos);
+        if (box_gap(mo.kind, mo.x) > (1.0 + RESTING_SLACK) * target_of(pair, reach)) continue;
+        const Weights w = closest(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
+        const Vec3 d = combine(w, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
+        const double length = norm(d);
+        if (!(length > 0.0 && length <= (1.0 + RESTING_SLACK) * target_of(pair, reach))) continue;
+        const double friction = phys.colliders[pair[P_COLLIDER] * COLLIDER_COLUMNS + C_FRICTION];
+        const double side[4] = {w.w0, w.w1, w.w2, w.w3};
+        for (int k = 0; k < 4; ++k) {
+            const Index s = pair[P_POINTS + k];
+            if (s < 0 || side[k] == 0.0 || free[s] == 0.0) continue;
+            const double sign = side[k] > 0.0 ? 1.0 : -1.0;  // the way a push would move it (settle_pair)
+            const double normal[3] = {sign * d.x / length, sign * d.y / length, sign * d.z / length};
+            const double v[3] = {vel[s], vel[n + s], vel[2 * n + s]};
+            if (!comes_to_rest(v, normal, friction)) continue;
+            free[s] = 0.0;
+            held[s] = EDGE_HELD;
+            double* rest = lists.collider_rest.data() + 4 * static_cast<std::size_t>(s);
+            rest[0] = normal[0], rest[1] = normal[1], rest[2] = normal[2], rest[3] = friction;
+            count += 1;
+        }
+    }
+    return count;
+}
+
+Index release_from_collider_edges(const ContactLists& lists, Index n, const double* force, double* free, double* held,
+                                  double cone) {
+    Index released = 0;
+    for (Index i = 0; i < n; ++i) {
+        if (held[i] != EDGE_HELD) continue;
+        const double* rest = lists.collider_rest.data() + 4 * static_cast<std::size_t>(i);
+        const double f[3] = {force[i], force[n + i], force[2 * n + i]};
+        if (!slips(f, rest, cone * rest[3])) continue;
+        held[i] = 0.0;
+        free[i] = 1.0;
+        released += 1;
+    }
+    return released;
 }
 
 void collider_edge_history(const ContactLists& lists, Index n, const double* pos, const double* vel, double* prev_pos,

@@ -168,11 +168,12 @@ void maybe_sleep(Core& core, double h, bool exchanging) {
     }
 }
 
-//: collider_edge_contact over the step from x0 to x1 (velocities v1).
+//: collider_edge_contact over the step from x0 to x1 (velocities v1), the particles held during the step
+//: (at rest on their support) not moved.
 int collider_edges(Core& core, const double* x0, double* x1, double* v1) {
     if (core.phys.meshes.count == 0 || core.contact.lists == nullptr) return UNTOUCHED;
     return collider_edge_contact(core.contact, *core.contact.lists, core.phys, core.cloth.n, core.solver.mass,
-                                 core.cloth.free, x0, x1, v1);
+                                 core.contact.lists->collider_free.data(), x0, x1, v1);
 }
 
 //: Take one accepted step of at most `remaining` s.  Returns DONE or BLOWN_UP.
@@ -189,6 +190,11 @@ Status step(Core& core, double remaining) {
     Index held = hold_resting(n, phys.floor_z, buf.pos, buf.vel, cloth.free, buf.held);
     const Index held_on_colliders = hold_on_colliders(n, phys, buf.pos, buf.vel, cloth.free, buf.held);
     held += held_on_colliders;
+    const Index held_on_edges = core.contact.lists != nullptr ? hold_on_collider_edges(core.contact, *core.contact.lists,
+                                                                                       phys, n, buf.pos, buf.vel,
+                                                                                       cloth.free, buf.held)
+                                                              : 0;
+    held += held_on_edges;
     const Index on_layers = hold_on_layers(core.contact, phys.thickness, n, buf.pos, buf.vel, cloth.free, buf.held);
     if (on_layers > 0) {  // whom the forces in hand would slide off their layer go free at once
         forces(cloth, phys, core.work, buf.pos, buf.vel, buf.water);
@@ -216,7 +222,11 @@ Status step(Core& core, double remaining) {
         if (held > 0 && trial.converged) {
             // Slips on the floor or a collider that move no particle farther than the step's allowed error
             // need no second try: they are made now (most are: a draping cloth releases a few every step).
-            Index released = release_unsupported(core.contact, n, cloth.free, buf.held);
+            // Layers' and collider edges' releases take the step again.
+            Index released = release_unsupported(core.contact, n, cloth.free, buf.held) +
+                             (held_on_edges > 0 ? release_from_collider_edges(*core.contact.lists, n, core.work.force,
+                                                                               cloth.free, buf.held)
+                                                : 0);
             const double slipped = released == 0 && adaptive
                 ? slip_on_supports(n, phys, core.work.force, core.solver.mass, h, control.allowed, cloth.free, buf.held,
                                    buf.trial_pos, buf.trial_vel)
@@ -235,6 +245,10 @@ Status step(Core& core, double remaining) {
                 if (held_on_colliders > 0) {
                     held -= release_from_colliders(n, phys, buf.pos, core.work.force, cloth.free, buf.held,
                                                    RELEASE_ROUND_CONE);
+                }
+                if (held_on_edges > 0) {
+                    held -= release_from_collider_edges(*core.contact.lists, n, core.work.force, cloth.free, buf.held,
+                                                        RELEASE_ROUND_CONE);
                 }
                 clock[REJECTED] += 1;
                 continue;
@@ -276,6 +290,9 @@ Status step(Core& core, double remaining) {
         clock[NEXT_STEP] = pymax(control.smallest_step, h * pymax(control.shrink, factor));
         clock[REJECTED] += 1;
         ++rejections;
+    }
+    if (phys.meshes.count > 0 && core.contact.lists != nullptr) {
+        core.contact.lists->collider_free.assign(cloth.free, cloth.free + n);
     }
     if (held > 0) release_all(n, cloth.free, buf.held);
     if (std::isfinite(trial.error)) clock[LARGEST_ERROR] = pymax(clock[LARGEST_ERROR], trial.error);

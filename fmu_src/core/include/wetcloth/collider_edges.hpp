@@ -20,10 +20,30 @@ enum EdgeContact : int { UNTOUCHED = 0, PUSHED = 1, STOPPED = 2 };
 //: self-collision treats a pair at the thickness: pushed apart to that distance (the collider not moving),
 //: its approaching velocity removed, its sliding reduced by the collider's friction times that.  Pairs whose
 //: motion still comes closer than a tenth of it (or half their start distance) then have their particles
-//: stay where they started, at rest.  Colliders whose box the cloth's path box, grown by thickness / 2,
-//: does not reach cost that test.  Returns EdgeContact flags; lists holds the pairs, the pushes and scratch.
+//: stay where they started, at rest.  The pairs come from a list kept across steps (gathered again when a
+//: particle moves beyond its allowance; docs/model.md section 6.3), which changes no result; a cloth far
+//: from every mesh's box costs a look at each particle's move.  Particles with free 0 (pinned, or held for
+//: the step) are not moved.  Returns EdgeContact flags; lists holds the pairs, the pushes and scratch.
 int collider_edge_contact(const Contact& contact, ContactLists& lists, const Physics& phys, Index n,
                           const double* mass, const double* free, const double* x0, double* x1, double* v1);
+
+//: The value of Buffers::held for a particle resting on a mesh collider's edge or vertex (the floor's is 1,
+//: a layer's 2, an analytic or mesh collider k's surface 3 + k).
+inline constexpr double EDGE_HELD = -1.0;
+
+//: Before a step from pos (3, n, m) at vel (3, n, m/s): the free particles of the cloth's edges and
+//: triangles (contact's) that lie on a mesh collider's edge or vertex, within twice their distance (the
+//: edge-edge and vertex-triangle pairs collider_edge_contact keeps apart), at rest there or coming onto it
+//: slowly enough that the collider's friction stops them (comes_to_rest), are held for the step as the
+//: floor holds its particles (free 0, held EDGE_HELD), each with the direction a push would move it
+//: and the collider's friction, in lists.  Returns how many.
+Index hold_on_collider_edges(const Contact& contact, ContactLists& lists, const Physics& phys, Index n, const double* pos,
+                             const double* vel, double* free, double* held);
+
+//: Release the particles hold_on_collider_edges held that the step's force (N, (3, n)) lifts off their
+//: support or pushes along it beyond cone times its friction times the force into it.  Returns how many.
+Index release_from_collider_edges(const ContactLists& lists, Index n, const double* force, double* free, double* held,
+                                  double cone = 1.0);
 
 //: After the step is taken (pos, vel its end, prev_pos, prev_vel its start, (3, n)): the particles that
 //: collider_edge_contact pushed get the history of a straight motion along their last push (as the

@@ -269,6 +269,13 @@ struct ContactLists {
     std::vector<Index> resting;         // (n, 3) what a particle held on a layer rests on (-1 padding)
     std::vector<double> resting_normal;  // (n, 3) the unit normal from that support to the particle
     std::vector<std::array<Index, 7>> collider_pairs;  // the cloth's pairs with mesh colliders' features (collider_edges.hpp)
+    std::vector<std::array<Index, 7>> collider_list;   // the pairs near the reference positions, kept across steps
+    std::vector<double> collider_reference;  // (3, n) the positions that list was gathered at, m
+    std::vector<double> collider_allowance;  // (n) m: how far each particle may move from them
+    double collider_margin = 0.0;            // m: the allowance of those near a mesh (0: no list)
+    const void* collider_key[2] = {nullptr, nullptr};  // the meshes and collider rows it was gathered from
+    std::vector<double> collider_free;   // (n) Cloth::free during the step: 0 also for the particles held in it
+    std::vector<double> collider_rest;   // (4, n) a particle resting on a mesh's edge or vertex: its normal (3), friction
     std::vector<Index> collider_items;   // their search's scratch
     std::vector<Index> collider_stamp;  // (mesh triangles) scratch: the last element that saw each
     std::vector<double> collider_start;  // (count) their distances at the step's start, m

@@ -1,5 +1,7 @@
 // Self-collision (docs/model.md section 6.2; port of bf41571:fmu_src/wetcloth/kernels/self_contact/).
 #pragma once
+#include <cmath>
+
 #include "wetcloth/core.hpp"
 
 namespace wc {
@@ -29,6 +31,16 @@ inline constexpr double RESTING_SLACK = 1.0;
 inline constexpr double RESTING_SPEED = 0.02;  // m/s
 inline constexpr Index RESTING_PASSES = 4;
 inline constexpr double LAYER_HELD = 2.0;
+
+//: Whether a particle of velocity v (3, m/s) is at rest on a support of unit outward normal (3) or coming
+//: onto it slowly enough (below RESTING_SPEED) that an inelastic impulse with `friction` stops it.
+inline bool comes_to_rest(const double* v, const double* normal, double friction) {
+    const double approach = -(v[0] * normal[0] + v[1] * normal[1] + v[2] * normal[2]);  // m/s onto the support
+    const double sx = v[0] + approach * normal[0], sy = v[1] + approach * normal[1], sz = v[2] + approach * normal[2];
+    const double sliding = std::sqrt(sx * sx + sy * sy + sz * sz);
+    return !(approach < 0.0 || sliding > friction * approach ||
+             approach * approach + sliding * sliding > RESTING_SPEED * RESTING_SPEED);
+}
 
 //: Hold the free particles at rest on a still layer for the coming step (free 0, held LAYER_HELD); returns
 //: how many.  pos, vel (3, n).

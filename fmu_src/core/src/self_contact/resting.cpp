@@ -33,14 +33,9 @@ bool hold_if_resting(ContactLists& lists, double thickness, double friction, Ind
                      double* held, Index p, const Index support[3], const Vec3& normal, double distance) {
     if (free[p] == 0.0 || !all_still(free, support)) return false;
     if (!(distance > 0.0 && distance <= (1.0 + RESTING_SLACK) * thickness)) return false;
-    const double vx = vel[p], vy = vel[n + p], vz = vel[2 * n + p];
-    const double approach = -(vx * normal.x + vy * normal.y + vz * normal.z);  // m/s onto the support
-    const double sx = vx + approach * normal.x, sy = vy + approach * normal.y, sz = vz + approach * normal.z;
-    const double sliding = std::sqrt(sx * sx + sy * sy + sz * sz);
-    if (approach < 0.0 || sliding > friction * approach ||
-        approach * approach + sliding * sliding > RESTING_SPEED * RESTING_SPEED) {
-        return false;
-    }
+    const double v[3] = {vel[p], vel[n + p], vel[2 * n + p]};
+    const double up[3] = {normal.x, normal.y, normal.z};
+    if (!comes_to_rest(v, up, friction)) return false;
     free[p] = 0.0;
     held[p] = LAYER_HELD;
     const std::size_t i = static_cast<std::size_t>(p);
