@@ -11,7 +11,11 @@ for each, and the ratio of CPU time per vertex.  The mesh takes the core's liste
 algebraic multigrid preconditioner (mesh_plane.cpp); the grid its families and geometric multigrid.
 Between them the grid's own cloth as a quad mesh file ("quads"), its vertices numbered along the columns
 (``--shuffle``: in a random order) rather than in the grid's order, so that it takes the mesh path:
-listed springs, face drag over triangles, the algebraic multigrid.
+listed springs, face drag over triangles, the algebraic multigrid.  ``--square-meshes`` adds two triangle
+meshes of the grid's square between them: its cells split in two ("split": the mesh path with a triangle
+mesh's springs, a regular one), and its inner points moved at random by up to a quarter of the spacing
+and triangulated by Delaunay ("jittered": irregular in the square's outline; the hanging case's box pins
+the inner points moved into it too).
 """
 
 from __future__ import annotations
@@ -59,11 +63,36 @@ def rectangle_file(path: Path, scene: wetcloth.Scene, shuffle: bool) -> Path:
     return path
 
 
+def square_file(path: Path, scene: wetcloth.Scene, jitter: float) -> Path:
+    """The scene's square as a triangle mesh file at ``path``: its cells split (jitter 0), or its inner points
+    moved by up to ``jitter`` times the spacing and triangulated by Delaunay."""
+    from scipy.spatial import Delaunay
+
+    nx, ny = scene.nx, scene.ny
+    xy = build_topology(scene).rest_xy.T.copy()
+    col, row = np.tile(np.arange(nx), ny), np.repeat(np.arange(ny), nx)
+    if jitter == 0.0:
+        a = np.flatnonzero((col < nx - 1) & (row < ny - 1))
+        triangles = np.concatenate([np.stack([a, a + 1, a + nx + 1], 1), np.stack([a, a + nx + 1, a + nx], 1)])
+    else:
+        inner = (col > 0) & (col < nx - 1) & (row > 0) & (row < ny - 1)
+        spacing = np.array([scene.width / (nx - 1), scene.length / (ny - 1)])
+        xy[inner] += np.random.default_rng(26).uniform(-jitter, jitter, (int(inner.sum()), 2)) * spacing
+        triangles = Delaunay(xy).simplices
+        a, b, c = (xy[triangles[:, k]] for k in range(3))
+        clockwise = (b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0] < 0
+        triangles[clockwise] = triangles[clockwise][:, [0, 2, 1]]
+    points = np.column_stack([xy, np.zeros(len(xy))])
+    meshio.write(path, meshio.Mesh(points, [("triangle", triangles.astype(np.int32))]), binary=True)
+    return path
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--vertices", type=int, default=10000)
     parser.add_argument("--duration", type=float, default=0.5, help="simulated seconds (default 0.5)")
     parser.add_argument("--shuffle", action="store_true", help="the quad mesh's vertices in a random order")
+    parser.add_argument("--square-meshes", action="store_true", help="also the square split into triangles, and jittered")
     args = parser.parse_args()
     rings = round(math.sqrt(args.vertices / math.pi))
     points, triangles = make_meshes.round_cloth(radius=make_meshes.RADIUS, rings=rings)
@@ -75,6 +104,12 @@ def main() -> None:
     mesh = dict(cloth_mesh=str(path), place_mesh="on")
     quads = dict(cloth_mesh=str(rectangle_file(path.with_name("square.ply"), wetcloth.load_scene(**grid), args.shuffle)),
                  place_mesh="on")
+    shapes = {"grid": grid, "quads": quads}
+    if args.square_meshes:
+        square = wetcloth.load_scene(**grid)
+        for kind, jitter in (("split", 0.0), ("jittered", 0.25)):
+            shapes[kind] = dict(cloth_mesh=str(square_file(path.with_name(f"{kind}.ply"), square, jitter)), place_mesh="on")
+    shapes["mesh"] = mesh
     cases = {
         "landing on water": dict(initial_tilt=0.0, initial_height=0.05),
         "hanging in air": dict(initial_tilt=0.0, initial_height=2.0, water_level=-10.0, floor_level=-20.0),
@@ -82,7 +117,7 @@ def main() -> None:
     print(f"disc of {len(points)} vertices ({rings} rings) against a {side} x {side} grid, {args.duration} s")
     for label, base in cases.items():
         results = {}
-        for kind, shape in (("grid", grid), ("quads", quads), ("mesh", mesh)):
+        for kind, shape in shapes.items():
             extra = dict(pinned_vertices="box:-9,0.6,-9,9,9,9") if label.startswith("hanging") else {}
             seconds, sim = run(wetcloth.load_scene(**base, **shape, **extra), args.duration)
             n = sim.model.topology.n
@@ -90,8 +125,8 @@ def main() -> None:
             c = sim.solver_counts
             print(f"  {label:<17} {kind}: {n:6d} vertices  {seconds:7.1f} s CPU  steps {sim.steps:5d}  rejected "
                   f"{sim.rejected_steps:4d}  Newton {c['newton_iterations']:5d}  CG {c['cg_iterations']:6d}", flush=True)
-        print(f"  {label:<17} per vertex: mesh / grid {results['mesh'] / results['grid']:.2f}x, quads / grid "
-              f"{results['quads'] / results['grid']:.2f}x", flush=True)
+        ratios = ", ".join(f"{kind} / grid {results[kind] / results['grid']:.2f}x" for kind in results if kind != "grid")
+        print(f"  {label:<17} per vertex: {ratios}", flush=True)
 
 
 if __name__ == "__main__":

@@ -244,13 +244,12 @@ def face_areas(mesh: MeshFile) -> np.ndarray:
 
 
 def vertex_areas(mesh: MeshFile) -> np.ndarray:
-    """Each vertex's area (n,) m2: every face's area shared equally by its corners."""
-    share = face_areas(mesh) / mesh.corners
-    area, start = np.zeros(mesh.n), 0
-    for b in mesh.blocks:
-        area += np.bincount(b.ravel(), np.repeat(share[start:start + len(b)], b.shape[1]), minlength=mesh.n)
-        start += len(b)
-    return area
+    """Each vertex's area (n,) m2: its shares of the triangles (a quad's: its split), by the same mixed
+    Voronoi areas that share their face drag (``corner_shares``), so that a uniform load per area gives
+    every particle the same acceleration (docs/model.md section 2.4)."""
+    t = mesh.triangles
+    share = corner_shares(mesh.points.T, t) * triangle_areas(mesh.points, t)[:, None]
+    return np.bincount(t.ravel(), share.ravel(), minlength=mesh.n)
 
 
 def flat_coordinates(points: np.ndarray, area: np.ndarray, triangles: np.ndarray) -> np.ndarray:

@@ -243,8 +243,23 @@ Index release_from_colliders(Index n, const Physics& phys, const double* pos, co
     return released;
 }
 
-double slip_on_supports(Index n, const Physics& phys, const double* force, const double* mass, double h, double limit,
-                        double* free, double* held, double* pos, double* vel) {
+namespace {
+
+//: m_i + e^T (D_i + B_i) e (kg) for the unit vector e (slip_on_supports); m_i without the blocks.
+double effective_mass(Index n, Index i, const double* mass, const double* diagonal_blocks, const double* blocks,
+                      const double* e) {
+    if (diagonal_blocks == nullptr) return mass[i];
+    double s[6];
+    for (Index slot = 0; slot < 6; ++slot) s[slot] = diagonal_blocks[slot * n + i] + blocks[slot * n + i];
+    return mass[i] + s[0] * e[0] * e[0] + s[1] * e[1] * e[1] + s[2] * e[2] * e[2] +
+           2.0 * (s[3] * e[0] * e[1] + s[4] * e[0] * e[2] + s[5] * e[1] * e[2]);
+}
+
+}  // namespace
+
+double slip_on_supports(Index n, const Physics& phys, const double* force, const double* mass,
+                        const double* diagonal_blocks, const double* blocks, double h, double limit, double* free,
+                        double* held, double* pos, double* vel) {
     const double up[3] = {0.0, 0.0, 1.0};
     double farthest = 0.0;
     for (int pass = 0; pass < 2; ++pass) {  // first: how far each would move; second: move them
@@ -263,16 +278,19 @@ double slip_on_supports(Index n, const Physics& phys, const double* force, const
             if (!slips(f, nrm, friction)) continue;
             double excess[3];
             slip_force(f, nrm, friction, excess);
-            const double move = 0.5 * std::sqrt(excess[0] * excess[0] + excess[1] * excess[1] + excess[2] * excess[2]) /
-                                mass[i] * h * h;
+            const double size = std::sqrt(excess[0] * excess[0] + excess[1] * excess[1] + excess[2] * excess[2]);
+            const double scale = size > 0.0 ? 1.0 / size : 0.0;  // (a force of exactly zero lifting off: no move)
+            const double e[3] = {excess[0] * scale, excess[1] * scale, excess[2] * scale};
+            const double inertia = effective_mass(n, i, mass, diagonal_blocks, blocks, e);
+            const double move = 0.5 * size / inertia * h * h;
             if (pass == 0) {
                 if (move > limit) return -1.0;
                 farthest = std::max(farthest, move);
                 continue;
             }
             for (int c = 0; c < 3; ++c) {
-                pos[c * n + i] += 0.5 * excess[c] / mass[i] * h * h;
-                vel[c * n + i] += excess[c] / mass[i] * h;
+                pos[c * n + i] += 0.5 * excess[c] / inertia * h * h;
+                vel[c * n + i] += excess[c] / inertia * h;
             }
             held[i] = 0.0;
             free[i] = 1.0;

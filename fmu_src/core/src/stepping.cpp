@@ -185,6 +185,7 @@ Status step(Core& core, double remaining) {
     double* clock = core.clock;
     const Index n = cloth.n;
     const bool adaptive = control.allowed > 0.0;
+    const bool implicit = control.integrator == BDF2 || control.integrator == IMPLICIT_EULER;
     // Particles at rest on the floor take no part in the step (a constraint of its solve) unless its forces
     // would move them; the model's free flags are theirs again before the step ends.
     Index held = hold_resting(n, phys.floor_z, buf.pos, buf.vel, cloth.free, buf.held);
@@ -228,8 +229,9 @@ Status step(Core& core, double remaining) {
                                                                                cloth.free, buf.held)
                                                 : 0);
             const double slipped = released == 0 && adaptive
-                ? slip_on_supports(n, phys, core.work.force, core.solver.mass, h, control.allowed, cloth.free, buf.held,
-                                   buf.trial_pos, buf.trial_vel)
+                ? slip_on_supports(n, phys, core.work.force, core.solver.mass, implicit ? core.work.diagonal_blocks : nullptr,
+                                   core.work.blocks, h, control.allowed, cloth.free, buf.held, buf.trial_pos,
+                                   buf.trial_vel)
                 : -1.0;
             if (slipped >= 0.0) {
                 trial.error = pymax(trial.error, slipped);

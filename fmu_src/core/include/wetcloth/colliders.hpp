@@ -46,12 +46,17 @@ Index release_from_colliders(Index n, const Physics& phys, const double* pos, co
 //: Instead of taking the step again: the particles held on the floor or a collider that the step's force
 //: (N, (3, n)) would have slipped or lifted (release_slipping's and release_from_colliders's test) move
 //: as they would have from rest over the step of h s under the force's excess beyond friction
-//: (slip_force; a = excess / m, mass (n) kg): pos (3, n) by a h^2 / 2 and vel by a h, and are released;
-//: provided each of them moves at most `limit` m (the error the step may make) and a collider's is
-//: still on it.  Returns the farthest such move (m, 0 if none slips), or -1 with nothing changed when
-//: one would move farther (the step is then to be taken again).  Layers' holds are not looked at.
-double slip_on_supports(Index n, const Physics& phys, const double* force, const double* mass, double h, double limit,
-                        double* free, double* held, double* pos, double* vel);
+//: (slip_force; a = excess / m_e): pos (3, n) by a h^2 / 2 and vel by a h, and are released; provided
+//: each of them moves at most `limit` m (the error the step may make) and a collider's is still on it.
+//: m_e (kg) is the particle's effective mass along the excess in the step's own matrix: its mass (n)
+//: plus e^T (D_i + B_i) e, e the excess's direction, D_i its springs' part of its diagonal block
+//: (diagonal_blocks (6, n)) and B_i its own (blocks (6, n): drag, buoyancy), as the implicit step left
+//: them (docs/model.md section 6.1); the mass alone when diagonal_blocks is null (explicit schemes).
+//: Returns the farthest such move (m, 0 if none slips), or -1 with nothing changed when one would move
+//: farther (the step is then to be taken again).  Layers' holds are not looked at.
+double slip_on_supports(Index n, const Physics& phys, const double* force, const double* mass,
+                        const double* diagonal_blocks, const double* blocks, double h, double limit, double* free,
+                        double* held, double* pos, double* vel);
 
 //: The particles on a collider (within gap m, where collider_contact left them) get the history of a
 //: straight motion along its normal (as the floor's agree_history).  Returns how many.
