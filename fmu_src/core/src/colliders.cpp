@@ -251,8 +251,7 @@ double effective_mass(Index n, Index i, const double* mass, const double* diagon
     if (diagonal_blocks == nullptr) return mass[i];
     double s[6];
     for (Index slot = 0; slot < 6; ++slot) s[slot] = diagonal_blocks[slot * n + i] + blocks[slot * n + i];
-    return mass[i] + s[0] * e[0] * e[0] + s[1] * e[1] * e[1] + s[2] * e[2] * e[2] +
-           2.0 * (s[3] * e[0] * e[1] + s[4] * e[0] * e[2] + s[5] * e[1] * e[2]);
+    return mass[i] + block_quadratic(s, e[0], e[1], e[2]);
 }
 
 }  // namespace

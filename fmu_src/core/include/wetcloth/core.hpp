@@ -129,6 +129,12 @@ struct Work {
     double* pair_across = nullptr;
 };
 
+//: t^T S t for the symmetric 3x3 block S of slots s (xx, yy, zz, xy, xz, yz; a Work::blocks layout) and
+//: the vector t = (tx, ty, tz).
+inline double block_quadratic(const double* s, double tx, double ty, double tz) {
+    return s[0] * tx * tx + s[1] * ty * ty + s[2] * tz * tz + 2.0 * (s[3] * tx * ty + s[4] * tx * tz + s[5] * ty * tz);
+}
+
 //: Integrator codes (Control::integrator).
 enum Integrator : Index { EXPLICIT_EULER = 0, SYMPLECTIC_EULER = 1, IMPLICIT_EULER = 2, BDF2 = 3 };
 

@@ -22,9 +22,7 @@ inline void axis_diagonal(const Plane& plane, Index n, Index c, const double* ma
     for (Index i = 0; i < n; ++i) {
         double e[6];
         for (Index slot = 0; slot < 6; ++slot) e[slot] = WITH_SPRINGS ? d[slot * n + i] + b[slot * n + i] : b[slot * n + i];
-        const double tx = t0[i], ty = t1[i], tz = t2[i];
-        out[i] = mass[i] + (e[0] * tx * tx + e[1] * ty * ty + e[2] * tz * tz +
-                            2.0 * (e[3] * tx * ty + e[4] * tx * tz + e[5] * ty * tz));
+        out[i] = mass[i] + block_quadratic(e, t0[i], t1[i], t2[i]);
     }
 }
 
