@@ -10,24 +10,11 @@
 #include <vector>
 
 #include "fmi2Functions.h"
-#include "unit.hpp"
+#include "instance.hpp"
 
 namespace {
 
 using wc::fmu::Outcome;
-using wc::fmu::Unit;
-
-constexpr std::uint64_t INSTANCE_MAGIC = 0x57657443'6c6f7432ull;  // "WetClot2"
-
-struct Instance {
-    std::uint64_t magic = INSTANCE_MAGIC;
-    std::string name;
-    fmi2CallbackLogger logger = nullptr;
-    fmi2ComponentEnvironment environment = nullptr;
-    bool logging_on = false;
-    bool discarded = false;  // the last doStep returned fmi2Discard: the unit asks the master to stop
-    std::unique_ptr<Unit> unit;
-};
 
 //: The logger's message is a format string: a '%' of the text must be doubled.
 std::string escaped(const std::string& text) {
@@ -40,44 +27,23 @@ std::string escaped(const std::string& text) {
     return out;
 }
 
-void log(const Instance* instance, fmi2Status status, const char* category, const std::string& message) {
-    if (instance == nullptr || instance->logger == nullptr) return;
-    instance->logger(instance->environment, instance->name.c_str(), status, category, escaped(message).c_str());
-}
+//: FMI 2.0's side of the interface both versions share (instance.hpp).
+struct Fmi2 {
+    using Status = fmi2Status;
+    using Logger = fmi2CallbackLogger;
+    using Environment = fmi2ComponentEnvironment;
+    static constexpr Status ok = fmi2OK;
+    static constexpr Status error = fmi2Error;
+    static constexpr std::uint64_t MAGIC = 0x57657443'6c6f7432ull;  // "WetClot2"
 
-Instance* instance_of(fmi2Component c) {
-    auto* instance = static_cast<Instance*>(c);
-    return instance != nullptr && instance->magic == INSTANCE_MAGIC ? instance : nullptr;
-}
-
-fmi2Status status_of(Outcome outcome) { return static_cast<fmi2Status>(outcome); }
-
-//: Run `body` (returning fmi2Status) for a valid instance; whatever it throws is logged as fmi2Error.
-template <class Body>
-fmi2Status guarded(fmi2Component c, const char* function, Body&& body) {
-    Instance* instance = instance_of(c);
-    if (instance == nullptr) return fmi2Error;  // not an instance of this unit: nothing to log through
-    try {
-        return body(*instance);
-    } catch (const std::bad_alloc&) {
-        log(instance, fmi2Error, "logStatusError", std::string(function) + ": out of memory");
-    } catch (const std::exception& exc) {
-        log(instance, fmi2Error, "logStatusError", std::string(function) + " failed: " + exc.what());
-    } catch (...) {
-        log(instance, fmi2Error, "logStatusError", std::string(function) + " failed");
+    template <class Instance>
+    static void emit(const Instance& instance, Status status, const char* category, const std::string& message) {
+        instance.logger(instance.environment, instance.name.c_str(), status, category, escaped(message).c_str());
     }
-    return fmi2Error;
-}
+};
 
-fmi2Status unsupported(fmi2Component c, const char* function) {
-    return guarded(c, function, [&](Instance& instance) {
-        log(&instance, fmi2Error, "logStatusError",
-            std::string(function) + " is not supported: WetCloth is a co-simulation unit without it");
-        return fmi2Error;
-    });
-}
-
-Outcome worst(Outcome a, Outcome b) { return static_cast<int>(b) > static_cast<int>(a) ? b : a; }
+using Fmi = wc::fmu::Interface<Fmi2>;
+using Instance = Fmi::Instance;
 
 }  // namespace
 
@@ -88,22 +54,7 @@ const char* fmi2GetVersion(void) { return fmi2Version; }
 
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
                                const fmi2String categories[]) {
-    return guarded(c, "fmi2SetDebugLogging", [&](Instance& instance) {
-        static const char* const known[] = {"logStatusWarning", "logStatusDiscard", "logStatusError",
-                                            "logStatusFatal", "logAll"};
-        for (size_t k = 0; k < nCategories; ++k) {
-            bool found = false;
-            for (const char* name : known) found = found || (categories[k] && std::strcmp(categories[k], name) == 0);
-            if (!found) {
-                log(&instance, fmi2Error, "logStatusError",
-                    std::string("fmi2SetDebugLogging: unknown log category '") + (categories[k] ? categories[k] : "") +
-                        "'; the unit has logStatusWarning, logStatusDiscard, logStatusError, logStatusFatal, logAll");
-                return fmi2Error;
-            }
-        }
-        instance.logging_on = loggingOn != fmi2False;
-        return fmi2OK;
-    });
+    return Fmi::set_debug_logging(c, "fmi2SetDebugLogging", loggingOn != fmi2False, nCategories, categories);
 }
 
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
@@ -111,50 +62,15 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               fmi2Boolean visible, fmi2Boolean loggingOn) {
     (void)fmuResourceLocation;
     (void)visible;
-    Instance probe;
-    probe.name = instanceName ? instanceName : "";
-    if (functions != nullptr) {
-        probe.logger = functions->logger;
-        probe.environment = functions->componentEnvironment;
-    }
-    try {
-        if (fmuType != fmi2CoSimulation) {
-            log(&probe, fmi2Error, "logStatusError",
-                "fmi2Instantiate: WetCloth is a co-simulation unit; it cannot be instantiated for model exchange");
-            return nullptr;
-        }
-        if (fmuGUID == nullptr || std::strcmp(fmuGUID, wc::fmu::instantiation_token()) != 0) {
-            log(&probe, fmi2Error, "logStatusError",
-                std::string("fmi2Instantiate: the GUID ") + (fmuGUID ? fmuGUID : "(none)") +
-                    " is not this binary's (" + wc::fmu::instantiation_token() +
-                    "): the model description belongs to another build of the unit");
-            return nullptr;
-        }
-        auto owned = std::make_unique<Instance>();
-        Instance* instance = owned.get();
-        instance->name = probe.name;
-        instance->logger = probe.logger;
-        instance->environment = probe.environment;
-        instance->logging_on = loggingOn != fmi2False;
-        instance->unit = std::make_unique<Unit>(
-            instance->name, [instance](Outcome outcome, const char* category, const std::string& message) {
-                log(instance, status_of(outcome), category, message);
-            });
-        return owned.release();
-    } catch (const std::exception& exc) {
-        log(&probe, fmi2Error, "logStatusError", std::string("fmi2Instantiate failed: ") + exc.what());
-    } catch (...) {
-        log(&probe, fmi2Error, "logStatusError", "fmi2Instantiate failed");
-    }
-    return nullptr;
+    const std::string refusal = fmuType == fmi2CoSimulation
+                                    ? ""
+                                    : "WetCloth is a co-simulation unit; it cannot be instantiated for model exchange";
+    return Fmi::instantiate("fmi2Instantiate", instanceName, functions ? functions->componentEnvironment : nullptr,
+                            functions ? functions->logger : nullptr, loggingOn != fmi2False, fmuGUID, "GUID",
+                            refusal);
 }
 
-void fmi2FreeInstance(fmi2Component c) {
-    Instance* instance = instance_of(c);
-    if (instance == nullptr) return;
-    instance->magic = 0;
-    delete instance;
-}
+void fmi2FreeInstance(fmi2Component c) { Fmi::free_instance(c); }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
@@ -162,26 +78,26 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
     (void)tolerance;
     (void)stopTimeDefined;
     (void)stopTime;
-    return guarded(c, "fmi2SetupExperiment",
-                   [&](Instance& instance) { return status_of(instance.unit->setup_experiment(startTime)); });
+    return Fmi::guarded(c, "fmi2SetupExperiment",
+                   [&](Instance& instance) { return Fmi::status_of(instance.unit->setup_experiment(startTime)); });
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-    return guarded(c, "fmi2EnterInitializationMode",
-                   [&](Instance& instance) { return status_of(instance.unit->enter_initialization()); });
+    return Fmi::guarded(c, "fmi2EnterInitializationMode",
+                   [&](Instance& instance) { return Fmi::status_of(instance.unit->enter_initialization()); });
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
-    return guarded(c, "fmi2ExitInitializationMode",
-                   [&](Instance& instance) { return status_of(instance.unit->exit_initialization()); });
+    return Fmi::guarded(c, "fmi2ExitInitializationMode",
+                   [&](Instance& instance) { return Fmi::status_of(instance.unit->exit_initialization()); });
 }
 
 fmi2Status fmi2Terminate(fmi2Component c) {
-    return guarded(c, "fmi2Terminate", [&](Instance& instance) { return status_of(instance.unit->terminate()); });
+    return Fmi::guarded(c, "fmi2Terminate", [&](Instance& instance) { return Fmi::status_of(instance.unit->terminate()); });
 }
 
 fmi2Status fmi2Reset(fmi2Component c) {
-    return guarded(c, "fmi2Reset", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi2Reset", [&](Instance& instance) {
         instance.unit->reset();
         instance.discarded = false;
         return fmi2OK;
@@ -190,18 +106,18 @@ fmi2Status fmi2Reset(fmi2Component c) {
 
 // ---------------------------------------------------------------------------------------------- getters
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
-    return guarded(c, "fmi2GetReal", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi2GetReal", [&](Instance& instance) {
         if (nvr == 0) return fmi2OK;
-        return status_of(instance.unit->get_real(vr, nvr, value, nvr, "fmi2GetReal"));
+        return Fmi::status_of(instance.unit->get_real(vr, nvr, value, nvr, "fmi2GetReal"));
     });
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[]) {
-    return guarded(c, "fmi2GetInteger", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi2GetInteger", [&](Instance& instance) {
         for (size_t k = 0; k < nvr; ++k) {
             std::int64_t v = 0;
             const Outcome outcome = instance.unit->get_integer(vr[k], v, "fmi2GetInteger");
-            if (outcome != Outcome::OK) return status_of(outcome);
+            if (outcome != Outcome::OK) return Fmi::status_of(outcome);
             value[k] = static_cast<fmi2Integer>(v);
         }
         return fmi2OK;
@@ -210,20 +126,20 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[]) {
     (void)value;
-    return guarded(c, "fmi2GetBoolean", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi2GetBoolean", [&](Instance& instance) {
         if (nvr == 0) return fmi2OK;
-        log(&instance, fmi2Error, "logStatusError",
+        Fmi::log(&instance, fmi2Error, "logStatusError",
             "fmi2GetBoolean: the unit has no Boolean variable (value reference " + std::to_string(vr[0]) + ")");
         return fmi2Error;
     });
 }
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
-    return guarded(c, "fmi2GetString", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi2GetString", [&](Instance& instance) {
         for (size_t k = 0; k < nvr; ++k) {
             const char* v = nullptr;
             const Outcome outcome = instance.unit->get_string(vr[k], v, "fmi2GetString");
-            if (outcome != Outcome::OK) return status_of(outcome);
+            if (outcome != Outcome::OK) return Fmi::status_of(outcome);
             value[k] = v;
         }
         return fmi2OK;
@@ -232,70 +148,70 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 
 // ---------------------------------------------------------------------------------------------- setters
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
-    return guarded(c, "fmi2SetReal", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi2SetReal", [&](Instance& instance) {
         Outcome outcome = Outcome::OK;
-        for (size_t k = 0; k < nvr; ++k) outcome = worst(outcome, instance.unit->set_real(vr[k], value[k], "fmi2SetReal"));
-        return status_of(outcome);
+        for (size_t k = 0; k < nvr; ++k) outcome = wc::fmu::worst(outcome, instance.unit->set_real(vr[k], value[k], "fmi2SetReal"));
+        return Fmi::status_of(outcome);
     });
 }
 
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[]) {
-    return guarded(c, "fmi2SetInteger", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi2SetInteger", [&](Instance& instance) {
         Outcome outcome = Outcome::OK;
         for (size_t k = 0; k < nvr; ++k) {
-            outcome = worst(outcome, instance.unit->set_integer(vr[k], value[k], std::to_string(value[k]), "fmi2SetInteger"));
+            outcome = wc::fmu::worst(outcome, instance.unit->set_integer(vr[k], value[k], std::to_string(value[k]), "fmi2SetInteger"));
         }
-        return status_of(outcome);
+        return Fmi::status_of(outcome);
     });
 }
 
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[]) {
     (void)value;
-    return guarded(c, "fmi2SetBoolean", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi2SetBoolean", [&](Instance& instance) {
         if (nvr == 0) return fmi2OK;
-        log(&instance, fmi2Error, "logStatusError",
+        Fmi::log(&instance, fmi2Error, "logStatusError",
             "fmi2SetBoolean: the unit has no Boolean variable (value reference " + std::to_string(vr[0]) + ")");
         return fmi2Error;
     });
 }
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
-    return guarded(c, "fmi2SetString", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi2SetString", [&](Instance& instance) {
         Outcome outcome = Outcome::OK;
-        for (size_t k = 0; k < nvr; ++k) outcome = worst(outcome, instance.unit->set_string(vr[k], value[k], "fmi2SetString"));
-        return status_of(outcome);
+        for (size_t k = 0; k < nvr; ++k) outcome = wc::fmu::worst(outcome, instance.unit->set_string(vr[k], value[k], "fmi2SetString"));
+        return Fmi::status_of(outcome);
     });
 }
 
 // ---------------------------------------------------------------------------------------------- FMU states
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate) {
-    return guarded(c, "fmi2GetFMUstate",
-                   [&](Instance& instance) { return status_of(wc::fmu::get_fmu_state(*instance.unit, FMUstate)); });
+    return Fmi::guarded(c, "fmi2GetFMUstate",
+                   [&](Instance& instance) { return Fmi::status_of(wc::fmu::get_fmu_state(*instance.unit, FMUstate)); });
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
-    return guarded(c, "fmi2SetFMUstate", [&](Instance& instance) {
-        const fmi2Status status = status_of(wc::fmu::set_fmu_state(*instance.unit, FMUstate));
+    return Fmi::guarded(c, "fmi2SetFMUstate", [&](Instance& instance) {
+        const fmi2Status status = Fmi::status_of(wc::fmu::set_fmu_state(*instance.unit, FMUstate));
         if (status == fmi2OK) instance.discarded = false;
         return status;
     });
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* FMUstate) {
-    return guarded(c, "fmi2FreeFMUstate", [&](Instance& instance) {
-        return status_of(wc::fmu::free_fmu_state(*instance.unit, FMUstate, "fmi2FreeFMUstate"));
+    return Fmi::guarded(c, "fmi2FreeFMUstate", [&](Instance& instance) {
+        return Fmi::status_of(wc::fmu::free_fmu_state(*instance.unit, FMUstate, "fmi2FreeFMUstate"));
     });
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t* size) {
-    return guarded(c, "fmi2SerializedFMUstateSize", [&](Instance& instance) {
-        return status_of(wc::fmu::serialized_state_size(*instance.unit, FMUstate, size, "fmi2SerializedFMUstateSize"));
+    return Fmi::guarded(c, "fmi2SerializedFMUstateSize", [&](Instance& instance) {
+        return Fmi::status_of(wc::fmu::serialized_state_size(*instance.unit, FMUstate, size, "fmi2SerializedFMUstateSize"));
     });
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
-    return guarded(c, "fmi2SerializeFMUstate", [&](Instance& instance) {
-        return status_of(wc::fmu::serialize_fmu_state(*instance.unit, FMUstate,
+    return Fmi::guarded(c, "fmi2SerializeFMUstate", [&](Instance& instance) {
+        return Fmi::status_of(wc::fmu::serialize_fmu_state(*instance.unit, FMUstate,
                                                       reinterpret_cast<unsigned char*>(serializedState), size,
                                                       "fmi2SerializeFMUstate"));
     });
@@ -303,76 +219,76 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
                                    fmi2FMUstate* FMUstate) {
-    return guarded(c, "fmi2DeSerializeFMUstate", [&](Instance& instance) {
-        return status_of(wc::fmu::deserialize_fmu_state(
+    return Fmi::guarded(c, "fmi2DeSerializeFMUstate", [&](Instance& instance) {
+        return Fmi::status_of(wc::fmu::deserialize_fmu_state(
             *instance.unit, reinterpret_cast<const unsigned char*>(serializedState), size, FMUstate));
     });
 }
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference[], size_t,
                                         const fmi2ValueReference[], size_t, const fmi2Real[], fmi2Real[]) {
-    return unsupported(c, "fmi2GetDirectionalDerivative");
+    return Fmi::unsupported(c, "fmi2GetDirectionalDerivative");
 }
 
 // ---------------------------------------------------------------------------------------------- model exchange
-fmi2Status fmi2EnterEventMode(fmi2Component c) { return unsupported(c, "fmi2EnterEventMode"); }
-fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo*) { return unsupported(c, "fmi2NewDiscreteStates"); }
-fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) { return unsupported(c, "fmi2EnterContinuousTimeMode"); }
+fmi2Status fmi2EnterEventMode(fmi2Component c) { return Fmi::unsupported(c, "fmi2EnterEventMode"); }
+fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo*) { return Fmi::unsupported(c, "fmi2NewDiscreteStates"); }
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) { return Fmi::unsupported(c, "fmi2EnterContinuousTimeMode"); }
 fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean, fmi2Boolean*, fmi2Boolean*) {
-    return unsupported(c, "fmi2CompletedIntegratorStep");
+    return Fmi::unsupported(c, "fmi2CompletedIntegratorStep");
 }
-fmi2Status fmi2SetTime(fmi2Component c, fmi2Real) { return unsupported(c, "fmi2SetTime"); }
+fmi2Status fmi2SetTime(fmi2Component c, fmi2Real) { return Fmi::unsupported(c, "fmi2SetTime"); }
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real[], size_t) {
-    return unsupported(c, "fmi2SetContinuousStates");
+    return Fmi::unsupported(c, "fmi2SetContinuousStates");
 }
-fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real[], size_t) { return unsupported(c, "fmi2GetDerivatives"); }
+fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real[], size_t) { return Fmi::unsupported(c, "fmi2GetDerivatives"); }
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real[], size_t) {
-    return unsupported(c, "fmi2GetEventIndicators");
+    return Fmi::unsupported(c, "fmi2GetEventIndicators");
 }
 fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real[], size_t) {
-    return unsupported(c, "fmi2GetContinuousStates");
+    return Fmi::unsupported(c, "fmi2GetContinuousStates");
 }
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real[], size_t) {
-    return unsupported(c, "fmi2GetNominalsOfContinuousStates");
+    return Fmi::unsupported(c, "fmi2GetNominalsOfContinuousStates");
 }
 
 // ---------------------------------------------------------------------------------------------- co-simulation
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference[], size_t, const fmi2Integer[],
                                        const fmi2Real[]) {
-    return unsupported(c, "fmi2SetRealInputDerivatives");
+    return Fmi::unsupported(c, "fmi2SetRealInputDerivatives");
 }
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference[], size_t, const fmi2Integer[],
                                         fmi2Real[]) {
-    return unsupported(c, "fmi2GetRealOutputDerivatives");
+    return Fmi::unsupported(c, "fmi2GetRealOutputDerivatives");
 }
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
                       fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
     (void)noSetFMUStatePriorToCurrentPoint;
-    return guarded(c, "fmi2DoStep", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi2DoStep", [&](Instance& instance) {
         const Outcome outcome = instance.unit->do_step(currentCommunicationPoint, communicationStepSize);
         instance.discarded = outcome == Outcome::DISCARD;
-        return status_of(outcome);
+        return Fmi::status_of(outcome);
     });
 }
 
-fmi2Status fmi2CancelStep(fmi2Component c) { return unsupported(c, "fmi2CancelStep (doStep is never asynchronous)"); }
+fmi2Status fmi2CancelStep(fmi2Component c) { return Fmi::unsupported(c, "fmi2CancelStep (doStep is never asynchronous)"); }
 
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status* value) {
     (void)s;
     (void)value;
-    return guarded(c, "fmi2GetStatus", [&](Instance& instance) {
-        log(&instance, fmi2Discard, "logStatusDiscard",
+    return Fmi::guarded(c, "fmi2GetStatus", [&](Instance& instance) {
+        Fmi::log(&instance, fmi2Discard, "logStatusDiscard",
             "fmi2GetStatus: no status to report (doStep is never asynchronous)");
         return fmi2Discard;
     });
 }
 
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* value) {
-    return guarded(c, "fmi2GetRealStatus", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi2GetRealStatus", [&](Instance& instance) {
         if (s != fmi2LastSuccessfulTime || value == nullptr) {
-            log(&instance, fmi2Discard, "logStatusDiscard", "fmi2GetRealStatus: only fmi2LastSuccessfulTime is known");
+            Fmi::log(&instance, fmi2Discard, "logStatusDiscard", "fmi2GetRealStatus: only fmi2LastSuccessfulTime is known");
             return fmi2Discard;
         }
         *value = instance.unit->time();
@@ -383,16 +299,16 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* 
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer* value) {
     (void)s;
     (void)value;
-    return guarded(c, "fmi2GetIntegerStatus", [&](Instance& instance) {
-        log(&instance, fmi2Discard, "logStatusDiscard", "fmi2GetIntegerStatus: no integer status to report");
+    return Fmi::guarded(c, "fmi2GetIntegerStatus", [&](Instance& instance) {
+        Fmi::log(&instance, fmi2Discard, "logStatusDiscard", "fmi2GetIntegerStatus: no integer status to report");
         return fmi2Discard;
     });
 }
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean* value) {
-    return guarded(c, "fmi2GetBooleanStatus", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi2GetBooleanStatus", [&](Instance& instance) {
         if (s != fmi2Terminated || value == nullptr) {
-            log(&instance, fmi2Discard, "logStatusDiscard", "fmi2GetBooleanStatus: only fmi2Terminated is known");
+            Fmi::log(&instance, fmi2Discard, "logStatusDiscard", "fmi2GetBooleanStatus: only fmi2Terminated is known");
             return fmi2Discard;
         }
         // After a discarded step the unit stays where it was and asks the master to stop there (a repeated
@@ -405,8 +321,8 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String* value) {
     (void)s;
     (void)value;
-    return guarded(c, "fmi2GetStringStatus", [&](Instance& instance) {
-        log(&instance, fmi2Discard, "logStatusDiscard", "fmi2GetStringStatus: no string status to report");
+    return Fmi::guarded(c, "fmi2GetStringStatus", [&](Instance& instance) {
+        Fmi::log(&instance, fmi2Discard, "logStatusDiscard", "fmi2GetStringStatus: no string status to report");
         return fmi2Discard;
     });
 }

@@ -13,75 +13,43 @@
 #include <vector>
 
 #include "fmi3Functions.h"
-#include "unit.hpp"
+#include "instance.hpp"
 
 namespace {
 
 using wc::fmu::Causality;
 using wc::fmu::Outcome;
 using wc::fmu::Type;
-using wc::fmu::Unit;
 
-constexpr std::uint64_t INSTANCE_MAGIC = 0x57657443'6c6f7433ull;  // "WetClot3"
+//: FMI 3.0's side of the interface both versions share (instance.hpp).
+struct Fmi3 {
+    using Status = fmi3Status;
+    using Logger = fmi3LogMessageCallback;
+    using Environment = fmi3InstanceEnvironment;
+    static constexpr Status ok = fmi3OK;
+    static constexpr Status error = fmi3Error;
+    static constexpr std::uint64_t MAGIC = 0x57657443'6c6f7433ull;  // "WetClot3"
 
-struct Instance {
-    std::uint64_t magic = INSTANCE_MAGIC;
-    std::string name;
-    fmi3InstanceEnvironment environment = nullptr;
-    fmi3LogMessageCallback logger = nullptr;
-    bool logging_on = false;
-    std::unique_ptr<Unit> unit;
+    template <class Instance>
+    static void emit(const Instance& instance, Status status, const char* category, const std::string& message) {
+        instance.logger(instance.environment, status, category, message.c_str());
+    }
 };
 
-void log(const Instance* instance, fmi3Status status, const char* category, const std::string& message) {
-    if (instance == nullptr || instance->logger == nullptr) return;
-    instance->logger(instance->environment, status, category, message.c_str());
-}
-
-Instance* instance_of(fmi3Instance c) {
-    auto* instance = static_cast<Instance*>(c);
-    return instance != nullptr && instance->magic == INSTANCE_MAGIC ? instance : nullptr;
-}
-
-fmi3Status status_of(Outcome outcome) { return static_cast<fmi3Status>(outcome); }
-
-template <class Body>
-fmi3Status guarded(fmi3Instance c, const char* function, Body&& body) {
-    Instance* instance = instance_of(c);
-    if (instance == nullptr) return fmi3Error;  // not an instance of this unit: nothing to log through
-    try {
-        return body(*instance);
-    } catch (const std::bad_alloc&) {
-        log(instance, fmi3Error, "logStatusError", std::string(function) + ": out of memory");
-    } catch (const std::exception& exc) {
-        log(instance, fmi3Error, "logStatusError", std::string(function) + " failed: " + exc.what());
-    } catch (...) {
-        log(instance, fmi3Error, "logStatusError", std::string(function) + " failed");
-    }
-    return fmi3Error;
-}
-
-fmi3Status unsupported(fmi3Instance c, const char* function) {
-    return guarded(c, function, [&](Instance& instance) {
-        log(&instance, fmi3Error, "logStatusError",
-            std::string(function) + " is not supported: WetCloth is a co-simulation unit without it");
-        return fmi3Error;
-    });
-}
+using Fmi = wc::fmu::Interface<Fmi3>;
+using Instance = Fmi::Instance;
 
 //: A get or set of a type no variable has: fine for no variables, else an error.
 fmi3Status no_such_type(fmi3Instance c, const char* function, const char* type, const fmi3ValueReference vrs[],
                         size_t nvr) {
-    return guarded(c, function, [&](Instance& instance) {
+    return Fmi::guarded(c, function, [&](Instance& instance) {
         if (nvr == 0) return fmi3OK;
-        log(&instance, fmi3Error, "logStatusError",
+        Fmi::log(&instance, fmi3Error, "logStatusError",
             std::string(function) + ": the unit has no " + type + " variable (value reference " +
                 std::to_string(vrs ? vrs[0] : 0) + ")");
         return fmi3Error;
     });
 }
-
-Outcome worst(Outcome a, Outcome b) { return static_cast<int>(b) > static_cast<int>(a) ? b : a; }
 
 //: Whether vr is an Integer variable of the FMI 3.0 type `structural` (UInt64) or not (Int32); logs if not.
 bool integer_of_kind(Instance& instance, fmi3ValueReference vr, bool structural, const char* function) {
@@ -89,7 +57,7 @@ bool integer_of_kind(Instance& instance, fmi3ValueReference vr, bool structural,
     const wc::fmu::Variable& var = wc::fmu::variables()[vr];
     if (var.type != Type::INTEGER) return true;  // the unit reports the type
     if ((var.causality == Causality::STRUCTURAL_PARAMETER) == structural) return true;
-    log(&instance, fmi3Error, "logStatusError",
+    Fmi::log(&instance, fmi3Error, "logStatusError",
         std::string(function) + ": variable '" + var.name + "' is " + (structural ? "an Int32" : "a UInt64"));
     return false;
 }
@@ -97,16 +65,16 @@ bool integer_of_kind(Instance& instance, fmi3ValueReference vr, bool structural,
 template <class T>
 fmi3Status get_integers(fmi3Instance c, const char* function, bool structural, const fmi3ValueReference vrs[],
                         size_t nvr, T values[], size_t nValues) {
-    return guarded(c, function, [&](Instance& instance) {
+    return Fmi::guarded(c, function, [&](Instance& instance) {
         if (nValues != nvr) {
-            log(&instance, fmi3Error, "logStatusError", std::string(function) + ": nValues must equal nValueReferences");
+            Fmi::log(&instance, fmi3Error, "logStatusError", std::string(function) + ": nValues must equal nValueReferences");
             return fmi3Error;
         }
         for (size_t k = 0; k < nvr; ++k) {
             if (!integer_of_kind(instance, vrs[k], structural, function)) return fmi3Error;
             std::int64_t v = 0;
             const Outcome outcome = instance.unit->get_integer(vrs[k], v, function);
-            if (outcome != Outcome::OK) return status_of(outcome);
+            if (outcome != Outcome::OK) return Fmi::status_of(outcome);
             values[k] = static_cast<T>(v);
         }
         return fmi3OK;
@@ -116,15 +84,15 @@ fmi3Status get_integers(fmi3Instance c, const char* function, bool structural, c
 template <class T>
 fmi3Status set_integers(fmi3Instance c, const char* function, bool structural, const fmi3ValueReference vrs[],
                         size_t nvr, const T values[], size_t nValues) {
-    return guarded(c, function, [&](Instance& instance) {
+    return Fmi::guarded(c, function, [&](Instance& instance) {
         if (nValues != nvr) {
-            log(&instance, fmi3Error, "logStatusError", std::string(function) + ": nValues must equal nValueReferences");
+            Fmi::log(&instance, fmi3Error, "logStatusError", std::string(function) + ": nValues must equal nValueReferences");
             return fmi3Error;
         }
         Outcome outcome = Outcome::OK;
         for (size_t k = 0; k < nvr; ++k) {
             if (!integer_of_kind(instance, vrs[k], structural, function)) {
-                outcome = worst(outcome, Outcome::ERROR);
+                outcome = wc::fmu::worst(outcome, Outcome::ERROR);
                 continue;
             }
             const T v = values[k];
@@ -133,9 +101,9 @@ fmi3Status set_integers(fmi3Instance c, const char* function, bool structural, c
                                                  v > 0
                                              ? std::numeric_limits<std::int64_t>::max()
                                              : static_cast<std::int64_t>(v);
-            outcome = worst(outcome, instance.unit->set_integer(vrs[k], clamped, std::to_string(v), function));
+            outcome = wc::fmu::worst(outcome, instance.unit->set_integer(vrs[k], clamped, std::to_string(v), function));
         }
-        return status_of(outcome);
+        return Fmi::status_of(outcome);
     });
 }
 
@@ -147,22 +115,7 @@ const char* fmi3GetVersion(void) { return fmi3Version; }
 
 fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, size_t nCategories,
                                const fmi3String categories[]) {
-    return guarded(instance, "fmi3SetDebugLogging", [&](Instance& inst) {
-        static const char* const known[] = {"logStatusWarning", "logStatusDiscard", "logStatusError",
-                                            "logStatusFatal", "logAll"};
-        for (size_t k = 0; k < nCategories; ++k) {
-            bool found = false;
-            for (const char* name : known) found = found || (categories[k] && std::strcmp(categories[k], name) == 0);
-            if (!found) {
-                log(&inst, fmi3Error, "logStatusError",
-                    std::string("fmi3SetDebugLogging: unknown log category '") + (categories[k] ? categories[k] : "") +
-                        "'; the unit has logStatusWarning, logStatusDiscard, logStatusError, logStatusFatal, logAll");
-                return fmi3Error;
-            }
-        }
-        inst.logging_on = loggingOn;
-        return fmi3OK;
-    });
+    return Fmi::set_debug_logging(instance, "fmi3SetDebugLogging", loggingOn, nCategories, categories);
 }
 
 fmi3Instance fmi3InstantiateModelExchange(fmi3String, fmi3String, fmi3String, fmi3Boolean, fmi3Boolean,
@@ -199,53 +152,15 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
     (void)earlyReturnAllowed;
     (void)requiredIntermediateVariables;
     (void)intermediateUpdate;
-    Instance probe;
-    probe.name = instanceName ? instanceName : "";
-    probe.environment = instanceEnvironment;
-    probe.logger = logMessage;
-    try {
-        if (eventModeUsed) {
-            log(&probe, fmi3Error, "logStatusError",
-                "fmi3InstantiateCoSimulation: the unit has no event mode (hasEventMode is false)");
-            return nullptr;
-        }
-        if (nRequiredIntermediateVariables > 0) {
-            log(&probe, fmi3Error, "logStatusError",
-                "fmi3InstantiateCoSimulation: the unit provides no intermediate updates");
-            return nullptr;
-        }
-        if (instantiationToken == nullptr || std::strcmp(instantiationToken, wc::fmu::instantiation_token()) != 0) {
-            log(&probe, fmi3Error, "logStatusError",
-                std::string("fmi3InstantiateCoSimulation: the instantiation token ") +
-                    (instantiationToken ? instantiationToken : "(none)") + " is not this binary's (" +
-                    wc::fmu::instantiation_token() + "): the model description belongs to another build of the unit");
-            return nullptr;
-        }
-        auto owned = std::make_unique<Instance>();
-        Instance* instance = owned.get();
-        instance->name = probe.name;
-        instance->environment = probe.environment;
-        instance->logger = probe.logger;
-        instance->logging_on = loggingOn;
-        instance->unit = std::make_unique<Unit>(
-            instance->name, [instance](Outcome outcome, const char* category, const std::string& message) {
-                log(instance, status_of(outcome), category, message);
-            });
-        return owned.release();
-    } catch (const std::exception& exc) {
-        log(&probe, fmi3Error, "logStatusError", std::string("fmi3InstantiateCoSimulation failed: ") + exc.what());
-    } catch (...) {
-        log(&probe, fmi3Error, "logStatusError", "fmi3InstantiateCoSimulation failed");
-    }
-    return nullptr;
+    const std::string refusal =
+        eventModeUsed ? "the unit has no event mode (hasEventMode is false)"
+        : nRequiredIntermediateVariables > 0 ? "the unit provides no intermediate updates"
+                                             : "";
+    return Fmi::instantiate("fmi3InstantiateCoSimulation", instanceName, instanceEnvironment, logMessage, loggingOn,
+                            instantiationToken, "instantiation token", refusal);
 }
 
-void fmi3FreeInstance(fmi3Instance c) {
-    Instance* instance = instance_of(c);
-    if (instance == nullptr) return;
-    instance->magic = 0;
-    delete instance;
-}
+void fmi3FreeInstance(fmi3Instance c) { Fmi::free_instance(c); }
 
 fmi3Status fmi3EnterInitializationMode(fmi3Instance c, fmi3Boolean toleranceDefined, fmi3Float64 tolerance,
                                        fmi3Float64 startTime, fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {
@@ -253,26 +168,26 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance c, fmi3Boolean toleranceDefi
     (void)tolerance;
     (void)stopTimeDefined;
     (void)stopTime;
-    return guarded(c, "fmi3EnterInitializationMode", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi3EnterInitializationMode", [&](Instance& instance) {
         const Outcome outcome = instance.unit->setup_experiment(startTime);
-        if (outcome != Outcome::OK) return status_of(outcome);
-        return status_of(instance.unit->enter_initialization());
+        if (outcome != Outcome::OK) return Fmi::status_of(outcome);
+        return Fmi::status_of(instance.unit->enter_initialization());
     });
 }
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance c) {
-    return guarded(c, "fmi3ExitInitializationMode",
-                   [&](Instance& instance) { return status_of(instance.unit->exit_initialization()); });
+    return Fmi::guarded(c, "fmi3ExitInitializationMode",
+                   [&](Instance& instance) { return Fmi::status_of(instance.unit->exit_initialization()); });
 }
 
-fmi3Status fmi3EnterEventMode(fmi3Instance c) { return unsupported(c, "fmi3EnterEventMode"); }
+fmi3Status fmi3EnterEventMode(fmi3Instance c) { return Fmi::unsupported(c, "fmi3EnterEventMode"); }
 
 fmi3Status fmi3Terminate(fmi3Instance c) {
-    return guarded(c, "fmi3Terminate", [&](Instance& instance) { return status_of(instance.unit->terminate()); });
+    return Fmi::guarded(c, "fmi3Terminate", [&](Instance& instance) { return Fmi::status_of(instance.unit->terminate()); });
 }
 
 fmi3Status fmi3Reset(fmi3Instance c) {
-    return guarded(c, "fmi3Reset", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi3Reset", [&](Instance& instance) {
         instance.unit->reset();
         return fmi3OK;
     });
@@ -281,9 +196,9 @@ fmi3Status fmi3Reset(fmi3Instance c) {
 // ---------------------------------------------------------------------------------------------- getters
 fmi3Status fmi3GetFloat64(fmi3Instance c, const fmi3ValueReference valueReferences[], size_t nValueReferences,
                           fmi3Float64 values[], size_t nValues) {
-    return guarded(c, "fmi3GetFloat64", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi3GetFloat64", [&](Instance& instance) {
         if (nValueReferences == 0 && nValues == 0) return fmi3OK;
-        return status_of(instance.unit->get_real(valueReferences, nValueReferences, values, nValues, "fmi3GetFloat64"));
+        return Fmi::status_of(instance.unit->get_real(valueReferences, nValueReferences, values, nValues, "fmi3GetFloat64"));
     });
 }
 
@@ -299,15 +214,15 @@ fmi3Status fmi3GetInt32(fmi3Instance c, const fmi3ValueReference valueReferences
 
 fmi3Status fmi3GetString(fmi3Instance c, const fmi3ValueReference valueReferences[], size_t nValueReferences,
                          fmi3String values[], size_t nValues) {
-    return guarded(c, "fmi3GetString", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi3GetString", [&](Instance& instance) {
         if (nValues != nValueReferences) {
-            log(&instance, fmi3Error, "logStatusError", "fmi3GetString: nValues must equal nValueReferences");
+            Fmi::log(&instance, fmi3Error, "logStatusError", "fmi3GetString: nValues must equal nValueReferences");
             return fmi3Error;
         }
         for (size_t k = 0; k < nValueReferences; ++k) {
             const char* v = nullptr;
             const Outcome outcome = instance.unit->get_string(valueReferences[k], v, "fmi3GetString");
-            if (outcome != Outcome::OK) return status_of(outcome);
+            if (outcome != Outcome::OK) return Fmi::status_of(outcome);
             values[k] = v;
         }
         return fmi3OK;
@@ -351,17 +266,17 @@ fmi3Status fmi3SetClock(fmi3Instance c, const fmi3ValueReference vrs[], size_t n
 // ---------------------------------------------------------------------------------------------- setters
 fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference valueReferences[], size_t nValueReferences,
                           const fmi3Float64 values[], size_t nValues) {
-    return guarded(c, "fmi3SetFloat64", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi3SetFloat64", [&](Instance& instance) {
         if (nValues != nValueReferences) {
-            log(&instance, fmi3Error, "logStatusError",
+            Fmi::log(&instance, fmi3Error, "logStatusError",
                 "fmi3SetFloat64: nValues must equal nValueReferences (no array variable can be set)");
             return fmi3Error;
         }
         Outcome outcome = Outcome::OK;
         for (size_t k = 0; k < nValueReferences; ++k) {
-            outcome = worst(outcome, instance.unit->set_real(valueReferences[k], values[k], "fmi3SetFloat64"));
+            outcome = wc::fmu::worst(outcome, instance.unit->set_real(valueReferences[k], values[k], "fmi3SetFloat64"));
         }
-        return status_of(outcome);
+        return Fmi::status_of(outcome);
     });
 }
 
@@ -377,63 +292,63 @@ fmi3Status fmi3SetInt32(fmi3Instance c, const fmi3ValueReference valueReferences
 
 fmi3Status fmi3SetString(fmi3Instance c, const fmi3ValueReference valueReferences[], size_t nValueReferences,
                          const fmi3String values[], size_t nValues) {
-    return guarded(c, "fmi3SetString", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi3SetString", [&](Instance& instance) {
         if (nValues != nValueReferences) {
-            log(&instance, fmi3Error, "logStatusError", "fmi3SetString: nValues must equal nValueReferences");
+            Fmi::log(&instance, fmi3Error, "logStatusError", "fmi3SetString: nValues must equal nValueReferences");
             return fmi3Error;
         }
         Outcome outcome = Outcome::OK;
         for (size_t k = 0; k < nValueReferences; ++k) {
-            outcome = worst(outcome, instance.unit->set_string(valueReferences[k], values[k], "fmi3SetString"));
+            outcome = wc::fmu::worst(outcome, instance.unit->set_string(valueReferences[k], values[k], "fmi3SetString"));
         }
-        return status_of(outcome);
+        return Fmi::status_of(outcome);
     });
 }
 
 // ---------------------------------------------------------------------------------------------- dependencies
 fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance c, fmi3ValueReference, size_t*) {
-    return unsupported(c, "fmi3GetNumberOfVariableDependencies");
+    return Fmi::unsupported(c, "fmi3GetNumberOfVariableDependencies");
 }
 
 fmi3Status fmi3GetVariableDependencies(fmi3Instance c, fmi3ValueReference, size_t[], fmi3ValueReference[], size_t[],
                                        fmi3DependencyKind[], size_t) {
-    return unsupported(c, "fmi3GetVariableDependencies");
+    return Fmi::unsupported(c, "fmi3GetVariableDependencies");
 }
 
 // ---------------------------------------------------------------------------------------------- FMU states
 fmi3Status fmi3GetFMUState(fmi3Instance c, fmi3FMUState* FMUState) {
-    return guarded(c, "fmi3GetFMUState",
-                   [&](Instance& instance) { return status_of(wc::fmu::get_fmu_state(*instance.unit, FMUState)); });
+    return Fmi::guarded(c, "fmi3GetFMUState",
+                   [&](Instance& instance) { return Fmi::status_of(wc::fmu::get_fmu_state(*instance.unit, FMUState)); });
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance c, fmi3FMUState FMUState) {
-    return guarded(c, "fmi3SetFMUState",
-                   [&](Instance& instance) { return status_of(wc::fmu::set_fmu_state(*instance.unit, FMUState)); });
+    return Fmi::guarded(c, "fmi3SetFMUState",
+                   [&](Instance& instance) { return Fmi::status_of(wc::fmu::set_fmu_state(*instance.unit, FMUState)); });
 }
 
 fmi3Status fmi3FreeFMUState(fmi3Instance c, fmi3FMUState* FMUState) {
-    return guarded(c, "fmi3FreeFMUState", [&](Instance& instance) {
-        return status_of(wc::fmu::free_fmu_state(*instance.unit, FMUState, "fmi3FreeFMUState"));
+    return Fmi::guarded(c, "fmi3FreeFMUState", [&](Instance& instance) {
+        return Fmi::status_of(wc::fmu::free_fmu_state(*instance.unit, FMUState, "fmi3FreeFMUState"));
     });
 }
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance c, fmi3FMUState FMUState, size_t* size) {
-    return guarded(c, "fmi3SerializedFMUStateSize", [&](Instance& instance) {
-        return status_of(wc::fmu::serialized_state_size(*instance.unit, FMUState, size, "fmi3SerializedFMUStateSize"));
+    return Fmi::guarded(c, "fmi3SerializedFMUStateSize", [&](Instance& instance) {
+        return Fmi::status_of(wc::fmu::serialized_state_size(*instance.unit, FMUState, size, "fmi3SerializedFMUStateSize"));
     });
 }
 
 fmi3Status fmi3SerializeFMUState(fmi3Instance c, fmi3FMUState FMUState, fmi3Byte serializedState[], size_t size) {
-    return guarded(c, "fmi3SerializeFMUState", [&](Instance& instance) {
-        return status_of(wc::fmu::serialize_fmu_state(*instance.unit, FMUState, serializedState, size,
+    return Fmi::guarded(c, "fmi3SerializeFMUState", [&](Instance& instance) {
+        return Fmi::status_of(wc::fmu::serialize_fmu_state(*instance.unit, FMUState, serializedState, size,
                                                       "fmi3SerializeFMUState"));
     });
 }
 
 fmi3Status fmi3DeserializeFMUState(fmi3Instance c, const fmi3Byte serializedState[], size_t size,
                                    fmi3FMUState* FMUState) {
-    return guarded(c, "fmi3DeserializeFMUState", [&](Instance& instance) {
-        return status_of(wc::fmu::deserialize_fmu_state(*instance.unit, serializedState, size, FMUState));
+    return Fmi::guarded(c, "fmi3DeserializeFMUState", [&](Instance& instance) {
+        return Fmi::status_of(wc::fmu::deserialize_fmu_state(*instance.unit, serializedState, size, FMUState));
     });
 }
 
@@ -441,16 +356,16 @@ fmi3Status fmi3DeserializeFMUState(fmi3Instance c, const fmi3Byte serializedStat
 fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3ValueReference[], size_t,
                                         const fmi3ValueReference[], size_t, const fmi3Float64[], size_t,
                                         fmi3Float64[], size_t) {
-    return unsupported(c, "fmi3GetDirectionalDerivative");
+    return Fmi::unsupported(c, "fmi3GetDirectionalDerivative");
 }
 
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3ValueReference[],
                                     size_t, const fmi3Float64[], size_t, fmi3Float64[], size_t) {
-    return unsupported(c, "fmi3GetAdjointDerivative");
+    return Fmi::unsupported(c, "fmi3GetAdjointDerivative");
 }
 
 fmi3Status fmi3EnterConfigurationMode(fmi3Instance c) {
-    return guarded(c, "fmi3EnterConfigurationMode", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi3EnterConfigurationMode", [&](Instance& instance) {
         if (instance.unit->initialized()) {
             instance.unit->error("fmi3EnterConfigurationMode: the unit is initialized; its structural parameters "
                                  "are fixed (fmi3Reset first)");
@@ -461,78 +376,78 @@ fmi3Status fmi3EnterConfigurationMode(fmi3Instance c) {
 }
 
 fmi3Status fmi3ExitConfigurationMode(fmi3Instance c) {
-    return guarded(c, "fmi3ExitConfigurationMode", [&](Instance&) { return fmi3OK; });
+    return Fmi::guarded(c, "fmi3ExitConfigurationMode", [&](Instance&) { return fmi3OK; });
 }
 
 fmi3Status fmi3GetIntervalDecimal(fmi3Instance c, const fmi3ValueReference[], size_t, fmi3Float64[],
                                   fmi3IntervalQualifier[]) {
-    return unsupported(c, "fmi3GetIntervalDecimal");
+    return Fmi::unsupported(c, "fmi3GetIntervalDecimal");
 }
 fmi3Status fmi3GetIntervalFraction(fmi3Instance c, const fmi3ValueReference[], size_t, fmi3UInt64[], fmi3UInt64[],
                                    fmi3IntervalQualifier[]) {
-    return unsupported(c, "fmi3GetIntervalFraction");
+    return Fmi::unsupported(c, "fmi3GetIntervalFraction");
 }
 fmi3Status fmi3GetShiftDecimal(fmi3Instance c, const fmi3ValueReference[], size_t, fmi3Float64[]) {
-    return unsupported(c, "fmi3GetShiftDecimal");
+    return Fmi::unsupported(c, "fmi3GetShiftDecimal");
 }
 fmi3Status fmi3GetShiftFraction(fmi3Instance c, const fmi3ValueReference[], size_t, fmi3UInt64[], fmi3UInt64[]) {
-    return unsupported(c, "fmi3GetShiftFraction");
+    return Fmi::unsupported(c, "fmi3GetShiftFraction");
 }
 fmi3Status fmi3SetIntervalDecimal(fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3Float64[]) {
-    return unsupported(c, "fmi3SetIntervalDecimal");
+    return Fmi::unsupported(c, "fmi3SetIntervalDecimal");
 }
 fmi3Status fmi3SetIntervalFraction(fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3UInt64[],
                                    const fmi3UInt64[]) {
-    return unsupported(c, "fmi3SetIntervalFraction");
+    return Fmi::unsupported(c, "fmi3SetIntervalFraction");
 }
 fmi3Status fmi3SetShiftDecimal(fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3Float64[]) {
-    return unsupported(c, "fmi3SetShiftDecimal");
+    return Fmi::unsupported(c, "fmi3SetShiftDecimal");
 }
 fmi3Status fmi3SetShiftFraction(fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3UInt64[],
                                 const fmi3UInt64[]) {
-    return unsupported(c, "fmi3SetShiftFraction");
+    return Fmi::unsupported(c, "fmi3SetShiftFraction");
 }
-fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance c) { return unsupported(c, "fmi3EvaluateDiscreteStates"); }
+fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance c) { return Fmi::unsupported(c, "fmi3EvaluateDiscreteStates"); }
 fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean*, fmi3Boolean*, fmi3Boolean*, fmi3Boolean*,
                                     fmi3Boolean*, fmi3Float64*) {
-    return unsupported(c, "fmi3UpdateDiscreteStates");
+    return Fmi::unsupported(c, "fmi3UpdateDiscreteStates");
 }
-fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance c) { return unsupported(c, "fmi3EnterContinuousTimeMode"); }
+fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance c) { return Fmi::unsupported(c, "fmi3EnterContinuousTimeMode"); }
 fmi3Status fmi3CompletedIntegratorStep(fmi3Instance c, fmi3Boolean, fmi3Boolean*, fmi3Boolean*) {
-    return unsupported(c, "fmi3CompletedIntegratorStep");
+    return Fmi::unsupported(c, "fmi3CompletedIntegratorStep");
 }
-fmi3Status fmi3SetTime(fmi3Instance c, fmi3Float64) { return unsupported(c, "fmi3SetTime"); }
+fmi3Status fmi3SetTime(fmi3Instance c, fmi3Float64) { return Fmi::unsupported(c, "fmi3SetTime"); }
 fmi3Status fmi3SetContinuousStates(fmi3Instance c, const fmi3Float64[], size_t) {
-    return unsupported(c, "fmi3SetContinuousStates");
+    return Fmi::unsupported(c, "fmi3SetContinuousStates");
 }
 fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance c, fmi3Float64[], size_t) {
-    return unsupported(c, "fmi3GetContinuousStateDerivatives");
+    return Fmi::unsupported(c, "fmi3GetContinuousStateDerivatives");
 }
 fmi3Status fmi3GetEventIndicators(fmi3Instance c, fmi3Float64[], size_t) {
-    return unsupported(c, "fmi3GetEventIndicators");
+    return Fmi::unsupported(c, "fmi3GetEventIndicators");
 }
 fmi3Status fmi3GetContinuousStates(fmi3Instance c, fmi3Float64[], size_t) {
-    return unsupported(c, "fmi3GetContinuousStates");
+    return Fmi::unsupported(c, "fmi3GetContinuousStates");
 }
 fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance c, fmi3Float64[], size_t) {
-    return unsupported(c, "fmi3GetNominalsOfContinuousStates");
+    return Fmi::unsupported(c, "fmi3GetNominalsOfContinuousStates");
 }
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance c, size_t*) {
-    return unsupported(c, "fmi3GetNumberOfEventIndicators");
+    return Fmi::unsupported(c, "fmi3GetNumberOfEventIndicators");
 }
 fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance c, size_t*) {
-    return unsupported(c, "fmi3GetNumberOfContinuousStates");
+    return Fmi::unsupported(c, "fmi3GetNumberOfContinuousStates");
 }
 fmi3Status fmi3GetOutputDerivatives(fmi3Instance c, const fmi3ValueReference[], size_t, const fmi3Int32[],
                                     fmi3Float64[], size_t) {
-    return unsupported(c, "fmi3GetOutputDerivatives");
+    return Fmi::unsupported(c, "fmi3GetOutputDerivatives");
 }
 fmi3Status fmi3ActivateModelPartition(fmi3Instance c, fmi3ValueReference, fmi3Float64) {
-    return unsupported(c, "fmi3ActivateModelPartition");
+    return Fmi::unsupported(c, "fmi3ActivateModelPartition");
 }
 
 fmi3Status fmi3EnterStepMode(fmi3Instance c) {
-    return guarded(c, "fmi3EnterStepMode", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi3EnterStepMode", [&](Instance& instance) {
         if (!instance.unit->initialized()) {
             instance.unit->error("fmi3EnterStepMode before the unit was initialized");
             return fmi3Error;
@@ -546,14 +461,14 @@ fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 currentCommunicationPoint, fmi
                       fmi3Boolean noSetFMUStatePriorToCurrentPoint, fmi3Boolean* eventHandlingNeeded,
                       fmi3Boolean* terminateSimulation, fmi3Boolean* earlyReturn, fmi3Float64* lastSuccessfulTime) {
     (void)noSetFMUStatePriorToCurrentPoint;
-    return guarded(c, "fmi3DoStep", [&](Instance& instance) {
+    return Fmi::guarded(c, "fmi3DoStep", [&](Instance& instance) {
         const Outcome outcome = instance.unit->do_step(currentCommunicationPoint, communicationStepSize);
         if (eventHandlingNeeded) *eventHandlingNeeded = fmi3False;
         if (earlyReturn) *earlyReturn = fmi3False;
         // After a discarded step the unit stays where it was and asks the master to stop there.
         if (terminateSimulation) *terminateSimulation = outcome == Outcome::DISCARD ? fmi3True : fmi3False;
         if (lastSuccessfulTime) *lastSuccessfulTime = instance.unit->time();
-        return status_of(outcome);
+        return Fmi::status_of(outcome);
     });
 }
 

@@ -129,7 +129,7 @@ def _sources(core: Path, fmi_version: int) -> list[tuple[Path, str]]:
     for path in sorted((core / "src").rglob("*.cpp")):
         files.append((path, "core/" + path.relative_to(core / "src").as_posix()))
     fmu = core / "fmu"
-    for name in ("unit.hpp", "unit.cpp", f"fmi{fmi_version}.cpp"):
+    for name in ("unit.hpp", "unit.cpp", "instance.hpp", f"fmi{fmi_version}.cpp"):
         files.append((fmu / name, f"fmu/{name}"))
     headers = sorted(fmu.glob(f"fmi{fmi_version}*.h"))
     if not headers:
@@ -546,7 +546,7 @@ def build_native_fmu(out: str | Path | None = None, fmi_version: int = 2, build_
         objects_dir = Path(build_dir) if build_dir is not None else stage / "objects"
         include = [core / "include", generated]
         fmu_headers = [*sorted((core / "include").rglob("*.hpp")), core / "fmu" / "unit.hpp",
-                       generated / VARIABLES_HEADER, *sorted((core / "fmu").glob(f"fmi{fmi_version}*.h"))]
+                       core / "fmu" / "instance.hpp", generated / VARIABLES_HEADER, *sorted((core / "fmu").glob(f"fmi{fmi_version}*.h"))]
         objects = core_objects(objects_dir, compiler, jobs)
         objects += compile_objects(compiler, [core / "fmu" / "unit.cpp", core / "fmu" / f"fmi{fmi_version}.cpp"],
                                    include, objects_dir, fmu_headers, jobs)
