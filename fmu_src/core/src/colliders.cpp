@@ -193,10 +193,6 @@ Index collider_contact(Index n, const Physics& phys, const double* start, double
     return touching;
 }
 
-namespace {
-
-//: The first collider that particle i of pos (3, n) touches: within thickness / 2 of it, up to rounding
-//: (where collider_contact puts a particle), its normal there into nrm; -1 if none.
 Index touched_collider(const Physics& phys, Index n, Index i, const double* pos, double* nrm) {
     const double reach = 0.5 * phys.thickness * (1.0 + 1e-9);
     const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
@@ -205,8 +201,6 @@ Index touched_collider(const Physics& phys, Index n, Index i, const double* pos,
     }
     return -1;
 }
-
-}  // namespace
 
 Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const double* vel, double* free, double* held) {
     Index holding = 0;
@@ -242,19 +236,6 @@ Index release_from_colliders(Index n, const Physics& phys, const double* pos, co
     }
     return released;
 }
-
-namespace {
-
-//: m_i + e^T (D_i + B_i) e (kg) for the unit vector e (slip_on_supports); m_i without the blocks.
-double effective_mass(Index n, Index i, const double* mass, const double* diagonal_blocks, const double* blocks,
-                      const double* e) {
-    if (diagonal_blocks == nullptr) return mass[i];
-    double s[6];
-    for (Index slot = 0; slot < 6; ++slot) s[slot] = diagonal_blocks[slot * n + i] + blocks[slot * n + i];
-    return mass[i] + block_quadratic(s, e[0], e[1], e[2]);
-}
-
-}  // namespace
 
 double slip_on_supports(Index n, const Physics& phys, const double* force, const double* mass,
                         const double* diagonal_blocks, const double* blocks, double h, double limit, double* free,

@@ -7,6 +7,7 @@
 #include "wetcloth/assembly.hpp"
 #include "wetcloth/integration.hpp"
 #include "wetcloth/plane.hpp"
+#include "wetcloth/sliding.hpp"
 
 namespace wc {
 
@@ -42,17 +43,20 @@ PlaneSolve plane_pcg(const Cloth& cloth, const Work& work, Solver& solver, Plane
     for (Index k = 0; k < 3 * n; ++k) x[k] = 0.0;
     copy(3 * n, b, r);
     apply(plane, n, cloth.free, r, z);
+    if (solver.sliding != nullptr) project_sliding(*solver.sliding, n, z);
     copy(3 * n, z, p);
     double rz = dot(n, r, z);
     const double accuracy = py_max(rtol * largest_of(n, z), floor);
     Index iterations = 0;
     while (largest_of(n, z) > accuracy && iterations < max_iterations) {
         system_matvec(cloth, work, mass, p, ap);
+        if (solver.sliding != nullptr) project_sliding(*solver.sliding, n, ap);
         const double p_ap = dot(n, p, ap);
         if (!(p_ap > 0.0)) break;
         conjugate_gradient_step(n, rz / p_ap, p, ap, x, r);
         iterations += 1;
         apply(plane, n, cloth.free, r, z);
+        if (solver.sliding != nullptr) project_sliding(*solver.sliding, n, z);
         const double rz_new = dot(n, r, z);
         next_search_direction(n, rz_new / rz, z, p);
         rz = rz_new;
@@ -90,12 +94,15 @@ double better_guess(Index n, const double* vel, const double* prev_vel, const do
 }
 
 //: Forces and Jacobian pieces at (out_pos, out_vel), and Newton's residual into solver.rhs:
-//: free (b h F - M (v - v^)), minus the gradient of the step's incremental potential in v.
+//: free (b h F - M (v - v^)), minus the gradient of the step's incremental potential in v.  The particles
+//: sliding on a surface (solver.sliding) feel kinetic friction in F, and their residual has no part along
+//: the surface's normal (their velocity across it is prescribed).
 void newton_residual(const Cloth& cloth, const Physics& phys, Work& work, Solver& solver, const double* hat_vel,
                      const double* step_water, const double* out_pos, const double* out_vel, double bh,
                      double slack_slope) {
     const Index n = cloth.n;
     forces_and_blocks(cloth, phys, work, out_pos, out_vel, step_water, bh, slack_slope);
+    if (solver.sliding != nullptr) add_sliding_friction(*solver.sliding, n, work.force);
     const double* free = cloth.free;
     const double* mass = solver.mass;
     for (Index c = 0; c < 3; ++c) {
@@ -105,6 +112,7 @@ void newton_residual(const Cloth& cloth, const Physics& phys, Work& work, Solver
         double* __restrict rc = solver.rhs + c * n;
         for (Index i = 0; i < n; ++i) rc[i] = free[i] * (bh * f[i] - mass[i] * (ov[i] - hv[i]));
     }
+    if (solver.sliding != nullptr) project_sliding(*solver.sliding, n, solver.rhs);
 }
 
 //: Descent's line search along the correction dv from the velocities out_vel, whose residual (minus
@@ -242,6 +250,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
         }
     }
     const double bh = beta * h;
+    if (solver.sliding != nullptr) prescribe_normal_speed(*solver.sliding, n, pos, hat_pos, bh, out_vel);
     for (Index k = 0; k < 3 * n; ++k) out_pos[k] = hat_pos[k] + bh * out_vel[k];
     const bool adaptive = mode == NewtonMode::ADAPTIVE;
     Index factored = 0;
@@ -323,6 +332,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
         }
         previous = largest;
     }
+    if (solver.sliding != nullptr) stop_reversed(*solver.sliding, n, hat_pos, bh, out_pos, out_vel);
     for (Index k = 0; k < 3 * n; ++k) solver.step_acceleration[k] = (out_vel[k] - hat_vel[k]) / bh;
     // Descent never fails: a solve still short of its tolerance after DESCENT_NEWTON_ITERATIONS is taken,
     // its last correction (as a position error) added to the estimate, so the user sees what it cost.

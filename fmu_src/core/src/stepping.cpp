@@ -17,6 +17,7 @@
 #include "wetcloth/implicit.hpp"
 #include "wetcloth/integration.hpp"
 #include "wetcloth/self_contact.hpp"
+#include "wetcloth/sliding.hpp"
 
 namespace wc {
 
@@ -201,6 +202,9 @@ Status step(Core& core, double remaining) {
         forces(cloth, phys, core.work, buf.pos, buf.vel, buf.water);
         held += on_layers - release_sliding(core.contact, n, core.work.force, cloth.free, buf.held);
     }
+    // Particles sliding on the floor or a collider stay on it through an implicit step, friction a force of it.
+    const bool sliding = implicit && gather_sliding(n, phys, buf.pos, buf.vel, cloth.free, core.sliding) > 0;
+    core.solver.sliding = sliding ? &core.sliding : nullptr;
     double h = 0.0;
     Trial trial{};
     GripMove grip;
@@ -220,6 +224,20 @@ Status step(Core& core, double remaining) {
         h = remaining / pymax(1.0, std::ceil(remaining / planned - STEP_COUNT_SLACK));
         grip = grip_move(n, phys, cloth.free, buf.held, buf.pos, clock[TIME], h, remaining);
         trial = take_step(core, h, grip);
+        if (core.solver.sliding != nullptr && trial.converged) {
+            // Those the step's force lifts off their surface move off it at the step's end if that moves
+            // none farther than the allowed error (as slips do); else the step is taken again without them.
+            const double lifted = lift_off(core.sliding, n, phys.floor_z, core.work.force, core.solver.mass,
+                                           core.work.diagonal_blocks, core.work.blocks, h, adaptive ? control.allowed : 0.0,
+                                           buf.trial_pos, buf.trial_vel);
+            if (lifted < 0.0) {
+                drop_lifting(core.sliding, n, core.work.force);
+                if (core.sliding.count() == 0) core.solver.sliding = nullptr;
+                clock[REJECTED] += 1;
+                continue;
+            }
+            trial.error = pymax(trial.error, lifted);
+        }
         if (held > 0 && trial.converged) {
             // Slips on the floor or a collider that move no particle farther than the step's allowed error
             // need no second try: they are made now (most are: a draping cloth releases a few every step).
@@ -251,6 +269,10 @@ Status step(Core& core, double remaining) {
                 if (held_on_edges > 0) {
                     held -= release_from_collider_edges(*core.contact.lists, n, core.work.force, cloth.free, buf.held,
                                                         RELEASE_ROUND_CONE);
+                }
+                // Those released on the floor or a collider slide on it in the step taken again.
+                if (implicit && add_released(n, phys, buf.pos, buf.vel, cloth.free, core.work.force, core.sliding) > 0) {
+                    core.solver.sliding = &core.sliding;
                 }
                 clock[REJECTED] += 1;
                 continue;
@@ -304,10 +326,10 @@ Status step(Core& core, double remaining) {
     }
     place_grip(n, phys, grip, cloth.free, buf.held, buf.trial_pos, buf.trial_vel);
     const bool on_floor = floor_contact(n, phys.floor_z, phys.floor_friction, buf.trial_pos, buf.trial_vel) > 0 ||
-                          held > 0;
+                          held > 0 || core.solver.sliding != nullptr;
     const bool on_collider = (phys.collider_count > 0 &&
                               collider_contact(n, phys, buf.pos, buf.trial_pos, buf.trial_vel) > 0) ||
-                             held_on_colliders > 0;
+                             held_on_colliders > 0 || (core.solver.sliding != nullptr && phys.collider_count > 0);
     // The cloth's edges and triangles against mesh colliders' edges and vertices, before self-collision and
     // again after it if it moved the cloth.
     int edged = collider_edges(core, buf.pos, buf.trial_pos, buf.trial_vel);

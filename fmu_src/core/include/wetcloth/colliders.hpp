@@ -30,6 +30,10 @@ double collider_distance(const Physics& phys, Index k, const double* p, double r
 //: many particles touched.
 Index collider_contact(Index n, const Physics& phys, const double* start, double* pos, double* vel);
 
+//: The first collider that particle i of pos (3, n) touches: within thickness / 2 of it, up to rounding
+//: (where collider_contact puts a particle), its normal there into nrm; -1 if none.
+Index touched_collider(const Physics& phys, Index n, Index i, const double* pos, double* nrm);
+
 //: The value of Buffers::held for a particle collider k holds (the floor's is 1, a layer's 2).
 inline double collider_held(Index k) { return 3.0 + static_cast<double>(k); }
 

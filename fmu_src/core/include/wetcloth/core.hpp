@@ -156,6 +156,20 @@ enum SolverCounter : Index { NEWTON_ITERATIONS = 0, CG_ITERATIONS = 1, FACTORISA
 //: Scratch of the implicit steps, each (3, n) unless noted: mass (n) kg; rhs, dv, r, z, p, ap of the
 //: linear solves; hat_pos, hat_vel the BDF2 history terms; predicted the extrapolated positions;
 //: step_acceleration (3, n) m/s2; counters (4) int64.
+//: The particles sliding during a step: index (count), the surface's unit outward normal (3 per particle),
+//: its friction coefficient, the direction of sliding at the step's start (3 per particle, a unit vector
+//: along the surface), the prescribed velocity along the normal (m/s, set by the step) and whether the
+//: support is the floor (1) or a collider (0).
+struct Sliding {
+    std::vector<Index> index;
+    std::vector<double> normal;
+    std::vector<double> friction;
+    std::vector<double> direction;
+    std::vector<double> normal_speed;
+    std::vector<char> on_floor;
+    Index count() const { return static_cast<Index>(index.size()); }
+};
+
 struct Solver {
     double* mass = nullptr;
     double* rhs = nullptr;
@@ -169,6 +183,7 @@ struct Solver {
     double* predicted = nullptr;
     double* step_acceleration = nullptr;
     Index* counters = nullptr;
+    Sliding* sliding = nullptr;  // the particles sliding on a surface during the step (sliding.hpp), or none
 };
 
 //: Columns of Hierarchy::levels.
@@ -360,6 +375,7 @@ struct Core {
     Plane plane;
     Contact contact;
     Buffers buf;
+    Sliding sliding;
     double* clock = nullptr;  // (CLOCK_SIZE)
 };
 

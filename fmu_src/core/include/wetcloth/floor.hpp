@@ -78,6 +78,17 @@ inline void normal_history(Index n, Index i, const double* normal, const double*
     }
 }
 
+//: m_i + e^T (D_i + B_i) e (kg): particle i's inertia along the unit vector e (3) in an implicit step's
+//: matrix, D_i its springs' part of its diagonal block (diagonal_blocks (6, n)) and B_i its own (blocks
+//: (6, n)); m_i (mass (n)) alone when diagonal_blocks is null (the explicit schemes).
+inline double effective_mass(Index n, Index i, const double* mass, const double* diagonal_blocks,
+                             const double* blocks, const double* e) {
+    if (diagonal_blocks == nullptr) return mass[i];
+    double s[6];
+    for (Index slot = 0; slot < 6; ++slot) s[slot] = diagonal_blocks[slot * n + i] + blocks[slot * n + i];
+    return mass[i] + block_quadratic(s, e[0], e[1], e[2]);
+}
+
 //: Keep particle centres at or above z_min (m); stop their fall and apply friction.  Returns how many touch.
 Index floor_contact(Index n, double z_min, double friction, double* pos, double* vel);
 

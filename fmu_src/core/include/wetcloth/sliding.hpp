@@ -1,0 +1,54 @@
+// Particles sliding on the floor or a collider, in contact with it through an implicit step (docs/model.md
+// section 6.1): their velocity across the surface is prescribed (they stay on it) and kinetic friction acts
+// on them as a force of the step, not as an impulse after it.  (The set itself, Sliding, is in core.hpp.)
+#pragma once
+#include "wetcloth/core.hpp"
+
+namespace wc {
+
+
+//: A particle on a surface whose velocity across it is at most this fraction of its sliding speed is not
+//: leaving it: what the step's rounding leaves of a velocity set along the surface.
+inline constexpr double ACROSS_ROUNDING = 1e-9;
+
+//: Gather the free, not held particles that lie on the floor (centre at floor_z or below) or touch a collider
+//: and slide along it: moving along the surface, not away from it.  Returns how many.
+Index gather_sliding(Index n, const Physics& phys, const double* pos, const double* vel, const double* free,
+                     Sliding& sliding);
+
+//: Add to the sliding set the free particles at rest (velocity (3, n) zero) on the floor or a collider that
+//: a step's force (3, n, N) presses onto it and pushes along it: released from their hold, they would slide
+//: along that push (their direction of sliding).  Returns how many.
+Index add_released(Index n, const Physics& phys, const double* pos, const double* vel, const double* free,
+                   const double* force, Sliding& sliding);
+
+//: Remove the parts of a (3, n) along the sliding particles' normals.
+void project_sliding(const Sliding& sliding, Index n, double* a);
+
+//: The sliding particles' velocities (3, n) get their prescribed normal part, speed (m/s) that keeps each
+//: where it is across the surface: n . (pos - hat_pos) / bh, pos the step's start, hat_pos (3, n) the
+//: scheme's x^ with x+ = x^ + bh v+.
+void prescribe_normal_speed(Sliding& sliding, Index n, const double* pos, const double* hat_pos, double bh,
+                            double* vel);
+
+//: Kinetic friction on the sliding particles into force (3, n, N): friction times the force pressing each
+//: onto its surface (zero if none), against its direction of sliding at the step's start.
+void add_sliding_friction(const Sliding& sliding, Index n, double* force);
+
+//: After the step's solve: a sliding particle whose velocity (3, n, m/s) along its direction of sliding is
+//: no longer positive has stopped within the step: its velocity is set to zero and its position (3, n) to
+//: x^ + bh v+ with v+ its prescribed velocity across the surface.  Returns how many stopped.
+Index stop_reversed(const Sliding& sliding, Index n, const double* hat_pos, double bh, double* pos, double* vel);
+
+//: After the step: the particles whose force (3, n) lifts them off their surface (their normal was held in the
+//: solve) move as they would have from rest along the normal under it, by F_n h^2 / (2 m_e) (m_e their
+//: inertia along it in the step's matrix, as slip_on_supports), and their velocity by F_n h / m_e; the
+//: others on the floor are put back exactly at floor_z (rounding).  Returns the largest such move (m), or -1
+//: without moving anything if one is beyond `limit` (m): the step is then taken again without them (drop_lifting).
+double lift_off(const Sliding& sliding, Index n, double floor_z, const double* force, const double* mass,
+                const double* diagonal_blocks, const double* blocks, double h, double limit, double* pos, double* vel);
+
+//: Leave out of the sliding set the particles that the force (3, n) lifts off; returns how many.
+Index drop_lifting(Sliding& sliding, Index n, const double* force);
+
+}  // namespace wc

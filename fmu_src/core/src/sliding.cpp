@@ -1,0 +1,208 @@
+// Particles sliding on the floor or a collider through an implicit step (sliding.hpp; docs/model.md
+// section 6.1).
+//
+// A particle that slides on a surface and is left free in the step's solve falls into the surface under the
+// force pressing it there, by h'^2 F_n / m, and is put back after the step, where its friction acts as an
+// impulse: the step's error estimate sees both (the fall across the surface and the friction missing from
+// the motion along it) and holds the steps of a cloth settling on the floor to about 1 ms.  So in the solve
+// its velocity across the surface is prescribed (it stays where it is across it: the corrections of Newton's
+// iterations have no part along the normal) and kinetic friction is a force of the step: friction times the
+// force pressing it onto the surface, against its direction of sliding at the step's start.  One that
+// friction stops within the step ends it at rest on the surface (held in the next step, static friction);
+// one that the force lifts off moves at the step's end as a held particle that slips does.
+#include "wetcloth/sliding.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "wetcloth/colliders.hpp"
+#include "wetcloth/floor.hpp"
+
+namespace wc {
+
+Index gather_sliding(Index n, const Physics& phys, const double* pos, const double* vel, const double* free,
+                     Sliding& sliding) {
+    sliding.index.clear();
+    sliding.normal.clear();
+    sliding.friction.clear();
+    sliding.direction.clear();
+    sliding.on_floor.clear();
+    for (Index i = 0; i < n; ++i) {
+        if (free[i] == 0.0) continue;  // pinned, or held at rest
+        double nrm[3] = {0.0, 0.0, 1.0};
+        double friction = phys.floor_friction;
+        bool floor = pos[2 * n + i] <= phys.floor_z;
+        if (!floor) {
+            const Index k = phys.collider_count > 0 ? touched_collider(phys, n, i, pos, nrm) : -1;
+            if (k < 0) continue;
+            friction = phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
+        }
+        const double v[3] = {vel[i], vel[n + i], vel[2 * n + i]};
+        const double vn = v[0] * nrm[0] + v[1] * nrm[1] + v[2] * nrm[2];
+        double t[3];
+        double slide2 = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            t[c] = v[c] - vn * nrm[c];
+            slide2 += t[c] * t[c];
+        }
+        if (!(slide2 > 0.0)) continue;
+        const double slide = std::sqrt(slide2);
+        if (vn > ACROSS_ROUNDING * slide) continue;  // leaving the surface
+        sliding.index.push_back(i);
+        for (int c = 0; c < 3; ++c) {
+            sliding.normal.push_back(nrm[c]);
+            sliding.direction.push_back(t[c] / slide);
+        }
+        sliding.friction.push_back(friction);
+        sliding.on_floor.push_back(floor ? 1 : 0);
+    }
+    sliding.normal_speed.assign(sliding.index.size(), 0.0);
+    return sliding.count();
+}
+
+Index add_released(Index n, const Physics& phys, const double* pos, const double* vel, const double* free,
+                   const double* force, Sliding& sliding) {
+    std::vector<char> listed(n, 0);
+    for (const Index i : sliding.index) listed[i] = 1;
+    Index added = 0;
+    for (Index i = 0; i < n; ++i) {
+        if (free[i] == 0.0 || listed[i] || vel[i] != 0.0 || vel[n + i] != 0.0 || vel[2 * n + i] != 0.0) continue;
+        double nrm[3] = {0.0, 0.0, 1.0};
+        double friction = phys.floor_friction;
+        const bool floor = pos[2 * n + i] <= phys.floor_z;
+        if (!floor) {
+            const Index k = phys.collider_count > 0 ? touched_collider(phys, n, i, pos, nrm) : -1;
+            if (k < 0) continue;
+            friction = phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
+        }
+        const double f[3] = {force[i], force[n + i], force[2 * n + i]};
+        const double fn = f[0] * nrm[0] + f[1] * nrm[1] + f[2] * nrm[2];
+        if (fn >= 0.0) continue;  // lifted off: free
+        double t[3];
+        double along2 = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            t[c] = f[c] - fn * nrm[c];
+            along2 += t[c] * t[c];
+        }
+        if (!(along2 > 0.0)) continue;
+        const double along = std::sqrt(along2);
+        sliding.index.push_back(i);
+        for (int c = 0; c < 3; ++c) {
+            sliding.normal.push_back(nrm[c]);
+            sliding.direction.push_back(t[c] / along);
+        }
+        sliding.friction.push_back(friction);
+        sliding.on_floor.push_back(floor ? 1 : 0);
+        added += 1;
+    }
+    sliding.normal_speed.assign(sliding.index.size(), 0.0);
+    return added;
+}
+
+void project_sliding(const Sliding& sliding, Index n, double* a) {
+    for (Index s = 0; s < sliding.count(); ++s) {
+        const Index i = sliding.index[s];
+        const double* nrm = &sliding.normal[3 * s];
+        const double along = a[i] * nrm[0] + a[n + i] * nrm[1] + a[2 * n + i] * nrm[2];
+        for (int c = 0; c < 3; ++c) a[c * n + i] -= along * nrm[c];
+    }
+}
+
+void prescribe_normal_speed(Sliding& sliding, Index n, const double* pos, const double* hat_pos, double bh,
+                            double* vel) {
+    for (Index s = 0; s < sliding.count(); ++s) {
+        const Index i = sliding.index[s];
+        const double* nrm = &sliding.normal[3 * s];
+        double gap = 0.0;
+        double vn = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            gap += (pos[c * n + i] - hat_pos[c * n + i]) * nrm[c];
+            vn += vel[c * n + i] * nrm[c];
+        }
+        const double speed = gap / bh;
+        sliding.normal_speed[s] = speed;
+        for (int c = 0; c < 3; ++c) vel[c * n + i] += (speed - vn) * nrm[c];
+    }
+}
+
+void add_sliding_friction(const Sliding& sliding, Index n, double* force) {
+    for (Index s = 0; s < sliding.count(); ++s) {
+        const Index i = sliding.index[s];
+        const double* nrm = &sliding.normal[3 * s];
+        const double pressing = -(force[i] * nrm[0] + force[n + i] * nrm[1] + force[2 * n + i] * nrm[2]);
+        if (!(pressing > 0.0)) continue;
+        const double kinetic = sliding.friction[s] * pressing;
+        for (int c = 0; c < 3; ++c) force[c * n + i] -= kinetic * sliding.direction[3 * s + c];
+    }
+}
+
+Index stop_reversed(const Sliding& sliding, Index n, const double* hat_pos, double bh, double* pos, double* vel) {
+    Index stopped = 0;
+    for (Index s = 0; s < sliding.count(); ++s) {
+        const Index i = sliding.index[s];
+        const double* nrm = &sliding.normal[3 * s];
+        const double* t = &sliding.direction[3 * s];
+        const double onward = vel[i] * t[0] + vel[n + i] * t[1] + vel[2 * n + i] * t[2];
+        if (onward > 0.0) continue;
+        stopped += 1;
+        for (int c = 0; c < 3; ++c) {  // at rest (exactly: held in the next step), where it is across the surface
+            const Index k = c * n + i;
+            vel[k] = 0.0;
+            pos[k] = hat_pos[k] + bh * sliding.normal_speed[s] * nrm[c];
+        }
+    }
+    return stopped;
+}
+
+double lift_off(const Sliding& sliding, Index n, double floor_z, const double* force, const double* mass,
+                const double* diagonal_blocks, const double* blocks, double h, double limit, double* pos, double* vel) {
+    double farthest = 0.0;
+    for (int pass = 0; pass < 2; ++pass) {  // first: how far each would move; second: move them
+        for (Index s = 0; s < sliding.count(); ++s) {
+            const Index i = sliding.index[s];
+            const double* nrm = &sliding.normal[3 * s];
+            const double lifting = force[i] * nrm[0] + force[n + i] * nrm[1] + force[2 * n + i] * nrm[2];
+            const double inertia = lifting > 0.0 ? effective_mass(n, i, mass, diagonal_blocks, blocks, nrm) : 1.0;
+            const double move = lifting > 0.0 ? 0.5 * lifting / inertia * h * h : 0.0;
+            if (pass == 0) {
+                if (move > limit) return -1.0;
+                farthest = std::max(farthest, move);
+                continue;
+            }
+            const double vn = vel[i] * nrm[0] + vel[n + i] * nrm[1] + vel[2 * n + i] * nrm[2];
+            for (int c = 0; c < 3; ++c) {
+                pos[c * n + i] += move * nrm[c];
+                vel[c * n + i] += (lifting > 0.0 ? lifting / inertia * h : 0.0) * nrm[c] - vn * nrm[c];
+            }
+            if (sliding.on_floor[s] && lifting <= 0.0) pos[2 * n + i] = floor_z;
+        }
+    }
+    return farthest;
+}
+
+Index drop_lifting(Sliding& sliding, Index n, const double* force) {
+    Index kept = 0;
+    const Index count = sliding.count();
+    for (Index s = 0; s < count; ++s) {
+        const Index i = sliding.index[s];
+        const double* nrm = &sliding.normal[3 * s];
+        if (force[i] * nrm[0] + force[n + i] * nrm[1] + force[2 * n + i] * nrm[2] > 0.0) continue;
+        sliding.index[kept] = i;
+        for (int c = 0; c < 3; ++c) {
+            sliding.normal[3 * kept + c] = nrm[c];
+            sliding.direction[3 * kept + c] = sliding.direction[3 * s + c];
+        }
+        sliding.friction[kept] = sliding.friction[s];
+        sliding.on_floor[kept] = sliding.on_floor[s];
+        kept += 1;
+    }
+    sliding.index.resize(kept);
+    sliding.normal.resize(3 * kept);
+    sliding.direction.resize(3 * kept);
+    sliding.friction.resize(kept);
+    sliding.on_floor.resize(kept);
+    sliding.normal_speed.assign(kept, 0.0);
+    return count - kept;
+}
+
+}  // namespace wc
