@@ -7,7 +7,8 @@ The mesh is docs/make_meshes.py's irregular disc (rings of jittered points, Dela
 ``--vertices`` vertices and the area of the square it is compared with: a square grid of as many
 particles.  Both drop flat from 5 cm onto water (the default towel's fabric, air and water), and hang
 in air from the part of them at y >= 0.6 m (pinned by a box); CPU seconds, steps, Newton and CG iterations
-for each, and the ratio of CPU time per vertex.  The mesh takes the core's listed springs and its
+for each (and the self-collision candidate lists built; ``--self-collision off`` leaves that stage out), and the
+ratio of CPU time per vertex.  The mesh takes the core's listed springs and its
 algebraic multigrid preconditioner (mesh_plane.cpp); the grid its families and geometric multigrid.
 Between them the grid's own cloth as a quad mesh file ("quads"), its vertices numbered along the columns
 (``--shuffle``: in a random order) rather than in the grid's order, so that it takes the mesh path:
@@ -93,6 +94,8 @@ def main() -> None:
     parser.add_argument("--duration", type=float, default=0.5, help="simulated seconds (default 0.5)")
     parser.add_argument("--shuffle", action="store_true", help="the quad mesh's vertices in a random order")
     parser.add_argument("--square-meshes", action="store_true", help="also the square split into triangles, and jittered")
+    parser.add_argument("--self-collision", choices=("on", "off"), default="on",
+                        help="off: without its cost (the disc hanging rebuilds its candidate list at most steps)")
     args = parser.parse_args()
     rings = round(math.sqrt(args.vertices / math.pi))
     points, triangles = make_meshes.round_cloth(radius=make_meshes.RADIUS, rings=rings)
@@ -119,12 +122,14 @@ def main() -> None:
         results = {}
         for kind, shape in shapes.items():
             extra = dict(pinned_vertices="box:-9,0.6,-9,9,9,9") if label.startswith("hanging") else {}
+            extra["self_collision"] = args.self_collision
             seconds, sim = run(wetcloth.load_scene(**base, **shape, **extra), args.duration)
             n = sim.model.topology.n
             results[kind] = seconds / n
             c = sim.solver_counts
+            lists = f"  lists built {sim.contact_counts['rebuilds']:4d}" if args.self_collision == "on" else ""
             print(f"  {label:<17} {kind}: {n:6d} vertices  {seconds:7.1f} s CPU  steps {sim.steps:5d}  rejected "
-                  f"{sim.rejected_steps:4d}  Newton {c['newton_iterations']:5d}  CG {c['cg_iterations']:6d}", flush=True)
+                  f"{sim.rejected_steps:4d}  Newton {c['newton_iterations']:5d}  CG {c['cg_iterations']:6d}{lists}", flush=True)
         ratios = ", ".join(f"{kind} / grid {results[kind] / results['grid']:.2f}x" for kind in results if kind != "grid")
         print(f"  {label:<17} per vertex: {ratios}", flush=True)
 

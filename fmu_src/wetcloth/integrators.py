@@ -84,7 +84,7 @@ class Integrator:
     def control(self) -> Control:
         """The loop's settings for the model's current scene."""
         sc = self.model.scene
-        size = max(sc.width, sc.length)
+        size = self.model.topology.size  # a mesh's own, not the scene's width and length (unused there)
         if sc.drag_model == "stokes":
             drag_offset, drag_slope = float(np.max(self.model.stokes_coefficient / self.model.dry_mass)), 0.0
         else:  # the water's speed past the cloth is at most a particle's speed plus the current's

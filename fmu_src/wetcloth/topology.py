@@ -72,6 +72,7 @@ class Topology:
     pair_kind: np.ndarray  # (S,) int8: STRETCH, SHEAR or BEND
     pair_tension_count: int  # the first this many listed springs are tension-only
     mesh: MeshFaces | None  # None for the built-in grid
+    size: float  # m, the cloth's larger side (grid: max(width, length); mesh: of rest_xy's bounding box)
 
     @property
     def n(self) -> int:
@@ -197,6 +198,7 @@ def _grid(scene: Scene, nx: int, ny: int, width: float, length: float) -> Topolo
         pinned=np.zeros(n, dtype=bool),
         **_no_pairs(),
         mesh=None,
+        size=max(width, length),
     )
 
 
@@ -276,12 +278,13 @@ def _mesh(scene: Scene, mesh: MeshFile, faces: MeshFaces) -> Topology:
     springs = listed_springs(mesh, scene)
     length = float(np.median(springs["pair_rest"][springs["pair_kind"] == STRETCH]))
     empty = np.zeros((0, n))
+    rest_xy = flat_coordinates(mesh.points, area, mesh.triangles)
     return Topology(
-        nx=n, ny=1, dx=length, dy=length, rest_pos=mesh.points.T.copy(),
-        rest_xy=flat_coordinates(mesh.points, area, mesh.triangles), area=area,
+        nx=n, ny=1, dx=length, dy=length, rest_pos=mesh.points.T.copy(), rest_xy=rest_xy, area=area,
         spring_offset=np.zeros(0, dtype=np.int64), spring_rest=np.zeros(0), spring_tension_only=np.zeros(0, dtype=bool),
         spring_stiffness=empty, spring_damping=empty.copy(), spring_shape=empty.copy(), spring_family_names=(),
         triangles=mesh.triangles.copy(), pinned=np.zeros(n, dtype=bool), **springs, mesh=faces,
+        size=float(np.ptp(rest_xy, axis=1).max()),
     )
 
 
