@@ -72,8 +72,8 @@ def test_the_swinging_sheets_error_falls_with_the_tolerance_at_bdf2s_rate(swingi
 def test_newtons_tolerance_adds_nothing_to_the_default_error(swinging_reference, monkeypatch):
     """Newton stops at NEWTON_FRACTION of the error allowed per step: what it leaves unsolved must be
     small beside the step's own error.  At the default tolerance the swinging sheet's largest error
-    is within 10 % of the error with Newton held 30 times tighter (measured: the same to 1e-16 at
-    0.3 and 0.5; at 1.0 6 % larger, at 3.0 6.7 times)."""
+    is within 10 % of the error with Newton held 30 times tighter (measured: the same to 1e-16 with
+    NEWTON_FRACTION 0.1 to 0.5; at 1.0 6 % larger, at 3.0 6.7 times)."""
     default = np.abs(swinging_sheet_positions(DEFAULTS.tolerance) - swinging_reference).max()
     monkeypatch.setattr(integrators, "NEWTON_FRACTION", integrators.NEWTON_FRACTION / 30)
     tight = np.abs(swinging_sheet_positions(DEFAULTS.tolerance) - swinging_reference).max()

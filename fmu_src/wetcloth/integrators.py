@@ -39,12 +39,8 @@ STEP_GROWTH, STEP_SHRINK = 2.0, 0.2
 #: Speed (m/s) beyond which the state counts as exploded: far above any fall in a tank.
 BLOW_UP_SPEED = 1.0e3
 #: BDF2's Newton iterations stop when the position correction is below this fraction of the
-#: local error allowed per step (or, with fixed steps, of 1e-5 times the cloth's size).  0.3 instead
-#: of 0.1: the 81 x 81 hanging sheet's 3 s took 8 % fewer Newton and 10 % fewer CG iterations, the
-#: same steps, and the reference scenes' errors (bench/work_precision.py's cases) stayed within 20 %
-#: of what they were (landing 9.4e-5 against 8.0e-5 m, sinking's wet mass 6.4e-4 against 8.0e-4,
-#: hanging sheet 2.1e-4 against 2.7e-4 m); tests/test_accuracy.py holds Newton's share of the error.
-NEWTON_FRACTION = 0.3
+#: local error allowed per step (or, with fixed steps, of 1e-5 times the cloth's size).
+NEWTON_FRACTION = 0.1
 FIXED_STEP_NEWTON_TOLERANCE = 1e-6
 #: A cloth whose particles all stay within SLEEP_DISTANCE (m) of where they were for SLEEP_AFTER
 #: seconds of simulated time, with no water going in or out, is asleep: time passes, nothing is

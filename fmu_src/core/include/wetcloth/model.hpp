@@ -204,7 +204,7 @@ std::vector<std::pair<Index, Index>> level_sizes(Index nx, Index ny, Index coars
 inline constexpr double SMALLEST_STEP = 1e-9;
 inline constexpr double STEP_GROWTH = 2.0, STEP_SHRINK = 0.2;
 inline constexpr double BLOW_UP_SPEED = 1.0e3;
-inline constexpr double NEWTON_FRACTION = 0.3;
+inline constexpr double NEWTON_FRACTION = 0.1;
 inline constexpr double FIXED_STEP_NEWTON_TOLERANCE = 1e-6;
 inline constexpr double SLEEP_DISTANCE = 5e-4, SLEEP_AFTER = 1.0;
 //: self_contact.MARGIN_FRACTION: a candidate list's least margin as a fraction of the smaller spacing.
