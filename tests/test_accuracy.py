@@ -60,7 +60,7 @@ def swinging_reference():
 
 def test_the_swinging_sheets_error_falls_with_the_tolerance_at_bdf2s_rate(swinging_reference):
     """Each tenfold tighter tolerance cuts the largest particle error about 10^(2/3) = 4.6 times
-    (second-order BDF2, its third-order local error held to the tolerance; measured 8.1, 5.2 and 4.7
+    (second-order BDF2, its third-order local error held to the tolerance; measured 7.9, 5.2 and 4.7
     from 5e-5 down).  At least 3 times over two decades: an error that does not shrink with the
     tolerance (Newton's, or the linear solves') would flatten the second decade first."""
     errors_by_tolerance = [np.abs(swinging_sheet_positions(DEFAULTS.tolerance * scale) - swinging_reference).max()
