@@ -161,18 +161,6 @@ def test_face_drag_velocity_jacobian_for_uniform_motion(drag_tangential, where):
     np.testing.assert_allclose(_matvec(model, state, p), expected, rtol=0, atol=1e-6 * np.abs(expected).max())
 
 
-def test_implicit_right_hand_side_is_h_squared_k_v():
-    """The implicit step's extra right-hand side h^2 K v equals h^2 times the position Jacobian of
-    the spring and buoyancy forces applied to v (finite differences), on a taut sheet in the slab."""
-    scene = wetcloth.load_scene(nx=5, ny=6, initial_tilt=0.0, initial_height=0.0, drag_model="stokes")
-    model, state = disturbed_state(scene, seed=4, spread=2e-4, stretch=1.02)
-    h = 3e-3
-    model.forces_and_blocks(state.pos, state.vel, state.water, h)
-    reference = NumpyReference(model)
-    kv = _position_derivative(reference, state, state.vel)
-    np.testing.assert_allclose(model.work.rhs, h * h * kv, rtol=0, atol=1e-6 * np.abs(h * h * kv).max())
-
-
 @pytest.mark.parametrize("damping_model", ["projected", "thesis"])
 def test_preconditioner_blocks_are_the_systems_diagonal_blocks(damping_model):
     """The block-Jacobi preconditioner is built from the 3x3 diagonal blocks the springs add up in

@@ -39,10 +39,10 @@ Physics = namedtuple("Physics", "projected wet_factor water_level water_density 
 #: Scratch and results: ``force`` (3, n) N; ``submerged`` (n) the submerged fraction of each
 #: particle; ``saturation`` (n); ``blocks`` (6, n) per-particle symmetric 3x3 blocks (xx, yy, zz,
 #: xy, xz, yz) of the system matrix; ``diagonal_blocks`` (6, n) the springs' part of its diagonal
-#: blocks; ``direction`` (F, 3, n), ``along``, ``across`` (F, n) each spring's block; ``rhs`` (3, n);
-#: ``buf`` (4, n); ``cells`` (2, 9, n + nx + 1) a grid's face-drag rows; ``wick_buffer`` (6, n);
+#: blocks; ``direction`` (F, 3, n), ``along``, ``across`` (F, n) each spring's block; ``buf`` (4, n);
+#: ``cells`` (2, 9, n + nx + 1) a grid's face-drag rows; ``wick_buffer`` (6, n);
 #: ``pair_direction`` (3, S), ``pair_along``, ``pair_across`` (S) the listed springs' blocks.
-Work = namedtuple("Work", "force submerged saturation blocks diagonal_blocks direction along across rhs buf cells "
+Work = namedtuple("Work", "force submerged saturation blocks diagonal_blocks direction along across buf cells "
                           "wick_buffer pair_direction pair_along pair_across")
 #: Integrator and controller settings: ``integrator`` (code: ``wetcloth.integrators.INTEGRATORS``),
 #: ``tolerance`` (-), ``allowed`` local position error per step (m, 0 = fixed steps of ``max_step``
@@ -73,7 +73,7 @@ def make_work(n: int, families: int, grid_x: int, pairs: int = 0, triangles: int
     cells = n + grid_x + 1 if grid_x > 0 else max(n + 1, triangles)  # the core's cells_length
     return Work(force=np.zeros((3, n)), submerged=np.zeros(n), saturation=np.zeros(n), blocks=np.zeros((6, n)),
                 diagonal_blocks=np.zeros((6, n)), direction=np.zeros((families, 3, n)),
-                along=np.zeros((families, n)), across=np.zeros((families, n)), rhs=np.zeros((3, n)),
+                along=np.zeros((families, n)), across=np.zeros((families, n)),
                 buf=np.zeros((4, n)), cells=np.zeros((2, 9, cells)), wick_buffer=np.zeros((6, n)),
                 pair_direction=np.zeros((3, pairs)), pair_along=np.zeros(pairs), pair_across=np.zeros(pairs))
 

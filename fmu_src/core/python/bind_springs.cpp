@@ -66,7 +66,7 @@ WETCLOTH_BINDINGS(m) {
         "spring_forces_and_blocks",
         [](nb::handle offsets, nb::handle rest, nb::handle tension_only, nb::handle stiffness, nb::handle damping,
            nb::handle projected, double wet_factor, nb::handle saturation, nb::handle pos, nb::handle vel, double h,
-           nb::handle force, nb::handle rhs, nb::handle diagonal_blocks, nb::handle direction, nb::handle along,
+           nb::handle force, nb::handle diagonal_blocks, nb::handle direction, nb::handle along,
            nb::handle across, nb::handle buf, double slack_slope) {
             const Index n = size_of(pos) / 3;
             const Cloth cloth = spring_cloth(n, offsets, rest, tension_only, stiffness, damping);
@@ -76,7 +76,6 @@ WETCLOTH_BINDINGS(m) {
             phys.wet_factor = wet_factor;
             Work work;
             work.force = argument<double>(force, "force", 3 * n);
-            work.rhs = argument<double>(rhs, "rhs", 3 * n);
             work.diagonal_blocks = argument<double>(diagonal_blocks, "diagonal_blocks", 6 * n);
             work.direction = argument<double>(direction, "direction", f * 3 * n);
             work.along = argument<double>(along, "along", f * n);
@@ -88,9 +87,9 @@ WETCLOTH_BINDINGS(m) {
         },
         nb::arg("offsets"), nb::arg("rest"), nb::arg("tension_only"), nb::arg("stiffness"), nb::arg("damping"),
         nb::arg("projected"), nb::arg("wet_factor"), nb::arg("saturation"), nb::arg("pos"), nb::arg("vel"),
-        nb::arg("h"), nb::arg("force"), nb::arg("rhs"), nb::arg("diagonal_blocks"), nb::arg("direction"),
+        nb::arg("h"), nb::arg("force"), nb::arg("diagonal_blocks"), nb::arg("direction"),
         nb::arg("along"), nb::arg("across"), nb::arg("buf"), nb::arg("slack_slope") = 0.0,
-        "Forces as spring_forces plus h^2 K v into rhs, the springs' blocks into diagonal_blocks (6, n) and "
+        "Forces as spring_forces, the springs' blocks into diagonal_blocks (6, n) and "
         "each spring's block into direction (F, 3, n), along, across (F, n); tension-only springs' slope along "
         "themselves at least slack_slope in the blocks.");
 

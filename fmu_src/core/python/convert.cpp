@@ -142,7 +142,6 @@ Work work_from(nb::handle h, const Cloth& cloth) {
     w.direction = array<double>(h, "direction", f * 3 * n);
     w.along = array<double>(h, "along", f * n);
     w.across = array<double>(h, "across", f * n);
-    w.rhs = array<double>(h, "rhs", 3 * n);
     w.buf = array<double>(h, "buf", 4 * n);
     w.cells = array<double>(h, "cells", 2 * 9 * cells_length(cloth));
     w.wick_buffer = array<double>(h, "wick_buffer", 6 * n);

@@ -67,7 +67,7 @@ void add_face_drag(const Cloth& cloth, const Physics& phys, Work& work, const do
 
 //: Buoyancy and drag (Stokes or face) into work.force; with blocks_wanted their velocity Jacobian
 //: (times h) into work.blocks and, for smooth buoyancy, its position Jacobian (times h^2) into
-//: work.blocks and work.rhs.
+//: work.blocks.
 void water_forces(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel, double h,
                   bool blocks_wanted) {
     const Index n = cloth.n;
@@ -85,11 +85,7 @@ void water_forces(const Cloth& cloth, const Physics& phys, Work& work, const dou
         // dF_z/dz = -rho g V / thickness inside the surface slab (0 < s < 1).
         const double scale = h * h * phys.water_density * GRAVITY / phys.thickness;
         for (Index i = 0; i < n; ++i) {
-            if (0.0 < s[i] && s[i] < 1.0) {
-                const double stiffness = scale * cloth.volume[i];
-                blocks[2 * n + i] += stiffness;
-                work.rhs[2 * n + i] -= stiffness * vel[2 * n + i];
-            }
+            if (0.0 < s[i] && s[i] < 1.0) blocks[2 * n + i] += scale * cloth.volume[i];
         }
     }
 }
@@ -119,7 +115,6 @@ void forces_and_blocks(const Cloth& cloth, const Physics& phys, Work& work, cons
                        const double* water, double h, double slack_slope) {
     const Index n = cloth.n;
     start_with_gravity(cloth, water, work.force);
-    fill_zero(work.rhs, 3 * n);
     fill_zero(work.diagonal_blocks, 6 * n);
     fill_zero(work.blocks, 6 * n);
     if (cloth.families > 0 || cloth.pair_count > 0) {

@@ -67,7 +67,6 @@ template <Law L>
 void blocks_of(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos, const double* vel,
                double h, double slack_slope, Index first, Index last, Work& work) {
     const Index n = cloth.n, count = cloth.pair_count;
-    const double thesis = phys.projected ? 0.0 : 1.0;
     double* d = work.diagonal_blocks;
     for (Index k = first; k < last; ++k) {
         const Ends e = ends(cloth, k);
@@ -83,8 +82,6 @@ void blocks_of(const Cloth& cloth, const Physics& phys, const double* saturation
         work.pair_along[k] = c.along;
         work.pair_across[k] = c.across;
         add_force(cloth, phys, vel, k, e, g, c.t, work.force);
-        const Vec kv = stiffness_times_velocity(h, thesis, cf, c.along, c.across, c.ux, c.uy, c.uz, dvx, dvy, dvz);
-        add_to_ends(n, e, -kv.x, -kv.y, -kv.z, work.rhs);
         const Block b = spring_block(c.along, c.across, c.ux, c.uy, c.uz);
         const double slots[6] = {b.xx, b.yy, b.zz, b.xy, b.xz, b.yz};
         for (Index s = 0; s < 6; ++s) {

@@ -375,7 +375,7 @@ Simulation::Simulation(const Scene& scene) : scene_(scene), topo_(build_topology
     // Work (bundles.make_work).
     const std::size_t cells = 2 * 9 * static_cast<std::size_t>(n + nx + 1);
     const std::size_t uf = static_cast<std::size_t>(families);
-    work_.assign(un * (3 + 1 + 1 + 6 + 6 + 3 * uf + uf + uf + 3 + 4 + 6) + cells, 0.0);
+    work_.assign(un * (3 + 1 + 1 + 6 + 6 + 3 * uf + uf + uf + 4 + 6) + cells, 0.0);
     {
         double* p = work_.data();
         auto take = [&p](std::size_t count) {
@@ -392,7 +392,6 @@ Simulation::Simulation(const Scene& scene) : scene_(scene), topo_(build_topology
         w.direction = take(3 * uf * un);
         w.along = take(uf * un);
         w.across = take(uf * un);
-        w.rhs = take(3 * un);
         w.buf = take(4 * un);
         w.cells = take(cells);
         w.wick_buffer = take(6 * un);

@@ -116,39 +116,6 @@ void coefficients(Index n, Index off, double l0, bool projected, const double* k
                                    along, across);
 }
 
-//: rx, ry, rz[k] -= sign * (k_across dv + (k_along - k_across) (u . dv) u) for the m springs.
-inline void stiffness_times_velocity_loop(Index m, double h, double thesis, double sign, const double* __restrict cf,
-                                          const double* __restrict along, const double* __restrict across,
-                                          const double* __restrict ux, const double* __restrict uy,
-                                          const double* __restrict uz, const double* __restrict vxi,
-                                          const double* __restrict vyi, const double* __restrict vzi,
-                                          const double* __restrict vxj, const double* __restrict vyj,
-                                          const double* __restrict vzj, double* __restrict rx, double* __restrict ry,
-                                          double* __restrict rz) {
-    for (Index k = 0; k < m; ++k) {
-        const Vec kv = stiffness_times_velocity(h, thesis, cf[k], along[k], across[k], ux[k], uy[k], uz[k],
-                                                vxi[k] - vxj[k], vyi[k] - vyj[k], vzi[k] - vzj[k]);
-        rx[k] -= sign * kv.x;
-        ry[k] -= sign * kv.y;
-        rz[k] -= sign * kv.z;
-    }
-}
-
-//: Add h^2 K v to rhs at both ends of each spring: with dv = v_i - v_j, its first end gets
-//: -(h^2 k_across) dv - h^2 (k_along - k_across) (u . dv) u, its second the opposite.  h^2 k is the
-//: stiffness part of along and across: their damping part taken off.
-inline void add_stiffness_times_velocity(Index n, Index off, double h, bool projected, const double* cf,
-                                         const double* along, const double* across, const double* u,
-                                         const double* vel, double* rhs) {
-    const double thesis = projected ? 0.0 : 1.0;
-    for (Index end = 0; end < 2; ++end) {
-        const Index start = end * off;
-        stiffness_times_velocity_loop(n - off, h, thesis, 1.0 - 2.0 * static_cast<double>(end), cf, along, across, u,
-                                      u + n, u + 2 * n, vel, vel + n, vel + 2 * n, vel + off, vel + n + off,
-                                      vel + 2 * n + off, rhs + start, rhs + n + start, rhs + 2 * n + start);
-    }
-}
-
 //: Rows xx..yz[j] += the block of spring j (along, across, u from that spring on), j < count.
 inline void one_end_blocks(Index count, const double* __restrict along, const double* __restrict across,
                            const double* __restrict ux, const double* __restrict uy, const double* __restrict uz,
@@ -301,7 +268,6 @@ void spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const dou
                 break;
         }
         add_spring_forces(n, off, t, phys.projected, cf, pos, vel, work.force);
-        add_stiffness_times_velocity(n, off, h, phys.projected, cf, along, across, u, vel, work.rhs);
         add_blocks(n, off, along, across, u, work.diagonal_blocks);
     }
     if (cloth.pair_count > 0) listed_spring_forces_and_blocks(cloth, phys, saturation, pos, vel, h, slack_slope, work);

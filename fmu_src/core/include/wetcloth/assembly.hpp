@@ -13,8 +13,8 @@ double submerged(const Physics& phys, Index n, const double* z, double* out);
 void forces(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
             const double* water);
 
-//: Forces as `forces`, plus the pieces of the system matrix M - h dF/dv - h^2 dF/dx: work.rhs the term
-//: h^2 K v, work.blocks the per-particle blocks (drag, buoyancy), work.diagonal_blocks the springs' part
+//: Forces as `forces`, plus the pieces of the system matrix M - h dF/dv - h^2 dF/dx: work.blocks the
+//: per-particle blocks (drag, buoyancy), work.diagonal_blocks the springs' part
 //: of the diagonal blocks, and each spring's block in work.direction, along, across.  With slack_slope > 0
 //: the blocks count every tension-only spring as at least that fraction of taut along itself
 //: (spring_forces_and_blocks): a majorant of the true Jacobian, for steps that start far from their solution.

@@ -108,7 +108,7 @@ struct Physics {
 //: Scratch and results: force (3, n) N; submerged (n) fraction; saturation (n); blocks (6, n)
 //: per-particle symmetric 3x3 blocks (xx, yy, zz, xy, xz, yz) of the system matrix;
 //: diagonal_blocks (6, n) the springs' part of its diagonal blocks; direction (F, 3, n), along,
-//: across (F, n) each spring's block; rhs (3, n); buf (4, n); cells (2, 9, n + grid_x + 1)
+//: across (F, n) each spring's block; buf (4, n); cells (2, 9, n + grid_x + 1)
 //: face-drag rows (cells_length); wick_buffer (6, n);
 //: pair_direction (3, S), pair_along, pair_across (S) the listed springs' blocks.
 struct Work {
@@ -120,7 +120,6 @@ struct Work {
     double* direction = nullptr;
     double* along = nullptr;
     double* across = nullptr;
-    double* rhs = nullptr;
     double* buf = nullptr;
     double* cells = nullptr;
     double* wick_buffer = nullptr;

@@ -11,7 +11,7 @@ void listed_spring_forces(const Cloth& cloth, const Physics& phys, const double*
                           const double* vel, double* force);
 
 //: As listed_spring_forces, plus their pieces of a Newton step (as spring_forces_and_blocks): adds to
-//: work.force, work.rhs and work.diagonal_blocks; writes work.pair_direction, pair_along, pair_across.
+//: work.force and work.diagonal_blocks; writes work.pair_direction, pair_along, pair_across.
 void listed_spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const double* saturation,
                                      const double* pos, const double* vel, double h, double slack_slope, Work& work);
 

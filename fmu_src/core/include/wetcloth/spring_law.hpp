@@ -111,20 +111,6 @@ inline Coefficients coefficients(const Geometry& g, double l0, double width, boo
             h * cf + h * h * g.stiffness * slope, damp_across * h * cf + h * h * g.stiffness * py_max(stretch, 0.0) * g.inv};
 }
 
-//: h^2 K dv's part on the first end, negated: k_across dv + (k_along - k_across) (u . dv) u, h^2 k the
-//: stiffness part of along and across (their damping part, h c, taken off; thesis = 1 for the
-//: thesis damping, whose h c is in across too).
-struct Vec {
-    double x, y, z;
-};
-inline Vec stiffness_times_velocity(double h, double thesis, double cf, double along, double across, double ux,
-                                    double uy, double uz, double dvx, double dvy, double dvz) {
-    const double damping = h * cf;
-    const double k_across = across - thesis * damping;
-    const double along_part = (along - damping - k_across) * (dvx * ux + dvy * uy + dvz * uz);
-    return {k_across * dvx + along_part * ux, k_across * dvy + along_part * uy, k_across * dvz + along_part * uz};
-}
-
 struct Block {
     double xx, yy, zz, xy, xz, yz;
 };

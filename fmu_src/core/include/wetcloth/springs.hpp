@@ -24,8 +24,8 @@ inline Stretch pulling_stretch(double stretch, double width) {
 void spring_forces(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos,
                    const double* vel, double* force, double* buf);
 
-//: Forces as spring_forces plus one backward-Euler Newton step's pieces: adds to work.force, work.rhs
-//: (h^2 K v) and work.diagonal_blocks; writes work.direction, along, across; work.buf as scratch.  A
+//: Forces as spring_forces plus one backward-Euler Newton step's pieces: adds to work.force and
+//: work.diagonal_blocks; writes work.direction, along, across; work.buf as scratch.  A
 //: tension-only spring's stiffness along itself enters the blocks at no less than slack_slope times k
 //: (0: its true slope, nothing while slack).
 void spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos,
