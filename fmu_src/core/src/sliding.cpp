@@ -20,6 +20,48 @@
 
 namespace wc {
 
+namespace {
+
+//: The surface particle i lies on: the floor (centre at floor_z or below) or the collider it touches, its
+//: outward normal into nrm and its friction; false if none.
+bool surface_under(const Physics& phys, Index n, Index i, const double* pos, double nrm[3], double& friction,
+                   bool& on_floor) {
+    nrm[0] = 0.0;
+    nrm[1] = 0.0;
+    nrm[2] = 1.0;
+    friction = phys.floor_friction;
+    on_floor = pos[2 * n + i] <= phys.floor_z;
+    if (on_floor) return true;
+    const Index k = phys.collider_count > 0 ? touched_collider(phys, n, i, pos, nrm) : -1;
+    if (k < 0) return false;
+    friction = phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
+    return true;
+}
+
+//: The part t of a (3) along the surface of normal nrm; returns its length.
+double along_surface(const double a[3], const double nrm[3], double t[3]) {
+    const double across = a[0] * nrm[0] + a[1] * nrm[1] + a[2] * nrm[2];
+    double length2 = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        t[c] = a[c] - across * nrm[c];
+        length2 += t[c] * t[c];
+    }
+    return std::sqrt(length2);
+}
+
+void add_particle(Sliding& sliding, Index i, const double nrm[3], const double t[3], double length, double friction,
+                  bool on_floor) {
+    sliding.index.push_back(i);
+    for (int c = 0; c < 3; ++c) {
+        sliding.normal.push_back(nrm[c]);
+        sliding.direction.push_back(t[c] / length);
+    }
+    sliding.friction.push_back(friction);
+    sliding.on_floor.push_back(on_floor ? 1 : 0);
+}
+
+}  // namespace
+
 Index gather_sliding(Index n, const Physics& phys, const double* pos, const double* vel, const double* free,
                      Sliding& sliding) {
     sliding.index.clear();
@@ -29,32 +71,16 @@ Index gather_sliding(Index n, const Physics& phys, const double* pos, const doub
     sliding.on_floor.clear();
     for (Index i = 0; i < n; ++i) {
         if (free[i] == 0.0) continue;  // pinned, or held at rest
-        double nrm[3] = {0.0, 0.0, 1.0};
-        double friction = phys.floor_friction;
-        bool floor = pos[2 * n + i] <= phys.floor_z;
-        if (!floor) {
-            const Index k = phys.collider_count > 0 ? touched_collider(phys, n, i, pos, nrm) : -1;
-            if (k < 0) continue;
-            friction = phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
-        }
+        double nrm[3], friction;
+        bool on_floor;
+        if (!surface_under(phys, n, i, pos, nrm, friction, on_floor)) continue;
         const double v[3] = {vel[i], vel[n + i], vel[2 * n + i]};
-        const double vn = v[0] * nrm[0] + v[1] * nrm[1] + v[2] * nrm[2];
         double t[3];
-        double slide2 = 0.0;
-        for (int c = 0; c < 3; ++c) {
-            t[c] = v[c] - vn * nrm[c];
-            slide2 += t[c] * t[c];
-        }
-        if (!(slide2 > 0.0)) continue;
-        const double slide = std::sqrt(slide2);
+        const double slide = along_surface(v, nrm, t);
+        if (!(slide > 0.0)) continue;
+        const double vn = v[0] * nrm[0] + v[1] * nrm[1] + v[2] * nrm[2];
         if (vn > ACROSS_ROUNDING * slide) continue;  // leaving the surface
-        sliding.index.push_back(i);
-        for (int c = 0; c < 3; ++c) {
-            sliding.normal.push_back(nrm[c]);
-            sliding.direction.push_back(t[c] / slide);
-        }
-        sliding.friction.push_back(friction);
-        sliding.on_floor.push_back(floor ? 1 : 0);
+        add_particle(sliding, i, nrm, t, slide, friction, on_floor);
     }
     sliding.normal_speed.assign(sliding.index.size(), 0.0);
     return sliding.count();
@@ -67,32 +93,16 @@ Index add_released(Index n, const Physics& phys, const double* pos, const double
     Index added = 0;
     for (Index i = 0; i < n; ++i) {
         if (free[i] == 0.0 || listed[i] || vel[i] != 0.0 || vel[n + i] != 0.0 || vel[2 * n + i] != 0.0) continue;
-        double nrm[3] = {0.0, 0.0, 1.0};
-        double friction = phys.floor_friction;
-        const bool floor = pos[2 * n + i] <= phys.floor_z;
-        if (!floor) {
-            const Index k = phys.collider_count > 0 ? touched_collider(phys, n, i, pos, nrm) : -1;
-            if (k < 0) continue;
-            friction = phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
-        }
+        double nrm[3], friction;
+        bool on_floor;
+        if (!surface_under(phys, n, i, pos, nrm, friction, on_floor)) continue;
         const double f[3] = {force[i], force[n + i], force[2 * n + i]};
         const double fn = f[0] * nrm[0] + f[1] * nrm[1] + f[2] * nrm[2];
         if (fn >= 0.0) continue;  // lifted off: free
         double t[3];
-        double along2 = 0.0;
-        for (int c = 0; c < 3; ++c) {
-            t[c] = f[c] - fn * nrm[c];
-            along2 += t[c] * t[c];
-        }
-        if (!(along2 > 0.0)) continue;
-        const double along = std::sqrt(along2);
-        sliding.index.push_back(i);
-        for (int c = 0; c < 3; ++c) {
-            sliding.normal.push_back(nrm[c]);
-            sliding.direction.push_back(t[c] / along);
-        }
-        sliding.friction.push_back(friction);
-        sliding.on_floor.push_back(floor ? 1 : 0);
+        const double along = along_surface(f, nrm, t);
+        if (!(along > 0.0)) continue;
+        add_particle(sliding, i, nrm, t, along, friction, on_floor);
         added += 1;
     }
     sliding.normal_speed.assign(sliding.index.size(), 0.0);
