@@ -499,14 +499,15 @@ def check_platform() -> None:
 # ----------------------------------------------------------------------------------------- the unit
 def native_scene(scene: str | Path):
     """The packed scene (``packed_scene.pack``) of a scene file for the native unit; NativeBuildError for a
-    parameter it does not support (a free-text one: cloth_mesh, pinned_vertices) or colliders."""
+    parameter it does not support (a free-text one: cloth_mesh, pinned_vertices), colliders or grip keys."""
     from wetcloth.fmu.packed_scene import pack
     from wetcloth.scene import PARAMETERS
 
     packed = pack(scene)
-    if packed.colliders:
-        raise NativeBuildError(f"scene {str(scene)!r}: the native unit has no colliders: build the pythonfmu unit "
-                               f"(wetcloth build-fmu --scene {scene}), or remove the [[collider]] tables")
+    for tables, name in ((packed.colliders, "collider"), (packed.grip_keys, "grip_key")):
+        if tables:
+            raise NativeBuildError(f"scene {str(scene)!r}: the native unit has no [[{name}]] tables: build the "
+                                   f"pythonfmu unit (wetcloth build-fmu --scene {scene}), or remove them")
     for name, value in packed.starts.items():
         if PARAMETERS[name].metadata["text"] and value:
             shown = str(packed.mesh) if name == "cloth_mesh" else value

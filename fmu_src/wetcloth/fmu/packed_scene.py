@@ -1,9 +1,9 @@
 """A scene built into a unit (``wetcloth build-fmu --scene SCENE``): its parameter values become the
-variables' start values, its colliders are built in (fixed: they are not variables), and its mesh
-files (``cloth_mesh``, mesh colliders' ``file``) go into the unit's resources.
+variables' start values, its colliders and grip keys are built in (fixed: they are not variables), and
+its mesh files (``cloth_mesh``, mesh colliders' ``file``) go into the unit's resources.
 
 The builder writes ``resources/wetcloth_scene.json``: ``{"starts": {name: value}, "vertices": n or null,
-"colliders": [{field: value}]}``.  A mesh file is packed as ``resources/meshes/<digest>/<file name>``
+"colliders": [{field: value}], "grip_keys": [{"time": s, "x": m, "y": m, "z": m}]}``.  A mesh file is packed as ``resources/meshes/<digest>/<file name>``
 and named by that relative path, which the unit finds in its resources (``mesh_file.SEARCH_FOLDERS``);
 the digest in the path means that two units holding the same relative path hold the same file.
 ``vertices`` (a mesh cloth's vertex count) sizes the FMI 3.0 unit's array outputs instead of the
@@ -29,12 +29,19 @@ MESH_FOLDER = "meshes"
 @dataclass(frozen=True)
 class PackedScene:
     """Start values by scene parameter, a mesh cloth's vertex count (else None), the colliders (their fields,
-    mesh files by their packed paths) and, when building, the mesh files to pack (packed path -> file)."""
+    mesh files by their packed paths), the grip keys (their fields) and, when building, the mesh files to
+    pack (packed path -> file)."""
 
     starts: dict[str, Any]
     vertices: int | None = None
     colliders: tuple = ()
+    grip_keys: tuple = ()
     files: dict = field(default_factory=dict)
+
+    def fixtures(self) -> dict:
+        """What of the scene is built in beside the variables: ``colliders`` and ``grip_keys``, for
+        ``scene.from_dict``."""
+        return {"colliders": list(self.colliders), "grip_keys": list(self.grip_keys)}
 
     @property
     def mesh(self) -> Path | None:
@@ -71,14 +78,15 @@ def pack(scene_path: str | Path) -> PackedScene:
         starts["cloth_mesh"] = _packed_path(mesh)
         files[starts["cloth_mesh"]] = mesh
         vertices = build_topology(scene).n
-    return PackedScene(starts, vertices=vertices, colliders=tuple(colliders), files=files)
+    grip_keys = tuple(dataclasses.asdict(key) for key in scene.grip_keys)
+    return PackedScene(starts, vertices=vertices, colliders=tuple(colliders), grip_keys=grip_keys, files=files)
 
 
 def write(packed: PackedScene, resources: Path) -> list[Path]:
     """Write ``packed`` into a unit's ``resources`` folder; the files written (the scene file first)."""
     target = resources / SCENE_NAME
-    target.write_text(json.dumps({"starts": packed.starts, "vertices": packed.vertices,
-                                  "colliders": list(packed.colliders)}, indent=1), encoding="utf-8")
+    target.write_text(json.dumps({"starts": packed.starts, "vertices": packed.vertices, **packed.fixtures()},
+                                 indent=1), encoding="utf-8")
     written = [target]
     for relative, source in packed.files.items():
         copy = resources / relative
@@ -102,4 +110,5 @@ def load(resources: str | Path | None) -> PackedScene | None:
     folder = Path(resources).resolve()
     if folder not in mesh_file.SEARCH_FOLDERS:
         mesh_file.SEARCH_FOLDERS.append(folder)
-    return PackedScene(dict(data["starts"]), data.get("vertices"), tuple(data.get("colliders", ())))
+    return PackedScene(dict(data["starts"]), data.get("vertices"), tuple(data.get("colliders", ())),
+                       tuple(data.get("grip_keys", ())))

@@ -133,10 +133,11 @@ class WetClothUnit:
         return self._read[name]
 
     def _scene_values(self) -> dict:
-        """The scene's parameters as the variables hold them, with the colliders built in (--scene)."""
+        """The scene's parameters as the variables hold them, with the colliders and grip keys built in
+        (--scene)."""
         values = {name: value for name, value in self.values.items() if self.specs[name].scene}
-        if self.packed is not None and self.packed.colliders:
-            values["colliders"] = list(self.packed.colliders)
+        if self.packed is not None:
+            values.update(self.packed.fixtures())
         return values
 
     # ------------------------------------------------------------------ life cycle
