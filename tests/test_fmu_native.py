@@ -539,6 +539,63 @@ def test_the_grip_inputs_act_as_in_the_python_api(build):
     assert result["centroid_z"][-1] - result["centroid_z"][0] > 0.15  # the grip lifted it
 
 
+OVERLAP = r"""
+import json, sys
+import fmpy
+from fmpy import calloc, free
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
+                       fmi2CallbackLoggerTYPE)
+directory = fmpy.extract(sys.argv[1])
+md = fmpy.read_model_description(directory)
+var = {v.name: v for v in md.modelVariables}
+messages = []
+callbacks = fmi2CallbackFunctions()
+callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, instance, status, category, message:
+                                          messages.append((int(status), message.decode())))
+callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+fmu = FMU2Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier="WetCloth", instanceName="overlap")
+fmu.instantiate(callbacks=callbacks, loggingOn=False)
+fmu.setupExperiment(startTime=0.0)
+fmu.setReal([var["initial_height"].valueReference], [float(sys.argv[2])])
+fmu.enterInitializationMode()
+try:
+    fmu.exitInitializationMode()
+    status = 0
+except FMICallException as exc:
+    status = int(exc.status)
+print(json.dumps({"status": status, "errors": [m for s, m in messages if s >= 3]}))
+fmu.freeInstance()
+"""
+
+
+def test_a_unit_built_with_a_scene_runs_its_colliders_and_grip_keys_as_the_python_api(build, tmp_path):
+    """`build-fmu --native --scene`: the scene's colliders (a sphere; the bucket, a mesh collider read from a
+    file) and grip keys (the lift) are compiled into the unit, which runs through fmpy as the Python API
+    does, bit for bit; each scene's run differs from the same scene without them.  A start value that puts
+    the cloth into the sphere fails the initialization with the Python API's message."""
+    import fmpy
+
+    for preset in ("tablecloth_sphere", "bucket", "lift"):
+        fmu = native.build_native_fmu(tmp_path / f"{preset}.fmu", 2, build_dir=build["objects"], scene=preset)
+        result = fmpy.simulate_fmu(str(fmu), stop_time=1.2, output_interval=0.1)
+        scene = wetcloth.load_scene(preset)
+        rows = {}
+        for label, fixed in (("as built", scene), ("without", scene.replace(colliders=(), grip_keys=()))):
+            sim, rows[label] = wetcloth.Simulation(fixed), []
+            for t in result["time"]:
+                advance_as_the_unit(sim, t)
+                rows[label].append([sim.outputs()[n] for n in OUTPUT_NAMES])
+        assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows["as built"], preset)
+        assert np.abs(np.subtract(rows["as built"], rows["without"])).max() > 1e-3, preset
+    fmu = native.build_native_fmu(tmp_path / "sphere.fmu", 2, build_dir=build["objects"], scene="tablecloth_sphere")
+    records, _ = run_child(OVERLAP, fmu, "0.05")
+    with pytest.raises(ParameterError) as exc:
+        wetcloth.load_scene("tablecloth_sphere", initial_height=0.05)
+    assert records[-1] == {"status": 3, "errors": [f"initialization refused: {exc.value}"]}
+
+
 def test_the_unit_steps_exactly_as_the_cores_simulation(build, checker_library):
     """Whatever the Python package runs on: the unit adds nothing to the core's arithmetic (the outputs of
     fmpy's run are those of a wc::Simulation stepped to the same points, bit for bit)."""

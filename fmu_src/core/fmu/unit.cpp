@@ -103,6 +103,28 @@ Scene start_scene() {
     return scene;
 }
 
+//: The scene's colliders and grip keys built into the unit (build-fmu --native --scene; none without).
+Fixtures scene_fixtures() {
+    Fixtures f;
+    f.colliders.assign(SCENE_COLLIDERS, SCENE_COLLIDERS + SCENE_COLLIDERS_SIZE);
+    f.mesh_count = SCENE_MESH_COUNT;
+    f.mesh_headers.assign(SCENE_MESH_HEADERS, SCENE_MESH_HEADERS + SCENE_MESH_HEADERS_SIZE);
+    f.mesh_vertices.assign(SCENE_MESH_VERTICES, SCENE_MESH_VERTICES + SCENE_MESH_VERTICES_SIZE);
+    f.face_normals.assign(SCENE_FACE_NORMALS, SCENE_FACE_NORMALS + SCENE_FACE_NORMALS_SIZE);
+    f.edge_normals.assign(SCENE_EDGE_NORMALS, SCENE_EDGE_NORMALS + SCENE_EDGE_NORMALS_SIZE);
+    f.vertex_normals.assign(SCENE_VERTEX_NORMALS, SCENE_VERTEX_NORMALS + SCENE_VERTEX_NORMALS_SIZE);
+    f.mesh_triangles.assign(SCENE_MESH_TRIANGLES, SCENE_MESH_TRIANGLES + SCENE_MESH_TRIANGLES_SIZE);
+    f.cell_start.assign(SCENE_CELL_START, SCENE_CELL_START + SCENE_CELL_START_SIZE);
+    f.cell_items.assign(SCENE_CELL_ITEMS, SCENE_CELL_ITEMS + SCENE_CELL_ITEMS_SIZE);
+    f.grip_keys.assign(SCENE_GRIP_KEYS, SCENE_GRIP_KEYS + SCENE_GRIP_KEYS_SIZE);
+    return f;
+}
+
+//: The simulation of `scene` with the unit's fixtures (std::invalid_argument as Simulation's).
+std::unique_ptr<Simulation> new_simulation(const Scene& scene) {
+    return std::make_unique<Simulation>(scene, scene_fixtures());
+}
+
 // ------------------------------------------------------------------------------ state bytes
 constexpr char STATE_MAGIC[] = "wetcloth-native-fmu-state\n";
 constexpr std::size_t MAGIC_SIZE = sizeof(STATE_MAGIC) - 1;
@@ -326,10 +348,11 @@ Simulation& Unit::simulation() {
     if (sim_) return *sim_;
     if (!preview_) {
         // The initial state of the current values, or of the defaults while they do not form a scene.
-        if (scene_problem(values_).empty()) {
-            preview_ = std::make_unique<Simulation>(values_);
-        } else {
-            preview_ = std::make_unique<Simulation>(start_scene());
+        try {
+            if (!scene_problem(values_).empty()) throw std::invalid_argument("not a scene");
+            preview_ = new_simulation(values_);
+        } catch (const std::invalid_argument&) {
+            preview_ = new_simulation(start_scene());
         }
     }
     return *preview_;
@@ -582,7 +605,7 @@ Outcome Unit::exit_initialization() {
     if (!whole.empty()) problems.push_back(whole);
     if (problems.empty()) {
         try {
-            sim_ = std::make_unique<Simulation>(values_);
+            sim_ = new_simulation(values_);
         } catch (const std::bad_alloc&) {
             problems.push_back("not enough memory for a cloth of nx x ny = " + std::to_string(values_.nx) + " x " +
                                std::to_string(values_.ny) + " particles");
@@ -761,7 +784,7 @@ Outcome Unit::set_state(const std::vector<unsigned char>& bytes) {
                 if (sim_ && fixed_differences(sim_->scene(), scene).empty()) {
                     sim_->restore(p.simulation);  // checks everything before it changes anything
                 } else {
-                    fresh = std::make_unique<Simulation>(scene);
+                    fresh = new_simulation(scene);
                     fresh->restore(p.simulation);
                 }
             } catch (const SnapshotError& exc) {

@@ -9,6 +9,7 @@
 #include <limits>
 #include <type_traits>
 
+#include "wetcloth/colliders.hpp"
 #include "wetcloth/implicit.hpp"
 #include "wetcloth/integration.hpp"
 #include "wetcloth/multigrid.hpp"
@@ -336,8 +337,59 @@ std::vector<std::pair<Index, Index>> level_sizes(Index nx, Index ny, Index coars
     return sizes;
 }
 
+// ------------------------------------------------------------------------------------------ fixtures
+ColliderMeshes Fixtures::meshes() const {
+    ColliderMeshes m;
+    if (mesh_count == 0) return m;
+    m.count = mesh_count;
+    m.vertex_count = static_cast<Index>(mesh_vertices.size() / 3);
+    m.headers = mesh_headers.data();
+    m.vertices = mesh_vertices.data();
+    m.triangles = mesh_triangles.data();
+    m.face_normals = face_normals.data();
+    m.edge_normals = edge_normals.data();
+    m.vertex_normals = vertex_normals.data();
+    m.cell_start = cell_start.data();
+    m.cell_items = cell_items.data();
+    return m;
+}
+
+namespace {
+
+inline constexpr const char* SHAPE_NAMES[] = {"plane", "box", "sphere", "cylinder", "mesh"};
+
+//: scene._check_collider_start: "" or the ParameterError's text of every collider closer than thickness / 2
+//: to a particle at `pos` (3, n) m, one line each ("parameter 'collider1': the sphere overlaps ...").
+std::string collider_overlaps(const Physics& phys, Index n, const double* pos) {
+    const double gap = 0.5 * phys.thickness;
+    std::vector<std::string> lines;
+    for (Index k = 0; k < phys.collider_count; ++k) {
+        double nearest = INF, normal[3];
+        Index at = 0;
+        for (Index i = 0; i < n; ++i) {
+            const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+            const double d = collider_distance(phys, k, p, 2.0 * gap, normal);
+            if (d < nearest) nearest = d, at = i;  // the first of the nearest, as numpy's argmin
+        }
+        if (!(nearest < gap * (1.0 - 1e-9))) continue;
+        const Index shape = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_SHAPE]);
+        lines.push_back("parameter 'collider" + std::to_string(k + 1) + "': the " + SHAPE_NAMES[shape] +
+                        " overlaps the cloth at t = 0 (particle " + std::to_string(at) + " at (" + py_g(pos[at]) +
+                        ", " + py_g(pos[n + at]) + ", " + py_g(pos[2 * n + at]) + ") m is " + py_g(nearest) +
+                        " m from its surface); allowed: every particle at least thickness/2 = " + py_g(gap) +
+                        " m outside it (move the collider or the cloth: initial_height)");
+    }
+    if (lines.size() == 1) return lines[0];
+    std::string text = lines.empty() ? "" : std::to_string(lines.size()) + " mistakes";
+    for (const std::string& line : lines) text += "\n  " + line;
+    return text;
+}
+
+}  // namespace
+
 // ------------------------------------------------------------------------------------------ simulation
-Simulation::Simulation(const Scene& scene) : scene_(scene), topo_(build_topology(scene)) {
+Simulation::Simulation(const Scene& scene, Fixtures fixtures)
+    : scene_(scene), fixtures_(std::move(fixtures)), topo_(build_topology(scene)) {
     const std::string problem = scene_problem(scene);
     if (!problem.empty()) throw std::invalid_argument(problem);
     const Index n = topo_.n, nx = topo_.nx, ny = topo_.ny, families = topo_.families();
@@ -583,6 +635,8 @@ Simulation::Simulation(const Scene& scene) : scene_(scene), topo_(build_topology
     }
 
     set_scene(scene);
+    const std::string overlaps = collider_overlaps(core_.phys, n, core_.buf.pos);
+    if (!overlaps.empty()) throw std::invalid_argument(overlaps);
 
     // The integrator's stability data (Integrator.__init__), from the first scene.
     const double stiffest = 1.0 + pymax(scene.wet_stiffness_factor, 0.0);  // a saturated, stiffened cloth
@@ -657,6 +711,11 @@ void Simulation::set_scene(const Scene& scene) {
     p.grip_y = scene.grip_y;
     p.grip_z = scene.grip_z;
     p.grip_origin = grip_origin_.empty() ? nullptr : grip_origin_.data();
+    p.collider_count = fixtures_.collider_count();
+    p.colliders = fixtures_.colliders.empty() ? nullptr : fixtures_.colliders.data();
+    p.meshes = fixtures_.meshes();
+    p.grip_key_count = static_cast<Index>(fixtures_.grip_keys.size() / 4);
+    p.grip_keys = fixtures_.grip_keys.empty() ? nullptr : fixtures_.grip_keys.data();
 }
 
 void Simulation::set_control() {

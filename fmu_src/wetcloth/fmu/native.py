@@ -2,13 +2,15 @@
 
     wetcloth build-fmu --native              # models/WetClothNative.fmu  (FMI 2.0)
     wetcloth build-fmu --native --fmi 3      # models/WetClothNative3.fmu (FMI 3.0, the mesh as array outputs)
+    wetcloth build-fmu --native --scene bucket   # a scene's start values, colliders and grip keys built in
 
 The unit has the model name, variables, value references, units, ranges and model structure of the
 pythonfmu units (``WetCloth.fmu``, ``WetCloth3.fmu``): its ``modelDescription.xml`` is made by the same
 code (``description.py``, ``description3.py`` on pythonfmu's and pythonfmu3's model-description writers),
 and the C++ side reads the same vocabulary through a generated header
 (``wetcloth_fmu_variables.hpp``: every variable in value-reference order with its Scene field, range,
-start value and the texts of its messages).  What it packs:
+start value and the texts of its messages; with ``--scene``, the scene's colliders and grip keys as the
+arrays the Python model hands the core).  What it packs:
 
 * ``binaries/linux64/WetCloth.so`` (FMI 3.0: ``binaries/x86_64-linux/``): ``fmu_src/core/src/**/*.cpp``,
   ``fmu_src/core/fmu/unit.cpp`` and ``fmi2.cpp`` (``fmi3.cpp``) compiled by the system C++ compiler
@@ -149,9 +151,40 @@ def _c_double(value) -> str:
     return text if any(c in text for c in ".einf") else text + ".0"
 
 
-def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "") -> str:
+#: The fixtures' arrays in the generated header (``unit.cpp``'s scene_fixtures): C++ name, element type, and
+#: where each comes from: the collider rows, a ColliderMeshes field (``collider_meshes``), the grip keys.
+FIXTURE_ARRAYS = (("SCENE_COLLIDERS", "double", "rows"), ("SCENE_MESH_HEADERS", "double", "headers"),
+                  ("SCENE_MESH_VERTICES", "double", "vertices"), ("SCENE_FACE_NORMALS", "double", "face_normals"),
+                  ("SCENE_EDGE_NORMALS", "double", "edge_normals"), ("SCENE_VERTEX_NORMALS", "double", "vertex_normals"),
+                  ("SCENE_MESH_TRIANGLES", "Index", "triangles"), ("SCENE_CELL_START", "Index", "cell_start"),
+                  ("SCENE_CELL_ITEMS", "Index", "cell_items"), ("SCENE_GRIP_KEYS", "double", "grip_keys"))
+
+
+def fixtures_header(scene=None) -> str:
+    """The C++ arrays of what a scene holds beside its variables (``Scene.colliders``, ``Scene.grip_keys``),
+    as the Python model hands them to the core (``model.py``), for ``unit.cpp``'s scene_fixtures: each
+    ``NAME[]`` (with a trailing 0: C++ has no empty arrays) and its length ``NAME_SIZE``; none without a
+    ``scene`` (a ``wetcloth.Scene``)."""
+    import numpy as np
+
+    from wetcloth.collider_meshes import meshes_of, no_meshes
+
+    rows, meshes = meshes_of(scene.colliders) if scene is not None else (np.zeros(0), no_meshes())
+    keys = [[k.time, k.x, k.y, k.z] for k in scene.grip_keys] if scene is not None else []
+    sources = dict(meshes._asdict(), rows=rows, grip_keys=np.array(keys, dtype=np.float64))
+    lines = [f"inline constexpr Index SCENE_MESH_COUNT = {len(meshes.headers)};"]
+    for name, kind, source in FIXTURE_ARRAYS:
+        values = np.ascontiguousarray(sources[source]).ravel()
+        text = ", ".join(str(int(v)) if kind == "Index" else _c_double(v) for v in values)
+        lines.append(f"inline constexpr std::size_t {name}_SIZE = {values.size};\n"
+                     f"inline constexpr {kind} {name}[] = {{{text}{', ' if text else ''}0}};")
+    return "\n".join(lines)
+
+
+def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "", fixtures: str = "") -> str:
     """The generated C++ table of the unit's variables (value reference = index), with compile-time
-    checks that ``model.hpp``'s Scene, its choices and inputs are those of ``wetcloth.scene``."""
+    checks that ``model.hpp``'s Scene, its choices and inputs are those of ``wetcloth.scene``, and the
+    scene's ``fixtures`` (``fixtures_header``)."""
     from wetcloth.fmu.description3 import dimension_sources
     from wetcloth.scene import INPUT, PARAMETERS, describe_range
     from wetcloth.simulation import OUTPUT_NAMES
@@ -238,6 +271,9 @@ inline constexpr const char* MESH_FORMATS[] = {{{formats}}};
 inline constexpr Variable VARIABLES[] = {{
 {chr(10).join(rows)}
 }};
+
+// The scene's colliders and grip keys (none unless built with --scene).
+{fixtures or fixtures_header()}
 
 // model.hpp's Scene, its inputs and choices are wetcloth.scene's (a parameter added in Python must be ported).
 static_assert(SCENE_FIELD_COUNT == {len(scene_names)}, "model.hpp's Scene does not have the {len(scene_names)} fields of wetcloth.scene");
@@ -499,15 +535,11 @@ def check_platform() -> None:
 # ----------------------------------------------------------------------------------------- the unit
 def native_scene(scene: str | Path):
     """The packed scene (``packed_scene.pack``) of a scene file for the native unit; NativeBuildError for a
-    parameter it does not support (a free-text one: cloth_mesh, pinned_vertices), colliders or grip keys."""
+    parameter it does not support (a free-text one: cloth_mesh, pinned_vertices)."""
     from wetcloth.fmu.packed_scene import pack
     from wetcloth.scene import PARAMETERS
 
     packed = pack(scene)
-    for tables, name in ((packed.colliders, "collider"), (packed.grip_keys, "grip_key")):
-        if tables:
-            raise NativeBuildError(f"scene {str(scene)!r}: the native unit has no [[{name}]] tables: build the "
-                                   f"pythonfmu unit (wetcloth build-fmu --scene {scene}), or remove them")
     for name, value in packed.starts.items():
         if PARAMETERS[name].metadata["text"] and value:
             shown = str(packed.mesh) if name == "cloth_mesh" else value
@@ -535,10 +567,13 @@ def build_native_fmu(out: str | Path | None = None, fmi_version: int = 2, build_
     sources = [name for _, name in files if name.endswith(".cpp")]
     # The instantiation token: a digest of the table and every source, so that a rebuild of the same
     # sources carries the same token and another build another.
-    body = variables_header(specs, fmi_version).encode()
+    from wetcloth.scene import load_scene
+
+    fixtures = fixtures_header(None if scene is None else load_scene(scene))
+    body = variables_header(specs, fmi_version, fixtures=fixtures).encode()
     token = "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, "wetcloth-native:" + _digest(
         body, " ".join(CXX_FLAGS).encode(), *(p.read_bytes() for p, _ in files)))) + "}"
-    header = variables_header(specs, fmi_version, token)
+    header = variables_header(specs, fmi_version, token, fixtures)
     with tempfile.TemporaryDirectory(prefix="wetcloth_native_") as tmp:
         stage = Path(tmp)
         generated = stage / "generated"

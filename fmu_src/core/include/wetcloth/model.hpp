@@ -22,6 +22,7 @@
 #include <string_view>
 #include <vector>
 
+#include "wetcloth/colliders.hpp"
 #include "wetcloth/core.hpp"
 
 namespace wc {
@@ -232,16 +233,32 @@ struct Checkpoint {
     std::vector<double> values;
 };
 
+//: What a scene holds beside its fields, fixed for a run (Scene.colliders, Scene.grip_keys): the rows of its
+//: colliders (colliders.hpp), the arrays of the mesh colliders among them (ColliderMeshes, owned here) and
+//: its grip's keys (grip.hpp).  Empty: no collider, no key.
+struct Fixtures {
+    std::vector<double> colliders;  // (k, COLLIDER_COLUMNS) rows
+    Index mesh_count = 0;           // mesh colliders: their headers (mesh_count, MESH_COLUMNS) and arrays
+    std::vector<double> mesh_headers, mesh_vertices, face_normals, edge_normals, vertex_normals;
+    std::vector<Index> mesh_triangles, cell_start, cell_items;
+    std::vector<double> grip_keys;  // (g, 4) rows: time s, x, y, z m
+    Index collider_count() const { return static_cast<Index>(colliders.size() / COLLIDER_COLUMNS); }
+    //: The mesh arrays as the kernels read them (pointing into this object).
+    ColliderMeshes meshes() const;
+};
+
 //: A cloth on water with every array it needs (wetcloth.Simulation's set-up), exposing them as a Core.
 class Simulation {
 public:
-    //: Build the simulation of `scene` (its values within their ranges; std::invalid_argument for a grid
-    //: below 2 x 2 or a scene_problem).
-    explicit Simulation(const Scene& scene);
+    //: Build the simulation of `scene` with its `fixtures` (its values within their ranges;
+    //: std::invalid_argument for a grid below 2 x 2, a scene_problem, or a collider within thickness / 2 of
+    //: a particle at t = 0).
+    explicit Simulation(const Scene& scene, Fixtures fixtures = {});
     Simulation(const Simulation&) = delete;
     Simulation& operator=(const Simulation&) = delete;
 
     const Scene& scene() const { return scene_; }
+    const Fixtures& fixtures() const { return fixtures_; }
     const Topology& topology() const { return topo_; }
     Core& core() { return core_; }
     const Core& core() const { return core_; }
@@ -289,6 +306,7 @@ private:
     void check(const Checkpoint& checkpoint) const;
 
     Scene scene_;
+    Fixtures fixtures_;
     Topology topo_;
     // Model
     std::vector<double> dry_mass_, volume_, stokes_, capacity_, wick_conductance_;
