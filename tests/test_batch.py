@@ -22,6 +22,7 @@ import wetcloth
 from wetcloth.batch import Study, compute_metrics, dask_client, read_table, run_study
 from wetcloth.batch import cluster as batch_cluster
 from wetcloth.batch.results import write_table
+from wetcloth.errors import ConfigError
 from wetcloth.runner import run
 from wetcloth.scene import from_dict
 
@@ -471,6 +472,34 @@ def test_fmu_engine_without_the_fmu_records_why(client, tmp_path):
     table = wetcloth.study(study, client=client)
     assert table["status"].tolist() == ["error"]
     assert "none.fmu' not found: build it with 'wetcloth build-fmu'" in table["error"][0]
+
+
+def test_fmu_engine_runs_grip_keys_from_a_unit_built_from_the_scene(client, fmu_file, tmp_path, capsys, monkeypatch):
+    """The lift's grip keys are built into a unit, not its variables.  The command builds one from the
+    study's scene (out/batch/STUDY.fmu) and its run gives the Python API's depth at fmpy's communication
+    points (to round-off, 1e-12 m: the same core); a unit without the keys records why each run failed
+    instead of running a towel that is never lifted; an axis over a key is refused at once."""
+    from wetcloth.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "lift_study.toml").write_text('scene = "lift"\nduration = 1.5\nengine = "fmu"\n[base]\nnx = 5\n'
+                                              'ny = 5\n[axes]\nabsorption_rate = [0.5]\n')
+    assert main(["batch", "lift_study.toml", "--scheduler", client.scheduler.address, "--no-progress"]) == 0
+    assert "built out/batch/lift_study.fmu: the scene's colliders and grip keys are in it" in capsys.readouterr().out
+    table = read_table(tmp_path / "out" / "batch" / "lift_study.parquet")
+    assert table["status"].tolist() == ["ok"], table["error"].tolist()
+    sim = wetcloth.Simulation(wetcloth.load_scene("lift", nx=5, ny=5, absorption_rate=0.5))
+    for k in range(1, 16):
+        sim.advance(k * 0.1 - sim.time)
+    assert table["final_depth"][0] == pytest.approx(sim.outputs()["depth"], rel=0, abs=1e-12)
+
+    study = Study.from_dict(dict(scene="lift", duration=0.2, engine="fmu", fmu=str(fmu_file), base=SMALL,
+                                 axes={"absorption_rate": [0.5]}), name="plain_unit")
+    failed = wetcloth.study(study, client=client)
+    assert failed["status"].tolist() == ["error"]
+    assert "carries 0 colliders and 0 grip keys, not this scene's (0 and 2" in failed["error"][0]
+    with pytest.raises(ConfigError, match=r"axes.grip_key2_z' is built into an FMU, not one of its variables"):
+        Study.from_dict(dict(scene="lift", duration=0.2, engine="fmu", axes={"grip_key2_z": [0.4, 0.8]}))
 
 
 def test_towel_sensitivity_example_runs_end_to_end_on_dask(client, tmp_path, capsys):

@@ -39,10 +39,17 @@ def python_series(params: dict[str, Any], duration: float, sample_rate: float) -
 
 def fmu_series(params: dict[str, Any], duration: float, sample_rate: float, fmu: str) -> dict[str, np.ndarray]:
     """Outputs of the FMU (fmpy co-simulation, communication step 1/``sample_rate`` s); a run the unit
-    stops early raises (a blow-up as BlowUpError), as the Python engine does."""
-    from wetcloth.fmu.cosim import simulate
+    stops early raises (a blow-up as BlowUpError), as the Python engine does.  The scene's colliders and
+    grip keys must be those built into the unit (ValueError otherwise); the other parameters are its
+    start values."""
+    from wetcloth.fmu.cosim import simulate, unpacked
+    from wetcloth.fmu.packed_scene import check_carries
+    from wetcloth.scene import PARAMETERS, from_dict
 
-    result = simulate(fmu, duration, sample_rate, params, output=OUTPUT_NAMES)
+    folder, _ = unpacked(fmu)
+    check_carries(fmu, Path(folder) / "resources", from_dict(params))
+    variables = {name: value for name, value in params.items() if name in PARAMETERS}
+    result = simulate(fmu, duration, sample_rate, variables, output=OUTPUT_NAMES)
     return {name: np.asarray(result[name], float) for name in RUN_SERIES}
 
 

@@ -228,6 +228,11 @@ class Study:
             mistakes.add(StudyError("axes", f"repeated axis in {names}"))
         for both in (n for n in names if n in self.base):
             mistakes.add(StudyError(f"axes.{both}", "is also set in [base]: set it in one place"))
+        if self.engine == "fmu":
+            for fixed in (n for n in names if n not in PARAMETERS):
+                mistakes.add(StudyError(f"axes.{fixed}", "is built into an FMU, not one of its variables (colliders "
+                                                         "and grip keys): engine 'fmu' cannot vary it; use engine "
+                                                         "'python'"))
         if self.sensitivity is not None:
             self._check_sensitivity(mistakes)
         else:

@@ -52,6 +52,25 @@ def add_parser(sub) -> None:
     p.set_defaults(func=main)
 
 
+def _with_unit(study):
+    """The study with the unit its FMU engine runs: models/WetCloth.fmu (built if missing or stale), or
+    for a scene with colliders or grip keys (built into a unit, not variables) a unit built from the
+    scene file, out/batch/STUDY.fmu."""
+    from wetcloth import batch
+    from wetcloth.fmu.builder import build_fmu, is_stale
+    from wetcloth.scene import from_dict
+
+    scene = from_dict(study.runs()[0].params)
+    if scene.colliders or scene.grip_keys:
+        unit = build_fmu(DEFAULT_OUT_DIR / f"{study.name}.fmu", scene=study.scene)
+        print(f"built {unit}: the scene's colliders and grip keys are in it")
+        return study.replace(fmu=str(unit))
+    default = batch.default_fmu_path()
+    if is_stale(default):  # missing or older than wetcloth's sources: as 'wetcloth build-fmu' would
+        print(f"building {build_fmu(default)}")
+    return study
+
+
 def main(args) -> int:
     from wetcloth import batch  # imports dask: only when the command runs
 
@@ -61,11 +80,7 @@ def main(args) -> int:
     if args.fmu is not None:
         study = study.replace(fmu=str(args.fmu))
     if study.engine == "fmu" and not study.fmu:
-        from wetcloth.fmu.builder import build_fmu, is_stale
-
-        default = batch.default_fmu_path()
-        if is_stale(default):  # missing or older than wetcloth's sources: as 'wetcloth build-fmu' would
-            print(f"building {build_fmu(default)}")
+        study = _with_unit(study)
     plot_specs = [batch.parse_plot_spec(text) for text in args.plot]
     study.check_plots(plot_specs)
     out = args.out if args.out is not None else DEFAULT_OUT_DIR / f"{study.name}.parquet"  # the name is a plain file name

@@ -47,7 +47,7 @@ from xml.etree import ElementTree
 
 import wetcloth
 from wetcloth.files import new_temporary, whole_file
-from wetcloth.fmu import MODEL_NAME
+from wetcloth.fmu import MODEL_NAME, packed_scene
 from wetcloth.fmu.vocabulary import (MESH_FORMAT_RANGE, MESH_FORMATS, MESH_OUTPUTS, VariableSpec, fmi_unit_name,
                                      variable_specs)
 
@@ -536,10 +536,9 @@ def check_platform() -> None:
 def native_scene(scene: str | Path):
     """The packed scene (``packed_scene.pack``) of a scene file for the native unit; NativeBuildError for a
     parameter it does not support (a free-text one: cloth_mesh, pinned_vertices)."""
-    from wetcloth.fmu.packed_scene import pack
     from wetcloth.scene import PARAMETERS
 
-    packed = pack(scene)
+    packed = packed_scene.pack(scene)
     for name, value in packed.starts.items():
         if PARAMETERS[name].metadata["text"] and value:
             shown = str(packed.mesh) if name == "cloth_mesh" else value
@@ -597,5 +596,7 @@ def build_native_fmu(out: str | Path | None = None, fmi_version: int = 2, build_
             archive.writestr(f"sources/{VARIABLES_HEADER}", header)
             archive.writestr("sources/buildDescription.xml", build_description(fmi_version, sources))
             archive.writestr("documentation/index.html", documentation_html(specs, fmi_version))
+            if packed is not None:  # what was built in, for a master to check (batch.engines.fmu_series)
+                archive.writestr(f"resources/{packed_scene.SCENE_NAME}", packed_scene.text(packed))
             archive.write(DOCS / "model.png", ICON_PATH[fmi_version])
     return out

@@ -54,6 +54,35 @@ def _packed_path(path: Path) -> str:
     return f"{MESH_FOLDER}/{hashlib.sha256(path.read_bytes()).hexdigest()[:16]}/{path.name}"
 
 
+def fixtures_of(scene) -> tuple[tuple, tuple, dict]:
+    """A ``Scene``'s colliders and grip keys (their fields) as a unit built from it carries them, and the
+    mesh colliders' files to pack (packed path -> file)."""
+    from wetcloth.mesh_file import locate
+
+    files, colliders = {}, []
+    for collider in scene.colliders:
+        fields = dataclasses.asdict(collider)
+        if collider.shape == "mesh":
+            source = locate(collider.file)
+            fields["file"] = _packed_path(source)
+            files[fields["file"]] = source
+        colliders.append(fields)
+    return tuple(colliders), tuple(dataclasses.asdict(key) for key in scene.grip_keys), files
+
+
+def check_carries(fmu: str | Path, resources: str | Path, scene) -> None:
+    """ValueError unless the unit ``fmu`` (its extracted ``resources`` folder) carries ``scene``'s colliders
+    and grip keys (built in by ``build-fmu --scene``: they are not variables)."""
+    packed = load(resources) or PackedScene({})
+    colliders, grip_keys, _ = fixtures_of(scene)
+    if (packed.colliders, packed.grip_keys) != (colliders, grip_keys):
+        have = f"{len(packed.colliders)} colliders and {len(packed.grip_keys)} grip keys"
+        want = f"{len(colliders)} and {len(grip_keys)}"
+        raise ValueError(f"the FMU {fmu} carries {have}, not this scene's ({want}, or other fields): colliders "
+                         f"and grip keys are built into a unit, not variables; build one from the scene "
+                         f"('wetcloth build-fmu --scene SCENE'), and vary them with engine 'python'")
+
+
 def pack(scene_path: str | Path) -> PackedScene:
     """The packed form of scene file ``scene_path`` (a path or preset name), checked whole; a
     ParameterError (ConfigError) for a scene the unit cannot start from."""
@@ -64,29 +93,25 @@ def pack(scene_path: str | Path) -> PackedScene:
     data = read_scene_file(scene_path)
     scene = from_dict({k: v for k, v in data.items() if k not in RESERVED_KEYS})
     starts = {name: getattr(scene, name) for name in PARAMETERS}
-    files, colliders = {}, []
-    for collider in scene.colliders:
-        fields = dataclasses.asdict(collider)
-        if collider.shape == "mesh":
-            source = locate(collider.file)
-            fields["file"] = _packed_path(source)
-            files[fields["file"]] = source
-        colliders.append(fields)
+    colliders, grip_keys, files = fixtures_of(scene)
     vertices = None
     if is_mesh(scene.cloth_mesh):
         mesh = locate(scene.cloth_mesh)
         starts["cloth_mesh"] = _packed_path(mesh)
         files[starts["cloth_mesh"]] = mesh
         vertices = build_topology(scene).n
-    grip_keys = tuple(dataclasses.asdict(key) for key in scene.grip_keys)
     return PackedScene(starts, vertices=vertices, colliders=tuple(colliders), grip_keys=grip_keys, files=files)
+
+
+def text(packed: PackedScene) -> str:
+    """The contents of ``SCENE_NAME``."""
+    return json.dumps({"starts": packed.starts, "vertices": packed.vertices, **packed.fixtures()}, indent=1)
 
 
 def write(packed: PackedScene, resources: Path) -> list[Path]:
     """Write ``packed`` into a unit's ``resources`` folder; the files written (the scene file first)."""
     target = resources / SCENE_NAME
-    target.write_text(json.dumps({"starts": packed.starts, "vertices": packed.vertices, **packed.fixtures()},
-                                 indent=1), encoding="utf-8")
+    target.write_text(text(packed), encoding="utf-8")
     written = [target]
     for relative, source in packed.files.items():
         copy = resources / relative
