@@ -20,9 +20,9 @@ def add_parser(sub) -> None:
                                             f"with --fmi 3 {default_fmu_path(3)}; with --native "
                                             f"{native_fmu_path(2)}, {native_fmu_path(3)})")
     p.add_argument("--fmi", type=int, choices=(2, 3), default=2, help="FMI version (default 2)")
-    p.add_argument("--scene", help="a scene file (or preset name) whose values become the unit's start values; "
-                                   "its mesh file (cloth_mesh) goes into the unit's resources (the native unit "
-                                   "refuses a cloth from a mesh file)")
+    p.add_argument("--scene", help="a scene file (or preset name) whose values become the unit's start values, "
+                                   "its colliders and grip keys built in; its mesh files go into the unit's "
+                                   "resources (the native unit refuses a cloth from a mesh file)")
     p.add_argument("--native", action="store_true",
                    help="compile the unit from the C++ core (no Python in it) instead of packing the Python one")
     p.set_defaults(func=main)
@@ -32,7 +32,7 @@ def main(args) -> int:
     if getattr(args, "native", False):
         from wetcloth.fmu.native import build_native_fmu
 
-        path = build_native_fmu(args.out, fmi_version=args.fmi, scene=args.scene)
+        path = build_native_fmu(args.out, fmi_version=args.fmi, scene=args.scene, progress=True)
     else:
         from wetcloth.fmu.builder import build_fmu
 

@@ -39,17 +39,21 @@ import platform
 import shutil
 import subprocess
 import tempfile
+import time
 import uuid
 import zipfile
 from pathlib import Path
 from string import Template
 from xml.etree import ElementTree
 
+from tqdm.auto import tqdm
+
 import wetcloth
 from wetcloth.files import new_temporary, whole_file
 from wetcloth.fmu import MODEL_NAME, packed_scene
 from wetcloth.fmu.vocabulary import (MESH_FORMAT_RANGE, MESH_FORMATS, MESH_OUTPUTS, VariableSpec, fmi_unit_name,
                                      variable_specs)
+from wetcloth.progress import SHOW_AFTER
 
 #: The order of the outputs in the core's ``record_outputs`` row (``stepping.hpp``).
 CORE_OUTPUTS = ("centroid_x", "centroid_y", "centroid_z", "depth", "wet_mass", "water_mass")
@@ -472,10 +476,30 @@ def _compiler_identity(compiler: str) -> bytes:
     return compiler.encode() + done.stdout
 
 
+def default_build_dir() -> Path:
+    """Where compiled objects are kept between builds: ``$XDG_CACHE_HOME/wetcloth/native-objects`` (by default
+    under ``~/.cache``).  Objects are named by the digest of what made them, so builds of other sources
+    and other versions share it safely; ones unused for ``KEEP_OBJECTS_DAYS`` days are removed."""
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "wetcloth" / "native-objects"
+
+
+#: Days an object in the build folder is kept without being used.
+KEEP_OBJECTS_DAYS = 30
+
+
+def _forget_unused(objects: Path) -> None:
+    """Remove the objects in ``objects`` that no build has used for KEEP_OBJECTS_DAYS days."""
+    oldest = time.time() - KEEP_OBJECTS_DAYS * 86400.0
+    for path in objects.glob("*.o"):
+        if path.stat().st_mtime < oldest:
+            path.unlink(missing_ok=True)
+
+
 def compile_objects(compiler: str, sources: list[Path], include_dirs: list[Path], objects: Path,
-                    depends: list[Path], jobs: int | None = None) -> list[Path]:
+                    depends: list[Path], jobs: int | None = None, bar=None) -> list[Path]:
     """Compile each source into ``objects`` (in parallel), reusing an object compiled before from the same
-    compiler, flags, source and ``depends`` (the headers it may include); the object files, in order."""
+    compiler, flags, source and ``depends`` (the headers it may include); the object files, in order.
+    ``bar``: a tqdm bar moved by one per source."""
     objects.mkdir(parents=True, exist_ok=True)
     identity = _compiler_identity(compiler)
     headers = b"".join(p.read_bytes() for p in depends)
@@ -487,15 +511,21 @@ def compile_objects(compiler: str, sources: list[Path], include_dirs: list[Path]
 
     def run(task):
         source, target = task
-        if target.exists():
+        try:
+            if target.exists():
+                os.utime(target)  # used now: kept by _forget_unused
+                return None
+            partial = new_temporary(target, ".tmp.o")  # created new (a random name): never a link planted there
+            done = subprocess.run([compiler, *flags, "-c", str(source), "-o", str(partial)], capture_output=True,
+                                  text=True)
+            if done.returncode != 0:
+                partial.unlink(missing_ok=True)
+                return f"{source}:\n{done.stderr[-6000:]}"
+            os.replace(partial, target)
             return None
-        partial = new_temporary(target, ".tmp.o")  # created new (a random name): never a link planted there
-        done = subprocess.run([compiler, *flags, "-c", str(source), "-o", str(partial)], capture_output=True, text=True)
-        if done.returncode != 0:
-            partial.unlink(missing_ok=True)
-            return f"{source}:\n{done.stderr[-6000:]}"
-        os.replace(partial, target)
-        return None
+        finally:
+            if bar is not None:
+                bar.update(1)
 
     workers = jobs or max(1, os.cpu_count() or 1)
     with concurrent.futures.ThreadPoolExecutor(max_workers=workers) as pool:
@@ -506,13 +536,18 @@ def compile_objects(compiler: str, sources: list[Path], include_dirs: list[Path]
     return [target for _, target in tasks]
 
 
-def core_objects(objects: Path, compiler: str | None = None, jobs: int | None = None) -> list[Path]:
-    """The core's object files (``fmu_src/core/src/**/*.cpp``, the unit's flags), compiled into ``objects``
-    or reused from there."""
+def core_sources() -> list[Path]:
+    """The core's C++ sources (``fmu_src/core/src/**/*.cpp``)."""
+    return sorted((core_dir() / "src").rglob("*.cpp"))
+
+
+def core_objects(objects: Path, compiler: str | None = None, jobs: int | None = None, bar=None) -> list[Path]:
+    """The core's object files (``core_sources``, the unit's flags), compiled into ``objects`` or reused
+    from there (``bar``: as compile_objects')."""
     core = core_dir()
     headers = sorted((core / "include").rglob("*.hpp"))
-    return compile_objects(compiler or find_compiler(), sorted((core / "src").rglob("*.cpp")), [core / "include"],
-                           Path(objects), headers, jobs)
+    return compile_objects(compiler or find_compiler(), core_sources(), [core / "include"], Path(objects), headers,
+                           jobs, bar)
 
 
 def link(compiler: str, objects: list[Path], out: Path, fmi_version: int) -> Path:
@@ -548,12 +583,13 @@ def native_scene(scene: str | Path):
 
 
 def build_native_fmu(out: str | Path | None = None, fmi_version: int = 2, build_dir: str | Path | None = None,
-                     jobs: int | None = None, scene: str | Path | None = None) -> Path:
+                     jobs: int | None = None, scene: str | Path | None = None, progress: bool = False) -> Path:
     """Build the native unit (FMI ``fmi_version`` 2 or 3) at ``out`` (default ``native_fmu_path``); return
-    its path.  ``build_dir`` keeps the compiled objects for the next build (which recompiles only what
-    changed); without it they go with a temporary folder.  ``scene``: a scene file (or preset name) whose
-    values become the start values.  NativeBuildError if it cannot be built here, or for a scene the
-    native unit cannot run (a cloth from a mesh file, pinned_vertices)."""
+    its path.  ``build_dir`` (default ``default_build_dir()``) keeps the compiled objects for the next build,
+    which recompiles only what changed.  ``scene``: a scene file (or preset name) whose values become the
+    start values, its colliders and grip keys built in.  ``progress``: a bar of the sources compiled.
+    NativeBuildError if it cannot be built here, or for a scene the native unit cannot run (a cloth from
+    a mesh file, pinned_vertices)."""
     if fmi_version not in (2, 3):
         raise ValueError(f"FMI version must be 2 or 3, got {fmi_version!r}")
     packed = None if scene is None else native_scene(scene)
@@ -578,14 +614,17 @@ def build_native_fmu(out: str | Path | None = None, fmi_version: int = 2, build_
         generated = stage / "generated"
         generated.mkdir()
         (generated / VARIABLES_HEADER).write_text(header, encoding="utf-8")
-        objects_dir = Path(build_dir) if build_dir is not None else stage / "objects"
+        objects_dir = Path(build_dir) if build_dir is not None else default_build_dir()
         include = [core / "include", generated]
         fmu_headers = [*sorted((core / "include").rglob("*.hpp")), core / "fmu" / "unit.hpp",
                        core / "fmu" / "instance.hpp", generated / VARIABLES_HEADER, *sorted((core / "fmu").glob(f"fmi{fmi_version}*.h"))]
-        objects = core_objects(objects_dir, compiler, jobs)
-        objects += compile_objects(compiler, [core / "fmu" / "unit.cpp", core / "fmu" / f"fmi{fmi_version}.cpp"],
-                                   include, objects_dir, fmu_headers, jobs)
+        unit_sources = [core / "fmu" / "unit.cpp", core / "fmu" / f"fmi{fmi_version}.cpp"]
+        with tqdm(total=len(core_sources()) + len(unit_sources), desc=f"compiling {out.name}", unit="file",
+                  delay=SHOW_AFTER, disable=not progress) as bar:
+            objects = core_objects(objects_dir, compiler, jobs, bar)
+            objects += compile_objects(compiler, unit_sources, include, objects_dir, fmu_headers, jobs, bar)
         binary = link(compiler, objects, stage / f"{MODEL_NAME}.so", fmi_version)
+        _forget_unused(objects_dir)
 
         out.parent.mkdir(parents=True, exist_ok=True)
         with whole_file(out) as tmp_out, zipfile.ZipFile(tmp_out, "w", zipfile.ZIP_DEFLATED) as archive:
