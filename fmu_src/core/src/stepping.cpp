@@ -177,6 +177,39 @@ int collider_edges(Core& core, const double* x0, double* x1, double* v1) {
                                  core.contact.lists->collider_free.data(), x0, x1, v1);
 }
 
+//: Marks in pushed (n) the particles whose end of step (pos, vel: (3, n)) self-collision's pushes changed
+//: from (before_pos, before_vel), 1 where changed, else 0.  Returns how many.
+Index mark_pushed(Index n, const double* before_pos, const double* before_vel, const double* pos, const double* vel,
+                  double* pushed) {
+    Index count = 0;
+    for (Index i = 0; i < n; ++i) {
+        bool changed = false;
+        for (Index c = 0; c < 3; ++c) {
+            const Index k = c * n + i;
+            changed = changed || pos[k] != before_pos[k] || vel[k] != before_vel[k];
+        }
+        pushed[i] = changed ? 1.0 : 0.0;
+        count += changed;
+    }
+    return count;
+}
+
+//: The history (prev_pos, prev_vel) of the particles marked in pushed (n), h s before their pushed state
+//: (pos, vel): a past of constant acceleration (the step's, m/s2) through it, so that BDF2's next step
+//: continues their motion from where the push left them to second order, and its error estimate sees how
+//: far their forces there depart from it.  The other particles keep their own history.
+void carry_pushed_history(Index n, const double* pushed, const double* pos, const double* vel,
+                          const double* acceleration, double h, double* prev_pos, double* prev_vel) {
+    for (Index c = 0; c < 3; ++c) {
+        for (Index i = 0; i < n; ++i) {
+            if (pushed[i] == 0.0) continue;
+            const Index k = c * n + i;
+            prev_vel[k] = vel[k] - h * acceleration[k];
+            prev_pos[k] = pos[k] - h * vel[k] + 0.5 * h * h * acceleration[k];
+        }
+    }
+}
+
 //: Take one accepted step of at most `remaining` s.  Returns DONE or BLOWN_UP.
 Status step(Core& core, double remaining) {
     Cloth& cloth = core.cloth;
@@ -333,10 +366,23 @@ Status step(Core& core, double remaining) {
     // The cloth's edges and triangles against mesh colliders' edges and vertices, before self-collision and
     // again after it if it moved the cloth.
     int edged = collider_edges(core, buf.pos, buf.trial_pos, buf.trial_vel);
+    // Self-collision's pushes: with BDF2 the pushed particles' history is carried through their pushed state
+    // (carry_pushed_history); a step whose motion it froze, or that mesh colliders' edges changed, restarts it.
+    const bool carries = control.integrator == BDF2 && core.contact.enabled && phys.meshes.count == 0;
+    double* unpushed_pos = core.solver.p;  // scratch (the linear solves' directions, free between steps)
+    double* unpushed_vel = core.solver.ap;
+    double* pushed = core.solver.z;
+    const Index freezes = core.contact.enabled ? core.contact.counters[FREEZES] : 0;
+    if (carries) {
+        copy(3 * n, buf.trial_pos, unpushed_pos);
+        copy(3 * n, buf.trial_vel, unpushed_vel);
+    }
     bool kinked = resolve(core.contact, phys.thickness, phys.floor_z, control.blow_up_speed, n, core.solver.mass,
                           cloth.free, buf.pos, buf.trial_pos, buf.trial_vel, h);
+    const bool carried = kinked && carries && core.contact.counters[FREEZES] == freezes &&
+                         mark_pushed(n, unpushed_pos, unpushed_vel, buf.trial_pos, buf.trial_vel, pushed) > 0;
     if (kinked) edged |= collider_edges(core, buf.pos, buf.trial_pos, buf.trial_vel);
-    kinked = kinked || (edged & STOPPED) != 0;
+    kinked = (kinked && !carried) || (edged & STOPPED) != 0;
     const bool exchanging = exchange_water(core, core.solver.mass, h);
     place_grip(n, phys, grip, cloth.free, buf.held, nullptr, buf.trial_vel);  // (the uptake rescaled velocities)
     const SpeedCheck check = speed_and_finiteness(n, buf.trial_pos, buf.trial_vel, buf.trial_water);
@@ -352,12 +398,13 @@ Status step(Core& core, double remaining) {
     copy(3 * n, buf.trial_vel, buf.vel);
     copy(n, buf.trial_water, buf.water);
     if (control.integrator == BDF2) copy(3 * n, core.solver.step_acceleration, buf.acceleration);
+    if (carried) carry_pushed_history(n, pushed, buf.pos, buf.vel, buf.acceleration, h, buf.prev_pos, buf.prev_vel);
     if (on_floor) agree_history(n, phys.floor_z, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h);
     if (on_collider) {
         collider_history(n, phys, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h);
     }
     if (edged & PUSHED) collider_edge_history(*core.contact.lists, n, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h);
-    clock[LAST_STEP] = kinked ? 0.0 : h;  // self-collision's push: BDF2 starts afresh
+    clock[LAST_STEP] = kinked ? 0.0 : h;  // a frozen step, a mesh collider's edges: BDF2 starts afresh
     clock[TIME] += h;
     clock[STEPS] += 1;
     maybe_sleep(core, h, (exchanging && !sunk(core)) || grip.moving);
