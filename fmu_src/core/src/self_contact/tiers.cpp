@@ -156,7 +156,16 @@ double rest_distance_beyond(const Contact& contact, Index n, int s) {
     return beyond;
 }
 
-double deviation(const Contact& contact, Index n, int s, const double* ref, const double* x0, const double* x1) {
+namespace {
+
+//: Each window of tier s, moving from x0 to x1 away from a rigid motion of `ref` (all (3, n)): for each of its
+//: particles i, particle(i, d2, a2, blend) with d2 the larger squared distance, at the two ends, from where
+//: the window's rigid motion takes it, a2 its squared distance from the window's centroid at `ref` and
+//: blend how far, per metre of that, the straight lines between the two rotations fall short of a rotation;
+//: then window(blend).  Either returning false stops the scan (and it returns false).
+template <class Particle, class Window>
+bool scan_windows(const Contact& contact, Index n, int s, const double* ref, const double* x0, const double* x1,
+                  Particle particle, Window window) {
     const Tier t = tier_of(contact, n, s);
     const Index cells = t.nx * t.ny;
     std::vector<double>& sums = contact.lists->tier_scratch;
@@ -181,7 +190,6 @@ double deviation(const Contact& contact, Index n, int s, const double* ref, cons
     }
     double* w = sums.data() + cells * SUMS;  // the window's sums
     const Index wide_x = py_min(WINDOW, t.nx), wide_y = py_min(WINDOW, t.ny);
-    double largest = 0.0;
     for (Index wy = 0; wy + wide_y <= t.ny; ++wy) {
         for (Index wx = 0; wx + wide_x <= t.nx; ++wx) {
             for (Index k = 0; k < SUMS; ++k) w[k] = 0.0;
@@ -200,7 +208,11 @@ double deviation(const Contact& contact, Index n, int s, const double* ref, cons
             const double ry[3] = {w[REF] * inv, w[REF + 1] * inv, w[REF + 2] * inv};
             const double m0[3] = {w[END0] * inv, w[END0 + 1] * inv, w[END0 + 2] * inv};
             const double m1[3] = {w[END1] * inv, w[END1 + 1] * inv, w[END1 + 2] * inv};
-            double worst = 0.0, radius = 0.0;
+            // Along the motion the window's linear blend of the two rotations is within (1 - cos(angle / 2))
+            // of a rotation at every point, at most (1 - cos(angle)) / 2 = (3 - trace(r0^T r1)) / 4.
+            double trace = 0.0;
+            for (int k = 0; k < 9; ++k) trace += r0[k] * r1[k];
+            const double blend = py_max(0.0, 0.25 * (3.0 - trace));
             for (Index cy = wy; cy < wy + wide_y; ++cy) {
                 for (Index cx = wx; cx < wx + wide_x; ++cx) {
                     const Index c = cx + t.nx * cy;
@@ -213,21 +225,44 @@ double deviation(const Contact& contact, Index n, int s, const double* ref, cons
                         const double d1x = x1[i] - m1[0] - (r1[0] * ax + r1[1] * ay + r1[2] * az);
                         const double d1y = x1[n + i] - m1[1] - (r1[3] * ax + r1[4] * ay + r1[5] * az);
                         const double d1z = x1[2 * n + i] - m1[2] - (r1[6] * ax + r1[7] * ay + r1[8] * az);
-                        worst = worse(worst, d0x * d0x + d0y * d0y + d0z * d0z);
-                        worst = worse(worst, d1x * d1x + d1y * d1y + d1z * d1z);
-                        radius = py_max(radius, ax * ax + ay * ay + az * az);
+                        const double d2 = worse(d0x * d0x + d0y * d0y + d0z * d0z, d1x * d1x + d1y * d1y + d1z * d1z);
+                        if (!particle(i, d2, ax * ax + ay * ay + az * az, blend)) return false;
                     }
                 }
             }
-            // Along the motion the window's linear blend of the two rotations is within (1 - cos(angle / 2))
-            // of a rotation at every point, at most (1 - cos(angle)) / 2 = (3 - trace(r0^T r1)) / 4.
-            double trace = 0.0;
-            for (int k = 0; k < 9; ++k) trace += r0[k] * r1[k];
-            const double blend = py_max(0.0, 0.25 * (3.0 - trace)) * std::sqrt(radius);
-            largest = worse(largest, std::sqrt(worst) + blend);
+            if (!window(blend)) return false;
         }
     }
+    return true;
+}
+
+}  // namespace
+
+double deviation(const Contact& contact, Index n, int s, const double* ref, const double* x0, const double* x1) {
+    double largest = 0.0, worst = 0.0, radius = 0.0;
+    scan_windows(
+        contact, n, s, ref, x0, x1,
+        [&](Index, double d2, double a2, double) {
+            worst = worse(worst, d2);
+            radius = py_max(radius, a2);
+            return true;
+        },
+        [&](double blend) {
+            largest = worse(largest, std::sqrt(worst) + blend * std::sqrt(radius));
+            worst = 0.0, radius = 0.0;
+            return true;
+        });
     return largest;
+}
+
+bool within_allowances(const Contact& contact, Index n, int s, const double* ref, const double* x0,
+                       const double* x1, const double* allowance) {
+    return scan_windows(
+        contact, n, s, ref, x0, x1,
+        [&](Index i, double d2, double a2, double blend) {
+            return std::sqrt(d2) + blend * std::sqrt(a2) <= allowance[i];  // false if NaN
+        },
+        [](double) { return true; });
 }
 
 double shifted_deviation(Index n, const double* ref, const double* x0, const double* x1) {

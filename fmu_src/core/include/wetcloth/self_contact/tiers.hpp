@@ -73,6 +73,13 @@ double rest_distance_beyond(const Contact& contact, Index n, int s);
 //: rotation.  NaN if a position is not finite.
 double deviation(const Contact& contact, Index n, int s, const double* ref, const double* x0, const double* x1);
 
+//: Whether the straight-line motion from x0 to x1 (both (3, n)) leaves each particle i of every window of tier
+//: s within allowance[i] (m) of the window's rigid motion of `ref` (3, n), as deviation() finds it (the
+//: shortfall of the straight lines between the rotations counted at the particle's own distance from the
+//: window's centroid, not the window's farthest).  False if a position is not finite.
+bool within_allowances(const Contact& contact, Index n, int s, const double* ref, const double* x0,
+                       const double* x1, const double* allowance);
+
 //: The deviation (m) of the straight-line motion from x0 to x1 (both (3, n)) from a translation of the whole
 //: sheet's reference positions `ref` (3, n), the mid-range of each end's displacements (what a cloth that
 //: does not turn needs; a bound for the pairs of every tier).  NaN if a position is not finite.
