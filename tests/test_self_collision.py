@@ -465,8 +465,8 @@ def test_a_mesh_lists_its_particles_own_allowances_and_keeps_its_promise(tmp_pat
     the finest tier, from 0.64 to 2.5 mm against a margin of 0.48 mm.  The promise, checked from scratch on
     the flat disc: every pair the list leaves out (it is empty) lies at least the thickness plus the least
     allowances of its two elements' particles apart.  Then motions from the flat disc, moved by 10 cm and
-    turned (by up to 0.05 rad: a window on the rim whose few particles lie on a line in the rest sheet has no
-    rotation of its own, so a larger turn is refused early), that push the two elements of the six pairs with
+    turned (by up to 0.5 rad; a window on the rim whose few particles lie on a line in the rest sheet takes the
+    whole sheet's rotation: with none, pushes by 0.5 of the allowances were refused from 0.3 rad), that push the two elements of the six pairs with
     the least room left (none) towards each other by a fraction f of those allowances (shaken by up to
     0.01 mm): the list must hold for f = 0.5 and 0.8, where such a pair ends 0.2 of its room (at most 0.4
     of the largest allowance) beyond the thickness, and not for f = 1.3; along every motion it holds for, no
@@ -507,7 +507,7 @@ def test_a_mesh_lists_its_particles_own_allowances_and_keeps_its_promise(tmp_pat
             pushed[:, first] += f * own[first].min() * towards[:, None]
             pushed[:, second] -= f * own[second].min() * towards[:, None]
             axis = rng.normal(size=3)
-            turn = Rotation.from_rotvec(rng.uniform(0.0, 0.05) * axis / np.linalg.norm(axis)).as_matrix()
+            turn = Rotation.from_rotvec(rng.uniform(0.0, 0.5) * axis / np.linalg.norm(axis)).as_matrix()
             centre, shift = ref.mean(axis=1, keepdims=True), rng.uniform(-0.1, 0.1, size=(3, 1))
             x0 = turn @ (ref - centre) + centre + shift
             x1 = turn @ (pushed - centre) + centre + shift + rng.uniform(-1e-5, 1e-5, size=ref.shape)

@@ -57,13 +57,13 @@ bool frame_of(const double* w, Index at, Index times, double e[9]) {
 }
 
 //: The window's rotation from the reference to the positions of frame `e` (this frame times the transposed
-//: reference frame); identity when either frame is degenerate (any rotation gives a valid bound).
-void rotation(bool ref_ok, const double e_ref[9], bool ok, const double e[9], double r[9]) {
+//: reference frame); `fallback` when either frame is degenerate (any rotation gives a valid bound).
+void rotation(bool ref_ok, const double e_ref[9], bool ok, const double e[9], const double fallback[9], double r[9]) {
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j)
             r[3 * i + j] = ref_ok && ok ? e[3 * i] * e_ref[3 * j] + e[3 * i + 1] * e_ref[3 * j + 1] +
                                               e[3 * i + 2] * e_ref[3 * j + 2]
-                                        : (i == j ? 1.0 : 0.0);
+                                        : fallback[3 * i + j];
 }
 
 //: The larger of `worst` and `v`, NaN once either is.
@@ -189,6 +189,19 @@ bool scan_windows(const Contact& contact, Index n, int s, const double* ref, con
         }
     }
     double* w = sums.data() + cells * SUMS;  // the window's sums
+    // The whole sheet's rotation at each end (identity if degenerate): that of a window whose particles lie
+    // on a line in the rest sheet (a few on the rim of a mesh), rather than none.
+    double sheet0[9], sheet1[9];
+    {
+        const double identity[9] = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
+        for (Index k = 0; k < SUMS; ++k) w[k] = 0.0;
+        for (Index c = 0; c < cells; ++c)
+            for (Index k = 0; k < SUMS; ++k) w[k] += sums[c * SUMS + k];
+        double e_ref[9], e0[9], e1[9];
+        const bool ref_ok = frame_of(w, REF, REF_REST, e_ref);
+        rotation(ref_ok, e_ref, frame_of(w, END0, END0_REST, e0), e0, identity, sheet0);
+        rotation(ref_ok, e_ref, frame_of(w, END1, END1_REST, e1), e1, identity, sheet1);
+    }
     const Index wide_x = py_min(WINDOW, t.nx), wide_y = py_min(WINDOW, t.ny);
     for (Index wy = 0; wy + wide_y <= t.ny; ++wy) {
         for (Index wx = 0; wx + wide_x <= t.nx; ++wx) {
@@ -202,8 +215,8 @@ bool scan_windows(const Contact& contact, Index n, int s, const double* ref, con
             // A rotation for each end, and a translation: the window's centroid to the end's.
             double e_ref[9], e0[9], e1[9], r0[9], r1[9];
             const bool ref_ok = frame_of(w, REF, REF_REST, e_ref);
-            rotation(ref_ok, e_ref, frame_of(w, END0, END0_REST, e0), e0, r0);
-            rotation(ref_ok, e_ref, frame_of(w, END1, END1_REST, e1), e1, r1);
+            rotation(ref_ok, e_ref, frame_of(w, END0, END0_REST, e0), e0, sheet0, r0);
+            rotation(ref_ok, e_ref, frame_of(w, END1, END1_REST, e1), e1, sheet1, r1);
             const double inv = 1.0 / w[COUNT];
             const double ry[3] = {w[REF] * inv, w[REF + 1] * inv, w[REF + 2] * inv};
             const double m0[3] = {w[END0] * inv, w[END0 + 1] * inv, w[END0 + 2] * inv};
