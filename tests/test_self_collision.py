@@ -17,6 +17,9 @@ itself_without_the_stage``), so a zero count with the stage on is not for want o
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -27,6 +30,9 @@ from scipy.spatial.transform import Rotation
 import wetcloth
 from wetcloth import _core
 from wetcloth.fmu.checkpoint import Checkpoint, from_bytes, leaves_of, snapshot_from, to_bytes
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "docs"))
+import make_meshes  # noqa: E402
 
 # --------------------------------------------------------------------------- the independent checker
 
@@ -448,6 +454,90 @@ def test_a_list_that_holds_has_every_pair_that_comes_close():
             nearest = min([nearest] + outside)
             assert nearest >= thickness, (bend, press, f, nearest)
     assert held >= 10 and refused >= 10 and nearest < 2.0 * thickness, (held, refused, nearest)
+
+
+def nearest_points(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The closest points of two elements of a flat sheet that do not overlap, each given by its particles'
+    positions (k, 3): a point, an edge or a triangle.  In the plane they are the closest points of their
+    sides (a point's side is itself), and those of two sides lie at an end of one of them."""
+    def sides(corners):
+        return [(corners[k], corners[(k + 1) % len(corners)]) for k in range(len(corners) if len(corners) > 2 else 1)]
+
+    def foot(x, a, b):
+        along = 0.0 if np.array_equal(a, b) else np.clip(np.dot(x - a, b - a) / np.dot(b - a, b - a), 0.0, 1.0)
+        return a + along * (b - a)
+
+    options = []
+    for a, b in sides(first):
+        for c, d in sides(second):
+            options += [(x, foot(x, c, d)) for x in (a, b)] + [(foot(y, a, b), y) for y in (c, d)]
+    return min(options, key=lambda pq: np.linalg.norm(pq[1] - pq[0]))
+
+
+def test_a_mesh_lists_its_particles_own_allowances_and_keeps_its_promise(tmp_path):
+    """A mesh whose smallest triangles would cap a single margin (an irregular disc of 2207 vertices, 1 cm
+    apart: smallest altitude 3.3 mm, median 7.7 mm, thickness 2 mm) gives each particle its own allowance in
+    the finest tier, from 0.64 to 2.5 mm against a margin of 0.48 mm.  The promise, checked from scratch on
+    the flat disc: every pair the list leaves out (it is empty) lies at least the thickness plus the least
+    allowances of its two elements' particles apart.  Then motions from the flat disc, moved by 10 cm and
+    turned (by up to 0.5 rad; a window on the rim whose few particles lie on a line in the rest sheet takes the
+    whole sheet's rotation: with none, pushes by 0.5 of the allowances were refused from 0.3 rad), that push the two elements of the six pairs with
+    the least room left (none) towards each other by a fraction f of those allowances (shaken by up to
+    0.01 mm): the list must hold for f = 0.5 and 0.8, where such a pair ends 0.2 of its room (at most 0.4
+    of the largest allowance) beyond the thickness, and not for f = 1.3; along every motion it holds for, no
+    pair comes closer than the thickness.  With allowances half as large again, the push by 0.8 of them
+    (1.2 of the room) would end inside the thickness."""
+    points, triangles = make_meshes.round_cloth(radius=0.26, rings=26)
+    path = tmp_path / "disc.ply"
+    make_meshes.write(path, points, triangles)
+    sim = wetcloth.Simulation(wetcloth.load_scene(cloth_mesh=str(path), place_mesh="on"))
+    contact, thickness = sim._contact, sim.scene.thickness
+    ref = sim.state.pos.copy()
+    contact.reference[...] = ref
+    lists = _core.ContactState()
+    _core.build_widest(contact, thickness, contact.least_margin, 0.5 * (_core.WIDE_REACH * contact.rest_gap - thickness),
+                       lists=lists)
+    margin, own = float(contact.margin[0]), np.array(lists.particle_allowances)
+    assert lists.point_triangle_count + lists.edge_edge_count == 0
+    assert own.size == len(points) and own.min() >= margin and own.max() > 2.5 * margin, (margin, own.min(), own.max())
+
+    def members(pair):
+        kind, a, b = pair
+        return ([a], sim.triangles[b]) if kind == "point_triangle" else (contact.edges[a], contact.edges[b])
+
+    room = {}  # each pair left out: how far it lies beyond the thickness and its elements' least allowances
+    for pair, gap in close_pairs(ref.T, sim.triangles, contact.edges, thickness + 2.0 * own.max()).items():
+        first, second = members(pair)
+        room[pair] = gap - thickness - own[first].min() - own[second].min()
+    assert min(room.values()) >= -1e-12 * thickness
+    rng = np.random.default_rng(26)
+    tightest = sorted(room, key=room.get)[:6]
+    held, refused, nearest = 0, 0, np.inf
+    for pair in tightest:
+        first, second = members(pair)
+        p, q = nearest_points(ref.T[first], ref.T[second])
+        towards = (q - p) / np.linalg.norm(q - p)
+        for f in (0.5, 0.8, 1.3):
+            pushed = ref.copy()
+            pushed[:, first] += f * own[first].min() * towards[:, None]
+            pushed[:, second] -= f * own[second].min() * towards[:, None]
+            axis = rng.normal(size=3)
+            turn = Rotation.from_rotvec(rng.uniform(0.0, 0.5) * axis / np.linalg.norm(axis)).as_matrix()
+            centre, shift = ref.mean(axis=1, keepdims=True), rng.uniform(-0.1, 0.1, size=(3, 1))
+            x0 = turn @ (ref - centre) + centre + shift
+            x1 = turn @ (pushed - centre) + centre + shift + rng.uniform(-1e-5, 1e-5, size=ref.shape)
+            if not _core.covers(contact, x0, x1, lists=lists):
+                assert f > 1.0, (pair, f)
+                refused += 1
+                continue
+            assert f < 1.0, (pair, f)
+            held += 1
+            for t in (0.0, 0.25, 0.5, 0.75, 1.0):
+                close = close_pairs(((1.0 - t) * x0 + t * x1).T, sim.triangles, contact.edges, 2.0 * thickness)
+                nearest = min([nearest] + list(close.values()))
+                assert nearest >= thickness, (pair, f, t, nearest)
+    assert refused == len(tightest) and held == 2 * len(tightest), (held, refused)
+    assert nearest <= thickness + 0.4 * own.max() + 1e-4 * thickness, nearest
 
 
 def test_a_swinging_sheet_keeps_an_empty_list():

@@ -19,12 +19,14 @@ from wetcloth._core import CONTACT_COUNTERS, ZONE_ROWS
 
 #: ``enabled`` (bool); ``friction`` (-) between layers; ``least_margin`` (m) of a candidate list;
 #: ``rest_gap`` (m) between the rest sheet's nearest elements that share no particle (``rest_gap``);
+#: ``typical_gap`` (m): a mesh's median triangle altitude (a grid's rest gap), what caps the particles' own
+#: allowances in the finest tier (docs/model.md 6.2);
 #: the cloth's ``triangles`` (m, 3) and ``edges`` (k, 2) (particle indices) and ``rest`` positions
 #: (3, n) in the flat sheet (m); the list's ``reference`` positions (3, n) and ``margin`` (1,) (m; 0
 #: when there is none); scratch of the impact zones ``zone`` (n) and ``zone_sums`` (ZONE_ROWS, n);
 #: ``counters``: lists built, steps that had candidates, passes over them, pairs pushed apart, rounds
 #: of impact zones, steps undone as a last resort.
-Contact = namedtuple("Contact", "enabled friction least_margin rest_gap triangles edges rest reference margin zone "
+Contact = namedtuple("Contact", "enabled friction least_margin rest_gap typical_gap triangles edges rest reference margin zone "
                                 "zone_sums counters")
 COUNTER_NAMES = ("rebuilds", "busy_steps", "passes", "responses", "zone_rounds", "freezes")
 
@@ -51,28 +53,36 @@ def grid_edges(triangles: np.ndarray) -> np.ndarray:
     return np.unique(edges, axis=0).astype(np.int64)
 
 
-def smallest_altitude(points: np.ndarray, triangles: np.ndarray) -> float:
-    """The smallest altitude (m) of any of the triangles (m, 3) of points (3, n) m: a corner's distance from
+def altitudes(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """The smallest altitude (m) of each of the triangles (m, 3) of points (3, n) m: a corner's distance from
     the opposite edge's line (on a grid, ``rest_gap``)."""
     p = points.T[triangles]
     double_area = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
     longest = np.max([np.linalg.norm(p[:, (k + 1) % 3] - p[:, k], axis=1) for k in range(3)], axis=0)
-    return float(np.min(double_area / longest))
+    return double_area / longest
+
+
+def smallest_altitude(points: np.ndarray, triangles: np.ndarray) -> float:
+    """The smallest altitude (m) of any of the triangles (m, 3) of points (3, n) m."""
+    return float(np.min(altitudes(points, triangles)))
 
 
 def make_contact(topology, enabled: bool, friction: float) -> Contact:
     """The stage's arrays for a cloth ``topology`` (``wetcloth.topology.Topology``).  A mesh's rest gap is
-    the smallest altitude of its triangles in the flat rest sheet, its least margin MARGIN_FRACTION of that."""
+    the smallest altitude of its triangles in the flat rest sheet, its least margin MARGIN_FRACTION of that,
+    its typical gap their median altitude."""
     n = topology.n
     rest = np.zeros((3, n))
     rest[:2] = topology.rest_xy
     if topology.pairs.shape[1] == 0:  # the grid's families (also of a file that forms the grid)
         gap, least = rest_gap(topology.dx, topology.dy), MARGIN_FRACTION * min(topology.dx, topology.dy)
+        typical = gap
     else:
-        gap = smallest_altitude(rest, topology.triangles)
+        heights = altitudes(rest, topology.triangles)
+        gap, typical = float(np.min(heights)), float(np.median(heights))
         least = MARGIN_FRACTION * gap
     return Contact(
-        enabled=bool(enabled), friction=float(friction), least_margin=least, rest_gap=gap,
+        enabled=bool(enabled), friction=float(friction), least_margin=least, rest_gap=gap, typical_gap=typical,
         triangles=np.ascontiguousarray(topology.triangles, dtype=np.int64), edges=grid_edges(topology.triangles),
         rest=rest, reference=np.zeros((3, n)), margin=np.zeros(1), zone=np.arange(n, dtype=np.int64),
         zone_sums=np.zeros((ZONE_ROWS, n)), counters=np.zeros(CONTACT_COUNTERS, dtype=np.int64),

@@ -67,6 +67,9 @@ WETCLOTH_BINDINGS(m) {
         .def_prop_ro("edge_edge_count", [](ContactState& s) { return s.lists.edge_edge_count(); })
         .def_prop_ro("allowances", [](ContactState& s) { return s.lists.allowances; },
                      "Each tier's allowance (m) of the last list built (empty before one is)")
+        .def_prop_ro("particle_allowances", [](ContactState& s) { return s.lists.particle_allowances; },
+                     "Each particle's own allowance (m) in the finest tier of the last list built (empty if "
+                     "they have none)")
         .def("__len__", [](ContactState&) { return 2; })
         .def("__getitem__", [](ContactState& s, Index k) { return rows_copy(s.kind(k)); })
         .def("__setitem__", [](ContactState& s, Index k, nb::ndarray<const Index, nb::ndim<2>, nb::device::cpu> a) {

@@ -238,6 +238,7 @@ Contact contact_from(nb::handle h, Index n, ContactLists* lists) {
     c.friction = number<double>(h, "friction");
     c.least_margin = number<double>(h, "least_margin");
     c.rest_gap = number<double>(h, "rest_gap");
+    c.typical_gap = number<double>(h, "typical_gap");
     c.triangles = array<const Index>(h, "triangles");
     c.triangle_count = size_of(h.attr("triangles")) / 3;
     c.edges = array<const Index>(h, "edges");

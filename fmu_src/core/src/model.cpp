@@ -576,6 +576,7 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
         c.friction = scene.self_friction;
         c.least_margin = MARGIN_FRACTION * pymin(topo_.dx, topo_.dy);
         c.rest_gap = topo_.dx * topo_.dy / std::hypot(topo_.dx, topo_.dy);
+        c.typical_gap = c.rest_gap;
         c.triangle_count = topo_.triangle_count();
         c.triangles = topo_.triangles.data();
         c.edge_count = static_cast<Index>(edges_.size() / 2);

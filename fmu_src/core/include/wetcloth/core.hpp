@@ -285,6 +285,7 @@ struct ContactLists {
     std::vector<Index> index_scratch;   // hash tables and other integer scratch
     std::vector<Index> tiers;           // each tier's cells of the rest sheet (self_contact/tiers.hpp)
     std::vector<double> allowances;     // (tiers) m: how far each tier's windows may move beyond a rigid motion
+    std::vector<double> particle_allowances;  // (n) m: how far each particle may, in the finest tier (empty: none)
     std::vector<double> tier_scratch;   // the tiers' sums and fits
     std::vector<Index> resting;         // (n, 3) what a particle held on a layer rests on (-1 padding)
     std::vector<double> resting_normal;  // (n, 3) the unit normal from that support to the particle
@@ -312,13 +313,13 @@ enum ContactCounter : Index { REBUILDS = 0, BUSY_STEPS = 1, PASSES = 2, RESPONSE
 inline constexpr Index CONTACT_COUNTERS = 6;
 inline constexpr Index ZONE_ROWS = 21;
 
-//: Self-collision (self_contact/): enabled; friction (-); least_margin (m); rest_gap (m);
+//: Self-collision (self_contact/): enabled; friction (-); least_margin (m); rest_gap (m); typical_gap (m);
 //: triangles (m, 3) and edges (k, 2) particle indices; rest positions (3, n) m; the candidate
 //: list's reference positions (3, n) and margin (1) m (0: none); zone (n) and zone_sums
 //: (ZONE_ROWS, n) scratch of the impact zones; counters (CONTACT_COUNTERS); the lists.
 struct Contact {
     bool enabled = false;
-    double friction = 0, least_margin = 0, rest_gap = 0;
+    double friction = 0, least_margin = 0, rest_gap = 0, typical_gap = 0;
     Index triangle_count = 0;
     const Index* triangles = nullptr;
     Index edge_count = 0;

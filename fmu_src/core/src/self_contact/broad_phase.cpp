@@ -28,6 +28,14 @@ inline double widest_margin(const Contact& contact, double thickness) {
     return py_max(contact.least_margin, 0.5 * (WIDE_REACH * contact.rest_gap - thickness));
 }
 
+//: The widest allowance (m) of a particle of the finest tier: its pairs' reach (thickness + 2 allowances) is
+//: WIDE_REACH of the rest sheet's typical gap (Contact::typical_gap).  Particles of a mesh away from its
+//: smallest triangles then may move as far as a grid's of the same spacing; on a grid, or a mesh whose
+//: triangles are alike, no farther than widest_margin (then the particles have no allowances of their own).
+inline double particle_widest(const Contact& contact, double thickness) {
+    return 0.5 * (WIDE_REACH * contact.typical_gap - thickness);
+}
+
 struct Grid {
     double origin[3];
     double cell;
@@ -206,9 +214,11 @@ inline int tier_of_pair(const Contact& contact, Index n, const Index idx[4]) {
     return TIERS - 1;
 }
 
-//: The least distance among the records (of `kind`) of each tier s >= 1, into nearest[s] (if less).
+//: The least distance among the records (of `kind`) of each tier s >= 1, into nearest[s] (if less); and, if
+//: `own` is not null, of the finest tier's records at `outside` (m) or farther (those the list leaves out),
+//: into own[i] for each of their particles i (if less).
 void nearest_by_tier(const Contact& contact, Index n, const std::vector<Index>& records, int kind,
-                     double nearest[TIERS]) {
+                     double nearest[TIERS], double outside, double* own) {
     for (std::size_t k = 0; k < records.size(); k += 3) {
         Index idx[4];
         if (kind == POINT_TRIANGLE) {
@@ -217,7 +227,10 @@ void nearest_by_tier(const Contact& contact, Index n, const std::vector<Index>& 
             particles<EDGE_EDGE>(contact, records[k], records[k + 1], idx);
         }
         const int s = tier_of_pair(contact, n, idx);
-        nearest[s] = py_min(nearest[s], gap_of(records[k + 2]));
+        const double gap = gap_of(records[k + 2]);
+        nearest[s] = py_min(nearest[s], gap);
+        if (s == 0 && own != nullptr && gap >= outside)
+            for (int j = 0; j < 4; ++j) own[idx[j]] = py_min(own[idx[j]], gap);
     }
 }
 
@@ -232,7 +245,15 @@ bool holds(const Contact& contact, Index n, const double* x0, const double* x1, 
     if (!(shifted == shifted)) return false;
     double bound = shifted;  // the least deviation found so far of this tier or a coarser one
     bool found[TIERS] = {};
+    const std::vector<double>& own = contact.lists->particle_allowances;
     for (int s = TIERS - 1; s >= 0; --s) {
+        // The finest tier's pairs, where its particles have allowances of their own: each particle within its
+        // own in every window (at least the margin, so nothing else can hold where this does not, but the
+        // coarser tiers' windows not yet looked at).
+        if (s == 0 && !own.empty() && !(bound <= allowance[0])) {
+            if (within_allowances(contact, n, 0, contact.reference, x0, x1, own.data())) break;
+            found[0] = true;
+        }
         // This tier's windows, then those of the coarser tiers passed over, until one holds the tier's pairs
         // (the same bound as rebuild_for_step's, so that a list holds for the step it was built for).
         for (int t = s; t < TIERS && !(bound <= allowance[s]); ++t) {
@@ -321,7 +342,11 @@ void build_widest(Contact& contact, Index n, double thickness, double least, dou
 void build_lists(Contact& contact, Index n, double thickness, double least, double widest) {
     ContactLists& lists = *contact.lists;
     const double* x = contact.reference;
-    const double reach = thickness + 2.0 * widest;
+    // Where the particles have allowances of their own (a mesh whose smallest triangles cap the margin), the
+    // search reaches as far as their widest, so that it finds every pair that bounds one.
+    const double own_widest = particle_widest(contact, thickness);
+    const bool own = own_widest > widest_margin(contact, thickness);
+    const double reach = thickness + 2.0 * (own ? py_max(widest, own_widest) : widest);
     const Index m = contact.triangle_count, k = contact.edge_count;
     lists.scratch.resize(static_cast<std::size_t>(6 * (m + k)));
     double* tri_lo = lists.scratch.data();
@@ -354,11 +379,20 @@ void build_lists(Contact& contact, Index n, double thickness, double least, doub
     // The widest margin whose lists are empty: the nearest pair just out of reach.
     const double margin = py_max(least, py_min(widest, 0.5 * (py_min(point_nearest, edge_nearest) - thickness)));
     // The nearest pair of each coarser tier among those found (a folded cloth's layers).
+    // And each particle's nearest among the finest tier's pairs the list leaves out.
     double nearest[TIERS];
     for (int s = 0; s < TIERS; ++s) nearest[s] = INF;
-    nearest_by_tier(contact, n, lists.point_triangle, POINT_TRIANGLE, nearest);
-    nearest_by_tier(contact, n, lists.edge_edge, EDGE_EDGE, nearest);
-    if (margin < widest) {
+    std::vector<double>& allowance = lists.particle_allowances;
+    allowance.assign(own ? static_cast<std::size_t>(n) : 0, INF);
+    double* nearest_own = own ? allowance.data() : nullptr;
+    nearest_by_tier(contact, n, lists.point_triangle, POINT_TRIANGLE, nearest, thickness + 2.0 * margin, nearest_own);
+    nearest_by_tier(contact, n, lists.edge_edge, EDGE_EDGE, nearest, thickness + 2.0 * margin, nearest_own);
+    // A particle's own allowance: half what its nearest pair left out has beyond the thickness, up to its
+    // widest, and at least the margin.  A pair the list leaves out is then at least the sum of its particles'
+    // allowances beyond the thickness: those within the search's reach bound each of its particles', the
+    // others are farther than the widest's reach.
+    for (double& a : allowance) a = py_max(margin, py_min(own_widest, 0.5 * (a - thickness)));
+    if (thickness + 2.0 * margin < reach) {
         within(lists.point_triangle, particle_boxes, triangle_boxes, thickness + 2.0 * margin);
         within(lists.edge_edge, edge_boxes, edge_boxes, thickness + 2.0 * margin);
     }
@@ -397,6 +431,7 @@ void invalidate(Contact& contact) {
         contact.lists->point_triangle.clear();
         contact.lists->edge_edge.clear();
         contact.lists->allowances.clear();
+        contact.lists->particle_allowances.clear();
     }
 }
 

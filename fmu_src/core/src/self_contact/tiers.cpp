@@ -57,13 +57,13 @@ bool frame_of(const double* w, Index at, Index times, double e[9]) {
 }
 
 //: The window's rotation from the reference to the positions of frame `e` (this frame times the transposed
-//: reference frame); identity when either frame is degenerate (any rotation gives a valid bound).
-void rotation(bool ref_ok, const double e_ref[9], bool ok, const double e[9], double r[9]) {
+//: reference frame); `fallback` when either frame is degenerate (any rotation gives a valid bound).
+void rotation(bool ref_ok, const double e_ref[9], bool ok, const double e[9], const double fallback[9], double r[9]) {
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j)
             r[3 * i + j] = ref_ok && ok ? e[3 * i] * e_ref[3 * j] + e[3 * i + 1] * e_ref[3 * j + 1] +
                                               e[3 * i + 2] * e_ref[3 * j + 2]
-                                        : (i == j ? 1.0 : 0.0);
+                                        : fallback[3 * i + j];
 }
 
 //: The larger of `worst` and `v`, NaN once either is.
@@ -156,7 +156,16 @@ double rest_distance_beyond(const Contact& contact, Index n, int s) {
     return beyond;
 }
 
-double deviation(const Contact& contact, Index n, int s, const double* ref, const double* x0, const double* x1) {
+namespace {
+
+//: Each window of tier s, moving from x0 to x1 away from a rigid motion of `ref` (all (3, n)): for each of its
+//: particles i, particle(i, d2, a2, blend) with d2 the larger squared distance, at the two ends, from where
+//: the window's rigid motion takes it, a2 its squared distance from the window's centroid at `ref` and
+//: blend how far, per metre of that, the straight lines between the two rotations fall short of a rotation;
+//: then window(blend).  Either returning false stops the scan (and it returns false).
+template <class Particle, class Window>
+bool scan_windows(const Contact& contact, Index n, int s, const double* ref, const double* x0, const double* x1,
+                  Particle particle, Window window) {
     const Tier t = tier_of(contact, n, s);
     const Index cells = t.nx * t.ny;
     std::vector<double>& sums = contact.lists->tier_scratch;
@@ -180,8 +189,20 @@ double deviation(const Contact& contact, Index n, int s, const double* ref, cons
         }
     }
     double* w = sums.data() + cells * SUMS;  // the window's sums
+    // The whole sheet's rotation at each end (identity if degenerate): that of a window whose particles lie
+    // on a line in the rest sheet (a few on the rim of a mesh), rather than none.
+    double sheet0[9], sheet1[9];
+    {
+        const double identity[9] = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
+        for (Index k = 0; k < SUMS; ++k) w[k] = 0.0;
+        for (Index c = 0; c < cells; ++c)
+            for (Index k = 0; k < SUMS; ++k) w[k] += sums[c * SUMS + k];
+        double e_ref[9], e0[9], e1[9];
+        const bool ref_ok = frame_of(w, REF, REF_REST, e_ref);
+        rotation(ref_ok, e_ref, frame_of(w, END0, END0_REST, e0), e0, identity, sheet0);
+        rotation(ref_ok, e_ref, frame_of(w, END1, END1_REST, e1), e1, identity, sheet1);
+    }
     const Index wide_x = py_min(WINDOW, t.nx), wide_y = py_min(WINDOW, t.ny);
-    double largest = 0.0;
     for (Index wy = 0; wy + wide_y <= t.ny; ++wy) {
         for (Index wx = 0; wx + wide_x <= t.nx; ++wx) {
             for (Index k = 0; k < SUMS; ++k) w[k] = 0.0;
@@ -194,13 +215,17 @@ double deviation(const Contact& contact, Index n, int s, const double* ref, cons
             // A rotation for each end, and a translation: the window's centroid to the end's.
             double e_ref[9], e0[9], e1[9], r0[9], r1[9];
             const bool ref_ok = frame_of(w, REF, REF_REST, e_ref);
-            rotation(ref_ok, e_ref, frame_of(w, END0, END0_REST, e0), e0, r0);
-            rotation(ref_ok, e_ref, frame_of(w, END1, END1_REST, e1), e1, r1);
+            rotation(ref_ok, e_ref, frame_of(w, END0, END0_REST, e0), e0, sheet0, r0);
+            rotation(ref_ok, e_ref, frame_of(w, END1, END1_REST, e1), e1, sheet1, r1);
             const double inv = 1.0 / w[COUNT];
             const double ry[3] = {w[REF] * inv, w[REF + 1] * inv, w[REF + 2] * inv};
             const double m0[3] = {w[END0] * inv, w[END0 + 1] * inv, w[END0 + 2] * inv};
             const double m1[3] = {w[END1] * inv, w[END1 + 1] * inv, w[END1 + 2] * inv};
-            double worst = 0.0, radius = 0.0;
+            // Along the motion the window's linear blend of the two rotations is within (1 - cos(angle / 2))
+            // of a rotation at every point, at most (1 - cos(angle)) / 2 = (3 - trace(r0^T r1)) / 4.
+            double trace = 0.0;
+            for (int k = 0; k < 9; ++k) trace += r0[k] * r1[k];
+            const double blend = py_max(0.0, 0.25 * (3.0 - trace));
             for (Index cy = wy; cy < wy + wide_y; ++cy) {
                 for (Index cx = wx; cx < wx + wide_x; ++cx) {
                     const Index c = cx + t.nx * cy;
@@ -213,21 +238,44 @@ double deviation(const Contact& contact, Index n, int s, const double* ref, cons
                         const double d1x = x1[i] - m1[0] - (r1[0] * ax + r1[1] * ay + r1[2] * az);
                         const double d1y = x1[n + i] - m1[1] - (r1[3] * ax + r1[4] * ay + r1[5] * az);
                         const double d1z = x1[2 * n + i] - m1[2] - (r1[6] * ax + r1[7] * ay + r1[8] * az);
-                        worst = worse(worst, d0x * d0x + d0y * d0y + d0z * d0z);
-                        worst = worse(worst, d1x * d1x + d1y * d1y + d1z * d1z);
-                        radius = py_max(radius, ax * ax + ay * ay + az * az);
+                        const double d2 = worse(d0x * d0x + d0y * d0y + d0z * d0z, d1x * d1x + d1y * d1y + d1z * d1z);
+                        if (!particle(i, d2, ax * ax + ay * ay + az * az, blend)) return false;
                     }
                 }
             }
-            // Along the motion the window's linear blend of the two rotations is within (1 - cos(angle / 2))
-            // of a rotation at every point, at most (1 - cos(angle)) / 2 = (3 - trace(r0^T r1)) / 4.
-            double trace = 0.0;
-            for (int k = 0; k < 9; ++k) trace += r0[k] * r1[k];
-            const double blend = py_max(0.0, 0.25 * (3.0 - trace)) * std::sqrt(radius);
-            largest = worse(largest, std::sqrt(worst) + blend);
+            if (!window(blend)) return false;
         }
     }
+    return true;
+}
+
+}  // namespace
+
+double deviation(const Contact& contact, Index n, int s, const double* ref, const double* x0, const double* x1) {
+    double largest = 0.0, worst = 0.0, radius = 0.0;
+    scan_windows(
+        contact, n, s, ref, x0, x1,
+        [&](Index, double d2, double a2, double) {
+            worst = worse(worst, d2);
+            radius = py_max(radius, a2);
+            return true;
+        },
+        [&](double blend) {
+            largest = worse(largest, std::sqrt(worst) + blend * std::sqrt(radius));
+            worst = 0.0, radius = 0.0;
+            return true;
+        });
     return largest;
+}
+
+bool within_allowances(const Contact& contact, Index n, int s, const double* ref, const double* x0,
+                       const double* x1, const double* allowance) {
+    return scan_windows(
+        contact, n, s, ref, x0, x1,
+        [&](Index i, double d2, double a2, double blend) {
+            return std::sqrt(d2) + blend * std::sqrt(a2) <= allowance[i];  // false if NaN
+        },
+        [](double) { return true; });
 }
 
 double shifted_deviation(Index n, const double* ref, const double* x0, const double* x1) {

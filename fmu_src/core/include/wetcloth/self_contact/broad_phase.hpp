@@ -6,7 +6,9 @@
 // outside it can come closer than the thickness, judged tier by tier (tiers.hpp): each tier's windows may
 // deviate from a rigid motion of their reference positions by the tier's allowance (or a coarser tier's
 // windows by that much) along the step's motion.  The finest tier's pairs are the fabric's neighbours, and
-// its allowance is the margin; a coarser tier's pairs lie farther apart in the rest sheet, and its
+// its allowance is the margin (on a mesh whose smallest triangles cap the margin, each particle's own, at least
+// the margin: half what its nearest pair left out has beyond the thickness; ContactLists::particle_allowances);
+// a coarser tier's pairs lie farther apart in the rest sheet, and its
 // allowance is the widest that keeps them out of the list (its nearest pair at the reference positions, out
 // of reach), up to what their distance in the rest sheet leaves room for, and at least the margin.  The list
 // and the allowances depend on the reference positions and the margin alone (its pairs ascend, whatever the

@@ -68,10 +68,18 @@ double rest_distance_beyond(const Contact& contact, Index n, int s);
 //: from a rigid motion of the reference positions `ref` (3, n): for each window and each end, the rotation
 //: between the frames (Gram-Schmidt) of the reference's and the end's gradients along the rest sheet's
 //: axes (least squares over the window; any rotation gives a valid bound, this one is close to the best
-//: fit and needs no iteration) and the translation of the window's centroid; along the motion, the larger
+//: fit and needs no iteration; the whole sheet's where the window's frames are degenerate, its particles on
+//: a line in the rest sheet) and the translation of the window's centroid; along the motion, the larger
 //: of the ends' deviations plus how far the straight lines between the two rotations fall short of a
 //: rotation.  NaN if a position is not finite.
 double deviation(const Contact& contact, Index n, int s, const double* ref, const double* x0, const double* x1);
+
+//: Whether the straight-line motion from x0 to x1 (both (3, n)) leaves each particle i of every window of tier
+//: s within allowance[i] (m) of the window's rigid motion of `ref` (3, n), as deviation() finds it (the
+//: shortfall of the straight lines between the rotations counted at the particle's own distance from the
+//: window's centroid, not the window's farthest).  False if a position is not finite.
+bool within_allowances(const Contact& contact, Index n, int s, const double* ref, const double* x0,
+                       const double* x1, const double* allowance);
 
 //: The deviation (m) of the straight-line motion from x0 to x1 (both (3, n)) from a translation of the whole
 //: sheet's reference positions `ref` (3, n), the mid-range of each end's displacements (what a cloth that
