@@ -62,11 +62,6 @@ def altitudes(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     return double_area / longest
 
 
-def smallest_altitude(points: np.ndarray, triangles: np.ndarray) -> float:
-    """The smallest altitude (m) of any of the triangles (m, 3) of points (3, n) m."""
-    return float(np.min(altitudes(points, triangles)))
-
-
 def make_contact(topology, enabled: bool, friction: float) -> Contact:
     """The stage's arrays for a cloth ``topology`` (``wetcloth.topology.Topology``).  A mesh's rest gap is
     the smallest altitude of its triangles in the flat rest sheet, its least margin MARGIN_FRACTION of that,

@@ -107,7 +107,6 @@ Scene start_scene() {
 Fixtures scene_fixtures() {
     Fixtures f;
     f.colliders.assign(SCENE_COLLIDERS, SCENE_COLLIDERS + SCENE_COLLIDERS_SIZE);
-    f.mesh_count = SCENE_MESH_COUNT;
     f.mesh_headers.assign(SCENE_MESH_HEADERS, SCENE_MESH_HEADERS + SCENE_MESH_HEADERS_SIZE);
     f.mesh_vertices.assign(SCENE_MESH_VERTICES, SCENE_MESH_VERTICES + SCENE_MESH_VERTICES_SIZE);
     f.face_normals.assign(SCENE_FACE_NORMALS, SCENE_FACE_NORMALS + SCENE_FACE_NORMALS_SIZE);
@@ -348,12 +347,13 @@ Simulation& Unit::simulation() {
     if (sim_) return *sim_;
     if (!preview_) {
         // The initial state of the current values, or of the defaults while they do not form a scene.
-        try {
-            if (!scene_problem(values_).empty()) throw std::invalid_argument("not a scene");
-            preview_ = new_simulation(values_);
-        } catch (const std::invalid_argument&) {
-            preview_ = new_simulation(start_scene());
+        if (scene_problem(values_).empty()) {
+            try {
+                preview_ = new_simulation(values_);
+            } catch (const std::invalid_argument&) {  // a collider in the cloth at t = 0
+            }
         }
+        if (!preview_) preview_ = new_simulation(start_scene());
     }
     return *preview_;
 }

@@ -9,6 +9,7 @@
 #include <limits>
 #include <type_traits>
 
+#include "wetcloth/collider_mesh.hpp"
 #include "wetcloth/colliders.hpp"
 #include "wetcloth/implicit.hpp"
 #include "wetcloth/integration.hpp"
@@ -340,8 +341,8 @@ std::vector<std::pair<Index, Index>> level_sizes(Index nx, Index ny, Index coars
 // ------------------------------------------------------------------------------------------ fixtures
 ColliderMeshes Fixtures::meshes() const {
     ColliderMeshes m;
-    if (mesh_count == 0) return m;
-    m.count = mesh_count;
+    if (mesh_headers.empty()) return m;
+    m.count = static_cast<Index>(mesh_headers.size() / MESH_COLUMNS);
     m.vertex_count = static_cast<Index>(mesh_vertices.size() / 3);
     m.headers = mesh_headers.data();
     m.vertices = mesh_vertices.data();

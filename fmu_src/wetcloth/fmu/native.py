@@ -176,7 +176,7 @@ def fixtures_header(scene=None) -> str:
     rows, meshes = meshes_of(scene.colliders) if scene is not None else (np.zeros(0), no_meshes())
     keys = [[k.time, k.x, k.y, k.z] for k in scene.grip_keys] if scene is not None else []
     sources = dict(meshes._asdict(), rows=rows, grip_keys=np.array(keys, dtype=np.float64))
-    lines = [f"inline constexpr Index SCENE_MESH_COUNT = {len(meshes.headers)};"]
+    lines = []
     for name, kind, source in FIXTURE_ARRAYS:
         values = np.ascontiguousarray(sources[source]).ravel()
         text = ", ".join(str(int(v)) if kind == "Index" else _c_double(v) for v in values)

@@ -238,7 +238,7 @@ struct Checkpoint {
 //: its grip's keys (grip.hpp).  Empty: no collider, no key.
 struct Fixtures {
     std::vector<double> colliders;  // (k, COLLIDER_COLUMNS) rows
-    Index mesh_count = 0;           // mesh colliders: their headers (mesh_count, MESH_COLUMNS) and arrays
+    // mesh colliders: their headers (one row of MESH_COLUMNS each) and arrays
     std::vector<double> mesh_headers, mesh_vertices, face_normals, edge_normals, vertex_normals;
     std::vector<Index> mesh_triangles, cell_start, cell_items;
     std::vector<double> grip_keys;  // (g, 4) rows: time s, x, y, z m
