@@ -257,3 +257,24 @@ def test_given_wheels_are_bundled_as_they_are_one_per_python_with_dependencies_f
             assert [n.split("-")[1:3] for n in sorted(found)] == [[version, "cp311"], [version, "cp313"]]
     assert cli_main(["blender-extension", "--out", str(tmp_path / "again"), *given[:2], *given[:2]]) == 2
     assert "two wheels for one Python" in capsys.readouterr().err
+
+
+def test_a_bake_reports_the_largest_error_its_steps_estimated(tmp_path):
+    """The bake's summary line gives each cloth's largest step error: with frame steps, the largest
+    ``error_estimate`` of a run advanced frame by frame (here, in the same process)."""
+    from wetcloth.exporter.blender_extension.baking import ClothBake
+
+    points, edges, _ = plane(5, 5, 0.4, 0.4, centre=(0.0, 0.0, 1.0))
+    grid = grid_cloth(points, edges)
+    scene = from_dict(grid.scene_values() | dict(integrator="implicit_euler", tolerance=0.0, max_step=0.125,
+                                                 pinned_edge="y_max", floor_level=-1.0))
+    bake = ClothBake(scene, grid, tmp_path, "cloth", fps=8.0, frame_start=1, frame_count=7)
+    while not bake.finished:
+        bake.step()
+    bake.close()
+    sim = Simulation(scene)
+    errors = []
+    for _ in range(6):
+        sim.advance(0.125)
+        errors.append(sim.error_estimate)
+    assert bake.largest_error == max(errors) > 0.0

@@ -28,9 +28,33 @@ def test_run_writes_csv_and_plot(tmp_path):
                  "--csv", str(csv_path), "--plot", str(plot_path), "--no-progress"])
     assert code == 0
     rows = list(csv.DictReader(open(csv_path)))
-    assert list(rows[0]) == ["time", *OUTPUT_NAMES]
+    assert list(rows[0]) == ["time", *OUTPUT_NAMES, "step_error"]
     assert [float(r["time"]) for r in rows] == [k / 10 for k in range(11)]
     assert plot_path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("export", [False, True])
+def test_run_reports_each_frames_step_error(tmp_path, capsys, export):
+    """Frame steps (``implicit_euler``, ``tolerance = 0``, one step a frame): the CSV's ``step_error`` of
+    each frame is the error estimate of the step that reached it (``error_estimate`` after an ``advance``
+    of one frame, run here), with frames exported or not; the command prints the largest and its time."""
+    settings = dict(nx=7, ny=7, integrator="implicit_euler", tolerance=0.0, max_step=0.125, pinned_edge="y_max",
+                    initial_tilt=0.0, water_level=-50.0, floor_level=-100.0)
+    csv_path = tmp_path / "o.csv"
+    extra = ["--export", str(tmp_path / "frames")] if export else []
+    code = main(["run", "--duration", "1", "--fps", "8", *[a for k, v in settings.items() for a in ("--set", f"{k}={v}")],
+                 "--csv", str(csv_path), "--plot", str(tmp_path / "p.png"), "--no-progress", *extra])
+    assert code == 0
+    written = [float(r["step_error"]) for r in csv.DictReader(open(csv_path))]
+    sim = wetcloth.Simulation(wetcloth.load_scene(**settings))
+    expected = [0.0]  # t = 0: no step
+    for _ in range(8):
+        sim.advance(0.125)
+        expected.append(sim.error_estimate)
+    assert written == pytest.approx(expected, rel=1e-15) and min(expected[1:]) > 0.0
+    worst = max(range(9), key=expected.__getitem__)
+    out = capsys.readouterr().out
+    assert f"at most {expected[worst] * 1000:.3g} mm in a frame (t = {worst / 8:g} s; column step_error)" in out
 
 
 def test_bad_override_names_parameter_and_range(tmp_path, capsys):

@@ -192,6 +192,28 @@ def test_sampling_in_compiled_code_repeats_advance_and_outputs_bit_for_bit():
     np.testing.assert_array_equal(sampled.state.pos, one_by_one.state.pos)
 
 
+@pytest.mark.parametrize("pause_after", [None, 0.0])
+def test_sampling_records_each_intervals_own_step_error_as_advance_does(pause_after):
+    """``sample_errors[k]`` is the ``error_estimate`` an ``advance`` from times[k - 1] to times[k] leaves:
+    the same steps' largest estimate, interval by interval, also when the compiled calls pause inside an
+    interval (``pause_after = 0``: a call after every step); ``error_estimate`` after ``sample`` is their
+    largest.  Fixed frame steps, where the estimate is what the user trades for speed."""
+    scene = wetcloth.load_scene(nx=9, ny=9, integrator="implicit_euler", tolerance=0.0, max_step=1.0 / 32.0,
+                                pinned_edge="y_max", **DRY_AIR)
+    times = np.arange(1, 17) / 16.0  # two steps a sample
+    one_by_one = wetcloth.Simulation(scene)
+    expected = []
+    for t in times:
+        one_by_one.advance(t - one_by_one.time)
+        expected.append(one_by_one.error_estimate)
+    sampled = wetcloth.Simulation(scene)
+    if pause_after is not None:
+        sampled.pause_after = pause_after
+    sampled.sample(times)
+    np.testing.assert_array_equal(sampled.sample_errors, expected)
+    assert sampled.error_estimate == max(expected) and len(set(expected)) > 4 and min(expected) > 0.0
+
+
 def test_outputs_are_the_mass_weighted_centroid_and_masses():
     """``outputs`` (computed in compiled code) against NumPy's sums of the same state."""
     sim = wetcloth.Simulation(wetcloth.load_scene("thesis_fast", nx=7, ny=7))

@@ -43,6 +43,7 @@ class ClothBake:
                                       faces=cloth.faces, polygons=cloth.polygons, first_frame=int(frame_start),
                                       overwrite=True)
         self.done = 0
+        self.largest_error = 0.0  # m: the largest error a step estimated for itself, over the frames baked
 
     @property
     def frame_count(self) -> int:
@@ -59,6 +60,7 @@ class ClothBake:
             if self.water_levels is not None:
                 self.sim.set_inputs(water_level=self.water_levels[k - 1])
             self.sim.sample(self.times[k:k + 1])
+            self.largest_error = max(self.largest_error, float(self.sim.sample_errors[0]))
         world = self.sim.positions + self.cloth.shift
         positions = (world @ self._linear.T + self._offset)[self.order]
         velocities = (self.sim.velocities @ self._linear.T)[self.order]

@@ -56,7 +56,8 @@ class Baking:
             if bake.done:
                 caches.attach(job.obj, str(bake.sequence.usd_path), job.prefix)
         seconds = time.perf_counter() - self.started
-        names = ", ".join(f"{job.obj.name!r} ({bake.done} frames)" for job, bake in zip(self.jobs, self.bakes))
+        names = ", ".join(f"{job.obj.name!r} ({bake.done} frames, step error up to {bake.largest_error * 1000:.2g} mm)"
+                          for job, bake in zip(self.jobs, self.bakes))
         return f"Wet Cloth: baked {names} in {seconds:.1f} s"
 
 

@@ -33,7 +33,8 @@ class ClothShape:
 
 @dataclass
 class RunResult:
-    """Outputs at every frame (``rows``: time then ``OUTPUT_NAMES``) and a few cloth shapes."""
+    """Outputs at every frame (``rows``: time, ``OUTPUT_NAMES``, then ``step_error``: the largest local
+    position error, m, any step since the frame before estimated for itself) and a few cloth shapes."""
 
     scene: Scene
     fps: float
@@ -45,11 +46,11 @@ class RunResult:
         return np.array([row[name] for row in self.rows])
 
     def write_csv(self, path: str | Path) -> Path:
-        """Write the outputs as CSV (header: time and the output names, SI units), whole or not at all."""
+        """Write the outputs as CSV (header: the rows' keys, SI units), whole or not at all."""
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         with whole_file(path) as tmp, open(tmp, "w", newline="") as fh:
-            writer = csv.DictWriter(fh, fieldnames=["time", *OUTPUT_NAMES])
+            writer = csv.DictWriter(fh, fieldnames=list(self.rows[0]) if self.rows else ["time", *OUTPUT_NAMES])
             writer.writeheader()
             writer.writerows(self.rows)
         return path
@@ -125,16 +126,16 @@ def run(
                         outputs = sim.sample(times[start:index + 1])
                     except BaseException as exc:
                         if on_frame is None:  # with frames, a row counts once its frame is written
-                            _add_rows(result, times[start:], getattr(exc, "partial_outputs", ()))
+                            _add_rows(result, times[start:], getattr(exc, "partial_outputs", ()), sim.sample_errors)
                         raise
                     if on_frame is None:
-                        _add_rows(result, times[start:index + 1], outputs)
+                        _add_rows(result, times[start:index + 1], outputs, sim.sample_errors)
                     if index in plotted:
                         result.shapes.append(ClothShape(float(times[index]), sim.positions, sim.wetness))
                     if on_frame is not None:
                         with deferred():  # the frame, then its row: the outputs never count a frame not on disk
                             on_frame(index, sim)
-                            _add_rows(result, times[start:index + 1], outputs)
+                            _add_rows(result, times[start:index + 1], outputs, sim.sample_errors)
                     start = index + 1
             except BaseException as exc:
                 exc.partial_result = result  # every frame up to the last good one
@@ -143,10 +144,11 @@ def run(
     return result
 
 
-def _add_rows(result: RunResult, times: np.ndarray, outputs) -> None:
-    """Append a row (time, then OUTPUT_NAMES) for each row of ``outputs`` (its times the first of ``times``)."""
-    for t, values in zip(times.tolist(), np.asarray(outputs).tolist()):
-        result.rows.append({"time": t, **dict(zip(OUTPUT_NAMES, values))})
+def _add_rows(result: RunResult, times: np.ndarray, outputs, errors: np.ndarray) -> None:
+    """Append a row (time, OUTPUT_NAMES, step_error) for each row of ``outputs`` (its times the first of
+    ``times``, its steps' largest errors the first of ``errors``)."""
+    for t, values, error in zip(times.tolist(), np.asarray(outputs).tolist(), errors.tolist()):
+        result.rows.append({"time": t, **dict(zip(OUTPUT_NAMES, values)), "step_error": error})
 
 
 @contextlib.contextmanager

@@ -48,16 +48,17 @@ class Stepper {
         return wc::advance(core_, target, max_steps, pause_after);
     }
 
-    std::tuple<Index, Index> advance_sampling(nb::handle times, nb::handle outputs, Index first, Index max_steps,
-                                              double pause_after) {
+    std::tuple<Index, Index> advance_sampling(nb::handle times, nb::handle outputs, nb::handle errors, Index first,
+                                              Index max_steps, double pause_after) {
         const Index count = size_of(times);
         const double* t = argument<const double>(times, "times", count);
         double* out = argument<double>(outputs, "outputs", count * OUTPUT_COUNT);
+        double* err = argument<double>(errors, "errors", count);
         if (first < 0 || first > count) throw nb::index_error("advance_sampling: first out of range");
         SamplingResult result;
         {
             nb::gil_scoped_release release;
-            result = wc::advance_sampling(core_, t, count, out, first, max_steps, pause_after);
+            result = wc::advance_sampling(core_, t, count, out, err, first, max_steps, pause_after);
         }
         return {result.status, result.next};
     }
@@ -90,9 +91,11 @@ WETCLOTH_BINDINGS(m) {
         .def("advance", &Stepper::advance, "target"_a, "max_steps"_a, "pause_after"_a = PAUSE_AFTER,
              "Step until the clock reaches target (s); DONE, BLOWN_UP, or PAUSED after max_steps steps or "
              "pause_after s of wall-clock time (which never changes what is computed)")
-        .def("advance_sampling", &Stepper::advance_sampling, "times"_a, "outputs"_a, "first"_a, "max_steps"_a,
-             "pause_after"_a = PAUSE_AFTER,
-             "Advance to each of times (s) from index first and record the outputs; (status, next index)")
+        .def("advance_sampling", &Stepper::advance_sampling, "times"_a, "outputs"_a, "errors"_a, "first"_a,
+             "max_steps"_a, "pause_after"_a = PAUSE_AFTER,
+             "Advance to each of times (s) from index first and record the outputs, and in errors (zeroed "
+             "before the first call) the largest error (m) a step up to each time estimated for itself; "
+             "(status, next index)")
         .def("build_contact", &Stepper::build_contact, "thickness"_a, "margin"_a)
         .def("invalidate_contact", &Stepper::invalidate_contact)
         .def("candidate_counts", &Stepper::candidate_counts);

@@ -666,14 +666,21 @@ void record_outputs(Index n, const double* dry_mass, double water_level, const d
     row[5] = water_mass;
 }
 
-SamplingResult advance_sampling(Core& core, const double* times, Index count, double* outputs, Index first,
-                                Index max_steps, double pause_after) {
+SamplingResult advance_sampling(Core& core, const double* times, Index count, double* outputs, double* errors,
+                                Index first, Index max_steps, double pause_after) {
     const WallClock::time_point deadline = deadline_after(pause_after);
     const double budget_end = core.clock[STEPS] + static_cast<double>(max_steps);
+    double* clock = core.clock;
     for (Index k = first; k < count; ++k) {
-        const Index budget = static_cast<Index>(budget_end - core.clock[STEPS]);
+        const Index budget = static_cast<Index>(budget_end - clock[STEPS]);
         if (budget <= 0 || (k > first && WallClock::now() >= deadline)) return {PAUSED, k};
+        // The interval's own largest error, kept in errors[k] across paused calls; the clock keeps the
+        // largest of them all.
+        const double running = clock[LARGEST_ERROR];
+        clock[LARGEST_ERROR] = errors[k];
         const Status status = advance_until(core, times[k], budget, deadline);
+        errors[k] = clock[LARGEST_ERROR];
+        clock[LARGEST_ERROR] = pymax(running, errors[k]);
         if (status != DONE) return {status, k};
         record_outputs(core.cloth.n, core.cloth.dry_mass, core.phys.water_level, core.buf.pos, core.buf.water,
                        outputs + k * OUTPUT_COUNT);

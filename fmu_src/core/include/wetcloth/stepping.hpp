@@ -91,9 +91,10 @@ struct SamplingResult {
 };
 
 //: Advance to times[k] (s, ascending) for k = first, first + 1, ... < count and record the outputs there
-//: in outputs[k * OUTPUT_COUNT ...].  PAUSED after about max_steps steps or pause_after s of wall-clock
-//: time (call again from `next`).
-SamplingResult advance_sampling(Core& core, const double* times, Index count, double* outputs, Index first,
-                                Index max_steps, double pause_after = PAUSE_AFTER);
+//: in outputs[k * OUTPUT_COUNT ...], and in errors[k] the largest local error (m) any step after times[k - 1]
+//: (or the start) up to times[k] estimated for itself (errors zeroed by the caller before the first call).
+//: PAUSED after about max_steps steps or pause_after s of wall-clock time (call again from `next`).
+SamplingResult advance_sampling(Core& core, const double* times, Index count, double* outputs, double* errors,
+                                Index first, Index max_steps, double pause_after = PAUSE_AFTER);
 
 }  // namespace wc
