@@ -394,6 +394,31 @@ def test_bad_workers_and_study_errors_are_reported_by_the_cli(tmp_path, capsys, 
     assert f"wetcloth batch: error: Timed out trying to connect to {address}" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("page", ["README.md", "docs/interface.md"])
+def test_the_python_quick_start_runs_as_written(page, client, tmp_path, monkeypatch):
+    """The Python block of the README and of docs/interface.md runs as written from a folder holding the
+    repository's models/ (its study on this module's cluster, its outputs in that folder); the values it
+    leaves are the ones its comments describe."""
+    root = Path(__file__).resolve().parents[1]
+    code = re.search(r"```python\n(.*?)```", (root / page).read_text(), re.S).group(1)
+    study = wetcloth.study
+    monkeypatch.setattr(wetcloth, "study", lambda spec, **options: study(spec, **options, client=client))
+    (tmp_path / "models").symlink_to(root / "models")
+    monkeypatch.chdir(tmp_path)
+    namespace = {}
+    exec(compile(code, page, "exec"), namespace)
+    sim = namespace["sim"]
+    assert sim.scene.nx == 33 and sim.scene.initial_tilt == 10.0 and sim.scene.water_level == 0.05
+    n = sim.positions.shape[0]
+    assert sim.positions.shape == (n, 3) and sim.wetness.shape == (n,) and sim.triangles.shape[1] == 3
+    assert list(sim.outputs()) == list(wetcloth.simulation.OUTPUT_NAMES)
+    if "sample(" in code:
+        assert sim.time == pytest.approx(2.3) and sim.sample_errors.shape == (3,)
+        assert sim.error_estimate >= sim.sample_errors.max() > 0.0  # since advance(2.0): its steps too
+    else:
+        assert sim.time == pytest.approx(2.0)
+
+
 def test_docs_worked_example_runs_as_written_and_prints_its_documented_output(client, tmp_path, monkeypatch, capsys):
     """The example of docs/batch.md runs as written and prints what the docs show: the same columns,
     one row per run with the documented axis values, every run ok, and the summary line.
