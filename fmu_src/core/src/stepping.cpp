@@ -233,7 +233,13 @@ Status step(Core& core, double remaining) {
     const Index on_layers = hold_on_layers(core.contact, phys.thickness, n, buf.pos, buf.vel, cloth.free, buf.held);
     if (on_layers > 0) {  // whom the forces in hand would slide off their layer go free at once
         forces(cloth, phys, core.work, buf.pos, buf.vel, buf.water);
-        held += on_layers - release_sliding(core.contact, n, core.work.force, cloth.free, buf.held);
+        const Index slid = release_sliding(core.contact, n, core.work.force, cloth.free, buf.held);
+        held += on_layers - slid;
+        // and any of them another still element holds within friction is held on that one
+        if (slid > 0) {
+            held += hold_within_friction(core.contact, phys.thickness, n, buf.pos, buf.vel, core.work.force,
+                                         cloth.free, buf.held);
+        }
     }
     // Particles sliding on the floor or a collider stay on it through an implicit step, friction a force of it.
     const bool sliding = implicit && gather_sliding(n, phys, buf.pos, buf.vel, cloth.free, core.sliding) > 0;

@@ -59,4 +59,11 @@ Index release_unsupported(Contact& contact, Index n, double* free, double* held)
 //: steps.)
 Index release_sliding(Contact& contact, Index n, const double* force, double* free, double* held);
 
+//: After release_sliding: hold the free particles that another still element holds as hold_on_layers
+//: would and that the force on them (3, n; at the step's start) presses onto it within friction (a particle
+//: in the corner of a fold, on a flat layer and against a sloping one, whose first support let it slide);
+//: returns how many.  hold_on_layers must have run in this step (its supports are kept).
+Index hold_within_friction(Contact& contact, double thickness, Index n, const double* pos, const double* vel,
+                           const double* force, double* free, double* held);
+
 }  // namespace wc

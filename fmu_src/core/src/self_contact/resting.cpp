@@ -28,14 +28,21 @@ bool all_still(const double* free, const Index* support) {
 
 //: Hold particle p (free) on a still support (up to 3 particles, -1 padding) lying along `normal` (unit,
 //: from the support to p) at `distance` (m), if it is at rest there or coming onto it slowly enough that
-//: the self-collision response's inelastic impulse would stop it.  Returns whether it held it.
-bool hold_if_resting(ContactLists& lists, double thickness, double friction, Index n, const double* vel, double* free,
-                     double* held, Index p, const Index support[3], const Vec3& normal, double distance) {
+//: the self-collision response's inelastic impulse would stop it, and, given the force on the particles
+//: (3, n; nullptr: not judged), if that force presses it onto the support within friction.  Returns
+//: whether it held it.
+bool hold_if_resting(ContactLists& lists, double thickness, double friction, Index n, const double* vel,
+                     const double* force, double* free, double* held, Index p, const Index support[3],
+                     const Vec3& normal, double distance) {
     if (free[p] == 0.0 || !all_still(free, support)) return false;
     if (!(distance > 0.0 && distance <= (1.0 + RESTING_SLACK) * thickness)) return false;
     const double v[3] = {vel[p], vel[n + p], vel[2 * n + p]};
     const double up[3] = {normal.x, normal.y, normal.z};
     if (!comes_to_rest(v, up, friction)) return false;
+    if (force != nullptr) {
+        const double f[3] = {force[p], force[n + p], force[2 * n + p]};
+        if (slips(f, up, friction)) return false;
+    }
     free[p] = 0.0;
     held[p] = LAYER_HELD;
     const std::size_t i = static_cast<std::size_t>(p);
@@ -46,18 +53,14 @@ bool hold_if_resting(ContactLists& lists, double thickness, double friction, Ind
     return true;
 }
 
-}  // namespace
-
-Index hold_on_layers(Contact& contact, double thickness, Index n, const double* pos, const double* vel, double* free,
-                     double* held) {
+//: RESTING_PASSES passes of hold_if_resting over the candidate pairs (force: as there).  Returns how many
+//: it held.
+Index hold_passes(Contact& contact, double thickness, Index n, const double* pos, const double* vel,
+                  const double* force, double* free, double* held) {
     using namespace self_contact;
-    if (!contact.enabled) return 0;
     ContactLists& lists = *contact.lists;
     const Index points = lists.point_triangle_count();
     const Index edges = lists.edge_edge_count();
-    if (points + edges == 0) return 0;
-    lists.resting.assign(3 * static_cast<std::size_t>(n), -1);
-    lists.resting_normal.assign(3 * static_cast<std::size_t>(n), 0.0);
     const double friction = contact.friction;
     Index count = 0;
     for (Index pass = 0; pass < RESTING_PASSES; ++pass) {
@@ -70,7 +73,7 @@ Index hold_on_layers(Contact& contact, double thickness, Index n, const double* 
             const Vec3 d = combine(closest(POINT_TRIANGLE, x0, x1, x2, x3), x0, x1, x2, x3);
             const double length = norm(d);
             const Vec3 normal = {d.x / length, d.y / length, d.z / length};
-            added += hold_if_resting(lists, thickness, friction, n, vel, free, held, p, t, normal, length);
+            added += hold_if_resting(lists, thickness, friction, n, vel, force, free, held, p, t, normal, length);
         }
         for (Index j = 0; j < edges; ++j) {  // the ends of an edge on an edge
             const Index* a = contact.edges + 2 * lists.edge_edge[j];
@@ -84,14 +87,32 @@ Index hold_on_layers(Contact& contact, double thickness, Index n, const double* 
             const Index on_b[3] = {b[0], b[1], -1};
             const Index on_a[3] = {a[0], a[1], -1};
             for (int k = 0; k < 2; ++k) {
-                added += hold_if_resting(lists, thickness, friction, n, vel, free, held, a[k], on_b, up, length);
-                added += hold_if_resting(lists, thickness, friction, n, vel, free, held, b[k], on_a, down, length);
+                added += hold_if_resting(lists, thickness, friction, n, vel, force, free, held, a[k], on_b, up, length);
+                added += hold_if_resting(lists, thickness, friction, n, vel, force, free, held, b[k], on_a, down, length);
             }
         }
         count += added;
         if (added == 0) break;
     }
     return count;
+}
+
+}  // namespace
+
+Index hold_on_layers(Contact& contact, double thickness, Index n, const double* pos, const double* vel, double* free,
+                     double* held) {
+    if (!contact.enabled) return 0;
+    ContactLists& lists = *contact.lists;
+    if (lists.point_triangle_count() + lists.edge_edge_count() == 0) return 0;
+    lists.resting.assign(3 * static_cast<std::size_t>(n), -1);
+    lists.resting_normal.assign(3 * static_cast<std::size_t>(n), 0.0);
+    return hold_passes(contact, thickness, n, pos, vel, nullptr, free, held);
+}
+
+Index hold_within_friction(Contact& contact, double thickness, Index n, const double* pos, const double* vel,
+                           const double* force, double* free, double* held) {
+    if (!contact.enabled) return 0;
+    return hold_passes(contact, thickness, n, pos, vel, force, free, held);
 }
 
 Index release_unsupported(Contact& contact, Index n, double* free, double* held) {
