@@ -33,7 +33,7 @@ inline constexpr int TIERS = LOCAL_TIERS + 1;
 //: The fine tier, stored after the others: cells of FINE_CELLS median edge lengths of the rest sheet (the
 //: others' spacing is the longest edge's extent).  On a mesh whose particles have allowances of their own, the
 //: finest tier's pairs that fit one of its windows are judged in those smaller windows, which bend less
-//: (bench/mesh_cost.py, hanging: the disc's lists 118 -> 89 in 0.5 s, the jittered square's 58 -> 28; with 3
+//: (bench/mesh_cost.py, hanging: the disc's lists 118 -> 78 in 0.5 s, the jittered square's 58 -> 28; with 3
 //: cells 93 and 41).
 inline constexpr int FINE_TIER = TIERS;
 inline constexpr Index FINE_CELLS = 2;
