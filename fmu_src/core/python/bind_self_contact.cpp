@@ -68,8 +68,20 @@ WETCLOTH_BINDINGS(m) {
         .def_prop_ro("allowances", [](ContactState& s) { return s.lists.allowances; },
                      "Each tier's allowance (m) of the last list built (empty before one is)")
         .def_prop_ro("particle_allowances", [](ContactState& s) { return s.lists.particle_allowances; },
-                     "Each particle's own allowance (m) in the finest tier of the last list built (empty if "
+                     "Each particle's own allowances (m) in the finest tier of the last list built, (2, n) "
+                     "flattened: for its pairs that fit a window of the fine tier, then for the others (empty if "
                      "they have none)")
+        .def(
+            "fine_cells",
+            [](ContactState& s, Index n) {
+                const self_contact::Tier t = self_contact::tier_in(s.lists.tiers, n, self_contact::FINE_TIER);
+                std::vector<Index> out(static_cast<std::size_t>(2 * n));
+                for (Index i = 0; i < n; ++i) out[i] = t.cx(i), out[n + i] = t.cy(i);
+                return out;
+            },
+            nb::arg("n"),
+            "Each of the n particles' cell of the fine tier of the last list built, (2, n) flattened: along the "
+            "rest sheet's x, then y (a pair fits one of its windows where its cells span at most WINDOW)")
         .def("__len__", [](ContactState&) { return 2; })
         .def("__getitem__", [](ContactState& s, Index k) { return rows_copy(s.kind(k)); })
         .def("__setitem__", [](ContactState& s, Index k, nb::ndarray<const Index, nb::ndim<2>, nb::device::cpu> a) {
@@ -147,6 +159,7 @@ WETCLOTH_BINDINGS(m) {
         "contact.reference.");
     m.attr("TIERS") = self_contact::TIERS;
     m.attr("WIDE_REACH") = self_contact::WIDE_REACH;
+    m.attr("WINDOW") = self_contact::WINDOW;
     m.attr("LOOSE") = self_contact::LOOSE;
     m.attr("ZONE_ROWS") = ZONE_ROWS;
 }

@@ -285,7 +285,8 @@ struct ContactLists {
     std::vector<Index> index_scratch;   // hash tables and other integer scratch
     std::vector<Index> tiers;           // each tier's cells of the rest sheet (self_contact/tiers.hpp)
     std::vector<double> allowances;     // (tiers) m: how far each tier's windows may move beyond a rigid motion
-    std::vector<double> particle_allowances;  // (n) m: how far each particle may, in the finest tier (empty: none)
+    std::vector<double> particle_allowances;  // (2, n) m: how far each particle may in the finest tier, for the
+                                              // pairs of the fine tier's windows, then the others (empty: none)
     std::vector<double> tier_scratch;   // the tiers' sums and fits
     std::vector<Index> resting;         // (n, 3) what a particle held on a layer rests on (-1 padding)
     std::vector<double> resting_normal;  // (n, 3) the unit normal from that support to the particle

@@ -215,10 +215,12 @@ inline int tier_of_pair(const Contact& contact, Index n, const Index idx[4]) {
 }
 
 //: The least distance among the records (of `kind`) of each tier s >= 1, into nearest[s] (if less); and, if
-//: `own` is not null, of the finest tier's records at `outside` (m) or farther (those the list leaves out),
-//: into own[i] for each of their particles i (if less).
+//: `own` (2, n) is not null, of the finest tier's records at `outside` (m) or farther (those the list leaves
+//: out), into own[i] for each of their particles i (if less): the first row for the pairs that fit a window of
+//: the fine tier, the second for the others.
 void nearest_by_tier(const Contact& contact, Index n, const std::vector<Index>& records, int kind,
                      double nearest[TIERS], double outside, double* own) {
+    const Tier fine = tier_of(contact, n, FINE_TIER);
     for (std::size_t k = 0; k < records.size(); k += 3) {
         Index idx[4];
         if (kind == POINT_TRIANGLE) {
@@ -229,8 +231,10 @@ void nearest_by_tier(const Contact& contact, Index n, const std::vector<Index>& 
         const int s = tier_of_pair(contact, n, idx);
         const double gap = gap_of(records[k + 2]);
         nearest[s] = py_min(nearest[s], gap);
-        if (s == 0 && own != nullptr && gap >= outside)
-            for (int j = 0; j < 4; ++j) own[idx[j]] = py_min(own[idx[j]], gap);
+        if (s == 0 && own != nullptr && gap >= outside) {
+            double* row = fits(fine, idx) ? own : own + n;
+            for (int j = 0; j < 4; ++j) row[idx[j]] = py_min(row[idx[j]], gap);
+        }
     }
 }
 
@@ -251,7 +255,9 @@ bool holds(const Contact& contact, Index n, const double* x0, const double* x1, 
         // own in every window (at least the margin, so nothing else can hold where this does not, but the
         // coarser tiers' windows not yet looked at).
         if (s == 0 && !own.empty() && !(bound <= allowance[0])) {
-            if (within_allowances(contact, n, 0, contact.reference, x0, x1, own.data())) break;
+            if (within_allowances(contact, n, FINE_TIER, contact.reference, x0, x1, own.data()) &&
+                within_allowances(contact, n, 0, contact.reference, x0, x1, own.data() + n))
+                break;
             found[0] = true;
         }
         // This tier's windows, then those of the coarser tiers passed over, until one holds the tier's pairs
@@ -383,13 +389,14 @@ void build_lists(Contact& contact, Index n, double thickness, double least, doub
     double nearest[TIERS];
     for (int s = 0; s < TIERS; ++s) nearest[s] = INF;
     std::vector<double>& allowance = lists.particle_allowances;
-    allowance.assign(own ? static_cast<std::size_t>(n) : 0, INF);
+    allowance.assign(own ? static_cast<std::size_t>(2 * n) : 0, INF);
     double* nearest_own = own ? allowance.data() : nullptr;
     nearest_by_tier(contact, n, lists.point_triangle, POINT_TRIANGLE, nearest, thickness + 2.0 * margin, nearest_own);
     nearest_by_tier(contact, n, lists.edge_edge, EDGE_EDGE, nearest, thickness + 2.0 * margin, nearest_own);
-    // A particle's own allowance: half what its nearest pair left out has beyond the thickness, up to its
-    // widest, and at least the margin.  A pair the list leaves out is then at least the sum of its particles'
-    // allowances beyond the thickness: those within the search's reach bound each of its particles', the
+    // A particle's own allowances (for the pairs that fit the fine tier's windows, and for the finest tier's
+    // others): half what its nearest such pair left out has beyond the thickness, up to its widest, and at least
+    // the margin.  A pair the list leaves out is then at least the sum of its particles' allowances (of its
+    // row) beyond the thickness: those within the search's reach bound each of its particles', the
     // others are farther than the widest's reach.
     for (double& a : allowance) a = py_max(margin, py_min(own_widest, 0.5 * (a - thickness)));
     if (thickness + 2.0 * margin < reach) {

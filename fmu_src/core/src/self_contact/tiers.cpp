@@ -2,6 +2,7 @@
 // wetcloth/self_contact/tiers.hpp).
 #include "wetcloth/self_contact/tiers.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -86,6 +87,19 @@ Spacing spacing_of(const Contact& contact, Index n) {
     return h;
 }
 
+//: The median length (m) of the edges in the rest sheet (0 if none).
+double median_edge(const Contact& contact, Index n) {
+    std::vector<double> lengths(static_cast<std::size_t>(contact.edge_count));
+    for (Index k = 0; k < contact.edge_count; ++k) {
+        const Index a = contact.edges[2 * k], b = contact.edges[2 * k + 1];
+        lengths[k] = std::hypot(contact.rest[a] - contact.rest[b], contact.rest[n + a] - contact.rest[n + b]);
+    }
+    if (lengths.empty()) return 0.0;
+    const auto middle = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
+    std::nth_element(lengths.begin(), middle, lengths.end());
+    return *middle;
+}
+
 //: The cell (0 to count - 1) of rest coordinate v: cells of `side` (m) from `origin`.
 inline Index cell_along(double v, double origin, double side, Index count) {
     const double c = std::floor((v - origin) / side);
@@ -102,16 +116,20 @@ void prepare_tiers(Contact& contact, Index n) {
         lo_x = py_min(lo_x, rx[i]), hi_x = py_max(hi_x, rx[i]);
         lo_y = py_min(lo_y, ry[i]), hi_y = py_max(hi_y, ry[i]);
     }
-    const Spacing h = spacing_of(contact, n);
-    // Cells start half a spacing before the sheet, so that no particle of a grid lies on a cell's side.
-    const double origin_x = lo_x - 0.5 * h.x, origin_y = lo_y - 0.5 * h.y;
+    const Spacing longest = spacing_of(contact, n);
+    const double median = median_edge(contact, n);
     std::vector<Index>& out = contact.lists->tiers;
     out.clear();
-    for (int s = 0; s < TIERS; ++s) {
+    for (int s = 0; s <= FINE_TIER; ++s) {
+        const Spacing h = s == FINE_TIER ? Spacing{median, median} : longest;
+        const double side_x = (s == FINE_TIER ? FINE_CELLS : whole(s) ? 0 : TIER_CELLS[s]) * h.x;
+        const double side_y = (s == FINE_TIER ? FINE_CELLS : whole(s) ? 0 : TIER_CELLS[s]) * h.y;
+        // Cells start half a spacing before the sheet, so that no particle of a grid lies on a cell's side.
+        const double origin_x = lo_x - 0.5 * h.x, origin_y = lo_y - 0.5 * h.y;
         Index nx = 1, ny = 1;
         if (!whole(s) && h.x > 0.0 && h.y > 0.0) {
-            nx = cells_along(origin_x, TIER_CELLS[s] * h.x, hi_x);
-            ny = cells_along(origin_y, TIER_CELLS[s] * h.y, hi_y);
+            nx = cells_along(origin_x, side_x, hi_x);
+            ny = cells_along(origin_y, side_y, hi_y);
         }
         const Index cells = nx * ny;
         const std::size_t base = out.size();
@@ -122,8 +140,8 @@ void prepare_tiers(Contact& contact, Index n) {
         Index* start = cell + n;
         Index* members = start + cells + 1;
         for (Index i = 0; i < n; ++i) {
-            const Index cx = nx > 1 ? cell_along(rx[i], origin_x, TIER_CELLS[s] * h.x, nx) : 0;
-            const Index cy = ny > 1 ? cell_along(ry[i], origin_y, TIER_CELLS[s] * h.y, ny) : 0;
+            const Index cx = nx > 1 ? cell_along(rx[i], origin_x, side_x, nx) : 0;
+            const Index cy = ny > 1 ? cell_along(ry[i], origin_y, side_y, ny) : 0;
             cell[i] = cx + nx * cy;
         }
         // The particles by cell, ascending within each (a counting sort).
@@ -136,8 +154,8 @@ void prepare_tiers(Contact& contact, Index n) {
     }
 }
 
-Tier tier_of(const Contact& contact, Index n, int s) {
-    const Index* t = contact.lists->tiers.data();
+Tier tier_in(const std::vector<Index>& tiers, Index n, int s) {
+    const Index* t = tiers.data();
     for (int k = 0; k < s; ++k) t += HEADER + n + (t[0] * t[1] + 1) + n;
     Tier tier;
     tier.nx = t[0], tier.ny = t[1];
