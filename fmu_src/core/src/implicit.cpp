@@ -261,7 +261,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
     }
     if (adaptive) follow_cloth(plane, cloth, pos);
     if (!adaptive) reused = nullptr;
-    Plane* solving = reused != nullptr ? &reused->plane : &plane;  // the linear solves' preconditioner
+    Plane* solving = &plane;  // the linear solves' preconditioner
     const double slack_slope = descent && !adaptive ? DESCENT_SLACK_SLOPE : 0.0;
     const Index iterations = descent ? DESCENT_NEWTON_ITERATIONS : NEWTON_ITERATIONS_MAX;
     bool converged = false;
@@ -283,16 +283,23 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
                 solver.counters[FACTORISATIONS] += factored > 0;
             }
             set_normal_diagonal(plane, n, mass, work.diagonal_blocks, work.blocks);
-            if (reused != nullptr && reuse_expired(*reused, bh * bh, memory[3])) {
-                build_reused(*reused, cloth, mass, work, out_pos, bh * bh);
-                solver.counters[FACTORISATIONS] += 1;
+            if (reused != nullptr) {
+                if (reuse_expired(*reused, bh * bh, memory[3])) {
+                    if (long_solve(memory[3])) {
+                        build_reused(*reused, cloth, mass, work, out_pos, bh * bh);
+                        solver.counters[FACTORISATIONS] += 1;
+                    } else {
+                        drop_reused(*reused);
+                    }
+                }
+                solving = in_use(*reused) ? &reused->plane : &plane;
             }
         }
         const double floor = CG_FLOOR * py_min(newton_tolerance / bh, newton_tolerance / NEWTON_VELOCITY_TIME);
         const PlaneSolve solve = plane_pcg(cloth, work, solver, *solving, rhs, dv, cg_tolerance, floor,
                                            NEWTON_CG_ITERATIONS);
         memory[3] = static_cast<double>(solve.iterations);
-        if (reused != nullptr) count_reused_solve(*reused, solve.iterations);
+        if (reused != nullptr && in_use(*reused)) count_reused_solve(*reused, solve.iterations);
         solver.counters[NEWTON_ITERATIONS] += 1;
         solver.counters[CG_ITERATIONS] += solve.iterations;
         solver.counters[UNCONVERGED] += !solve.solved;

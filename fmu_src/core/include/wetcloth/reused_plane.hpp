@@ -14,9 +14,10 @@ namespace wc {
 //: CG iterations of the first solve with it (0: none yet).
 enum ReuseRuleSlot : Index { REUSED_BUILT = 0, REUSED_SCALE, REUSED_FIRST_SOLVE, REUSE_RULE_SIZE };
 
-//: Rebuild before a Newton iteration's solve when (beta h)^2 has changed by more than the factor
-//: REUSE_SCALE since the build, or when the last solve took more than REUSE_RISE times the CG iterations
-//: of the first solve with it (and more than REUSE_FLOOR).  Hanging 81 x 81 sheet, 3 s (bench/hanging_sheet.py):
+//: Built before a Newton iteration's solve when the last solve took more than REUSE_FLOOR CG iterations;
+//: rebuilt (or, after a solve of at most REUSE_FLOOR, dropped for the rest-stiffness systems) when
+//: (beta h)^2 has changed by more than the factor REUSE_SCALE since the build, or when the last solve
+//: took more than REUSE_RISE times the CG iterations of the first solve with it (and more than REUSE_FLOOR).  Hanging 81 x 81 sheet, 3 s (bench/hanging_sheet.py):
 //: a rise of 2 rebuilt 362 times, CG 17 314 against 31 044 with the rest-stiffness systems, 164 against
 //: 233 ms/frame; a rise of 3: 87 builds, CG 21 563, 184 ms; every 8 steps: 164 builds, CG 19 225.
 inline constexpr double REUSE_SCALE = 2.0;
@@ -44,6 +45,14 @@ Index build_reused(ReusedPlane& reused, const Cloth& cloth, const double* mass, 
 
 //: Rebuild from reused.source (a restored run), if its rule says it was built.
 void rebuild_reused(ReusedPlane& reused, const Cloth& cloth);
+
+//: Whether a solve of `iterations` CG iterations was long enough to build the systems for (REUSE_FLOOR):
+//: where the rest-stiffness systems' solves are that short (a cloth floating flat), they are kept.
+inline bool long_solve(double iterations) { return iterations > REUSE_FLOOR; }
+
+//: Whether the systems are built and in use; drop them (back to Core::plane's) until a solve is long.
+inline bool in_use(const ReusedPlane& reused) { return reused.rule[REUSED_BUILT] != 0.0; }
+inline void drop_reused(ReusedPlane& reused) { reused.rule = {0.0, 0.0, 0.0}; }
 
 //: Count a solve of `iterations` CG iterations with it.
 void count_reused_solve(ReusedPlane& reused, Index iterations);
