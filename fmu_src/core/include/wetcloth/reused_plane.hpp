@@ -17,9 +17,13 @@ enum ReuseRuleSlot : Index { REUSED_BUILT = 0, REUSED_SCALE, REUSED_FIRST_SOLVE,
 //: Built before a Newton iteration's solve when the last solve took more than REUSE_FLOOR CG iterations;
 //: rebuilt (or, after a solve of at most REUSE_FLOOR, dropped for the rest-stiffness systems) when
 //: (beta h)^2 has changed by more than the factor REUSE_SCALE since the build, or when the last solve
-//: took more than REUSE_RISE times the CG iterations of the first solve with it (and more than REUSE_FLOOR).  Hanging 81 x 81 sheet, 3 s (bench/hanging_sheet.py):
-//: a rise of 2 rebuilt 362 times, CG 17 314 against 31 044 with the rest-stiffness systems, 164 against
-//: 233 ms/frame; a rise of 3: 87 builds, CG 21 563, 184 ms; every 8 steps: 164 builds, CG 19 225.
+//: took more than REUSE_RISE times the CG iterations of the first solve with it (and more than REUSE_FLOOR).
+//: Hanging 81 x 81 sheet, 3 s, self-collision on (bench/hanging_sheet.py): 309 builds, CG 18 187 against
+//: 31 044 with the rest-stiffness systems, Newton 3127 against 3024, 172 against 251 ms/frame.  Without
+//: the floor (always reused): CG 17 314, but the 100 x 100 grid landing of bench/mesh_cost.py took 721 CG
+//: instead of 586 (now 496); a rise of 3: 87 builds, CG 21 563; rebuilt every 8 steps instead: CG 19 225;
+//: applied in the frame of the build rather than the cloth's current one: CG 8691 in the first second
+//: where this takes 6305, and 16 063 (more than the rest stiffness's 10 110) when rebuilt every 16 steps.
 inline constexpr double REUSE_SCALE = 2.0;
 inline constexpr double REUSE_RISE = 2.0;
 inline constexpr double REUSE_FLOOR = 4.0;
