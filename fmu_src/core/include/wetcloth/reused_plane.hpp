@@ -22,8 +22,8 @@ enum ReuseRuleSlot : Index { REUSED_BUILT = 0, REUSED_SCALE, REUSED_FIRST_SOLVE,
 //: 31 044 with the rest-stiffness systems, Newton 3127 against 3024, 172 against 251 ms/frame.  Without
 //: the floor (always reused): CG 17 314, but the 100 x 100 grid landing of bench/mesh_cost.py took 721 CG
 //: instead of 586 (now 496); a rise of 3: 87 builds, CG 21 563; rebuilt every 8 steps instead: CG 19 225;
-//: applied in the frame of the build rather than the cloth's current one: CG 8691 in the first second
-//: where this takes 6305, and 16 063 (more than the rest stiffness's 10 110) when rebuilt every 16 steps.
+//: applied in the frame of the build rather than the cloth's current one, rebuilt every 8 steps: CG 8691
+//: in the first second against 6305 (every 16 steps: 16 063, more than the rest stiffness's 10 110).
 inline constexpr double REUSE_SCALE = 2.0;
 inline constexpr double REUSE_RISE = 2.0;
 inline constexpr double REUSE_FLOOR = 4.0;
