@@ -280,3 +280,42 @@ def test_systems_from_the_jacobian_are_its_projection_on_the_frames():
     px, py = apply(multigrid, model, x), apply(multigrid, model, y)
     assert abs(np.sum(x * py) - np.sum(y * px)) <= 100 * EPS * np.linalg.norm(x) * np.linalg.norm(py)
     assert np.sum(x * px) > 0.0
+
+
+def hanging_sheet(side: int) -> wetcloth.Scene:
+    """bench/hanging_sheet.py's sheet, ``side`` x ``side`` particles (multigrid from 41)."""
+    return wetcloth.load_scene(nx=side, ny=side, width=1.0, length=1.0, pinned_edge="y_max", initial_tilt=0.0,
+                               initial_height=2.0, water_level=-10.0, floor_level=-20.0)
+
+
+def test_a_run_restored_with_reused_jacobian_systems_repeats_bit_for_bit():
+    """Adaptive steps on a multigrid grid solve with in-plane systems built from the Jacobian and reused
+    over the steps after (reused_plane.hpp).  A snapshot holds what they were built from: restoring it,
+    into the same simulation (whose systems have been rebuilt meanwhile) or into a new one, rebuilds the
+    same factors and the run repeats the uninterrupted one exactly."""
+    sim = wetcloth.Simulation(hanging_sheet(41))
+    sim.advance(0.3)
+    snapshot = sim.snapshot()
+    rule = snapshot["preconditioner_reused_rule"]
+    assert rule[0] == 1.0 and rule[2] > 0, "the reused systems are built and in use"
+    families = snapshot["preconditioner_jacobian_along"].shape[0]
+    assert snapshot["preconditioner_reused_source"].size == (10 + 5 * families) * 41 * 41
+    before = sim.solver_counts["factorisations"]
+    sim.advance(0.2)
+    assert sim.solver_counts["factorisations"] > before, "rebuilt since the snapshot"
+    expected = sim.state.copy()
+    for restored in (sim, wetcloth.Simulation(hanging_sheet(41))):
+        restored.restore(snapshot)
+        restored.advance(0.2)
+        for name in ("pos", "vel", "water"):
+            np.testing.assert_array_equal(getattr(restored.state, name), getattr(expected, name))
+
+
+def test_small_grids_have_no_reused_jacobian_systems():
+    """Below MULTIGRID_SIDE the banded factors refactor from the Jacobian instead: the snapshot's
+    reused source is empty and its rule unbuilt."""
+    sim = wetcloth.Simulation(hanging_sheet(9))
+    sim.advance(0.1)
+    snapshot = sim.snapshot()
+    assert snapshot["preconditioner_reused_source"].size == 0
+    assert not snapshot["preconditioner_reused_rule"].any()

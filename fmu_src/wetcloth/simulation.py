@@ -9,8 +9,8 @@ import numpy as np
 from wetcloth import _core, self_collision
 from wetcloth._core import (BLOWN_UP, CALM_TIME, CG_ITERATIONS, CLOCK_SIZE, EXCHANGING, FACTORISATIONS, FAILED_STEP,
                             FIRST_GUESS, LAST_SOLVE, LAST_STEP, MAX_REJECTIONS, NEWTON_ITERATIONS, NEWTON_RATE,
-                            NEXT_STEP, OUTPUT_COUNT, PAUSE_AFTER, PAUSED, RATE_CORRECTION, REJECTED, SLEEPING, SPEED,
-                            STEPS, TIME, UNCHECKED_TIME, UNCONVERGED, LARGEST_ERROR)
+                            NEXT_STEP, OUTPUT_COUNT, PAUSE_AFTER, PAUSED, RATE_CORRECTION, REJECTED, REUSE_RULE_SIZE,
+                            SLEEPING, SPEED, STEPS, TIME, UNCHECKED_TIME, UNCONVERGED, LARGEST_ERROR)
 from wetcloth.advice import blow_up_advice
 from wetcloth.bundles import Buffers, make_solver
 from wetcloth.errors import BlowUpError, ParameterError
@@ -91,8 +91,9 @@ class Simulation:
     def snapshot(self) -> dict:
         """Everything that evolves, as a flat dict of arrays and numbers plus ``"scene"``: the state,
         the BDF2 history, the step control, sleep, what the implicit solver's preconditioner was
-        last factored for and what self-collision's candidate list was built from (so that a restored
-        run factors the same matrices, finds the same candidates and repeats bit for bit)."""
+        last factored for (and its reused Jacobian systems built from, ``preconditioner_reused_*``:
+        empty on grids without multigrid) and what self-collision's candidate list was built from (so
+        that a restored run factors the same matrices, finds the same candidates and repeats bit for bit)."""
         buf = self._buffers
         plane = self._plane
         values = {"scene": self.scene, "state": self.state.copy()}
@@ -104,6 +105,10 @@ class Simulation:
         values["preconditioner_from_jacobian"] = bool(plane.reference[2])
         values["preconditioner_jacobian_along"] = plane.jacobian_along.copy()
         values["preconditioner_jacobian_mass"] = plane.jacobian_mass.copy()
+        reused_source, reused_rule = np.zeros(self._stepper.reused_size()), np.zeros(REUSE_RULE_SIZE)
+        self._stepper.save_reused(reused_source, reused_rule)
+        values["preconditioner_reused_source"] = reused_source
+        values["preconditioner_reused_rule"] = reused_rule
         for key, slot, kind in _SNAPSHOT_CLOCK:
             values[key] = kind(self._clock[slot])
         values.update(self_collision.snapshot(self._contact))
@@ -133,6 +138,7 @@ class Simulation:
             if snapshot["preconditioner_from_jacobian"]:
                 _core.refresh_from_jacobian(plane, cloth, snapshot["preconditioner_jacobian_mass"],
                                             snapshot["preconditioner_jacobian_along"])
+        self._stepper.restore_reused(snapshot["preconditioner_reused_source"], snapshot["preconditioner_reused_rule"])
         # Self-collision's list: the same reference and margin, and the list rebuilt from them.
         self._contact.reference[...] = snapshot["contact_reference"]
         margin = float(snapshot["contact_margin"])
@@ -159,7 +165,8 @@ class Simulation:
         except OverflowError:
             raise ValueError("snapshot of a state the cloth cannot be in: a number of its clock is too large") from None
         others = np.concatenate([snapshot["preconditioner_mass"], snapshot["preconditioner_jacobian_along"].ravel(),
-                                 snapshot["preconditioner_jacobian_mass"], [float(snapshot["preconditioner_scale"])]])
+                                 snapshot["preconditioner_jacobian_mass"], [float(snapshot["preconditioner_scale"])],
+                                 snapshot["preconditioner_reused_source"], snapshot["preconditioner_reused_rule"]])
         self._refuse_contents(state, snapshot, clock, float(snapshot["contact_margin"]), others)
 
     def _refuse_contents(self, state: State, arrays, clock: np.ndarray, margin: float, others: np.ndarray) -> None:

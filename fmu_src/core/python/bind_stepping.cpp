@@ -4,6 +4,7 @@
 #include <nanobind/stl/tuple.h>
 
 #include "convert.hpp"
+#include "wetcloth/reused_plane.hpp"
 #include "wetcloth/self_contact.hpp"
 #include "wetcloth/stepping.hpp"
 
@@ -22,6 +23,10 @@ class Stepper {
         core_.work = work_from(work, core_.cloth);
         core_.solver = solver_from(solver, n);
         core_.plane = plane_from(plane, n);
+        if (reuses_jacobian(core_.plane)) {
+            attach_reused(reused_, core_.plane, n);
+            core_.reused = &reused_;
+        }
         core_.contact = contact_from(contact, n, &lists_);
         core_.buf = buffers_from(buffers, n);
         core_.clock = argument<double>(clock, "clock", CLOCK_SIZE);
@@ -70,8 +75,28 @@ class Stepper {
         return {lists_.point_triangle_count(), lists_.edge_edge_count()};
     }
 
+    //: Size of the reused Jacobian systems' source (0: the cloth has none; reused_plane.hpp).
+    Index reused_size() const { return core_.reused != nullptr ? static_cast<Index>(reused_.source.size()) : 0; }
+    //: Copy the reused systems' source and rule into `source` (reused_size) and `rule` (REUSE_RULE_SIZE).
+    void save_reused(nb::handle source, nb::handle rule) const {
+        double* s = argument<double>(source, "source", reused_size());
+        double* r = argument<double>(rule, "rule", REUSE_RULE_SIZE);
+        std::copy(reused_.source.begin(), reused_.source.begin() + reused_size(), s);
+        std::copy(reused_.rule.begin(), reused_.rule.end(), r);
+    }
+    //: Set the reused systems' source and rule and rebuild them from it (a restored run).
+    void restore_reused(nb::handle source, nb::handle rule) {
+        if (core_.reused == nullptr) return;
+        const double* s = argument<const double>(source, "source", reused_size());
+        const double* r = argument<const double>(rule, "rule", REUSE_RULE_SIZE);
+        std::copy(s, s + reused_size(), reused_.source.begin());
+        std::copy(r, r + REUSE_RULE_SIZE, reused_.rule.begin());
+        rebuild_reused(reused_, core_.cloth);
+    }
+
   private:
     Core core_;
+    ReusedPlane reused_;
     ContactLists lists_;
     nb::object cloth_, phys_, control_, work_, solver_, plane_, contact_, buffers_, clock_;
 };
@@ -98,7 +123,11 @@ WETCLOTH_BINDINGS(m) {
              "(status, next index)")
         .def("build_contact", &Stepper::build_contact, "thickness"_a, "margin"_a)
         .def("invalidate_contact", &Stepper::invalidate_contact)
-        .def("candidate_counts", &Stepper::candidate_counts);
+        .def("candidate_counts", &Stepper::candidate_counts)
+        .def("reused_size", &Stepper::reused_size)
+        .def("save_reused", &Stepper::save_reused, "source"_a, "rule"_a)
+        .def("restore_reused", &Stepper::restore_reused, "source"_a, "rule"_a);
+    m.attr("REUSE_RULE_SIZE") = Index(REUSE_RULE_SIZE);
     m.def(
         "record_outputs",
         [](nb::handle dry_mass, double water_level, nb::handle pos, nb::handle water, nb::handle row) {

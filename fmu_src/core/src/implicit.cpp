@@ -7,6 +7,7 @@
 #include "wetcloth/assembly.hpp"
 #include "wetcloth/integration.hpp"
 #include "wetcloth/plane.hpp"
+#include "wetcloth/reused_plane.hpp"
 #include "wetcloth/sliding.hpp"
 
 namespace wc {
@@ -207,7 +208,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
                        const double* prev_pos, const double* prev_vel, const double* prev_water,
                        const double* acceleration, double h, double h_prev, double newton_tolerance,
                        double cg_tolerance, NewtonMode mode, bool descent, double* memory, double* out_pos,
-                       double* out_vel, const double* held, const double* grip_rate) {
+                       double* out_vel, const double* held, const double* grip_rate, ReusedPlane* reused) {
     const Index n = cloth.n;
     double* mass = solver.mass;
     double* hat_pos = solver.hat_pos;
@@ -259,6 +260,8 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
         solver.counters[FACTORISATIONS] += factored > 0;
     }
     if (adaptive) follow_cloth(plane, cloth, pos);
+    if (!adaptive) reused = nullptr;
+    Plane* solving = &plane;  // the linear solves' preconditioner
     const double slack_slope = descent && !adaptive ? DESCENT_SLACK_SLOPE : 0.0;
     const Index iterations = descent ? DESCENT_NEWTON_ITERATIONS : NEWTON_ITERATIONS_MAX;
     bool converged = false;
@@ -280,11 +283,23 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
                 solver.counters[FACTORISATIONS] += factored > 0;
             }
             set_normal_diagonal(plane, n, mass, work.diagonal_blocks, work.blocks);
+            if (reused != nullptr) {
+                if (reuse_expired(*reused, bh * bh, memory[3])) {
+                    if (long_solve(memory[3])) {
+                        build_reused(*reused, cloth, mass, work, out_pos, bh * bh);
+                        solver.counters[FACTORISATIONS] += 1;
+                    } else {
+                        drop_reused(*reused);
+                    }
+                }
+                solving = in_use(*reused) ? &reused->plane : &plane;
+            }
         }
         const double floor = CG_FLOOR * py_min(newton_tolerance / bh, newton_tolerance / NEWTON_VELOCITY_TIME);
-        const PlaneSolve solve = plane_pcg(cloth, work, solver, plane, rhs, dv, cg_tolerance, floor,
+        const PlaneSolve solve = plane_pcg(cloth, work, solver, *solving, rhs, dv, cg_tolerance, floor,
                                            NEWTON_CG_ITERATIONS);
         memory[3] = static_cast<double>(solve.iterations);
+        if (reused != nullptr && in_use(*reused)) count_reused_solve(*reused, solve.iterations);
         solver.counters[NEWTON_ITERATIONS] += 1;
         solver.counters[CG_ITERATIONS] += solve.iterations;
         solver.counters[UNCONVERGED] += !solve.solved;
@@ -348,7 +363,8 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
     // The difference, filtered through (approximately) A^-1 M, as Shampine filters the error estimates
     // of stiff solvers: stiff modes (in-plane vibration, a floating cloth's heave), which the scheme
     // damps anyway, would otherwise dominate the estimate and hold the step far below what the smooth
-    // motion needs.
+    // motion needs.  Through the rest-stiffness systems (`plane`), never the reused Jacobian ones: a
+    // filter that changed with each rebuild of those would move the steps.
     double* difference = solver.r;
     for (Index c = 0; c < 3; ++c) {
         for (Index i = 0; i < n; ++i) {

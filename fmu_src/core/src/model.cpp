@@ -15,6 +15,7 @@
 #include "wetcloth/integration.hpp"
 #include "wetcloth/multigrid.hpp"
 #include "wetcloth/plane.hpp"
+#include "wetcloth/reused_plane.hpp"
 #include "wetcloth/self_contact.hpp"
 #include "wetcloth/stepping.hpp"
 
@@ -74,11 +75,20 @@ std::uint64_t fnv1a(const unsigned char* data, std::size_t size) {
 
 constexpr char SNAPSHOT_MAGIC[] = "wetcloth-native-snapshot\n";
 constexpr std::size_t MAGIC_SIZE = sizeof(SNAPSHOT_MAGIC) - 1;
-constexpr std::uint32_t SNAPSHOT_VERSION = 3;  // 3: the scene's 44 fields (pinned_vertices, grip_x/y/z); 2: 40 (wind)
+//: 4: the reused Jacobian systems' rule and source; 3: the scene's 44 fields (pinned_vertices, grip_x/y/z); 2: 40
+//: (wind).
+constexpr std::uint32_t SNAPSHOT_VERSION = 4;
 constexpr std::size_t PREAMBLE = MAGIC_SIZE + 4 + 8;  // magic, version, checksum
 
-//: Doubles of a checkpoint's `values` for n particles and F spring families (see Checkpoint).
-std::size_t value_count(Index n, Index families) { return static_cast<std::size_t>((25 + families) * n); }
+//: Whether an nx x ny grid's preconditioner has a multigrid hierarchy, and so reused Jacobian systems.
+bool multigrid(Index nx, Index ny) { return std::min(nx, ny) > MULTIGRID_SIDE; }
+
+//: Doubles of a checkpoint's `values` for an nx x ny grid and F spring families (see Checkpoint).
+std::size_t value_count(Index nx, Index ny, Index families) {
+    const Index n = nx * ny;
+    return static_cast<std::size_t>((25 + families) * n + REUSE_RULE_SIZE +
+                                    (multigrid(nx, ny) ? reused_source_size(n, families) : 0));
+}
 
 struct Writer {
     std::vector<unsigned char>& out;
@@ -477,7 +487,7 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
 
     // Plane and its multigrid hierarchy (make_plane, make_hierarchy).
     {
-        const auto sizes = std::min(nx, ny) > MULTIGRID_SIDE ? level_sizes(nx, ny, COARSEST_SIDE)
+        const auto sizes = multigrid(nx, ny) ? level_sizes(nx, ny, COARSEST_SIDE)
                                                              : std::vector<std::pair<Index, Index>>{{nx, ny}};
         const Index levels = static_cast<Index>(sizes.size());
         levels_.assign(4 * sizes.size(), 0);
@@ -563,6 +573,10 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
         pl.normal = take(un);
         std::fill(pl.normal, pl.normal + n, 1.0);
         pl.local = take(COMPONENTS * static_cast<std::size_t>(n_c));
+        if (reuses_jacobian(pl)) {
+            attach_reused(reused_, pl, n);
+            core_.reused = &reused_;
+        }
     }
 
     // Self-collision (make_contact).
@@ -846,7 +860,7 @@ void Simulation::save(Checkpoint& cp) const {
     std::copy(clock_, clock_ + CLOCK_SIZE, cp.clock);
     std::copy(pl.reference, pl.reference + 3, cp.plane_reference);
     cp.contact_margin = core_.contact.margin[0];
-    cp.values.resize(value_count(n, families));
+    cp.values.resize(value_count(scene_.nx, scene_.ny, families));
     double* out = cp.values.data();
     auto put = [&out](const double* from, Index count) {
         std::memcpy(out, from, static_cast<std::size_t>(count) * sizeof(double));
@@ -864,6 +878,8 @@ void Simulation::save(Checkpoint& cp) const {
     put(pl.jacobian_along, families * n);
     put(pl.jacobian_mass, n);
     put(core_.contact.reference, 3 * n);
+    put(reused_.rule.data(), REUSE_RULE_SIZE);
+    if (core_.reused != nullptr) put(reused_.source.data(), static_cast<Index>(reused_.source.size()));
 }
 
 void Simulation::check(const Checkpoint& cp) const {
@@ -874,7 +890,7 @@ void Simulation::check(const Checkpoint& cp) const {
     }
     const std::string fixed = fixed_differences(scene_, cp.scene);
     if (!fixed.empty()) throw SnapshotError("snapshot of another scene: " + fixed + " differ (only inputs may)");
-    if (cp.families != topo_.families() || cp.values.size() != value_count(topo_.n, topo_.families())) {
+    if (cp.families != topo_.families() || cp.values.size() != value_count(scene_.nx, scene_.ny, topo_.families())) {
         throw SnapshotError("snapshot of another simulation: its arrays do not fit this one's");
     }
     bool finite = std::isfinite(cp.contact_margin);
@@ -931,6 +947,9 @@ void Simulation::restore(const Checkpoint& cp) {
     const double* jacobian_mass = in;
     get(pl.jacobian_mass, n);
     const double* contact_reference = in;
+    in += 3 * n;
+    get(reused_.rule.data(), REUSE_RULE_SIZE);
+    if (core_.reused != nullptr) get(reused_.source.data(), static_cast<Index>(reused_.source.size()));
     std::copy(cp.clock, cp.clock + CLOCK_SIZE, clock_);
     // The preconditioner as it was factored (Simulation.restore: refresh, refresh_from_jacobian).
     pl.reference[0] = cp.plane_reference[0];
@@ -940,6 +959,7 @@ void Simulation::restore(const Checkpoint& cp) {
         refresh(pl, core_.cloth, reference_mass, cp.plane_reference[0]);
         if (cp.plane_reference[2] != 0.0) refresh_from_jacobian(pl, core_.cloth, jacobian_mass, jacobian_along);
     }
+    if (core_.reused != nullptr) rebuild_reused(reused_, core_.cloth);
     // Self-collision's candidate list, rebuilt from its reference and margin (self_contact.restore).
     Contact& contact = core_.contact;
     std::memcpy(contact.reference, contact_reference, 3 * static_cast<std::size_t>(n) * sizeof(double));
@@ -993,7 +1013,7 @@ Checkpoint Simulation::from_bytes(const unsigned char* data, std::size_t size) {
     for_each_field(cp.scene, [&](const char*, auto& v) { v = r.get<std::remove_reference_t<decltype(v)>>(); });
     const Index nx = cp.scene.nx, ny = cp.scene.ny;
     if (nx < 2 || ny < 2 || nx > (1 << 20) || ny > (1 << 20) || cp.families < 0 || cp.families > 6 ||
-        count < 0 || static_cast<std::size_t>(count) != value_count(nx * ny, cp.families)) {
+        count < 0 || static_cast<std::size_t>(count) != value_count(nx, ny, cp.families)) {
         throw SnapshotError("snapshot bytes are malformed (grid, families and array sizes do not fit)");
     }
     r.get(cp.clock, CLOCK_SIZE);

@@ -240,14 +240,15 @@ void set_normal_diagonal(Plane& plane, Index n, const double* mass, const double
     plane.reference[3] = 0.0;
 }
 
-Index set_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const Work& work) {
+Index set_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const Work& work,
+                                Index components) {
     if (mesh_plane(plane)) return mesh_systems_from_jacobian(plane, cloth, mass, work);
     const Index n = cloth.n;
     plane.reference[1] = plane.reference[2] = 0.0;  // the rest-stiffness factors are overwritten
-    plane.reference[3] = 1.0;
+    plane.reference[3] = components == COMPONENTS ? 1.0 : 0.0;
     Index result = 1;
     std::vector<double> in_plane(static_cast<std::size_t>(n));
-    for (Index c = 0; c < COMPONENTS; ++c) {
+    for (Index c = 0; c < components; ++c) {
         double* diagonal = c == NORMAL ? plane.normal : in_plane.data();
         axis_diagonal<false>(plane, n, c, mass, nullptr, work.blocks, diagonal);
         jacobian_stencil(plane, cloth, work, c, diagonal);

@@ -81,7 +81,8 @@ Trial take_step(Core& core, double h, const GripMove& grip) {
                                         h_prev, core.control.newton_tolerance,
                                         euler ? DESCENT_CG_TOLERANCE : core.control.cg_tolerance, mode, euler,
                                         clock + NEWTON_RATE,
-                                        buf.trial_pos, buf.trial_vel, buf.held, grip.acts ? grip.rate : nullptr);
+                                        buf.trial_pos, buf.trial_vel, buf.held, grip.acts ? grip.rate : nullptr,
+                                        core.reused);
     return {step.error, h_prev > 0.0 ? 2 : 1, step.converged};
 }
 

@@ -274,6 +274,22 @@ struct Plane {
     Algebraic algebraic;  // a mesh's hierarchy (mesh_plane.cpp)
 };
 
+//: The in-plane systems of the plane preconditioner built from the Jacobian at one Newton iteration and
+//: reused for the linear solves of the adaptive steps after it (reused_plane.hpp), while `Core::plane`
+//: keeps the rest-stiffness systems that filter the step's error estimate.  `plane` views `storage` for
+//: what it factors (stencils, inverse diagonals, band factors, reference) and shares everything else with
+//: Core::plane (its frame and normal diagonal among them); frame_at_build (3, 3, n) is the frame it was
+//: projected on.  `source` holds what it was built from, so that a restored run rebuilds the same
+//: factors: positions (3, n) m, mass (n) kg, blocks (6, n), direction (F, 3, n), along, across (F, n)
+//: (Work's); `rule` the state of the rule that decides when to rebuild it (reused_plane.hpp).
+struct ReusedPlane {
+    Plane plane;
+    std::vector<double> storage;
+    std::vector<double> frame_at_build;
+    std::vector<double> source;
+    std::array<double, 3> rule{};
+};
+
 //: Self-collision's candidate lists and scratch, owned by the core (self_contact/*.cpp): the
 //: point-triangle (particle, triangle) and edge-edge (edge, edge) candidate pairs, and whatever
 //: scratch the broad phase and the response need between calls; the rest sheet's tiers of cells and
@@ -374,6 +390,7 @@ struct Core {
     Work work;
     Solver solver;
     Plane plane;
+    ReusedPlane* reused = nullptr;  // adaptive steps' Jacobian systems (reused_plane.hpp), or none
     Contact contact;
     Buffers buf;
     Sliding sliding;

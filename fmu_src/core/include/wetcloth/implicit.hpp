@@ -44,7 +44,8 @@ inline constexpr Index NEWTON_CG_ITERATIONS = 300;
 
 //: How bdf2_step builds its preconditioner.  ADAPTIVE (an error estimate watches the steps, tolerance
 //: > 0): the rest-stiffness factors, reused across steps and refreshed from the Jacobian when solves
-//: grow long.  FIXED (tolerance 0, steps possibly a frame long): from the Jacobian at every Newton
+//: grow long (banded grids); with a ReusedPlane (multigrid grids) the solves use its in-plane systems
+//: from the Jacobian instead, the error estimate still the rest-stiffness factors'.  FIXED (tolerance 0, steps possibly a frame long): from the Jacobian at every Newton
 //: iteration.
 enum class NewtonMode : int { ADAPTIVE = 0, FIXED = 1 };
 
@@ -101,12 +102,13 @@ struct StepEstimate {
 //: descent or not; see implicit.cpp.
 //: memory (4) carries over from step to step (clock slots NEWTON_RATE..LAST_SOLVE).  With grip_rate (3,
 //: m/s), the pinned particles (free 0 and held 0 in held (n)) move at that velocity during the step
-//: (grip.hpp); without, they stay where they are.
+//: (grip.hpp); without, they stay where they are.  `reused` (adaptive steps only): reused_plane.hpp.
 StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solver& solver, Plane& plane,
                        const double* pos, const double* vel, const double* water, const double* step_water,
                        const double* prev_pos, const double* prev_vel, const double* prev_water,
                        const double* acceleration, double h, double h_prev, double newton_tolerance,
                        double cg_tolerance, NewtonMode mode, bool descent, double* memory, double* out_pos,
-                       double* out_vel, const double* held = nullptr, const double* grip_rate = nullptr);
+                       double* out_vel, const double* held = nullptr, const double* grip_rate = nullptr,
+                       ReusedPlane* reused = nullptr);
 
 }  // namespace wc

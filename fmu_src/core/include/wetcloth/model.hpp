@@ -223,7 +223,8 @@ struct SnapshotError : std::runtime_error {
 //: differ from the simulation's), the clock, the preconditioner's reference, self-collision's margin and
 //: the arrays `values` in the order pos, vel, water, prev_pos, prev_vel, prev_water, acceleration,
 //: anchor (3n, 3n, n, 3n, 3n, n, 3n, 3n), reference_mass (n), jacobian_along (F n), jacobian_mass (n),
-//: contact reference (3n).
+//: contact reference (3n), the reused Jacobian systems' rule (REUSE_RULE_SIZE) and, on a grid with a
+//: multigrid hierarchy, their source (reused_plane.hpp).
 struct Checkpoint {
     Scene scene;
     Index families = 0;
@@ -322,6 +323,7 @@ private:
     // Plane and its hierarchy
     std::vector<Index> slots_, order_, rank_, levels_;
     std::vector<double> plane_, grid_;
+    ReusedPlane reused_;
     // Contact
     std::vector<Index> edges_, zone_, contact_counters_;
     std::vector<double> contact_;

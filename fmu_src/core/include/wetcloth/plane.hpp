@@ -58,8 +58,10 @@ void set_normal_diagonal(Plane& plane, Index n, const double* mass, const double
 //: hanging sheet at frame-long steps) the tension's stiffness across the springs makes these far
 //: better than the rest stiffness's in-plane systems and the normal's diagonal: on a 41 x 41 sheet
 //: hanging at 1/30 s steps, 14 CG iterations to 1e-2 where those took 42.  Call after follow_cloth;
-//: it overwrites the rest-stiffness factors.  Returns 1, or -1.
-Index set_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const Work& work);
+//: it overwrites the rest-stiffness factors.  Returns 1, or -1.  With components == NORMAL (a grid's
+//: only) the in-plane systems alone, the normal component left to its diagonal (set_normal_diagonal).
+Index set_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const Work& work,
+                                Index components = COMPONENTS);
 
 //: z = P^-1 r (both (3, n)), rows of pinned particles (free == 0) zero.
 void apply(Plane& plane, Index n, const double* free, const double* r, double* z);
