@@ -10,30 +10,20 @@ with the most of both together.  ``--every k`` runs every k-th run only, as in `
 
 from __future__ import annotations
 
-import argparse
 import os
-from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-from wetcloth.batch.spec import load_study  # noqa: E402
+from study_tail import study_runs  # noqa: E402
 from wetcloth.runner import frame_times  # noqa: E402
-from wetcloth.scene import from_dict, preset_dir  # noqa: E402
+from wetcloth.scene import from_dict  # noqa: E402
 from wetcloth.simulation import Simulation  # noqa: E402
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--study", type=Path, default=preset_dir() / "studies" / "towel_sink_sensitivity.toml")
-    parser.add_argument("--top", type=int, default=8, help="runs with the most steps to list (default 8)")
-    parser.add_argument("--every", type=int, default=1, help="run every k-th run only (default 1: all)")
-    args = parser.parse_args()
-    if args.every < 1:
-        parser.error("--every must be at least 1")
-    study = load_study(args.study)
-    runs = study.runs()[:: args.every]
+    args, study, runs = study_runs(__doc__.splitlines()[0], 8, "runs with the most steps to list")
     times = frame_times(study.duration, study.sample_rate)
     steps, redone = [], []
     for run in runs:

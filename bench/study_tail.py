@@ -25,16 +25,22 @@ from wetcloth.batch.spec import load_study  # noqa: E402
 from wetcloth.scene import preset_dir  # noqa: E402
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def study_runs(description: str, top: int, top_help: str):
+    """The command line of a study benchmark (--study, --top, --every): its arguments, the study and
+    the runs to take (every ``--every``-th)."""
+    parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--study", type=Path, default=preset_dir() / "studies" / "towel_sink_sensitivity.toml")
-    parser.add_argument("--top", type=int, default=5, help="costliest runs to list (default 5)")
+    parser.add_argument("--top", type=int, default=top, help=f"{top_help} (default {top})")
     parser.add_argument("--every", type=int, default=1, help="run every k-th run only (default 1: all)")
     args = parser.parse_args()
     if args.every < 1:
         parser.error("--every must be at least 1")
     study = load_study(args.study)
-    runs = study.runs()[:: args.every]
+    return args, study, study.runs()[:: args.every]
+
+
+def main() -> None:
+    args, study, runs = study_runs(__doc__.splitlines()[0], 5, "costliest runs to list")
     python_series(runs[0].params, 0.1, study.sample_rate)
     seconds = []
     for run in runs:
