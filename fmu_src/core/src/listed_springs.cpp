@@ -1,5 +1,6 @@
-// A mesh's listed springs (wetcloth/listed_springs.hpp): one loop over the springs, each gathering its
-// ends' positions and velocities and scattering its force and blocks back to them.
+// A mesh's listed springs (wetcloth/listed_springs.hpp): the springs in chunks, each gathering its
+// springs' ends' positions and velocities, running the law over them in one loop that vectorises,
+// and scattering forces and blocks back to the ends; the product gathers and scatters spring by spring.
 #include "wetcloth/listed_springs.hpp"
 
 #include "wetcloth/spring_law.hpp"
@@ -15,14 +16,6 @@ struct Ends {
 };
 inline Ends ends(const Cloth& cloth, Index k) { return {cloth.pairs[k], cloth.pairs[cloth.pair_count + k]}; }
 
-//: Spring k's geometry from pos (3, n) and the saturations.
-inline Geometry geometry(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos,
-                         Index k, Ends e) {
-    const Index n = cloth.n;
-    return spring_geometry(pos[e.i], pos[n + e.i], pos[2 * n + e.i], pos[e.j], pos[n + e.j], pos[2 * n + e.j],
-                           cloth.pair_stiffness[k], saturation[e.i], saturation[e.j], phys.wet_factor);
-}
-
 //: out[i] += a, out[j] -= a for each row of out (3, n).
 inline void add_to_ends(Index n, Ends e, double ax, double ay, double az, double* out) {
     out[e.i] += ax;
@@ -33,60 +26,140 @@ inline void add_to_ends(Index n, Ends e, double ax, double ay, double az, double
     out[2 * n + e.j] -= az;
 }
 
-//: Spring k's force on its first end: t (x_i - x_j), minus c (v_i - v_j) for the thesis damping.
-inline void add_force(const Cloth& cloth, const Physics& phys, const double* vel, Index k, Ends e, const Geometry& g,
-                      double t, double* force) {
+//: Springs taken at a time: their ends' values gathered into rows so that the law's loop vectorises
+//: over them as over a grid's family, then the results scattered to the ends in the springs' order.
+constexpr Index CHUNK = 128;
+
+//: The ends' positions, velocities and saturations of CHUNK springs (rows: x, y, z, vx, vy, vz of
+//: end i, the same of end j, then s_i, s_j), and what the law gives back: force (3) and block (6).
+struct Chunk {
+    double x[6][CHUNK];  // x_i, y_i, z_i, x_j, y_j, z_j
+    double v[6][CHUNK];
+    double s[2][CHUNK];
+    double force[3][CHUNK];
+    double block[6][CHUNK];
+};
+
+//: Gather springs first .. first + count into the chunk's input rows.
+void gather(const Cloth& cloth, const double* saturation, const double* pos, const double* vel, Index first,
+            Index count, Chunk& c) {
     const Index n = cloth.n;
-    double fx = t * g.dx, fy = t * g.dy, fz = t * g.dz;
-    if (!phys.projected) {
-        const double c = cloth.pair_damping[k];
-        fx -= c * (vel[e.i] - vel[e.j]);
-        fy -= c * (vel[n + e.i] - vel[n + e.j]);
-        fz -= c * (vel[2 * n + e.i] - vel[2 * n + e.j]);
+    for (Index k = 0; k < count; ++k) {
+        const Ends e = ends(cloth, first + k);
+        for (Index r = 0; r < 3; ++r) {
+            c.x[r][k] = pos[r * n + e.i];
+            c.x[3 + r][k] = pos[r * n + e.j];
+            c.v[r][k] = vel[r * n + e.i];
+            c.v[3 + r][k] = vel[r * n + e.j];
+        }
+        c.s[0][k] = saturation[e.i];
+        c.s[1][k] = saturation[e.j];
     }
-    add_to_ends(n, e, fx, fy, fz, force);
+}
+
+//: Spring k's tension force on its first end, t (x_i - x_j), into the chunk's force rows.
+inline void chunk_force(Chunk& c, Index k, const Geometry& g, double t) {
+    c.force[0][k] = t * g.dx;
+    c.force[1][k] = t * g.dy;
+    c.force[2][k] = t * g.dz;
+}
+
+inline Geometry chunk_geometry(const Chunk& c, Index k, double kf, double wet_factor) {
+    return spring_geometry(c.x[0][k], c.x[1][k], c.x[2][k], c.x[3][k], c.x[4][k], c.x[5][k], kf, c.s[0][k], c.s[1][k],
+                           wet_factor);
+}
+
+//: Add the chunk's forces of its count springs, from spring first on, to their ends, less the thesis
+//: damping c (v_i - v_j) unless the damping is projected.
+void scatter_forces(const Cloth& cloth, const Physics& phys, const double* vel, const Chunk& c, Index first,
+                    Index count, double* force) {
+    const Index n = cloth.n;
+    for (Index k = 0; k < count; ++k) {
+        const Ends e = ends(cloth, first + k);
+        double fx = c.force[0][k], fy = c.force[1][k], fz = c.force[2][k];
+        if (!phys.projected) {
+            const double cf = cloth.pair_damping[first + k];
+            fx -= cf * (vel[e.i] - vel[e.j]);
+            fy -= cf * (vel[n + e.i] - vel[n + e.j]);
+            fz -= cf * (vel[2 * n + e.i] - vel[2 * n + e.j]);
+        }
+        add_to_ends(n, e, fx, fy, fz, force);
+    }
 }
 
 template <Law L>
 void forces_of(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos,
                const double* vel, Index first, Index last, double* force) {
-    const Index n = cloth.n;
-    const double damp = phys.projected ? 1.0 : 0.0;
-    for (Index k = first; k < last; ++k) {
-        const Ends e = ends(cloth, k);
-        const Geometry g = geometry(cloth, phys, saturation, pos, k, e);
-        const double rate = (vel[e.i] - vel[e.j]) * g.dx + (vel[n + e.i] - vel[n + e.j]) * g.dy +
-                            (vel[2 * n + e.i] - vel[2 * n + e.j]) * g.dz;
-        const double l0 = cloth.pair_rest[k];
-        add_force(cloth, phys, vel, k, e, g, tension<L>(g, l0, TENSION_ROUNDING * l0, damp, cloth.pair_damping[k], rate),
-                  force);
+    const double damp = phys.projected ? 1.0 : 0.0, wet_factor = phys.wet_factor;
+    Chunk c;
+    for (Index start = first; start < last; start += CHUNK) {
+        const Index count = last - start < CHUNK ? last - start : CHUNK;
+        gather(cloth, saturation, pos, vel, start, count, c);
+        const double* __restrict rest = cloth.pair_rest + start;
+        const double* __restrict damping = cloth.pair_damping + start;
+        const double* __restrict stiffness = cloth.pair_stiffness + start;
+        for (Index k = 0; k < count; ++k) {
+            const Geometry g = chunk_geometry(c, k, stiffness[k], wet_factor);
+            const double rate = (c.v[0][k] - c.v[3][k]) * g.dx + (c.v[1][k] - c.v[4][k]) * g.dy +
+                                (c.v[2][k] - c.v[5][k]) * g.dz;
+            const double l0 = rest[k];
+            chunk_force(c, k, g, tension<L>(g, l0, TENSION_ROUNDING * l0, damp, damping[k], rate));
+        }
+        scatter_forces(cloth, phys, vel, c, start, count, force);
+    }
+}
+
+//: The law over a chunk's count springs (rest length, damping, stiffness from their first on): their
+//: coefficients into ux .. across, forces and blocks into the chunk's rows.  Every array a __restrict
+//: parameter, so the loop vectorises (GCC ignores __restrict on locals).
+template <Law L>
+void coefficients_loop(Index count, double wet_factor, bool projected, double h, double slack_slope,
+                       const double* __restrict rest, const double* __restrict damping,
+                       const double* __restrict stiffness, Chunk* __restrict c, double* __restrict ux,
+                       double* __restrict uy, double* __restrict uz, double* __restrict along,
+                       double* __restrict across) {
+    for (Index k = 0; k < count; ++k) {
+        const Geometry g = chunk_geometry(*c, k, stiffness[k], wet_factor);
+        const double l0 = rest[k], cf = damping[k];
+        const Coefficients co = spring_law::coefficients<L>(g, l0, TENSION_ROUNDING * l0, projected, h, slack_slope, cf,
+                                                            c->v[0][k] - c->v[3][k], c->v[1][k] - c->v[4][k],
+                                                            c->v[2][k] - c->v[5][k]);
+        ux[k] = co.ux;
+        uy[k] = co.uy;
+        uz[k] = co.uz;
+        along[k] = co.along;
+        across[k] = co.across;
+        chunk_force(*c, k, g, co.t);
+        const Block b = spring_block(co.along, co.across, co.ux, co.uy, co.uz);
+        c->block[0][k] = b.xx;
+        c->block[1][k] = b.yy;
+        c->block[2][k] = b.zz;
+        c->block[3][k] = b.xy;
+        c->block[4][k] = b.xz;
+        c->block[5][k] = b.yz;
     }
 }
 
 template <Law L>
 void blocks_of(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos, const double* vel,
                double h, double slack_slope, Index first, Index last, Work& work) {
-    const Index n = cloth.n, count = cloth.pair_count;
+    const Index n = cloth.n, all = cloth.pair_count;
     double* d = work.diagonal_blocks;
-    for (Index k = first; k < last; ++k) {
-        const Ends e = ends(cloth, k);
-        const Geometry g = geometry(cloth, phys, saturation, pos, k, e);
-        const double dvx = vel[e.i] - vel[e.j], dvy = vel[n + e.i] - vel[n + e.j];
-        const double dvz = vel[2 * n + e.i] - vel[2 * n + e.j];
-        const double l0 = cloth.pair_rest[k], cf = cloth.pair_damping[k];
-        const Coefficients c =
-            spring_law::coefficients<L>(g, l0, TENSION_ROUNDING * l0, phys.projected, h, slack_slope, cf, dvx, dvy, dvz);
-        work.pair_direction[k] = c.ux;
-        work.pair_direction[count + k] = c.uy;
-        work.pair_direction[2 * count + k] = c.uz;
-        work.pair_along[k] = c.along;
-        work.pair_across[k] = c.across;
-        add_force(cloth, phys, vel, k, e, g, c.t, work.force);
-        const Block b = spring_block(c.along, c.across, c.ux, c.uy, c.uz);
-        const double slots[6] = {b.xx, b.yy, b.zz, b.xy, b.xz, b.yz};
-        for (Index s = 0; s < 6; ++s) {
-            d[s * n + e.i] += slots[s];
-            d[s * n + e.j] += slots[s];
+    double* u = work.pair_direction;
+    Chunk c;
+    for (Index start = first; start < last; start += CHUNK) {
+        const Index count = last - start < CHUNK ? last - start : CHUNK;
+        gather(cloth, saturation, pos, vel, start, count, c);
+        coefficients_loop<L>(count, phys.wet_factor, phys.projected, h, slack_slope, cloth.pair_rest + start,
+                             cloth.pair_damping + start, cloth.pair_stiffness + start, &c, u + start, u + all + start,
+                             u + 2 * all + start, work.pair_along + start, work.pair_across + start);
+        scatter_forces(cloth, phys, vel, c, start, count, work.force);
+        for (Index k = 0; k < count; ++k) {
+            const Ends e = ends(cloth, start + k);
+            for (Index s = 0; s < 6; ++s) {
+                d[s * n + e.i] += c.block[s][k];
+                d[s * n + e.j] += c.block[s][k];
+            }
         }
     }
 }
