@@ -26,9 +26,11 @@ double collider_distance(const Physics& phys, Index k, const double* p, double r
 //: thickness / 2 to a collider is put back at distance gap along the outward normal; one whose path
 //: crossed a mesh collider's triangle goes back to the side it came from, gap off that triangle.  Its
 //: velocity into the collider is removed and its tangential velocity reduced by friction times that (never
-//: reversed).  Colliders whose box, grown by gap, the cloth's path does not reach are skipped.  Returns how
-//: many particles touched.
-Index collider_contact(Index n, const Physics& phys, const double* start, double* pos, double* vel);
+//: reversed); against a moving collider (collider_motion.hpp) the velocity relative to its.  Colliders whose
+//: box, grown by gap, the cloth's path does not reach are skipped.  Returns how many particles touched; in
+//: kick (m/s, unless null) the largest change of a particle's velocity along a moving collider's surface.
+Index collider_contact(Index n, const Physics& phys, const double* start, double* pos, double* vel,
+                       double* kick = nullptr);
 
 //: The first collider that particle i of pos (3, n) touches: within thickness / 2 of it, up to rounding
 //: (where collider_contact puts a particle), its normal there into nrm; -1 if none.
