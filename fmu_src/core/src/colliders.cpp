@@ -335,7 +335,10 @@ double slip_on_supports(Index n, const Physics& phys, const double* force, const
             double friction = phys.floor_friction;
             if (!on_floor) {
                 const Index k = static_cast<Index>(held[i] - collider_held(0));
-                const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+                double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+                if (const double* u = held_rate(phys, held[i])) {  // where a moving collider held it, at the step's start
+                    for (int c = 0; c < 3; ++c) p[c] -= h * u[c];
+                }
                 if (collider_distance(phys, k, p, phys.thickness, nrm) >= phys.thickness) return -1.0;  // off it
                 friction = phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
             }
