@@ -147,7 +147,7 @@ def test_the_sweep_preset_pushes_the_towel_aside_without_entering_the_ball():
 
 def test_collider_keys_are_addressed_by_one_name_each(tmp_path):
     """collider_key<k>_<field> in load_scene overrides, --set text, Scene.replace and to_dict; [[collider_key]]
-    tables in a scene file; `wetcloth params` lists them."""
+    tables in a scene file; `wetcloth params` lists them; a batch study's axis sets them."""
     from wetcloth.commands.params import rows
 
     path = tmp_path / "scene.toml"
@@ -162,6 +162,11 @@ def test_collider_keys_are_addressed_by_one_name_each(tmp_path):
     assert scene.replace(collider_keys=()).collider_keys == ()
     names = [r["name"] for r in rows(str(path))]
     assert {"collider_key1_collider", "collider_key1_time", "collider_key1_z"} <= set(names)
+    from wetcloth.batch.spec import Study
+    from wetcloth.scene import from_dict
+
+    study = Study.from_dict(dict(scene="sweep", duration=0.1, axes={"collider_key2_y": [0.4, 0.6]}))
+    assert [from_dict(run.params).collider_keys[1].y for run in study.runs()] == [0.4, 0.6]
 
 
 @pytest.mark.parametrize("keys, name, words", [
