@@ -1,6 +1,6 @@
 """What colliders cost: those the cloth never touches (issue 26: under 5 %), and a cloth lying on a mesh.
 
-    .venv/bin/python bench/collider_cost.py [--repeat 5] [--duration 5] [--part far|lying|both]
+    .venv/bin/python bench/collider_cost.py [--repeat 5] [--duration 5] [--part far|lying|both|moving]
 
 Far (``--part far``): the default towel at 41 x 57 lands on the water for ``--duration`` s: without
 colliders, with a far analytic sphere, with the bucket mesh collider (models/meshes/bucket.ply, 1200
@@ -13,6 +13,10 @@ Lying (``--part lying``): a cloth that lies on a mesh collider, where the edges'
 section 6.3) works in every step: the ``bucket`` preset for 6 s, and a 15 x 15 sheet (0.4 m) dropped onto
 an icosphere of 5120 faces (radius 0.15 m, tests/test_mesh_colliders.py) for 2 s.  CPU seconds (best and
 median), accepted and rejected steps, ms per step.
+
+Moving (``--part moving``, docs/model.md section 6.3 "Moving colliders"): the ``sweep`` preset (a ball
+sweeping through a hanging towel) for 4 s, with its collider keys and without them (the ball never
+reaches the towel), as the lying part prints them.
 """
 from __future__ import annotations
 
@@ -65,12 +69,32 @@ def lying(repeat: int) -> None:
               f"steps {steps:5d}  rejected {rejected:5d}  {1000 * min(t) / steps:.2f} ms a step", flush=True)
 
 
+def moving(repeat: int) -> None:
+    cases = {"sweep": wetcloth.load_scene("sweep"), "sweep, no keys": wetcloth.load_scene("sweep", collider_keys=())}
+    times = {name: [] for name in cases}
+    counts = {}
+    for _ in range(repeat):
+        for name, scene in cases.items():
+            sim = wetcloth.Simulation(scene)
+            start = time.process_time()
+            sim.advance(4.0)
+            times[name].append(time.process_time() - start)
+            counts[name] = (sim.steps, sim.rejected_steps)
+    for name, t in times.items():
+        steps, rejected = counts[name]
+        print(f"{name:<18}   4 s  best {min(t):6.2f} s  median {statistics.median(t):6.2f} s  steps {steps:5d}  "
+              f"rejected {rejected:5d}  {1000 * min(t) / steps:.2f} ms a step", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--duration", type=float, default=5.0)
-    parser.add_argument("--part", choices=("far", "lying", "both"), default="both")
+    parser.add_argument("--part", choices=("far", "lying", "both", "moving"), default="both")
     args = parser.parse_args()
+    if args.part == "moving":
+        moving(args.repeat)
+        return
     if args.part != "far":
         lying(args.repeat)
     if args.part == "lying":

@@ -385,7 +385,8 @@ def python_arrays(sim: wetcloth.Simulation) -> dict[str, np.ndarray]:
     physics = sim.model.physics  # its scalars (the native FMU has no colliders: none in these scenes)
     assert physics.colliders.size == 0 and len(physics.meshes.headers) == 0
     arrays["physics"] = [float(v) for f, v in zip(physics._fields, physics)
-                         if f not in ("colliders", "meshes", "grip_keys", "grip_origin")]
+                         if f not in ("colliders", "meshes", "grip_keys", "grip_origin", "collider_keys",
+                                      "collider_motion")]
     arrays["grip_origin"] = physics.grip_origin
     arrays["control"] = [float(getattr(control, f)) for f in control._fields if f != "scheme"]
     arrays |= {f"plane.{name}": getattr(plane, name) for name in ("slots", "shares", "stiffness", "order", "rank",

@@ -30,12 +30,15 @@ Cloth = namedtuple("Cloth", "grid_x grid_y offsets rest tension_only stiffness d
 #: is the lowest particle centre; ``colliders`` (k, 13) the colliders' rows (colliders.hpp), ``meshes`` the
 #: mesh colliders' triangles (wetcloth.collider_meshes.ColliderMeshes); the grip (grip.hpp): ``grip_x``,
 #: ``grip_y``, ``grip_z`` (m, inputs), ``grip_keys`` (k, 4) rows time s, x, y, z m, ``grip_origin`` (3, n) m
-#: the particles at t = 0 (empty: no pinned particles).
+#: the particles at t = 0 (empty: no pinned particles); the colliders' keys (collider_motion.hpp):
+#: ``collider_keys`` (c, 5) rows collider (from 0), time s, x, y, z m by collider and time,
+#: ``collider_motion`` (k, MOTION_COLUMNS) the step loop's scratch (empty without keys).
 Physics = namedtuple("Physics", "projected wet_factor water_level water_density thickness smooth stokes "
                                 "drag_normal drag_tangential drag_linear current_x current_y air_density "
                                 "wind_x wind_y wind_z floor_z "
                                 "floor_friction absorption_capacity absorption_rate drying_rate wicking_rate "
-                                "wick_step_limit skip_idle colliders meshes grip_x grip_y grip_z grip_keys grip_origin")
+                                "wick_step_limit skip_idle colliders meshes grip_x grip_y grip_z grip_keys grip_origin "
+                                "collider_keys collider_motion")
 #: Scratch and results: ``force`` (3, n) N; ``submerged`` (n) the submerged fraction of each
 #: particle; ``saturation`` (n); ``blocks`` (6, n) per-particle symmetric 3x3 blocks (xx, yy, zz,
 #: xy, xz, yz) of the system matrix; ``diagonal_blocks`` (6, n) the springs' part of its diagonal

@@ -146,6 +146,37 @@ def grip_key_name(name: str) -> tuple[int, str] | None:
 
 
 @dataclass(frozen=True)
+class ColliderKey:
+    """A key of a collider's motion (docs/model.md section 6.3), one ``[[collider_key]]`` table of a scene file:
+    collider ``collider`` is displaced by (x, y, z) from where its table puts it at ``time``, linearly
+    between its keys (from 0 at t = 0 to the first), the last key's after it.  Its fields are addressed as
+    ``collider_key<k>_<field>`` (k from 1) everywhere else."""
+
+    collider: int = _param(None, "-", "the collider it moves: its number (1, 2, ... in file order; required)", 1, 10000)
+    time: float = _param(None, "s", "time of the key (required: no default)", 0.0, 1e6, lo_open=True)
+    x: float = _param(0.0, "m", "the collider's displacement along x at the key's time", -1e4, 1e4)
+    y: float = _param(0.0, "m", "the collider's displacement along y at the key's time", -1e4, 1e4)
+    z: float = _param(0.0, "m", "the collider's displacement along z (up) at the key's time", -1e4, 1e4)
+
+
+COLLIDER_KEY_FIELDS: dict[str, dataclasses.Field] = {f.name: f for f in dataclasses.fields(ColliderKey)}
+_COLLIDER_KEY_NAME = re.compile(r"collider_key([1-9][0-9]*)_([a-z]+)")
+
+
+def collider_key_name(name: str) -> tuple[int, str] | None:
+    """(k, field) of a flattened collider key name such as 'collider_key1_time', else None."""
+    m = _COLLIDER_KEY_NAME.fullmatch(name)
+    return (int(m.group(1)), m.group(2)) if m and m.group(2) in COLLIDER_KEY_FIELDS else None
+
+
+def collider_key_rows(keys) -> np.ndarray:
+    """The core's rows of collider keys (collider_motion.hpp: collider from 0, time s, x, y, z m), by collider
+    and then time; (0, 5) without keys."""
+    rows = sorted(([k.collider - 1, k.time, k.x, k.y, k.z] for k in keys), key=lambda r: (r[0], r[1]))
+    return np.array(rows, dtype=np.float64).reshape(-1, 5)
+
+
+@dataclass(frozen=True)
 class Scene:
     """A cloth dropped onto water.  The defaults are the cotton towel of ``models/towel.toml``."""
 
@@ -247,13 +278,15 @@ class Scene:
     colliders: tuple = field(default=(), metadata=dict(collider=True))
     # --- the grip's keys: [[grip_key]] tables, flattened as grip_key<k>_<field>
     grip_keys: tuple = field(default=(), metadata=dict(grip_key=True))
+    # --- the colliders' keys (docs/model.md section 6.3): [[collider_key]] tables, flattened as collider_key<k>_<field>
+    collider_keys: tuple = field(default=(), metadata=dict(collider_key=True))
 
     def __post_init__(self):
         validate(self)
 
     def replace(self, **overrides) -> "Scene":
         """A copy with some parameters changed (validated); collider fields by their flattened names.  A
-        new ``colliders`` or ``grip_keys`` replaces the scene's whole (``colliders=()``: none)."""
+        new ``colliders``, ``grip_keys`` or ``collider_keys`` replaces the scene's whole (``colliders=()``: none)."""
         return from_dict(_overridden(self.to_dict(), overrides))
 
     def to_dict(self) -> dict[str, Any]:
@@ -263,11 +296,13 @@ class Scene:
             values |= {f"collider{k}_{name}": getattr(collider, name) for name in COLLIDER_FIELDS}
         for k, key in enumerate(self.grip_keys, 1):
             values |= {f"grip_key{k}_{name}": getattr(key, name) for name in GRIP_KEY_FIELDS}
+        for k, key in enumerate(self.collider_keys, 1):
+            values |= {f"collider_key{k}_{name}": getattr(key, name) for name in COLLIDER_KEY_FIELDS}
         return values
 
 
 PARAMETERS: dict[str, dataclasses.Field] = {f.name: f for f in dataclasses.fields(Scene)
-                                            if f.name not in ("colliders", "grip_keys")}
+                                            if f.name not in ("colliders", "grip_keys", "collider_keys")}
 PARAMETER_LISTING = f"there are {len(PARAMETERS)}; 'wetcloth params' lists them"
 
 
@@ -293,6 +328,12 @@ def _field(name: str) -> dataclasses.Field:
     key = grip_key_name(name)
     if key is not None:
         return GRIP_KEY_FIELDS[key[1]]
+    moving = collider_key_name(name)
+    if moving is not None:
+        return COLLIDER_KEY_FIELDS[moving[1]]
+    if name.startswith("collider_key"):
+        raise ParameterError(name, f"unknown collider key field; a collider key's fields are collider_key<k>_<field> "
+                                   f"(k = 1, 2, ...) with <field> one of {', '.join(COLLIDER_KEY_FIELDS)}")
     if name.startswith("grip_key"):
         raise ParameterError(name, f"unknown grip key field; a grip key's fields are grip_key<k>_<field> "
                                    f"(k = 1, 2, ...) with <field> one of {', '.join(GRIP_KEY_FIELDS)}")
@@ -311,7 +352,8 @@ def parameter_field(name: str) -> dataclasses.Field:
 
 def is_parameter(name: str) -> bool:
     """Whether ``name`` is a scene parameter or a collider field's flattened name (collider1_radius)."""
-    return name in PARAMETERS or collider_name(name) is not None or grip_key_name(name) is not None
+    return (name in PARAMETERS or collider_name(name) is not None or grip_key_name(name) is not None
+            or collider_key_name(name) is not None)
 
 
 def normalise(name: str, value):
@@ -379,6 +421,7 @@ def validate(scene: Scene) -> None:
             object.__setattr__(scene, name, check_value(name, getattr(scene, name)))
     object.__setattr__(scene, "colliders", _checked_colliders(scene.colliders, mistakes))
     object.__setattr__(scene, "grip_keys", _checked_grip_keys(scene, mistakes))
+    object.__setattr__(scene, "collider_keys", _checked_collider_keys(scene, mistakes))
     mistakes.raise_if_any()
     start = _check_mesh_start(scene) if is_mesh(scene.cloth_mesh) else None
     if start is None:
@@ -484,6 +527,50 @@ def _checked_grip_keys(scene: Scene, mistakes: Mistakes) -> tuple:
     return tuple(out)
 
 
+def _checked_collider_keys(scene: Scene, mistakes: Mistakes) -> tuple:
+    """The collider keys as ColliderKey objects (from ColliderKey or dicts of fields), each field checked under
+    its flattened name; each names a collider of the scene, and the times of one collider's keys increase."""
+    keys = scene.collider_keys
+    if not isinstance(keys, (tuple, list)):
+        with mistakes.collect():
+            raise ParameterError("collider_keys", f"expected a list of collider keys, got {keys!r}")
+        return ()
+    out = []
+    last: dict[int, tuple[int, float]] = {}  # each collider's latest key: (k, time)
+    for k, key in enumerate(keys, 1):
+        values = dataclasses.asdict(key) if isinstance(key, ColliderKey) else key
+        with mistakes.collect():
+            if not isinstance(values, dict):
+                raise ParameterError(f"collider_key{k}", f"expected a table of collider key fields, got {values!r}")
+            for required in ("collider", "time"):
+                if required not in values:
+                    name = f"collider_key{k}_{required}"
+                    raise ParameterError(name, f"a collider key needs its {required}; allowed: "
+                                         + _key_range(required, name, scene))
+            checked = {name: check_value(f"collider_key{k}_{name}", value) for name, value in values.items()}
+            collider = checked["collider"]
+            if collider > len(scene.colliders):
+                raise ParameterError(f"collider_key{k}_collider", f"{collider} names no collider (the scene has "
+                                     f"{len(scene.colliders)}); allowed: "
+                                     + _key_range("collider", f"collider_key{k}_collider", scene))
+            if collider in last and checked["time"] <= last[collider][1]:
+                before, time = last[collider]
+                raise ParameterError(f"collider_key{k}_time", f"{checked['time']!r} s is not after "
+                                     f"collider_key{before}_time = {time!r} s, the previous key of collider {collider}; "
+                                     f"allowed: the times of one collider's keys increase")
+            last[collider] = (k, checked["time"])
+            out.append(ColliderKey(**checked))
+    return tuple(out)
+
+
+def _key_range(field_name: str, name: str, scene: Scene) -> str:
+    """What a collider key's field allows: its range, the collider number within the scene's colliders."""
+    if field_name == "collider":
+        return (f"1 <= {name} <= {len(scene.colliders)} (the scene's [[collider]] tables)" if scene.colliders
+                else "a collider key moves a [[collider]] of the scene, and it has none")
+    return describe_range(COLLIDER_KEY_FIELDS[field_name], name)
+
+
 def _check_collider_start(scene: Scene, pos: np.ndarray) -> None:
     """No collider may reach into the cloth at t = 0 (closer than thickness/2 to a particle at ``pos`` (3, n) m)."""
     if not scene.colliders:
@@ -512,9 +599,12 @@ def from_dict(values: dict[str, Any]) -> Scene:
                  for c in values.pop("colliders", ())]
     keys = [dataclasses.asdict(c) if isinstance(c, GripKey) else dict(c) if isinstance(c, dict) else c
             for c in values.pop("grip_keys", ())]
+    moves = [dataclasses.asdict(c) if isinstance(c, ColliderKey) else dict(c) if isinstance(c, dict) else c
+             for c in values.pop("collider_keys", ())]
     mistakes = Mistakes()
     flat: dict[int, dict[str, Any]] = {}
     flat_keys: dict[int, dict[str, Any]] = {}
+    flat_moves: dict[int, dict[str, Any]] = {}
     for name in list(values):
         with mistakes.collect():
             _field(name)
@@ -524,14 +614,18 @@ def from_dict(values: dict[str, Any]) -> Scene:
             key = grip_key_name(name)
             if key is not None:
                 flat_keys.setdefault(key[0], {})[key[1]] = values.pop(name)
-    for k in sorted(flat_keys):
-        with mistakes.collect():
-            if k > len(keys) + 1:
-                raise ParameterError(f"grip_key{k}_{next(iter(flat_keys[k]))}",
-                                     f"there is no grip key {k - 1}: number grip keys 1, 2, ... without gaps")
-            if k == len(keys) + 1:
-                keys.append({})
-            keys[k - 1] = keys[k - 1] | flat_keys[k]
+            move = collider_key_name(name)
+            if move is not None:
+                flat_moves.setdefault(move[0], {})[move[1]] = values.pop(name)
+    for table, listed, label in ((flat_keys, keys, "grip_key"), (flat_moves, moves, "collider_key")):
+        for k in sorted(table):
+            with mistakes.collect():
+                if k > len(listed) + 1:
+                    raise ParameterError(f"{label}{k}_{next(iter(table[k]))}", f"there is no {label.replace('_', ' ')} "
+                                         f"{k - 1}: number {label.replace('_', ' ')}s 1, 2, ... without gaps")
+                if k == len(listed) + 1:
+                    listed.append({})
+                listed[k - 1] = listed[k - 1] | table[k]
     for k in sorted(flat):
         with mistakes.collect():
             if k > len(colliders) + 1:
@@ -541,7 +635,7 @@ def from_dict(values: dict[str, Any]) -> Scene:
                 colliders.append({})
             colliders[k - 1] = colliders[k - 1] | flat[k]
     mistakes.raise_if_any()
-    return Scene(**values, colliders=tuple(colliders), grip_keys=tuple(keys))
+    return Scene(**values, colliders=tuple(colliders), grip_keys=tuple(keys), collider_keys=tuple(moves))
 
 
 #: Keys of a scene file that are not scene parameters: a description and the ``[run]`` table.  (``[[collider]]``
@@ -585,7 +679,8 @@ def read_toml(path: Path, what: str = "scene file") -> dict[str, Any]:
 
 #: The arrays of tables of a scene file ([[collider]], [[grip_key]]), read into flattened names
 #: (collider1_shape, grip_key2_time, ...), and what each is called in errors.
-TABLE_LISTS = {"collider": "colliders are [[collider]] tables", "grip_key": "grip keys are [[grip_key]] tables"}
+TABLE_LISTS = {"collider": "colliders are [[collider]] tables", "grip_key": "grip keys are [[grip_key]] tables",
+               "collider_key": "collider keys are [[collider_key]] tables"}
 
 
 def _flattened_tables(key: str, value, folder: Path, mistakes: Mistakes) -> dict[str, Any]:
@@ -638,9 +733,9 @@ def load_scene(path: str | Path | None = None, **overrides) -> Scene:
 
 
 def _overridden(values: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
-    """``values`` with ``overrides``: a new ``colliders`` or ``grip_keys`` replaces the whole table list
-    (its flattened names in ``values`` dropped; ``colliders=()``: none)."""
-    for table, prefix in (("colliders", "collider"), ("grip_keys", "grip_key")):
+    """``values`` with ``overrides``: a new ``colliders``, ``grip_keys`` or ``collider_keys`` replaces the whole
+    table list (its flattened names in ``values`` dropped; ``colliders=()``: none)."""
+    for table, prefix in (("colliders", "collider"), ("grip_keys", "grip_key"), ("collider_keys", "collider_key")):
         if table in overrides:
             values = {name: v for name, v in values.items() if not re.fullmatch(rf"{prefix}[0-9]+_.+", name)}
     return values | overrides

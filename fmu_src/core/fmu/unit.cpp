@@ -116,6 +116,7 @@ Fixtures scene_fixtures() {
     f.cell_start.assign(SCENE_CELL_START, SCENE_CELL_START + SCENE_CELL_START_SIZE);
     f.cell_items.assign(SCENE_CELL_ITEMS, SCENE_CELL_ITEMS + SCENE_CELL_ITEMS_SIZE);
     f.grip_keys.assign(SCENE_GRIP_KEYS, SCENE_GRIP_KEYS + SCENE_GRIP_KEYS_SIZE);
+    f.collider_keys.assign(SCENE_COLLIDER_KEYS, SCENE_COLLIDER_KEYS + SCENE_COLLIDER_KEYS_SIZE);
     return f;
 }
 

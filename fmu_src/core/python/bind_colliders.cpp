@@ -1,6 +1,7 @@
 // Bindings of the colliders' geometry (colliders.cpp, collider_mesh.cpp), for tests and callers that check a scene.
 #include "convert.hpp"
 #include "wetcloth/collider_mesh.hpp"
+#include "wetcloth/collider_motion.hpp"
 #include "wetcloth/colliders.hpp"
 
 namespace wc::py {
@@ -8,6 +9,7 @@ namespace wc::py {
 WETCLOTH_BINDINGS(m) {
     m.attr("COLLIDER_COLUMNS") = static_cast<Index>(COLLIDER_COLUMNS);
     m.attr("MESH_COLUMNS") = static_cast<Index>(MESH_COLUMNS);
+    m.attr("MOTION_COLUMNS") = static_cast<Index>(MOTION_COLUMNS);
     m.def(
         "collider_distance",
         [](nb::handle colliders, nb::handle meshes, Index k, nb::handle points, double reach, nb::handle distance,

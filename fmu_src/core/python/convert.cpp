@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "wetcloth/collider_mesh.hpp"
+#include "wetcloth/collider_motion.hpp"
 #include "wetcloth/colliders.hpp"
 
 namespace wc::py {
@@ -105,6 +106,13 @@ Physics physics_from(nb::handle h) {
     p.grip_key_count = size_of(h.attr("grip_keys")) / 4;
     p.grip_keys = p.grip_key_count > 0 ? array<const double>(h, "grip_keys", 4 * p.grip_key_count) : nullptr;
     p.grip_origin = size_of(h.attr("grip_origin")) > 0 ? array<const double>(h, "grip_origin") : nullptr;
+    p.collider_key_count = size_of(h.attr("collider_keys")) / COLLIDER_KEY_COLUMNS;
+    p.collider_keys = p.collider_key_count > 0
+                          ? array<const double>(h, "collider_keys", COLLIDER_KEY_COLUMNS * p.collider_key_count)
+                          : nullptr;
+    p.collider_motion = p.collider_key_count > 0
+                            ? array<double>(h, "collider_motion", MOTION_COLUMNS * p.collider_count)
+                            : nullptr;
     return p;
 }
 

@@ -14,6 +14,7 @@
 #include <limits>
 
 #include "wetcloth/collider_mesh.hpp"
+#include "wetcloth/collider_motion.hpp"
 #include "wetcloth/colliders.hpp"
 #include "wetcloth/floor.hpp"
 #include "wetcloth/self_contact.hpp"
@@ -289,7 +290,7 @@ void keep_list(const Contact& contact, ContactLists& lists, const Physics& phys,
     double gap = std::numeric_limits<double>::infinity();
     for (Index k = 0; k < phys.collider_count; ++k) {
         const double* row = phys.colliders + k * COLLIDER_COLUMNS;
-        if (static_cast<Index>(row[C_SHAPE]) != MESH) continue;
+        if (static_cast<Index>(row[C_SHAPE]) != MESH || collider_moves(phys, k)) continue;
         const double* header = phys.meshes.headers + static_cast<Index>(row[C_RADIUS]) * MESH_COLUMNS;
         double gap2 = 0.0;
         for (Index c = 0; c < 3; ++c) {
@@ -310,7 +311,7 @@ void keep_list(const Contact& contact, ContactLists& lists, const Physics& phys,
     const Box cloth = path_box(nullptr, n, n, x.data(), x.data(), far_pad);  // a mesh it does not reach costs this
     for (Index k = 0; k < phys.collider_count; ++k) {
         const double* row = phys.colliders + k * COLLIDER_COLUMNS;
-        if (static_cast<Index>(row[C_SHAPE]) != MESH) continue;
+        if (static_cast<Index>(row[C_SHAPE]) != MESH || collider_moves(phys, k)) continue;
         const Index mesh = static_cast<Index>(row[C_RADIUS]);
         const double* header = phys.meshes.headers + mesh * MESH_COLUMNS;
         bool meets = true;

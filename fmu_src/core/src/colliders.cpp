@@ -16,6 +16,7 @@
 #include <limits>
 
 #include "wetcloth/collider_mesh.hpp"
+#include "wetcloth/collider_motion.hpp"
 #include "wetcloth/floor.hpp"
 
 namespace wc {
@@ -41,7 +42,7 @@ double box_distance(const double* d, const double* half, double* normal) {
     return q[widest];
 }
 
-//: The collider's axis-aligned bounding box (lo, hi (3)); false for a plane (unbounded).
+//: The collider's axis-aligned bounding box (lo, hi (3)) where its row puts it; false for a plane (unbounded).
 bool bounds(const Physics& phys, const double* row, double* lo, double* hi) {
     double half[3];
     switch (static_cast<Index>(row[C_SHAPE])) {
@@ -62,28 +63,40 @@ bool bounds(const Physics& phys, const double* row, double* lo, double* hi) {
     return true;
 }
 
-//: Whether any point of the box [lo, hi] can be closer than gap to the collider.
-bool reachable(const Physics& phys, const double* row, const double* lo, const double* hi, double gap) {
+//: Whether any point of the box [lo, hi] can be closer than gap to the collider, where it is now or was at
+//: the step's start (shift: its row of Physics::collider_motion, or null: it stands where its row puts it).
+bool reachable(const Physics& phys, const double* row, const double* shift, const double* lo, const double* hi,
+               double gap) {
     double clo[3], chi[3];
     if (bounds(phys, row, clo, chi)) {
         for (Index c = 0; c < 3; ++c) {
+            if (shift != nullptr) {
+                const double now = shift[MOTION_NOW + c], start = shift[MOTION_START + c];
+                clo[c] += std::min(now, start);
+                chi[c] += std::max(now, start);
+            }
             if (hi[c] < clo[c] - gap || lo[c] > chi[c] + gap) return false;
         }
         return true;
     }
-    // A plane: the box's corner deepest along -normal.
+    // A plane: the box's corner deepest along -normal (the plane where it is now).
     double depth = 0.0;
     for (Index c = 0; c < 3; ++c) {
         const double nc = row[C_NORMAL_X + c];
-        depth += nc * ((nc >= 0.0 ? lo[c] : hi[c]) - row[C_X + c]);
+        const double point = row[C_X + c] + (shift != nullptr ? shift[MOTION_NOW + c] : 0.0);
+        depth += nc * ((nc >= 0.0 ? lo[c] : hi[c]) - point);
     }
     return depth < gap;
 }
 
 }  // namespace
 
-double collider_distance(const Physics& phys, Index k, const double* p, double reach, double* normal) {
+double collider_distance(const Physics& phys, Index k, const double* at, double reach, double* normal) {
     const double* row = phys.colliders + k * COLLIDER_COLUMNS;
+    const double* shift = collider_shift(phys, k);  // a moving collider: p in the frame where it stands still
+    const double p[3] = {shift != nullptr ? at[0] - shift[MOTION_NOW] : at[0],
+                         shift != nullptr ? at[1] - shift[MOTION_NOW + 1] : at[1],
+                         shift != nullptr ? at[2] - shift[MOTION_NOW + 2] : at[2]};
     const double d[3] = {p[0] - row[C_X], p[1] - row[C_Y], p[2] - row[C_Z]};
     switch (static_cast<Index>(row[C_SHAPE])) {
         case MESH: return mesh_distance(phys.meshes, static_cast<Index>(row[C_RADIUS]), p, reach, normal);
@@ -148,17 +161,60 @@ void path_box(Index n, const double* start, const double* pos, double* lo, doubl
 }
 
 //: Where particle i's path from a to p crossed mesh collider `row`'s surface: p goes back to the side it
-//: came from, gap off the crossed triangle (normal: that side's).  Returns whether it crossed.
-bool undo_crossing(const Physics& phys, const double* row, const double* a, double gap, double* p, double* normal) {
+//: came from, gap off the crossed triangle (normal: that side's).  Returns whether it crossed.  A moving
+//: mesh (shift: its row of Physics::collider_motion) is looked at in its own frame: the path from a less its
+//: displacement at the step's start to p less its displacement now.
+bool undo_crossing(const Physics& phys, const double* row, const double* shift, const double* a, double gap, double* p,
+                   double* normal) {
     double hit[3];
-    if (!mesh_crossing(phys.meshes, static_cast<Index>(row[C_RADIUS]), a, p, hit, normal)) return false;
-    for (Index c = 0; c < 3; ++c) p[c] = hit[c] + gap * normal[c];
+    if (shift == nullptr) {
+        if (!mesh_crossing(phys.meshes, static_cast<Index>(row[C_RADIUS]), a, p, hit, normal)) return false;
+        for (Index c = 0; c < 3; ++c) p[c] = hit[c] + gap * normal[c];
+        return true;
+    }
+    const double from[3] = {a[0] - shift[MOTION_START], a[1] - shift[MOTION_START + 1], a[2] - shift[MOTION_START + 2]};
+    const double to[3] = {p[0] - shift[MOTION_NOW], p[1] - shift[MOTION_NOW + 1], p[2] - shift[MOTION_NOW + 2]};
+    if (!mesh_crossing(phys.meshes, static_cast<Index>(row[C_RADIUS]), from, to, hit, normal)) return false;
+    for (Index c = 0; c < 3; ++c) p[c] = hit[c] + gap * normal[c] + shift[MOTION_NOW + c];
+    return true;
+}
+
+//: Where particle i's path crossed a moving box (shift: its row of Physics::collider_motion), in the box's
+//: frame (from a (3) less the box's displacement at the step's start to p (3) less its displacement now), as
+//: a mesh's crossing (undo_crossing): p goes back gap off the face it entered through, where the box is now
+//: (normal: that face's).  Returns whether the path entered the box from outside.  (The nearest face at the
+//: step's end would let a particle whose support the box's top carried away in the step fall past its
+//: edge, or push one that the top swept over near the edge out through the side face, across the cloth.)
+bool undo_box_crossing(const double* row, const double* shift, const double* a, double gap, double* p,
+                       double* normal) {
+    const double half[3] = {0.5 * row[C_SIZE_X], 0.5 * row[C_SIZE_Y], 0.5 * row[C_SIZE_Z]};
+    double s[3], e[3];
+    double enter = -std::numeric_limits<double>::infinity(), leave = std::numeric_limits<double>::infinity();
+    Index axis = -1;
+    for (Index c = 0; c < 3; ++c) {
+        s[c] = a[c] - shift[MOTION_START + c] - row[C_X + c];
+        e[c] = p[c] - shift[MOTION_NOW + c] - row[C_X + c];
+        if (s[c] == e[c]) {
+            if (std::abs(s[c]) > half[c]) return false;  // beside the slab all along
+            continue;
+        }
+        const double t0 = (-half[c] - s[c]) / (e[c] - s[c]), t1 = (half[c] - s[c]) / (e[c] - s[c]);
+        const double lo = std::min(t0, t1), hi = std::max(t0, t1);
+        if (lo > enter) enter = lo, axis = c;
+        leave = std::min(leave, hi);
+    }
+    if (axis < 0 || !(enter > 0.0 && enter <= 1.0 && enter <= leave)) return false;  // inside at the start, or missed
+    for (Index c = 0; c < 3; ++c) normal[c] = 0.0;
+    normal[axis] = s[axis] > 0.0 ? 1.0 : -1.0;
+    for (Index c = 0; c < 3; ++c) {
+        p[c] = s[c] + enter * (e[c] - s[c]) + gap * normal[c] + row[C_X + c] + shift[MOTION_NOW + c];
+    }
     return true;
 }
 
 }  // namespace
 
-Index collider_contact(Index n, const Physics& phys, const double* start, double* pos, double* vel) {
+Index collider_contact(Index n, const Physics& phys, const double* start, double* pos, double* vel, double* kick) {
     if (phys.collider_count == 0 || n == 0) return 0;
     const double gap = 0.5 * phys.thickness;
     double lo[3], hi[3];
@@ -166,14 +222,21 @@ Index collider_contact(Index n, const Physics& phys, const double* start, double
     Index touching = 0;
     for (Index k = 0; k < phys.collider_count; ++k) {
         const double* row = phys.colliders + k * COLLIDER_COLUMNS;
-        if (!reachable(phys, row, lo, hi, gap)) continue;
+        const double* shift = collider_shift(phys, k);
+        if (!reachable(phys, row, shift, lo, hi, gap)) continue;
         const bool mesh = static_cast<Index>(row[C_SHAPE]) == MESH;
+        const bool box = static_cast<Index>(row[C_SHAPE]) == BOX;
+        const bool moved = shift != nullptr && (shift[MOTION_NOW] != shift[MOTION_START] ||
+                                                shift[MOTION_NOW + 1] != shift[MOTION_START + 1] ||
+                                                shift[MOTION_NOW + 2] != shift[MOTION_START + 2]);
         const double friction = row[C_FRICTION];
         for (Index i = 0; i < n; ++i) {
             double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
             const double a[3] = {start[i], start[n + i], start[2 * n + i]};
             double nrm[3];
-            if (!(mesh && undo_crossing(phys, row, a, gap, p, nrm))) {
+            const bool crossed = mesh ? undo_crossing(phys, row, shift, a, gap, p, nrm)
+                                 : box && moved && undo_box_crossing(row, shift, a, gap, p, nrm);
+            if (!crossed) {
                 const double dist = collider_distance(phys, k, p, gap, nrm);
                 if (!(dist < gap)) continue;
                 // Position: out along the normal, to the contact distance.
@@ -181,9 +244,26 @@ Index collider_contact(Index n, const Physics& phys, const double* start, double
                 for (Index c = 0; c < 3; ++c) p[c] += depth * nrm[c];
             }
             touching += 1;
-            // Velocity: the part into the collider removed, sliding reduced by friction times that.
+            // Velocity: the part into the collider removed, sliding reduced by friction times that (relative
+            // to a moving collider's velocity).
             double v[3] = {vel[i], vel[n + i], vel[2 * n + i]};
-            coulomb_stop(v, nrm, friction);
+            if (shift == nullptr) {
+                coulomb_stop(v, nrm, friction);
+            } else {
+                const double* u = shift + MOTION_VELOCITY;
+                for (Index c = 0; c < 3; ++c) v[c] -= u[c];
+                double before[3] = {v[0], v[1], v[2]};
+                coulomb_stop(v, nrm, friction);
+                double along = 0.0, across = 0.0;
+                for (Index c = 0; c < 3; ++c) {
+                    before[c] = v[c] - before[c];
+                    across += before[c] * nrm[c];
+                    v[c] += u[c];
+                }
+                for (Index c = 0; c < 3; ++c) along += (before[c] - across * nrm[c]) * (before[c] - across * nrm[c]);
+                const bool moves = u[0] != 0.0 || u[1] != 0.0 || u[2] != 0.0;
+                if (kick != nullptr && moves) *kick = std::max(*kick, std::sqrt(along));
+            }
             for (Index c = 0; c < 3; ++c) {
                 pos[c * n + i] = p[c];
                 vel[c * n + i] = v[c];
@@ -205,11 +285,16 @@ Index touched_collider(const Physics& phys, Index n, Index i, const double* pos,
 Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const double* vel, double* free, double* held) {
     Index holding = 0;
     if (phys.collider_count == 0) return 0;
+    const double still[3] = {0.0, 0.0, 0.0};
     for (Index i = 0; i < n; ++i) {
-        if (free[i] == 0.0 || vel[i] != 0.0 || vel[n + i] != 0.0 || vel[2 * n + i] != 0.0) continue;
+        if (free[i] == 0.0) continue;
+        if (phys.collider_motion == nullptr && (vel[i] != 0.0 || vel[n + i] != 0.0 || vel[2 * n + i] != 0.0)) continue;
         double nrm[3];
         const Index k = touched_collider(phys, n, i, pos, nrm);
         if (k < 0) continue;
+        const double* shift = collider_shift(phys, k);
+        const double* u = shift != nullptr ? shift + MOTION_VELOCITY : still;  // at rest on it: moving with it
+        if (vel[i] != u[0] || vel[n + i] != u[1] || vel[2 * n + i] != u[2]) continue;
         free[i] = 0.0;
         held[i] = collider_held(k);
         holding += 1;
@@ -250,7 +335,10 @@ double slip_on_supports(Index n, const Physics& phys, const double* force, const
             double friction = phys.floor_friction;
             if (!on_floor) {
                 const Index k = static_cast<Index>(held[i] - collider_held(0));
-                const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+                double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+                if (const double* u = held_rate(phys, held[i])) {  // where a moving collider held it, at the step's start
+                    for (int c = 0; c < 3; ++c) p[c] -= h * u[c];
+                }
                 if (collider_distance(phys, k, p, phys.thickness, nrm) >= phys.thickness) return -1.0;  // off it
                 friction = phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
             }

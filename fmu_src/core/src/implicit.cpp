@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "wetcloth/assembly.hpp"
+#include "wetcloth/collider_motion.hpp"
 #include "wetcloth/integration.hpp"
 #include "wetcloth/plane.hpp"
 #include "wetcloth/reused_plane.hpp"
@@ -243,15 +244,19 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
                 guess = hat_vel[k];
             }
             out_vel[k] = guess * free[i];
-            if (grip_rate != nullptr && free[i] == 0.0 && held[i] == 0.0) {  // the grip moves it: v+ prescribed
-                out_vel[k] = grip_rate[c];
-                hat_vel[k] = grip_rate[c];
-                hat_pos[k] = pos[k] + (h - beta * h) * grip_rate[c];  // so that x+ = x + h v+
+            // The grip or a moving collider that holds it moves it: v+ prescribed.
+            const double* rate = free[i] != 0.0 || held == nullptr ? nullptr
+                                 : held[i] == 0.0                   ? grip_rate
+                                                                    : held_rate(phys, held[i]);
+            if (rate != nullptr) {
+                out_vel[k] = rate[c];
+                hat_vel[k] = rate[c];
+                hat_pos[k] = pos[k] + (h - beta * h) * rate[c];  // so that x+ = x + h v+
             }
         }
     }
     const double bh = beta * h;
-    if (solver.sliding != nullptr) prescribe_normal_speed(*solver.sliding, n, pos, hat_pos, bh, out_vel);
+    if (solver.sliding != nullptr) prescribe_normal_speed(*solver.sliding, n, pos, hat_pos, h, bh, out_vel);
     for (Index k = 0; k < 3 * n; ++k) out_pos[k] = hat_pos[k] + bh * out_vel[k];
     const bool adaptive = mode == NewtonMode::ADAPTIVE;
     Index factored = 0;

@@ -10,6 +10,7 @@
 #include <type_traits>
 
 #include "wetcloth/collider_mesh.hpp"
+#include "wetcloth/collider_motion.hpp"
 #include "wetcloth/colliders.hpp"
 #include "wetcloth/implicit.hpp"
 #include "wetcloth/integration.hpp"
@@ -732,6 +733,10 @@ void Simulation::set_scene(const Scene& scene) {
     p.meshes = fixtures_.meshes();
     p.grip_key_count = static_cast<Index>(fixtures_.grip_keys.size() / 4);
     p.grip_keys = fixtures_.grip_keys.empty() ? nullptr : fixtures_.grip_keys.data();
+    p.collider_key_count = static_cast<Index>(fixtures_.collider_keys.size() / COLLIDER_KEY_COLUMNS);
+    p.collider_keys = fixtures_.collider_keys.empty() ? nullptr : fixtures_.collider_keys.data();
+    if (p.collider_key_count > 0) collider_motion_.resize(static_cast<std::size_t>(p.collider_count * MOTION_COLUMNS));
+    p.collider_motion = collider_motion_.empty() ? nullptr : collider_motion_.data();
 }
 
 void Simulation::set_control() {

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "wetcloth/collider_motion.hpp"
 #include "wetcloth/colliders.hpp"
 #include "wetcloth/floor.hpp"
 
@@ -23,18 +24,22 @@ namespace wc {
 namespace {
 
 //: The surface particle i lies on: the floor (centre at floor_z or below) or the collider it touches, its
-//: outward normal into nrm and its friction; false if none.
+//: outward normal into nrm, its friction and its velocity u (m/s: a moving collider's, else 0); false if none.
 bool surface_under(const Physics& phys, Index n, Index i, const double* pos, double nrm[3], double& friction,
-                   bool& on_floor) {
+                   bool& on_floor, double u[3]) {
     nrm[0] = 0.0;
     nrm[1] = 0.0;
     nrm[2] = 1.0;
+    u[0] = u[1] = u[2] = 0.0;
     friction = phys.floor_friction;
     on_floor = pos[2 * n + i] <= phys.floor_z;
     if (on_floor) return true;
     const Index k = phys.collider_count > 0 ? touched_collider(phys, n, i, pos, nrm) : -1;
     if (k < 0) return false;
     friction = phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
+    if (const double* shift = collider_shift(phys, k)) {
+        for (int c = 0; c < 3; ++c) u[c] = shift[MOTION_VELOCITY + c];
+    }
     return true;
 }
 
@@ -50,11 +55,12 @@ double along_surface(const double a[3], const double nrm[3], double t[3]) {
 }
 
 void add_particle(Sliding& sliding, Index i, const double nrm[3], const double t[3], double length, double friction,
-                  bool on_floor) {
+                  bool on_floor, const double u[3]) {
     sliding.index.push_back(i);
     for (int c = 0; c < 3; ++c) {
         sliding.normal.push_back(nrm[c]);
         sliding.direction.push_back(t[c] / length);
+        sliding.surface_velocity.push_back(u[c]);
     }
     sliding.friction.push_back(friction);
     sliding.on_floor.push_back(on_floor ? 1 : 0);
@@ -69,18 +75,19 @@ Index gather_sliding(Index n, const Physics& phys, const double* pos, const doub
     sliding.friction.clear();
     sliding.direction.clear();
     sliding.on_floor.clear();
+    sliding.surface_velocity.clear();
     for (Index i = 0; i < n; ++i) {
         if (free[i] == 0.0) continue;  // pinned, or held at rest
-        double nrm[3], friction;
+        double nrm[3], friction, u[3];
         bool on_floor;
-        if (!surface_under(phys, n, i, pos, nrm, friction, on_floor)) continue;
-        const double v[3] = {vel[i], vel[n + i], vel[2 * n + i]};
+        if (!surface_under(phys, n, i, pos, nrm, friction, on_floor, u)) continue;
+        const double v[3] = {vel[i] - u[0], vel[n + i] - u[1], vel[2 * n + i] - u[2]};  // relative to the surface
         double t[3];
         const double slide = along_surface(v, nrm, t);
         if (!(slide > 0.0)) continue;
         const double vn = v[0] * nrm[0] + v[1] * nrm[1] + v[2] * nrm[2];
         if (vn > ACROSS_ROUNDING * slide) continue;  // leaving the surface
-        add_particle(sliding, i, nrm, t, slide, friction, on_floor);
+        add_particle(sliding, i, nrm, t, slide, friction, on_floor, u);
     }
     sliding.normal_speed.assign(sliding.index.size(), 0.0);
     return sliding.count();
@@ -92,17 +99,18 @@ Index add_released(Index n, const Physics& phys, const double* pos, const double
     for (const Index i : sliding.index) listed[i] = 1;
     Index added = 0;
     for (Index i = 0; i < n; ++i) {
-        if (free[i] == 0.0 || listed[i] || vel[i] != 0.0 || vel[n + i] != 0.0 || vel[2 * n + i] != 0.0) continue;
-        double nrm[3], friction;
+        if (free[i] == 0.0 || listed[i]) continue;
+        double nrm[3], friction, u[3];
         bool on_floor;
-        if (!surface_under(phys, n, i, pos, nrm, friction, on_floor)) continue;
+        if (!surface_under(phys, n, i, pos, nrm, friction, on_floor, u)) continue;
+        if (vel[i] != u[0] || vel[n + i] != u[1] || vel[2 * n + i] != u[2]) continue;  // not at rest on it
         const double f[3] = {force[i], force[n + i], force[2 * n + i]};
         const double fn = f[0] * nrm[0] + f[1] * nrm[1] + f[2] * nrm[2];
         if (fn >= 0.0) continue;  // lifted off: free
         double t[3];
         const double along = along_surface(f, nrm, t);
         if (!(along > 0.0)) continue;
-        add_particle(sliding, i, nrm, t, along, friction, on_floor);
+        add_particle(sliding, i, nrm, t, along, friction, on_floor, u);
         added += 1;
     }
     sliding.normal_speed.assign(sliding.index.size(), 0.0);
@@ -118,17 +126,20 @@ void project_sliding(const Sliding& sliding, Index n, double* a) {
     }
 }
 
-void prescribe_normal_speed(Sliding& sliding, Index n, const double* pos, const double* hat_pos, double bh,
+void prescribe_normal_speed(Sliding& sliding, Index n, const double* pos, const double* hat_pos, double h, double bh,
                             double* vel) {
     for (Index s = 0; s < sliding.count(); ++s) {
         const Index i = sliding.index[s];
         const double* nrm = &sliding.normal[3 * s];
+        const double* u = &sliding.surface_velocity[3 * s];
         double gap = 0.0;
         double vn = 0.0;
         for (int c = 0; c < 3; ++c) {
             gap += (pos[c * n + i] - hat_pos[c * n + i]) * nrm[c];
             vn += vel[c * n + i] * nrm[c];
         }
+        const double un = u[0] * nrm[0] + u[1] * nrm[1] + u[2] * nrm[2];
+        if (un != 0.0) gap += h * un;  // (a still surface: as before, to the bit)
         const double speed = gap / bh;
         sliding.normal_speed[s] = speed;
         for (int c = 0; c < 3; ++c) vel[c * n + i] += (speed - vn) * nrm[c];
@@ -152,13 +163,16 @@ Index stop_reversed(const Sliding& sliding, Index n, const double* hat_pos, doub
         const Index i = sliding.index[s];
         const double* nrm = &sliding.normal[3 * s];
         const double* t = &sliding.direction[3 * s];
-        const double onward = vel[i] * t[0] + vel[n + i] * t[1] + vel[2 * n + i] * t[2];
+        const double* u = &sliding.surface_velocity[3 * s];
+        const double onward = (vel[i] - u[0]) * t[0] + (vel[n + i] - u[1]) * t[1] + (vel[2 * n + i] - u[2]) * t[2];
         if (onward > 0.0) continue;
         stopped += 1;
-        for (int c = 0; c < 3; ++c) {  // at rest (exactly: held in the next step), where it is across the surface
+        const double un = u[0] * nrm[0] + u[1] * nrm[1] + u[2] * nrm[2];
+        for (int c = 0; c < 3; ++c) {  // at rest on the surface (exactly: held in the next step), where it is across it
             const Index k = c * n + i;
-            vel[k] = 0.0;
+            vel[k] = u[c];
             pos[k] = hat_pos[k] + bh * sliding.normal_speed[s] * nrm[c];
+            if (u[c] != 0.0 || un != 0.0) pos[k] += bh * (u[c] - un * nrm[c]);  // carried along a moving surface
         }
     }
     return stopped;
@@ -179,7 +193,8 @@ double lift_off(const Sliding& sliding, Index n, double floor_z, const double* f
                 farthest = std::max(farthest, move);
                 continue;
             }
-            const double vn = vel[i] * nrm[0] + vel[n + i] * nrm[1] + vel[2 * n + i] * nrm[2];
+            const double* u = &sliding.surface_velocity[3 * s];
+            const double vn = (vel[i] - u[0]) * nrm[0] + (vel[n + i] - u[1]) * nrm[1] + (vel[2 * n + i] - u[2]) * nrm[2];
             for (int c = 0; c < 3; ++c) {
                 pos[c * n + i] += move * nrm[c];
                 vel[c * n + i] += (lifting > 0.0 ? lifting / inertia * h : 0.0) * nrm[c] - vn * nrm[c];
@@ -201,6 +216,7 @@ Index drop_lifting(Sliding& sliding, Index n, const double* force) {
         for (int c = 0; c < 3; ++c) {
             sliding.normal[3 * kept + c] = nrm[c];
             sliding.direction[3 * kept + c] = sliding.direction[3 * s + c];
+            sliding.surface_velocity[3 * kept + c] = sliding.surface_velocity[3 * s + c];
         }
         sliding.friction[kept] = sliding.friction[s];
         sliding.on_floor[kept] = sliding.on_floor[s];
@@ -209,6 +225,7 @@ Index drop_lifting(Sliding& sliding, Index n, const double* force) {
     sliding.index.resize(kept);
     sliding.normal.resize(3 * kept);
     sliding.direction.resize(3 * kept);
+    sliding.surface_velocity.resize(3 * kept);
     sliding.friction.resize(kept);
     sliding.on_floor.resize(kept);
     sliding.normal_speed.assign(kept, 0.0);

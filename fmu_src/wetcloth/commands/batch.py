@@ -61,7 +61,7 @@ def _with_unit(study):
     from wetcloth.scene import from_dict
 
     scene = from_dict(study.runs()[0].params)
-    if scene.colliders or scene.grip_keys:
+    if scene.colliders or scene.grip_keys or scene.collider_keys:
         unit = build_fmu(DEFAULT_OUT_DIR / f"{study.name}.fmu", scene=study.scene)
         print(f"built {unit}: the scene's colliders and grip keys are in it")
         return study.replace(fmu=str(unit))

@@ -7,8 +7,9 @@ import shutil
 import textwrap
 
 from wetcloth import run_settings
-from wetcloth.scene import (COLLIDER_FIELDS, GRIP_KEY_FIELDS, PARAMETERS, RESERVED_KEYS, collider_name, describe_range,
-                            grip_key_name, parameter_field, read_scene_file)
+from wetcloth.scene import (COLLIDER_FIELDS, COLLIDER_KEY_FIELDS, GRIP_KEY_FIELDS, PARAMETERS, RESERVED_KEYS,
+                            collider_key_name, collider_name, describe_range, grip_key_name, parameter_field,
+                            read_scene_file)
 
 
 def add_parser(sub) -> None:
@@ -32,8 +33,9 @@ def rows(scene: str | None) -> list[dict]:
         out.append(dict(name=name, table="", value=values.get(name, f.default), default=f.default, unit=md["unit"],
                         range=describe_range(f), min=md["lo"], min_exclusive=bool(md["lo_open"]), max=md["hi"],
                         choices=list(md["choices"]) or None, fmu=md["fmu"], doc=md["doc"]))
-    for table, fields, flat in (("collider", COLLIDER_FIELDS, collider_name), ("grip_key", GRIP_KEY_FIELDS, grip_key_name)):
-        count = max((flat(n)[0] for n in values if flat(n)), default=0)  # the scene's [[collider]]s, [[grip_key]]s
+    for table, fields, flat in (("collider", COLLIDER_FIELDS, collider_name), ("grip_key", GRIP_KEY_FIELDS, grip_key_name),
+                                ("collider_key", COLLIDER_KEY_FIELDS, collider_key_name)):
+        count = max((flat(n)[0] for n in values if flat(n)), default=0)  # the scene's [[collider]]s, [[grip_key]]s, ...
         for name in (f"{table}{k}_{field}" for k in range(1, count + 1) for field in fields):
             f = parameter_field(name)
             md = f.metadata

@@ -161,7 +161,8 @@ FIXTURE_ARRAYS = (("SCENE_COLLIDERS", "double", "rows"), ("SCENE_MESH_HEADERS", 
                   ("SCENE_MESH_VERTICES", "double", "vertices"), ("SCENE_FACE_NORMALS", "double", "face_normals"),
                   ("SCENE_EDGE_NORMALS", "double", "edge_normals"), ("SCENE_VERTEX_NORMALS", "double", "vertex_normals"),
                   ("SCENE_MESH_TRIANGLES", "Index", "triangles"), ("SCENE_CELL_START", "Index", "cell_start"),
-                  ("SCENE_CELL_ITEMS", "Index", "cell_items"), ("SCENE_GRIP_KEYS", "double", "grip_keys"))
+                  ("SCENE_CELL_ITEMS", "Index", "cell_items"), ("SCENE_GRIP_KEYS", "double", "grip_keys"),
+                  ("SCENE_COLLIDER_KEYS", "double", "collider_keys"))
 
 
 def fixtures_header(scene=None) -> str:
@@ -172,10 +173,12 @@ def fixtures_header(scene=None) -> str:
     import numpy as np
 
     from wetcloth.collider_meshes import meshes_of, no_meshes
+    from wetcloth.scene import collider_key_rows
 
     rows, meshes = meshes_of(scene.colliders) if scene is not None else (np.zeros(0), no_meshes())
     keys = [[k.time, k.x, k.y, k.z] for k in scene.grip_keys] if scene is not None else []
-    sources = dict(meshes._asdict(), rows=rows, grip_keys=np.array(keys, dtype=np.float64))
+    sources = dict(meshes._asdict(), rows=rows, grip_keys=np.array(keys, dtype=np.float64),
+                   collider_keys=collider_key_rows(scene.collider_keys if scene is not None else ()))
     lines = []
     for name, kind, source in FIXTURE_ARRAYS:
         values = np.ascontiguousarray(sources[source]).ravel()

@@ -3,7 +3,8 @@ variables' start values, its colliders and grip keys are built in (fixed: they a
 its mesh files (``cloth_mesh``, mesh colliders' ``file``) go into the unit's resources.
 
 The builder writes ``resources/wetcloth_scene.json``: ``{"starts": {name: value}, "vertices": n or null,
-"colliders": [{field: value}], "grip_keys": [{"time": s, "x": m, "y": m, "z": m}]}``.  A mesh file is packed as ``resources/meshes/<digest>/<file name>``
+"colliders": [{field: value}], "grip_keys": [{"time": s, "x": m, "y": m, "z": m}], "collider_keys":
+[{"collider": k, "time": s, "x": m, "y": m, "z": m}]}``.  A mesh file is packed as ``resources/meshes/<digest>/<file name>``
 and named by that relative path, which the unit finds in its resources (``mesh_file.SEARCH_FOLDERS``);
 the digest in the path means that two units holding the same relative path hold the same file.
 ``vertices`` (a mesh cloth's vertex count) sizes the FMI 3.0 unit's array outputs instead of the
@@ -29,19 +30,21 @@ MESH_FOLDER = "meshes"
 @dataclass(frozen=True)
 class PackedScene:
     """Start values by scene parameter, a mesh cloth's vertex count (else None), the colliders (their fields,
-    mesh files by their packed paths), the grip keys (their fields) and, when building, the mesh files to
-    pack (packed path -> file)."""
+    mesh files by their packed paths), the grip keys and the collider keys (their fields) and, when building,
+    the mesh files to pack (packed path -> file)."""
 
     starts: dict[str, Any]
     vertices: int | None = None
     colliders: tuple = ()
     grip_keys: tuple = ()
     files: dict = field(default_factory=dict)
+    collider_keys: tuple = ()
 
     def fixtures(self) -> dict:
-        """What of the scene is built in beside the variables: ``colliders`` and ``grip_keys``, for
-        ``scene.from_dict``."""
-        return {"colliders": list(self.colliders), "grip_keys": list(self.grip_keys)}
+        """What of the scene is built in beside the variables: ``colliders``, ``grip_keys`` and
+        ``collider_keys``, for ``scene.from_dict``."""
+        return {"colliders": list(self.colliders), "grip_keys": list(self.grip_keys),
+                "collider_keys": list(self.collider_keys)}
 
     @property
     def mesh(self) -> Path | None:
@@ -56,7 +59,7 @@ def _packed_path(path: Path) -> str:
 
 def fixtures_of(scene) -> tuple[tuple, tuple, dict]:
     """A ``Scene``'s colliders and grip keys (their fields) as a unit built from it carries them, and the
-    mesh colliders' files to pack (packed path -> file)."""
+    mesh colliders' files to pack (packed path -> file); its collider keys: ``collider_keys_of``."""
     from wetcloth.mesh_file import locate
 
     files, colliders = {}, []
@@ -70,14 +73,23 @@ def fixtures_of(scene) -> tuple[tuple, tuple, dict]:
     return tuple(colliders), tuple(dataclasses.asdict(key) for key in scene.grip_keys), files
 
 
+def collider_keys_of(scene) -> tuple:
+    """A ``Scene``'s collider keys (their fields) as a unit built from it carries them."""
+    return tuple(dataclasses.asdict(key) for key in scene.collider_keys)
+
+
 def check_carries(fmu: str | Path, resources: str | Path, scene) -> None:
     """ValueError unless the unit ``fmu`` (its extracted ``resources`` folder) carries ``scene``'s colliders
     and grip keys (built in by ``build-fmu --scene``: they are not variables)."""
     packed = load(resources) or PackedScene({})
     colliders, grip_keys, _ = fixtures_of(scene)
-    if (packed.colliders, packed.grip_keys) != (colliders, grip_keys):
+    moves = collider_keys_of(scene)
+    if (packed.colliders, packed.grip_keys, packed.collider_keys) != (colliders, grip_keys, moves):
         have = f"{len(packed.colliders)} colliders and {len(packed.grip_keys)} grip keys"
         want = f"{len(colliders)} and {len(grip_keys)}"
+        if packed.collider_keys or moves:
+            have += f" ({len(packed.collider_keys)} collider keys)"
+            want += f" ({len(moves)} collider keys)"
         raise ValueError(f"the FMU {fmu} carries {have}, not this scene's ({want}, or other fields): colliders "
                          f"and grip keys are built into a unit, not variables; build one from the scene "
                          f"('wetcloth build-fmu --scene SCENE'), and vary them with engine 'python'")
@@ -100,7 +112,8 @@ def pack(scene_path: str | Path) -> PackedScene:
         starts["cloth_mesh"] = _packed_path(mesh)
         files[starts["cloth_mesh"]] = mesh
         vertices = build_topology(scene).n
-    return PackedScene(starts, vertices=vertices, colliders=tuple(colliders), grip_keys=grip_keys, files=files)
+    return PackedScene(starts, vertices=vertices, colliders=tuple(colliders), grip_keys=grip_keys, files=files,
+                       collider_keys=collider_keys_of(scene))
 
 
 def text(packed: PackedScene) -> str:
@@ -136,4 +149,4 @@ def load(resources: str | Path | None) -> PackedScene | None:
     if folder not in mesh_file.SEARCH_FOLDERS:
         mesh_file.SEARCH_FOLDERS.append(folder)
     return PackedScene(dict(data["starts"]), data.get("vertices"), tuple(data.get("colliders", ())),
-                       tuple(data.get("grip_keys", ())))
+                       tuple(data.get("grip_keys", ())), collider_keys=tuple(data.get("collider_keys", ())))

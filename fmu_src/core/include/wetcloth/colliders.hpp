@@ -26,9 +26,11 @@ double collider_distance(const Physics& phys, Index k, const double* p, double r
 //: thickness / 2 to a collider is put back at distance gap along the outward normal; one whose path
 //: crossed a mesh collider's triangle goes back to the side it came from, gap off that triangle.  Its
 //: velocity into the collider is removed and its tangential velocity reduced by friction times that (never
-//: reversed).  Colliders whose box, grown by gap, the cloth's path does not reach are skipped.  Returns how
-//: many particles touched.
-Index collider_contact(Index n, const Physics& phys, const double* start, double* pos, double* vel);
+//: reversed); against a moving collider (collider_motion.hpp) the velocity relative to its.  Colliders whose
+//: box, grown by gap, the cloth's path does not reach are skipped.  Returns how many particles touched; in
+//: kick (m/s, unless null) the largest change of a particle's velocity along a moving collider's surface.
+Index collider_contact(Index n, const Physics& phys, const double* start, double* pos, double* vel,
+                       double* kick = nullptr);
 
 //: The first collider that particle i of pos (3, n) touches: within thickness / 2 of it, up to rounding
 //: (where collider_contact puts a particle), its normal there into nrm; -1 if none.
@@ -51,7 +53,8 @@ Index release_from_colliders(Index n, const Physics& phys, const double* pos, co
 //: (N, (3, n)) would have slipped or lifted (release_slipping's and release_from_colliders's test) move
 //: as they would have from rest over the step of h s under the force's excess beyond friction
 //: (slip_force; a = excess / m_e): pos (3, n) by a h^2 / 2 and vel by a h, and are released; provided
-//: each of them moves at most `limit` m (the error the step may make) and a collider's is still on it.
+//: each of them moves at most `limit` m (the error the step may make) and a collider's is still on it (a
+//: moving collider's looked at where it held the particle: pos less its motion over the step).
 //: m_e (kg) is the particle's effective mass along the excess in the step's own matrix: its mass (n)
 //: plus e^T (D_i + B_i) e, e the excess's direction, D_i its springs' part of its diagonal block
 //: (diagonal_blocks (6, n)) and B_i its own (blocks (6, n): drag, buoyancy), as the implicit step left

@@ -103,6 +103,10 @@ struct Physics {
     Index grip_key_count = 0;            // the grip's keys (grip.hpp), none by default
     const double* grip_keys = nullptr;   // (grip_key_count, 4) rows: time s, x, y, z m
     const double* grip_origin = nullptr; // (3, n) m: where the grip's zero displacement holds the particles (t = 0)
+    Index collider_key_count = 0;          // the colliders' keys (collider_motion.hpp), none by default
+    const double* collider_keys = nullptr; // (collider_key_count, 5) rows: collider (from 0), time s, x, y, z m
+    double* collider_motion = nullptr;     // (collider_count, MOTION_COLUMNS) scratch the step loop sets; null
+                                           // without keys (every collider still)
 };
 
 //: Scratch and results: force (3, n) N; submerged (n) fraction; saturation (n); blocks (6, n)
@@ -166,6 +170,7 @@ struct Sliding {
     std::vector<double> direction;
     std::vector<double> normal_speed;
     std::vector<char> on_floor;
+    std::vector<double> surface_velocity;  // (3 each) m/s: a moving collider's, else 0
     Index count() const { return static_cast<Index>(index.size()); }
 };
 

@@ -243,6 +243,7 @@ struct Fixtures {
     std::vector<double> mesh_headers, mesh_vertices, face_normals, edge_normals, vertex_normals;
     std::vector<Index> mesh_triangles, cell_start, cell_items;
     std::vector<double> grip_keys;  // (g, 4) rows: time s, x, y, z m
+    std::vector<double> collider_keys;  // (c, 5) rows: collider (from 0), time s, x, y, z m; by collider, then time
     Index collider_count() const { return static_cast<Index>(colliders.size() / COLLIDER_COLUMNS); }
     //: The mesh arrays as the kernels read them (pointing into this object).
     ColliderMeshes meshes() const;
@@ -317,6 +318,7 @@ private:
     std::vector<Index> wick_offsets_;
     double wick_step_limit_ = 0.0, floor_z_ = 0.0;
     std::vector<double> grip_origin_;  // (3, n) m, the start positions; empty when nothing is pinned
+    std::vector<double> collider_motion_;  // (colliders, MOTION_COLUMNS) the step loop's scratch; empty without keys
     // Integrator
     double omega_squared_ = 0.0, damping_rate_ = 0.0, spring_limit_ = 0.0;
     // Work, Solver

@@ -26,9 +26,9 @@ Index add_released(Index n, const Physics& phys, const double* pos, const double
 void project_sliding(const Sliding& sliding, Index n, double* a);
 
 //: The sliding particles' velocities (3, n) get their prescribed normal part, speed (m/s) that keeps each
-//: where it is across the surface: n . (pos - hat_pos) / bh, pos the step's start, hat_pos (3, n) the
-//: scheme's x^ with x+ = x^ + bh v+.
-void prescribe_normal_speed(Sliding& sliding, Index n, const double* pos, const double* hat_pos, double bh,
+//: where it is across the surface (moving with a moving surface over the step of h s): n . (pos + h u -
+//: hat_pos) / bh, pos the step's start, u the surface's velocity, hat_pos (3, n) the scheme's x^ with x+ = x^ + bh v+.
+void prescribe_normal_speed(Sliding& sliding, Index n, const double* pos, const double* hat_pos, double h, double bh,
                             double* vel);
 
 //: Kinetic friction on the sliding particles into force (3, n, N): friction times the force pressing each
@@ -36,8 +36,9 @@ void prescribe_normal_speed(Sliding& sliding, Index n, const double* pos, const 
 void add_sliding_friction(const Sliding& sliding, Index n, double* force);
 
 //: After the step's solve: a sliding particle whose velocity (3, n, m/s) along its direction of sliding is
-//: no longer positive has stopped within the step: its velocity is set to zero and its position (3, n) to
-//: x^ + bh v+ with v+ its prescribed velocity across the surface.  Returns how many stopped.
+//: (relative to its surface's) no longer positive has stopped within the step: its velocity is set to its
+//: surface's (zero but on a moving collider) and its position (3, n) to x^ + bh v+ with v+ that velocity
+//: along the surface and its prescribed velocity across it.  Returns how many stopped.
 Index stop_reversed(const Sliding& sliding, Index n, const double* hat_pos, double bh, double* pos, double* vel);
 
 //: After the step: the particles whose force (3, n) lifts them off their surface (their normal was held in the
