@@ -159,8 +159,7 @@ void follow_cloth(Plane& plane, const Cloth& cloth, const double* pos) {
     const double* py = pos + n;
     const double* pz = pos + 2 * n;
     double* frame = plane.frame;  // frame[(3 r + c) n + i]
-    for (Index i = 0; i < n; ++i) {
-        const Index col = i % grid_x;
+    for (Index i = 0, col = 0; i < n; ++i, col = col + 1 < grid_x ? col + 1 : 0) {  // col: i % grid_x
         const Index right = col + 1 < grid_x ? i + 1 : i;
         const Index left = col > 0 ? i - 1 : i;
         const Index up = i + grid_x < n ? i + grid_x : i;
