@@ -8,7 +8,7 @@ import scipy.sparse
 import wetcloth
 from wetcloth import _core
 from wetcloth._core import _system_matvec, forces_and_blocks
-from wetcloth.preconditioner import _SHARE, make_plane
+from wetcloth.preconditioner import _SHARE, level_sizes, make_hierarchy, make_plane
 from wetcloth.model import Model
 from wetcloth.state import initial_state
 
@@ -94,6 +94,73 @@ def test_multigrid_is_symmetric_positive_definite(towel):
         scale = np.linalg.norm(x) * np.linalg.norm(py)
         assert abs(np.sum(x * py) - np.sum(y * px)) <= 100 * EPS * scale
         assert np.sum(x * px) > 0.0
+
+
+def stencil_matrix(grid, level):
+    """Component 0's stencils of ``level`` as a sparse matrix over its points (row-major), and their
+    padded indices: entry (p, p + (dx, dy)) is coef[0, 3 (dy + 1) + dx + 1, p]."""
+    nx, ny, start, pad = grid.levels[level]
+    ix, iy = np.meshgrid(np.arange(nx), np.arange(ny))
+    ix, iy = ix.ravel(), iy.ravel()
+    padded = start + (iy + 1) * pad + ix + 1
+    rows, cols, values = [], [], []
+    for k in range(9):
+        jx, jy = ix + k % 3 - 1, iy + k // 3 - 1
+        inside = (0 <= jx) & (jx < nx) & (0 <= jy) & (jy < ny)
+        rows.append(np.flatnonzero(inside))
+        cols.append((jy * nx + jx)[inside])
+        values.append(grid.coef[0, k, padded[inside]])
+    matrix = scipy.sparse.coo_matrix((np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))),
+                                     shape=(nx * ny, nx * ny))
+    return matrix.tocsr(), padded
+
+
+def interpolation(fine, coarse):
+    """Bilinear interpolation P from the coarse grid (nx // 2 + 1 lines) to the fine one: a fine line at
+    2 i takes coarse line i, one at 2 i + 1 half of lines i and i + 1."""
+    def along(n, m):
+        p = np.zeros((n, m))
+        for i in range(n):
+            p[i, i // 2] += 0.5 if i % 2 else 1.0
+            if i % 2:
+                p[i, i // 2 + 1] += 0.5
+        return p
+    (fx, fy), (cx, cy) = fine, coarse
+    return scipy.sparse.csr_matrix(np.kron(along(fy, cy), along(fx, cx)))
+
+
+def test_coarse_stencils_are_the_galerkin_products():
+    """Each coarser level's stencils are P^T A P of the finer one's (``galerkin``), for random 9-point
+    stencils (not symmetric) on a grid with an even and an odd side, two levels down, and the finer
+    level's inverse diagonals 1 / A_ii.  Compared with scipy's products: a coarse entry sums at most 576
+    terms (16 per fine entry, each a / 16 times interpolation weights), so in any order it errs by at
+    most 576 eps times the sum of their magnitudes, (P^T |A| P)_ij."""
+    sizes = level_sizes(36, 41, 12)[:3]
+    grid = make_hierarchy(sizes)
+    rng = np.random.default_rng(11)
+    _, padded = stencil_matrix(grid, 0)
+    for k in range(9):
+        grid.coef[:, k, padded] = rng.uniform(-1.0, 1.0, (grid.coef.shape[0], padded.size))
+    grid.coef[:, 4, padded] += 10.0  # a diagonal far from 0
+    nx, ny = sizes[0]
+    ix, iy = np.arange(nx * ny) % nx, np.arange(nx * ny) // nx
+    for k in range(9):  # no neighbours beyond the grid
+        jx, jy = ix + k % 3 - 1, iy + k // 3 - 1
+        grid.coef[:, k, padded[(jx < 0) | (jx >= nx) | (jy < 0) | (jy >= ny)]] = 0.0
+    for level in range(2):
+        _core.galerkin(grid, level)
+        fine, fine_padded = stencil_matrix(grid, level)
+        coarse, coarse_padded = stencil_matrix(grid, level + 1)
+        p = interpolation(sizes[level], sizes[level + 1])
+        expected = (p.T @ fine @ p).toarray()
+        bound = 576 * EPS * (p.T @ abs(fine) @ p).toarray()
+        assert np.all(np.abs(coarse.toarray() - expected) <= bound), level
+        cx, cy = sizes[level + 1]
+        qx, qy = np.arange(cx * cy) % cx, np.arange(cx * cy) // cx
+        for k in range(9):  # entries towards points beyond the coarse grid are zero
+            beyond = (qx + k % 3 - 1 < 0) | (qx + k % 3 - 1 >= cx) | (qy + k // 3 - 1 < 0) | (qy + k // 3 - 1 >= cy)
+            assert np.all(grid.coef[0, k, coarse_padded[beyond]] == 0.0)
+        assert np.array_equal(grid.inverse_diagonal[0, fine_padded], 1.0 / fine.diagonal())
 
 
 def test_v_cycle_reduces_the_error_of_its_own_matrix(towel):

@@ -26,6 +26,21 @@ double largest_of(Index n, const double* a) {
     return largest;
 }
 
+struct DotAndLargest {
+    double dot, largest;
+};
+
+//: dot(n, r, z) and largest_of(n, z) in one pass (the same sums and comparisons, in the same order).
+DotAndLargest dot_and_largest(Index n, const double* r, const double* z) {
+    double sum = 0.0;
+    double largest = 0.0;
+    for (Index k = 0; k < 3 * n; ++k) {
+        sum += r[k] * z[k];
+        largest = py_max(largest, std::fabs(z[k]));
+    }
+    return {sum, largest};
+}
+
 struct PlaneSolve {
     Index iterations;
     bool solved;
@@ -47,10 +62,11 @@ PlaneSolve plane_pcg(const Cloth& cloth, const Work& work, Solver& solver, Plane
     apply(plane, n, cloth.free, r, z);
     if (solver.sliding != nullptr) project_sliding(*solver.sliding, n, z);
     copy(3 * n, z, p);
-    double rz = dot(n, r, z);
-    const double accuracy = py_max(rtol * largest_of(n, z), floor);
+    DotAndLargest rz_z = dot_and_largest(n, r, z);  // r . z and the largest |z|
+    double rz = rz_z.dot;
+    const double accuracy = py_max(rtol * rz_z.largest, floor);
     Index iterations = 0;
-    while (largest_of(n, z) > accuracy && iterations < max_iterations) {
+    while (rz_z.largest > accuracy && iterations < max_iterations) {
         system_matvec(cloth, work, mass, p, ap);
         if (solver.sliding != nullptr) project_sliding(*solver.sliding, n, ap);
         const double p_ap = dot(n, p, ap);
@@ -59,11 +75,11 @@ PlaneSolve plane_pcg(const Cloth& cloth, const Work& work, Solver& solver, Plane
         iterations += 1;
         apply(plane, n, cloth.free, r, z);
         if (solver.sliding != nullptr) project_sliding(*solver.sliding, n, z);
-        const double rz_new = dot(n, r, z);
-        next_search_direction(n, rz_new / rz, z, p);
-        rz = rz_new;
+        rz_z = dot_and_largest(n, r, z);
+        next_search_direction(n, rz_z.dot / rz, z, p);
+        rz = rz_z.dot;
     }
-    return {iterations, largest_of(n, z) <= accuracy};
+    return {iterations, rz_z.largest <= accuracy};
 }
 
 //: Newton's first guess (m/s) of a velocity component h s ahead, extrapolated from v (now, with `slope`

@@ -5,9 +5,6 @@ namespace wc {
 
 namespace {
 
-//: Python's floor division (a fine index of -1 has its parent at -1).
-inline Index floor_div2(Index a) { return a >= 0 ? a / 2 : -((1 - a) / 2); }
-
 void zero_level(Hierarchy& h, Index level, double* v, Index components) {
     const Index start = level_value(h.levels, level, START);
     const Index end = start + level_value(h.levels, level, PAD_X) * (level_value(h.levels, level, NY) + 3);
@@ -19,53 +16,88 @@ void zero_level(Hierarchy& h, Index level, double* v, Index components) {
 
 }  // namespace
 
+namespace {
+
+//: One fine entry's part of a coarse entry: the fine point 2 Q + (px, py) of coarse point Q, its stencil
+//: slot k, and how many times a / 16 is added (the product of the interpolation weights of both ends,
+//: times 16).
+struct Contribution {
+    Index px, py, k, count;
+};
+
+//: The fine entries (a of point p, slot k: p and its neighbour j) that coarse slot `slot` of every
+//: coarse point takes, in the order of the fine points (row after row), then of k: P^T A P adds a / 16
+//: times 16 w_p w_j (w the bilinear weights: 1 at even, 1/2 at odd indices) for each p among Q's fine
+//: points and j among those of the neighbour Q + (dx, dy).  Returns their number (at most 49).
+Index contributions(Index slot, Contribution* out) {
+    const Index dx = slot % 3 - 1, dy = slot / 3 - 1;
+    Index count = 0;
+    for (Index py = -1; py <= 1; ++py) {
+        for (Index px = -1; px <= 1; ++px) {
+            for (Index k = 0; k < 9; ++k) {
+                const Index jx = px + k % 3 - 1 - 2 * dx, jy = py + k / 3 - 1 - 2 * dy;  // j from 2 (Q + d)
+                if (jx < -1 || jx > 1 || jy < -1 || jy > 1) continue;
+                const Index weights = (py == 0 ? 2 : 1) * (px == 0 ? 2 : 1) * (jy == 0 ? 2 : 1) * (jx == 0 ? 2 : 1);
+                out[count++] = {px, py, k, weights};
+            }
+        }
+    }
+    return count;
+}
+
+//: target[q] += v, COUNT times over, v = a[2 q] / 16, for the m points q of a coarse row (a: the
+//: fine entries from the row's first fine point, every other one).
+template <Index COUNT>
+void add_repeated(double* __restrict target, const double* __restrict a, Index m) {
+    for (Index q = 0; q < m; ++q) {
+        const double v = 0.0625 * a[2 * q];
+        double sum = target[q];
+        for (Index r = 0; r < COUNT; ++r) sum += v;
+        target[q] = sum;
+    }
+}
+
+}  // namespace
+
 void galerkin(Hierarchy& h, Index level, Index first, Index end) {
+    // Each coarse entry gathers its fine entries' additions in the order in which a scatter over the
+    // fine points (row after row), their slots and parents would make them: the same roundings, but
+    // coarse points side by side (vectorised).  A fine point or neighbour outside the grid has zero
+    // entries (the padding): adding them changes no sum.
     const Index* levels = h.levels;
     const Index size = h.size;
     const Index nx = level_value(levels, level, NX), ny = level_value(levels, level, NY);
+    const Index coarse_nx = level_value(levels, level + 1, NX), coarse_ny = level_value(levels, level + 1, NY);
     const Index coarse_start = level_value(levels, level + 1, START);
     const Index coarse_pad = level_value(levels, level + 1, PAD_X);
-    const Index coarse_end = coarse_start + coarse_pad * (level_value(levels, level + 1, NY) + 3);
+    const Index coarse_end = coarse_start + coarse_pad * (coarse_ny + 3);
+    Contribution list[9][49];
+    Index listed[9];
+    for (Index slot = 0; slot < 9; ++slot) listed[slot] = contributions(slot, list[slot]);
     for (Index c = first; c < end; ++c) {
         double* coef = h.coef + c * 9 * size;  // coef[k * size + p]
         double* inverse = h.inverse_diagonal + c * size;
+        for (Index iy = 0; iy < ny; ++iy) {
+            const Index row = padded_index(levels, level, 0, iy);
+            const double* __restrict centre = coef + CENTRE * size + row;
+            double* __restrict inv = inverse + row;
+            for (Index ix = 0; ix < nx; ++ix) inv[ix] = 1.0 / centre[ix];
+        }
         for (Index k = 0; k < 9; ++k)
             for (Index q = coarse_start; q < coarse_end; ++q) coef[k * size + q] = 0.0;
-        for (Index iy = 0; iy < ny; ++iy) {
-            for (Index ix = 0; ix < nx; ++ix) {
-                const Index p = padded_index(levels, level, ix, iy);
-                inverse[p] = 1.0 / coef[CENTRE * size + p];
-                // Each of the 16 (parent of (ix, iy), parent of (jx, jy)) pairs adds a / 16 to one
-                // coarse entry; a parent appears twice along an axis where the fine index is even,
-                // so an entry may take the same addition 2, 4, 8 or 16 times.  Those are made in a
-                // register, one after the other as the loops over the pairs make them (the same
-                // roundings; additions to other entries between them do not touch it).
-                const Index ny_a = iy % 2 + 1, nx_a = ix % 2 + 1;  // distinct parents of (ix, iy)
-                const Index py0 = iy / 2, px0 = ix / 2;
-                for (Index k = 0; k < 9; ++k) {
-                    const double a = coef[k * size + p];
-                    if (a == 0.0) continue;
-                    const double v = 0.0625 * a;
-                    const Index jx = ix + k % 3 - 1, jy = iy + k / 3 - 1;
-                    const Index ny_b = (jy & 1) + 1, nx_b = (jx & 1) + 1;  // (jx, jy) >= -1
-                    const Index qy0 = floor_div2(jy), qx0 = floor_div2(jx);
-                    const Index count = (3 - ny_a) * (3 - nx_a) * (3 - ny_b) * (3 - nx_b);
-                    for (Index a_y = 0; a_y < ny_a; ++a_y) {
-                        const Index py = py0 + a_y;
-                        for (Index a_x = 0; a_x < nx_a; ++a_x) {
-                            const Index px = px0 + a_x;
-                            const Index q = coarse_start + (py + 1) * coarse_pad + px + 1;
-                            for (Index b_y = 0; b_y < ny_b; ++b_y) {
-                                const Index qy = qy0 + b_y;
-                                for (Index b_x = 0; b_x < nx_b; ++b_x) {
-                                    const Index qx = qx0 + b_x;
-                                    double& target = coef[(3 * (qy - py + 1) + qx - px + 1) * size + q];
-                                    double sum = target;
-                                    for (Index r = 0; r < count; ++r) sum += v;
-                                    target = sum;
-                                }
-                            }
-                        }
+        for (Index slot = 0; slot < 9; ++slot) {
+            for (Index qy = 0; qy < coarse_ny; ++qy) {
+                double* target = coef + slot * size + padded_index(levels, level + 1, 0, qy);
+                for (Index e = 0; e < listed[slot]; ++e) {
+                    const Contribution& t = list[slot][e];
+                    // fine point (2 qx + px, 2 qy + py) for qx = 0: its padded index
+                    const double* a = coef + t.k * size + padded_index(levels, level, t.px, 2 * qy + t.py);
+                    switch (t.count) {
+                        case 1: add_repeated<1>(target, a, coarse_nx); break;
+                        case 2: add_repeated<2>(target, a, coarse_nx); break;
+                        case 4: add_repeated<4>(target, a, coarse_nx); break;
+                        case 8: add_repeated<8>(target, a, coarse_nx); break;
+                        default: add_repeated<16>(target, a, coarse_nx); break;
                     }
                 }
             }

@@ -51,7 +51,11 @@ void diagonal_stencil(Plane& plane, Index n, Index c, const double* diagonal) {
     double* coef = grid.coef + c * 9 * size;
     for (Index k = 0; k < 9; ++k)
         for (Index p = 0; p < level0_end; ++p) coef[k * size + p] = 0.0;
-    for (Index i = 0; i < n; ++i) coef[CENTRE * size + padded_index(grid.levels, 0, i % grid_x, i / grid_x)] = diagonal[i];
+    double* centre = coef + CENTRE * size;
+    for (Index first = 0; first < n; first += grid_x) {
+        const Index row = padded_index(grid.levels, 0, 0, first / grid_x) - first;
+        for (Index i = first; i < first + grid_x; ++i) centre[row + i] = diagonal[i];
+    }
 }
 
 //: Build and factor M + scale L_c for c = t1, t2, L_c the Laplacian of the springs weighted by
@@ -74,11 +78,15 @@ Index factor(Plane& plane, const Cloth& cloth, const double* mass, double scale,
             const Index off = cloth.offsets[f];
             const double share = scale * plane.shares[c * plane.families + f];
             const double* w_f = weights + f * n;
-            for (Index i = 0; i < n - off; ++i) {
+            // (ix, iy) and (jx, jy): the grid points of i and i + off, counted along
+            Index ix = 0, iy = 0, jx = off % grid_x, jy = off / grid_x;
+            for (Index i = 0; i < n - off; ++i, ++ix, ++jx) {
+                if (ix == grid_x) ix = 0, ++iy;
+                if (jx == grid_x) jx = 0, ++jy;
                 const double w = share * w_f[i];
                 if (w == 0.0) continue;
-                const Index p = padded_index(levels, 0, i % grid_x, i / grid_x);
-                const Index q = padded_index(levels, 0, (i + off) % grid_x, (i + off) / grid_x);
+                const Index p = padded_index(levels, 0, ix, iy);
+                const Index q = padded_index(levels, 0, jx, jy);
                 coef[CENTRE * size + p] += w;
                 coef[CENTRE * size + q] += w;
                 coef[k * size + p] -= w;
@@ -151,8 +159,7 @@ void follow_cloth(Plane& plane, const Cloth& cloth, const double* pos) {
     const double* py = pos + n;
     const double* pz = pos + 2 * n;
     double* frame = plane.frame;  // frame[(3 r + c) n + i]
-    for (Index i = 0; i < n; ++i) {
-        const Index col = i % grid_x;
+    for (Index i = 0, col = 0; i < n; ++i, col = col + 1 < grid_x ? col + 1 : 0) {  // col: i % grid_x
         const Index right = col + 1 < grid_x ? i + 1 : i;
         const Index left = col > 0 ? i - 1 : i;
         const Index up = i + grid_x < n ? i + grid_x : i;
@@ -193,41 +200,74 @@ void follow_cloth(Plane& plane, const Cloth& cloth, const double* pos) {
 
 namespace {
 
+//: Each spring's part of one component's stencil (spring_coupling) for the m springs i -> i + off:
+//: at_i, at_j and, between ends both free (free 1, else 0), between.  A spring with no block (along =
+//: across = 0) or with a pinned end then gives +-0 (the frame and u are finite), and adding +-0 changes
+//: no entry (none is -0): the entries of skipping them, with no branch in the loop (which vectorises).
+void couplings_loop(Index m, const double* __restrict tx, const double* __restrict ty, const double* __restrict tz,
+                    const double* __restrict txj, const double* __restrict tyj, const double* __restrict tzj,
+                    const double* __restrict ux, const double* __restrict uy, const double* __restrict uz,
+                    const double* __restrict along, const double* __restrict across, const double* __restrict free_i,
+                    const double* __restrict free_j, double* __restrict at_i, double* __restrict at_j,
+                    double* __restrict between) {
+    for (Index i = 0; i < m; ++i) {
+        const Coupling s = spring_coupling(tx[i], ty[i], tz[i], txj[i], tyj[i], tzj[i], ux[i], uy[i], uz[i], along[i],
+                                           across[i]);
+        at_i[i] = s.at_i;
+        at_j[i] = s.at_j;
+        between[i] = free_i[i] * free_j[i] * s.between;  // a pinned end holds: no coupling (Dirichlet)
+    }
+}
+
+//: centre[s] += at[s], side[s] += between[s] over m points.
+void add_couplings(Index m, const double* __restrict at, const double* __restrict between, double* __restrict centre,
+                   double* __restrict side) {
+    for (Index s = 0; s < m; ++s) {
+        centre[s] += at[s];
+        side[s] += between[s];
+    }
+}
+
 //: Component c's level-0 stencil from the Jacobian: on the diagonal `diagonal` (the mass and the
 //: particle's own blocks) plus t_i^T S t_i of each spring the stencil reaches, and between its ends
 //: -t_i^T S t_j, S = across I + (along - across) u u^T the spring's block.  Springs it does not reach
 //: (bending) are left out whole: their diagonal part alone would make smooth modes far too stiff.
-void jacobian_stencil(Plane& plane, const Cloth& cloth, const Work& work, Index c, const double* diagonal) {
+//: scratch: 3 n.  Each entry takes its springs' parts family after family, spring after spring (a
+//: particle's part as a second end before its part as a first end), row by row of the grid.
+void jacobian_stencil(Plane& plane, const Cloth& cloth, const Work& work, Index c, const double* diagonal,
+                      double* scratch) {
     const Index n = cloth.n;
     diagonal_stencil(plane, n, c, diagonal);
     Hierarchy& grid = plane.grid;
     const Index size = grid.size, grid_x = cloth.grid_x;
     double* coef = grid.coef + c * 9 * size;
-    const double* tx = plane.frame + (3 * c) * n;
-    const double* ty = tx + n;
-    const double* tz = ty + n;
+    const double* t = plane.frame + (3 * c) * n;
     const double* free = cloth.free;
+    double* at_i = scratch;
+    double* at_j = scratch + n;
+    double* between = scratch + 2 * n;
     for (Index f = 0; f < cloth.families; ++f) {
         const Index k = plane.slots[f];
         if (k < 0) continue;  // a family the stencil does not reach: its diagonal part stays
         const Index off = cloth.offsets[f];
-        const double* ux = work.direction + (3 * f) * n;
-        const double* uy = ux + n;
-        const double* uz = uy + n;
-        const double* along = work.along + f * n;
-        const double* across = work.across + f * n;
-        for (Index i = 0; i < n - off; ++i) {
-            const Index j = i + off;
-            if (along[i] == 0.0 && across[i] == 0.0) continue;
-            const Coupling s = spring_coupling(tx[i], ty[i], tz[i], tx[j], ty[j], tz[j], ux[i], uy[i], uz[i], along[i],
-                                               across[i]);
-            const Index p = padded_index(grid.levels, 0, i % grid_x, i / grid_x);
-            const Index q = padded_index(grid.levels, 0, j % grid_x, j / grid_x);
-            coef[CENTRE * size + p] += s.at_i;
-            coef[CENTRE * size + q] += s.at_j;
-            if (free[i] == 0.0 || free[j] == 0.0) continue;  // a pinned end holds: no coupling (Dirichlet)
-            coef[k * size + p] += s.between;
-            coef[(8 - k) * size + q] += s.between;
+        const Index m = n - off;
+        if (m <= 0) continue;
+        const double* u = work.direction + (3 * f) * n;
+        couplings_loop(m, t, t + n, t + 2 * n, t + off, t + n + off, t + 2 * n + off, u, u + n, u + 2 * n,
+                       work.along + f * n, work.across + f * n, free, free + off, at_i, at_j, between);
+        for (Index first = 0; first < n; first += grid_x) {
+            const Index end = first + grid_x;
+            const Index row = padded_index(grid.levels, 0, 0, first / grid_x) - first;  // + x: x's point
+            double* centre = coef + CENTRE * size + row;
+            if (end > off) {  // particles x >= off: second ends of springs x - off
+                const Index from = first > off ? first : off;
+                add_couplings(end - from, at_j + from - off, between + from - off, centre + from,
+                              coef + (8 - k) * size + row + from);
+            }
+            if (first < m) {  // particles x < m: first ends of springs x
+                const Index to = end < m ? end : m;
+                add_couplings(to - first, at_i + first, between + first, centre + first, coef + k * size + row + first);
+            }
         }
     }
 }
@@ -247,11 +287,12 @@ Index set_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double* 
     plane.reference[1] = plane.reference[2] = 0.0;  // the rest-stiffness factors are overwritten
     plane.reference[3] = components == COMPONENTS ? 1.0 : 0.0;
     Index result = 1;
-    std::vector<double> in_plane(static_cast<std::size_t>(n));
+    std::vector<double> scratch(static_cast<std::size_t>(4 * n));  // the in-plane diagonal, then jacobian_stencil's
+    double* in_plane = scratch.data();
     for (Index c = 0; c < components; ++c) {
-        double* diagonal = c == NORMAL ? plane.normal : in_plane.data();
+        double* diagonal = c == NORMAL ? plane.normal : in_plane;
         axis_diagonal<false>(plane, n, c, mass, nullptr, work.blocks, diagonal);
-        jacobian_stencil(plane, cloth, work, c, diagonal);
+        jacobian_stencil(plane, cloth, work, c, diagonal, in_plane + n);
         if (factor_component(plane, c) == 0) continue;
         diagonal_stencil(plane, n, c, diagonal);  // not positive definite (round-off on a crumpled cloth)
         if (factor_component(plane, c) != 0) result = -1;

@@ -32,7 +32,7 @@ void spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const dou
                               const double* vel, double h, double slack_slope, Work& work);
 
 //: Add the springs' part of the system matrix (work.direction, along, across) times p (3, n) to out;
-//: rows 0 and 1 of work.buf as scratch.
+//: rows 0 to 2 of work.buf as scratch.
 void spring_matvec(const Cloth& cloth, const Work& work, const double* p, double* out);
 
 }  // namespace wc
