@@ -10,7 +10,8 @@ code (``description.py``, ``description3.py`` on pythonfmu's and pythonfmu3's mo
 and the C++ side reads the same vocabulary through a generated header
 (``wetcloth_fmu_variables.hpp``: every variable in value-reference order with its Scene field, range,
 start value and the texts of its messages; with ``--scene``, the scene's colliders and grip keys as the
-arrays the Python model hands the core).  What it packs:
+arrays the Python model hands the core, and a cloth from a mesh file as the arrays of its structure,
+``native_mesh.py``).  What it packs:
 
 * ``binaries/linux64/WetCloth.so`` (FMI 3.0: ``binaries/x86_64-linux/``): ``fmu_src/core/src/**/*.cpp``,
   ``fmu_src/core/fmu/unit.cpp`` and ``fmi2.cpp`` (``fmi3.cpp``) compiled by the system C++ compiler
@@ -467,8 +468,10 @@ def documentation_html(specs: list[VariableSpec], fmi_version: int) -> str:
         model=MODEL_NAME, version=html.escape(wetcloth.__version__), fmi=f"{fmi_version}.0", api=f"fmi{fmi_version}",
         icon="../" + ICON_PATH[fmi_version], rows="\n".join(rows), inputs=inputs,
         arrays="" if not arrays else (f" The cloth mesh of the current step comes as array outputs instead: {arrays} "
-                                      "(vertex <code>row * nx + col</code>); their sizes are the structural "
-                                      "parameters <code>nx</code> and <code>ny</code>."))
+                                      + ("(the vertices of the mesh file built in, in its order)."
+                                         if any(isinstance(d, int) for s in specs for d in s.dimensions) else
+                                         "(vertex <code>row * nx + col</code>); their sizes are the structural "
+                                         "parameters <code>nx</code> and <code>ny</code>.")))
 
 
 # ----------------------------------------------------------------------------------------- compiling
