@@ -100,10 +100,11 @@ def test_it_agrees_with_the_fmi_2_unit_to_round_off(fmu3):
     arrays are the direct run's mesh."""
     values = GRID | {"initial_tilt": 30.0}
     signal = np.array([(0.0, 0.0), (0.2, 0.0), (0.4, 0.02)], dtype=[("time", float), ("water_level", float)])
-    two = simulate(built_fmu(2), 0.5, 20.0, values, input=signal)
-    three = simulate(fmu3, 0.5, 20.0, values, input=signal, output=[*OUTPUT_NAMES, *MESH_OUTPUTS])
+    three = simulate(fmu3, 0.5, 20.0, values, input=signal, output=[*OUTPUT_NAMES, "step_error", *MESH_OUTPUTS])
+    two = simulate(built_fmu(2), 0.5, 20.0, values, input=signal, output=[*OUTPUT_NAMES, "step_error"])
     np.testing.assert_array_equal(two["time"], three["time"])
-    for name in OUTPUT_NAMES:
+    assert np.all(three["step_error"][1:] > 0)
+    for name in (*OUTPUT_NAMES, "step_error"):
         np.testing.assert_allclose(three[name], two[name], rtol=1e-12, atol=1e-15, err_msg=name)
     assert three["positions"].shape == (len(two), 7, 5, 3) and three["wetness"].shape == (len(two), 7, 5)
     direct = wetcloth.Simulation(wetcloth.Scene(**values))

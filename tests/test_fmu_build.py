@@ -71,6 +71,7 @@ INTERFACE = {
     "centroid_x": ("Real", "output", "m"), "centroid_y": ("Real", "output", "m"),
     "centroid_z": ("Real", "output", "m"), "depth": ("Real", "output", "m"),
     "wet_mass": ("Real", "output", "kg"), "water_mass": ("Real", "output", "kg"),
+    "step_error": ("Real", "output", "m"),
     "nx": ("Integer", "parameter", None), "ny": ("Integer", "parameter", None),
     "width": ("Real", "parameter", "m"), "length": ("Real", "parameter", "m"),
     "areal_density": ("Real", "parameter", "kg/m2"), "thickness": ("Real", "parameter", "m"),
@@ -103,18 +104,19 @@ def test_interface_md_variables_keep_their_names_types_and_units(md):
 
 def test_outputs_and_mesh_parameters(md):
     variables = {v.name: v for v in md.modelVariables}
-    for name in OUTPUT_NAMES:
+    outputs = {**OUTPUTS, "step_error": ("m", "")}
+    for name, (unit, _) in outputs.items():
         v = variables[name]
         assert (v.type, v.causality, v.variability, v.initial) == ("Real", "output", "continuous", "calculated")
-        assert v.unit == OUTPUTS[name][0]
-    assert [u.variable.name for u in md.outputs] == list(OUTPUT_NAMES)
-    assert sorted(u.variable.name for u in md.initialUnknowns) == sorted(OUTPUT_NAMES)
+        assert v.unit == unit
+    assert [u.variable.name for u in md.outputs] == list(outputs)
+    assert sorted(u.variable.name for u in md.initialUnknowns) == sorted(outputs)
     depth = next(u for u in md.outputs if u.variable.name == "depth")
     assert [d.name for d in depth.dependencies] == ["water_level"]  # direct feedthrough, nothing else
     for name, start in (("mesh_output_dir", ""), ("mesh_format", "ply")):
         v = variables[name]
         assert (v.type, v.causality, v.variability, v.start) == ("String", "parameter", "fixed", start)
-    assert len(md.modelVariables) == len(PARAMETERS) + 2 + len(OUTPUT_NAMES)  # FMI 2.0: no arrays, no time
+    assert len(md.modelVariables) == len(PARAMETERS) + 2 + len(outputs)  # FMI 2.0: no arrays, no time
 
 
 def test_units_carry_si_base_exponents(md):

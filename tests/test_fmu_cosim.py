@@ -37,11 +37,11 @@ def direct_run(scene_values: dict, times: np.ndarray, signal: np.ndarray | None 
             sim.set_inputs(**dict(zip(names, map(float, values))))
 
     apply(times[0])
-    rows = [sim.outputs()]
+    rows = [{**sim.outputs(), "step_error": sim.error_estimate}]
     for previous, t in zip(times[:-1], times[1:]):
         apply(previous)
         sim.advance(t - sim.time)
-        rows.append(sim.outputs())
+        rows.append({**sim.outputs(), "step_error": sim.error_estimate})
     return rows
 
 
@@ -55,6 +55,8 @@ def test_simulate_fmu_with_varying_inputs_equals_a_direct_run(fmu):
     for row, want in zip(result, expected):
         # Same arithmetic in the same order: equal to round-off (in practice bit for bit).
         assert_same_outputs({n: row[n] for n in OUTPUT_NAMES}, want)
+        assert math.isclose(row["step_error"], want["step_error"], rel_tol=1e-12, abs_tol=1e-15)
+    assert np.all(result["step_error"][1:] > 0)  # every communication step estimated its steps' error
     assert result["water_mass"][-1] > 0 and np.ptp(result["depth"]) > 0.05  # the run did something
 
 

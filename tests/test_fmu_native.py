@@ -498,8 +498,9 @@ def test_fmpy_runs_the_towel_as_the_python_api_does(build):
     rows = []
     for t in result["time"]:
         advance_as_the_unit(sim, t)
-        rows.append([sim.outputs()[n] for n in OUTPUT_NAMES])
-    assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows, "fmpy FMI 2.0")
+        rows.append([*(sim.outputs()[n] for n in OUTPUT_NAMES), sim.error_estimate])
+    assert_agree([[row[n] for n in (*OUTPUT_NAMES, "step_error")] for row in result], rows, "fmpy FMI 2.0")
+    assert np.count_nonzero(result["step_error"]) == len(result) - 1  # every step estimated its error
 
 
 
@@ -649,17 +650,17 @@ def test_fmi3_mesh_outputs_are_the_python_api_positions_and_wetness(build):
 
     values = {"nx": 9, "ny": 13, "initial_saturation": 0.2, "absorption_rate": 0.5}
     result = simulate(build[3]["fmu"], duration=1.0, fps=20, start_values=values,
-                      output=[*OUTPUT_NAMES, "positions", "wetness"])
+                      output=[*OUTPUT_NAMES, "step_error", "positions", "wetness"])
     assert result["positions"].shape == (21, 13, 9, 3) and result["wetness"].shape == (21, 13, 9)
     scene = wetcloth.load_scene(**values)
     sim = wetcloth.Simulation(scene)
     rows, positions, wetness = [], [], []
     for t in result["time"]:
         advance_as_the_unit(sim, t)
-        rows.append([sim.outputs()[n] for n in OUTPUT_NAMES])
+        rows.append([*(sim.outputs()[n] for n in OUTPUT_NAMES), sim.error_estimate])
         positions.append(sim.positions)
         wetness.append(sim.wetness)
-    assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows, "FMI 3.0")
+    assert_agree([[row[n] for n in (*OUTPUT_NAMES, "step_error")] for row in result], rows, "FMI 3.0")
     np.testing.assert_array_equal(result["positions"].reshape(21, -1, 3), positions)
     np.testing.assert_array_equal(result["wetness"].reshape(21, -1), wetness)
     assert result["wetness"][-1].max() > 0.2  # the cloth took up water

@@ -43,7 +43,7 @@ _SNAPSHOT_CLOCK = (("next_step", NEXT_STEP, float), ("last_step", LAST_STEP, flo
                    ("exchanging", EXCHANGING, bool), ("sleeping", SLEEPING, bool), ("steps", STEPS, int),
                    ("rejected_steps", REJECTED, int), ("newton_rate", NEWTON_RATE, float),
                    ("rate_correction", RATE_CORRECTION, float), ("first_guess", FIRST_GUESS, float),
-                   ("last_solve_iterations", LAST_SOLVE, float))
+                   ("last_solve_iterations", LAST_SOLVE, float), ("largest_error", LARGEST_ERROR, float))
 
 
 

@@ -582,6 +582,7 @@ Outcome Unit::get_real(const std::uint32_t* vrs, std::size_t nvr, double* values
                 }
                 values[at] = outputs_[var->slot];
                 break;
+            case Role::STEP_ERROR: values[at] = simulation().error_estimate(); break;
             case Role::POSITIONS:
                 if (static_cast<std::size_t>(3 * simulation().n()) != size) {
                     error(std::string(function) + ": 'positions' holds 3 nx ny = " +

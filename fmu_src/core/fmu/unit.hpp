@@ -29,7 +29,7 @@ enum class Type : int { REAL, INTEGER, STRING };
 enum class Causality : int { PARAMETER, STRUCTURAL_PARAMETER, INPUT, OUTPUT, INDEPENDENT };
 //: What a variable reads and writes: a Scene field, an FMU-only parameter, an output slot of
 //: record_outputs, a mesh array output or the time.
-enum class Role : int { SCENE, MESH_OUTPUT_DIR, MESH_FORMAT, OUTPUT, POSITIONS, WETNESS, TIME };
+enum class Role : int { SCENE, MESH_OUTPUT_DIR, MESH_FORMAT, OUTPUT, STEP_ERROR, POSITIONS, WETNESS, TIME };
 
 //: One variable of the generated table (its index is its value reference).
 struct Variable {

@@ -937,6 +937,7 @@ Status Simulation::advance(double duration) {
         throw std::invalid_argument("duration must be a finite number >= 0 s, got " + py_repr(duration));
     }
     const double target = time() + duration;
+    clock_[LARGEST_ERROR] = 0.0;
     const Index steps_per_call = std::max<Index>(1, STEPS_PER_CALL / topo_.n);
     Status status = PAUSED;
     while (status == PAUSED) status = wc::advance(core_, target, steps_per_call);

@@ -178,14 +178,26 @@ inline bool outside_all(const double* s, Index a, Index b, Index c, bool above) 
     return out_of_fluid(s[a], above) && out_of_fluid(s[b], above) && out_of_fluid(s[c], above);
 }
 
-//: triangle_drag of a mesh's triangle (a, b, c), its corners gathered from pos, vel (3, n) and s (n).
+//: Triangles a mesh's face drag takes at a time: their corners gathered into rows (MESH_INPUTS of
+//: them) so that drag_row_loop vectorises over them as over a grid's rows, then scattered back.
+constexpr Index MESH_CHUNK = 128;
+constexpr Index MESH_INPUTS = 21;  // x, y, z, vx, vy, vz, s of each of the three corners
+
+//: Corner rows (MESH_INPUTS, MESH_CHUNK) of the triangles `kept` (count of them), and the drag's rows
+//: (9, MESH_CHUNK) that drag_row_loop fills.
+struct MeshChunk {
+    Index kept[MESH_CHUNK];
+    double in[MESH_INPUTS][MESH_CHUNK];
+    double out[9][MESH_CHUNK];
+};
+
 template <bool Blocks>
-inline TriangleDrag mesh_triangle(Index n, Index a, Index b, Index c, const double* pos, const double* vel,
-                                  const double* s, const Fluid& f, double base, double sign) {
-    return triangle_drag<Blocks>(f.density, f.c_normal, f.c_tangential, f.c_linear, f.flow_x, f.flow_y, f.flow_z,
-                                 base, sign, pos[a], pos[n + a], pos[2 * n + a], vel[a], vel[n + a], vel[2 * n + a],
-                                 s[a], pos[b], pos[n + b], pos[2 * n + b], vel[b], vel[n + b], vel[2 * n + b], s[b],
-                                 pos[c], pos[n + c], pos[2 * n + c], vel[c], vel[n + c], vel[2 * n + c], s[c]);
+void mesh_chunk_drag(MeshChunk& m, Index count, const Fluid& f, double base, double sign) {
+    double(*in)[MESH_CHUNK] = m.in;
+    drag_row_loop<Blocks>(count, f.density, f.c_normal, f.c_tangential, f.c_linear, f.flow_x, f.flow_y, f.flow_z,
+                          base, sign, in[0], in[1], in[2], in[3], in[4], in[5], in[6], in[7], in[8], in[9], in[10],
+                          in[11], in[12], in[13], in[14], in[15], in[16], in[17], in[18], in[19], in[20], m.out[0],
+                          m.out[1], m.out[2], m.out[3], m.out[4], m.out[5], m.out[6], m.out[7], m.out[8]);
 }
 
 }  // namespace
@@ -316,18 +328,35 @@ void mesh_face_drag(Index n, Index triangle_count, const Index* triangles, const
                     const double* vel, const double* s, const Fluid& fluid, double h, double* force, double* blocks,
                     bool skip_idle) {
     const double base = fluid.above ? 1.0 : 0.0, sign = fluid.above ? -1.0 : 1.0;
-    for (Index t = 0; t < triangle_count; ++t) {
-        const Index a = triangles[3 * t], b = triangles[3 * t + 1], c = triangles[3 * t + 2];
-        if (skip_idle && outside_all(s, a, b, c, fluid.above)) continue;
-        const TriangleDrag d = blocks != nullptr ? mesh_triangle<true>(n, a, b, c, pos, vel, s, fluid, base, sign)
-                                                 : mesh_triangle<false>(n, a, b, c, pos, vel, s, fluid, base, sign);
-        const double rows[9] = {d.fx, d.fy, d.fz, d.xx, d.yy, d.zz, d.xy, d.xz, d.yz};
-        for (Index corner = 0; corner < 3; ++corner) {
-            const Index v = triangles[3 * t + corner];
-            const double share = shares[3 * t + corner];
-            for (Index r = 0; r < 3; ++r) force[r * n + v] += share * rows[r];
-            if (blocks != nullptr)
-                for (Index r = 0; r < 6; ++r) blocks[r * n + v] += (h * share) * rows[3 + r];
+    MeshChunk m;
+    for (Index first = 0; first < triangle_count; first += MESH_CHUNK) {
+        const Index stop = first + MESH_CHUNK < triangle_count ? first + MESH_CHUNK : triangle_count;
+        Index count = 0;
+        for (Index t = first; t < stop; ++t) {
+            const Index* v = triangles + 3 * t;
+            if (skip_idle && outside_all(s, v[0], v[1], v[2], fluid.above)) continue;
+            for (Index corner = 0; corner < 3; ++corner) {
+                double* column = &m.in[7 * corner][count];
+                const Index i = v[corner];
+                const double values[7] = {pos[i], pos[n + i], pos[2 * n + i], vel[i], vel[n + i], vel[2 * n + i], s[i]};
+                for (Index r = 0; r < 7; ++r) column[r * MESH_CHUNK] = values[r];
+            }
+            m.kept[count++] = t;
+        }
+        if (blocks != nullptr) {
+            mesh_chunk_drag<true>(m, count, fluid, base, sign);
+        } else {
+            mesh_chunk_drag<false>(m, count, fluid, base, sign);
+        }
+        for (Index k = 0; k < count; ++k) {
+            const Index t = m.kept[k];
+            for (Index corner = 0; corner < 3; ++corner) {
+                const Index v = triangles[3 * t + corner];
+                const double share = shares[3 * t + corner];
+                for (Index r = 0; r < 3; ++r) force[r * n + v] += share * m.out[r][k];
+                if (blocks != nullptr)
+                    for (Index r = 0; r < 6; ++r) blocks[r * n + v] += (h * share) * m.out[3 + r][k];
+            }
         }
     }
 }

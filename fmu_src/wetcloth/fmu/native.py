@@ -52,8 +52,8 @@ from tqdm.auto import tqdm
 import wetcloth
 from wetcloth.files import new_temporary, whole_file
 from wetcloth.fmu import MODEL_NAME, native_mesh, packed_scene
-from wetcloth.fmu.vocabulary import (MESH_FORMAT_RANGE, MESH_FORMATS, MESH_OUTPUTS, VariableSpec, fmi_unit_name,
-                                     variable_specs)
+from wetcloth.fmu.vocabulary import (MESH_FORMAT_RANGE, MESH_FORMATS, MESH_OUTPUTS, STEP_OUTPUTS, VariableSpec,
+                                     fmi_unit_name, variable_specs)
 from wetcloth.progress import SHOW_AFTER
 
 #: The order of the outputs in the core's ``record_outputs`` row (``stepping.hpp``).
@@ -254,6 +254,8 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
         elif spec.name == "mesh_format":
             role, start_text, range_text = "MESH_FORMAT", _c_string(spec.start), _c_string(MESH_FORMAT_RANGE)
             choices, count = "MESH_FORMATS", str(len(MESH_FORMATS))
+        elif spec.name in STEP_OUTPUTS:
+            role = spec.name.upper()
         elif spec.causality == "output" and not spec.dimensions:
             if spec.name not in CORE_OUTPUTS:
                 raise NativeBuildError(f"output {spec.name!r} is not one the core computes ({', '.join(CORE_OUTPUTS)})")

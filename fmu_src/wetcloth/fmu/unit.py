@@ -124,10 +124,11 @@ class WetClothUnit:
         return self._preview
 
     def output(self, name: str):
-        """An output: a scalar of ``Simulation.outputs()``, an array output as a flat list, or the time (s)."""
+        """An output: a scalar of ``Simulation.outputs()``, ``step_error`` (``Simulation.error_estimate``),
+        an array output as a flat list, or the time (s)."""
         if not self._read:
             sim = self._simulation()
-            self._read.update(sim.outputs(), time=self.start_time + sim.time)
+            self._read.update(sim.outputs(), step_error=sim.error_estimate, time=self.start_time + sim.time)
         if name not in self._read:  # an array output
             self._read[name] = getattr(self._simulation(), name).ravel().tolist()
         return self._read[name]

@@ -5,7 +5,7 @@ String, floats Real; fields whose metadata says ``fmu="input"`` are continuous R
 others fixed parameters.  Unit, description, start value and range come from the field metadata,
 so parameters added to the Scene later appear in the FMU without touching this package.
 Two FMU-only parameters (``mesh_output_dir``, ``mesh_format``) and the six outputs of
-``wetcloth.simulation.OUTPUTS`` complete the interface; the FMI 3.0 unit adds the mesh of every
+``wetcloth.simulation.OUTPUTS`` with ``step_error`` (``STEP_OUTPUTS``) complete the interface; the FMI 3.0 unit adds the mesh of every
 step as array outputs (``MESH_OUTPUTS``), dimensioned by the grid parameters ``ny`` and ``nx``.
 """
 
@@ -33,6 +33,13 @@ MESH_FORMAT_RANGE = "one of " + ", ".join(repr(f) for f in MESH_FORMATS)
 MESH_OUTPUTS = {
     "positions": ("m", "vertex positions x, y, z; vertex row * nx + col (z is up)", ("ny", "nx", 3)),
     "wetness": ("-", "saturation of each vertex, absorbed water over capacity (0 to 1)", ("ny", "nx")),
+}
+
+#: Outputs beyond ``Simulation.outputs()``: name -> (unit, meaning).  ``step_error`` is
+#: ``Simulation.error_estimate`` after the communication step.
+STEP_OUTPUTS = {
+    "step_error": ("m", "the largest local position error a step of the last communication step estimated for "
+                        "itself: what the step size costs (0 before the first step)"),
 }
 
 
@@ -123,7 +130,7 @@ def variable_specs(fields: Iterable[dataclasses.Field] | None = None, fmi_versio
               for name, (start, doc) in FMU_PARAMETERS.items()]
     nominal = output_nominals()
     specs += [VariableSpec(n, "Real", "output", "continuous", doc, unit=u, scene=False, nominal=nominal[n])
-              for n, (u, doc) in OUTPUTS.items()]
+              for n, (u, doc) in {**OUTPUTS, **STEP_OUTPUTS}.items()]
     if fmi_version == 3:
         vertices = None if packed is None else packed.vertices
         specs += [VariableSpec(n, "Real", "output", "continuous", doc, unit=u, scene=False, nominal=nominal[n],
@@ -136,12 +143,13 @@ def variable_specs(fields: Iterable[dataclasses.Field] | None = None, fmi_versio
 
 def output_nominals() -> dict[str, float]:
     """The outputs' typical magnitudes, from the default scene: lengths its cloth's size (m), masses
-    its dry mass (kg), wetness 1."""
+    its dry mass (kg), wetness 1, the step error its tolerance times its size (m)."""
     defaults = {name: f.default for name, f in PARAMETERS.items()}
     size = max(defaults["width"], defaults["length"])
     mass = defaults["areal_density"] * defaults["width"] * defaults["length"]
     lengths = ("centroid_x", "centroid_y", "centroid_z", "depth", "positions")
-    return {**{name: size for name in lengths}, "wet_mass": mass, "water_mass": mass, "wetness": 1.0}
+    return {**{name: size for name in lengths}, "wet_mass": mass, "water_mass": mass, "wetness": 1.0,
+            "step_error": defaults["tolerance"] * size}
 
 
 def check_variable(name: str, value) -> None:

@@ -348,6 +348,9 @@ public:
     //: Simulate `duration` s (finite, >= 0) more: DONE, or BLOWN_UP with the last good state current
     //: (blow_up_message says what happened).
     Status advance(double duration);
+    //: The largest local position error (m) a step of the last advance estimated for itself
+    //: (Simulation.error_estimate).
+    double error_estimate() const { return clock_[LARGEST_ERROR]; }
 
     //: The outputs (OUTPUT_COUNT): centroid x, y, z, depth (m), wet mass, water mass (kg).
     void outputs(double* row) const;
