@@ -21,6 +21,9 @@ import wetcloth
 from wetcloth.errors import ParameterError
 from wetcloth.simulation import OUTPUT_NAMES
 
+#: The outputs compared: the core's and the largest error estimate of the communication step's steps.
+COLUMNS = (*OUTPUT_NAMES, "step_error")
+
 native = pytest.importorskip("wetcloth.fmu.native")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs"))
 import make_meshes  # noqa: E402
@@ -70,7 +73,7 @@ def python_rows(scene, times, grip=None):
         if grip is not None:
             sim.set_inputs(grip_z=float(np.interp(t, *grip)))
         advance_as_the_unit(sim, t)
-        rows.append([sim.outputs()[n] for n in OUTPUT_NAMES])
+        rows.append([*(sim.outputs()[n] for n in OUTPUT_NAMES), sim.error_estimate])
         positions.append(sim.positions)
     return rows, positions
 
@@ -87,11 +90,11 @@ def test_the_native_units_of_a_mesh_cloth_run_it_as_the_python_api(units):
     n = wetcloth.Simulation(scene).model.topology.n
     result = fmpy.simulate_fmu(str(units[2]), stop_time=0.3, output_interval=0.05)
     rows, _ = python_rows(scene, result["time"])
-    assert_agree([[row[k] for k in OUTPUT_NAMES] for row in result], rows, "FMI 2")
-    three = simulate(units[3], duration=0.3, fps=20, output=[*OUTPUT_NAMES, "positions", "wetness"])
+    assert_agree([[row[k] for k in COLUMNS] for row in result], rows, "FMI 2")
+    three = simulate(units[3], duration=0.3, fps=20, output=[*COLUMNS, "positions", "wetness"])
     assert three["positions"].shape == (len(three["time"]), n, 3) and three["wetness"].shape == (len(three["time"]), n)
     rows, positions = python_rows(scene, three["time"])
-    assert_agree([[three[k][i] for k in OUTPUT_NAMES] for i in range(len(three["time"]))], rows, "FMI 3")
+    assert_agree([[three[k][i] for k in COLUMNS] for i in range(len(three["time"]))], rows, "FMI 3")
     np.testing.assert_array_equal(three["positions"], np.array(positions))
     assert three["water_mass"][-1] > 0 and np.ptp(three["positions"][-1][:, 2]) > 0.01  # it wets and moves
 
@@ -108,7 +111,7 @@ def test_tunable_parameters_change_the_run_as_in_python(units):
     for changes in (values, {"place_mesh": "off", "initial_height": 0.3}):
         result = fmpy.simulate_fmu(str(units[2]), stop_time=0.2, output_interval=0.05, start_values=changes)
         rows, _ = python_rows(scene.replace(**changes), result["time"])
-        assert_agree([[row[k] for k in OUTPUT_NAMES] for row in result], rows, str(changes))
+        assert_agree([[row[k] for k in COLUMNS] for row in result], rows, str(changes))
         assert np.abs(result["centroid_z"] - built["centroid_z"]).max() > 1e-4, changes
 
 
@@ -121,7 +124,7 @@ def test_the_large_mesh_with_its_algebraic_hierarchy_runs_as_the_python_api(unit
     assert wetcloth.Simulation(scene).model.topology.n > wetcloth._core.ALGEBRAIC_SIZE
     result = fmpy.simulate_fmu(str(units["large2"]), stop_time=0.1, output_interval=0.05)
     rows, _ = python_rows(scene, result["time"])
-    assert_agree([[row[k] for k in OUTPUT_NAMES] for row in result], rows, "large mesh")
+    assert_agree([[row[k] for k in COLUMNS] for row in result], rows, "large mesh")
 
 
 STATES = r"""
