@@ -65,16 +65,23 @@ def units(tmp_path_factory):
             "large2": native.build_native_fmu(folder / "large2.fmu", 2, build_dir=objects, scene=large)}
 
 
-def python_rows(scene, times, grip=None):
-    """Simulation's outputs at fmpy's communication points `times`, stepped as the unit steps; and the
+def python_rows(scene, times, signal=None):
+    """Simulation's outputs at fmpy's communication points `times`, stepped as the unit steps, with the
+    inputs of `signal` (time, then a column per input) set before each step as fmpy sets them; and the
     positions (n, 3) at each."""
-    sim, rows, positions = wetcloth.Simulation(scene), [], []
+    from fmpy.simulation import Input
+
+    sim, rows, positions, previous = wetcloth.Simulation(scene), [], [], 0.0
     for t in times:
-        if grip is not None:
-            sim.set_inputs(grip_z=float(np.interp(t, *grip)))
+        if signal is not None:
+            names = signal.dtype.names[1:]
+            inputs, _ = Input.interpolate(time=previous, t=signal["time"], after_event=True,
+                                          table=np.array([signal[n] for n in names]))
+            sim.set_inputs(**dict(zip(names, map(float, inputs))))
         advance_as_the_unit(sim, t)
         rows.append([*(sim.outputs()[n] for n in OUTPUT_NAMES), sim.error_estimate])
         positions.append(sim.positions)
+        previous = t
     return rows, positions
 
 
@@ -196,8 +203,8 @@ def test_what_the_built_in_mesh_fixes_is_refused_with_its_name(units):
 
 
 def test_a_mesh_the_native_unit_cannot_run_is_refused_at_build(tmp_path):
-    """A mesh file whose vertices form the built-in grid (Python runs it with the grid's springs) and pins on
-    the built-in grid: NativeBuildError naming the parameter, and no unit written."""
+    """A mesh file whose vertices form the built-in grid (Python runs it with the grid's springs):
+    NativeBuildError naming the parameter, and no unit written."""
     import meshio
 
     nx, ny = 4, 3
@@ -209,11 +216,30 @@ def test_a_mesh_the_native_unit_cannot_run_is_refused_at_build(tmp_path):
     with pytest.raises(native.NativeBuildError, match=r"parameter 'cloth_mesh' = '.*grid.ply': the native unit "
                                                       r"cannot run the mesh file's vertices form the built-in grid"):
         native.build_native_fmu(tmp_path / "n.fmu", scene=tmp_path / "grid.toml")
-    (tmp_path / "pins.toml").write_text('pinned_vertices = "box:-1,-1,-1,1,-0.3,1"\n')
-    with pytest.raises(native.NativeBuildError, match=r"parameter 'pinned_vertices' = 'box:-1,-1,-1,1,-0.3,1': "
-                                                      r"the native unit cannot run pinned_vertices on the nx x ny"):
-        native.build_native_fmu(tmp_path / "n.fmu", scene=tmp_path / "pins.toml")
     assert not (tmp_path / "n.fmu").exists()
+
+
+def test_a_grid_pinned_by_a_box_runs_as_the_python_api(units, tmp_path):
+    """pinned_vertices' box on the built-in grid, the grip lifting what it pins: the unit's outputs are
+    Simulation's, bit for bit, with the built values and with another tilt (another start); a tilt that
+    leaves the box empty fails the initialization with the Python API's message."""
+    import fmpy
+
+    scene_file = tmp_path / "pins.toml"
+    scene_file.write_text('nx = 7\nny = 9\ninitial_height = 0.3\npinned_vertices = "box:-1,-1,-1,1,-0.3,1"\n')
+    fmu = native.build_native_fmu(tmp_path / "pins.fmu", 2, build_dir=units["objects"], scene=scene_file)
+    signal = np.array([(0.0, 0.0), (0.4, 0.2)], dtype=[("time", float), ("grip_z", float)])
+    scene = wetcloth.load_scene(scene_file)
+    for changes in ({}, {"initial_tilt": 30.0}):
+        result = fmpy.simulate_fmu(str(fmu), stop_time=0.4, output_interval=0.05, start_values=changes, input=signal)
+        rows, _ = python_rows(scene.replace(**changes), result["time"], signal)
+        assert_agree([[row[k] for k in COLUMNS] for row in result], rows, str(changes))
+    free = fmpy.simulate_fmu(str(fmu), stop_time=0.4, output_interval=0.05)
+    assert result["centroid_z"][-1] - free["centroid_z"][-1] > 0.02  # the grip lifted the pinned row
+    records, _ = run_child(OVERLAP, fmu, "initial_tilt", "80.0")
+    with pytest.raises(ParameterError) as exc:
+        wetcloth.load_scene(scene_file, initial_tilt=80.0)
+    assert records[-1] == {"status": 3, "errors": [f"initialization refused: {exc.value}"]}
 
 
 OVERLAP = r"""

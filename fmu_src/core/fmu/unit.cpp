@@ -113,22 +113,18 @@ const std::shared_ptr<const ClothMesh>& built_in_cloth() {
     static const std::shared_ptr<const ClothMesh> cloth = []() -> std::shared_ptr<const ClothMesh> {
         if (!CLOTH_MESH) return nullptr;
         auto m = std::make_shared<ClothMesh>();
-        m->source = CLOTH_TEXTS[0];
-        m->pins_text = CLOTH_TEXTS[1];
-        m->pins_allowed = CLOTH_TEXTS[2];
+        m->source = CLOTH_SOURCE;
         m->n = CLOTH_COUNTS[0];
         m->pair_tension_count = CLOTH_COUNTS[1];
         m->kd = CLOTH_COUNTS[2];
         m->marker_size = CLOTH_COUNTS[3];
         m->bends = CLOTH_COUNTS[4] != 0;
-        m->pin_box = CLOTH_COUNTS[5] != 0;
         std::copy(CLOTH_SCALARS, CLOTH_SCALARS + 3, m->centre);
         m->size = CLOTH_SCALARS[3];
         m->rest_gap = CLOTH_SCALARS[4];
         m->typical_gap = CLOTH_SCALARS[5];
         m->least_margin = CLOTH_SCALARS[6];
         m->hierarchy_stretch_stiffness = CLOTH_SCALARS[7];
-        std::copy(CLOTH_SCALARS + 8, CLOTH_SCALARS + 14, m->box);
         m->rest_pos = vector_of(CLOTH_REST_POS, CLOTH_REST_POS_SIZE);
         m->rest_xy = vector_of(CLOTH_REST_XY, CLOTH_REST_XY_SIZE);
         m->area = vector_of(CLOTH_AREA, CLOTH_AREA_SIZE);
@@ -138,7 +134,6 @@ const std::shared_ptr<const ClothMesh>& built_in_cloth() {
         m->pair_kind = vector_of(CLOTH_PAIR_KIND, CLOTH_PAIR_KIND_SIZE);
         m->triangles = vector_of(CLOTH_TRIANGLES, CLOTH_TRIANGLES_SIZE);
         m->corner_shares = vector_of(CLOTH_CORNER_SHARES, CLOTH_CORNER_SHARES_SIZE);
-        m->pinned = vector_of(CLOTH_PINNED, CLOTH_PINNED_SIZE);
         m->order = vector_of(CLOTH_ORDER, CLOTH_ORDER_SIZE);
         m->rank = vector_of(CLOTH_RANK, CLOTH_RANK_SIZE);
         m->levels = vector_of(CLOTH_LEVELS, CLOTH_LEVELS_SIZE);
@@ -157,8 +152,25 @@ const std::shared_ptr<const ClothMesh>& built_in_cloth() {
     return cloth;
 }
 
-//: scene_problem with the unit's cloth.
-std::string unit_scene_problem(const Scene& scene) { return scene_problem(scene, built_in_cloth().get()); }
+//: The pins by pinned_vertices built into the unit (native_mesh.py's), or null: none.
+const std::shared_ptr<const Pins>& built_in_pins() {
+    static const std::shared_ptr<const Pins> pins = []() -> std::shared_ptr<const Pins> {
+        if (!PINS) return nullptr;
+        auto p = std::make_shared<Pins>();
+        p->box = PIN_BOX;
+        std::copy(PIN_CORNERS, PIN_CORNERS + 6, p->corners);
+        p->attribute = vector_of(PIN_ATTRIBUTE, PIN_ATTRIBUTE_SIZE);
+        p->text = PIN_TEXTS[0];
+        p->allowed = PIN_TEXTS[1];
+        return p;
+    }();
+    return pins;
+}
+
+//: scene_problem with the unit's cloth and pins.
+std::string unit_scene_problem(const Scene& scene) {
+    return scene_problem(scene, built_in_cloth().get(), built_in_pins().get());
+}
 
 //: The scene's colliders, grip keys and cloth built into the unit (build-fmu --native --scene; none without).
 Fixtures scene_fixtures() {
@@ -174,6 +186,7 @@ Fixtures scene_fixtures() {
     f.cell_items.assign(SCENE_CELL_ITEMS, SCENE_CELL_ITEMS + SCENE_CELL_ITEMS_SIZE);
     f.grip_keys.assign(SCENE_GRIP_KEYS, SCENE_GRIP_KEYS + SCENE_GRIP_KEYS_SIZE);
     f.cloth_mesh = built_in_cloth();
+    f.pins = built_in_pins();
     return f;
 }
 

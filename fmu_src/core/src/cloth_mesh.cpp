@@ -51,21 +51,13 @@ std::vector<double> ClothMesh::start_positions(const Scene& scene) const {
     return pos;
 }
 
-std::vector<char> ClothMesh::pinned_at(const Scene& scene, const std::vector<double>& pos, std::string& problem) const {
-    std::vector<char> pins(static_cast<std::size_t>(n), 0);
-    problem.clear();
-    if (scene.pinned_edge != EDGE_NONE) {
-        problem = parameter_error("pinned_edge", py_repr(std::string_view(EDGES[scene.pinned_edge])) +
-                                  " is an edge of the nx x ny rectangle, but the cloth comes from cloth_mesh (pin its "
-                                  "vertices with pinned_vertices: a point attribute or a box); allowed here: 'none'");
-        return pins;
-    }
-    if (pin_box) {
+std::string Pins::pin(Index n, const double* pos, std::vector<char>& pinned) const {
+    if (box) {
         bool any = false;
         for (Index i = 0; i < n; ++i) {
             bool inside = true;
-            for (Index k = 0; k < 3; ++k) inside = inside && pos[k * n + i] >= box[k] && pos[k * n + i] <= box[3 + k];
-            pins[i] = inside;
+            for (Index k = 0; k < 3; ++k) inside = inside && pos[k * n + i] >= corners[k] && pos[k * n + i] <= corners[3 + k];
+            pinned[i] = pinned[i] || inside;
             any = any || inside;
         }
         if (!any) {
@@ -78,15 +70,29 @@ std::vector<char> ClothMesh::pinned_at(const Scene& scene, const std::vector<dou
                 }
                 span += std::string(k ? ", " : "") + "xyz"[k] + " " + py_g(lo) + " .. " + py_g(hi);
             }
-            problem = parameter_error("pinned_vertices", "the box " + pins_text + " holds no vertex of the cloth at t = 0 "
-                                      "(it spans " + span + " m); allowed: " + pins_allowed);
+            return parameter_error("pinned_vertices", "the box " + text + " holds no vertex of the cloth at t = 0 "
+                                   "(it spans " + span + " m); allowed: " + allowed);
         }
     }
-    for (std::size_t i = 0; i < pinned.size(); ++i) pins[i] = pins[i] || pinned[i] != 0;
-    return pins;
+    for (std::size_t i = 0; i < attribute.size(); ++i) pinned[i] = pinned[i] || attribute[i] != 0;
+    return "";
 }
 
-std::string mesh_scene_problem(const Scene& scene, const ClothMesh& mesh) {
+std::vector<char> ClothMesh::pinned_at(const Scene& scene, const std::vector<double>& pos, const Pins* pins,
+                                       std::string& problem) const {
+    std::vector<char> pinned(static_cast<std::size_t>(n), 0);
+    problem.clear();
+    if (scene.pinned_edge != EDGE_NONE) {
+        problem = parameter_error("pinned_edge", py_repr(std::string_view(EDGES[scene.pinned_edge])) +
+                                  " is an edge of the nx x ny rectangle, but the cloth comes from cloth_mesh (pin its "
+                                  "vertices with pinned_vertices: a point attribute or a box); allowed here: 'none'");
+        return pinned;
+    }
+    if (pins != nullptr) problem = pins->pin(n, pos.data(), pinned);
+    return pinned;
+}
+
+std::string mesh_scene_problem(const Scene& scene, const ClothMesh& mesh, const Pins* pins) {
     std::string problem = mesh.fixed_problem(scene);
     if (!problem.empty()) return problem;
     const std::vector<double> pos = mesh.start_positions(scene);
@@ -102,12 +108,12 @@ std::string mesh_scene_problem(const Scene& scene, const ClothMesh& mesh) {
                                              "raise the mesh in its file, or place it: place_mesh = 'on'") +
                                    "; allowed: every vertex above floor_level + thickness/2");
     }
-    mesh.pinned_at(scene, pos, problem);
+    mesh.pinned_at(scene, pos, pins, problem);
     return problem;
 }
 
-Topology mesh_topology(const Scene& scene, const ClothMesh& mesh) {
-    const std::string problem = mesh_scene_problem(scene, mesh);
+Topology mesh_topology(const Scene& scene, const ClothMesh& mesh, const Pins* pins) {
+    const std::string problem = mesh_scene_problem(scene, mesh, pins);
     if (!problem.empty()) throw std::invalid_argument(problem);
     Topology t;
     const Index n = mesh.n, count = static_cast<Index>(mesh.pair_rest.size());
@@ -129,10 +135,10 @@ Topology mesh_topology(const Scene& scene, const ClothMesh& mesh) {
     }
     t.start = mesh.start_positions(scene);
     std::string unused;
-    const std::vector<char> pins = mesh.pinned_at(scene, t.start, unused);
+    const std::vector<char> pinned = mesh.pinned_at(scene, t.start, pins, unused);
     t.free.assign(n, 1.0);
     for (Index i = 0; i < n; ++i) {
-        if (pins[i]) t.free[i] = 0.0;
+        if (pinned[i]) t.free[i] = 0.0;
     }
     return t;
 }

@@ -145,8 +145,8 @@ std::string fixed_differences(const Scene& a, const Scene& b) {
     return text;
 }
 
-std::string scene_problem(const Scene& s, const ClothMesh* mesh) {
-    if (mesh != nullptr) return mesh_scene_problem(s, *mesh);
+std::string scene_problem(const Scene& s, const ClothMesh* mesh, const Pins* pins) {
+    if (mesh != nullptr) return mesh_scene_problem(s, *mesh, pins);
     const double half_drop = 0.5 * s.length * std::fabs(std::sin(s.initial_tilt * (PI / 180.0)));
     const double lowest = s.initial_height - half_drop - 0.5 * s.thickness;
     if (lowest <= s.floor_level) {
@@ -154,7 +154,26 @@ std::string scene_problem(const Scene& s, const ClothMesh* mesh) {
                " m, floor_level " + py_g(s.floor_level) + " m); allowed: initial_height > floor_level + " +
                py_g(half_drop + 0.5 * s.thickness) + " m";
     }
-    return "";
+    if (pins == nullptr || s.nx < 2 || s.ny < 2) return "";
+    std::vector<char> pinned(static_cast<std::size_t>(s.nx * s.ny), 0);
+    return pins->pin(s.nx * s.ny, grid_start(s).data(), pinned);
+}
+
+std::vector<double> grid_start(const Scene& scene) {
+    const Index nx = scene.nx, n = scene.nx * scene.ny;
+    const double dx = scene.width / static_cast<double>(nx - 1);
+    const double dy = scene.length / static_cast<double>(scene.ny - 1);
+    const double tilt = scene.initial_tilt * (PI / 180.0);  // math.radians
+    const double cos_tilt = std::cos(tilt), sin_tilt = std::sin(tilt);
+    std::vector<double> pos(3 * static_cast<std::size_t>(n));
+    for (Index i = 0; i < n; ++i) {
+        const double x = static_cast<double>(i % nx) * dx - 0.5 * scene.width;  // Topology.rest_xy
+        const double y = static_cast<double>(i / nx) * dy - 0.5 * scene.length;
+        pos[i] = x;
+        pos[n + i] = y * cos_tilt;
+        pos[2 * n + i] = scene.initial_height + y * sin_tilt;
+    }
+    return pos;
 }
 
 // ------------------------------------------------------------------------------------------ formatting
@@ -226,8 +245,8 @@ std::vector<double> Topology::per_particle_sum(const double* per_spring, const s
     return total;
 }
 
-Topology build_topology(const Scene& scene, const ClothMesh* mesh) {
-    if (mesh != nullptr) return mesh_topology(scene, *mesh);
+Topology build_topology(const Scene& scene, const ClothMesh* mesh, const Pins* pins) {
+    if (mesh != nullptr) return mesh_topology(scene, *mesh, pins);
     if (scene.nx < 2 || scene.ny < 2) {
         throw std::invalid_argument("the grid needs at least 2 x 2 particles, got " + std::to_string(scene.nx) +
                                     " x " + std::to_string(scene.ny));
@@ -320,6 +339,15 @@ Topology build_topology(const Scene& scene, const ClothMesh* mesh) {
                             (scene.pinned_edge == EDGE_Y_MIN && row[i] == 0) ||
                             (scene.pinned_edge == EDGE_Y_MAX && row[i] == ny - 1);
         if (pinned) t.free[i] = 0.0;
+    }
+    t.start = grid_start(scene);
+    if (pins != nullptr) {  // pinned_vertices' box, over the start positions
+        std::vector<char> pinned(static_cast<std::size_t>(n), 0);
+        const std::string problem = pins->pin(n, t.start.data(), pinned);
+        if (!problem.empty()) throw std::invalid_argument(problem);
+        for (Index i = 0; i < n; ++i) {
+            if (pinned[i]) t.free[i] = 0.0;
+        }
     }
     return t;
 }
@@ -421,9 +449,10 @@ std::string collider_overlaps(const Physics& phys, Index n, const double* pos) {
 
 // ------------------------------------------------------------------------------------------ simulation
 Simulation::Simulation(const Scene& scene, Fixtures fixtures)
-    : scene_(scene), fixtures_(std::move(fixtures)), topo_(build_topology(scene, fixtures_.cloth_mesh.get())) {
+    : scene_(scene), fixtures_(std::move(fixtures)),
+      topo_(build_topology(scene, fixtures_.cloth_mesh.get(), fixtures_.pins.get())) {
     const ClothMesh* mesh = topo_.mesh;
-    const std::string problem = scene_problem(scene, mesh);
+    const std::string problem = scene_problem(scene, mesh, fixtures_.pins.get());
     if (!problem.empty()) throw std::invalid_argument(problem);
     const Index n = topo_.n, families = topo_.families();
     const std::size_t un = static_cast<std::size_t>(n);
@@ -598,17 +627,8 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
         b.acceleration = take(3 * un);
         b.anchor = take(3 * un);
         b.held = take(un);
-        const double tilt = scene.initial_tilt * (PI / 180.0);  // math.radians
-        const double cos_tilt = std::cos(tilt), sin_tilt = std::sin(tilt);
         for (Index i = 0; i < n; ++i) {
-            if (mesh != nullptr) {  // placed
-                for (Index k = 0; k < 3; ++k) b.pos[k * n + i] = topo_.start[k * n + i];
-            } else {
-                const double x = topo_.rest_xy[i], y = topo_.rest_xy[n + i];
-                b.pos[i] = x;
-                b.pos[n + i] = y * cos_tilt;
-                b.pos[2 * n + i] = scene.initial_height + y * sin_tilt;
-            }
+            for (Index k = 0; k < 3; ++k) b.pos[k * n + i] = topo_.start[k * n + i];  // initial_positions
             b.water[i] = scene.initial_saturation * scene.absorption_capacity * scene.areal_density * topo_.area[i];
         }
         copy(3 * n, b.pos, b.trial_pos);

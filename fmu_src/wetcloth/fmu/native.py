@@ -187,6 +187,7 @@ def fixtures_header(scene=None, cloth: dict | None = None) -> str:
         lines.append(f"inline constexpr std::size_t {name}_SIZE = {values.size};\n"
                      f"inline constexpr {kind} {name}[] = {{{text}{', ' if text else ''}0}};")
     lines.append(native_mesh.cloth_header(cloth, _c_double, _c_string))
+    lines.append(native_mesh.pins_header(scene, _c_double, _c_string))
     return "\n".join(lines)
 
 
@@ -588,16 +589,14 @@ def check_platform() -> None:
 # ----------------------------------------------------------------------------------------- the unit
 def native_scene(scene: str | Path):
     """The packed scene (``packed_scene.pack``) of a scene file for the native unit; NativeBuildError for a
-    cloth it cannot run (``native_mesh.unsupported``: pins on the built-in grid, a mesh file that forms it)."""
+    cloth it cannot run (``native_mesh.unsupported``: a mesh file whose vertices form the built-in grid)."""
     from wetcloth.scene import load_scene
 
     packed = packed_scene.pack(scene)
     reason = native_mesh.unsupported(load_scene(scene))
     if reason:
-        name = "cloth_mesh" if packed.starts.get("cloth_mesh") else "pinned_vertices"
-        shown = str(packed.mesh) if name == "cloth_mesh" else packed.starts[name]
-        raise NativeBuildError(f"scene {str(scene)!r}: parameter '{name}' = {shown!r}: the native unit cannot run "
-                               f"{reason}; use WetCloth.fmu (wetcloth build-fmu --scene {scene})")
+        raise NativeBuildError(f"scene {str(scene)!r}: parameter 'cloth_mesh' = {str(packed.mesh)!r}: the native "
+                               f"unit cannot run {reason}; use WetCloth.fmu (wetcloth build-fmu --scene {scene})")
     return packed
 
 

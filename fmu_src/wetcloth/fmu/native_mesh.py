@@ -28,7 +28,7 @@ CLOTH_ARRAYS = (
     ("CLOTH_PAIRS", "Index", "pairs"), ("CLOTH_PAIR_REST", "double", "pair_rest"),
     ("CLOTH_PAIR_SHAPE", "double", "pair_shape"), ("CLOTH_PAIR_KIND", "Index", "pair_kind"),
     ("CLOTH_TRIANGLES", "Index", "triangles"), ("CLOTH_CORNER_SHARES", "double", "corner_shares"),
-    ("CLOTH_PINNED", "Index", "pinned"), ("CLOTH_ORDER", "Index", "order"), ("CLOTH_RANK", "Index", "rank"),
+    ("CLOTH_ORDER", "Index", "order"), ("CLOTH_RANK", "Index", "rank"),
     ("CLOTH_LEVELS", "Index", "levels"), ("CLOTH_A_START", "Index", "a_start"),
     ("CLOTH_A_COLUMN", "Index", "a_column"), ("CLOTH_DIAGONAL", "Index", "diagonal"),
     ("CLOTH_P_START", "Index", "p_start"), ("CLOTH_P_COLUMN", "Index", "p_column"),
@@ -38,20 +38,17 @@ CLOTH_ARRAYS = (
 )
 #: The ClothMesh numbers, in the order of the header's CLOTH_SCALARS and CLOTH_COUNTS (unit.cpp reads them so).
 CLOTH_SCALARS = ("centre_x", "centre_y", "centre_z", "size", "rest_gap", "typical_gap", "least_margin",
-                 "hierarchy_stretch_stiffness", "box_x0", "box_y0", "box_z0", "box_x1", "box_y1", "box_z1")
-CLOTH_COUNTS = ("n", "pair_tension_count", "kd", "marker_size", "bends", "pin_box")
+                 "hierarchy_stretch_stiffness")
+CLOTH_COUNTS = ("n", "pair_tension_count", "kd", "marker_size", "bends")
 
 
 def unsupported(scene) -> str | None:
     """Why the native unit cannot run ``scene`` (a ``wetcloth.Scene``), or None: a mesh file whose vertices
-    form the built-in grid (Python gives it the grid's springs), or pins on the built-in grid."""
+    form the built-in grid (Python gives it the grid's springs)."""
     from wetcloth.mesh_file import is_mesh, read_mesh_file
     from wetcloth.topology import file_grid
 
     if not is_mesh(scene.cloth_mesh):
-        if scene.pinned_vertices.strip():
-            return ("pinned_vertices on the nx x ny rectangle: the native unit pins a grid by pinned_edge only, "
-                    "and a cloth from a mesh file by pinned_vertices")
         return None
     if file_grid(read_mesh_file(scene.cloth_mesh)) is not None:
         return ("the mesh file's vertices form the built-in grid, which the Python front end runs with the grid's "
@@ -63,11 +60,10 @@ def cloth_arrays(scene) -> dict | None:
     """The ClothMesh of ``scene`` (a ``wetcloth.Scene`` whose cloth comes from a mesh file, ``unsupported``
     None) as arrays and numbers (keys of CLOTH_ARRAYS, CLOTH_SCALARS, CLOTH_COUNTS, and the texts
     ``source``, ``pins_text``, ``pins_allowed``); None for the built-in grid."""
-    from wetcloth.mesh_file import is_mesh, read_mesh_file
+    from wetcloth.mesh_file import is_mesh
     from wetcloth.preconditioner import plane_for
-    from wetcloth.scene import PINS_ALLOWED
     from wetcloth.self_collision import make_contact
-    from wetcloth.topology import _attribute, build_topology, corner_shares
+    from wetcloth.topology import build_topology, corner_shares
 
     if not is_mesh(scene.cloth_mesh):
         return None
@@ -75,27 +71,44 @@ def cloth_arrays(scene) -> dict | None:
     plane = plane_for(topo)
     contact = make_contact(topo, True, 0.0)
     h = plane.algebraic
-    spec = scene.pinned_vertices.strip()
-    box = [float(v) for v in spec[4:].split(",")] if spec.startswith("box:") else [0.0] * 6
-    pinned = (_attribute(spec, read_mesh_file(scene.cloth_mesh)) if spec and not spec.startswith("box:")
-              else np.zeros(0, dtype=bool))
     centre = topo.rest_pos @ topo.area / topo.area.sum()  # topology.placed's
     arrays = dict(
         rest_pos=topo.rest_pos, rest_xy=topo.rest_xy, area=topo.area, pairs=topo.pairs, pair_rest=topo.pair_rest,
         pair_shape=topo.pair_shape, pair_kind=topo.pair_kind, triangles=topo.triangles,
-        corner_shares=corner_shares(topo.rest_pos, topo.triangles), pinned=pinned.astype(np.int64),
+        corner_shares=corner_shares(topo.rest_pos, topo.triangles),
         order=plane.order, rank=plane.rank, levels=h.levels, a_start=h.a_start, a_column=h.a_column,
         diagonal=h.diagonal, p_start=h.p_start, p_column=h.p_column, p_value=h.p_value, r_start=h.r_start,
         r_column=h.r_column, r_value=h.r_value, spring_entries=h.spring_entries,
     )
     arrays.update(centre_x=centre[0], centre_y=centre[1], centre_z=centre[2], size=topo.size,
                   rest_gap=contact.rest_gap, typical_gap=contact.typical_gap, least_margin=contact.least_margin,
-                  hierarchy_stretch_stiffness=scene.stretch_stiffness,
-                  **{f"box_{c}{k}": box[3 * k + j] for k in (0, 1) for j, c in enumerate("xyz")})
+                  hierarchy_stretch_stiffness=scene.stretch_stiffness)
     arrays.update(n=topo.n, pair_tension_count=topo.pair_tension_count, kd=plane.bands.shape[2] - 1,
-                  marker_size=len(h.marker), bends=int(scene.bend_stiffness != 0.0), pin_box=int(spec.startswith("box:")))
-    arrays.update(source=str(topo.mesh.source), pins_text=repr(spec), pins_allowed=PINS_ALLOWED)
+                  marker_size=len(h.marker), bends=int(scene.bend_stiffness != 0.0), source=str(topo.mesh.source))
     return arrays
+
+
+def pins_header(scene, c_double, c_string) -> str:
+    """The generated header's Pins (model.hpp) of ``scene``'s pinned_vertices (a ``wetcloth.Scene``, or None):
+    ``PINS`` (false: none), the box (``PIN_BOX``, ``PIN_CORNERS``), a point attribute's pins (``PIN_ATTRIBUTE``)
+    and the texts of the messages."""
+    from wetcloth.mesh_file import read_mesh_file
+    from wetcloth.scene import PINS_ALLOWED
+    from wetcloth.topology import _attribute
+
+    spec = "" if scene is None else scene.pinned_vertices.strip()
+    box = spec.startswith("box:")
+    corners = [float(v) for v in spec[4:].split(",")] if box else [0.0] * 6
+    attribute = (_attribute(spec, read_mesh_file(scene.cloth_mesh)).astype(np.int64) if spec and not box
+                 else np.zeros(0, dtype=np.int64))
+    values = ", ".join(str(int(v)) for v in attribute)
+    return "\n".join([
+        f"inline constexpr bool PINS = {'true' if spec else 'false'};",
+        f"inline constexpr bool PIN_BOX = {'true' if box else 'false'};",
+        f"inline constexpr double PIN_CORNERS[] = {{{', '.join(c_double(v) for v in corners)}}};",
+        f"inline constexpr std::size_t PIN_ATTRIBUTE_SIZE = {attribute.size};",
+        f"inline constexpr Index PIN_ATTRIBUTE[] = {{{values}{', ' if values else ''}0}};",
+        f"inline constexpr const char* PIN_TEXTS[] = {{{c_string(repr(spec))}, {c_string(PINS_ALLOWED)}}};"])
 
 
 def hierarchy_levels(arrays: dict | None) -> int:
@@ -134,8 +147,8 @@ def cloth_header(arrays: dict | None, c_double, c_string) -> str:
                      f"inline constexpr {kind} {name}[] = {{{text}{', ' if text else ''}0}};")
     scalars = ", ".join(c_double(0.0 if arrays is None else arrays[k]) for k in CLOTH_SCALARS)
     counts = ", ".join(str(0 if arrays is None else int(arrays[k])) for k in CLOTH_COUNTS)
-    texts = ", ".join(c_string("" if arrays is None else arrays[k]) for k in ("source", "pins_text", "pins_allowed"))
+    source = c_string("" if arrays is None else arrays["source"])
     lines += [f"inline constexpr double CLOTH_SCALARS[] = {{{scalars}}};  // {', '.join(CLOTH_SCALARS)}",
               f"inline constexpr Index CLOTH_COUNTS[] = {{{counts}}};  // {', '.join(CLOTH_COUNTS)}",
-              f"inline constexpr const char* CLOTH_TEXTS[] = {{{texts}}};  // source, pins_text, pins_allowed"]
+              f"inline constexpr const char* CLOTH_SOURCE = {source};"]
     return "\n".join(lines)

@@ -100,7 +100,7 @@ struct Scene {
     Index self_collision = SWITCH_ON;
     double self_friction = 0.4;                                  // -
     Index pinned_edge = EDGE_NONE;
-    Index pinned_vertices = 0;                                   // 0: the one allowed (the ClothMesh's pins)
+    Index pinned_vertices = 0;                                   // 0: the one allowed (the built-in Pins)
     double grip_x = 0.0, grip_y = 0.0, grip_z = 0.0;             // m (inputs)
     Index integrator = BDF2;
     double tolerance = 5e-6;                                     // -
@@ -155,12 +155,16 @@ void for_each_field(S& s, Visit&& visit) {
 std::string fixed_differences(const Scene& a, const Scene& b);
 
 struct ClothMesh;
+struct Pins;
 
 //: scene.validate's rule on the scene as a whole: "" or the ParameterError's text ("parameter
 //: 'initial_height': the cloth starts at or below the floor ...").  Ranges are the caller's.  With a
-//: cloth `mesh`: its start above the floor and its pins (_check_mesh_start, pinned_mask), and the
-//: parameters its built-in structure fixes (ClothMesh::fixed_problem).
-std::string scene_problem(const Scene& scene, const ClothMesh* mesh = nullptr);
+//: cloth `mesh`: its start above the floor (_check_mesh_start) and the parameters its built-in structure
+//: fixes (ClothMesh::fixed_problem); with `pins`, a box that holds a particle (pinned_mask).
+std::string scene_problem(const Scene& scene, const ClothMesh* mesh = nullptr, const Pins* pins = nullptr);
+
+//: The grid's particle positions (3, n) m at t = 0 (topology.initial_positions).
+std::vector<double> grid_start(const Scene& scene);
 
 // ------------------------------------------------------------------------------------------ formatting
 //: Python's repr of a float ('0.1', '1e-05', '1e+16', 'inf', 'nan') and of a str ('text').
@@ -178,12 +182,24 @@ inline constexpr const char* FAMILY_NAMES[] = {"structural_x", "structural_y", "
 //: Kinds of a mesh's listed springs (topology.py's STRETCH, SHEAR, BEND).
 enum PairKind : Index { PAIR_STRETCH = 0, PAIR_SHEAR = 1, PAIR_BEND = 2 };
 
+//: Pins by pinned_vertices, built into a native FMU with its scene (topology.pinned_mask): a box over the
+//: particles' start positions, or a mesh file's point attribute (its nonzero vertices).
+struct Pins {
+    bool box = false;
+    double corners[6] = {};        // the box's lower corner, upper corner (m)
+    std::vector<Index> attribute;  // (n) 1 pinned by the attribute, or empty
+    std::string text, allowed;     // pinned_vertices' value (its repr) and scene.PINS_ALLOWED, for messages
+    //: Mark in `pinned` (n) the particles these pins hold at the start positions pos (3, n); "" or the
+    //: ParameterError's text of a box that holds none.
+    std::string pin(Index n, const double* pos, std::vector<char>& pinned) const;
+};
+
 //: A cloth from a mesh file: what depends on the file alone, computed once by the Python front end
-//: (topology.py's _mesh, listed_springs, corner_shares, placed's centroid, pinned_mask's attribute;
+//: (topology.py's _mesh, listed_springs, corner_shares, placed's centroid;
 //: self_collision.make_contact's gaps; preconditioner.make_mesh_plane's band order and algebraic
 //: hierarchy) and built into the native FMU as arrays (wetcloth/fmu/native_mesh.py).  The Simulation turns
 //: it, with a scene's values, into what the Python front end hands the core: spring constants by the
-//: moduli, masses by areal_density, the start by place_mesh, initial_height and initial_tilt, box pins.
+//: moduli, masses by areal_density, the start by place_mesh, initial_height and initial_tilt.
 struct ClothMesh {
     std::string source;              // the mesh file, for messages
     Index n = 0;                     // particles (the file's vertices)
@@ -200,10 +216,6 @@ struct ClothMesh {
     Index pair_tension_count = 0;
     std::vector<Index> triangles;    // (m, 3)
     std::vector<double> corner_shares;  // (m, 3)
-    std::vector<Index> pinned;       // (n) 1 where the pinned_vertices attribute pins, or empty
-    bool pin_box = false;            // pinned_vertices is a box over the start positions:
-    double box[6] = {};              //   lower corner, upper corner (m)
-    std::string pins_text, pins_allowed;  // pinned_vertices' value and scene.PINS_ALLOWED, for messages
     // The preconditioner (make_mesh_plane): the coarsest level's band order, its rank and half-bandwidth,
     // the algebraic hierarchy's arrays (core.hpp's Algebraic; the values filled by the core at each refresh).
     std::vector<Index> order, rank;
@@ -220,9 +232,10 @@ struct ClothMesh {
     std::string fixed_problem(const Scene& scene) const;
     //: The particle positions (3, n) m at t = 0 for `scene` (topology.placed).
     std::vector<double> start_positions(const Scene& scene) const;
-    //: The pinned particles (n, 1 pinned) at the start positions `pos` (3, n) (pinned_mask), or the
-    //: ParameterError's text in `problem`.
-    std::vector<char> pinned_at(const Scene& scene, const std::vector<double>& pos, std::string& problem) const;
+    //: The pinned particles (n, 1 pinned) at the start positions `pos` (3, n) by `pins` (pinned_mask), or
+    //: the ParameterError's text in `problem` (pinned_edge, which a mesh has not; a box holding none).
+    std::vector<char> pinned_at(const Scene& scene, const std::vector<double>& pos, const Pins* pins,
+                                std::string& problem) const;
 };
 
 //: The grid and per-spring constants of a scene (topology.py's Topology).  Particle i = row * nx + col.  A
@@ -244,7 +257,7 @@ struct Topology {
     double size = 0.0;                     // m, the cloth's larger side (integrators.control)
     const ClothMesh* mesh = nullptr;       // a mesh cloth's built-in structure, else null
     std::vector<double> pair_stiffness, pair_damping;  // (S) N/m, N s/m: a mesh's listed springs
-    std::vector<double> start;             // (3, n) m: a mesh's positions at t = 0
+    std::vector<double> start;             // (3, n) m: the positions at t = 0
     Index families() const { return static_cast<Index>(offset.size()); }
     Index triangle_count() const { return static_cast<Index>(triangles.size() / 3); }
     //: Sum (n) over the springs touching each particle of per-spring values (F', n) of the families
@@ -252,13 +265,13 @@ struct Topology {
     std::vector<double> per_particle_sum(const double* per_spring, const std::vector<Index>& offsets) const;
 };
 
-//: The topology of `scene`: its nx x ny grid, or the cloth `mesh` (std::invalid_argument for a
-//: scene_problem of the mesh).
-Topology build_topology(const Scene& scene, const ClothMesh* mesh = nullptr);
+//: The topology of `scene`: its nx x ny grid, or the cloth `mesh`, with its `pins` (std::invalid_argument
+//: for a scene_problem of the mesh or the pins).
+Topology build_topology(const Scene& scene, const ClothMesh* mesh = nullptr, const Pins* pins = nullptr);
 
 //: scene_problem and build_topology of a cloth from a mesh (cloth_mesh.cpp).
-std::string mesh_scene_problem(const Scene& scene, const ClothMesh& mesh);
-Topology mesh_topology(const Scene& scene, const ClothMesh& mesh);
+std::string mesh_scene_problem(const Scene& scene, const ClothMesh& mesh, const Pins* pins);
+Topology mesh_topology(const Scene& scene, const ClothMesh& mesh, const Pins* pins);
 
 //: The distinct edges (k, 2) of a triangle mesh (m, 3), each (lower, higher), sorted (grid_edges).
 std::vector<Index> grid_edges(const std::vector<Index>& triangles);
@@ -310,6 +323,7 @@ struct Fixtures {
     std::vector<Index> mesh_triangles, cell_start, cell_items;
     std::vector<double> grip_keys;  // (g, 4) rows: time s, x, y, z m
     std::shared_ptr<const ClothMesh> cloth_mesh;  // the cloth from a mesh file, or none: the nx x ny grid
+    std::shared_ptr<const Pins> pins;             // the pins by pinned_vertices, or none
     Index collider_count() const { return static_cast<Index>(colliders.size() / COLLIDER_COLUMNS); }
     //: The mesh arrays as the kernels read them (pointing into this object).
     ColliderMeshes meshes() const;
