@@ -219,6 +219,28 @@ def test_a_mesh_the_native_unit_cannot_run_is_refused_at_build(tmp_path):
     assert not (tmp_path / "n.fmu").exists()
 
 
+def test_pins_by_a_point_attribute_of_the_mesh_file_run_as_the_python_api(units, tmp_path):
+    """pinned_vertices naming a point attribute of the mesh file (the vertices of its -x half): the unit
+    holds them as Simulation does, bit for bit, and the run differs from the box's."""
+    import fmpy
+    import meshio
+
+    points, triangles = make_meshes.round_cloth(radius=0.3, rings=SMALL_RINGS)
+    half = (points[:, 0] < -0.2).astype(np.float64)
+    meshio.write(tmp_path / "pinned.ply", meshio.Mesh(points, [("triangle", triangles.astype(np.int32))],
+                                                      point_data={"held": half}))
+    text = SCENE.format(mesh="pinned.ply", pin_y=0.0).replace('"box:-1,-1,-1,1,0.0,1"', '"held"')
+    (tmp_path / "pinned.toml").write_text(text)
+    fmu = native.build_native_fmu(tmp_path / "pinned.fmu", 2, build_dir=units["objects"], scene=tmp_path / "pinned.toml")
+    scene = wetcloth.load_scene(tmp_path / "pinned.toml")
+    assert 0 < np.count_nonzero(wetcloth.Simulation(scene).model.topology.pinned) < len(points)
+    result = fmpy.simulate_fmu(str(fmu), stop_time=0.2, output_interval=0.05)
+    rows, _ = python_rows(scene, result["time"])
+    assert_agree([[row[k] for k in COLUMNS] for row in result], rows, "attribute pins")
+    box = fmpy.simulate_fmu(str(units[2]), stop_time=0.2, output_interval=0.05)
+    assert np.abs(result["centroid_x"] - box["centroid_x"]).max() > 1e-3
+
+
 def test_a_grid_pinned_by_a_box_runs_as_the_python_api(units, tmp_path):
     """pinned_vertices' box on the built-in grid, the grip lifting what it pins: the unit's outputs are
     Simulation's, bit for bit, with the built values and with another tilt (another start); a tilt that

@@ -6,12 +6,13 @@ the arrays ``wetcloth.Simulation`` hands the core.
 From the file alone: the particles' rest positions, flat rest sheet and areas (``topology._mesh``), the
 listed springs' ends, rest lengths, kinds and shapes (``listed_springs``), the triangles and their corners'
 shares, the area-weighted centroid that ``place_mesh`` turns about, self-collision's gaps
-(``self_collision.make_contact``), the pins of a point attribute or the box of ``pinned_vertices``, and the
-preconditioner's structure (``preconditioner.make_mesh_plane``: the band order of its coarsest level and
+(``self_collision.make_contact``) and the preconditioner's structure (``preconditioner.make_mesh_plane``: the band order of its coarsest level and
 the algebraic multigrid hierarchy's patterns and prolongators, pyamg's).  From the parameters, in C++:
 spring constants (``stretch_stiffness``, ``bend_stiffness``, ``damping`` times the shapes), masses and
-wicking (``areal_density``, ...), the start (``place_mesh``, ``initial_height``, ``initial_tilt``) and the
-particles a box pins there.
+wicking (``areal_density``, ...) and the start (``place_mesh``, ``initial_height``, ``initial_tilt``).
+
+The pins of ``pinned_vertices`` (``pins_header``), on a mesh or the built-in grid: a point attribute's
+vertices, or a box, whose particles the core finds at the start positions.
 
 What the structure fixes (``fixed_ranges``): ``bend_stiffness`` 0 or not (the bending springs are listed or
 not), and, on a mesh with an algebraic hierarchy (more than ``ALGEBRAIC_SIZE`` vertices), ``stretch_stiffness``
@@ -58,8 +59,8 @@ def unsupported(scene) -> str | None:
 
 def cloth_arrays(scene) -> dict | None:
     """The ClothMesh of ``scene`` (a ``wetcloth.Scene`` whose cloth comes from a mesh file, ``unsupported``
-    None) as arrays and numbers (keys of CLOTH_ARRAYS, CLOTH_SCALARS, CLOTH_COUNTS, and the texts
-    ``source``, ``pins_text``, ``pins_allowed``); None for the built-in grid."""
+    None) as arrays and numbers (keys of CLOTH_ARRAYS, CLOTH_SCALARS, CLOTH_COUNTS, and the file's name
+    ``source``); None for the built-in grid."""
     from wetcloth.mesh_file import is_mesh
     from wetcloth.preconditioner import plane_for
     from wetcloth.self_collision import make_contact
