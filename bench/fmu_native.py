@@ -1,6 +1,7 @@
 """The native unit (``wetcloth build-fmu --native``): its start, and what a doStep costs beyond the physics.
 
     .venv/bin/python bench/fmu_native.py [--repeat 5] [--steps 3000] [--native FMU] [--python FMU]
+    .venv/bin/python bench/fmu_native.py --scene tablecloth --step 0.01 --steps 100 --clock cpu
 
 Both units are driven by a minimal master: ctypes calls straight into their binaries (no fmpy wrapper
 in the loop), the default towel, 1 ms communication steps from t = 0 (its landing: one internal BDF2 step
@@ -19,8 +20,12 @@ per communication step), ``fmi2DoStep`` then ``fmi2GetReal`` of the six outputs 
   "native minus Simulation" is what separates the two drivers: doStep and getReal through ctypes
   against ``advance`` and ``outputs()`` in Python.
 
-Wall-clock times (``time.perf_counter``), each the best of ``--repeat`` (median in brackets): the machine
-may be shared.  Builds the units into a temporary folder unless given.
+Wall-clock times (``time.perf_counter``; ``--clock cpu``: the process's CPU time, ``time.process_time``, but for
+the start, a child's), each the best of ``--repeat`` (median in brackets): the machine may be shared.  Builds the
+units into a temporary folder unless given; ``--scene`` (a scene file or preset, e.g. a cloth from a mesh file)
+builds them with that scene built in, runs it instead of the towel with communication steps of ``--step`` s, and
+times the native build: with the core's objects compiled before (only the unit's own sources and its generated
+header) and from nothing.
 """
 
 from __future__ import annotations
@@ -116,12 +121,12 @@ class Unit:
         """Wall time (s) of `steps` doSteps of h s, each followed by a read of the outputs."""
         lib, c, vrs, values = self.lib, self.c, self.vrs, self.values
         t = self.t
-        start = time.perf_counter()
+        start = clock()
         for k in range(steps):
             assert lib.fmi2DoStep(c, t, h, 1) == 0
             t += h
             lib.fmi2GetReal(c, vrs, 6, values)
-        elapsed = time.perf_counter() - start
+        elapsed = clock() - start
         self.t = t
         return elapsed
 
@@ -129,15 +134,19 @@ class Unit:
         self.lib.fmi2FreeInstance(self.c)
 
 
-def direct(steps: int, h: float) -> float:
-    sim = wetcloth.Simulation()
+#: The clock of the per-step figures (--clock).
+clock = time.perf_counter
+
+
+def direct(steps: int, h: float, scene=None) -> float:
+    sim = wetcloth.Simulation(scene)
     t = 0.0
-    start = time.perf_counter()
+    start = clock()
     for k in range(steps):
         sim.advance(t + h - sim.time)
         t += h
         sim.outputs()
-    return time.perf_counter() - start
+    return clock() - start
 
 
 def best(values: list[float]) -> str:
@@ -154,20 +163,38 @@ def main(argv=None) -> int:
     parser.add_argument("--steps", type=int, default=3000, help="1 ms communication steps per run (default 3000)")
     parser.add_argument("--native", type=Path, help="the native unit (default: build it)")
     parser.add_argument("--python", type=Path, help="pythonfmu's WetCloth.fmu (default: build it)")
+    parser.add_argument("--scene", help="a scene file or preset built into both units and run (default: the towel)")
+    parser.add_argument("--step", type=float, default=1e-3, help="communication step, s (default 0.001)")
+    parser.add_argument("--clock", choices=("wall", "cpu"), default="wall", help="the per-step figures' clock")
     args = parser.parse_args(argv)
-    h = 1e-3
+    h = args.step
+    global clock
+    clock = time.process_time if args.clock == "cpu" else time.perf_counter
+    scene = None if args.scene is None else wetcloth.load_scene(args.scene)
 
     with tempfile.TemporaryDirectory(prefix="wetcloth_bench_native_") as tmp:
         tmp = Path(tmp)
-        native_fmu = args.native or build_native_fmu(tmp / "WetClothNative.fmu", 2)
-        python_fmu = args.python or build_fmu(tmp / "WetCloth.fmu", 2)
+        if args.scene is not None and args.native is None:
+            print(f"native build with --scene {args.scene} (wall clock): ", end="", flush=True)
+            for label in ("from nothing", "core objects compiled before"):
+                for unit_object in (*(tmp / "objects").glob("unit-*.o"), *(tmp / "objects").glob("fmi2-*.o")):
+                    unit_object.unlink()  # the unit's own sources compile again, as for another scene
+                start = time.perf_counter()
+                build_native_fmu(tmp / "built.fmu", 2, build_dir=tmp / "objects", scene=args.scene)
+                print(f"{label} {time.perf_counter() - start:.1f} s; ", end="", flush=True)
+            print()
+        native_fmu = args.native or build_native_fmu(tmp / "WetClothNative.fmu", 2, build_dir=tmp / "objects",
+                                                     scene=args.scene)
+        python_fmu = args.python or build_fmu(tmp / "WetCloth.fmu", 2, scene=args.scene)
         units = {}
         for label, fmu in (("native", native_fmu), ("pythonfmu", python_fmu)):
             directory = Path(fmpy.extract(str(fmu), unzipdir=str(tmp / label)))
             units[label] = (directory, fmpy.read_model_description(str(directory)))
 
-        print(f"wetcloth {wetcloth.__version__}, default towel ({wetcloth.load_scene().nx} x "
-              f"{wetcloth.load_scene().ny}), 1 ms communication steps; best of {args.repeat} (median)")
+        what = (f"default towel ({wetcloth.load_scene().nx} x {wetcloth.load_scene().ny})" if scene is None else
+                f"scene {args.scene} ({wetcloth.Simulation(scene).model.topology.n} particles)")
+        print(f"wetcloth {wetcloth.__version__}, {what}, {h * 1e3:g} ms communication steps, {args.clock} clock; "
+              f"best of {args.repeat} (median)")
         print("\nstart, a new process: load + instantiate + initialize | to the end of the first doStep")
         for label, (directory, md) in units.items():
             ready, first = [], []
@@ -189,30 +216,31 @@ def main(argv=None) -> int:
             native.append(unit.run(steps, h))
             # Beyond the physics: doStep of a zero step (checks, the fallback copy of the state), read.
             lib, c = unit.lib, unit.c
-            start = time.perf_counter()
+            start = clock()
             for _ in range(steps):
                 lib.fmi2DoStep(c, unit.t, 0.0, 1)
-            overhead.append(time.perf_counter() - start)
-            start = time.perf_counter()
+            overhead.append(clock() - start)
+            start = clock()
             for _ in range(steps):
                 lib.fmi2GetReal(c, unit.vrs, 6, unit.values)
-            reads.append(time.perf_counter() - start)
+            reads.append(clock() - start)
             unit.free()
-            python.append(direct(steps, h))
+            python.append(direct(steps, h, scene))
         calls = []  # what a ctypes call costs by itself (a function that does nothing measurable)
         lib = ctypes.CDLL(str(units["native"][0] / "binaries" / "linux64" / "WetCloth.so"))
         lib.fmi2GetVersion.restype = ctypes.c_char_p
         for _ in range(args.repeat):
-            start = time.perf_counter()
+            start = clock()
             for _ in range(steps):
                 lib.fmi2GetVersion()
-            calls.append(time.perf_counter() - start)
+            calls.append(clock() - start)
         for _ in range(max(1, args.repeat // 2)):
             unit = Unit(*units["pythonfmu"])
             pythonfmu.append(unit.run(steps, h))
             unit.free()
 
         print(f"\nper communication step ({steps} steps from t = 0: the landing)")
+        print(f"  native / Simulation                    {min(native) / min(python):.3f}")
         print(f"  native unit: doStep + getReal          {per_step(native, steps)}")
         print(f"  wetcloth.Simulation: advance + outputs {per_step(python, steps)}")
         print(f"  pythonfmu WetCloth.fmu                 {per_step(pythonfmu, steps)}")

@@ -314,23 +314,6 @@ def test_build_fmu_with_a_scene_builds_in_its_colliders_and_packs_a_mesh_collide
     assert abs(outputs[0] - outputs[1]) > 1e-4  # 0.7 mm: the rim holds the cloth back
 
 
-def test_build_fmu_refuses_what_a_unit_cannot_run(tmp_path, disc):
-    from wetcloth.fmu.native import NativeBuildError, build_native_fmu
-
-    meshio.write(tmp_path / "disc.ply", meshio.Mesh(disc[0], [("triangle", disc[1].astype(np.int32))]))
-    scene_file = tmp_path / "disc.toml"
-    scene_file.write_text('cloth_mesh = "disc.ply"\n')
-    with pytest.raises(NativeBuildError, match=r"parameter 'cloth_mesh' = '.*disc.ply': the native unit has no "
-                                               r"cloth from a mesh file"):
-        build_native_fmu(tmp_path / "n.fmu", scene=scene_file)
-    assert not (tmp_path / "n.fmu").exists()
-    grid_pins = tmp_path / "pins.toml"
-    grid_pins.write_text('pinned_vertices = "box:-1,-1,-1,1,-0.3,1"\n')
-    with pytest.raises(NativeBuildError, match=r"parameter 'pinned_vertices' = 'box:-1,-1,-1,1,-0.3,1'"):
-        build_native_fmu(tmp_path / "n.fmu", scene=grid_pins)
-    assert not (tmp_path / "n.fmu").exists()
-
-
 # ----------------------------------------------------------------------------------------- running
 def _rectangle_file(tmp_path, scene, order):
     """The scene's rectangle as a quad mesh file whose vertex k is grid vertex order[k]."""

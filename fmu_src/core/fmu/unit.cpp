@@ -103,7 +103,76 @@ Scene start_scene() {
     return scene;
 }
 
-//: The scene's colliders and grip keys built into the unit (build-fmu --native --scene; none without).
+template <class T, std::size_t N>
+std::vector<T> vector_of(const T (&values)[N], std::size_t size) {
+    return std::vector<T>(values, values + size);
+}
+
+//: The cloth from a mesh file built into the unit (native_mesh.py's arrays), or null: the nx x ny grid.
+const std::shared_ptr<const ClothMesh>& built_in_cloth() {
+    static const std::shared_ptr<const ClothMesh> cloth = []() -> std::shared_ptr<const ClothMesh> {
+        if (!CLOTH_MESH) return nullptr;
+        auto m = std::make_shared<ClothMesh>();
+        m->source = CLOTH_SOURCE;
+        m->n = CLOTH_COUNTS[0];
+        m->pair_tension_count = CLOTH_COUNTS[1];
+        m->kd = CLOTH_COUNTS[2];
+        m->marker_size = CLOTH_COUNTS[3];
+        m->bends = CLOTH_COUNTS[4] != 0;
+        std::copy(CLOTH_SCALARS, CLOTH_SCALARS + 3, m->centre);
+        m->size = CLOTH_SCALARS[3];
+        m->rest_gap = CLOTH_SCALARS[4];
+        m->typical_gap = CLOTH_SCALARS[5];
+        m->least_margin = CLOTH_SCALARS[6];
+        m->hierarchy_stretch_stiffness = CLOTH_SCALARS[7];
+        m->rest_pos = vector_of(CLOTH_REST_POS, CLOTH_REST_POS_SIZE);
+        m->rest_xy = vector_of(CLOTH_REST_XY, CLOTH_REST_XY_SIZE);
+        m->area = vector_of(CLOTH_AREA, CLOTH_AREA_SIZE);
+        m->pairs = vector_of(CLOTH_PAIRS, CLOTH_PAIRS_SIZE);
+        m->pair_rest = vector_of(CLOTH_PAIR_REST, CLOTH_PAIR_REST_SIZE);
+        m->pair_shape = vector_of(CLOTH_PAIR_SHAPE, CLOTH_PAIR_SHAPE_SIZE);
+        m->pair_kind = vector_of(CLOTH_PAIR_KIND, CLOTH_PAIR_KIND_SIZE);
+        m->triangles = vector_of(CLOTH_TRIANGLES, CLOTH_TRIANGLES_SIZE);
+        m->corner_shares = vector_of(CLOTH_CORNER_SHARES, CLOTH_CORNER_SHARES_SIZE);
+        m->order = vector_of(CLOTH_ORDER, CLOTH_ORDER_SIZE);
+        m->rank = vector_of(CLOTH_RANK, CLOTH_RANK_SIZE);
+        m->levels = vector_of(CLOTH_LEVELS, CLOTH_LEVELS_SIZE);
+        m->a_start = vector_of(CLOTH_A_START, CLOTH_A_START_SIZE);
+        m->a_column = vector_of(CLOTH_A_COLUMN, CLOTH_A_COLUMN_SIZE);
+        m->diagonal = vector_of(CLOTH_DIAGONAL, CLOTH_DIAGONAL_SIZE);
+        m->p_start = vector_of(CLOTH_P_START, CLOTH_P_START_SIZE);
+        m->p_column = vector_of(CLOTH_P_COLUMN, CLOTH_P_COLUMN_SIZE);
+        m->p_value = vector_of(CLOTH_P_VALUE, CLOTH_P_VALUE_SIZE);
+        m->r_start = vector_of(CLOTH_R_START, CLOTH_R_START_SIZE);
+        m->r_column = vector_of(CLOTH_R_COLUMN, CLOTH_R_COLUMN_SIZE);
+        m->r_value = vector_of(CLOTH_R_VALUE, CLOTH_R_VALUE_SIZE);
+        m->spring_entries = vector_of(CLOTH_SPRING_ENTRIES, CLOTH_SPRING_ENTRIES_SIZE);
+        return m;
+    }();
+    return cloth;
+}
+
+//: The pins by pinned_vertices built into the unit (native_mesh.py's), or null: none.
+const std::shared_ptr<const Pins>& built_in_pins() {
+    static const std::shared_ptr<const Pins> pins = []() -> std::shared_ptr<const Pins> {
+        if (!PINS) return nullptr;
+        auto p = std::make_shared<Pins>();
+        p->box = PIN_BOX;
+        std::copy(PIN_CORNERS, PIN_CORNERS + 6, p->corners);
+        p->attribute = vector_of(PIN_ATTRIBUTE, PIN_ATTRIBUTE_SIZE);
+        p->text = PIN_TEXTS[0];
+        p->allowed = PIN_TEXTS[1];
+        return p;
+    }();
+    return pins;
+}
+
+//: scene_problem with the unit's cloth and pins.
+std::string unit_scene_problem(const Scene& scene) {
+    return scene_problem(scene, built_in_cloth().get(), built_in_pins().get());
+}
+
+//: The scene's colliders, grip keys and cloth built into the unit (build-fmu --native --scene; none without).
 Fixtures scene_fixtures() {
     Fixtures f;
     f.colliders.assign(SCENE_COLLIDERS, SCENE_COLLIDERS + SCENE_COLLIDERS_SIZE);
@@ -117,6 +186,8 @@ Fixtures scene_fixtures() {
     f.cell_items.assign(SCENE_CELL_ITEMS, SCENE_CELL_ITEMS + SCENE_CELL_ITEMS_SIZE);
     f.grip_keys.assign(SCENE_GRIP_KEYS, SCENE_GRIP_KEYS + SCENE_GRIP_KEYS_SIZE);
     f.collider_keys.assign(SCENE_COLLIDER_KEYS, SCENE_COLLIDER_KEYS + SCENE_COLLIDER_KEYS_SIZE);
+    f.cloth_mesh = built_in_cloth();
+    f.pins = built_in_pins();
     return f;
 }
 
@@ -348,7 +419,7 @@ Simulation& Unit::simulation() {
     if (sim_) return *sim_;
     if (!preview_) {
         // The initial state of the current values, or of the defaults while they do not form a scene.
-        if (scene_problem(values_).empty()) {
+        if (unit_scene_problem(values_).empty()) {
             try {
                 preview_ = new_simulation(values_);
             } catch (const std::invalid_argument&) {  // a collider in the cloth at t = 0
@@ -507,7 +578,7 @@ Outcome Unit::get_real(const std::uint32_t* vrs, std::size_t nvr, double* values
         }
         std::size_t size = 1;
         if (var->role == Role::POSITIONS || var->role == Role::WETNESS) {
-            const Index n = sim_ ? sim_->n() : values_.nx * values_.ny;
+            const Index n = sim_ ? sim_->n() : built_in_cloth() ? built_in_cloth()->n : values_.nx * values_.ny;
             size = static_cast<std::size_t>(var->role == Role::POSITIONS ? 3 * n : n);
         }
         if (at + size > n_values) {
@@ -603,7 +674,7 @@ Outcome Unit::exit_initialization() {
     if (initialized_) return Outcome::OK;
     std::vector<std::string> problems;
     for (const auto& entry : refused_) problems.push_back(entry.second);
-    const std::string whole = scene_problem(values_);
+    const std::string whole = unit_scene_problem(values_);
     if (!whole.empty()) problems.push_back(whole);
     if (problems.empty()) {
         try {

@@ -146,7 +146,8 @@ std::string fixed_differences(const Scene& a, const Scene& b) {
     return text;
 }
 
-std::string scene_problem(const Scene& s) {
+std::string scene_problem(const Scene& s, const ClothMesh* mesh, const Pins* pins) {
+    if (mesh != nullptr) return mesh_scene_problem(s, *mesh, pins);
     const double half_drop = 0.5 * s.length * std::fabs(std::sin(s.initial_tilt * (PI / 180.0)));
     const double lowest = s.initial_height - half_drop - 0.5 * s.thickness;
     if (lowest <= s.floor_level) {
@@ -154,7 +155,26 @@ std::string scene_problem(const Scene& s) {
                " m, floor_level " + py_g(s.floor_level) + " m); allowed: initial_height > floor_level + " +
                py_g(half_drop + 0.5 * s.thickness) + " m";
     }
-    return "";
+    if (pins == nullptr || s.nx < 2 || s.ny < 2) return "";
+    std::vector<char> pinned(static_cast<std::size_t>(s.nx * s.ny), 0);
+    return pins->pin(s.nx * s.ny, grid_start(s).data(), pinned);
+}
+
+std::vector<double> grid_start(const Scene& scene) {
+    const Index nx = scene.nx, n = scene.nx * scene.ny;
+    const double dx = scene.width / static_cast<double>(nx - 1);
+    const double dy = scene.length / static_cast<double>(scene.ny - 1);
+    const double tilt = scene.initial_tilt * (PI / 180.0);  // math.radians
+    const double cos_tilt = std::cos(tilt), sin_tilt = std::sin(tilt);
+    std::vector<double> pos(3 * static_cast<std::size_t>(n));
+    for (Index i = 0; i < n; ++i) {
+        const double x = static_cast<double>(i % nx) * dx - 0.5 * scene.width;  // Topology.rest_xy
+        const double y = static_cast<double>(i / nx) * dy - 0.5 * scene.length;
+        pos[i] = x;
+        pos[n + i] = y * cos_tilt;
+        pos[2 * n + i] = scene.initial_height + y * sin_tilt;
+    }
+    return pos;
 }
 
 // ------------------------------------------------------------------------------------------ formatting
@@ -226,7 +246,8 @@ std::vector<double> Topology::per_particle_sum(const double* per_spring, const s
     return total;
 }
 
-Topology build_topology(const Scene& scene) {
+Topology build_topology(const Scene& scene, const ClothMesh* mesh, const Pins* pins) {
+    if (mesh != nullptr) return mesh_topology(scene, *mesh, pins);
     if (scene.nx < 2 || scene.ny < 2) {
         throw std::invalid_argument("the grid needs at least 2 x 2 particles, got " + std::to_string(scene.nx) +
                                     " x " + std::to_string(scene.ny));
@@ -236,6 +257,7 @@ Topology build_topology(const Scene& scene) {
     t.nx = nx;
     t.ny = ny;
     t.n = n;
+    t.size = pymax(scene.width, scene.length);
     t.dx = scene.width / static_cast<double>(nx - 1);
     t.dy = scene.length / static_cast<double>(ny - 1);
     const double dx = t.dx, dy = t.dy;
@@ -319,6 +341,15 @@ Topology build_topology(const Scene& scene) {
                             (scene.pinned_edge == EDGE_Y_MAX && row[i] == ny - 1);
         if (pinned) t.free[i] = 0.0;
     }
+    t.start = grid_start(scene);
+    if (pins != nullptr) {  // pinned_vertices' box, over the start positions
+        std::vector<char> pinned(static_cast<std::size_t>(n), 0);
+        const std::string problem = pins->pin(n, t.start.data(), pinned);
+        if (!problem.empty()) throw std::invalid_argument(problem);
+        for (Index i = 0; i < n; ++i) {
+            if (pinned[i]) t.free[i] = 0.0;
+        }
+    }
     return t;
 }
 
@@ -370,6 +401,24 @@ namespace {
 
 inline constexpr const char* SHAPE_NAMES[] = {"plane", "box", "sphere", "cylinder", "mesh"};
 
+//: Topology.per_particle_pair_sum of a mesh's per-listed-spring `values` (S): np.bincount onto the first
+//: ends plus np.bincount onto the second ends, over the stretch springs alone if `stretch_only`; empty for
+//: a grid.
+std::vector<double> pair_sum(const Topology& topo, const double* values, bool stretch_only) {
+    if (topo.mesh == nullptr) return {};
+    const ClothMesh& m = *topo.mesh;
+    const std::size_t count = m.pair_rest.size(), n = static_cast<std::size_t>(topo.n);
+    std::vector<double> first(n, 0.0), second(n, 0.0);
+    for (std::size_t k = 0; k < count; ++k) {
+        first[m.pairs[k]] += stretch_only && m.pair_kind[k] != PAIR_STRETCH ? 0.0 : values[k];
+    }
+    for (std::size_t k = 0; k < count; ++k) {
+        second[m.pairs[count + k]] += stretch_only && m.pair_kind[k] != PAIR_STRETCH ? 0.0 : values[k];
+    }
+    for (std::size_t i = 0; i < n; ++i) first[i] = first[i] + second[i];
+    return first;
+}
+
 //: scene._check_collider_start: "" or the ParameterError's text of every collider closer than thickness / 2
 //: to a particle at `pos` (3, n) m, one line each ("parameter 'collider1': the sphere overlaps ...").
 std::string collider_overlaps(const Physics& phys, Index n, const double* pos) {
@@ -401,10 +450,12 @@ std::string collider_overlaps(const Physics& phys, Index n, const double* pos) {
 
 // ------------------------------------------------------------------------------------------ simulation
 Simulation::Simulation(const Scene& scene, Fixtures fixtures)
-    : scene_(scene), fixtures_(std::move(fixtures)), topo_(build_topology(scene)) {
-    const std::string problem = scene_problem(scene);
+    : scene_(scene), fixtures_(std::move(fixtures)),
+      topo_(build_topology(scene, fixtures_.cloth_mesh.get(), fixtures_.pins.get())) {
+    const ClothMesh* mesh = topo_.mesh;
+    const std::string problem = scene_problem(scene, mesh, fixtures_.pins.get());
     if (!problem.empty()) throw std::invalid_argument(problem);
-    const Index n = topo_.n, nx = topo_.nx, ny = topo_.ny, families = topo_.families();
+    const Index n = topo_.n, families = topo_.families();
     const std::size_t un = static_cast<std::size_t>(n);
 
     // Model: the per-particle constants (set_scene fills them), the wicking links.
@@ -418,8 +469,8 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
     wick_conductance_.assign(wick_offsets_.size() * un, 0.0);
 
     Cloth& cloth = core_.cloth;
-    cloth.grid_x = nx;
-    cloth.grid_y = ny;
+    cloth.grid_x = topo_.nx;
+    cloth.grid_y = topo_.ny;
     cloth.n = n;
     cloth.families = families;
     cloth.offsets = topo_.offset.data();
@@ -435,11 +486,37 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
     cloth.wick_families = static_cast<Index>(wick_offsets_.size());
     cloth.wick_offsets = wick_offsets_.data();
     cloth.wick_conductance = wick_conductance_.data();
+    if (mesh != nullptr) {  // listed springs and wicking links, face drag over the mesh's triangles (Model)
+        cloth.grid_x = cloth.grid_y = 0;
+        cloth.pair_count = static_cast<Index>(mesh->pair_rest.size());
+        cloth.pair_tension_count = mesh->pair_tension_count;
+        cloth.pairs = mesh->pairs.data();
+        cloth.pair_rest = mesh->pair_rest.data();
+        cloth.pair_stiffness = topo_.pair_stiffness.data();
+        cloth.pair_damping = topo_.pair_damping.data();
+        for (Index k = 0; k < cloth.pair_count; ++k) {
+            if (mesh->pair_kind[k] == PAIR_STRETCH) wick_pair_springs_.push_back(k);
+        }
+        const std::size_t links = wick_pair_springs_.size();
+        wick_pairs_.resize(2 * links);
+        for (std::size_t l = 0; l < links; ++l) {
+            wick_pairs_[l] = mesh->pairs[wick_pair_springs_[l]];
+            wick_pairs_[links + l] = mesh->pairs[cloth.pair_count + wick_pair_springs_[l]];
+        }
+        wick_pair_conductance_.assign(links, 0.0);
+        cloth.wick_pair_count = static_cast<Index>(links);
+        cloth.wick_pairs = wick_pairs_.data();
+        cloth.wick_pair_conductance = wick_pair_conductance_.data();
+        cloth.triangle_count = topo_.triangle_count();
+        cloth.triangles = topo_.triangles.data();
+        cloth.corner_shares = mesh->corner_shares.data();
+    }
 
     // Work (bundles.make_work).
-    const std::size_t cells = 2 * 9 * static_cast<std::size_t>(n + nx + 1);
+    const std::size_t cells = 2 * 9 * static_cast<std::size_t>(cells_length(cloth));
     const std::size_t uf = static_cast<std::size_t>(families);
-    work_.assign(un * (3 + 1 + 1 + 6 + 6 + 3 * uf + uf + uf + 4 + 6) + cells, 0.0);
+    const std::size_t pairs = static_cast<std::size_t>(cloth.pair_count);
+    work_.assign(un * (3 + 1 + 1 + 6 + 6 + 3 * uf + uf + uf + 4 + 6) + cells + 5 * pairs, 0.0);
     {
         double* p = work_.data();
         auto take = [&p](std::size_t count) {
@@ -459,6 +536,9 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
         w.buf = take(4 * un);
         w.cells = take(cells);
         w.wick_buffer = take(6 * un);
+        w.pair_direction = take(3 * pairs);
+        w.pair_along = take(pairs);
+        w.pair_across = take(pairs);
     }
 
     // Solver (make_solver).
@@ -486,98 +566,10 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
         s.counters = counters_.data();
     }
 
-    // Plane and its multigrid hierarchy (make_plane, make_hierarchy).
-    {
-        const auto sizes = multigrid(nx, ny) ? level_sizes(nx, ny, COARSEST_SIDE)
-                                                             : std::vector<std::pair<Index, Index>>{{nx, ny}};
-        const Index levels = static_cast<Index>(sizes.size());
-        levels_.assign(4 * sizes.size(), 0);
-        Index start = 0;
-        for (Index l = 0; l < levels; ++l) {
-            const auto [lx, ly] = sizes[l];
-            levels_[4 * l + NX] = lx;
-            levels_[4 * l + NY] = ly;
-            levels_[4 * l + START] = start;
-            levels_[4 * l + PAD_X] = lx + 3;
-            start += (lx + 3) * (ly + 3);
-        }
-        const std::size_t size = static_cast<std::size_t>(start);
-        const std::size_t components = COMPONENTS;
-        grid_.assign(9 * components * size + 4 * components * size + static_cast<std::size_t>(nx + 3), 0.0);
-        Hierarchy& g = core_.plane.grid;
-        g.level_count = levels;
-        g.size = start;
-        g.levels = levels_.data();
-        g.coef = grid_.data();
-        g.inverse_diagonal = g.coef + 9 * components * size;
-        g.x = g.inverse_diagonal + components * size;
-        g.b = g.x + components * size;
-        g.r = g.b + components * size;
-        g.row = g.r + components * size;
-
-        const auto [cx, cy] = sizes.back();
-        const Index n_c = cx * cy;
-        std::vector<Index> ordered(n_c);
-        Index kd;
-        if (cx <= cy) {
-            for (Index k = 0; k < n_c; ++k) ordered[k] = k;
-            kd = cx + 1;
-        } else {  // along the columns, the shorter side: position j is column j / cy, row j % cy
-            for (Index j = 0; j < n_c; ++j) ordered[j] = (j % cy) * cx + j / cy;
-            kd = cy + 1;
-        }
-        kd = std::min(kd, n_c - 1);
-        const Index first = levels_[4 * (levels - 1) + START], pad = levels_[4 * (levels - 1) + PAD_X];
-        order_.resize(n_c);
-        rank_.assign(static_cast<std::size_t>(pad * (cy + 3)), -1);
-        for (Index j = 0; j < n_c; ++j) {
-            const Index k = ordered[j];
-            order_[j] = first + (k / cx + 1) * pad + k % cx + 1;
-            rank_[order_[j] - first] = j;
-        }
-        slots_.resize(uf);
-        for (Index f = 0; f < families; ++f) slots_[f] = SLOT[topo_.family[f]];
-        const std::size_t band = COMPONENTS * static_cast<std::size_t>(n_c * (kd + 1));
-        plane_.assign(2 * band + 4 + un + 2 * uf + uf * un + un + 9 * un + un + COMPONENTS * static_cast<std::size_t>(n_c),
-                      0.0);
-        Plane& pl = core_.plane;
-        pl.families = families;
-        pl.stiffness = topo_.stiffness.data();
-        pl.slots = slots_.data();
-        pl.coarse_n = n_c;
-        pl.kd = kd;
-        pl.order = order_.data();
-        pl.rank = rank_.data();
-        pl.rank_size = static_cast<Index>(rank_.size());
-        double* p = plane_.data();
-        auto take = [&p](std::size_t count) {
-            double* at = p;
-            p += count;
-            return at;
-        };
-        pl.bands = take(band);
-        pl.rows = take(band);
-        pl.reference = take(4);
-        pl.reference_mass = take(un);
-        double* shares = take(2 * uf);
-        for (Index f = 0; f < families; ++f) {
-            shares[f] = SHARE[topo_.family[f]][0];
-            shares[families + f] = SHARE[topo_.family[f]][1];
-        }
-        pl.shares = shares;
-        pl.jacobian_along = take(uf * un);
-        pl.jacobian_mass = take(un);
-        pl.frame = take(9 * un);
-        for (Index a = 0; a < 3; ++a) {
-            for (Index i = 0; i < n; ++i) pl.frame[(4 * a) * n + i] = 1.0;  // frame[a, a, i]
-        }
-        pl.normal = take(un);
-        std::fill(pl.normal, pl.normal + n, 1.0);
-        pl.local = take(COMPONENTS * static_cast<std::size_t>(n_c));
-        if (reuses_jacobian(pl)) {
-            attach_reused(reused_, pl, n);
-            core_.reused = &reused_;
-        }
+    if (mesh != nullptr) {
+        build_mesh_plane();
+    } else {
+        build_plane();
     }
 
     // Self-collision (make_contact).
@@ -590,9 +582,15 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
         Contact& c = core_.contact;
         c.enabled = scene.self_collision == SWITCH_ON;
         c.friction = scene.self_friction;
-        c.least_margin = MARGIN_FRACTION * pymin(topo_.dx, topo_.dy);
-        c.rest_gap = topo_.dx * topo_.dy / std::hypot(topo_.dx, topo_.dy);
-        c.typical_gap = c.rest_gap;
+        if (mesh != nullptr) {  // the smallest and median altitudes of its rest triangles
+            c.least_margin = mesh->least_margin;
+            c.rest_gap = mesh->rest_gap;
+            c.typical_gap = mesh->typical_gap;
+        } else {
+            c.least_margin = MARGIN_FRACTION * pymin(topo_.dx, topo_.dy);
+            c.rest_gap = topo_.dx * topo_.dy / std::hypot(topo_.dx, topo_.dy);
+            c.typical_gap = c.rest_gap;
+        }
         c.triangle_count = topo_.triangle_count();
         c.triangles = topo_.triangles.data();
         c.edge_count = static_cast<Index>(edges_.size() / 2);
@@ -630,13 +628,8 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
         b.acceleration = take(3 * un);
         b.anchor = take(3 * un);
         b.held = take(un);
-        const double tilt = scene.initial_tilt * (PI / 180.0);  // math.radians
-        const double cos_tilt = std::cos(tilt), sin_tilt = std::sin(tilt);
         for (Index i = 0; i < n; ++i) {
-            const double x = topo_.rest_xy[i], y = topo_.rest_xy[n + i];
-            b.pos[i] = x;
-            b.pos[n + i] = y * cos_tilt;
-            b.pos[2 * n + i] = scene.initial_height + y * sin_tilt;
+            for (Index k = 0; k < 3; ++k) b.pos[k * n + i] = topo_.start[k * n + i];  // initial_positions
             b.water[i] = scene.initial_saturation * scene.absorption_capacity * scene.areal_density * topo_.area[i];
         }
         copy(3 * n, b.pos, b.trial_pos);
@@ -658,19 +651,180 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
     // The integrator's stability data (Integrator.__init__), from the first scene.
     const double stiffest = 1.0 + pymax(scene.wet_stiffness_factor, 0.0);  // a saturated, stiffened cloth
     std::vector<double> ratio = topo_.per_particle_sum(topo_.stiffness.data(), topo_.offset);
-    for (Index i = 0; i < n; ++i) ratio[i] = ratio[i] / dry_mass_[i];
+    std::vector<double> listed = pair_sum(topo_, topo_.pair_stiffness.data(), false);
+    for (Index i = 0; i < n; ++i) ratio[i] = (listed.empty() ? ratio[i] : ratio[i] + listed[i]) / dry_mass_[i];
     omega_squared_ = 2.0 * stiffest * np_max(ratio);
     ratio = topo_.per_particle_sum(topo_.damping.data(), topo_.offset);
-    for (Index i = 0; i < n; ++i) ratio[i] = ratio[i] / dry_mass_[i];
+    listed = pair_sum(topo_, topo_.pair_damping.data(), false);
+    for (Index i = 0; i < n; ++i) ratio[i] = (listed.empty() ? ratio[i] : ratio[i] + listed[i]) / dry_mass_[i];
     damping_rate_ = 2.0 * np_max(ratio);
     std::vector<double> spring_ratio;
     for (std::size_t k = 0; k < topo_.stiffness.size(); ++k) {
         if (topo_.stiffness[k] > 0) spring_ratio.push_back(topo_.damping[k] / topo_.stiffness[k]);
     }
+    for (std::size_t k = 0; k < topo_.pair_stiffness.size(); ++k) {
+        if (topo_.pair_stiffness[k] > 0) spring_ratio.push_back(topo_.pair_damping[k] / topo_.pair_stiffness[k]);
+    }
     double limit = spring_ratio.empty() ? INF : np_min(spring_ratio) / stiffest;
     if (omega_squared_ > 0) limit = pymax(limit, 0.1 / std::sqrt(omega_squared_));
     spring_limit_ = limit;
     set_control();
+}
+
+void Simulation::build_plane() {
+    const Index n = topo_.n, nx = topo_.nx, ny = topo_.ny, families = topo_.families();
+    const std::size_t un = static_cast<std::size_t>(n), uf = static_cast<std::size_t>(families);
+    const auto sizes = multigrid(nx, ny) ? level_sizes(nx, ny, COARSEST_SIDE)
+                                                         : std::vector<std::pair<Index, Index>>{{nx, ny}};
+    const Index levels = static_cast<Index>(sizes.size());
+    levels_.assign(4 * sizes.size(), 0);
+    Index start = 0;
+    for (Index l = 0; l < levels; ++l) {
+        const auto [lx, ly] = sizes[l];
+        levels_[4 * l + NX] = lx;
+        levels_[4 * l + NY] = ly;
+        levels_[4 * l + START] = start;
+        levels_[4 * l + PAD_X] = lx + 3;
+        start += (lx + 3) * (ly + 3);
+    }
+    const std::size_t size = static_cast<std::size_t>(start);
+    const std::size_t components = COMPONENTS;
+    grid_.assign(9 * components * size + 4 * components * size + static_cast<std::size_t>(nx + 3), 0.0);
+    Hierarchy& g = core_.plane.grid;
+    g.level_count = levels;
+    g.size = start;
+    g.levels = levels_.data();
+    g.coef = grid_.data();
+    g.inverse_diagonal = g.coef + 9 * components * size;
+    g.x = g.inverse_diagonal + components * size;
+    g.b = g.x + components * size;
+    g.r = g.b + components * size;
+    g.row = g.r + components * size;
+
+    const auto [cx, cy] = sizes.back();
+    const Index n_c = cx * cy;
+    std::vector<Index> ordered(n_c);
+    Index kd;
+    if (cx <= cy) {
+        for (Index k = 0; k < n_c; ++k) ordered[k] = k;
+        kd = cx + 1;
+    } else {  // along the columns, the shorter side: position j is column j / cy, row j % cy
+        for (Index j = 0; j < n_c; ++j) ordered[j] = (j % cy) * cx + j / cy;
+        kd = cy + 1;
+    }
+    kd = std::min(kd, n_c - 1);
+    const Index first = levels_[4 * (levels - 1) + START], pad = levels_[4 * (levels - 1) + PAD_X];
+    order_.resize(n_c);
+    rank_.assign(static_cast<std::size_t>(pad * (cy + 3)), -1);
+    for (Index j = 0; j < n_c; ++j) {
+        const Index k = ordered[j];
+        order_[j] = first + (k / cx + 1) * pad + k % cx + 1;
+        rank_[order_[j] - first] = j;
+    }
+    slots_.resize(uf);
+    for (Index f = 0; f < families; ++f) slots_[f] = SLOT[topo_.family[f]];
+    const std::size_t band = COMPONENTS * static_cast<std::size_t>(n_c * (kd + 1));
+    plane_.assign(2 * band + 4 + un + 2 * uf + uf * un + un + 9 * un + un + COMPONENTS * static_cast<std::size_t>(n_c),
+                  0.0);
+    Plane& pl = core_.plane;
+    pl.families = families;
+    pl.stiffness = topo_.stiffness.data();
+    pl.slots = slots_.data();
+    pl.coarse_n = n_c;
+    pl.kd = kd;
+    pl.order = order_.data();
+    pl.rank = rank_.data();
+    pl.rank_size = static_cast<Index>(rank_.size());
+    double* p = plane_.data();
+    auto take = [&p](std::size_t count) {
+        double* at = p;
+        p += count;
+        return at;
+    };
+    pl.bands = take(band);
+    pl.rows = take(band);
+    pl.reference = take(4);
+    pl.reference_mass = take(un);
+    double* shares = take(2 * uf);
+    for (Index f = 0; f < families; ++f) {
+        shares[f] = SHARE[topo_.family[f]][0];
+        shares[families + f] = SHARE[topo_.family[f]][1];
+    }
+    pl.shares = shares;
+    pl.jacobian_along = take(uf * un);
+    pl.jacobian_mass = take(un);
+    pl.frame = take(9 * un);
+    for (Index a = 0; a < 3; ++a) {
+        for (Index i = 0; i < n; ++i) pl.frame[(4 * a) * n + i] = 1.0;  // frame[a, a, i]
+    }
+    pl.normal = take(un);
+    std::fill(pl.normal, pl.normal + n, 1.0);
+    pl.local = take(COMPONENTS * static_cast<std::size_t>(n_c));
+    if (reuses_jacobian(pl)) {
+        attach_reused(reused_, pl, n);
+        core_.reused = &reused_;
+    }
+}
+
+void Simulation::build_mesh_plane() {
+    const ClothMesh& m = *topo_.mesh;
+    const Index n = topo_.n, n_c = static_cast<Index>(m.order.size()), kd = m.kd;
+    const std::size_t un = static_cast<std::size_t>(n), count = m.pair_rest.size();
+    order_ = m.order;
+    rank_ = m.rank;
+    const std::size_t band = COMPONENTS * static_cast<std::size_t>(n_c * (kd + 1));
+    plane_.assign(2 * band + 4 + un + count + un + 9 * un + un + COMPONENTS * static_cast<std::size_t>(n_c), 0.0);
+    Plane& pl = core_.plane;
+    pl.families = 0;
+    pl.stiffness = topo_.pair_stiffness.data();
+    pl.coarse_n = n_c;
+    pl.kd = kd;
+    pl.order = order_.data();
+    pl.rank = rank_.data();
+    pl.rank_size = n_c;
+    double* p = plane_.data();
+    auto take = [&p](std::size_t size) {
+        double* at = p;
+        p += size;
+        return at;
+    };
+    pl.bands = take(band);
+    pl.rows = take(band);
+    pl.reference = take(4);
+    pl.reference_mass = take(un);
+    pl.jacobian_along = take(count);
+    pl.jacobian_mass = take(un);
+    pl.frame = take(9 * un);
+    for (Index a = 0; a < 3; ++a) {
+        for (Index i = 0; i < n; ++i) pl.frame[(4 * a) * n + i] = 1.0;  // frame[a, a, i]
+    }
+    pl.normal = take(un);
+    std::fill(pl.normal, pl.normal + n, 1.0);
+    pl.local = take(COMPONENTS * static_cast<std::size_t>(n_c));
+    // The algebraic hierarchy (make_algebraic): its structure the mesh's, its values and vectors here.
+    Algebraic& h = pl.algebraic;
+    h.level_count = m.level_count();
+    h.entries = static_cast<Index>(m.a_column.size());
+    h.vectors = static_cast<Index>(m.diagonal.size());
+    h.levels = m.levels.data();
+    h.a_start = m.a_start.data();
+    h.a_column = m.a_column.data();
+    h.diagonal = m.diagonal.data();
+    h.p_start = m.p_start.data();
+    h.p_column = m.p_column.data();
+    h.p_value = m.p_value.data();
+    h.r_start = m.r_start.data();
+    h.r_column = m.r_column.data();
+    h.r_value = m.r_value.data();
+    h.spring_entries = m.spring_entries.data();
+    const std::size_t entries = static_cast<std::size_t>(h.entries), vectors = static_cast<std::size_t>(h.vectors);
+    algebraic_.assign(COMPONENTS * (entries + 3 * vectors), 0.0);
+    h.a_value = algebraic_.data();
+    h.inverse_diagonal = h.a_value + COMPONENTS * entries;
+    h.x = h.inverse_diagonal + COMPONENTS * vectors;
+    h.b = h.x + COMPONENTS * vectors;
+    marker_.assign(static_cast<std::size_t>(m.marker_size), 0);
+    h.marker = marker_.data();
 }
 
 void Simulation::set_scene(const Scene& scene) {
@@ -695,6 +849,14 @@ void Simulation::set_scene(const Scene& scene) {
         wick_conductance_[k] = scene.wicking_rate * scene.absorption_capacity * scene.areal_density * shape[k];
     }
     std::vector<double> links = topo_.per_particle_sum(shape.data(), wick_offsets_);
+    if (topo_.mesh != nullptr) {  // its links: the stretch springs (Model._set_wicking)
+        const double per_shape = scene.wicking_rate * scene.absorption_capacity * scene.areal_density;
+        for (std::size_t l = 0; l < wick_pair_springs_.size(); ++l) {
+            wick_pair_conductance_[l] = per_shape * topo_.mesh->pair_shape[wick_pair_springs_[l]];
+        }
+        const std::vector<double> listed = pair_sum(topo_, topo_.mesh->pair_shape.data(), true);
+        for (Index i = 0; i < n; ++i) links[i] = links[i] + listed[i];
+    }
     for (Index i = 0; i < n; ++i) links[i] = topo_.area[i] / (scene.wicking_rate * links[i]);
     wick_step_limit_ = np_min(links);
 
@@ -741,7 +903,7 @@ void Simulation::set_scene(const Scene& scene) {
 
 void Simulation::set_control() {
     const Scene& sc = scene_;
-    const double size = pymax(sc.width, sc.length);
+    const double size = topo_.size;  // a mesh's own, not the scene's width and length
     double drag_offset, drag_slope;
     if (sc.drag_model == DRAG_STOKES) {
         std::vector<double> rate(stokes_.size());
@@ -866,7 +1028,7 @@ void Simulation::save(Checkpoint& cp) const {
     std::copy(clock_, clock_ + CLOCK_SIZE, cp.clock);
     std::copy(pl.reference, pl.reference + 3, cp.plane_reference);
     cp.contact_margin = core_.contact.margin[0];
-    cp.values.resize(value_count(scene_.nx, scene_.ny, families));
+    cp.values.resize(value_count());
     double* out = cp.values.data();
     auto put = [&out](const double* from, Index count) {
         std::memcpy(out, from, static_cast<std::size_t>(count) * sizeof(double));
@@ -881,22 +1043,31 @@ void Simulation::save(Checkpoint& cp) const {
     put(b.acceleration, 3 * n);
     put(b.anchor, 3 * n);
     put(pl.reference_mass, n);
-    put(pl.jacobian_along, families * n);
+    put(pl.jacobian_along, along_count());
     put(pl.jacobian_mass, n);
     put(core_.contact.reference, 3 * n);
     put(reused_.rule.data(), REUSE_RULE_SIZE);
     if (core_.reused != nullptr) put(reused_.source.data(), static_cast<Index>(reused_.source.size()));
 }
 
+Index Simulation::along_count() const {
+    return topo_.mesh != nullptr ? static_cast<Index>(topo_.mesh->pair_rest.size()) : topo_.families() * topo_.n;
+}
+
+std::size_t Simulation::value_count() const {
+    if (topo_.mesh == nullptr) return wc::value_count(scene_.nx, scene_.ny, topo_.families());
+    return static_cast<std::size_t>(25 * topo_.n + along_count() + REUSE_RULE_SIZE);  // no reused systems
+}
+
 void Simulation::check(const Checkpoint& cp) const {
-    if (cp.scene.nx != scene_.nx || cp.scene.ny != scene_.ny) {
+    if (topo_.mesh == nullptr && (cp.scene.nx != scene_.nx || cp.scene.ny != scene_.ny)) {
         throw SnapshotError("snapshot of another grid: " + std::to_string(cp.scene.nx) + " x " +
                             std::to_string(cp.scene.ny) + " particles, this simulation has " +
                             std::to_string(scene_.nx) + " x " + std::to_string(scene_.ny));
     }
     const std::string fixed = fixed_differences(scene_, cp.scene);
     if (!fixed.empty()) throw SnapshotError("snapshot of another scene: " + fixed + " differ (only inputs may)");
-    if (cp.families != topo_.families() || cp.values.size() != value_count(scene_.nx, scene_.ny, topo_.families())) {
+    if (cp.families != topo_.families() || cp.values.size() != value_count()) {
         throw SnapshotError("snapshot of another simulation: its arrays do not fit this one's");
     }
     bool finite = std::isfinite(cp.contact_margin);
@@ -908,7 +1079,7 @@ void Simulation::check(const Checkpoint& cp) const {
     }
     if (!finite) throw SnapshotError("snapshot holds values that are not finite");
     // The state's contents (stepping.hpp, state_problem; Simulation.check_snapshot in Python).
-    const Index n = topo_.n, families = topo_.families();
+    const Index n = topo_.n;
     const double* v = cp.values.data();
     StateView state;
     state.pos = v;
@@ -920,8 +1091,8 @@ void Simulation::check(const Checkpoint& cp) const {
     state.acceleration = v + 14 * n;
     state.anchor = v + 17 * n;
     state.others = v + 20 * n;  // the preconditioner's masses and Jacobian
-    state.other_count = (2 + families) * n;
-    state.contact_reference = v + (22 + families) * n;
+    state.other_count = 2 * n + along_count();
+    state.contact_reference = state.others + state.other_count;
     state.contact_margin = cp.contact_margin;
     state.clock = cp.clock;
     const std::string problem = state_problem(core_.cloth, core_.phys, core_.control, state);
@@ -930,7 +1101,7 @@ void Simulation::check(const Checkpoint& cp) const {
 
 void Simulation::restore(const Checkpoint& cp) {
     check(cp);
-    const Index n = topo_.n, families = topo_.families();
+    const Index n = topo_.n;
     Buffers& b = core_.buf;
     Plane& pl = core_.plane;
     const double* in = cp.values.data();
@@ -949,7 +1120,7 @@ void Simulation::restore(const Checkpoint& cp) {
     const double* reference_mass = in;
     get(pl.reference_mass, n);
     const double* jacobian_along = in;
-    get(pl.jacobian_along, families * n);
+    get(pl.jacobian_along, along_count());
     const double* jacobian_mass = in;
     get(pl.jacobian_mass, n);
     const double* contact_reference = in;
@@ -1018,8 +1189,10 @@ Checkpoint Simulation::from_bytes(const unsigned char* data, std::size_t size) {
     const auto count = r.get<std::int64_t>();
     for_each_field(cp.scene, [&](const char*, auto& v) { v = r.get<std::remove_reference_t<decltype(v)>>(); });
     const Index nx = cp.scene.nx, ny = cp.scene.ny;
-    if (nx < 2 || ny < 2 || nx > (1 << 20) || ny > (1 << 20) || cp.families < 0 || cp.families > 6 ||
-        count < 0 || static_cast<std::size_t>(count) != value_count(nx, ny, cp.families)) {
+    // A mesh cloth (no families) has as many values as its particles and springs make: Simulation::check's.
+    if (nx < 2 || ny < 2 || nx > (1 << 20) || ny > (1 << 20) || cp.families < 0 || cp.families > 6 || count < 0 ||
+        (cp.families > 0 ? static_cast<std::size_t>(count) != wc::value_count(nx, ny, cp.families)
+                         : count < REUSE_RULE_SIZE || count > (std::int64_t{1} << 40))) {
         throw SnapshotError("snapshot bytes are malformed (grid, families and array sizes do not fit)");
     }
     r.get(cp.clock, CLOCK_SIZE);

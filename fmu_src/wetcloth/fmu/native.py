@@ -10,7 +10,8 @@ code (``description.py``, ``description3.py`` on pythonfmu's and pythonfmu3's mo
 and the C++ side reads the same vocabulary through a generated header
 (``wetcloth_fmu_variables.hpp``: every variable in value-reference order with its Scene field, range,
 start value and the texts of its messages; with ``--scene``, the scene's colliders and grip keys as the
-arrays the Python model hands the core).  What it packs:
+arrays the Python model hands the core, and a cloth from a mesh file as the arrays of its structure,
+``native_mesh.py``).  What it packs:
 
 * ``binaries/linux64/WetCloth.so`` (FMI 3.0: ``binaries/x86_64-linux/``): ``fmu_src/core/src/**/*.cpp``,
   ``fmu_src/core/fmu/unit.cpp`` and ``fmi2.cpp`` (``fmi3.cpp``) compiled by the system C++ compiler
@@ -50,7 +51,7 @@ from tqdm.auto import tqdm
 
 import wetcloth
 from wetcloth.files import new_temporary, whole_file
-from wetcloth.fmu import MODEL_NAME, packed_scene
+from wetcloth.fmu import MODEL_NAME, native_mesh, packed_scene
 from wetcloth.fmu.vocabulary import (MESH_FORMAT_RANGE, MESH_FORMATS, MESH_OUTPUTS, STEP_OUTPUTS, VariableSpec,
                                      fmi_unit_name, variable_specs)
 from wetcloth.progress import SHOW_AFTER
@@ -66,8 +67,10 @@ CXX_FLAGS = ("-std=c++17", "-O3", "-DNDEBUG", "-fno-math-errno", "-ffp-contract=
 #: undefined symbol left, stripped.
 LINK_FLAGS = ("-shared", "-static-libstdc++", "-static-libgcc", "-Wl,--exclude-libs,ALL", "-Wl,-z,defs",
               "-Wl,-O1", "-s")
-#: Why the native unit takes only '' for a free-text parameter (``cloth_mesh``, ``pinned_vertices``).
-NO_TEXT_REASON = "the native unit has no cloth from a mesh file and no pinned_vertices: use WetCloth.fmu"
+#: Why a native unit takes only the value it was built with for a free-text parameter (``cloth_mesh``,
+#: ``pinned_vertices``): '' without --scene, else the scene's.
+NO_TEXT_REASON = ("the native unit runs the cloth and the pins built into it: build it with --scene from a scene "
+                  "with another cloth_mesh or pinned_vertices, or use WetCloth.fmu")
 #: The generated variable table (included by ``fmu/unit.cpp``).
 VARIABLES_HEADER = "wetcloth_fmu_variables.hpp"
 #: Binary folder in the archive, by FMI version.
@@ -165,11 +168,12 @@ FIXTURE_ARRAYS = (("SCENE_COLLIDERS", "double", "rows"), ("SCENE_MESH_HEADERS", 
                   ("SCENE_COLLIDER_KEYS", "double", "collider_keys"))
 
 
-def fixtures_header(scene=None) -> str:
+def fixtures_header(scene=None, cloth: dict | None = None) -> str:
     """The C++ arrays of what a scene holds beside its variables (``Scene.colliders``, ``Scene.grip_keys``),
     as the Python model hands them to the core (``model.py``), for ``unit.cpp``'s scene_fixtures: each
     ``NAME[]`` (with a trailing 0: C++ has no empty arrays) and its length ``NAME_SIZE``; none without a
-    ``scene`` (a ``wetcloth.Scene``)."""
+    ``scene`` (a ``wetcloth.Scene``); and a cloth from a mesh file, ``cloth`` (``native_mesh.cloth_arrays``
+    of the scene; None: the grid)."""
     import numpy as np
 
     from wetcloth.collider_meshes import meshes_of, no_meshes
@@ -185,13 +189,17 @@ def fixtures_header(scene=None) -> str:
         text = ", ".join(str(int(v)) if kind == "Index" else _c_double(v) for v in values)
         lines.append(f"inline constexpr std::size_t {name}_SIZE = {values.size};\n"
                      f"inline constexpr {kind} {name}[] = {{{text}{', ' if text else ''}0}};")
+    lines.append(native_mesh.cloth_header(cloth, _c_double, _c_string))
+    lines.append(native_mesh.pins_header(scene, _c_double, _c_string))
     return "\n".join(lines)
 
 
-def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "", fixtures: str = "") -> str:
+def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "", fixtures: str = "",
+                     fixed: dict | None = None) -> str:
     """The generated C++ table of the unit's variables (value reference = index), with compile-time
     checks that ``model.hpp``'s Scene, its choices and inputs are those of ``wetcloth.scene``, and the
-    scene's ``fixtures`` (``fixtures_header``)."""
+    scene's ``fixtures`` (``fixtures_header``).  A free-text parameter takes its start value alone;
+    ``fixed``: the ranges a built-in mesh allows instead of Python's (``native_mesh.fixed_ranges``)."""
     from wetcloth.fmu.description3 import dimension_sources
     from wetcloth.scene import INPUT, PARAMETERS, describe_range
     from wetcloth.simulation import OUTPUT_NAMES
@@ -200,7 +208,8 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
         raise NativeBuildError(f"the outputs {OUTPUT_NAMES} are not in the order of the core's record_outputs "
                                f"{CORE_OUTPUTS}: update wetcloth/fmu/native.py and stepping.cpp together")
     structural = dimension_sources(specs) if fmi_version == 3 else set()
-    rows, checks = [], []
+    fixed = fixed or {}
+    rows, checks, texts = [], [], []
     for vr, spec in enumerate(specs):
         real = integer = "nullptr"
         choices, count, start_text = "nullptr", "0", "nullptr"
@@ -225,8 +234,10 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
                 count = f'scene_choices("{spec.name}").count'
                 start_text = _c_string(spec.start)
                 allowed = md["choices"] or ("",)  # free text (a mesh file, pins by name): only '' natively
-                if md["text"]:
-                    range_text = _c_string(f"'' ({NO_TEXT_REASON})")
+                if md["text"]:  # its one value: the start (the built-in mesh and pins)
+                    range_text = _c_string(f"{spec.start!r} ({NO_TEXT_REASON})")
+                    choices, count = f"TEXT_{spec.name.upper()}", "1"
+                    texts.append(f"inline constexpr const char* TEXT_{spec.name.upper()}[] = {{{_c_string(spec.start)}}};")
                 names = " && ".join(f'same_text(scene_choices("{spec.name}").names[{k}], {_c_string(c)})'
                                     for k, c in enumerate(allowed))
                 checks.append(f'static_assert(scene_choices("{spec.name}").count == {len(allowed)} && {names},\n'
@@ -234,6 +245,9 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
             else:
                 ranged, lo, hi = "true", _c_double(md["lo"]), _c_double(md["hi"])
                 lo_open = "true" if md["lo_open"] else "false"
+                if spec.name in fixed:
+                    low, high, low_open, text = fixed[spec.name]
+                    lo, hi, lo_open, range_text = _c_double(low), _c_double(high), str(low_open).lower(), _c_string(text)
                 start = _c_double(spec.start)
             is_input = md["fmu"] == INPUT
             checks.append(f'static_assert({"" if is_input else "!"}scene_input("{spec.name}"), '
@@ -276,6 +290,7 @@ namespace wc::fmu {{
 inline constexpr int FMI_VERSION = {fmi_version};
 inline constexpr const char INSTANTIATION_TOKEN[] = {_c_string(token)};
 inline constexpr const char* MESH_FORMATS[] = {{{formats}}};
+{chr(10).join(texts)}
 
 inline constexpr Variable VARIABLES[] = {{
 {chr(10).join(rows)}
@@ -459,8 +474,10 @@ def documentation_html(specs: list[VariableSpec], fmi_version: int) -> str:
         model=MODEL_NAME, version=html.escape(wetcloth.__version__), fmi=f"{fmi_version}.0", api=f"fmi{fmi_version}",
         icon="../" + ICON_PATH[fmi_version], rows="\n".join(rows), inputs=inputs,
         arrays="" if not arrays else (f" The cloth mesh of the current step comes as array outputs instead: {arrays} "
-                                      "(vertex <code>row * nx + col</code>); their sizes are the structural "
-                                      "parameters <code>nx</code> and <code>ny</code>."))
+                                      + ("(the vertices of the mesh file built in, in its order)."
+                                         if any(isinstance(d, int) for s in specs for d in s.dimensions) else
+                                         "(vertex <code>row * nx + col</code>); their sizes are the structural "
+                                         "parameters <code>nx</code> and <code>ny</code>.")))
 
 
 # ----------------------------------------------------------------------------------------- compiling
@@ -575,15 +592,14 @@ def check_platform() -> None:
 # ----------------------------------------------------------------------------------------- the unit
 def native_scene(scene: str | Path):
     """The packed scene (``packed_scene.pack``) of a scene file for the native unit; NativeBuildError for a
-    parameter it does not support (a free-text one: cloth_mesh, pinned_vertices)."""
-    from wetcloth.scene import PARAMETERS
+    cloth it cannot run (``native_mesh.unsupported``: a mesh file whose vertices form the built-in grid)."""
+    from wetcloth.scene import load_scene
 
     packed = packed_scene.pack(scene)
-    for name, value in packed.starts.items():
-        if PARAMETERS[name].metadata["text"] and value:
-            shown = str(packed.mesh) if name == "cloth_mesh" else value
-            raise NativeBuildError(f"scene {str(scene)!r}: parameter '{name}' = {shown!r}: {NO_TEXT_REASON} "
-                                   f"(wetcloth build-fmu --scene {scene})")
+    reason = native_mesh.unsupported(load_scene(scene))
+    if reason:
+        raise NativeBuildError(f"scene {str(scene)!r}: parameter 'cloth_mesh' = {str(packed.mesh)!r}: the native "
+                               f"unit cannot run {reason}; use WetCloth.fmu (wetcloth build-fmu --scene {scene})")
     return packed
 
 
@@ -593,8 +609,8 @@ def build_native_fmu(out: str | Path | None = None, fmi_version: int = 2, build_
     its path.  ``build_dir`` (default ``default_build_dir()``) keeps the compiled objects for the next build,
     which recompiles only what changed.  ``scene``: a scene file (or preset name) whose values become the
     start values, its colliders and grip keys built in.  ``progress``: a bar of the sources compiled.
-    NativeBuildError if it cannot be built here, or for a scene the native unit cannot run (a cloth from
-    a mesh file, pinned_vertices)."""
+    NativeBuildError if it cannot be built here, or for a scene the native unit cannot run
+    (``native_scene``).  A scene's cloth from a mesh file is built in (``native_mesh``)."""
     if fmi_version not in (2, 3):
         raise ValueError(f"FMI version must be 2 or 3, got {fmi_version!r}")
     packed = None if scene is None else native_scene(scene)
@@ -609,11 +625,14 @@ def build_native_fmu(out: str | Path | None = None, fmi_version: int = 2, build_
     # sources carries the same token and another build another.
     from wetcloth.scene import load_scene
 
-    fixtures = fixtures_header(None if scene is None else load_scene(scene))
-    body = variables_header(specs, fmi_version, fixtures=fixtures).encode()
+    loaded = None if scene is None else load_scene(scene)
+    cloth = None if loaded is None else native_mesh.cloth_arrays(loaded)
+    fixtures = fixtures_header(loaded, cloth)
+    fixed = native_mesh.fixed_ranges(cloth)
+    body = variables_header(specs, fmi_version, fixtures=fixtures, fixed=fixed).encode()
     token = "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, "wetcloth-native:" + _digest(
         body, " ".join(CXX_FLAGS).encode(), *(p.read_bytes() for p, _ in files)))) + "}"
-    header = variables_header(specs, fmi_version, token, fixtures)
+    header = variables_header(specs, fmi_version, token, fixtures, fixed)
     with tempfile.TemporaryDirectory(prefix="wetcloth_native_") as tmp:
         stage = Path(tmp)
         generated = stage / "generated"

@@ -36,8 +36,9 @@ inline constexpr const char* BUOYANCY_MODELS[] = {"smooth", "thesis"};
 inline constexpr const char* SWITCHES[] = {"on", "off"};
 inline constexpr const char* EDGES[] = {"none", "x_min", "x_max", "y_min", "y_max"};
 inline constexpr const char* INTEGRATOR_NAMES[] = {"explicit_euler", "symplectic_euler", "implicit_euler", "bdf2"};
-//: The one value the native model takes of a free-text parameter (cloth_mesh, pinned_vertices): none.  A
-//: cloth from a mesh file and pins by attribute or box are the Python package's alone.
+//: The one value the native model takes of a free-text parameter (cloth_mesh, pinned_vertices) by default:
+//: none.  A native FMU built for a mesh cloth takes its scene's values instead (its generated table), and
+//: the mesh comes built in (ClothMesh).
 inline constexpr const char* NO_TEXT[] = {""};
 enum DampingModel : Index { DAMPING_PROJECTED = 0, DAMPING_THESIS = 1 };
 enum DragModel : Index { DRAG_FACE = 0, DRAG_STOKES = 1 };
@@ -69,7 +70,7 @@ constexpr Choices scene_choices(std::string_view field) {
 struct Scene {
     Index nx = 21, ny = 29;                                      // particles along x, y
     double width = 0.5, length = 0.7;                            // m
-    Index cloth_mesh = 0;                                        // NO_TEXT only: the nx x ny rectangle
+    Index cloth_mesh = 0;                                        // 0: the one allowed (the ClothMesh, if any)
     Index place_mesh = SWITCH_OFF;
     double areal_density = 0.45;                                 // kg/m2
     double thickness = 0.002;                                    // m
@@ -99,7 +100,7 @@ struct Scene {
     Index self_collision = SWITCH_ON;
     double self_friction = 0.4;                                  // -
     Index pinned_edge = EDGE_NONE;
-    Index pinned_vertices = 0;                                   // NO_TEXT only: none
+    Index pinned_vertices = 0;                                   // 0: the one allowed (the built-in Pins)
     double grip_x = 0.0, grip_y = 0.0, grip_z = 0.0;             // m (inputs)
     Index integrator = BDF2;
     double tolerance = 5e-6;                                     // -
@@ -153,9 +154,17 @@ void for_each_field(S& s, Visit&& visit) {
 //: The names of the fixed (non-input) fields whose values differ between a and b, comma-separated.
 std::string fixed_differences(const Scene& a, const Scene& b);
 
+struct ClothMesh;
+struct Pins;
+
 //: scene.validate's rule on the scene as a whole: "" or the ParameterError's text ("parameter
-//: 'initial_height': the cloth starts at or below the floor ...").  Ranges are the caller's.
-std::string scene_problem(const Scene& scene);
+//: 'initial_height': the cloth starts at or below the floor ...").  Ranges are the caller's.  With a
+//: cloth `mesh`: its start above the floor (_check_mesh_start) and the parameters its built-in structure
+//: fixes (ClothMesh::fixed_problem); with `pins`, a box that holds a particle (pinned_mask).
+std::string scene_problem(const Scene& scene, const ClothMesh* mesh = nullptr, const Pins* pins = nullptr);
+
+//: The grid's particle positions (3, n) m at t = 0 (topology.initial_positions).
+std::vector<double> grid_start(const Scene& scene);
 
 // ------------------------------------------------------------------------------------------ formatting
 //: Python's repr of a float ('0.1', '1e-05', '1e+16', 'inf', 'nan') and of a str ('text').
@@ -170,7 +179,67 @@ enum Family : Index { STRUCTURAL_X = 0, STRUCTURAL_Y, SHEAR_UP_RIGHT, SHEAR_UP_L
 inline constexpr const char* FAMILY_NAMES[] = {"structural_x", "structural_y", "shear_up_right", "shear_up_left",
                                                "bend_x", "bend_y"};
 
-//: The grid and per-spring constants of a scene (topology.py's Topology).  Particle i = row * nx + col.
+//: Kinds of a mesh's listed springs (topology.py's STRETCH, SHEAR, BEND).
+enum PairKind : Index { PAIR_STRETCH = 0, PAIR_SHEAR = 1, PAIR_BEND = 2 };
+
+//: Pins by pinned_vertices, built into a native FMU with its scene (topology.pinned_mask): a box over the
+//: particles' start positions, or a mesh file's point attribute (its nonzero vertices).
+struct Pins {
+    bool box = false;
+    double corners[6] = {};        // the box's lower corner, upper corner (m)
+    std::vector<Index> attribute;  // (n) 1 pinned by the attribute, or empty
+    std::string text, allowed;     // pinned_vertices' value (its repr) and scene.PINS_ALLOWED, for messages
+    //: Mark in `pinned` (n) the particles these pins hold at the start positions pos (3, n); "" or the
+    //: ParameterError's text of a box that holds none.
+    std::string pin(Index n, const double* pos, std::vector<char>& pinned) const;
+};
+
+//: A cloth from a mesh file: what depends on the file alone, computed once by the Python front end
+//: (topology.py's _mesh, listed_springs, corner_shares, placed's centroid;
+//: self_collision.make_contact's gaps; preconditioner.make_mesh_plane's band order and algebraic
+//: hierarchy) and built into the native FMU as arrays (wetcloth/fmu/native_mesh.py).  The Simulation turns
+//: it, with a scene's values, into what the Python front end hands the core: spring constants by the
+//: moduli, masses by areal_density, the start by place_mesh, initial_height and initial_tilt.
+struct ClothMesh {
+    std::string source;              // the mesh file, for messages
+    Index n = 0;                     // particles (the file's vertices)
+    std::vector<double> rest_pos;    // (3, n) m, the file's coordinates
+    std::vector<double> rest_xy;     // (2, n) m, the flat rest sheet (flat_coordinates)
+    std::vector<double> area;        // (n) m2 (vertex_areas)
+    double centre[3] = {};           // m, the area-weighted centroid of rest_pos (placed)
+    double size = 0.0;               // m, the rest sheet's larger side (Topology.size)
+    double rest_gap = 0.0, typical_gap = 0.0, least_margin = 0.0;  // m (make_contact)
+    std::vector<Index> pairs;        // (2, S) listed springs, the first pair_tension_count tension-only
+    std::vector<double> pair_rest;   // (S) m
+    std::vector<double> pair_shape;  // (S) strip area / rest length^2 (-)
+    std::vector<Index> pair_kind;    // (S) PairKind
+    Index pair_tension_count = 0;
+    std::vector<Index> triangles;    // (m, 3)
+    std::vector<double> corner_shares;  // (m, 3)
+    // The preconditioner (make_mesh_plane): the coarsest level's band order, its rank and half-bandwidth,
+    // the algebraic hierarchy's arrays (core.hpp's Algebraic; the values filled by the core at each refresh).
+    std::vector<Index> order, rank;
+    Index kd = 0;
+    std::vector<Index> levels, a_start, a_column, diagonal, p_start, p_column, r_start, r_column, spring_entries;
+    std::vector<double> p_value, r_value;
+    Index marker_size = 0;
+    // What the structure was built for: whether it has bending springs (bend_stiffness != 0), and, with an
+    // algebraic hierarchy (more than one level), the stretch_stiffness its aggregation weighed (N/m).
+    bool bends = false;
+    double hierarchy_stretch_stiffness = 0.0;
+    Index level_count() const { return static_cast<Index>(levels.size() / ALGEBRAIC_COLUMNS); }
+    //: "" or the ParameterError's text of a scene value that this built-in structure cannot take.
+    std::string fixed_problem(const Scene& scene) const;
+    //: The particle positions (3, n) m at t = 0 for `scene` (topology.placed).
+    std::vector<double> start_positions(const Scene& scene) const;
+    //: The pinned particles (n, 1 pinned) at the start positions `pos` (3, n) by `pins` (pinned_mask), or
+    //: the ParameterError's text in `problem` (pinned_edge, which a mesh has not; a box holding none).
+    std::vector<char> pinned_at(const Scene& scene, const std::vector<double>& pos, const Pins* pins,
+                                std::string& problem) const;
+};
+
+//: The grid and per-spring constants of a scene (topology.py's Topology).  Particle i = row * nx + col.  A
+//: mesh cloth (`mesh` set) has no families, its springs listed (pair_*), nx = n and ny = 1.
 struct Topology {
     Index nx = 0, ny = 0, n = 0;
     double dx = 0, dy = 0;                 // m, rest spacing
@@ -185,6 +254,10 @@ struct Topology {
     std::vector<double> shape;             // (F, n) strip area / rest length^2 (-)
     std::vector<Index> triangles;          // (m, 3)
     std::vector<double> free;              // (n) 0 for pinned particles, else 1
+    double size = 0.0;                     // m, the cloth's larger side (integrators.control)
+    const ClothMesh* mesh = nullptr;       // a mesh cloth's built-in structure, else null
+    std::vector<double> pair_stiffness, pair_damping;  // (S) N/m, N s/m: a mesh's listed springs
+    std::vector<double> start;             // (3, n) m: the positions at t = 0
     Index families() const { return static_cast<Index>(offset.size()); }
     Index triangle_count() const { return static_cast<Index>(triangles.size() / 3); }
     //: Sum (n) over the springs touching each particle of per-spring values (F', n) of the families
@@ -192,7 +265,13 @@ struct Topology {
     std::vector<double> per_particle_sum(const double* per_spring, const std::vector<Index>& offsets) const;
 };
 
-Topology build_topology(const Scene& scene);
+//: The topology of `scene`: its nx x ny grid, or the cloth `mesh`, with its `pins` (std::invalid_argument
+//: for a scene_problem of the mesh or the pins).
+Topology build_topology(const Scene& scene, const ClothMesh* mesh = nullptr, const Pins* pins = nullptr);
+
+//: scene_problem and build_topology of a cloth from a mesh (cloth_mesh.cpp).
+std::string mesh_scene_problem(const Scene& scene, const ClothMesh& mesh, const Pins* pins);
+Topology mesh_topology(const Scene& scene, const ClothMesh& mesh, const Pins* pins);
 
 //: The distinct edges (k, 2) of a triangle mesh (m, 3), each (lower, higher), sorted (grid_edges).
 std::vector<Index> grid_edges(const std::vector<Index>& triangles);
@@ -244,6 +323,8 @@ struct Fixtures {
     std::vector<Index> mesh_triangles, cell_start, cell_items;
     std::vector<double> grip_keys;  // (g, 4) rows: time s, x, y, z m
     std::vector<double> collider_keys;  // (c, 5) rows: collider (from 0), time s, x, y, z m; by collider, then time
+    std::shared_ptr<const ClothMesh> cloth_mesh;  // the cloth from a mesh file, or none: the nx x ny grid
+    std::shared_ptr<const Pins> pins;             // the pins by pinned_vertices, or none
     Index collider_count() const { return static_cast<Index>(colliders.size() / COLLIDER_COLUMNS); }
     //: The mesh arrays as the kernels read them (pointing into this object).
     ColliderMeshes meshes() const;
@@ -309,6 +390,10 @@ private:
     void set_scene(const Scene& scene);  // Model.scene setter + Simulation._set_scene
     void set_control();                  // Integrator.control()
     void check(const Checkpoint& checkpoint) const;
+    void build_plane();                  // make_plane, make_hierarchy
+    void build_mesh_plane();             // make_mesh_plane from the ClothMesh's arrays
+    Index along_count() const;           // size of the plane's jacobian_along: F n (grid), S (mesh)
+    std::size_t value_count() const;     // doubles of a Checkpoint's values
 
     Scene scene_;
     Fixtures fixtures_;
@@ -316,6 +401,8 @@ private:
     // Model
     std::vector<double> dry_mass_, volume_, stokes_, capacity_, wick_conductance_;
     std::vector<Index> wick_offsets_;
+    std::vector<Index> wick_pairs_, wick_pair_springs_;  // a mesh's wicking links (2, L): its stretch springs
+    std::vector<double> wick_pair_conductance_;           // (L) kg/s
     double wick_step_limit_ = 0.0, floor_z_ = 0.0;
     std::vector<double> grip_origin_;  // (3, n) m, the start positions; empty when nothing is pinned
     std::vector<double> collider_motion_;  // (colliders, MOTION_COLUMNS) the step loop's scratch; empty without keys
@@ -326,8 +413,8 @@ private:
     std::vector<double> solver_;
     std::vector<Index> counters_;
     // Plane and its hierarchy
-    std::vector<Index> slots_, order_, rank_, levels_;
-    std::vector<double> plane_, grid_;
+    std::vector<Index> slots_, order_, rank_, levels_, marker_;
+    std::vector<double> plane_, grid_, algebraic_;  // algebraic_: a mesh's hierarchy's values and vectors
     ReusedPlane reused_;
     // Contact
     std::vector<Index> edges_, zone_, contact_counters_;

@@ -1,0 +1,155 @@
+"""A scene's cloth from a mesh file, built into the native unit (``native.py``): what depends on the file alone,
+computed here once by the Python front end and written into the unit's generated header as arrays, which
+the core's ``ClothMesh`` (``model.hpp``, ``cloth_mesh.cpp``) turns, with the unit's parameter values, into
+the arrays ``wetcloth.Simulation`` hands the core.
+
+From the file alone: the particles' rest positions, flat rest sheet and areas (``topology._mesh``), the
+listed springs' ends, rest lengths, kinds and shapes (``listed_springs``), the triangles and their corners'
+shares, the area-weighted centroid that ``place_mesh`` turns about, self-collision's gaps
+(``self_collision.make_contact``) and the preconditioner's structure (``preconditioner.make_mesh_plane``: the band order of its coarsest level and
+the algebraic multigrid hierarchy's patterns and prolongators, pyamg's).  From the parameters, in C++:
+spring constants (``stretch_stiffness``, ``bend_stiffness``, ``damping`` times the shapes), masses and
+wicking (``areal_density``, ...) and the start (``place_mesh``, ``initial_height``, ``initial_tilt``).
+
+The pins of ``pinned_vertices`` (``pins_header``), on a mesh or the built-in grid: a point attribute's
+vertices, or a box, whose particles the core finds at the start positions.
+
+What the structure fixes (``fixed_ranges``): ``bend_stiffness`` 0 or not (the bending springs are listed or
+not), and, on a mesh with an algebraic hierarchy (more than ``ALGEBRAIC_SIZE`` vertices), ``stretch_stiffness``
+(pyamg's aggregation weighs the springs by it; the unit refuses another value with an error naming it).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: The ClothMesh arrays in the generated header: C++ name, element type, key of ``cloth_arrays``.
+CLOTH_ARRAYS = (
+    ("CLOTH_REST_POS", "double", "rest_pos"), ("CLOTH_REST_XY", "double", "rest_xy"), ("CLOTH_AREA", "double", "area"),
+    ("CLOTH_PAIRS", "Index", "pairs"), ("CLOTH_PAIR_REST", "double", "pair_rest"),
+    ("CLOTH_PAIR_SHAPE", "double", "pair_shape"), ("CLOTH_PAIR_KIND", "Index", "pair_kind"),
+    ("CLOTH_TRIANGLES", "Index", "triangles"), ("CLOTH_CORNER_SHARES", "double", "corner_shares"),
+    ("CLOTH_ORDER", "Index", "order"), ("CLOTH_RANK", "Index", "rank"),
+    ("CLOTH_LEVELS", "Index", "levels"), ("CLOTH_A_START", "Index", "a_start"),
+    ("CLOTH_A_COLUMN", "Index", "a_column"), ("CLOTH_DIAGONAL", "Index", "diagonal"),
+    ("CLOTH_P_START", "Index", "p_start"), ("CLOTH_P_COLUMN", "Index", "p_column"),
+    ("CLOTH_P_VALUE", "double", "p_value"), ("CLOTH_R_START", "Index", "r_start"),
+    ("CLOTH_R_COLUMN", "Index", "r_column"), ("CLOTH_R_VALUE", "double", "r_value"),
+    ("CLOTH_SPRING_ENTRIES", "Index", "spring_entries"),
+)
+#: The ClothMesh numbers, in the order of the header's CLOTH_SCALARS and CLOTH_COUNTS (unit.cpp reads them so).
+CLOTH_SCALARS = ("centre_x", "centre_y", "centre_z", "size", "rest_gap", "typical_gap", "least_margin",
+                 "hierarchy_stretch_stiffness")
+CLOTH_COUNTS = ("n", "pair_tension_count", "kd", "marker_size", "bends")
+
+
+def unsupported(scene) -> str | None:
+    """Why the native unit cannot run ``scene`` (a ``wetcloth.Scene``), or None: a mesh file whose vertices
+    form the built-in grid (Python gives it the grid's springs)."""
+    from wetcloth.mesh_file import is_mesh, read_mesh_file
+    from wetcloth.topology import file_grid
+
+    if not is_mesh(scene.cloth_mesh):
+        return None
+    if file_grid(read_mesh_file(scene.cloth_mesh)) is not None:
+        return ("the mesh file's vertices form the built-in grid, which the Python front end runs with the grid's "
+                "springs: give the scene nx, ny, width and length instead of cloth_mesh")
+    return None
+
+
+def cloth_arrays(scene) -> dict | None:
+    """The ClothMesh of ``scene`` (a ``wetcloth.Scene`` whose cloth comes from a mesh file, ``unsupported``
+    None) as arrays and numbers (keys of CLOTH_ARRAYS, CLOTH_SCALARS, CLOTH_COUNTS, and the file's name
+    ``source``); None for the built-in grid."""
+    from wetcloth.mesh_file import is_mesh
+    from wetcloth.preconditioner import plane_for
+    from wetcloth.self_collision import make_contact
+    from wetcloth.topology import build_topology, corner_shares
+
+    if not is_mesh(scene.cloth_mesh):
+        return None
+    topo = build_topology(scene)
+    plane = plane_for(topo)
+    contact = make_contact(topo, True, 0.0)
+    h = plane.algebraic
+    centre = topo.rest_pos @ topo.area / topo.area.sum()  # topology.placed's
+    arrays = dict(
+        rest_pos=topo.rest_pos, rest_xy=topo.rest_xy, area=topo.area, pairs=topo.pairs, pair_rest=topo.pair_rest,
+        pair_shape=topo.pair_shape, pair_kind=topo.pair_kind, triangles=topo.triangles,
+        corner_shares=corner_shares(topo.rest_pos, topo.triangles),
+        order=plane.order, rank=plane.rank, levels=h.levels, a_start=h.a_start, a_column=h.a_column,
+        diagonal=h.diagonal, p_start=h.p_start, p_column=h.p_column, p_value=h.p_value, r_start=h.r_start,
+        r_column=h.r_column, r_value=h.r_value, spring_entries=h.spring_entries,
+    )
+    arrays.update(centre_x=centre[0], centre_y=centre[1], centre_z=centre[2], size=topo.size,
+                  rest_gap=contact.rest_gap, typical_gap=contact.typical_gap, least_margin=contact.least_margin,
+                  hierarchy_stretch_stiffness=scene.stretch_stiffness)
+    arrays.update(n=topo.n, pair_tension_count=topo.pair_tension_count, kd=plane.bands.shape[2] - 1,
+                  marker_size=len(h.marker), bends=int(scene.bend_stiffness != 0.0), source=str(topo.mesh.source))
+    return arrays
+
+
+def pins_header(scene, c_double, c_string) -> str:
+    """The generated header's Pins (model.hpp) of ``scene``'s pinned_vertices (a ``wetcloth.Scene``, or None):
+    ``PINS`` (false: none), the box (``PIN_BOX``, ``PIN_CORNERS``), a point attribute's pins (``PIN_ATTRIBUTE``)
+    and the texts of the messages."""
+    from wetcloth.mesh_file import read_mesh_file
+    from wetcloth.scene import PINS_ALLOWED
+    from wetcloth.topology import _attribute
+
+    spec = "" if scene is None else scene.pinned_vertices.strip()
+    box = spec.startswith("box:")
+    corners = [float(v) for v in spec[4:].split(",")] if box else [0.0] * 6
+    attribute = (_attribute(spec, read_mesh_file(scene.cloth_mesh)).astype(np.int64) if spec and not box
+                 else np.zeros(0, dtype=np.int64))
+    values = ", ".join(str(int(v)) for v in attribute)
+    return "\n".join([
+        f"inline constexpr bool PINS = {'true' if spec else 'false'};",
+        f"inline constexpr bool PIN_BOX = {'true' if box else 'false'};",
+        f"inline constexpr double PIN_CORNERS[] = {{{', '.join(c_double(v) for v in corners)}}};",
+        f"inline constexpr std::size_t PIN_ATTRIBUTE_SIZE = {attribute.size};",
+        f"inline constexpr Index PIN_ATTRIBUTE[] = {{{values}{', ' if values else ''}0}};",
+        f"inline constexpr const char* PIN_TEXTS[] = {{{c_string(repr(spec))}, {c_string(PINS_ALLOWED)}}};"])
+
+
+def hierarchy_levels(arrays: dict | None) -> int:
+    """Levels of the algebraic hierarchy of ``cloth_arrays`` (1: the band factors alone; 0: a grid)."""
+    return 0 if arrays is None else len(np.asarray(arrays["levels"]).reshape(-1, 5))
+
+
+def fixed_ranges(arrays: dict | None) -> dict[str, tuple[float, float, bool, str]]:
+    """The parameters the built-in mesh fixes: name -> (lo, hi, lo_open, range text) of the values the unit
+    takes (ClothMesh::fixed_problem gives the same verdicts)."""
+    if arrays is None:
+        return {}
+    rebuild = "; rebuild the unit (wetcloth build-fmu --native --scene) for another"
+    ranges = {}
+    if arrays["bends"]:
+        ranges["bend_stiffness"] = (0.0, 1e8, True, "0 < bend_stiffness <= 1e+08 N/m (this unit's mesh has bending "
+                                                    f"springs, built in with bend_stiffness > 0{rebuild})")
+    else:
+        ranges["bend_stiffness"] = (0.0, 0.0, False, f"0 N/m (this unit's mesh has no bending springs{rebuild})")
+    if hierarchy_levels(arrays) > 1:
+        k = float(arrays["hierarchy_stretch_stiffness"])
+        ranges["stretch_stiffness"] = (k, k, False, f"{k:g} N/m (the algebraic multigrid hierarchy of this unit's "
+                                                    f"mesh of {arrays['n']} vertices was built for it{rebuild})")
+    return ranges
+
+
+def cloth_header(arrays: dict | None, c_double, c_string) -> str:
+    """The generated header's ClothMesh arrays (each ``NAME[]`` with a trailing 0 and ``NAME_SIZE``), numbers
+    and texts, and ``CLOTH_MESH`` (false, every array empty, for the built-in grid).  ``c_double``,
+    ``c_string``: native.py's literal writers."""
+    lines = [f"inline constexpr bool CLOTH_MESH = {'true' if arrays is not None else 'false'};"]
+    for name, kind, key in CLOTH_ARRAYS:
+        values = np.zeros(0) if arrays is None else np.ascontiguousarray(arrays[key]).ravel()
+        text = ", ".join(str(int(v)) if kind == "Index" else c_double(v) for v in values)
+        lines.append(f"inline constexpr std::size_t {name}_SIZE = {values.size};\n"
+                     f"inline constexpr {kind} {name}[] = {{{text}{', ' if text else ''}0}};")
+    scalars = ", ".join(c_double(0.0 if arrays is None else arrays[k]) for k in CLOTH_SCALARS)
+    counts = ", ".join(str(0 if arrays is None else int(arrays[k])) for k in CLOTH_COUNTS)
+    source = c_string("" if arrays is None else arrays["source"])
+    lines += [f"inline constexpr double CLOTH_SCALARS[] = {{{scalars}}};  // {', '.join(CLOTH_SCALARS)}",
+              f"inline constexpr Index CLOTH_COUNTS[] = {{{counts}}};  // {', '.join(CLOTH_COUNTS)}",
+              f"inline constexpr const char* CLOTH_SOURCE = {source};"]
+    return "\n".join(lines)
