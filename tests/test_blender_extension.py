@@ -35,7 +35,7 @@ PROBE = Path(__file__).with_name("blender") / "extension_probe.py"
 FRAMES, FPS, CUTS = 48, 24, 11  # 13 x 13 particles
 CANCEL_AFTER = 20
 SPEC = {"frames": FRAMES, "fps": FPS, "cuts": CUTS, "sphere": {"radius": 0.2, "z": 0.0},
-        "cloth": {"size": 0.6, "z": 0.215}, "water_z": 0.06, "rise": 0.1, "cancel_after": CANCEL_AFTER,
+        "cloth": {"size": 0.6, "z": 0.215}, "water_z": 0.06, "rise": 0.1, "ball_rise": 0.05, "cancel_after": CANCEL_AFTER,
         "mesh_frames": 24, "round_cloth": {"segments": 24, "radius": 0.3, "z": 0.12, "inset": 0.05, "insets": 3},
         "cup": {"radius": 0.22, "depth": 0.16, "z": 0.0}}
 #: Blender plays float32 positions (USD points): within 6e-8 m of wetcloth's below 1 m; the cloth
@@ -218,6 +218,31 @@ def test_a_water_plane_keyed_to_rise_raises_the_water_level(baked):
     check_against_reference(rising["frames"], rising["manifest"], levels)
     still = baked.report["bake"]["frames"][-1]["wetness"]
     assert np.sum(rising["frames"][-1]["wetness"]) > np.sum(still)
+
+
+def test_a_ball_keyed_to_rise_lifts_the_towel_without_it_entering(baked):
+    """The ball's animated location becomes collider keys at every frame: what Blender plays is
+    wetcloth's run with those keys, no particle enters the ball where it is at that frame, and the
+    towel ends on its top.  A ball keyed to turn is refused, naming it."""
+    moving = baked.report["moving"]
+    manifest = moving["manifest"]
+    assert moving["result"] == ["FINISHED"] and manifest["complete"], moving["error"]
+    scene = from_dict(manifest["scene"])
+    assert len(scene.collider_keys) == FRAMES - 1
+    centres = np.array(moving["centres"])
+    for k, (key, centre) in enumerate(zip(scene.collider_keys, centres[1:]), 1):
+        assert key.collider == 1 and key.time == k / FPS
+        assert key.z == as_float32_decimal(centre[2] - centres[0][2]) and key.x == key.y == 0.0
+    assert centres[-1][2] - centres[0][2] == np.float32(SPEC["ball_rise"])
+    check_against_reference(moving["frames"], manifest)
+    gap = 0.5 * manifest["scene"]["thickness"]
+    radius = manifest["scene"]["collider1_radius"]
+    for frame, centre in zip(moving["frames"], centres):
+        distance = np.linalg.norm(np.array(frame["positions"]) - centre, axis=1) - radius
+        assert distance.min() >= gap - CONTACT_TOL, frame["frame"]
+    last = np.array(moving["frames"][-1]["positions"])
+    assert abs(last[:, 2].max() - (centres[-1][2] + radius + gap)) <= CONTACT_TOL  # on the risen ball's top
+    assert "'Ball'" in moving["turning"] and "translation only" in moving["turning"]
 
 
 def test_pin_group_preset_and_the_cloths_own_modifiers(baked):

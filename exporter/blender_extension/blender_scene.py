@@ -3,8 +3,9 @@
 Geometry is read in world space at the first frame of the scene's range: the Cloth object's mesh
 as stored (its modifiers apply after the cache) gives the grid or the mesh cloth (``geometry.cloth_of``),
 handed to wetcloth as arrays in Blender's vertex order; Collider objects' evaluated meshes the
-analytic or mesh colliders (``geometry.collider_of``, their triangles as arrays), the Water plane
-``water_level`` (and, if it is animated, the level over every frame).  Parameters come from
+analytic or mesh colliders (``geometry.collider_of``, their triangles as arrays; an animated one's
+moves as a collider key at every frame), the Water plane ``water_level`` (and, if it is animated, the
+level over every frame).  Parameters come from
 ``scene.wetcloth`` and the cloth's ``obj.wetcloth``; Blender keeps them as 32-bit floats, which
 are read back as the shortest decimal that rounds to them (0.45, not 0.4499999881).
 """
@@ -137,6 +138,39 @@ def _water(scene, waters, depsgraph) -> tuple[float, list | None]:
     return level, levels
 
 
+def _animated(obj) -> bool:
+    """Whether the object or one of its parents has animation data (keys or drivers)."""
+    while obj is not None:
+        if obj.animation_data is not None:
+            return True
+        obj = obj.parent
+    return False
+
+
+def _collider_keys(scene, obj, number: int) -> list[dict]:
+    """Collider ``number``'s keys (docs/interface.md, collider keys) if the object is animated: its
+    displacement (m) from the first frame at every later frame of the range, at (frame - frame_start) /
+    fps s; none if it does not move.  ValueError if it turns or scales: colliders move by translation."""
+    if not _animated(obj):
+        return []
+    fps = scene.render.fps / scene.render.fps_base
+    scene.frame_set(scene.frame_start)
+    first = np.array(obj.matrix_world)
+    keys = []
+    for frame in range(scene.frame_start + 1, scene.frame_end + 1):
+        scene.frame_set(frame)
+        matrix = np.array(obj.matrix_world)
+        if np.abs(matrix[:3, :3] - first[:3, :3]).max() > 1e-6 * max(np.abs(first[:3, :3]).max(), 1e-9):
+            scene.frame_set(scene.frame_start)
+            raise ValueError(f"collider {obj.name!r} turns or scales at frame {frame}: colliders move by translation "
+                             "only (keys on its location; its rotation and scale stay as at the first frame)")
+        x, y, z = matrix[:3, 3] - first[:3, 3]
+        keys.append({"collider": number, "time": (frame - scene.frame_start) / fps,
+                     "x": clean(float(x)), "y": clean(float(y)), "z": clean(float(z))})
+    scene.frame_set(scene.frame_start)
+    return keys if any(k["x"] or k["y"] or k["z"] for k in keys) else []
+
+
 def cloth_jobs(context) -> list[ClothJob]:
     """One job per Cloth object of the scene; ValueError naming the object or parameter at fault."""
     scene = context.scene
@@ -151,12 +185,13 @@ def cloth_jobs(context) -> list[ClothJob]:
     depsgraph = context.evaluated_depsgraph_get()
     depsgraph.update()
     water_level, water_levels = _water(scene, [o for o in objects if o.wetcloth.role == "WATER"], depsgraph)
-    colliders = []
+    colliders, collider_keys = [], []
     for obj in (o for o in objects if o.wetcloth.role == "COLLIDER"):
         if obj.type != "MESH":
             raise ValueError(f"collider {obj.name!r} is not a mesh")
         collider = collider_of(*world_vertices(obj, depsgraph, triangles=True), obj.name)
         colliders.append({key: clean(value) for key, value in collider.items()} | {"friction": clean(obj.wetcloth.friction)})
+        collider_keys += _collider_keys(scene, obj, len(colliders))
     settings = {name: clean(getattr(scene.wetcloth, name)) for name in SCENE} | {"water_level": water_level}
     directory = cache_directory(scene)
     jobs = []
@@ -168,7 +203,8 @@ def cloth_jobs(context) -> list[ClothJob]:
         fabric = {name: clean(getattr(obj.wetcloth, name)) for name in FABRIC}
         shift = cloth.shift
         moved = [c | {"x": clean(c["x"] - shift[0]), "y": clean(c["y"] - shift[1])} for c in colliders]
-        values = settings | fabric | cloth.scene_values() | {"pinned_edge": pins, "colliders": moved}
+        values = settings | fabric | cloth.scene_values() | {"pinned_edge": pins, "colliders": moved,
+                                                             "collider_keys": collider_keys}
         prefix = prefix_of(obj)
         jobs.append(ClothJob(obj=obj, scene=from_dict(values), cloth=cloth, directory=os.path.join(directory, prefix),
                              prefix=prefix, to_local=np.array(obj.matrix_world.inverted()),

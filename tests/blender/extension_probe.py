@@ -133,6 +133,30 @@ def rising_water(spec, blend, frames):
     return out
 
 
+def moving_ball(spec, blend, frames):
+    """A bake with the ball keyed to rise under the towel: the ball's centre and the cloth at every
+    frame; then the ball keyed to turn too: the bake's error."""
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    ball = bpy.data.objects["Ball"]
+    ball.location.z = spec["sphere"]["z"]
+    ball.keyframe_insert("location", index=2, frame=frames[0])
+    ball.location.z = spec["sphere"]["z"] + spec["ball_rise"]
+    ball.keyframe_insert("location", index=2, frame=frames[-1])
+    out = operator(bpy.ops.wetcloth.bake)
+    out |= cache_report(bpy.data.objects["Towel"])
+    out["centres"] = []
+    for frame in frames:
+        bpy.context.scene.frame_set(frame)
+        out["centres"].append(list(ball.matrix_world.translation))
+    out["frames"] = [evaluated_cloth(bpy.data.objects["Towel"], f) for f in frames]
+    ball.rotation_euler.x = 0.0
+    ball.keyframe_insert("rotation_euler", index=0, frame=frames[0])
+    ball.rotation_euler.x = 0.5
+    ball.keyframe_insert("rotation_euler", index=0, frame=frames[-1])
+    out["turning"] = operator(bpy.ops.wetcloth.bake)["error"]
+    return out
+
+
 def pinned_with_modifiers(blend):
     """The towel pinned by a vertex group (the vertices of its largest y), of the denim preset, with a
     Solidify modifier of its own: a short bake (cancel_after=3)."""
@@ -289,6 +313,7 @@ def main(spec_path, result_path):
         result["freed"] |= {"modifiers": [m.type for m in bpy.data.objects["Towel"].modifiers],
                             "left": sorted(os.listdir(os.path.dirname(cache))) if os.path.isdir(os.path.dirname(cache)) else None}
         result["rising"] = rising_water(spec, blend, frames)
+        result["moving"] = moving_ball(spec, blend, frames)
         result["pinned"] = pinned_with_modifiers(blend)
         result["refusals"] = refusals(spec)
         result["mesh"] = mesh_cloth_over_a_cup(spec)
