@@ -671,6 +671,42 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
     set_control();
 }
 
+namespace {
+
+//: Point the plane's arrays that grids and meshes share into `storage` (sized here), in this order:
+//: bands and rows (band values each), reference (4), reference_mass (n), `between` values of the
+//: caller's own (returned), jacobian_along (along values), jacobian_mass (n), the frame (9 n, each
+//: particle's the identity), normal (n, ones) and local (COMPONENTS n_c).
+double* lay_out_plane(Plane& pl, std::vector<double>& storage, Index n, Index n_c, std::size_t band,
+                      std::size_t between, std::size_t along) {
+    const std::size_t un = static_cast<std::size_t>(n);
+    storage.assign(2 * band + 4 + un + between + along + un + 9 * un + un + COMPONENTS * static_cast<std::size_t>(n_c),
+                   0.0);
+    double* p = storage.data();
+    auto take = [&p](std::size_t count) {
+        double* at = p;
+        p += count;
+        return at;
+    };
+    pl.bands = take(band);
+    pl.rows = take(band);
+    pl.reference = take(4);
+    pl.reference_mass = take(un);
+    double* own = take(between);
+    pl.jacobian_along = take(along);
+    pl.jacobian_mass = take(un);
+    pl.frame = take(9 * un);
+    for (Index a = 0; a < 3; ++a) {
+        for (Index i = 0; i < n; ++i) pl.frame[(4 * a) * n + i] = 1.0;  // frame[a, a, i]
+    }
+    pl.normal = take(un);
+    std::fill(pl.normal, pl.normal + n, 1.0);
+    pl.local = take(COMPONENTS * static_cast<std::size_t>(n_c));
+    return own;
+}
+
+}  // namespace
+
 void Simulation::build_plane() {
     const Index n = topo_.n, nx = topo_.nx, ny = topo_.ny, families = topo_.families();
     const std::size_t un = static_cast<std::size_t>(n), uf = static_cast<std::size_t>(families);
@@ -724,8 +760,6 @@ void Simulation::build_plane() {
     slots_.resize(uf);
     for (Index f = 0; f < families; ++f) slots_[f] = SLOT[topo_.family[f]];
     const std::size_t band = COMPONENTS * static_cast<std::size_t>(n_c * (kd + 1));
-    plane_.assign(2 * band + 4 + un + 2 * uf + uf * un + un + 9 * un + un + COMPONENTS * static_cast<std::size_t>(n_c),
-                  0.0);
     Plane& pl = core_.plane;
     pl.families = families;
     pl.stiffness = topo_.stiffness.data();
@@ -735,31 +769,12 @@ void Simulation::build_plane() {
     pl.order = order_.data();
     pl.rank = rank_.data();
     pl.rank_size = static_cast<Index>(rank_.size());
-    double* p = plane_.data();
-    auto take = [&p](std::size_t count) {
-        double* at = p;
-        p += count;
-        return at;
-    };
-    pl.bands = take(band);
-    pl.rows = take(band);
-    pl.reference = take(4);
-    pl.reference_mass = take(un);
-    double* shares = take(2 * uf);
+    double* shares = lay_out_plane(pl, plane_, n, n_c, band, 2 * uf, uf * un);
     for (Index f = 0; f < families; ++f) {
         shares[f] = SHARE[topo_.family[f]][0];
         shares[families + f] = SHARE[topo_.family[f]][1];
     }
     pl.shares = shares;
-    pl.jacobian_along = take(uf * un);
-    pl.jacobian_mass = take(un);
-    pl.frame = take(9 * un);
-    for (Index a = 0; a < 3; ++a) {
-        for (Index i = 0; i < n; ++i) pl.frame[(4 * a) * n + i] = 1.0;  // frame[a, a, i]
-    }
-    pl.normal = take(un);
-    std::fill(pl.normal, pl.normal + n, 1.0);
-    pl.local = take(COMPONENTS * static_cast<std::size_t>(n_c));
     if (reuses_jacobian(pl)) {
         attach_reused(reused_, pl, n);
         core_.reused = &reused_;
@@ -769,11 +784,10 @@ void Simulation::build_plane() {
 void Simulation::build_mesh_plane() {
     const ClothMesh& m = *topo_.mesh;
     const Index n = topo_.n, n_c = static_cast<Index>(m.order.size()), kd = m.kd;
-    const std::size_t un = static_cast<std::size_t>(n), count = m.pair_rest.size();
+    const std::size_t count = m.pair_rest.size();
     order_ = m.order;
     rank_ = m.rank;
     const std::size_t band = COMPONENTS * static_cast<std::size_t>(n_c * (kd + 1));
-    plane_.assign(2 * band + 4 + un + count + un + 9 * un + un + COMPONENTS * static_cast<std::size_t>(n_c), 0.0);
     Plane& pl = core_.plane;
     pl.families = 0;
     pl.stiffness = topo_.pair_stiffness.data();
@@ -782,25 +796,7 @@ void Simulation::build_mesh_plane() {
     pl.order = order_.data();
     pl.rank = rank_.data();
     pl.rank_size = n_c;
-    double* p = plane_.data();
-    auto take = [&p](std::size_t size) {
-        double* at = p;
-        p += size;
-        return at;
-    };
-    pl.bands = take(band);
-    pl.rows = take(band);
-    pl.reference = take(4);
-    pl.reference_mass = take(un);
-    pl.jacobian_along = take(count);
-    pl.jacobian_mass = take(un);
-    pl.frame = take(9 * un);
-    for (Index a = 0; a < 3; ++a) {
-        for (Index i = 0; i < n; ++i) pl.frame[(4 * a) * n + i] = 1.0;  // frame[a, a, i]
-    }
-    pl.normal = take(un);
-    std::fill(pl.normal, pl.normal + n, 1.0);
-    pl.local = take(COMPONENTS * static_cast<std::size_t>(n_c));
+    lay_out_plane(pl, plane_, n, n_c, band, 0, count);
     // The algebraic hierarchy (make_algebraic): its structure the mesh's, its values and vectors here.
     Algebraic& h = pl.algebraic;
     h.level_count = m.level_count();
