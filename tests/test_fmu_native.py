@@ -568,6 +568,8 @@ def test_the_grip_inputs_act_as_in_the_python_api(build):
     assert result["centroid_z"][-1] - result["centroid_z"][0] > 0.15  # the grip lifted it
 
 
+#: A child process: the unit at argv[1] initialised with parameter argv[2] = argv[3]; prints the status and
+#: the errors logged.
 OVERLAP = r"""
 import json, sys
 import fmpy
@@ -587,7 +589,7 @@ callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
 fmu = FMU2Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier="WetCloth", instanceName="overlap")
 fmu.instantiate(callbacks=callbacks, loggingOn=False)
 fmu.setupExperiment(startTime=0.0)
-fmu.setReal([var["initial_height"].valueReference], [float(sys.argv[2])])
+fmu.setReal([var[sys.argv[2]].valueReference], [float(sys.argv[3])])
 fmu.enterInitializationMode()
 try:
     fmu.exitInitializationMode()
@@ -619,7 +621,7 @@ def test_a_unit_built_with_a_scene_runs_its_colliders_and_grip_keys_as_the_pytho
         assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows["as built"], preset)
         assert np.abs(np.subtract(rows["as built"], rows["without"])).max() > 1e-3, preset
     fmu = native.build_native_fmu(tmp_path / "sphere.fmu", 2, build_dir=build["objects"], scene="tablecloth_sphere")
-    records, _ = run_child(OVERLAP, fmu, "0.05")
+    records, _ = run_child(OVERLAP, fmu, "initial_height", "0.05")
     with pytest.raises(ParameterError) as exc:
         wetcloth.load_scene("tablecloth_sphere", initial_height=0.05)
     assert records[-1] == {"status": 3, "errors": [f"initialization refused: {exc.value}"]}

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_fmu_native import advance_as_the_unit, assert_agree
+from test_fmu_native import OVERLAP, advance_as_the_unit, assert_agree
 from test_fmu_support import run_child
 
 import wetcloth
@@ -262,37 +262,6 @@ def test_a_grid_pinned_by_a_box_runs_as_the_python_api(units, tmp_path):
     with pytest.raises(ParameterError) as exc:
         wetcloth.load_scene(scene_file, initial_tilt=80.0)
     assert records[-1] == {"status": 3, "errors": [f"initialization refused: {exc.value}"]}
-
-
-OVERLAP = r"""
-import json, sys
-import fmpy
-from fmpy import calloc, free
-from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
-                       fmi2CallbackLoggerTYPE)
-directory = fmpy.extract(sys.argv[1])
-md = fmpy.read_model_description(directory)
-var = {v.name: v for v in md.modelVariables}
-messages = []
-callbacks = fmi2CallbackFunctions()
-callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, instance, status, category, message:
-                                          messages.append((int(status), message.decode())))
-callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-fmu = FMU2Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier="WetCloth", instanceName="floor")
-fmu.instantiate(callbacks=callbacks, loggingOn=False)
-fmu.setupExperiment(startTime=0.0)
-fmu.setReal([var[sys.argv[2]].valueReference], [float(sys.argv[3])])
-fmu.enterInitializationMode()
-try:
-    fmu.exitInitializationMode()
-    status = 0
-except FMICallException as exc:
-    status = int(exc.status)
-print(json.dumps({"status": status, "errors": [m for s, m in messages if s >= 3]}))
-fmu.freeInstance()
-"""
 
 
 def test_a_start_below_the_floor_or_a_box_without_vertices_fails_the_initialization_as_in_python(units):

@@ -64,6 +64,16 @@ def extracted_fmu(fmi_version: int = 2) -> tuple[Path, object]:
     return _BUILT[key], _BUILT[f"md{fmi_version}"]
 
 
+#: A child process: fmpy runs the unit at argv[1] for argv[2] s at 0.1 s communication steps and prints the
+#: last value of output argv[3].
+RUN_UNIT = r"""
+import json, sys
+import fmpy
+res = fmpy.simulate_fmu(sys.argv[1], stop_time=float(sys.argv[2]), output_interval=0.1, output=[sys.argv[3]])
+print(json.dumps({sys.argv[3]: float(res[sys.argv[3]][-1])}))
+"""
+
+
 def run_child(code: str, *args, cwd=None, env=None, timeout: float = 300, stdin: str | None = None) -> tuple:
     """Run Python ``code`` in a child process (so that a crash of the FMU's host fails a test, not the
     suite); its JSON lines (``print(json.dumps(...))``) and the completed process."""

@@ -192,25 +192,17 @@ def test_grip_keys_without_pinned_particles_and_bad_tables_are_refused(tmp_path)
         load_scene(path)
 
 
-RUN_UNIT = r"""
-import json, sys
-import fmpy
-res = fmpy.simulate_fmu(sys.argv[1], stop_time=float(sys.argv[2]), output_interval=0.1, output=["centroid_z"])
-print(json.dumps({"centroid_z": float(res["centroid_z"][-1])}))
-"""
-
-
 def test_a_unit_built_with_a_scene_moves_the_grip_by_its_keys(tmp_path):
     """`wetcloth build-fmu --scene lift`: the unit carries the scene's [[grip_key]] tables (they are not
     variables) and, run for 1.5 s, gives the Python run's outputs, the run advanced to fmpy's
     communication points k * 0.1 s (equal to round-off, 1e-12 m).  Without the keys the edge stays on
     the water: by 1.5 s the keys have lifted it 0.1 m and the centroid is centimetres higher."""
-    from test_fmu_support import run_child
+    from test_fmu_support import RUN_UNIT, run_child
 
     from wetcloth.fmu.builder import build_fmu
 
     fmu = build_fmu(tmp_path / "Lift.fmu", scene="lift")
-    run, _ = run_child(RUN_UNIT, fmu, "1.5", cwd=tmp_path)
+    run, _ = run_child(RUN_UNIT, fmu, "1.5", "centroid_z", cwd=tmp_path)
     heights = []
     for scene in (load_scene("lift"), load_scene("lift").replace(grip_keys=())):
         sim = wetcloth.Simulation(scene)

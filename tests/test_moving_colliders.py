@@ -200,24 +200,16 @@ def test_bad_collider_key_names_and_tables_are_refused(tmp_path):
         load_scene(path)
 
 
-RUN_UNIT = r"""
-import json, sys
-import fmpy
-res = fmpy.simulate_fmu(sys.argv[1], stop_time=float(sys.argv[2]), output_interval=0.1, output=["centroid_y"])
-print(json.dumps({"centroid_y": float(res["centroid_y"][-1])}))
-"""
-
-
 def test_a_unit_built_with_a_scene_moves_its_colliders_by_their_keys(tmp_path):
     """`wetcloth build-fmu --scene sweep`: the unit carries the scene's [[collider_key]] tables (they are not
     variables) and, run for 1.2 s, gives the Python run's outputs advanced to fmpy's communication points
     (equal to round-off, 1e-12 m); without the keys the ball never reaches the towel."""
-    from test_fmu_support import run_child
+    from test_fmu_support import RUN_UNIT, run_child
 
     from wetcloth.fmu.builder import build_fmu
 
     fmu = build_fmu(tmp_path / "Sweep.fmu", scene="sweep")
-    run, _ = run_child(RUN_UNIT, fmu, "1.2", cwd=tmp_path)
+    run, _ = run_child(RUN_UNIT, fmu, "1.2", "centroid_y", cwd=tmp_path)
     centroids = []
     for scene in (load_scene("sweep"), load_scene("sweep").replace(collider_keys=())):
         sim = wetcloth.Simulation(scene)
