@@ -4,6 +4,7 @@
 // to the bit.
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "wetcloth/model.hpp"
@@ -92,29 +93,47 @@ std::vector<char> ClothMesh::pinned_at(const Scene& scene, const std::vector<dou
     return pinned;
 }
 
-std::string mesh_scene_problem(const Scene& scene, const ClothMesh& mesh, const Pins* pins) {
-    std::string problem = mesh.fixed_problem(scene);
-    if (!problem.empty()) return problem;
-    const std::vector<double> pos = mesh.start_positions(scene);
-    double lowest = pos[2 * mesh.n];
-    for (Index i = 0; i < mesh.n; ++i) lowest = std::fmin(lowest, pos[2 * mesh.n + i]);
+namespace {
+
+//: Where the mesh starts (3, n) m and which particles are pinned there, for `scene`; `problem` "" or the
+//: first thing the scene asks that the mesh cannot be (scene.py's _check_mesh_start).
+struct MeshStart {
+    std::vector<double> pos;
+    std::vector<char> pinned;
+    std::string problem;
+};
+
+MeshStart mesh_start(const Scene& scene, const ClothMesh& mesh, const Pins* pins) {
+    MeshStart start;
+    start.problem = mesh.fixed_problem(scene);
+    if (!start.problem.empty()) return start;
+    start.pos = mesh.start_positions(scene);
+    double lowest = start.pos[2 * mesh.n];
+    for (Index i = 0; i < mesh.n; ++i) lowest = std::fmin(lowest, start.pos[2 * mesh.n + i]);
     lowest -= 0.5 * scene.thickness;
     if (lowest <= scene.floor_level) {
         const bool placed = scene.place_mesh == SWITCH_ON;
-        return parameter_error(placed ? "initial_height" : "cloth_mesh",
-                               "the cloth starts at or below the floor (lowest point " + py_g(lowest) +
-                                   " m with thickness/2, floor_level " + py_g(scene.floor_level) + " m): " +
-                                   (placed ? "raise initial_height" :
-                                             "raise the mesh in its file, or place it: place_mesh = 'on'") +
-                                   "; allowed: every vertex above floor_level + thickness/2");
+        start.problem = parameter_error(placed ? "initial_height" : "cloth_mesh",
+                                        "the cloth starts at or below the floor (lowest point " + py_g(lowest) +
+                                            " m with thickness/2, floor_level " + py_g(scene.floor_level) + " m): " +
+                                            (placed ? "raise initial_height" :
+                                                      "raise the mesh in its file, or place it: place_mesh = 'on'") +
+                                            "; allowed: every vertex above floor_level + thickness/2");
+        return start;
     }
-    mesh.pinned_at(scene, pos, pins, problem);
-    return problem;
+    start.pinned = mesh.pinned_at(scene, start.pos, pins, start.problem);
+    return start;
+}
+
+}  // namespace
+
+std::string mesh_scene_problem(const Scene& scene, const ClothMesh& mesh, const Pins* pins) {
+    return mesh_start(scene, mesh, pins).problem;
 }
 
 Topology mesh_topology(const Scene& scene, const ClothMesh& mesh, const Pins* pins) {
-    const std::string problem = mesh_scene_problem(scene, mesh, pins);
-    if (!problem.empty()) throw std::invalid_argument(problem);
+    MeshStart start = mesh_start(scene, mesh, pins);
+    if (!start.problem.empty()) throw std::invalid_argument(start.problem);
     Topology t;
     const Index n = mesh.n, count = static_cast<Index>(mesh.pair_rest.size());
     t.nx = n;
@@ -133,12 +152,10 @@ Topology mesh_topology(const Scene& scene, const ClothMesh& mesh, const Pins* pi
         t.pair_stiffness[k] = modulus * mesh.pair_shape[k];
         t.pair_damping[k] = scene.damping * mesh.pair_shape[k];
     }
-    t.start = mesh.start_positions(scene);
-    std::string unused;
-    const std::vector<char> pinned = mesh.pinned_at(scene, t.start, pins, unused);
+    t.start = std::move(start.pos);
     t.free.assign(n, 1.0);
     for (Index i = 0; i < n; ++i) {
-        if (pinned[i]) t.free[i] = 0.0;
+        if (start.pinned[i]) t.free[i] = 0.0;
     }
     return t;
 }

@@ -12,12 +12,14 @@ namespace wc {
 
 namespace {
 
+//: The key every collider starts from: at t = 0, no displacement.
+constexpr double START_KEY[COLLIDER_KEY_COLUMNS] = {};
+
 //: Collider k's displacement d (3) at t (s) and its velocity u (3) over the key interval after t.
 void displacement(const Physics& phys, Index k, double t, double* d, double* u) {
     d[0] = d[1] = d[2] = 0.0;
     u[0] = u[1] = u[2] = 0.0;
-    const double zero[COLLIDER_KEY_COLUMNS] = {0.0, 0.0, 0.0, 0.0, 0.0};
-    const double* before = zero;
+    const double* before = START_KEY;
     const double* rows = phys.collider_keys;
     const double slack = key_slack(t);
     for (Index r = 0; r < phys.collider_key_count; ++r) {
@@ -73,13 +75,12 @@ double next_collider_key(const Physics& phys, double t) {
     const double slack = key_slack(t);
     const Index count = phys.collider_key_count;
     const double* rows = phys.collider_keys;
-    const double zero[COLLIDER_KEY_COLUMNS] = {0.0, 0.0, 0.0, 0.0, 0.0};
     for (Index r = 0; r < count; ++r) {  // rows by collider, then time (Fixtures::collider_keys)
         const double* key = rows + r * COLLIDER_KEY_COLUMNS;
         if (!(key[K_TIME] > t + slack) || !(key[K_TIME] < next)) continue;
         const bool first = r == 0 || rows[(r - 1) * COLLIDER_KEY_COLUMNS + K_COLLIDER] != key[K_COLLIDER];
         const bool last = r + 1 == count || rows[(r + 1) * COLLIDER_KEY_COLUMNS + K_COLLIDER] != key[K_COLLIDER];
-        const double* before = first ? zero : key - COLLIDER_KEY_COLUMNS;
+        const double* before = first ? START_KEY : key - COLLIDER_KEY_COLUMNS;
         bool jumps = false;  // the velocity before the key differs from the one after it
         for (int c = 0; c < 3; ++c) {
             const double in = (key[K_X + c] - before[K_X + c]) / (key[K_TIME] - before[K_TIME]);
@@ -127,9 +128,8 @@ void carry_held(Index n, const Physics& phys, const double* held, const double* 
                 double* trial_vel) {
     if (phys.collider_motion == nullptr) return;
     for (Index i = 0; i < n; ++i) {
-        if (held[i] < collider_held(0)) continue;  // free, pinned, on the floor or a layer
-        const Index k = static_cast<Index>(held[i] - collider_held(0));
-        const double* u = phys.collider_motion + k * MOTION_COLUMNS + MOTION_VELOCITY;
+        const double* u = held_rate(phys, held[i]);
+        if (u == nullptr) continue;  // free, pinned, on the floor or a layer
         for (Index c = 0; c < 3; ++c) {
             trial_pos[c * n + i] = pos[c * n + i] + h * u[c];
             trial_vel[c * n + i] = u[c];

@@ -4,6 +4,7 @@
 // so a collider moves at one velocity through a step; the geometry (colliders.cpp, collider_mesh.cpp) is
 // looked up at p - d_k, and friction acts on the velocity relative to the collider's.
 #pragma once
+#include "wetcloth/colliders.hpp"
 #include "wetcloth/core.hpp"
 
 namespace wc {
@@ -54,8 +55,8 @@ inline constexpr double MOTION_STEP_FRACTION = 0.5;
 //: The velocity (3, m/s) of the moving collider that holds a particle (its Buffers::held value), or null
 //: (not held on a collider, or nothing moves).
 inline const double* held_rate(const Physics& phys, double held) {
-    if (phys.collider_motion == nullptr || held < 3.0) return nullptr;  // (3.0: collider_held(0))
-    return phys.collider_motion + static_cast<Index>(held - 3.0) * MOTION_COLUMNS + MOTION_VELOCITY;
+    if (phys.collider_motion == nullptr || held < collider_held(0)) return nullptr;
+    return phys.collider_motion + static_cast<Index>(held - collider_held(0)) * MOTION_COLUMNS + MOTION_VELOCITY;
 }
 
 //: The particles held on a moving collider (held (n) collider_held(k)) move with it over a step of h s:
