@@ -15,7 +15,7 @@ from wetcloth import _core
 from wetcloth._core import GRAVITY
 from wetcloth.bundles import Cloth, Physics, make_work
 from wetcloth.collider_meshes import meshes_of
-from wetcloth.scene import Scene, collider_key_rows
+from wetcloth.scene import Scene, collider_key_rows, grip_key_rows
 from wetcloth.state import initial_state
 from wetcloth.topology import STRETCH, Topology, build_topology, corner_shares
 
@@ -78,7 +78,7 @@ class Model:
             wick_step_limit=self.wick_step_limit, skip_idle=self.skip_idle_work,
             colliders=colliders, meshes=meshes,
             grip_x=scene.grip_x, grip_y=scene.grip_y, grip_z=scene.grip_z,
-            grip_keys=np.array([[k.time, k.x, k.y, k.z] for k in scene.grip_keys], dtype=np.float64).reshape(-1, 4),
+            grip_keys=grip_key_rows(scene.grip_keys),
             grip_origin=self.grip_origin,
             collider_keys=collider_key_rows(scene.collider_keys),
             collider_motion=np.zeros((len(scene.colliders) if scene.collider_keys else 0, _core.MOTION_COLUMNS)),

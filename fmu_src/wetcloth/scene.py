@@ -117,10 +117,15 @@ COLLIDER_FIELDS: dict[str, dataclasses.Field] = {f.name: f for f in dataclasses.
 _COLLIDER_NAME = re.compile(r"collider([1-9][0-9]*)_([a-z_]+)")
 
 
+def _table_name(pattern: re.Pattern, fields: dict, name: str) -> tuple[int, str] | None:
+    """(k, field) of the flattened name of table k's field (``pattern``: its number, then its field), else None."""
+    m = pattern.fullmatch(name)
+    return (int(m.group(1)), m.group(2)) if m and m.group(2) in fields else None
+
+
 def collider_name(name: str) -> tuple[int, str] | None:
     """(k, field) of a flattened collider name such as 'collider1_radius', else None."""
-    m = _COLLIDER_NAME.fullmatch(name)
-    return (int(m.group(1)), m.group(2)) if m and m.group(2) in COLLIDER_FIELDS else None
+    return _table_name(_COLLIDER_NAME, COLLIDER_FIELDS, name)
 
 
 @dataclass(frozen=True)
@@ -141,8 +146,7 @@ _GRIP_KEY_NAME = re.compile(r"grip_key([1-9][0-9]*)_([a-z]+)")
 
 def grip_key_name(name: str) -> tuple[int, str] | None:
     """(k, field) of a flattened grip key name such as 'grip_key1_time', else None."""
-    m = _GRIP_KEY_NAME.fullmatch(name)
-    return (int(m.group(1)), m.group(2)) if m and m.group(2) in GRIP_KEY_FIELDS else None
+    return _table_name(_GRIP_KEY_NAME, GRIP_KEY_FIELDS, name)
 
 
 @dataclass(frozen=True)
@@ -165,8 +169,12 @@ _COLLIDER_KEY_NAME = re.compile(r"collider_key([1-9][0-9]*)_([a-z]+)")
 
 def collider_key_name(name: str) -> tuple[int, str] | None:
     """(k, field) of a flattened collider key name such as 'collider_key1_time', else None."""
-    m = _COLLIDER_KEY_NAME.fullmatch(name)
-    return (int(m.group(1)), m.group(2)) if m and m.group(2) in COLLIDER_KEY_FIELDS else None
+    return _table_name(_COLLIDER_KEY_NAME, COLLIDER_KEY_FIELDS, name)
+
+
+def grip_key_rows(keys) -> np.ndarray:
+    """The core's rows of grip keys (grip.hpp: time s, x, y, z m); (0, 4) without keys."""
+    return np.array([[k.time, k.x, k.y, k.z] for k in keys], dtype=np.float64).reshape(-1, 4)
 
 
 def collider_key_rows(keys) -> np.ndarray:
@@ -617,7 +625,8 @@ def from_dict(values: dict[str, Any]) -> Scene:
             move = collider_key_name(name)
             if move is not None:
                 flat_moves.setdefault(move[0], {})[move[1]] = values.pop(name)
-    for table, listed, label in ((flat_keys, keys, "grip_key"), (flat_moves, moves, "collider_key")):
+    for table, listed, label in ((flat_keys, keys, "grip_key"), (flat_moves, moves, "collider_key"),
+                                 (flat, colliders, "collider")):
         for k in sorted(table):
             with mistakes.collect():
                 if k > len(listed) + 1:
@@ -626,14 +635,6 @@ def from_dict(values: dict[str, Any]) -> Scene:
                 if k == len(listed) + 1:
                     listed.append({})
                 listed[k - 1] = listed[k - 1] | table[k]
-    for k in sorted(flat):
-        with mistakes.collect():
-            if k > len(colliders) + 1:
-                raise ParameterError(f"collider{k}_{next(iter(flat[k]))}",
-                                     f"there is no collider {k - 1}: number colliders 1, 2, ... without gaps")
-            if k == len(colliders) + 1:
-                colliders.append({})
-            colliders[k - 1] = colliders[k - 1] | flat[k]
     mistakes.raise_if_any()
     return Scene(**values, colliders=tuple(colliders), grip_keys=tuple(keys), collider_keys=tuple(moves))
 

@@ -158,6 +158,17 @@ def _c_double(value) -> str:
     return text if any(c in text for c in ".einf") else text + ".0"
 
 
+def _c_array(name: str, kind: str, values) -> str:
+    """The C++ array ``NAME[]`` of ``values`` ("double" or "Index" elements, with a trailing 0: C++ has no
+    empty arrays) and its length ``NAME_SIZE``."""
+    import numpy as np
+
+    values = np.ascontiguousarray(values).ravel()
+    text = ", ".join(str(int(v)) if kind == "Index" else _c_double(v) for v in values)
+    return (f"inline constexpr std::size_t {name}_SIZE = {values.size};\n"
+            f"inline constexpr {kind} {name}[] = {{{text}{', ' if text else ''}0}};")
+
+
 #: The fixtures' arrays in the generated header (``unit.cpp``'s scene_fixtures): C++ name, element type, and
 #: where each comes from: the collider rows, a ColliderMeshes field (``collider_meshes``), the grip keys.
 FIXTURE_ARRAYS = (("SCENE_COLLIDERS", "double", "rows"), ("SCENE_MESH_HEADERS", "double", "headers"),
@@ -177,20 +188,14 @@ def fixtures_header(scene=None, cloth: dict | None = None) -> str:
     import numpy as np
 
     from wetcloth.collider_meshes import meshes_of, no_meshes
-    from wetcloth.scene import collider_key_rows
+    from wetcloth.scene import collider_key_rows, grip_key_rows
 
     rows, meshes = meshes_of(scene.colliders) if scene is not None else (np.zeros(0), no_meshes())
-    keys = [[k.time, k.x, k.y, k.z] for k in scene.grip_keys] if scene is not None else []
-    sources = dict(meshes._asdict(), rows=rows, grip_keys=np.array(keys, dtype=np.float64),
+    sources = dict(meshes._asdict(), rows=rows, grip_keys=grip_key_rows(scene.grip_keys if scene is not None else ()),
                    collider_keys=collider_key_rows(scene.collider_keys if scene is not None else ()))
-    lines = []
-    for name, kind, source in FIXTURE_ARRAYS:
-        values = np.ascontiguousarray(sources[source]).ravel()
-        text = ", ".join(str(int(v)) if kind == "Index" else _c_double(v) for v in values)
-        lines.append(f"inline constexpr std::size_t {name}_SIZE = {values.size};\n"
-                     f"inline constexpr {kind} {name}[] = {{{text}{', ' if text else ''}0}};")
-    lines.append(native_mesh.cloth_header(cloth, _c_double, _c_string))
-    lines.append(native_mesh.pins_header(scene, _c_double, _c_string))
+    lines = [_c_array(name, kind, sources[source]) for name, kind, source in FIXTURE_ARRAYS]
+    lines.append(native_mesh.cloth_header(cloth, _c_array, _c_double, _c_string))
+    lines.append(native_mesh.pins_header(scene, _c_array, _c_double, _c_string))
     return "\n".join(lines)
 
 

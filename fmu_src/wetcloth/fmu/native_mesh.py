@@ -89,7 +89,7 @@ def cloth_arrays(scene) -> dict | None:
     return arrays
 
 
-def pins_header(scene, c_double, c_string) -> str:
+def pins_header(scene, c_array, c_double, c_string) -> str:
     """The generated header's Pins (model.hpp) of ``scene``'s pinned_vertices (a ``wetcloth.Scene``, or None):
     ``PINS`` (false: none), the box (``PIN_BOX``, ``PIN_CORNERS``), a point attribute's pins (``PIN_ATTRIBUTE``)
     and the texts of the messages."""
@@ -102,13 +102,11 @@ def pins_header(scene, c_double, c_string) -> str:
     corners = [float(v) for v in spec[4:].split(",")] if box else [0.0] * 6
     attribute = (_attribute(spec, read_mesh_file(scene.cloth_mesh)).astype(np.int64) if spec and not box
                  else np.zeros(0, dtype=np.int64))
-    values = ", ".join(str(int(v)) for v in attribute)
     return "\n".join([
         f"inline constexpr bool PINS = {'true' if spec else 'false'};",
         f"inline constexpr bool PIN_BOX = {'true' if box else 'false'};",
         f"inline constexpr double PIN_CORNERS[] = {{{', '.join(c_double(v) for v in corners)}}};",
-        f"inline constexpr std::size_t PIN_ATTRIBUTE_SIZE = {attribute.size};",
-        f"inline constexpr Index PIN_ATTRIBUTE[] = {{{values}{', ' if values else ''}0}};",
+        c_array("PIN_ATTRIBUTE", "Index", attribute),
         f"inline constexpr const char* PIN_TEXTS[] = {{{c_string(repr(spec))}, {c_string(PINS_ALLOWED)}}};"])
 
 
@@ -136,16 +134,12 @@ def fixed_ranges(arrays: dict | None) -> dict[str, tuple[float, float, bool, str
     return ranges
 
 
-def cloth_header(arrays: dict | None, c_double, c_string) -> str:
+def cloth_header(arrays: dict | None, c_array, c_double, c_string) -> str:
     """The generated header's ClothMesh arrays (each ``NAME[]`` with a trailing 0 and ``NAME_SIZE``), numbers
-    and texts, and ``CLOTH_MESH`` (false, every array empty, for the built-in grid).  ``c_double``,
-    ``c_string``: native.py's literal writers."""
+    and texts, and ``CLOTH_MESH`` (false, every array empty, for the built-in grid).  ``c_array``,
+    ``c_double``, ``c_string``: native.py's literal writers."""
     lines = [f"inline constexpr bool CLOTH_MESH = {'true' if arrays is not None else 'false'};"]
-    for name, kind, key in CLOTH_ARRAYS:
-        values = np.zeros(0) if arrays is None else np.ascontiguousarray(arrays[key]).ravel()
-        text = ", ".join(str(int(v)) if kind == "Index" else c_double(v) for v in values)
-        lines.append(f"inline constexpr std::size_t {name}_SIZE = {values.size};\n"
-                     f"inline constexpr {kind} {name}[] = {{{text}{', ' if text else ''}0}};")
+    lines += [c_array(name, kind, np.zeros(0) if arrays is None else arrays[key]) for name, kind, key in CLOTH_ARRAYS]
     scalars = ", ".join(c_double(0.0 if arrays is None else arrays[k]) for k in CLOTH_SCALARS)
     counts = ", ".join(str(0 if arrays is None else int(arrays[k])) for k in CLOTH_COUNTS)
     source = c_string("" if arrays is None else arrays["source"])
