@@ -51,39 +51,32 @@ def lying_cases(folder: str) -> dict:
     return {"bucket preset": (wetcloth.load_scene("bucket"), 6.0), "sheet on icosphere": (sheet, 2.0)}
 
 
-def lying(repeat: int) -> None:
-    with tempfile.TemporaryDirectory() as folder:
-        cases = lying_cases(folder)
-        times = {name: [] for name in cases}
-        counts = {}
-        for _ in range(repeat):
-            for name, (scene, duration) in cases.items():
-                sim = wetcloth.Simulation(scene)
-                start = time.process_time()
-                sim.advance(duration)
-                times[name].append(time.process_time() - start)
-                counts[name] = (duration, sim.steps, sim.rejected_steps)
+def timed_cases(cases: dict, repeat: int) -> None:
+    """Run each case (name -> (scene, duration s)) ``repeat`` times in turn; print CPU seconds (best, median),
+    accepted and rejected steps, ms per step."""
+    times = {name: [] for name in cases}
+    counts = {}
+    for _ in range(repeat):
+        for name, (scene, duration) in cases.items():
+            sim = wetcloth.Simulation(scene)
+            start = time.process_time()
+            sim.advance(duration)
+            times[name].append(time.process_time() - start)
+            counts[name] = (duration, sim.steps, sim.rejected_steps)
     for name, t in times.items():
         duration, steps, rejected = counts[name]
         print(f"{name:<18} {duration:3.0f} s  best {min(t):6.2f} s  median {statistics.median(t):6.2f} s  "
               f"steps {steps:5d}  rejected {rejected:5d}  {1000 * min(t) / steps:.2f} ms a step", flush=True)
 
 
+def lying(repeat: int) -> None:
+    with tempfile.TemporaryDirectory() as folder:
+        timed_cases(lying_cases(folder), repeat)
+
+
 def moving(repeat: int) -> None:
-    cases = {"sweep": wetcloth.load_scene("sweep"), "sweep, no keys": wetcloth.load_scene("sweep", collider_keys=())}
-    times = {name: [] for name in cases}
-    counts = {}
-    for _ in range(repeat):
-        for name, scene in cases.items():
-            sim = wetcloth.Simulation(scene)
-            start = time.process_time()
-            sim.advance(4.0)
-            times[name].append(time.process_time() - start)
-            counts[name] = (sim.steps, sim.rejected_steps)
-    for name, t in times.items():
-        steps, rejected = counts[name]
-        print(f"{name:<18}   4 s  best {min(t):6.2f} s  median {statistics.median(t):6.2f} s  steps {steps:5d}  "
-              f"rejected {rejected:5d}  {1000 * min(t) / steps:.2f} ms a step", flush=True)
+    timed_cases({"sweep": (wetcloth.load_scene("sweep"), 4.0),
+                 "sweep, no keys": (wetcloth.load_scene("sweep", collider_keys=()), 4.0)}, repeat)
 
 
 def main() -> None:
