@@ -202,21 +202,42 @@ def test_what_the_built_in_mesh_fixes_is_refused_with_its_name(units):
     assert large[-1]["refused"] == [["stretch_stiffness", 3], ["bend_stiffness", 3]]
 
 
-def test_a_mesh_the_native_unit_cannot_run_is_refused_at_build(tmp_path):
-    """A mesh file whose vertices form the built-in grid (Python runs it with the grid's springs):
-    NativeBuildError naming the parameter, and no unit written."""
+def test_a_mesh_file_that_forms_the_grid_runs_as_the_python_api(units, tmp_path):
+    """A quad mesh file whose vertices form the built-in grid, off the origin, its top row pinned by a point
+    attribute: Python runs it with the grid's springs from the file's start, and so do the FMI 2 and 3 units,
+    bit for bit, with the built values and with another tilt and stiffness; the grid's nx and ny set on the
+    unit change nothing (the file's grid is built in, as Python ignores them for a mesh)."""
+    import fmpy
     import meshio
 
-    nx, ny = 4, 3
-    points = np.array([[0.1 * c, 0.1 * r, 0.0] for r in range(ny) for c in range(nx)])
+    from wetcloth.fmu.cosim import simulate
+
+    nx, ny = 6, 5
+    col, row = np.tile(np.arange(nx), ny), np.repeat(np.arange(ny), nx)
+    points = np.stack([0.3 + 0.08 * col, -0.1 + 0.07 * row, np.full(nx * ny, 0.4)], axis=1)
     quads = np.array([[r * nx + c, r * nx + c + 1, (r + 1) * nx + c + 1, (r + 1) * nx + c]
                       for r in range(ny - 1) for c in range(nx - 1)], dtype=np.int32)
-    meshio.write(tmp_path / "grid.ply", meshio.Mesh(points, [("quad", quads)]))
-    (tmp_path / "grid.toml").write_text('cloth_mesh = "grid.ply"\nplace_mesh = "on"\ninitial_height = 0.2\n')
-    with pytest.raises(native.NativeBuildError, match=r"parameter 'cloth_mesh' = '.*grid.ply': the native unit "
-                                                      r"cannot run the mesh file's vertices form the built-in grid"):
-        native.build_native_fmu(tmp_path / "n.fmu", scene=tmp_path / "grid.toml")
-    assert not (tmp_path / "n.fmu").exists()
+    meshio.write(tmp_path / "grid.ply", meshio.Mesh(points, [("quad", quads)],
+                                                   point_data={"held": (row == ny - 1).astype(np.float64)}))
+    (tmp_path / "grid.toml").write_text('cloth_mesh = "grid.ply"\nplace_mesh = "on"\ninitial_height = 0.2\n'
+                                        'initial_tilt = 15.0\npinned_vertices = "held"\nabsorption_rate = 0.5\n')
+    scene = wetcloth.load_scene(tmp_path / "grid.toml")
+    topology = wetcloth.Simulation(scene).model.topology
+    assert not topology.listed and (topology.nx, topology.ny) == (nx, ny) and topology.pinned.sum() == nx
+    fmu2 = native.build_native_fmu(tmp_path / "grid2.fmu", 2, build_dir=units["objects"], scene=tmp_path / "grid.toml")
+    fmu3 = native.build_native_fmu(tmp_path / "grid3.fmu", 3, build_dir=units["objects"], scene=tmp_path / "grid.toml")
+    for changes in ({}, {"initial_tilt": 40.0, "stretch_stiffness": 2500.0, "bend_stiffness": 0.0}):
+        result = fmpy.simulate_fmu(str(fmu2), stop_time=0.3, output_interval=0.05, start_values=changes)
+        rows, _ = python_rows(scene.replace(**changes), result["time"])
+        assert_agree([[row[k] for k in COLUMNS] for row in result], rows, str(changes))
+    other_grid = fmpy.simulate_fmu(str(fmu2), stop_time=0.3, output_interval=0.05, start_values={"nx": 9, "ny": 7})
+    assert_agree([[row[k] for k in COLUMNS] for row in other_grid], python_rows(scene, other_grid["time"])[0],
+                 "nx and ny set")
+    three = simulate(fmu3, duration=0.3, fps=20, output=[*COLUMNS, "positions"])
+    rows, positions = python_rows(scene, three["time"])
+    assert_agree([[three[k][i] for k in COLUMNS] for i in range(len(three["time"]))], rows, "FMI 3")
+    np.testing.assert_array_equal(three["positions"], np.array(positions))
+    assert np.ptp(three["positions"][-1][:, 2]) > 0.01  # it hangs from its pinned row and moves
 
 
 def test_pins_by_a_point_attribute_of_the_mesh_file_run_as_the_python_api(units, tmp_path):

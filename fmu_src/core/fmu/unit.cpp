@@ -125,6 +125,10 @@ const std::shared_ptr<const ClothMesh>& built_in_cloth() {
         m->typical_gap = CLOTH_SCALARS[5];
         m->least_margin = CLOTH_SCALARS[6];
         m->hierarchy_stretch_stiffness = CLOTH_SCALARS[7];
+        m->grid_width = CLOTH_SCALARS[8];
+        m->grid_length = CLOTH_SCALARS[9];
+        m->grid_nx = CLOTH_COUNTS[5];
+        m->grid_ny = CLOTH_COUNTS[6];
         m->rest_pos = vector_of(CLOTH_REST_POS, CLOTH_REST_POS_SIZE);
         m->rest_xy = vector_of(CLOTH_REST_XY, CLOTH_REST_XY_SIZE);
         m->area = vector_of(CLOTH_AREA, CLOTH_AREA_SIZE);

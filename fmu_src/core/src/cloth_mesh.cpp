@@ -21,7 +21,18 @@ std::string parameter_error(const char* name, const std::string& message) {
 
 }  // namespace
 
+Scene ClothMesh::on_grid(const Scene& scene) const {
+    if (!forms_grid()) return scene;
+    Scene grid = scene;
+    grid.nx = grid_nx;
+    grid.ny = grid_ny;
+    grid.width = grid_width;
+    grid.length = grid_length;
+    return grid;
+}
+
 std::string ClothMesh::fixed_problem(const Scene& scene) const {
+    if (forms_grid()) return "";  // the grid's families: any bend and stretch stiffness
     if ((scene.bend_stiffness != 0.0) != bends) {
         return parameter_error("bend_stiffness", py_repr(scene.bend_stiffness) + " is not allowed in this unit: its mesh's "
                                "springs were built " + (bends ? "with" : "without") + " bending springs; allowed: " +
@@ -125,15 +136,8 @@ MeshStart mesh_start(const Scene& scene, const ClothMesh& mesh, const Pins* pins
     return start;
 }
 
-}  // namespace
-
-std::string mesh_scene_problem(const Scene& scene, const ClothMesh& mesh, const Pins* pins) {
-    return mesh_start(scene, mesh, pins).problem;
-}
-
-Topology mesh_topology(const Scene& scene, const ClothMesh& mesh, const Pins* pins) {
-    MeshStart start = mesh_start(scene, mesh, pins);
-    if (!start.problem.empty()) throw std::invalid_argument(start.problem);
+//: The listed springs' topology of a mesh that does not form the grid (its start and pins unset).
+Topology listed_topology(const Scene& scene, const ClothMesh& mesh) {
     Topology t;
     const Index n = mesh.n, count = static_cast<Index>(mesh.pair_rest.size());
     t.nx = n;
@@ -152,11 +156,22 @@ Topology mesh_topology(const Scene& scene, const ClothMesh& mesh, const Pins* pi
         t.pair_stiffness[k] = modulus * mesh.pair_shape[k];
         t.pair_damping[k] = scene.damping * mesh.pair_shape[k];
     }
-    t.start = std::move(start.pos);
     t.free.assign(n, 1.0);
-    for (Index i = 0; i < n; ++i) {
-        if (start.pinned[i]) t.free[i] = 0.0;
-    }
+    return t;
+}
+
+}  // namespace
+
+std::string mesh_scene_problem(const Scene& scene, const ClothMesh& mesh, const Pins* pins) {
+    return mesh_start(scene, mesh, pins).problem;
+}
+
+Topology mesh_topology(const Scene& scene, const ClothMesh& mesh, const Pins* pins) {
+    MeshStart start = mesh_start(scene, mesh, pins);
+    if (!start.problem.empty()) throw std::invalid_argument(start.problem);
+    Topology t = mesh.forms_grid() ? grid_topology(scene, nullptr) : listed_topology(scene, mesh);
+    t.start = std::move(start.pos);
+    for (Index i = 0; i < mesh.n; ++i) t.free[i] = start.pinned[i] ? 0.0 : 1.0;
     return t;
 }
 

@@ -247,7 +247,10 @@ std::vector<double> Topology::per_particle_sum(const double* per_spring, const s
 }
 
 Topology build_topology(const Scene& scene, const ClothMesh* mesh, const Pins* pins) {
-    if (mesh != nullptr) return mesh_topology(scene, *mesh, pins);
+    return mesh != nullptr ? mesh_topology(scene, *mesh, pins) : grid_topology(scene, pins);
+}
+
+Topology grid_topology(const Scene& scene, const Pins* pins) {
     if (scene.nx < 2 || scene.ny < 2) {
         throw std::invalid_argument("the grid needs at least 2 x 2 particles, got " + std::to_string(scene.nx) +
                                     " x " + std::to_string(scene.ny));
@@ -450,10 +453,10 @@ std::string collider_overlaps(const Physics& phys, Index n, const double* pos) {
 
 // ------------------------------------------------------------------------------------------ simulation
 Simulation::Simulation(const Scene& scene, Fixtures fixtures)
-    : scene_(scene), fixtures_(std::move(fixtures)),
-      topo_(build_topology(scene, fixtures_.cloth_mesh.get(), fixtures_.pins.get())) {
-    const ClothMesh* mesh = topo_.mesh;
-    const std::string problem = scene_problem(scene, mesh, fixtures_.pins.get());
+    : scene_(fixtures.cloth_mesh != nullptr ? fixtures.cloth_mesh->on_grid(scene) : scene),
+      fixtures_(std::move(fixtures)), topo_(build_topology(scene_, fixtures_.cloth_mesh.get(), fixtures_.pins.get())) {
+    const ClothMesh* mesh = topo_.mesh;  // null for the grid, also a file's that forms it
+    const std::string problem = scene_problem(scene_, fixtures_.cloth_mesh.get(), fixtures_.pins.get());
     if (!problem.empty()) throw std::invalid_argument(problem);
     const Index n = topo_.n, families = topo_.families();
     const std::size_t un = static_cast<std::size_t>(n);

@@ -595,30 +595,16 @@ def check_platform() -> None:
 
 
 # ----------------------------------------------------------------------------------------- the unit
-def native_scene(scene: str | Path):
-    """The packed scene (``packed_scene.pack``) of a scene file for the native unit; NativeBuildError for a
-    cloth it cannot run (``native_mesh.unsupported``: a mesh file whose vertices form the built-in grid)."""
-    from wetcloth.scene import load_scene
-
-    packed = packed_scene.pack(scene)
-    reason = native_mesh.unsupported(load_scene(scene))
-    if reason:
-        raise NativeBuildError(f"scene {str(scene)!r}: parameter 'cloth_mesh' = {str(packed.mesh)!r}: the native "
-                               f"unit cannot run {reason}; use WetCloth.fmu (wetcloth build-fmu --scene {scene})")
-    return packed
-
-
 def build_native_fmu(out: str | Path | None = None, fmi_version: int = 2, build_dir: str | Path | None = None,
                      jobs: int | None = None, scene: str | Path | None = None, progress: bool = False) -> Path:
     """Build the native unit (FMI ``fmi_version`` 2 or 3) at ``out`` (default ``native_fmu_path``); return
     its path.  ``build_dir`` (default ``default_build_dir()``) keeps the compiled objects for the next build,
     which recompiles only what changed.  ``scene``: a scene file (or preset name) whose values become the
     start values, its colliders and grip keys built in.  ``progress``: a bar of the sources compiled.
-    NativeBuildError if it cannot be built here, or for a scene the native unit cannot run
-    (``native_scene``).  A scene's cloth from a mesh file is built in (``native_mesh``)."""
+    NativeBuildError if it cannot be built here.  A scene's cloth from a mesh file is built in (``native_mesh``)."""
     if fmi_version not in (2, 3):
         raise ValueError(f"FMI version must be 2 or 3, got {fmi_version!r}")
-    packed = None if scene is None else native_scene(scene)
+    packed = None if scene is None else packed_scene.pack(scene)
     check_platform()
     core = core_dir()
     compiler = find_compiler()

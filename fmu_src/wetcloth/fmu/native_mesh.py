@@ -39,28 +39,15 @@ CLOTH_ARRAYS = (
 )
 #: The ClothMesh numbers, in the order of the header's CLOTH_SCALARS and CLOTH_COUNTS (unit.cpp reads them so).
 CLOTH_SCALARS = ("centre_x", "centre_y", "centre_z", "size", "rest_gap", "typical_gap", "least_margin",
-                 "hierarchy_stretch_stiffness")
-CLOTH_COUNTS = ("n", "pair_tension_count", "kd", "marker_size", "bends")
-
-
-def unsupported(scene) -> str | None:
-    """Why the native unit cannot run ``scene`` (a ``wetcloth.Scene``), or None: a mesh file whose vertices
-    form the built-in grid (Python gives it the grid's springs)."""
-    from wetcloth.mesh_file import is_mesh, read_mesh_file
-    from wetcloth.topology import file_grid
-
-    if not is_mesh(scene.cloth_mesh):
-        return None
-    if file_grid(read_mesh_file(scene.cloth_mesh)) is not None:
-        return ("the mesh file's vertices form the built-in grid, which the Python front end runs with the grid's "
-                "springs: give the scene nx, ny, width and length instead of cloth_mesh")
-    return None
+                 "hierarchy_stretch_stiffness", "grid_width", "grid_length")
+CLOTH_COUNTS = ("n", "pair_tension_count", "kd", "marker_size", "bends", "grid_nx", "grid_ny")
 
 
 def cloth_arrays(scene) -> dict | None:
-    """The ClothMesh of ``scene`` (a ``wetcloth.Scene`` whose cloth comes from a mesh file, ``unsupported``
-    None) as arrays and numbers (keys of CLOTH_ARRAYS, CLOTH_SCALARS, CLOTH_COUNTS, and the file's name
-    ``source``); None for the built-in grid."""
+    """The ClothMesh of ``scene`` (a ``wetcloth.Scene`` whose cloth comes from a mesh file) as arrays and
+    numbers (keys of CLOTH_ARRAYS, CLOTH_SCALARS, CLOTH_COUNTS, and the file's name ``source``); None for the
+    built-in grid.  A file whose vertices form the built-in grid (``topology.file_grid``) runs with the grid's
+    springs, as in Python: it carries only its start (rest_pos and the centroid) and the grid's numbers."""
     from wetcloth.mesh_file import is_mesh
     from wetcloth.preconditioner import plane_for
     from wetcloth.self_collision import make_contact
@@ -69,6 +56,8 @@ def cloth_arrays(scene) -> dict | None:
     if not is_mesh(scene.cloth_mesh):
         return None
     topo = build_topology(scene)
+    if not topo.listed:
+        return _grid_file_arrays(scene, topo)
     plane = plane_for(topo)
     contact = make_contact(topo, True, 0.0)
     h = plane.algebraic
@@ -85,7 +74,25 @@ def cloth_arrays(scene) -> dict | None:
                   rest_gap=contact.rest_gap, typical_gap=contact.typical_gap, least_margin=contact.least_margin,
                   hierarchy_stretch_stiffness=scene.stretch_stiffness)
     arrays.update(n=topo.n, pair_tension_count=topo.pair_tension_count, kd=plane.bands.shape[2] - 1,
-                  marker_size=len(h.marker), bends=int(scene.bend_stiffness != 0.0), source=str(topo.mesh.source))
+                  marker_size=len(h.marker), bends=int(scene.bend_stiffness != 0.0), source=str(topo.mesh.source),
+                  grid_width=0.0, grid_length=0.0, grid_nx=0, grid_ny=0)
+    return arrays
+
+
+def _grid_file_arrays(scene, topo) -> dict:
+    """``cloth_arrays`` of a file that forms the built-in grid (``topo``: its topology, the grid's): the file's
+    coordinates and the centroid ``topology.placed`` turns them about (by the grid's areas, as Python's
+    start), the grid's nx, ny, width and length; every other array empty."""
+    from wetcloth.mesh_file import read_mesh_file
+    from wetcloth.topology import file_grid
+
+    nx, ny, width, length = file_grid(read_mesh_file(scene.cloth_mesh))
+    arrays = {key: np.zeros(0) for _, _, key in CLOTH_ARRAYS}
+    centre = topo.rest_pos @ topo.area / topo.area.sum()  # topology.placed's
+    arrays.update(rest_pos=topo.rest_pos, centre_x=centre[0], centre_y=centre[1], centre_z=centre[2], size=topo.size,
+                  rest_gap=0.0, typical_gap=0.0, least_margin=0.0, hierarchy_stretch_stiffness=0.0,
+                  grid_width=width, grid_length=length, n=topo.n, pair_tension_count=0, kd=0, marker_size=0, bends=0,
+                  grid_nx=nx, grid_ny=ny, source=str(topo.mesh.source))
     return arrays
 
 
@@ -118,7 +125,7 @@ def hierarchy_levels(arrays: dict | None) -> int:
 def fixed_ranges(arrays: dict | None) -> dict[str, tuple[float, float, bool, str]]:
     """The parameters the built-in mesh fixes: name -> (lo, hi, lo_open, range text) of the values the unit
     takes (ClothMesh::fixed_problem gives the same verdicts)."""
-    if arrays is None:
+    if arrays is None or arrays["grid_nx"]:  # the grid's families take any stiffness
         return {}
     rebuild = "; rebuild the unit (wetcloth build-fmu --native --scene) for another"
     ranges = {}

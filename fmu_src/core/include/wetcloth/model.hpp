@@ -227,6 +227,14 @@ struct ClothMesh {
     // algebraic hierarchy (more than one level), the stretch_stiffness its aggregation weighed (N/m).
     bool bends = false;
     double hierarchy_stretch_stiffness = 0.0;
+    // A file whose vertices form the built-in grid (topology.file_grid): its grid_nx x grid_ny particles and
+    // grid_width x grid_length (m).  It runs with the grid's springs, preconditioner and self-collision gaps,
+    // from the file's start (rest_pos, centre); the listed springs and hierarchy are empty.  0: a mesh.
+    Index grid_nx = 0, grid_ny = 0;
+    double grid_width = 0.0, grid_length = 0.0;
+    bool forms_grid() const { return grid_nx > 0; }
+    //: `scene` with the grid's nx, ny, width and length, if this file forms one (else `scene`).
+    Scene on_grid(const Scene& scene) const;
     Index level_count() const { return static_cast<Index>(levels.size() / ALGEBRAIC_COLUMNS); }
     //: "" or the ParameterError's text of a scene value that this built-in structure cannot take.
     std::string fixed_problem(const Scene& scene) const;
@@ -266,8 +274,12 @@ struct Topology {
 };
 
 //: The topology of `scene`: its nx x ny grid, or the cloth `mesh`, with its `pins` (std::invalid_argument
-//: for a scene_problem of the mesh or the pins).
+//: for a scene_problem of the mesh or the pins).  A mesh that forms the grid (ClothMesh::forms_grid) wants
+//: a `scene` with its nx, ny, width and length (ClothMesh::on_grid).
 Topology build_topology(const Scene& scene, const ClothMesh* mesh = nullptr, const Pins* pins = nullptr);
+
+//: The nx x ny grid's topology of `scene`, pinned by pinned_edge and `pins` at grid_start.
+Topology grid_topology(const Scene& scene, const Pins* pins);
 
 //: scene_problem and build_topology of a cloth from a mesh (cloth_mesh.cpp).
 std::string mesh_scene_problem(const Scene& scene, const ClothMesh& mesh, const Pins* pins);
