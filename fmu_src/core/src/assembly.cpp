@@ -93,20 +93,16 @@ void water_forces(const Cloth& cloth, const Physics& phys, Work& work, const dou
     if (blocks_wanted && phys.smooth) add_buoyancy_blocks(cloth, phys, s, h, blocks);
 }
 
-//: forces (blocks_wanted false) or forces_and_blocks of a mesh: its listed springs and face drag summed
-//: in its records (mesh_records.hpp), then added to the rows.
+//: forces (blocks_wanted false) or forces_and_blocks of a mesh: gravity, its listed springs and face drag
+//: summed in its records (mesh_records.hpp) and stored in the rows, then the per-particle water forces.
 void mesh_forces(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
                  const double* water, double h, double slack_slope, bool blocks_wanted) {
     const Index n = cloth.n;
     start_with_gravity(cloth, water, work.force);
-    if (blocks_wanted) {
-        fill_zero(work.diagonal_blocks, 6 * n);
-        fill_zero(work.blocks, 6 * n);
-    }
     update_saturation(cloth, phys, water, work.saturation);
     const double* s = work.submerged;
     const bool wet = submerged(phys, n, pos + 2 * n, work.submerged) > 0.0 || !phys.skip_idle;
-    const MeshRecords records = fill_records(n, work.cells, blocks_wanted, pos, vel, work.saturation, s);
+    const MeshRecords records = fill_records(n, work.cells, blocks_wanted, pos, vel, work.saturation, s, work.force);
     if (blocks_wanted) {
         listed_spring_forces_and_blocks(cloth, phys, records, h, slack_slope, work);
     } else {
@@ -114,22 +110,20 @@ void mesh_forces(const Cloth& cloth, const Physics& phys, Work& work, const doub
     }
     Fluid fluids[MESH_FLUIDS];
     Index fluid_count = 0;
-    if (wet) {
-        buoyancy(n, s, cloth.volume, phys.water_density, GRAVITY, work.force);
-        if (phys.stokes) {
-            stokes_drag(n, s, cloth.stokes_coefficient, phys.current_x, phys.current_y, vel, work.force);
-            if (blocks_wanted)
-                stokes_blocks_loop(n, h, cloth.stokes_coefficient, s, work.blocks, work.blocks + n, work.blocks + 2 * n);
-        } else {
-            fluids[fluid_count++] = water_fluid(phys);
-        }
-        if (blocks_wanted && phys.smooth) add_buoyancy_blocks(cloth, phys, s, h, work.blocks);
-    }
+    if (wet && !phys.stokes) fluids[fluid_count++] = water_fluid(phys);
     if (phys.air_density > 0.0) fluids[fluid_count++] = air_fluid(phys);  // docs/model.md section 4.4
     if (fluid_count > 0)
         mesh_face_drag(cloth.triangle_count, cloth.triangles, cloth.corner_shares, fluids, fluid_count, h, records,
                        phys.skip_idle);
-    add_sums(n, records, work.force, work.diagonal_blocks, work.blocks);
+    store_sums(n, records, work.force, work.diagonal_blocks, work.blocks);
+    if (!wet) return;
+    buoyancy(n, s, cloth.volume, phys.water_density, GRAVITY, work.force);
+    if (phys.stokes) {
+        stokes_drag(n, s, cloth.stokes_coefficient, phys.current_x, phys.current_y, vel, work.force);
+        if (blocks_wanted)
+            stokes_blocks_loop(n, h, cloth.stokes_coefficient, s, work.blocks, work.blocks + n, work.blocks + 2 * n);
+    }
+    if (blocks_wanted && phys.smooth) add_buoyancy_blocks(cloth, phys, s, h, work.blocks);
 }
 
 }  // namespace

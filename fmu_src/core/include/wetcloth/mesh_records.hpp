@@ -2,8 +2,8 @@
 // corners by index, and from the (3, n) rows each end cost up to 16 scattered cache lines (its x, v,
 // saturation and submerged fraction read, its force and blocks added to).  In records of each
 // particle's slots side by side it costs one line read and two written.  The records live in Work::cells
-// (a mesh's cells_length); every force evaluation fills the state, sums into the sums and adds them to
-// the rows (assembly.cpp).
+// (a mesh's cells_length); every force evaluation fills the state and starts the sums from gravity, sums
+// the springs and the face drag into them and stores them in the rows (assembly.cpp).
 #pragma once
 #include "wetcloth/core.hpp"
 
@@ -25,12 +25,13 @@ struct MeshRecords {
 };
 
 //: The records in a mesh's Work::cells for n particles (stride: blocks_wanted ? SUM_SLOTS : SUM_FORCE_SLOTS),
-//: the state filled from pos, vel (3, n) and saturation, submerged (n), the sums zeroed.
+//: the state filled from pos, vel (3, n) and saturation, submerged (n), the sums' force from force (3, n)
+//: and their blocks zeroed.
 MeshRecords fill_records(Index n, double* cells, bool blocks_wanted, const double* pos, const double* vel,
-                         const double* saturation, const double* submerged);
+                         const double* saturation, const double* submerged, const double* force);
 
-//: The records' sums as fill_records left them (filled since): add them to force (3, n) and, with the
-//: blocks, to diagonal_blocks and blocks (6, n).
-void add_sums(Index n, const MeshRecords& records, double* force, double* diagonal_blocks, double* blocks);
+//: The records' sums (filled since fill_records) into force (3, n) and, with the blocks, diagonal_blocks
+//: and blocks (6, n).
+void store_sums(Index n, const MeshRecords& records, double* force, double* diagonal_blocks, double* blocks);
 
 }  // namespace wc
