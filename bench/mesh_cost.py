@@ -88,6 +88,34 @@ def square_file(path: Path, scene: wetcloth.Scene, jitter: float) -> Path:
     return path
 
 
+CASES = {  # scene settings of each case (the hanging one adds PIN)
+    "landing on water": dict(initial_tilt=0.0, initial_height=0.05),
+    "hanging in air": dict(initial_tilt=0.0, initial_height=2.0, water_level=-10.0, floor_level=-20.0),
+}
+PIN = "box:-9,0.6,-9,9,9,9"  # the hanging case's pins: every particle at y >= 0.6 m
+
+
+def shapes_of(vertices: int, shuffle: bool, square_meshes: bool) -> dict:
+    """Scene settings of each shape: the grid, its quad mesh, the square's triangle meshes (if
+    ``square_meshes``) and the disc of about ``vertices`` vertices (files in a new temporary folder)."""
+    rings = round(math.sqrt(vertices / math.pi))
+    points, triangles = make_meshes.round_cloth(radius=make_meshes.RADIUS, rings=rings)
+    side = round(math.sqrt(len(points)))
+    size = math.sqrt(math.pi) * make_meshes.RADIUS  # the square of the disc's area
+    path = Path(tempfile.mkdtemp()) / "disc.ply"
+    make_meshes.write(path, points, triangles)
+    grid = dict(nx=side, ny=side, width=size, length=size)
+    quads = dict(cloth_mesh=str(rectangle_file(path.with_name("square.ply"), wetcloth.load_scene(**grid), shuffle)),
+                 place_mesh="on")
+    shapes = {"grid": grid, "quads": quads}
+    if square_meshes:
+        square = wetcloth.load_scene(**grid)
+        for kind, jitter in (("split", 0.0), ("jittered", 0.25)):
+            shapes[kind] = dict(cloth_mesh=str(square_file(path.with_name(f"{kind}.ply"), square, jitter)), place_mesh="on")
+    shapes["mesh"] = dict(cloth_mesh=str(path), place_mesh="on")
+    return shapes
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--vertices", type=int, default=10000)
@@ -97,31 +125,15 @@ def main() -> None:
     parser.add_argument("--self-collision", choices=("on", "off"), default="on",
                         help="off: without its cost (the disc hanging rebuilds its candidate list at most steps)")
     args = parser.parse_args()
+    shapes = shapes_of(args.vertices, args.shuffle, args.square_meshes)
+    disc = wetcloth.Simulation(wetcloth.load_scene(**shapes["mesh"])).model.topology.n
+    side = shapes["grid"]["nx"]
     rings = round(math.sqrt(args.vertices / math.pi))
-    points, triangles = make_meshes.round_cloth(radius=make_meshes.RADIUS, rings=rings)
-    side = round(math.sqrt(len(points)))
-    size = math.sqrt(math.pi) * make_meshes.RADIUS  # the square of the disc's area
-    path = Path(tempfile.mkdtemp()) / "disc.ply"
-    make_meshes.write(path, points, triangles)
-    grid = dict(nx=side, ny=side, width=size, length=size)
-    mesh = dict(cloth_mesh=str(path), place_mesh="on")
-    quads = dict(cloth_mesh=str(rectangle_file(path.with_name("square.ply"), wetcloth.load_scene(**grid), args.shuffle)),
-                 place_mesh="on")
-    shapes = {"grid": grid, "quads": quads}
-    if args.square_meshes:
-        square = wetcloth.load_scene(**grid)
-        for kind, jitter in (("split", 0.0), ("jittered", 0.25)):
-            shapes[kind] = dict(cloth_mesh=str(square_file(path.with_name(f"{kind}.ply"), square, jitter)), place_mesh="on")
-    shapes["mesh"] = mesh
-    cases = {
-        "landing on water": dict(initial_tilt=0.0, initial_height=0.05),
-        "hanging in air": dict(initial_tilt=0.0, initial_height=2.0, water_level=-10.0, floor_level=-20.0),
-    }
-    print(f"disc of {len(points)} vertices ({rings} rings) against a {side} x {side} grid, {args.duration} s")
-    for label, base in cases.items():
+    print(f"disc of {disc} vertices ({rings} rings) against a {side} x {side} grid, {args.duration} s")
+    for label, base in CASES.items():
         results = {}
         for kind, shape in shapes.items():
-            extra = dict(pinned_vertices="box:-9,0.6,-9,9,9,9") if label.startswith("hanging") else {}
+            extra = dict(pinned_vertices=PIN) if label.startswith("hanging") else {}
             extra["self_collision"] = args.self_collision
             seconds, sim = run(wetcloth.load_scene(**base, **shape, **extra), args.duration)
             n = sim.model.topology.n
@@ -132,7 +144,6 @@ def main() -> None:
                   f"{sim.rejected_steps:4d}  Newton {c['newton_iterations']:5d}  CG {c['cg_iterations']:6d}{lists}", flush=True)
         ratios = ", ".join(f"{kind} / grid {results[kind] / results['grid']:.2f}x" for kind in results if kind != "grid")
         print(f"  {label:<17} per vertex: {ratios}", flush=True)
-
 
 if __name__ == "__main__":
     main()

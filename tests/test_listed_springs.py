@@ -5,6 +5,8 @@ a grid's springs): the mesh path computes the same forces, Jacobians and motion.
 Sums over a particle's springs come in another order on the two paths, so forces agree to round-off:
 ROUND_OFF relative to the largest force (a few ulp of each of the ~16 terms summed per particle)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from support.listed import listed_from_grid
@@ -72,6 +74,43 @@ def test_drag_over_a_triangle_list_is_the_grids():
         model.forces_and_blocks(pos, vel, water, 1e-2)
     np.testing.assert_allclose(listed.work.blocks, grid.work.blocks, rtol=0,
                                atol=ROUND_OFF * np.abs(grid.work.blocks).max())
+
+
+def test_stokes_drag_and_smooth_buoyancy_on_a_triangle_list_are_the_grids():
+    """The per-particle water forces (Stokes drag, smooth buoyancy and its position Jacobian) come after a
+    mesh's sums of springs and face drag: with them, in water and air, every particle's force and blocks
+    are the grid's to round-off."""
+    scene = hanging(water_level=0.0, initial_height=0.0, air_density=1.2, wind_x=3.0, current_x=0.2,
+                    drag_model="stokes", buoyancy_model="smooth")
+    grid = Model(scene)
+    listed = Model(scene, topology=listed_from_grid(grid.topology))
+    pos, vel, water = random_state(grid.topology, seed=4)
+    expected = grid.forces(pos, vel, water).copy()
+    assert 0.0 < grid.submerged.mean() < 1.0
+    np.testing.assert_allclose(listed.forces(pos, vel, water), expected, rtol=0, atol=ROUND_OFF * np.abs(expected).max())
+    for model in (grid, listed):
+        model.forces_and_blocks(pos, vel, water, 1e-2)
+    for name in ("force", "diagonal_blocks", "blocks"):
+        a, b = getattr(grid.work, name), getattr(listed.work, name)
+        np.testing.assert_allclose(b, a, rtol=0, atol=ROUND_OFF * np.abs(a).max(), err_msg=name)
+
+
+def test_a_meshs_triangle_order_changes_its_forces_by_round_off_only():
+    """The core takes a mesh's triangles in its own order (topology.cloth_order): the same triangles listed
+    in another order give the same forces and drag blocks to round-off, and the topology (what exports
+    see) keeps the order it was given."""
+    scene = hanging(water_level=0.0, initial_height=0.0, air_density=1.2, wind_x=3.0)
+    topo = listed_from_grid(build_topology(scene))
+    shuffled = dataclasses.replace(topo, triangles=topo.triangles[np.random.default_rng(5).permutation(len(topo.triangles))])
+    models = [Model(scene, topology=t) for t in (topo, shuffled)]
+    assert not np.array_equal(shuffled.triangles, topo.triangles)
+    np.testing.assert_array_equal(models[1].topology.triangles, shuffled.triangles)  # what exports see
+    pos, vel, water = random_state(topo, seed=6)
+    for model in models:
+        model.forces_and_blocks(pos, vel, water, 1e-2)
+    for name in ("force", "blocks"):
+        a, b = getattr(models[0].work, name), getattr(models[1].work, name)
+        np.testing.assert_allclose(b, a, rtol=0, atol=ROUND_OFF * np.abs(a).max(), err_msg=name)
 
 
 def test_wicking_over_listed_links_moves_the_same_water():

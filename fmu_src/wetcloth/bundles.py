@@ -43,8 +43,8 @@ Physics = namedtuple("Physics", "projected wet_factor water_level water_density 
 #: particle; ``saturation`` (n); ``blocks`` (6, n) per-particle symmetric 3x3 blocks (xx, yy, zz,
 #: xy, xz, yz) of the system matrix; ``diagonal_blocks`` (6, n) the springs' part of its diagonal
 #: blocks; ``direction`` (F, 3, n), ``along``, ``across`` (F, n) each spring's block; ``buf`` (4, n);
-#: ``cells`` (2, 9, n + nx + 1) a grid's face-drag rows; ``wick_buffer`` (6, n);
-#: ``pair_direction`` (3, S), ``pair_along``, ``pair_across`` (S) the listed springs' blocks.
+#: ``cells`` (2, 9, n + nx + 1) a grid's face-drag rows (a mesh's: its particles' records,
+#: mesh_records.hpp); ``wick_buffer`` (6, n); ``pair_direction`` (3, S), ``pair_along``, ``pair_across`` (S) the listed springs' blocks.
 Work = namedtuple("Work", "force submerged saturation blocks diagonal_blocks direction along across buf cells "
                           "wick_buffer pair_direction pair_along pair_across")
 #: Integrator and controller settings: ``integrator`` (code: ``wetcloth.integrators.INTEGRATORS``),
@@ -70,10 +70,10 @@ Buffers = namedtuple("Buffers", "pos vel water trial_pos trial_vel trial_water p
 Solver = namedtuple("Solver", "mass rhs dv r z p ap hat_pos hat_vel predicted step_acceleration counters")
 
 
-def make_work(n: int, families: int, grid_x: int, pairs: int = 0, triangles: int = 0) -> Work:
+def make_work(n: int, families: int, grid_x: int, pairs: int = 0) -> Work:
     """Zeroed scratch for n particles, ``families`` spring families and rows of ``grid_x`` particles (0:
-    a mesh, with ``pairs`` listed springs and ``triangles`` triangles)."""
-    cells = n + grid_x + 1 if grid_x > 0 else max(n + 1, triangles)  # the core's cells_length
+    a mesh, with ``pairs`` listed springs)."""
+    cells = n + grid_x + 1 if grid_x > 0 else (32 * (n + 1) + 17) // 18  # the core's cells_length
     return Work(force=np.zeros((3, n)), submerged=np.zeros(n), saturation=np.zeros(n), blocks=np.zeros((6, n)),
                 diagonal_blocks=np.zeros((6, n)), direction=np.zeros((families, 3, n)),
                 along=np.zeros((families, n)), across=np.zeros((families, n)),

@@ -17,7 +17,7 @@ from wetcloth.bundles import Cloth, Physics, make_work
 from wetcloth.collider_meshes import meshes_of
 from wetcloth.scene import Scene, collider_key_rows, grip_key_rows
 from wetcloth.state import initial_state
-from wetcloth.topology import STRETCH, Topology, build_topology, corner_shares
+from wetcloth.topology import STRETCH, Topology, build_topology, cloth_order, corner_shares
 
 __all__ = ["GRAVITY", "Model"]
 
@@ -30,8 +30,9 @@ class Model:
         self.skip_idle_work = skip_idle_work  # False: run the water kernels on dry cloth too (benchmarks)
         self.free = (~topo.pinned).astype(np.float64)  # 1 for moving particles, 0 for pinned
         self.grid_x, self.grid_y = (0, 0) if topo.listed else (topo.nx, topo.ny)
-        self.corner_shares = corner_shares(topo.rest_pos, topo.triangles)
-        self.work = make_work(topo.n, len(topo.spring_offset), self.grid_x, len(topo.pair_rest), len(topo.triangles))
+        self.cloth_order = cloth_order(topo.triangles) if topo.listed else np.arange(len(topo.triangles))
+        self.corner_shares = corner_shares(topo.rest_pos, topo.triangles)[self.cloth_order]
+        self.work = make_work(topo.n, len(topo.spring_offset), self.grid_x, len(topo.pair_rest))
         # Where the grip's zero displacement holds the particles (m, (3, n)): their start positions (fixed
         # parameters only); empty when nothing is pinned, so that the grip has nothing to move.
         self.grip_origin = initial_state(scene, topo).pos if topo.pinned.any() else np.empty((3, 0))
@@ -62,7 +63,8 @@ class Model:
             pair_stiffness=topo.pair_stiffness, pair_damping=topo.pair_damping,
             pair_tension_count=topo.pair_tension_count,
             wick_pairs=self.wick_pairs, wick_pair_conductance=self.wick_pair_conductance,
-            triangles=np.ascontiguousarray(topo.triangles, dtype=np.int64), corner_shares=self.corner_shares,
+            triangles=np.ascontiguousarray(topo.triangles[self.cloth_order], dtype=np.int64),
+            corner_shares=self.corner_shares,
         )
         colliders, meshes = meshes_of(scene.colliders)
         wet = scene.wet_stiffness_factor != 0.0 and scene.absorption_capacity > 0.0

@@ -466,6 +466,14 @@ def _attribute(name: str, mesh: MeshFile | None) -> np.ndarray:
     return values[:, 0] != 0
 
 
+def cloth_order(triangles: np.ndarray) -> np.ndarray:
+    """The order (m,) in which the core takes a mesh's ``triangles`` (m, 3) for its face drag and frames: by
+    their least vertex, stably, so that neighbouring triangles meet neighbouring particles' records in the
+    cache (a file's order, Delaunay's for one, may jump across the mesh).  The native unit's own sort
+    (model.cpp) gives the same order."""
+    return np.argsort(triangles.min(axis=1), kind="stable")
+
+
 def corner_shares(rest_pos: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """Each corner's share (m, 3) of its triangle, by the rest sheet's mixed Voronoi areas (Meyer et al.
     2003): in a triangle without an obtuse angle the part of it nearer that corner than the others; in an

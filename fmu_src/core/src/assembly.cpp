@@ -5,6 +5,8 @@
 // the implicit schemes, to the per-particle blocks or to the per-spring blocks that the system matrix uses.
 #include "wetcloth/assembly.hpp"
 
+#include "wetcloth/listed_springs.hpp"
+#include "wetcloth/mesh_records.hpp"
 #include "wetcloth/springs.hpp"
 #include "wetcloth/water.hpp"
 
@@ -50,18 +52,25 @@ void fill_zero(double* a, Index count) {
     for (Index i = 0; i < count; ++i) a[i] = 0.0;
 }
 
-//: The face drag of `fluid` into work.force (on a grid's cells or a mesh's triangles) and, with
-//: blocks_wanted, h times its velocity Jacobian into work.blocks.
+//: The face drag of `fluid` on a grid's cells into work.force and, with blocks_wanted, h times its
+//: velocity Jacobian into work.blocks.
 void add_face_drag(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
                    const Fluid& fluid, double h, bool blocks_wanted) {
-    if (is_mesh(cloth)) {
-        mesh_face_drag(cloth.n, cloth.triangle_count, cloth.triangles, cloth.corner_shares, pos, vel, work.submerged,
-                       fluid, h, work.force, blocks_wanted ? work.blocks : nullptr, phys.skip_idle);
-    } else if (blocks_wanted) {
+    if (blocks_wanted) {
         face_drag_and_blocks(cloth.grid_x, cloth.grid_y, pos, vel, work.submerged, fluid, h, work.force, work.blocks,
                              work.cells, phys.skip_idle);
     } else {
         face_drag(cloth.grid_x, cloth.grid_y, pos, vel, work.submerged, fluid, work.force, work.cells, phys.skip_idle);
+    }
+}
+
+//: Smooth buoyancy's position Jacobian times h^2 into blocks: dF_z/dz = -rho g V / thickness inside the
+//: surface slab (0 < s < 1).
+void add_buoyancy_blocks(const Cloth& cloth, const Physics& phys, const double* s, double h, double* blocks) {
+    const Index n = cloth.n;
+    const double scale = h * h * phys.water_density * GRAVITY / phys.thickness;
+    for (Index i = 0; i < n; ++i) {
+        if (0.0 < s[i] && s[i] < 1.0) blocks[2 * n + i] += scale * cloth.volume[i];
     }
 }
 
@@ -81,13 +90,40 @@ void water_forces(const Cloth& cloth, const Physics& phys, Work& work, const dou
     } else {
         add_face_drag(cloth, phys, work, pos, vel, water_fluid(phys), h, blocks_wanted);
     }
-    if (blocks_wanted && phys.smooth) {
-        // dF_z/dz = -rho g V / thickness inside the surface slab (0 < s < 1).
-        const double scale = h * h * phys.water_density * GRAVITY / phys.thickness;
-        for (Index i = 0; i < n; ++i) {
-            if (0.0 < s[i] && s[i] < 1.0) blocks[2 * n + i] += scale * cloth.volume[i];
-        }
+    if (blocks_wanted && phys.smooth) add_buoyancy_blocks(cloth, phys, s, h, blocks);
+}
+
+//: forces (blocks_wanted false) or forces_and_blocks of a mesh: gravity, its listed springs and face drag
+//: summed in its records (mesh_records.hpp) and stored in the rows, then the per-particle water forces.
+void mesh_forces(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
+                 const double* water, double h, double slack_slope, bool blocks_wanted) {
+    const Index n = cloth.n;
+    start_with_gravity(cloth, water, work.force);
+    update_saturation(cloth, phys, water, work.saturation);
+    const double* s = work.submerged;
+    const bool wet = submerged(phys, n, pos + 2 * n, work.submerged) > 0.0 || !phys.skip_idle;
+    const MeshRecords records = fill_records(n, work.cells, blocks_wanted, pos, vel, work.saturation, s, work.force);
+    if (blocks_wanted) {
+        listed_spring_forces_and_blocks(cloth, phys, records, h, slack_slope, work);
+    } else {
+        listed_spring_forces(cloth, phys, records);
     }
+    Fluid fluids[MESH_FLUIDS];
+    Index fluid_count = 0;
+    if (wet && !phys.stokes) fluids[fluid_count++] = water_fluid(phys);
+    if (phys.air_density > 0.0) fluids[fluid_count++] = air_fluid(phys);  // docs/model.md section 4.4
+    if (fluid_count > 0)
+        mesh_face_drag(cloth.triangle_count, cloth.triangles, cloth.corner_shares, fluids, fluid_count, h, records,
+                       phys.skip_idle);
+    store_sums(n, records, work.force, work.diagonal_blocks, work.blocks);
+    if (!wet) return;
+    buoyancy(n, s, cloth.volume, phys.water_density, GRAVITY, work.force);
+    if (phys.stokes) {
+        stokes_drag(n, s, cloth.stokes_coefficient, phys.current_x, phys.current_y, vel, work.force);
+        if (blocks_wanted)
+            stokes_blocks_loop(n, h, cloth.stokes_coefficient, s, work.blocks, work.blocks + n, work.blocks + 2 * n);
+    }
+    if (blocks_wanted && phys.smooth) add_buoyancy_blocks(cloth, phys, s, h, work.blocks);
 }
 
 }  // namespace
@@ -98,6 +134,7 @@ double submerged(const Physics& phys, Index n, const double* z, double* out) {
 
 void forces(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
             const double* water) {
+    if (is_mesh(cloth)) return mesh_forces(cloth, phys, work, pos, vel, water, 0.0, 0.0, false);
     const Index n = cloth.n;
     start_with_gravity(cloth, water, work.force);
     if (cloth.families > 0 || cloth.pair_count > 0) {
@@ -113,6 +150,7 @@ void forces(const Cloth& cloth, const Physics& phys, Work& work, const double* p
 
 void forces_and_blocks(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
                        const double* water, double h, double slack_slope) {
+    if (is_mesh(cloth)) return mesh_forces(cloth, phys, work, pos, vel, water, h, slack_slope, true);
     const Index n = cloth.n;
     start_with_gravity(cloth, water, work.force);
     fill_zero(work.diagonal_blocks, 6 * n);

@@ -1,6 +1,7 @@
 // A mesh's listed springs (wetcloth/listed_springs.hpp): the springs in chunks, each gathering its
-// springs' ends' positions and velocities, running the law over them in one loop that vectorises,
-// and scattering forces and blocks back to the ends; the product gathers and scatters spring by spring.
+// springs' ends' positions and velocities from their records, running the law over them in one loop
+// that vectorises, and scattering forces and blocks to the ends' sums; the product gathers and scatters
+// spring by spring.
 #include "wetcloth/listed_springs.hpp"
 
 #include "wetcloth/spring_law.hpp"
@@ -40,20 +41,20 @@ struct Chunk {
     double block[6][CHUNK];
 };
 
-//: Gather springs first .. first + count into the chunk's input rows.
-void gather(const Cloth& cloth, const double* saturation, const double* pos, const double* vel, Index first,
-            Index count, Chunk& c) {
-    const Index n = cloth.n;
+//: Gather springs first .. first + count into the chunk's input rows from the ends' state records.
+void gather(const Cloth& cloth, const double* state, Index first, Index count, Chunk& c) {
     for (Index k = 0; k < count; ++k) {
         const Ends e = ends(cloth, first + k);
+        const double* a = state + STATE_SLOTS * e.i;
+        const double* b = state + STATE_SLOTS * e.j;
         for (Index r = 0; r < 3; ++r) {
-            c.x[r][k] = pos[r * n + e.i];
-            c.x[3 + r][k] = pos[r * n + e.j];
-            c.v[r][k] = vel[r * n + e.i];
-            c.v[3 + r][k] = vel[r * n + e.j];
+            c.x[r][k] = a[STATE_X + r];
+            c.x[3 + r][k] = b[STATE_X + r];
+            c.v[r][k] = a[STATE_V + r];
+            c.v[3 + r][k] = b[STATE_V + r];
         }
-        c.s[0][k] = saturation[e.i];
-        c.s[1][k] = saturation[e.j];
+        c.s[0][k] = a[STATE_SATURATION];
+        c.s[1][k] = b[STATE_SATURATION];
     }
 }
 
@@ -69,32 +70,37 @@ inline Geometry chunk_geometry(const Chunk& c, Index k, double kf, double wet_fa
                            wet_factor);
 }
 
-//: Add the chunk's forces of its count springs, from spring first on, to their ends, less the thesis
-//: damping c (v_i - v_j) unless the damping is projected.
-void scatter_forces(const Cloth& cloth, const Physics& phys, const double* vel, const Chunk& c, Index first,
-                    Index count, double* force) {
-    const Index n = cloth.n;
+//: Add the chunk's forces of its count springs, from spring first on, to their ends' sums, less the
+//: thesis damping c (v_i - v_j) unless the damping is projected.
+void scatter_forces(const Cloth& cloth, const Physics& phys, const Chunk& c, Index first, Index count,
+                    const MeshRecords& records) {
     for (Index k = 0; k < count; ++k) {
         const Ends e = ends(cloth, first + k);
         double fx = c.force[0][k], fy = c.force[1][k], fz = c.force[2][k];
         if (!phys.projected) {
             const double cf = cloth.pair_damping[first + k];
-            fx -= cf * (vel[e.i] - vel[e.j]);
-            fy -= cf * (vel[n + e.i] - vel[n + e.j]);
-            fz -= cf * (vel[2 * n + e.i] - vel[2 * n + e.j]);
+            fx -= cf * (c.v[0][k] - c.v[3][k]);
+            fy -= cf * (c.v[1][k] - c.v[4][k]);
+            fz -= cf * (c.v[2][k] - c.v[5][k]);
         }
-        add_to_ends(n, e, fx, fy, fz, force);
+        double* a = records.sums + records.stride * e.i + SUM_FORCE;
+        double* b = records.sums + records.stride * e.j + SUM_FORCE;
+        a[0] += fx;
+        a[1] += fy;
+        a[2] += fz;
+        b[0] -= fx;
+        b[1] -= fy;
+        b[2] -= fz;
     }
 }
 
 template <Law L>
-void forces_of(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos,
-               const double* vel, Index first, Index last, double* force) {
+void forces_of(const Cloth& cloth, const Physics& phys, const MeshRecords& records, Index first, Index last) {
     const double damp = phys.projected ? 1.0 : 0.0, wet_factor = phys.wet_factor;
     Chunk c;
     for (Index start = first; start < last; start += CHUNK) {
         const Index count = last - start < CHUNK ? last - start : CHUNK;
-        gather(cloth, saturation, pos, vel, start, count, c);
+        gather(cloth, records.state, start, count, c);
         const double* __restrict rest = cloth.pair_rest + start;
         const double* __restrict damping = cloth.pair_damping + start;
         const double* __restrict stiffness = cloth.pair_stiffness + start;
@@ -105,7 +111,7 @@ void forces_of(const Cloth& cloth, const Physics& phys, const double* saturation
             const double l0 = rest[k];
             chunk_force(c, k, g, tension<L>(g, l0, TENSION_ROUNDING * l0, damp, damping[k], rate));
         }
-        scatter_forces(cloth, phys, vel, c, start, count, force);
+        scatter_forces(cloth, phys, c, start, count, records);
     }
 }
 
@@ -141,24 +147,25 @@ void coefficients_loop(Index count, double wet_factor, bool projected, double h,
 }
 
 template <Law L>
-void blocks_of(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos, const double* vel,
-               double h, double slack_slope, Index first, Index last, Work& work) {
-    const Index n = cloth.n, all = cloth.pair_count;
-    double* d = work.diagonal_blocks;
+void blocks_of(const Cloth& cloth, const Physics& phys, const MeshRecords& records, double h, double slack_slope,
+               Index first, Index last, Work& work) {
+    const Index all = cloth.pair_count;
     double* u = work.pair_direction;
     Chunk c;
     for (Index start = first; start < last; start += CHUNK) {
         const Index count = last - start < CHUNK ? last - start : CHUNK;
-        gather(cloth, saturation, pos, vel, start, count, c);
+        gather(cloth, records.state, start, count, c);
         coefficients_loop<L>(count, phys.wet_factor, phys.projected, h, slack_slope, cloth.pair_rest + start,
                              cloth.pair_damping + start, cloth.pair_stiffness + start, &c, u + start, u + all + start,
                              u + 2 * all + start, work.pair_along + start, work.pair_across + start);
-        scatter_forces(cloth, phys, vel, c, start, count, work.force);
+        scatter_forces(cloth, phys, c, start, count, records);
         for (Index k = 0; k < count; ++k) {
             const Ends e = ends(cloth, start + k);
+            double* a = records.sums + records.stride * e.i + SUM_DIAGONAL;
+            double* b = records.sums + records.stride * e.j + SUM_DIAGONAL;
             for (Index s = 0; s < 6; ++s) {
-                d[s * n + e.i] += c.block[s][k];
-                d[s * n + e.j] += c.block[s][k];
+                a[s] += c.block[s][k];
+                b[s] += c.block[s][k];
             }
         }
     }
@@ -166,17 +173,15 @@ void blocks_of(const Cloth& cloth, const Physics& phys, const double* saturation
 
 }  // namespace
 
-void listed_spring_forces(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos,
-                          const double* vel, double* force) {
-    forces_of<Law::CLAMPED>(cloth, phys, saturation, pos, vel, 0, cloth.pair_tension_count, force);
-    forces_of<Law::BOTH_WAYS>(cloth, phys, saturation, pos, vel, cloth.pair_tension_count, cloth.pair_count, force);
+void listed_spring_forces(const Cloth& cloth, const Physics& phys, const MeshRecords& records) {
+    forces_of<Law::CLAMPED>(cloth, phys, records, 0, cloth.pair_tension_count);
+    forces_of<Law::BOTH_WAYS>(cloth, phys, records, cloth.pair_tension_count, cloth.pair_count);
 }
 
-void listed_spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const double* saturation,
-                                     const double* pos, const double* vel, double h, double slack_slope, Work& work) {
-    blocks_of<Law::CLAMPED>(cloth, phys, saturation, pos, vel, h, slack_slope, 0, cloth.pair_tension_count, work);
-    blocks_of<Law::BOTH_WAYS>(cloth, phys, saturation, pos, vel, h, slack_slope, cloth.pair_tension_count,
-                              cloth.pair_count, work);
+void listed_spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const MeshRecords& records, double h,
+                                     double slack_slope, Work& work) {
+    blocks_of<Law::CLAMPED>(cloth, phys, records, h, slack_slope, 0, cloth.pair_tension_count, work);
+    blocks_of<Law::BOTH_WAYS>(cloth, phys, records, h, slack_slope, cloth.pair_tension_count, cloth.pair_count, work);
 }
 
 void listed_spring_matvec(const Cloth& cloth, const Work& work, const double* p, double* out) {

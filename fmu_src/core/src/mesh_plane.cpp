@@ -101,10 +101,13 @@ Index factor_component(Plane& plane, Index c) {
     return factor_coarsest(plane, c);
 }
 
-//: The V-cycle's loops over a level's rows do C components side by side (2: t1 and t2; 3: and the
-//: normal): one pass over the pattern for all, and independent chains in each row's sums.
+//: The V-cycle's loops over a level's rows do C components side by side (2: t1 and t2, whose systems
+//: at the rest stiffness are one (mesh_factor), so that their loops read component 0's matrix; 3: and the
+//: normal, each its own): one pass over the pattern for all, and independent chains in each row's sums.
 template <Index C>
 struct Rows {
+    //: The system component c's loops read (component 0's for both in-plane components when C is 2).
+    static constexpr Index system(Index c) { return C == NORMAL ? 0 : c; }
     const Index* start;   // the level's rows in a_start
     const Index* column;  // a_column
     const Index* diagonal;
@@ -118,8 +121,8 @@ struct Rows {
           diagonal(h.diagonal + level_of(h, level, VECTOR)), n(level_of(h, level, SIZE)) {
         const Index first = level_of(h, level, VECTOR);
         for (Index c = 0; c < C; ++c) {
-            a[c] = h.a_value + c * h.entries;
-            inverse[c] = h.inverse_diagonal + c * h.vectors + first;
+            a[c] = h.a_value + system(c) * h.entries;
+            inverse[c] = h.inverse_diagonal + system(c) * h.vectors + first;
             x[c] = h.x + c * h.vectors + first;
             b[c] = h.b + c * h.vectors + first;
         }
@@ -144,13 +147,13 @@ void down(Algebraic& h, Index level) {
         double s[C];
         for (Index c = 0; c < C; ++c) s[c] = m.b[c][i];
         for (Index e = m.start[i]; e < m.diagonal[i]; ++e)
-            for (Index c = 0; c < C; ++c) s[c] -= m.a[c][e] * m.x[c][m.column[e]];
-        for (Index c = 0; c < C; ++c) m.x[c][i] = s[c] * m.inverse[c][i];
+            for (Index c = 0; c < C; ++c) s[c] -= m.a[m.system(c)][e] * m.x[c][m.column[e]];
+        for (Index c = 0; c < C; ++c) m.x[c][i] = s[c] * m.inverse[m.system(c)][i];
     }
     for (Index i = 0; i < m.n; ++i) {
         double s[C] = {};
         for (Index e = m.diagonal[i] + 1; e < m.start[i + 1]; ++e)
-            for (Index c = 0; c < C; ++c) s[c] -= m.a[c][e] * m.x[c][m.column[e]];
+            for (Index c = 0; c < C; ++c) s[c] -= m.a[m.system(c)][e] * m.x[c][m.column[e]];
         for (Index u = p_rows[i]; u < p_rows[i + 1]; ++u)
             for (Index c = 0; c < C; ++c) coarse_b[c][h.p_column[u]] += h.p_value[u] * s[c];
     }
@@ -172,8 +175,8 @@ void up(Algebraic& h, Index level) {
         double s[C];
         for (Index c = 0; c < C; ++c) s[c] = m.b[c][i];
         for (Index e = m.start[i]; e < m.start[i + 1]; ++e)
-            for (Index c = 0; c < C; ++c) s[c] -= m.a[c][e] * m.x[c][m.column[e]];
-        for (Index c = 0; c < C; ++c) m.x[c][i] += s[c] * m.inverse[c][i];
+            for (Index c = 0; c < C; ++c) s[c] -= m.a[m.system(c)][e] * m.x[c][m.column[e]];
+        for (Index c = 0; c < C; ++c) m.x[c][i] += s[c] * m.inverse[m.system(c)][i];
     }
 }
 

@@ -510,9 +510,25 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
         cloth.wick_pair_count = static_cast<Index>(links);
         cloth.wick_pairs = wick_pairs_.data();
         cloth.wick_pair_conductance = wick_pair_conductance_.data();
-        cloth.triangle_count = topo_.triangle_count();
-        cloth.triangles = topo_.triangles.data();
-        cloth.corner_shares = mesh->corner_shares.data();
+        const Index m = topo_.triangle_count();  // in topology.cloth_order: by their least vertex, stably
+        std::vector<Index> order(static_cast<std::size_t>(m)), least(static_cast<std::size_t>(m));
+        for (Index t = 0; t < m; ++t) {
+            const Index* v = topo_.triangles.data() + 3 * t;
+            order[t] = t;
+            least[t] = std::min(v[0], std::min(v[1], v[2]));
+        }
+        std::stable_sort(order.begin(), order.end(), [&least](Index a, Index b) { return least[a] < least[b]; });
+        cloth_triangles_.resize(3 * order.size());
+        cloth_shares_.resize(3 * order.size());
+        for (Index t = 0; t < m; ++t) {
+            for (Index c = 0; c < 3; ++c) {
+                cloth_triangles_[3 * t + c] = topo_.triangles[3 * order[t] + c];
+                cloth_shares_[3 * t + c] = mesh->corner_shares[3 * order[t] + c];
+            }
+        }
+        cloth.triangle_count = m;
+        cloth.triangles = cloth_triangles_.data();
+        cloth.corner_shares = cloth_shares_.data();
     }
 
     // Work (bundles.make_work).

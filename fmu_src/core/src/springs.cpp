@@ -234,7 +234,6 @@ void spring_forces(const Cloth& cloth, const Physics& phys, const double* satura
         }
         add_spring_forces(n, off, t, phys.projected, cf, pos, vel, force);
     }
-    if (cloth.pair_count > 0) listed_spring_forces(cloth, phys, saturation, pos, vel, force);
 }
 
 void spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos,
@@ -266,7 +265,6 @@ void spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const dou
         add_spring_forces(n, off, t, phys.projected, cf, pos, vel, work.force);
         add_blocks(n, off, along, across, u, work.diagonal_blocks);
     }
-    if (cloth.pair_count > 0) listed_spring_forces_and_blocks(cloth, phys, saturation, pos, vel, h, slack_slope, work);
 }
 
 // Per family, each spring's product into a scratch row (3, n), then one pass over out's rows adding

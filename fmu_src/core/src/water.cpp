@@ -173,31 +173,29 @@ void drag_forces(Index nx, Index ny, const double* pos, const double* vel, const
     }
 }
 
-//: Whether none of corners a, b, c is in the fluid.
-inline bool outside_all(const double* s, Index a, Index b, Index c, bool above) {
-    return out_of_fluid(s[a], above) && out_of_fluid(s[b], above) && out_of_fluid(s[c], above);
-}
-
 //: Triangles a mesh's face drag takes at a time: their corners gathered into rows (MESH_INPUTS of
 //: them) so that drag_row_loop vectorises over them as over a grid's rows, then scattered back.
 constexpr Index MESH_CHUNK = 128;
 constexpr Index MESH_INPUTS = 21;  // x, y, z, vx, vy, vz, s of each of the three corners
 
 //: Corner rows (MESH_INPUTS, MESH_CHUNK) of the triangles `kept` (count of them), and the drag's rows
-//: (9, MESH_CHUNK) that drag_row_loop fills.
+//: (9, MESH_CHUNK) that drag_row_loop fills for each fluid (at most MESH_FLUIDS).
 struct MeshChunk {
     Index kept[MESH_CHUNK];
     double in[MESH_INPUTS][MESH_CHUNK];
-    double out[9][MESH_CHUNK];
+    double out[MESH_FLUIDS][9][MESH_CHUNK];
 };
 
+//: The drag of fluid f (fluids[f]) on the chunk's count triangles into its rows out[f].
 template <bool Blocks>
-void mesh_chunk_drag(MeshChunk& m, Index count, const Fluid& f, double base, double sign) {
+void mesh_chunk_drag(MeshChunk& m, Index f, Index count, const Fluid& fluid) {
     double(*in)[MESH_CHUNK] = m.in;
-    drag_row_loop<Blocks>(count, f.density, f.c_normal, f.c_tangential, f.c_linear, f.flow_x, f.flow_y, f.flow_z,
-                          base, sign, in[0], in[1], in[2], in[3], in[4], in[5], in[6], in[7], in[8], in[9], in[10],
-                          in[11], in[12], in[13], in[14], in[15], in[16], in[17], in[18], in[19], in[20], m.out[0],
-                          m.out[1], m.out[2], m.out[3], m.out[4], m.out[5], m.out[6], m.out[7], m.out[8]);
+    double(*out)[MESH_CHUNK] = m.out[f];
+    const double base = fluid.above ? 1.0 : 0.0, sign = fluid.above ? -1.0 : 1.0;
+    drag_row_loop<Blocks>(count, fluid.density, fluid.c_normal, fluid.c_tangential, fluid.c_linear, fluid.flow_x,
+                          fluid.flow_y, fluid.flow_z, base, sign, in[0], in[1], in[2], in[3], in[4], in[5], in[6],
+                          in[7], in[8], in[9], in[10], in[11], in[12], in[13], in[14], in[15], in[16], in[17], in[18],
+                          in[19], in[20], out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8]);
 }
 
 }  // namespace
@@ -324,38 +322,52 @@ void face_drag_and_blocks(Index nx, Index ny, const double* pos, const double* v
     }
 }
 
-void mesh_face_drag(Index n, Index triangle_count, const Index* triangles, const double* shares, const double* pos,
-                    const double* vel, const double* s, const Fluid& fluid, double h, double* force, double* blocks,
-                    bool skip_idle) {
-    const double base = fluid.above ? 1.0 : 0.0, sign = fluid.above ? -1.0 : 1.0;
+void mesh_face_drag(Index triangle_count, const Index* triangles, const double* shares, const Fluid* fluids,
+                    Index fluid_count, double h, const MeshRecords& records, bool skip_idle) {
+    const bool blocks = records.stride == SUM_SLOTS;
+    const double* state = records.state;
     MeshChunk m;
     for (Index first = 0; first < triangle_count; first += MESH_CHUNK) {
         const Index stop = first + MESH_CHUNK < triangle_count ? first + MESH_CHUNK : triangle_count;
         Index count = 0;
         for (Index t = first; t < stop; ++t) {
             const Index* v = triangles + 3 * t;
-            if (skip_idle && outside_all(s, v[0], v[1], v[2], fluid.above)) continue;
+            const double* corners[3] = {state + STATE_SLOTS * v[0], state + STATE_SLOTS * v[1],
+                                        state + STATE_SLOTS * v[2]};
+            bool idle = skip_idle;
+            for (Index f = 0; f < fluid_count && idle; ++f) {
+                idle = out_of_fluid(corners[0][STATE_SUBMERGED], fluids[f].above) &&
+                       out_of_fluid(corners[1][STATE_SUBMERGED], fluids[f].above) &&
+                       out_of_fluid(corners[2][STATE_SUBMERGED], fluids[f].above);
+            }
+            if (idle) continue;
             for (Index corner = 0; corner < 3; ++corner) {
                 double* column = &m.in[7 * corner][count];
-                const Index i = v[corner];
-                const double values[7] = {pos[i], pos[n + i], pos[2 * n + i], vel[i], vel[n + i], vel[2 * n + i], s[i]};
-                for (Index r = 0; r < 7; ++r) column[r * MESH_CHUNK] = values[r];
+                const double* c = corners[corner];
+                for (Index r = 0; r < 6; ++r) column[r * MESH_CHUNK] = c[STATE_X + r];
+                column[6 * MESH_CHUNK] = c[STATE_SUBMERGED];
             }
             m.kept[count++] = t;
         }
-        if (blocks != nullptr) {
-            mesh_chunk_drag<true>(m, count, fluid, base, sign);
-        } else {
-            mesh_chunk_drag<false>(m, count, fluid, base, sign);
+        for (Index f = 0; f < fluid_count; ++f) {
+            if (blocks) {
+                mesh_chunk_drag<true>(m, f, count, fluids[f]);
+            } else {
+                mesh_chunk_drag<false>(m, f, count, fluids[f]);
+            }
         }
+        const Index rows = blocks ? 9 : 3;
+        for (Index f = 1; f < fluid_count; ++f)
+            for (Index r = 0; r < rows; ++r)
+                for (Index k = 0; k < count; ++k) m.out[0][r][k] += m.out[f][r][k];
         for (Index k = 0; k < count; ++k) {
             const Index t = m.kept[k];
             for (Index corner = 0; corner < 3; ++corner) {
-                const Index v = triangles[3 * t + corner];
+                double* sum = records.sums + records.stride * triangles[3 * t + corner];
                 const double share = shares[3 * t + corner];
-                for (Index r = 0; r < 3; ++r) force[r * n + v] += share * m.out[r][k];
-                if (blocks != nullptr)
-                    for (Index r = 0; r < 6; ++r) blocks[r * n + v] += (h * share) * m.out[3 + r][k];
+                for (Index r = 0; r < 3; ++r) sum[SUM_FORCE + r] += share * m.out[0][r][k];
+                if (blocks)
+                    for (Index r = 0; r < 6; ++r) sum[SUM_BLOCKS + r] += (h * share) * m.out[0][3 + r][k];
             }
         }
     }

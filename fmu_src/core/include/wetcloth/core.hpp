@@ -59,11 +59,14 @@ struct Cloth {
 //: Whether the cloth is a mesh (listed springs, drag over its triangle list) rather than a grid.
 inline bool is_mesh(const Cloth& cloth) { return cloth.grid_x == 0; }
 
-//: Length of each of the 18 face-drag rows of Work::cells: a grid's n + grid_x + 1 slots (water.hpp),
-//: a mesh's one per triangle (at least n + 1).
+//: Doubles a mesh's Work::cells holds per particle: its records (mesh_records.hpp), and room to align them.
+inline constexpr Index MESH_RECORD_SLOTS = 32;
+
+//: Length of each of the 18 face-drag rows of Work::cells: a grid's n + grid_x + 1 slots (water.hpp);
+//: for a mesh, whose cells hold its records, MESH_RECORD_SLOTS (n + 1) / 18 rounded up.
 inline Index cells_length(const Cloth& cloth) {
     if (!is_mesh(cloth)) return cloth.n + cloth.grid_x + 1;
-    return cloth.triangle_count > cloth.n + 1 ? cloth.triangle_count : cloth.n + 1;
+    return (MESH_RECORD_SLOTS * (cloth.n + 1) + 17) / 18;
 }
 
 //: The triangle meshes of mesh colliders (collider_mesh.hpp), all in one set of arrays: headers (count,

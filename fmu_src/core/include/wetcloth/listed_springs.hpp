@@ -3,17 +3,17 @@
 // same law as the grid's families (spring_law.hpp), gathered and scattered through the index lists.
 #pragma once
 #include "wetcloth/core.hpp"
+#include "wetcloth/mesh_records.hpp"
 
 namespace wc {
 
-//: Add the listed springs' tension and damping to force (3, n).
-void listed_spring_forces(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos,
-                          const double* vel, double* force);
+//: Add the listed springs' tension and damping (N) to the force sums of the records (their state filled).
+void listed_spring_forces(const Cloth& cloth, const Physics& phys, const MeshRecords& records);
 
-//: As listed_spring_forces, plus their pieces of a Newton step (as spring_forces_and_blocks): adds to
-//: work.force and work.diagonal_blocks; writes work.pair_direction, pair_along, pair_across.
-void listed_spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const double* saturation,
-                                     const double* pos, const double* vel, double h, double slack_slope, Work& work);
+//: As listed_spring_forces, plus their pieces of a Newton step (as spring_forces_and_blocks): adds to the
+//: sums' force and diagonal blocks; writes work.pair_direction, pair_along, pair_across.
+void listed_spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const MeshRecords& records, double h,
+                                     double slack_slope, Work& work);
 
 //: Add the listed springs' part of the system matrix times p (3, n) to out.
 void listed_spring_matvec(const Cloth& cloth, const Work& work, const double* p, double* out);

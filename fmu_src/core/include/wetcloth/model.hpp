@@ -415,6 +415,8 @@ private:
     std::vector<Index> wick_offsets_;
     std::vector<Index> wick_pairs_, wick_pair_springs_;  // a mesh's wicking links (2, L): its stretch springs
     std::vector<double> wick_pair_conductance_;           // (L) kg/s
+    std::vector<Index> cloth_triangles_;                  // a mesh's triangles (m, 3) by their first vertex
+    std::vector<double> cloth_shares_;                    // (m, 3) their corner shares (topology.cloth_order)
     double wick_step_limit_ = 0.0, floor_z_ = 0.0;
     std::vector<double> grip_origin_;  // (3, n) m, the start positions; empty when nothing is pinned
     std::vector<double> collider_motion_;  // (colliders, MOTION_COLUMNS) the step loop's scratch; empty without keys

@@ -8,6 +8,7 @@
 // triangles' values with the weights of its area: the right-angle corner 1/2, the other two 1/4 each.
 #pragma once
 #include "wetcloth/core.hpp"
+#include "wetcloth/mesh_records.hpp"
 
 namespace wc {
 
@@ -64,11 +65,14 @@ void face_drag_and_blocks(Index nx, Index ny, const double* pos, const double* v
                           const Fluid& fluid, double h, double* force, double* blocks, double* cells,
                           bool skip_dry_rows = true);
 
-//: The face drag of the fluid on a mesh's triangles (m, 3) added to force (3, n), each triangle's shared by
-//: its corners as `shares` (m, 3) says; unless blocks is null, h (s) times its lumped velocity Jacobian
-//: added to blocks (6, n) likewise.  With skip_idle, triangles with no corner in the fluid are skipped.
-void mesh_face_drag(Index n, Index triangle_count, const Index* triangles, const double* shares, const double* pos,
-                    const double* vel, const double* s, const Fluid& fluid, double h, double* force, double* blocks,
-                    bool skip_idle);
+//: Fluids a mesh's face drag takes in one pass over its triangles: the water and the air above it.
+inline constexpr Index MESH_FLUIDS = 2;
+
+//: The face drag of fluid_count (at most MESH_FLUIDS) fluids on a mesh's triangles (m, 3) added to the
+//: force sums of its particles' records (from their state), each triangle's shared by its corners as
+//: `shares` (m, 3) says; with the records' blocks, h (s) times its lumped velocity Jacobian added to their
+//: drag blocks likewise.  With skip_idle, triangles with no corner in any of the fluids are skipped.
+void mesh_face_drag(Index triangle_count, const Index* triangles, const double* shares, const Fluid* fluids,
+                    Index fluid_count, double h, const MeshRecords& records, bool skip_idle);
 
 }  // namespace wc
