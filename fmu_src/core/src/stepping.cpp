@@ -293,7 +293,7 @@ Status step(Core& core, double remaining, double span) {
                                                 : 0);
             const double slipped = released == 0 && adaptive
                 ? slip_on_supports(n, phys, core.work.force, core.solver.mass, implicit ? core.work.diagonal_blocks : nullptr,
-                                   core.work.blocks, h, control.allowed, cloth.free, buf.held, buf.trial_pos,
+                                   core.work.blocks, h, control.allowed, cloth.free, buf.held, buf.pos, buf.trial_pos,
                                    buf.trial_vel)
                 : -1.0;
             if (slipped >= 0.0) {
@@ -301,14 +301,14 @@ Status step(Core& core, double remaining, double span) {
             } else {
                 released += release_slipping(n, phys.floor_friction, core.work.force, cloth.free, buf.held) +
                             (held_on_colliders > 0
-                                 ? release_from_colliders(n, phys, buf.pos, core.work.force, cloth.free, buf.held)
+                                 ? release_from_colliders(n, phys, buf.pos, core.work.force, core.solver.mass, cloth.free, buf.held)
                                  : 0);
             }
             if (released > 0) {  // redo the step with them free, and with them those near slipping too
                 held -= released + release_slipping(n, RELEASE_ROUND_CONE * phys.floor_friction, core.work.force,
                                                     cloth.free, buf.held);
                 if (held_on_colliders > 0) {
-                    held -= release_from_colliders(n, phys, buf.pos, core.work.force, cloth.free, buf.held,
+                    held -= release_from_colliders(n, phys, buf.pos, core.work.force, core.solver.mass, cloth.free, buf.held,
                                                    RELEASE_ROUND_CONE);
                 }
                 if (held_on_edges > 0) {
