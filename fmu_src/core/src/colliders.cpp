@@ -25,7 +25,8 @@ namespace wc {
 namespace {
 
 //: A particle moves with a turning collider's surface if its velocity is within this fraction of the
-//: surface's (rounding, as the step's end recomputes the collider's motion from its keys).
+//: surface's (rounding, as the step's end recomputes the collider's motion from its keys) beyond the
+//: change of the surface's velocity over the last step's travel (hold_on_colliders).
 constexpr double HOLD_SLACK = 1e-9;
 
 //: Particle i of pos (3, n) as a point.
@@ -347,7 +348,8 @@ Index touched_collider(const Physics& phys, Index n, Index i, const double* pos,
     return -1;
 }
 
-Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const double* vel, double* free, double* held) {
+Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const double* vel, double* free, double* held,
+                        double last_step) {
     Index holding = 0;
     if (phys.collider_count == 0) return 0;
     const double still[3] = {0.0, 0.0, 0.0};
@@ -360,9 +362,13 @@ Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const d
         const double* shift = collider_shift(phys, k);
         double u[3] = {still[0], still[1], still[2]};  // at rest on it: moving with it
         if (shift != nullptr) surface_velocity(phys, k, buf_point(n, i, pos).data(), u);
-        if (turns(shift)) {  // (its surface velocity where the last step carried it may differ by rounding)
+        if (turns(shift)) {  // (a step leaves it at the surface's velocity where it started or ends the step)
+            const double* w = shift + MOTION_SPIN;
+            const double carried = std::hypot(u[0] - shift[MOTION_VELOCITY], u[1] - shift[MOTION_VELOCITY + 1],
+                                              u[2] - shift[MOTION_VELOCITY + 2]);
             const double off = std::hypot(vel[i] - u[0], vel[n + i] - u[1], vel[2 * n + i] - u[2]);
-            if (off > HOLD_SLACK * std::hypot(u[0], u[1], u[2])) continue;
+            const double slack = std::hypot(w[0], w[1], w[2]) * carried * last_step;
+            if (off > slack + HOLD_SLACK * std::hypot(u[0], u[1], u[2])) continue;
         } else if (vel[i] != u[0] || vel[n + i] != u[1] || vel[2 * n + i] != u[2]) {
             continue;
         }

@@ -227,7 +227,8 @@ Status step(Core& core, double remaining, double span) {
     // Particles at rest on the floor take no part in the step (a constraint of its solve) unless its forces
     // would move them; the model's free flags are theirs again before the step ends.
     Index held = hold_resting(n, phys.floor_z, buf.pos, buf.vel, cloth.free, buf.held);
-    const Index held_on_colliders = hold_on_colliders(n, phys, buf.pos, buf.vel, cloth.free, buf.held);
+    const Index held_on_colliders = hold_on_colliders(n, phys, buf.pos, buf.vel, cloth.free, buf.held,
+                                                          clock[LAST_STEP]);
     held += held_on_colliders;
     const Index held_on_edges = core.contact.lists != nullptr ? hold_on_collider_edges(core.contact, *core.contact.lists,
                                                                                        phys, n, buf.pos, buf.vel,

@@ -43,8 +43,12 @@ Index touched_collider(const Physics& phys, Index n, Index i, const double* pos,
 inline double collider_held(Index k) { return 3.0 + static_cast<double>(k); }
 
 //: As the floor's hold_resting: the free particles on a collider (within gap m) with zero velocity
-//: (friction stopped them) are held for the coming step (free 0, held collider_held(k)).  Returns how many.
-Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const double* vel, double* free, double* held);
+//: (friction stopped them) are held for the coming step (free 0, held collider_held(k)); on a moving collider
+//: at its surface's velocity there, on a turning one within |omega| |omega x r| last_step (s) of it (the
+//: change of the surface's velocity over the last step's travel, which a step stopping a particle on it
+//: leaves).  Returns how many.
+Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const double* vel, double* free, double* held,
+                        double last_step = 0.0);
 
 //: As the floor's release_slipping: release the particles held on a collider that the step's force (N,
 //: (3, n)) lifts off it or pushes along it above cone times friction times the force into it (on a turning
