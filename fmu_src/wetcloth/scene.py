@@ -203,6 +203,27 @@ def rotation_matrix(vector) -> np.ndarray:
     return np.eye(3) + math.sin(angle) * cross + (1.0 - math.cos(angle)) * cross @ cross
 
 
+def rotation_vector(turn) -> np.ndarray:
+    """The rotation vector (3, rad, angle in [0, pi]) of a rotation matrix (3 x 3): log(turn)."""
+    cosine = min(1.0, max(-1.0, 0.5 * (float(np.trace(turn)) - 1.0)))
+    w = np.array([turn[2, 1] - turn[1, 2], turn[0, 2] - turn[2, 0], turn[1, 0] - turn[0, 1]])
+    angle = math.atan2(0.5 * float(np.linalg.norm(w)), cosine)  # (acos loses half the digits near 0 and pi)
+    if angle < 1e-6:
+        return 0.5 * w
+    if math.sin(angle) > 1e-3:
+        return 0.5 * angle / math.sin(angle) * w
+    # near a half turn: the axis a from the symmetric part, turn + turn^T = 2 cos I + 2 (1 - cos) a a^T
+    big = int(np.argmax(np.diag(turn)))
+    axis = np.empty(3)
+    axis[big] = math.sqrt(max(0.0, (turn[big, big] - cosine) / (1.0 - cosine)))
+    for c in range(3):
+        if c != big:
+            axis[c] = 0.5 * (turn[c, big] + turn[big, c]) / ((1.0 - cosine) * axis[big])
+    if float(w @ axis) < 0.0:  # (w = 2 sin a)
+        axis = -axis
+    return angle * axis
+
+
 def _turn_between(a, b) -> float:
     """The angle (deg) of the rotation from rotation vector a to b (3, deg each): of R_b R_a^T."""
     relative = rotation_matrix(np.radians(b)) @ rotation_matrix(np.radians(a)).T

@@ -40,26 +40,28 @@ void multiply(const double* A, const double* B, bool transpose_b, double* C) {
 //: The rotation vector r (3, rad, angle in [0, pi]) of the rotation R (3 x 3 by rows): log(R).
 void rotation_vector(const double* R, double* r) {
     const double cosine = std::clamp(0.5 * (R[0] + R[4] + R[8] - 1.0), -1.0, 1.0);
-    const double angle = std::acos(cosine);
     const double w[3] = {R[7] - R[5], R[2] - R[6], R[3] - R[1]};  // 2 sin(angle) times the axis
+    const double angle = std::atan2(0.5 * std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]), cosine);  // (not acos:
+    // it loses half the digits near 0 and pi)
     const double sine = std::sin(angle);
     if (angle < 1e-6) {  // exp([r]) = I + [r] + O(angle^2)
         for (int c = 0; c < 3; ++c) r[c] = 0.5 * w[c];
         return;
     }
-    if (sine > 1e-6) {
+    if (sine > 1e-3) {
         for (int c = 0; c < 3; ++c) r[c] = 0.5 * angle / sine * w[c];
         return;
     }
-    // near a half turn: the axis from the diagonal of R = 2 a a^T - I, its signs from the largest component
+    // near a half turn: the axis a from the symmetric part, R + R^T = 2 cos I + 2 (1 - cos) a a^T
     Index big = 0;
     for (Index c = 1; c < 3; ++c) big = R[4 * c] > R[4 * big] ? c : big;
     double a[3];
-    a[big] = std::sqrt(std::max(0.0, 0.5 * (R[4 * big] + 1.0)));
+    a[big] = std::sqrt(std::max(0.0, (R[4 * big] - cosine) / (1.0 - cosine)));
     for (Index c = 0; c < 3; ++c) {
-        if (c != big) a[c] = 0.5 * (R[3 * c + big] + R[3 * big + c]) / (2.0 * a[big]);
+        if (c != big) a[c] = 0.5 * (R[3 * c + big] + R[3 * big + c]) / ((1.0 - cosine) * a[big]);
     }
-    for (int c = 0; c < 3; ++c) r[c] = angle * a[c];
+    const double sign = w[0] * a[0] + w[1] * a[1] + w[2] * a[2] < 0.0 ? -1.0 : 1.0;  // (w = 2 sin a)
+    for (int c = 0; c < 3; ++c) r[c] = sign * angle * a[c];
 }
 
 //: Collider k's rotation R (3 x 3 by rows) at t (s) and its angular velocity omega (3, rad/s) over the key
