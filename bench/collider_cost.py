@@ -16,7 +16,8 @@ median), accepted and rejected steps, ms per step.
 
 Moving (``--part moving``, docs/model.md section 6.3 "Moving colliders"): the ``sweep`` preset (a ball
 sweeping through a hanging towel) for 4 s, with its collider keys and without them (the ball never
-reaches the towel), as the lying part prints them.
+reaches the towel), and with the ball also turning 170 deg about the vertical as it sweeps (a turning
+collider: friction against its surface's velocity), as the lying part prints them.
 """
 from __future__ import annotations
 
@@ -75,8 +76,10 @@ def lying(repeat: int) -> None:
 
 
 def moving(repeat: int) -> None:
-    timed_cases({"sweep": (wetcloth.load_scene("sweep"), 4.0),
-                 "sweep, no keys": (wetcloth.load_scene("sweep", collider_keys=()), 4.0)}, repeat)
+    sweep = wetcloth.load_scene("sweep")
+    spinning = sweep.replace(collider_key2_rz=170.0)  # the ball turns 170 deg about the vertical as it sweeps
+    timed_cases({"sweep": (sweep, 4.0), "sweep, no keys": (sweep.replace(collider_keys=()), 4.0),
+                 "sweep, spinning": (spinning, 4.0)}, repeat)
 
 
 def main() -> None:

@@ -14,6 +14,7 @@ WETCLOTH_REQUIRE_BLENDER=1, as ``make test`` sets), as in tests/test_blender.py.
 """
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -223,7 +224,7 @@ def test_a_water_plane_keyed_to_rise_raises_the_water_level(baked):
 def test_a_ball_keyed_to_rise_lifts_the_towel_without_it_entering(baked):
     """The ball's animated location becomes collider keys at every frame: what Blender plays is
     wetcloth's run with those keys, no particle enters the ball where it is at that frame, and the
-    towel ends on its top.  A ball keyed to turn is refused, naming it."""
+    towel ends on its top.  A ball keyed to scale is refused, naming it."""
     moving = baked.report["moving"]
     manifest = moving["manifest"]
     assert moving["result"] == ["FINISHED"] and manifest["complete"], moving["error"]
@@ -242,7 +243,30 @@ def test_a_ball_keyed_to_rise_lifts_the_towel_without_it_entering(baked):
         assert distance.min() >= gap - CONTACT_TOL, frame["frame"]
     last = np.array(moving["frames"][-1]["positions"])
     assert abs(last[:, 2].max() - (centres[-1][2] + radius + gap)) <= CONTACT_TOL  # on the risen ball's top
-    assert "'Ball'" in moving["turning"] and "translation only" in moving["turning"]
+    assert "'Ball'" in moving["scaling"] and "scales at frame" in moving["scaling"]
+
+
+def test_a_ball_keyed_to_rise_and_turn_turns_by_its_keys(baked):
+    """The ball keyed to turn 0.5 rad about x while it rises: its keys' rotation vectors are Blender's
+    turn from the first frame at every frame (rx its angle in degrees, to the float32 of Blender's
+    matrices: 1e-5 deg), what Blender plays is wetcloth's run with those keys, and no particle enters
+    the ball."""
+    turned = baked.report["moving"]["turned"]
+    manifest = turned["manifest"]
+    assert turned["result"] == ["FINISHED"] and manifest["complete"], turned["error"]
+    scene = from_dict(manifest["scene"])
+    assert len(scene.collider_keys) == FRAMES - 1
+    turns = np.array(turned["turns"])
+    for key, turn in zip(scene.collider_keys, turns[1:]):
+        angle = math.degrees(math.atan2(turn[2, 1], turn[1, 1]))
+        assert abs(key.rx - angle) <= 1e-5 and key.ry == key.rz == 0.0
+    assert scene.collider_keys[-1].rx == pytest.approx(math.degrees(0.5), abs=1e-5)
+    check_against_reference(turned["frames"], manifest)
+    gap, radius = 0.5 * manifest["scene"]["thickness"], manifest["scene"]["collider1_radius"]
+    centres = baked.report["moving"]["centres"]
+    for frame, centre in zip(turned["frames"], centres):
+        distance = np.linalg.norm(np.array(frame["positions"]) - centre, axis=1) - radius
+        assert distance.min() >= gap - CONTACT_TOL, frame["frame"]
 
 
 def test_pin_group_preset_and_the_cloths_own_modifiers(baked):

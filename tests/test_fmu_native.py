@@ -627,6 +627,28 @@ def test_a_unit_built_with_a_scene_runs_its_colliders_and_grip_keys_as_the_pytho
     assert records[-1] == {"status": 3, "errors": [f"initialization refused: {exc.value}"]}
 
 
+def test_a_unit_built_with_a_scene_turns_its_colliders_by_their_keys_as_the_python_api(build, tmp_path):
+    """`build-fmu --native --scene` of a turntable (a box turning 2 rad/s about the vertical under a sheet off
+    its axis, tests/test_turning_colliders.py): its keys' rotation columns are compiled in, and the unit
+    runs through fmpy as the Python API does, bit for bit; the sheet turns with it (its centroid moves)."""
+    import fmpy
+
+    path = tmp_path / "turntable.toml"
+    keys = "".join(f"[[collider_key]]\ncollider = 1\ntime = {0.1 * k:.1f}\nrz = {math.degrees(0.2 * k)!r}\n"
+                   for k in range(1, 11))
+    path.write_text("nx = 5\nny = 5\nwidth = 0.1\nlength = 0.1\ninitial_tilt = 0.0\ninitial_height = 0.2\n"
+                    "thickness = 0.002\nwater_level = -0.5\nair_density = 0.0\n[[collider]]\nshape = \"box\"\n"
+                    "size_x = 0.6\nsize_y = 0.6\nsize_z = 0.2\nx = -0.15\nz = 0.098999\nfriction = 0.5\n" + keys)
+    fmu = native.build_native_fmu(tmp_path / "turntable.fmu", 2, build_dir=build["objects"], scene=str(path))
+    result = fmpy.simulate_fmu(str(fmu), stop_time=1.0, output_interval=0.1)
+    sim, rows = wetcloth.Simulation(wetcloth.load_scene(path)), []
+    for t in result["time"]:
+        advance_as_the_unit(sim, t)
+        rows.append([sim.outputs()[n] for n in OUTPUT_NAMES])
+    assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows, "turntable")
+    assert abs(sim.outputs()["centroid_y"]) > 0.05
+
+
 def test_the_unit_steps_exactly_as_the_cores_simulation(build, checker_library):
     """Whatever the Python package runs on: the unit adds nothing to the core's arithmetic (the outputs of
     fmpy's run are those of a wc::Simulation stepped to the same points, bit for bit)."""

@@ -222,10 +222,12 @@ def test_a_unit_built_with_a_scene_moves_its_colliders_by_their_keys(tmp_path):
 
 def test_the_native_unit_compiles_in_the_collider_keys():
     """`build-fmu --native --scene`: the scene's collider keys become the unit's SCENE_COLLIDER_KEYS rows
-    (collider from 0, time, x, y, z; by collider and time), as the Python model hands them to the core."""
+    (collider from 0, time, x, y, z, rx, ry, rz in rad; by collider and time), as the Python model hands them
+    to the core."""
     from wetcloth.fmu.native import fixtures_header
 
     header = fixtures_header(load_scene("sweep"))
-    assert "SCENE_COLLIDER_KEYS_SIZE = 10;" in header
-    assert "SCENE_COLLIDER_KEYS[] = {0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.6, 0.0, 0};" in header
+    assert "SCENE_COLLIDER_KEYS_SIZE = 16;" in header
+    assert ("SCENE_COLLIDER_KEYS[] = {0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.6, 0.0, 0.0, 0.0, 0.0, 0};"
+            in header)
     assert "SCENE_COLLIDER_KEYS_SIZE = 0;" in fixtures_header(load_scene("tablecloth_sphere"))

@@ -12,6 +12,7 @@ are read back as the shortest decimal that rounds to them (0.45, not 0.449999988
 
 from __future__ import annotations
 
+import math
 import os
 import re
 from dataclasses import dataclass, replace
@@ -21,7 +22,7 @@ import numpy as np
 
 from wetcloth.exporter.blender_extension.geometry import GridCloth, MeshCloth, cloth_of, collider_of
 from wetcloth.exporter.blender_extension.parameters import FABRIC, SCENE
-from wetcloth.scene import Scene, from_dict
+from wetcloth.scene import MAX_KEY_TURN, Scene, from_dict, rotation_matrix, rotation_vector
 
 @dataclass
 class ClothJob:
@@ -147,28 +148,55 @@ def _animated(obj) -> bool:
     return False
 
 
-def _collider_keys(scene, obj, number: int) -> list[dict]:
-    """Collider ``number``'s keys (docs/interface.md, collider keys) if the object is animated: its
-    displacement (m) from the first frame at every later frame of the range, at (frame - frame_start) /
-    fps s; none if it does not move.  ValueError if it turns or scales: colliders move by translation."""
+def _collider_keys(scene, obj, number: int, centre) -> list[dict]:
+    """Collider ``number``'s keys (docs/interface.md, collider keys) if the object is animated: at every
+    later frame of the range, at (frame - frame_start) / fps s, its turn R from the first frame as a rotation
+    vector (rx, ry, rz, deg; unwrapped: the representative nearest the previous frame's) and the
+    displacement (m) of its centre (3, m: its collider's x, y, z at the first frame), R c + b - c for the
+    frame's world motion p -> R p + b; none if it neither moves nor turns.  ValueError if it scales or turns
+    by 179 deg or more between frames."""
     if not _animated(obj):
         return []
     fps = scene.render.fps / scene.render.fps_base
     scene.frame_set(scene.frame_start)
     first = np.array(obj.matrix_world)
-    keys = []
+    to_first = np.linalg.inv(first)
+    c = np.asarray(centre, dtype=np.float64)
+    keys, previous = [], np.zeros(3)
     for frame in range(scene.frame_start + 1, scene.frame_end + 1):
         scene.frame_set(frame)
-        matrix = np.array(obj.matrix_world)
-        if np.abs(matrix[:3, :3] - first[:3, :3]).max() > 1e-6 * max(np.abs(first[:3, :3]).max(), 1e-9):
+        motion = np.array(obj.matrix_world) @ to_first  # world at the first frame -> world at this one
+        turn, shift = motion[:3, :3], motion[:3, 3]
+        if np.abs(turn.T @ turn - np.eye(3)).max() > 1e-6 or np.linalg.det(turn) < 0.0:
             scene.frame_set(scene.frame_start)
-            raise ValueError(f"collider {obj.name!r} turns or scales at frame {frame}: colliders move by translation "
-                             "only (keys on its location; its rotation and scale stay as at the first frame)")
-        x, y, z = matrix[:3, 3] - first[:3, 3]
+            raise ValueError(f"collider {obj.name!r} scales at frame {frame}: colliders move and turn only "
+                             "(its scale stays as at the first frame)")
+        vector = _unwrapped(rotation_vector(turn), previous)
+        if np.degrees(np.linalg.norm(rotation_vector(turn @ rotation_matrix(previous).T))) >= MAX_KEY_TURN:
+            scene.frame_set(scene.frame_start)
+            raise ValueError(f"collider {obj.name!r} turns by {MAX_KEY_TURN:g} deg or more between frames {frame - 1} "
+                             f"and {frame}: at most that between frames (more frames per second)")
+        previous = vector
+        x, y, z = turn @ c + shift - c
+        rx, ry, rz = np.degrees(vector)
         keys.append({"collider": number, "time": (frame - scene.frame_start) / fps,
-                     "x": clean(float(x)), "y": clean(float(y)), "z": clean(float(z))})
+                     "x": clean(float(x)), "y": clean(float(y)), "z": clean(float(z)),
+                     "rx": clean(float(rx)), "ry": clean(float(ry)), "rz": clean(float(rz))})
     scene.frame_set(scene.frame_start)
-    return keys if any(k["x"] or k["y"] or k["z"] for k in keys) else []
+    fields = ("x", "y", "z", "rx", "ry", "rz")
+    return keys if any(k[f] for k in keys for f in fields) else []
+
+
+def _unwrapped(vector, previous) -> np.ndarray:
+    """Of the rotation vectors of one rotation, vector + 2 pi k axis (k whole), the nearest to previous (3, rad)."""
+    angle = float(np.linalg.norm(vector))
+    if angle == 0.0:
+        axis = previous / np.linalg.norm(previous) if np.linalg.norm(previous) > 0.0 else np.zeros(3)
+    else:
+        axis = vector / angle
+    reach = round(float(np.linalg.norm(previous)) / (2 * math.pi)) + 1
+    candidates = [vector + 2 * math.pi * k * axis for k in range(-reach, reach + 1)]
+    return min(candidates, key=lambda v: float(np.linalg.norm(v - previous)))
 
 
 def cloth_jobs(context) -> list[ClothJob]:
@@ -191,7 +219,7 @@ def cloth_jobs(context) -> list[ClothJob]:
             raise ValueError(f"collider {obj.name!r} is not a mesh")
         collider = collider_of(*world_vertices(obj, depsgraph, triangles=True), obj.name)
         colliders.append({key: clean(value) for key, value in collider.items()} | {"friction": clean(obj.wetcloth.friction)})
-        collider_keys += _collider_keys(scene, obj, len(colliders))
+        collider_keys += _collider_keys(scene, obj, len(colliders), (collider["x"], collider["y"], collider["z"]))
     settings = {name: clean(getattr(scene.wetcloth, name)) for name in SCENE} | {"water_level": water_level}
     directory = cache_directory(scene)
     jobs = []

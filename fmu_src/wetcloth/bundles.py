@@ -31,7 +31,7 @@ Cloth = namedtuple("Cloth", "grid_x grid_y offsets rest tension_only stiffness d
 #: mesh colliders' triangles (wetcloth.collider_meshes.ColliderMeshes); the grip (grip.hpp): ``grip_x``,
 #: ``grip_y``, ``grip_z`` (m, inputs), ``grip_keys`` (k, 4) rows time s, x, y, z m, ``grip_origin`` (3, n) m
 #: the particles at t = 0 (empty: no pinned particles); the colliders' keys (collider_motion.hpp):
-#: ``collider_keys`` (c, 5) rows collider (from 0), time s, x, y, z m by collider and time,
+#: ``collider_keys`` (c, 8) rows collider (from 0), time s, x, y, z m, rx, ry, rz rad by collider and time,
 #: ``collider_motion`` (k, MOTION_COLUMNS) the step loop's scratch (empty without keys).
 Physics = namedtuple("Physics", "projected wet_factor water_level water_density thickness smooth stokes "
                                 "drag_normal drag_tangential drag_linear current_x current_y air_density "

@@ -153,14 +153,21 @@ def grip_key_name(name: str) -> tuple[int, str] | None:
 class ColliderKey:
     """A key of a collider's motion (docs/model.md section 6.3), one ``[[collider_key]]`` table of a scene file:
     collider ``collider`` is displaced by (x, y, z) from where its table puts it at ``time``, linearly
-    between its keys (from 0 at t = 0 to the first), the last key's after it.  Its fields are addressed as
-    ``collider_key<k>_<field>`` (k from 1) everywhere else."""
+    between its keys (from 0 at t = 0 to the first), the last key's after it, and turned about its centre
+    by the rotation vector (rx, ry, rz) (axis times angle, degrees) from its table's orientation, by slerp
+    between its keys (a constant angular velocity; consecutive keys less than 180 deg apart).  Its fields
+    are addressed as ``collider_key<k>_<field>`` (k from 1) everywhere else."""
 
     collider: int = _param(None, "-", "the collider it moves: its number (1, 2, ... in file order; required)", 1, 10000)
     time: float = _param(None, "s", "time of the key (required: no default)", 0.0, 1e6, lo_open=True)
     x: float = _param(0.0, "m", "the collider's displacement along x at the key's time", -1e4, 1e4)
     y: float = _param(0.0, "m", "the collider's displacement along y at the key's time", -1e4, 1e4)
     z: float = _param(0.0, "m", "the collider's displacement along z (up) at the key's time", -1e4, 1e4)
+    rx: float = _param(0.0, "deg", "x component of the collider's rotation vector (axis times angle) at the key's "
+                       "time, about its centre", -1e6, 1e6)
+    ry: float = _param(0.0, "deg", "y component of the collider's rotation vector at the key's time", -1e6, 1e6)
+    rz: float = _param(0.0, "deg", "z component (about the vertical) of the collider's rotation vector at the "
+                       "key's time", -1e6, 1e6)
 
 
 COLLIDER_KEY_FIELDS: dict[str, dataclasses.Field] = {f.name: f for f in dataclasses.fields(ColliderKey)}
@@ -178,10 +185,49 @@ def grip_key_rows(keys) -> np.ndarray:
 
 
 def collider_key_rows(keys) -> np.ndarray:
-    """The core's rows of collider keys (collider_motion.hpp: collider from 0, time s, x, y, z m), by collider
-    and then time; (0, 5) without keys."""
-    rows = sorted(([k.collider - 1, k.time, k.x, k.y, k.z] for k in keys), key=lambda r: (r[0], r[1]))
-    return np.array(rows, dtype=np.float64).reshape(-1, 5)
+    """The core's rows of collider keys (collider_motion.hpp: collider from 0, time s, x, y, z m, rotation
+    vector rad), by collider and then time; (0, 8) without keys."""
+    rows = sorted(([k.collider - 1, k.time, k.x, k.y, k.z, math.radians(k.rx), math.radians(k.ry),
+                    math.radians(k.rz)] for k in keys), key=lambda r: (r[0], r[1]))
+    return np.array(rows, dtype=np.float64).reshape(-1, 8)
+
+
+def rotation_matrix(vector) -> np.ndarray:
+    """The rotation (3 x 3) by |vector| rad about vector (3): exp([vector]) (Rodrigues)."""
+    r = np.asarray(vector, dtype=np.float64)
+    angle = float(np.linalg.norm(r))
+    if angle == 0.0:
+        return np.eye(3)
+    a = r / angle
+    cross = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * cross + (1.0 - math.cos(angle)) * cross @ cross
+
+
+def rotation_vector(turn) -> np.ndarray:
+    """The rotation vector (3, rad, angle in [0, pi]) of a rotation matrix (3 x 3): log(turn)."""
+    cosine = min(1.0, max(-1.0, 0.5 * (float(np.trace(turn)) - 1.0)))
+    w = np.array([turn[2, 1] - turn[1, 2], turn[0, 2] - turn[2, 0], turn[1, 0] - turn[0, 1]])
+    angle = math.atan2(0.5 * float(np.linalg.norm(w)), cosine)  # (acos loses half the digits near 0 and pi)
+    if angle < 1e-6:
+        return 0.5 * w
+    if math.sin(angle) > 1e-3:
+        return 0.5 * angle / math.sin(angle) * w
+    # near a half turn: the axis a from the symmetric part, turn + turn^T = 2 cos I + 2 (1 - cos) a a^T
+    big = int(np.argmax(np.diag(turn)))
+    axis = np.empty(3)
+    axis[big] = math.sqrt(max(0.0, (turn[big, big] - cosine) / (1.0 - cosine)))
+    for c in range(3):
+        if c != big:
+            axis[c] = 0.5 * (turn[c, big] + turn[big, c]) / ((1.0 - cosine) * axis[big])
+    if float(w @ axis) < 0.0:  # (w = 2 sin a)
+        axis = -axis
+    return angle * axis
+
+
+def _turn_between(a, b) -> float:
+    """The angle (deg) of the rotation from rotation vector a to b (3, deg each): of R_b R_a^T."""
+    relative = rotation_matrix(np.radians(b)) @ rotation_matrix(np.radians(a)).T
+    return math.degrees(math.acos(min(1.0, max(-1.0, 0.5 * (np.trace(relative) - 1.0)))))
 
 
 @dataclass(frozen=True)
@@ -545,6 +591,7 @@ def _checked_collider_keys(scene: Scene, mistakes: Mistakes) -> tuple:
         return ()
     out = []
     last: dict[int, tuple[int, float]] = {}  # each collider's latest key: (k, time)
+    turned: dict[int, tuple[float, float, float]] = {}  # and its rotation vector (deg)
     for k, key in enumerate(keys, 1):
         values = dataclasses.asdict(key) if isinstance(key, ColliderKey) else key
         with mistakes.collect():
@@ -566,9 +613,25 @@ def _checked_collider_keys(scene: Scene, mistakes: Mistakes) -> tuple:
                 raise ParameterError(f"collider_key{k}_time", f"{checked['time']!r} s is not after "
                                      f"collider_key{before}_time = {time!r} s, the previous key of collider {collider}; "
                                      f"allowed: the times of one collider's keys increase")
+            key = ColliderKey(**checked)
+            before = turned.get(collider, (0.0, 0.0, 0.0))
+            turn = _turn_between(before, (key.rx, key.ry, key.rz))
+            if turn >= MAX_KEY_TURN:
+                after = (f"collider_key{last[collider][0]}" if collider in last
+                         else f"its table's orientation (t = 0)")
+                raise ParameterError(f"collider_key{k}_rx", f"(rx, ry, rz) = ({key.rx:g}, {key.ry:g}, {key.rz:g}) deg "
+                                     f"turns collider {collider} by {turn:.6g} deg from {after}; allowed: less than "
+                                     f"{MAX_KEY_TURN:g} deg between consecutive keys of one collider (the turn "
+                                     f"between them is the shortest; add keys between)")
             last[collider] = (k, checked["time"])
-            out.append(ColliderKey(**checked))
+            turned[collider] = (key.rx, key.ry, key.rz)
+            out.append(key)
     return tuple(out)
+
+
+#: The largest turn (deg, excluded) between consecutive keys of one collider: the slerp between them turns
+#: the shorter way, which a half turn leaves undecided.
+MAX_KEY_TURN = 179.0
 
 
 def _key_range(field_name: str, name: str, scene: Scene) -> str:

@@ -135,7 +135,8 @@ def rising_water(spec, blend, frames):
 
 def moving_ball(spec, blend, frames):
     """A bake with the ball keyed to rise under the towel: the ball's centre and the cloth at every
-    frame; then the ball keyed to turn too: the bake's error."""
+    frame; then the ball keyed to turn about x too: the bake, its rotation matrix and the cloth at every
+    frame; then keyed to scale too: the bake's error."""
     bpy.ops.wm.open_mainfile(filepath=blend)
     ball = bpy.data.objects["Ball"]
     ball.location.z = spec["sphere"]["z"]
@@ -153,7 +154,19 @@ def moving_ball(spec, blend, frames):
     ball.keyframe_insert("rotation_euler", index=0, frame=frames[0])
     ball.rotation_euler.x = 0.5
     ball.keyframe_insert("rotation_euler", index=0, frame=frames[-1])
-    out["turning"] = operator(bpy.ops.wetcloth.bake)["error"]
+    turned = operator(bpy.ops.wetcloth.bake)
+    turned |= cache_report(bpy.data.objects["Towel"])
+    turned["turns"] = []
+    for frame in frames:
+        bpy.context.scene.frame_set(frame)
+        turned["turns"].append([list(row) for row in ball.matrix_world.to_3x3()])
+    turned["frames"] = [evaluated_cloth(bpy.data.objects["Towel"], f) for f in frames]
+    out["turned"] = turned
+    ball.scale = (1.0, 1.0, 1.0)
+    ball.keyframe_insert("scale", frame=frames[0])
+    ball.scale = (1.2, 1.2, 1.2)
+    ball.keyframe_insert("scale", frame=frames[-1])
+    out["scaling"] = operator(bpy.ops.wetcloth.bake)["error"]
     return out
 
 

@@ -12,6 +12,7 @@
 #include "wetcloth/colliders.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -22,6 +23,14 @@
 namespace wc {
 
 namespace {
+
+//: A particle moves with a turning collider's surface if its velocity is within this fraction of the
+//: surface's (rounding, as the step's end recomputes the collider's motion from its keys) beyond the
+//: change of the surface's velocity over the last step's travel (hold_on_colliders).
+constexpr double HOLD_SLACK = 1e-9;
+
+//: Particle i of pos (3, n) as a point.
+std::array<double, 3> buf_point(Index n, Index i, const double* pos) { return {pos[i], pos[n + i], pos[2 * n + i]}; }
 
 //: Distance to an axis-aligned box of half sizes half (3) centred at the origin, from offset d (3).
 double box_distance(const double* d, const double* half, double* normal) {
@@ -63,11 +72,31 @@ bool bounds(const Physics& phys, const double* row, double* lo, double* hi) {
     return true;
 }
 
+//: The distance (m) from a collider's centre to its farthest point (its row's box's farthest corner).
+double turning_bound(const Physics& phys, const double* row) {
+    double lo[3], hi[3], far2 = 0.0;
+    bounds(phys, row, lo, hi);
+    for (Index c = 0; c < 3; ++c) far2 += std::max(std::abs(lo[c] - row[C_X + c]), std::abs(hi[c] - row[C_X + c])) *
+                                          std::max(std::abs(lo[c] - row[C_X + c]), std::abs(hi[c] - row[C_X + c]));
+    return std::sqrt(far2);
+}
+
 //: Whether any point of the box [lo, hi] can be closer than gap to the collider, where it is now or was at
 //: the step's start (shift: its row of Physics::collider_motion, or null: it stands where its row puts it).
 bool reachable(const Physics& phys, const double* row, const double* shift, const double* lo, const double* hi,
                double gap) {
     double clo[3], chi[3];
+    if (turns(shift) && static_cast<Index>(row[C_SHAPE]) != PLANE) {  // the sphere about its centre that holds it
+        const double far = turning_bound(phys, row);
+        for (Index c = 0; c < 3; ++c) {
+            const double now = shift[MOTION_NOW + c], start = shift[MOTION_START + c];
+            if (hi[c] < row[C_X + c] + std::min(now, start) - far - gap ||
+                lo[c] > row[C_X + c] + std::max(now, start) + far + gap) {
+                return false;
+            }
+        }
+        return true;
+    }
     if (bounds(phys, row, clo, chi)) {
         for (Index c = 0; c < 3; ++c) {
             if (shift != nullptr) {
@@ -80,13 +109,32 @@ bool reachable(const Physics& phys, const double* row, const double* shift, cons
         return true;
     }
     // A plane: the box's corner deepest along -normal (the plane where it is now).
-    double depth = 0.0;
+    double depth = 0.0, normal[3] = {row[C_NORMAL_X], row[C_NORMAL_Y], row[C_NORMAL_Z]};
+    world_direction(shift, normal);
     for (Index c = 0; c < 3; ++c) {
-        const double nc = row[C_NORMAL_X + c];
+        const double nc = normal[c];
         const double point = row[C_X + c] + (shift != nullptr ? shift[MOTION_NOW + c] : 0.0);
         depth += nc * ((nc >= 0.0 ? lo[c] : hi[c]) - point);
     }
     return depth < gap;
+}
+
+//: The force (3, N) the support of particle i (at pos (3, n), of mass (n) kg) held on collider k must
+//: balance: f less its mass times its surface's acceleration omega x (omega x r) when the collider turns
+//: (r from its centre), in place.
+void carried_force(const Physics& phys, Index k, Index n, Index i, const double* pos, const double* mass, double* f) {
+    const double* shift = collider_shift(phys, k);
+    if (!turns(shift)) return;
+    const double* centre = phys.colliders + k * COLLIDER_COLUMNS + C_X;
+    const double* w = shift + MOTION_SPIN;
+    double r[3], u[3];
+    for (Index c = 0; c < 3; ++c) r[c] = pos[c * n + i] - centre[c] - shift[MOTION_NOW + c];
+    u[0] = w[1] * r[2] - w[2] * r[1];
+    u[1] = w[2] * r[0] - w[0] * r[2];
+    u[2] = w[0] * r[1] - w[1] * r[0];
+    f[0] -= mass[i] * (w[1] * u[2] - w[2] * u[1]);
+    f[1] -= mass[i] * (w[2] * u[0] - w[0] * u[2]);
+    f[2] -= mass[i] * (w[0] * u[1] - w[1] * u[0]);
 }
 
 }  // namespace
@@ -94,9 +142,19 @@ bool reachable(const Physics& phys, const double* row, const double* shift, cons
 double collider_distance(const Physics& phys, Index k, const double* at, double reach, double* normal) {
     const double* row = phys.colliders + k * COLLIDER_COLUMNS;
     const double* shift = collider_shift(phys, k);  // a moving collider: p in the frame where it stands still
-    const double p[3] = {shift != nullptr ? at[0] - shift[MOTION_NOW] : at[0],
-                         shift != nullptr ? at[1] - shift[MOTION_NOW + 1] : at[1],
-                         shift != nullptr ? at[2] - shift[MOTION_NOW + 2] : at[2]};
+    if (turns(shift)) {  // its table point, and the normal there turned back to the world
+        double q[3];
+        table_point(shift, row + C_X, at, false, q);
+        const double dist = table_distance(phys, row, q, reach, normal);
+        world_direction(shift, normal);
+        return dist;
+    }
+    double p[3];
+    table_point(shift, row + C_X, at, false, p);
+    return table_distance(phys, row, p, reach, normal);
+}
+
+double table_distance(const Physics& phys, const double* row, const double* p, double reach, double* normal) {
     const double d[3] = {p[0] - row[C_X], p[1] - row[C_Y], p[2] - row[C_Z]};
     switch (static_cast<Index>(row[C_SHAPE])) {
         case MESH: return mesh_distance(phys.meshes, static_cast<Index>(row[C_RADIUS]), p, reach, normal);
@@ -172,10 +230,13 @@ bool undo_crossing(const Physics& phys, const double* row, const double* shift, 
         for (Index c = 0; c < 3; ++c) p[c] = hit[c] + gap * normal[c];
         return true;
     }
-    const double from[3] = {a[0] - shift[MOTION_START], a[1] - shift[MOTION_START + 1], a[2] - shift[MOTION_START + 2]};
-    const double to[3] = {p[0] - shift[MOTION_NOW], p[1] - shift[MOTION_NOW + 1], p[2] - shift[MOTION_NOW + 2]};
+    double from[3], to[3];
+    table_point(shift, row + C_X, a, true, from);
+    table_point(shift, row + C_X, p, false, to);
     if (!mesh_crossing(phys.meshes, static_cast<Index>(row[C_RADIUS]), from, to, hit, normal)) return false;
-    for (Index c = 0; c < 3; ++c) p[c] = hit[c] + gap * normal[c] + shift[MOTION_NOW + c];
+    for (Index c = 0; c < 3; ++c) hit[c] = hit[c] + gap * normal[c];
+    world_point(shift, row + C_X, hit, p);
+    world_direction(shift, normal);
     return true;
 }
 
@@ -191,9 +252,12 @@ bool undo_box_crossing(const double* row, const double* shift, const double* a, 
     double s[3], e[3];
     double enter = -std::numeric_limits<double>::infinity(), leave = std::numeric_limits<double>::infinity();
     Index axis = -1;
+    double from[3], to[3];
+    table_point(shift, row + C_X, a, true, from);
+    table_point(shift, row + C_X, p, false, to);
     for (Index c = 0; c < 3; ++c) {
-        s[c] = a[c] - shift[MOTION_START + c] - row[C_X + c];
-        e[c] = p[c] - shift[MOTION_NOW + c] - row[C_X + c];
+        s[c] = from[c] - row[C_X + c];
+        e[c] = to[c] - row[C_X + c];
         if (s[c] == e[c]) {
             if (std::abs(s[c]) > half[c]) return false;  // beside the slab all along
             continue;
@@ -206,9 +270,10 @@ bool undo_box_crossing(const double* row, const double* shift, const double* a, 
     if (axis < 0 || !(enter > 0.0 && enter <= 1.0 && enter <= leave)) return false;  // inside at the start, or missed
     for (Index c = 0; c < 3; ++c) normal[c] = 0.0;
     normal[axis] = s[axis] > 0.0 ? 1.0 : -1.0;
-    for (Index c = 0; c < 3; ++c) {
-        p[c] = s[c] + enter * (e[c] - s[c]) + gap * normal[c] + row[C_X + c] + shift[MOTION_NOW + c];
-    }
+    double q[3];
+    for (Index c = 0; c < 3; ++c) q[c] = s[c] + enter * (e[c] - s[c]) + gap * normal[c] + row[C_X + c];
+    world_point(shift, row + C_X, q, p);
+    world_direction(shift, normal);
     return true;
 }
 
@@ -228,7 +293,7 @@ Index collider_contact(Index n, const Physics& phys, const double* start, double
         const bool box = static_cast<Index>(row[C_SHAPE]) == BOX;
         const bool moved = shift != nullptr && (shift[MOTION_NOW] != shift[MOTION_START] ||
                                                 shift[MOTION_NOW + 1] != shift[MOTION_START + 1] ||
-                                                shift[MOTION_NOW + 2] != shift[MOTION_START + 2]);
+                                                shift[MOTION_NOW + 2] != shift[MOTION_START + 2] || turns(shift));
         const double friction = row[C_FRICTION];
         for (Index i = 0; i < n; ++i) {
             double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
@@ -250,7 +315,8 @@ Index collider_contact(Index n, const Physics& phys, const double* start, double
             if (shift == nullptr) {
                 coulomb_stop(v, nrm, friction);
             } else {
-                const double* u = shift + MOTION_VELOCITY;
+                double u[3];
+                surface_velocity(phys, k, p, u);
                 for (Index c = 0; c < 3; ++c) v[c] -= u[c];
                 double before[3] = {v[0], v[1], v[2]};
                 coulomb_stop(v, nrm, friction);
@@ -282,7 +348,8 @@ Index touched_collider(const Physics& phys, Index n, Index i, const double* pos,
     return -1;
 }
 
-Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const double* vel, double* free, double* held) {
+Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const double* vel, double* free, double* held,
+                        double last_step) {
     Index holding = 0;
     if (phys.collider_count == 0) return 0;
     const double still[3] = {0.0, 0.0, 0.0};
@@ -293,8 +360,18 @@ Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const d
         const Index k = touched_collider(phys, n, i, pos, nrm);
         if (k < 0) continue;
         const double* shift = collider_shift(phys, k);
-        const double* u = shift != nullptr ? shift + MOTION_VELOCITY : still;  // at rest on it: moving with it
-        if (vel[i] != u[0] || vel[n + i] != u[1] || vel[2 * n + i] != u[2]) continue;
+        double u[3] = {still[0], still[1], still[2]};  // at rest on it: moving with it
+        if (shift != nullptr) surface_velocity(phys, k, buf_point(n, i, pos).data(), u);
+        if (turns(shift)) {  // (a step leaves it at the surface's velocity where it started or ends the step)
+            const double* w = shift + MOTION_SPIN;
+            const double carried = std::hypot(u[0] - shift[MOTION_VELOCITY], u[1] - shift[MOTION_VELOCITY + 1],
+                                              u[2] - shift[MOTION_VELOCITY + 2]);
+            const double off = std::hypot(vel[i] - u[0], vel[n + i] - u[1], vel[2 * n + i] - u[2]);
+            const double slack = std::hypot(w[0], w[1], w[2]) * carried * last_step;
+            if (off > slack + HOLD_SLACK * std::hypot(u[0], u[1], u[2])) continue;
+        } else if (vel[i] != u[0] || vel[n + i] != u[1] || vel[2 * n + i] != u[2]) {
+            continue;
+        }
         free[i] = 0.0;
         held[i] = collider_held(k);
         holding += 1;
@@ -302,8 +379,8 @@ Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const d
     return holding;
 }
 
-Index release_from_colliders(Index n, const Physics& phys, const double* pos, const double* force, double* free,
-                             double* held, double cone) {
+Index release_from_colliders(Index n, const Physics& phys, const double* pos, const double* force, const double* mass,
+                             double* free, double* held, double cone) {
     Index released = 0;
     const double reach = phys.thickness;  // a held particle sits at thickness / 2
     for (Index i = 0; i < n; ++i) {
@@ -312,7 +389,8 @@ Index release_from_colliders(Index n, const Physics& phys, const double* pos, co
         const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
         double nrm[3];
         const bool on = collider_distance(phys, k, p, reach, nrm) < reach;  // a mesh's is not looked for farther
-        const double f[3] = {force[i], force[n + i], force[2 * n + i]};
+        double f[3] = {force[i], force[n + i], force[2 * n + i]};
+        carried_force(phys, k, n, i, pos, mass, f);
         if (!on || slips(f, nrm, cone * phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION])) {
             held[i] = 0.0;
             free[i] = 1.0;
@@ -324,7 +402,7 @@ Index release_from_colliders(Index n, const Physics& phys, const double* pos, co
 
 double slip_on_supports(Index n, const Physics& phys, const double* force, const double* mass,
                         const double* diagonal_blocks, const double* blocks, double h, double limit, double* free,
-                        double* held, double* pos, double* vel) {
+                        double* held, const double* start, double* pos, double* vel) {
     const double up[3] = {0.0, 0.0, 1.0};
     double farthest = 0.0;
     for (int pass = 0; pass < 2; ++pass) {  // first: how far each would move; second: move them
@@ -336,13 +414,17 @@ double slip_on_supports(Index n, const Physics& phys, const double* force, const
             if (!on_floor) {
                 const Index k = static_cast<Index>(held[i] - collider_held(0));
                 double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
-                if (const double* u = held_rate(phys, held[i])) {  // where a moving collider held it, at the step's start
-                    for (int c = 0; c < 3; ++c) p[c] -= h * u[c];
+                const double* shift = collider_shift(phys, k);
+                if (turns(shift)) {  // where a moving collider held it, at the step's start
+                    for (int c = 0; c < 3; ++c) p[c] = start[c * n + i];
+                } else if (shift != nullptr) {
+                    for (int c = 0; c < 3; ++c) p[c] -= h * shift[MOTION_VELOCITY + c];
                 }
                 if (collider_distance(phys, k, p, phys.thickness, nrm) >= phys.thickness) return -1.0;  // off it
                 friction = phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
             }
-            const double f[3] = {force[i], force[n + i], force[2 * n + i]};
+            double f[3] = {force[i], force[n + i], force[2 * n + i]};
+            if (!on_floor) carried_force(phys, static_cast<Index>(held[i] - collider_held(0)), n, i, start, mass, f);
             if (!slips(f, nrm, friction)) continue;
             double excess[3];
             slip_force(f, nrm, friction, excess);

@@ -261,9 +261,10 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
             }
             out_vel[k] = guess * free[i];
             // The grip or a moving collider that holds it moves it: v+ prescribed.
+            double carried[3];
             const double* rate = free[i] != 0.0 || held == nullptr ? nullptr
                                  : held[i] == 0.0                   ? grip_rate
-                                                                    : held_rate(phys, held[i]);
+                                 : held_rate(phys, held[i], n, i, pos, h, carried) ? carried : nullptr;
             if (rate != nullptr) {
                 out_vel[k] = rate[c];
                 hat_vel[k] = rate[c];

@@ -37,9 +37,8 @@ bool surface_under(const Physics& phys, Index n, Index i, const double* pos, dou
     const Index k = phys.collider_count > 0 ? touched_collider(phys, n, i, pos, nrm) : -1;
     if (k < 0) return false;
     friction = phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
-    if (const double* shift = collider_shift(phys, k)) {
-        for (int c = 0; c < 3; ++c) u[c] = shift[MOTION_VELOCITY + c];
-    }
+    const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+    surface_velocity(phys, k, p, u);
     return true;
 }
 

@@ -227,7 +227,8 @@ Status step(Core& core, double remaining, double span) {
     // Particles at rest on the floor take no part in the step (a constraint of its solve) unless its forces
     // would move them; the model's free flags are theirs again before the step ends.
     Index held = hold_resting(n, phys.floor_z, buf.pos, buf.vel, cloth.free, buf.held);
-    const Index held_on_colliders = hold_on_colliders(n, phys, buf.pos, buf.vel, cloth.free, buf.held);
+    const Index held_on_colliders = hold_on_colliders(n, phys, buf.pos, buf.vel, cloth.free, buf.held,
+                                                          clock[LAST_STEP]);
     held += held_on_colliders;
     const Index held_on_edges = core.contact.lists != nullptr ? hold_on_collider_edges(core.contact, *core.contact.lists,
                                                                                        phys, n, buf.pos, buf.vel,
@@ -293,7 +294,7 @@ Status step(Core& core, double remaining, double span) {
                                                 : 0);
             const double slipped = released == 0 && adaptive
                 ? slip_on_supports(n, phys, core.work.force, core.solver.mass, implicit ? core.work.diagonal_blocks : nullptr,
-                                   core.work.blocks, h, control.allowed, cloth.free, buf.held, buf.trial_pos,
+                                   core.work.blocks, h, control.allowed, cloth.free, buf.held, buf.pos, buf.trial_pos,
                                    buf.trial_vel)
                 : -1.0;
             if (slipped >= 0.0) {
@@ -301,14 +302,14 @@ Status step(Core& core, double remaining, double span) {
             } else {
                 released += release_slipping(n, phys.floor_friction, core.work.force, cloth.free, buf.held) +
                             (held_on_colliders > 0
-                                 ? release_from_colliders(n, phys, buf.pos, core.work.force, cloth.free, buf.held)
+                                 ? release_from_colliders(n, phys, buf.pos, core.work.force, core.solver.mass, cloth.free, buf.held)
                                  : 0);
             }
             if (released > 0) {  // redo the step with them free, and with them those near slipping too
                 held -= released + release_slipping(n, RELEASE_ROUND_CONE * phys.floor_friction, core.work.force,
                                                     cloth.free, buf.held);
                 if (held_on_colliders > 0) {
-                    held -= release_from_colliders(n, phys, buf.pos, core.work.force, cloth.free, buf.held,
+                    held -= release_from_colliders(n, phys, buf.pos, core.work.force, core.solver.mass, cloth.free, buf.held,
                                                    RELEASE_ROUND_CONE);
                 }
                 if (held_on_edges > 0) {

@@ -4,7 +4,7 @@ its mesh files (``cloth_mesh``, mesh colliders' ``file``) go into the unit's res
 
 The builder writes ``resources/wetcloth_scene.json``: ``{"starts": {name: value}, "vertices": n or null,
 "colliders": [{field: value}], "grip_keys": [{"time": s, "x": m, "y": m, "z": m}], "collider_keys":
-[{"collider": k, "time": s, "x": m, "y": m, "z": m}]}``.  A mesh file is packed as ``resources/meshes/<digest>/<file name>``
+[{"collider": k, "time": s, "x": m, "y": m, "z": m, "rx": deg, "ry": deg, "rz": deg}]}``.  A mesh file is packed as ``resources/meshes/<digest>/<file name>``
 and named by that relative path, which the unit finds in its resources (``mesh_file.SEARCH_FOLDERS``);
 the digest in the path means that two units holding the same relative path hold the same file.
 ``vertices`` (a mesh cloth's vertex count) sizes the FMI 3.0 unit's array outputs instead of the

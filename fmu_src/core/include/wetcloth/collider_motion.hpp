@@ -1,8 +1,12 @@
 // Colliders moved by keys (docs/model.md section 6.3, "Moving colliders"): each collider may be displaced
-// from where its row puts it by d_k(t), linear between its keys ((time, x, y, z) rows of
-// Physics::collider_keys), 0 at t = 0 and the last key's after it.  The step loop ends steps on key times,
-// so a collider moves at one velocity through a step; the geometry (colliders.cpp, collider_mesh.cpp) is
-// looked up at p - d_k, and friction acts on the velocity relative to the collider's.
+// from where its row puts it by d_k(t), linear between its keys ((time, x, y, z, rx, ry, rz) rows of
+// Physics::collider_keys), 0 at t = 0 and the last key's after it, and turned about its centre c_k (its
+// row's C_X..C_Z) by R_k(t): the key's rotation vector (rx, ry, rz) rad, by slerp between keys (a constant
+// angular velocity omega over each key interval).  The step loop ends steps on key times, so a collider
+// moves at one velocity and one angular velocity through a step; the geometry (colliders.cpp,
+// collider_mesh.cpp) is looked up at its table point c_k + R_k^T (p - c_k - d_k) (p - d_k if it does not
+// turn), normals turned back by R_k, and friction acts on the velocity relative to its surface's there,
+// v_k + omega x (p - c_k - d_k).
 #pragma once
 #include "wetcloth/colliders.hpp"
 #include "wetcloth/core.hpp"
@@ -10,17 +14,22 @@
 namespace wc {
 
 //: Columns of a row of Physics::collider_motion: the displacement now (m), the velocity over the current
-//: step (m/s), the displacement at the step's start (m).
-enum MotionColumn : Index { MOTION_NOW = 0, MOTION_VELOCITY = 3, MOTION_START = 6, MOTION_COLUMNS = 9 };
+//: step (m/s), the displacement at the step's start (m); the angular velocity over the step (rad/s), the
+//: rotation now and at the step's start (3 x 3, by rows), and 1 if the collider turns at all (a key of
+//: nonzero rotation), else 0 (then the rotation columns are not looked at).
+enum MotionColumn : Index {
+    MOTION_NOW = 0, MOTION_VELOCITY = 3, MOTION_START = 6, MOTION_SPIN = 9, MOTION_TURN = 12, MOTION_TURN_START = 21,
+    MOTION_TURNS = 30, MOTION_COLUMNS = 31
+};
 
-//: Columns of a row of Physics::collider_keys.
-enum ColliderKeyColumn : Index { K_COLLIDER = 0, K_TIME, K_X, K_Y, K_Z, COLLIDER_KEY_COLUMNS };
+//: Columns of a row of Physics::collider_keys: collider (from 0), time s, displacement m, rotation vector rad.
+enum ColliderKeyColumn : Index { K_COLLIDER = 0, K_TIME, K_X, K_Y, K_Z, K_RX, K_RY, K_RZ, COLLIDER_KEY_COLUMNS };
 
 //: A key time within this many seconds (relative, at least 1 s) of t counts as reached at t: the step that
 //: ends on it by rounding leaves no sliver.
 inline double key_slack(double t) { return 1e-12 * (t > 1.0 ? t : 1.0); }
 
-//: Whether collider k has a key of nonzero displacement (a moving mesh's edges are left out of the edges'
+//: Whether collider k has a key of nonzero displacement or rotation (a moving mesh's edges are left out of the edges'
 //: pass, collider_edges.hpp: only the particles' contact keeps the cloth off it).
 bool collider_moves(const Physics& phys, Index k);
 
@@ -43,24 +52,42 @@ double next_collider_key(const Physics& phys, double t);
 //: Whether a collider moves at t (s) or will (then the cloth does not fall asleep).
 bool colliders_ahead(const Physics& phys, double t);
 
-//: The longest step (s) over which no moving collider moves farther than MOTION_STEP_FRACTION of its
-//: half size (a sphere's radius, a box's or cylinder's smallest half edge, a solid mesh's smallest half
-//: box edge; planes and open meshes are not limited), or infinity.
+//: The longest step (s) over which no point of a moving collider's surface moves farther than
+//: MOTION_STEP_FRACTION of its half size (a sphere's radius, a box's or cylinder's smallest half edge, a
+//: solid mesh's smallest half box edge; planes and open meshes are not limited), or infinity.  A point's
+//: speed is at most |v| + |omega| r_far, r_far the farthest point's distance from the centre (0 for a sphere:
+//: its turning does not move its surface).
 double collider_step_limit(const Physics& phys);
 
 //: The fraction of its half size a collider may move in one step: a particle it sweeps over in a step
 //: still lies on the side it entered from, and is pushed back out there.
 inline constexpr double MOTION_STEP_FRACTION = 0.5;
 
-//: The velocity (3, m/s) of the moving collider that holds a particle (its Buffers::held value), or null
-//: (not held on a collider, or nothing moves).
-inline const double* held_rate(const Physics& phys, double held) {
-    if (phys.collider_motion == nullptr || held < collider_held(0)) return nullptr;
-    return phys.collider_motion + static_cast<Index>(held - collider_held(0)) * MOTION_COLUMNS + MOTION_VELOCITY;
-}
+//: Whether a collider's motion row (shift, or null) turns it.
+inline bool turns(const double* shift) { return shift != nullptr && shift[MOTION_TURNS] != 0.0; }
+
+//: The point q (3) of the collider's table frame (where its row puts it) that lies at `at` (3) now (or at
+//: the step's start when `start`): c + R^T (at - c - d), or at - d when it does not turn; at when it does
+//: not move (shift null).  centre: the row's C_X..C_Z.
+void table_point(const double* shift, const double* centre, const double* at, bool start, double* q);
+
+//: The world point p (3) where the table point q (3) is now: c + d + R (q - c), or q + d.
+void world_point(const double* shift, const double* centre, const double* q, double* p);
+
+//: The world direction (3) of a table-frame direction v (3) now: R v in place (unchanged if it does not turn).
+void world_direction(const double* shift, double* v);
+
+//: The velocity (3, m/s) over the step of collider k's surface at world point p (3):
+//: v_k + omega x (p - c - d) (d now); 0 when it does not move.
+void surface_velocity(const Physics& phys, Index k, const double* p, double* u);
+
+//: The velocity (3, m/s) at which the moving collider that holds particle i (its Buffers::held value) carries
+//: it over a step of h s from pos (3, n): v_k, or the chord (carried - p) / h of its turn; false (rate unset)
+//: when it is not held on a collider or nothing moves.
+bool held_rate(const Physics& phys, double held, Index n, Index i, const double* pos, double h, double* rate);
 
 //: The particles held on a moving collider (held (n) collider_held(k)) move with it over a step of h s:
-//: trial_pos (3, n) = pos + h u, trial_vel = u (u its velocity).
+//: trial_pos (3, n) = pos + h rate (held_rate), trial_vel its surface's velocity there at the step's end.
 void carry_held(Index n, const Physics& phys, const double* held, const double* pos, double h, double* trial_pos,
                 double* trial_vel);
 

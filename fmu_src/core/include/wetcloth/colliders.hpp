@@ -22,6 +22,9 @@ enum ColliderColumn : Index {
 //: outward normal there (normal, 3); a mesh collider's is at most reach (m): farther, it is not looked for.
 double collider_distance(const Physics& phys, Index k, const double* p, double reach, double* normal);
 
+//: As collider_distance, for the collider of row `row` where its row puts it (unmoved), from point p (3).
+double table_distance(const Physics& phys, const double* row, const double* p, double reach, double* normal);
+
 //: After a step from start (3, n) to pos (3, n): every particle whose centre is closer than gap =
 //: thickness / 2 to a collider is put back at distance gap along the outward normal; one whose path
 //: crossed a mesh collider's triangle goes back to the side it came from, gap off that triangle.  Its
@@ -40,21 +43,26 @@ Index touched_collider(const Physics& phys, Index n, Index i, const double* pos,
 inline double collider_held(Index k) { return 3.0 + static_cast<double>(k); }
 
 //: As the floor's hold_resting: the free particles on a collider (within gap m) with zero velocity
-//: (friction stopped them) are held for the coming step (free 0, held collider_held(k)).  Returns how many.
-Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const double* vel, double* free, double* held);
+//: (friction stopped them) are held for the coming step (free 0, held collider_held(k)); on a moving collider
+//: at its surface's velocity there, on a turning one within |omega| |omega x r| last_step (s) of it (the
+//: change of the surface's velocity over the last step's travel, which a step stopping a particle on it
+//: leaves).  Returns how many.
+Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const double* vel, double* free, double* held,
+                        double last_step = 0.0);
 
 //: As the floor's release_slipping: release the particles held on a collider that the step's force (N,
-//: (3, n)) lifts off it or pushes along it above cone times friction times the force into it.  Returns
-//: how many.
-Index release_from_colliders(Index n, const Physics& phys, const double* pos, const double* force, double* free,
-                             double* held, double cone = 1.0);
+//: (3, n)) lifts off it or pushes along it above cone times friction times the force into it (on a turning
+//: collider the force less mass (kg, (n)) times the surface's centripetal acceleration).  Returns how many.
+Index release_from_colliders(Index n, const Physics& phys, const double* pos, const double* force, const double* mass,
+                             double* free, double* held, double cone = 1.0);
 
 //: Instead of taking the step again: the particles held on the floor or a collider that the step's force
 //: (N, (3, n)) would have slipped or lifted (release_slipping's and release_from_colliders's test) move
 //: as they would have from rest over the step of h s under the force's excess beyond friction
 //: (slip_force; a = excess / m_e): pos (3, n) by a h^2 / 2 and vel by a h, and are released; provided
 //: each of them moves at most `limit` m (the error the step may make) and a collider's is still on it (a
-//: moving collider's looked at where it held the particle: pos less its motion over the step).
+//: moving collider's looked at where it held the particle: pos less its motion over the step, or its
+//: start (3, n) on a turning one, whose force is less mass times the surface's centripetal acceleration).
 //: m_e (kg) is the particle's effective mass along the excess in the step's own matrix: its mass (n)
 //: plus e^T (D_i + B_i) e, e the excess's direction, D_i its springs' part of its diagonal block
 //: (diagonal_blocks (6, n)) and B_i its own (blocks (6, n): drag, buoyancy), as the implicit step left
@@ -63,7 +71,7 @@ Index release_from_colliders(Index n, const Physics& phys, const double* pos, co
 //: farther (the step is then to be taken again).  Layers' holds are not looked at.
 double slip_on_supports(Index n, const Physics& phys, const double* force, const double* mass,
                         const double* diagonal_blocks, const double* blocks, double h, double limit, double* free,
-                        double* held, double* pos, double* vel);
+                        double* held, const double* start, double* pos, double* vel);
 
 //: The particles on a collider (within gap m, where collider_contact left them) get the history of a
 //: straight motion along its normal (as the floor's agree_history).  Returns how many.

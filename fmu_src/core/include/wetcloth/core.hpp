@@ -107,7 +107,8 @@ struct Physics {
     const double* grip_keys = nullptr;   // (grip_key_count, 4) rows: time s, x, y, z m
     const double* grip_origin = nullptr; // (3, n) m: where the grip's zero displacement holds the particles (t = 0)
     Index collider_key_count = 0;          // the colliders' keys (collider_motion.hpp), none by default
-    const double* collider_keys = nullptr; // (collider_key_count, 5) rows: collider (from 0), time s, x, y, z m
+    const double* collider_keys = nullptr; // (collider_key_count, 8) rows: collider (from 0), time s, x, y, z m,
+                                           // rotation vector rx, ry, rz rad
     double* collider_motion = nullptr;     // (collider_count, MOTION_COLUMNS) scratch the step loop sets; null
                                            // without keys (every collider still)
 };
