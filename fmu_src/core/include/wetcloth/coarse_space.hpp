@@ -1,4 +1,4 @@
-// A coarse space for the linear solves of fixed (frame-long) steps on grids: the rigid translations of
+// A coarse space for the linear solves of backward Euler's fixed (frame-long) steps on grids: the rigid translations of
 // square aggregates of particles, with their x, y, z coupled through the Galerkin product P^T A P of
 // the step's own Newton matrix A (masses, per-particle blocks, springs).  Added to the plane
 // preconditioner (two-level additive Schwarz), it supplies the coupling of the components across a
