@@ -1,0 +1,46 @@
+// A coarse space for the linear solves of backward Euler's fixed (frame-long) steps on grids: the rigid translations of
+// square aggregates of particles, with their x, y, z coupled through the Galerkin product P^T A P of
+// the step's own Newton matrix A (masses, per-particle blocks, springs).  Added to the plane
+// preconditioner (two-level additive Schwarz), it supplies the coupling of the components across a
+// curved sheet that the per-component V-cycles in each particle's frame (t1, t2, normal) miss.
+#pragma once
+#include <vector>
+
+#include "wetcloth/core.hpp"
+
+namespace wc {
+
+//: Particles per aggregate side.  Hanging 81 x 81 sheet, implicit_euler at 1/30 s, 3 s, self-collision
+//: on (bench/hanging_sheet.py): CG per Newton iteration 26.2 without, 18.6 at 27, 12.7 at 9, 11.5 at 7,
+//: 10.8 at 5, 9.0 at 4, 9.2 at 3; 9 and 7 the fastest (27 ms a frame against 38; 3: 52 ms, its band
+//: factor dominating).
+inline constexpr Index COARSE_SIDE = 9;
+
+//: The aggregates of a grid (side x side particles, the last row and column of aggregates possibly
+//: narrower) and the coarse matrix, 3 unknowns per aggregate (x, y, z, aggregate-major), kg: its lower
+//: band, row-major, entry (row, col) at band[row * (width + 1) + row - col], Cholesky-factored in place
+//: by build_coarse_space.  coarse is scratch (3 count).
+struct CoarseSpace {
+    Index side = 0, columns = 0, count = 0, width = 0;
+    std::vector<Index> aggregate;  // (n) each particle's
+    std::vector<double> band;
+    std::vector<double> coarse;
+};
+
+//: Whether a cloth gets a coarse space: a grid (a mesh's listed springs are not assembled).
+inline bool has_coarse_space(const Cloth& cloth) { return cloth.grid_x > 0 && cloth.pair_count == 0; }
+
+//: Shape coarse for a grid cloth with aggregates of side x side particles.
+void shape_coarse_space(CoarseSpace& coarse, const Cloth& cloth, Index side);
+
+//: Assemble into coarse.band P^T A P for the matrix A that system_matvec applies (masses `mass` kg, work's
+//: per-particle blocks and spring coefficients), P's columns the free particles' aggregate translations.
+void assemble_coarse_matrix(CoarseSpace& coarse, const Cloth& cloth, const double* mass, const Work& work);
+
+//: assemble_coarse_matrix and its Cholesky factor.
+void build_coarse_space(CoarseSpace& coarse, const Cloth& cloth, const double* mass, const Work& work);
+
+//: z += P (P^T A P)^-1 P^T r for a (3, n) residual r (N) into z (m/s), after build_coarse_space.
+void add_coarse_correction(CoarseSpace& coarse, const Cloth& cloth, const double* r, double* z);
+
+}  // namespace wc
