@@ -64,34 +64,52 @@ void rotation_vector(const double* R, double* r) {
     for (int c = 0; c < 3; ++c) r[c] = sign * angle * a[c];
 }
 
+//: The angular velocity (3, rad/s) of collider k over its key interval that ends at key `key` (from
+//: before, START_KEY for its first).
+void key_spin(const double* before, const double* key, double* omega) {
+    double Ra[9], Rb[9], relative[9];
+    rotation_of(before + K_RX, Ra);
+    rotation_of(key + K_RX, Rb);
+    multiply(Rb, Ra, true, relative);
+    rotation_vector(relative, omega);
+    for (int c = 0; c < 3; ++c) omega[c] /= key[K_TIME] - before[K_TIME];
+}
+
+//: Collider k's keys around t (s): the last at or before t (START_KEY if none) and the first after it (null
+//: at or after the last key).
+struct KeyInterval {
+    const double* before;
+    const double* after;
+};
+
+KeyInterval key_interval(const Physics& phys, Index k, double t) {
+    const double* before = START_KEY;
+    const double slack = key_slack(t);
+    for (Index r = 0; r < phys.collider_key_count; ++r) {
+        const double* key = phys.collider_keys + r * COLLIDER_KEY_COLUMNS;
+        if (static_cast<Index>(key[K_COLLIDER]) != k) continue;
+        if (key[K_TIME] > t + slack) return {before, key};
+        before = key;
+    }
+    return {before, nullptr};
+}
+
 //: Collider k's rotation R (3 x 3 by rows) at t (s) and its angular velocity omega (3, rad/s) over the key
 //: interval after t: slerp between the keys' rotations (R(t) = exp((t - t_a) [omega]) R_a, omega =
 //: log(R_b R_a^T) / (t_b - t_a)), identity at t = 0, the last key's after it.
 void orientation(const Physics& phys, Index k, double t, double* R, double* omega) {
-    const double* before = START_KEY;
-    const double* rows = phys.collider_keys;
-    const double slack = key_slack(t);
+    const KeyInterval at = key_interval(phys, k, t);
     omega[0] = omega[1] = omega[2] = 0.0;
-    for (Index r = 0; r < phys.collider_key_count; ++r) {
-        const double* key = rows + r * COLLIDER_KEY_COLUMNS;
-        if (static_cast<Index>(key[K_COLLIDER]) != k) continue;
-        if (key[K_TIME] <= t + slack) {
-            before = key;
-            continue;
-        }
-        double Ra[9], Rb[9], relative[9], turn[9], step[3];
-        rotation_of(before + K_RX, Ra);
-        rotation_of(key + K_RX, Rb);
-        multiply(Rb, Ra, true, relative);
-        rotation_vector(relative, omega);
-        const double span = key[K_TIME] - before[K_TIME];
-        for (int c = 0; c < 3; ++c) omega[c] /= span;
-        for (int c = 0; c < 3; ++c) step[c] = (t - before[K_TIME]) * omega[c];
-        rotation_of(step, turn);
-        multiply(turn, Ra, false, R);
+    if (at.after == nullptr) {  // at or after the last key: held there
+        rotation_of(at.before + K_RX, R);
         return;
     }
-    rotation_of(before + K_RX, R);  // at or after the last key: held there
+    key_spin(at.before, at.after, omega);
+    double Ra[9], turn[9], step[3];
+    rotation_of(at.before + K_RX, Ra);
+    for (int c = 0; c < 3; ++c) step[c] = (t - at.before[K_TIME]) * omega[c];
+    rotation_of(step, turn);
+    multiply(turn, Ra, false, R);
 }
 
 //: Whether collider k has a key of nonzero rotation.
@@ -103,17 +121,6 @@ bool collider_turns(const Physics& phys, Index k) {
         }
     }
     return false;
-}
-
-//: The angular velocity (3, rad/s) of collider k over its key interval that ends at key `key` (from
-//: before, START_KEY for its first).
-void key_spin(const double* before, const double* key, double* omega) {
-    double Ra[9], Rb[9], relative[9];
-    rotation_of(before + K_RX, Ra);
-    rotation_of(key + K_RX, Rb);
-    multiply(Rb, Ra, true, relative);
-    rotation_vector(relative, omega);
-    for (int c = 0; c < 3; ++c) omega[c] /= key[K_TIME] - before[K_TIME];
 }
 
 //: The distance (m) from collider row `row`'s centre to the farthest point of its surface that turning moves
@@ -138,27 +145,18 @@ double turning_reach(const Physics& phys, const double* row) {
 
 //: Collider k's displacement d (3) at t (s) and its velocity u (3) over the key interval after t.
 void displacement(const Physics& phys, Index k, double t, double* d, double* u) {
-    d[0] = d[1] = d[2] = 0.0;
+    const KeyInterval at = key_interval(phys, k, t);
     u[0] = u[1] = u[2] = 0.0;
-    const double* before = START_KEY;
-    const double* rows = phys.collider_keys;
-    const double slack = key_slack(t);
-    for (Index r = 0; r < phys.collider_key_count; ++r) {
-        const double* key = rows + r * COLLIDER_KEY_COLUMNS;
-        if (static_cast<Index>(key[K_COLLIDER]) != k) continue;
-        if (key[K_TIME] <= t + slack) {
-            before = key;
-            continue;
-        }
-        const double span = key[K_TIME] - before[K_TIME];
-        const double fraction = (t - before[K_TIME]) / span;
-        for (int c = 0; c < 3; ++c) {
-            d[c] = before[K_X + c] + fraction * (key[K_X + c] - before[K_X + c]);
-            u[c] = (key[K_X + c] - before[K_X + c]) / span;
-        }
+    if (at.after == nullptr) {  // at or after the last key: held there
+        for (int c = 0; c < 3; ++c) d[c] = at.before[K_X + c];
         return;
     }
-    for (int c = 0; c < 3; ++c) d[c] = before[K_X + c];  // at or after the last key: held there
+    const double span = at.after[K_TIME] - at.before[K_TIME];
+    const double fraction = (t - at.before[K_TIME]) / span;
+    for (int c = 0; c < 3; ++c) {
+        d[c] = at.before[K_X + c] + fraction * (at.after[K_X + c] - at.before[K_X + c]);
+        u[c] = (at.after[K_X + c] - at.before[K_X + c]) / span;
+    }
 }
 
 }  // namespace
