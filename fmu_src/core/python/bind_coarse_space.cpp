@@ -21,7 +21,7 @@ WETCLOTH_BINDINGS(m) {
             for (Index row = 0; row < size; ++row) {
                 for (Index col = 0; col < size; ++col) {
                     const Index hi = std::max(row, col), lo = std::min(row, col);
-                    dense[row * size + col] = hi - lo <= coarse.width ? coarse.band[hi * stride + hi - lo] : 0.0;
+                    dense[row * size + col] = hi - lo <= coarse.width ? coarse.band[lo * stride + hi - lo] : 0.0;
                 }
             }
         },

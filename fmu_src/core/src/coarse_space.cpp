@@ -2,7 +2,8 @@
 #include "wetcloth/coarse_space.hpp"
 
 #include <algorithm>
-#include <cmath>
+
+#include "wetcloth/band.hpp"
 
 namespace wc {
 
@@ -18,7 +19,7 @@ inline void add_block(CoarseSpace& coarse, Index I, Index J, double s, const dou
     for (Index c = 0; c < 3; ++c) {
         for (Index d = 0; d < 3; ++d) {
             const Index row = 3 * I + c, col = 3 * J + d;
-            if (col <= row) coarse.band[row * stride + row - col] += s * b[SLOT[c][d]];
+            if (col <= row) coarse.band[col * stride + row - col] += s * b[SLOT[c][d]];
         }
     }
 }
@@ -40,6 +41,7 @@ void shape_coarse_space(CoarseSpace& coarse, const Cloth& cloth, Index side) {
         coarse.aggregate[i] = (row / side) * columns + column / side;
     }
     coarse.band.assign(3 * coarse.count * (coarse.width + 1), 0.0);
+    coarse.rows.assign(coarse.band.size(), 0.0);
     coarse.coarse.assign(3 * coarse.count, 0.0);
 }
 
@@ -80,26 +82,16 @@ void assemble_coarse_matrix(CoarseSpace& coarse, const Cloth& cloth, const doubl
 
 void build_coarse_space(CoarseSpace& coarse, const Cloth& cloth, const double* mass, const Work& work) {
     assemble_coarse_matrix(coarse, cloth, mass, work);
-    const Index size = 3 * coarse.count, width = coarse.width, stride = width + 1;
-    double* L = coarse.band.data();
-    for (Index row = 0; row < size; ++row) {  // banded Cholesky, L L^T
-        const Index first = std::max<Index>(0, row - width);
-        for (Index col = first; col <= row; ++col) {
-            double sum = L[row * stride + row - col];
-            for (Index k = std::max<Index>(first, col - width); k < col; ++k) {
-                sum -= L[row * stride + row - k] * L[col * stride + col - k];
-            }
-            if (col < row) {
-                L[row * stride + row - col] = sum / L[col * stride];
-            } else {
-                L[row * stride] = sum > 0.0 ? std::sqrt(sum) : 1.0;  // (an aggregate of pinned particles: 0)
-            }
-        }
+    const Index size = 3 * coarse.count, stride = coarse.width + 1;
+    for (Index row = 0; row < size; ++row) {
+        if (coarse.band[row * stride] == 0.0) coarse.band[row * stride] = 1.0;  // (an aggregate of pinned particles)
     }
+    coarse.factored = band_factor(coarse.band.data(), coarse.rows.data(), size, coarse.width) == 0;
 }
 
 void add_coarse_correction(CoarseSpace& coarse, const Cloth& cloth, const double* r, double* z) {
-    const Index n = cloth.n, size = 3 * coarse.count, width = coarse.width, stride = width + 1;
+    if (!coarse.factored) return;
+    const Index n = cloth.n;
     const double* free = cloth.free;
     const Index* aggregate = coarse.aggregate.data();
     double* y = coarse.coarse.data();
@@ -107,17 +99,7 @@ void add_coarse_correction(CoarseSpace& coarse, const Cloth& cloth, const double
     for (Index c = 0; c < 3; ++c) {
         for (Index i = 0; i < n; ++i) y[3 * aggregate[i] + c] += free[i] * r[c * n + i];
     }
-    const double* L = coarse.band.data();
-    for (Index row = 0; row < size; ++row) {
-        double sum = y[row];
-        for (Index k = std::max<Index>(0, row - width); k < row; ++k) sum -= L[row * stride + row - k] * y[k];
-        y[row] = sum / L[row * stride];
-    }
-    for (Index row = size - 1; row >= 0; --row) {
-        double sum = y[row];
-        for (Index k = row + 1; k <= std::min(size - 1, row + width); ++k) sum -= L[k * stride + k - row] * y[k];
-        y[row] = sum / L[row * stride];
-    }
+    band_solve_one(coarse.band.data(), coarse.rows.data(), y, 3 * coarse.count, coarse.width);
     for (Index c = 0; c < 3; ++c) {
         for (Index i = 0; i < n; ++i) z[c * n + i] += free[i] * y[3 * aggregate[i] + c];
     }

@@ -17,14 +17,16 @@ namespace wc {
 inline constexpr Index COARSE_SIDE = 9;
 
 //: The aggregates of a grid (side x side particles, the last row and column of aggregates possibly
-//: narrower) and the coarse matrix, 3 unknowns per aggregate (x, y, z, aggregate-major), kg: its lower
-//: band, row-major, entry (row, col) at band[row * (width + 1) + row - col], Cholesky-factored in place
-//: by build_coarse_space.  coarse is scratch (3 count).
+//: narrower) and the coarse matrix, 3 unknowns per aggregate (x, y, z, aggregate-major), kg, in band.hpp's
+//: lower band form (half-bandwidth width), factored by build_coarse_space with band_factor (its rows
+//: beside it; factored false if it was not positive definite: no correction then).  coarse is scratch
+//: (3 count).
 struct CoarseSpace {
     Index side = 0, columns = 0, count = 0, width = 0;
     std::vector<Index> aggregate;  // (n) each particle's
-    std::vector<double> band;
+    std::vector<double> band, rows;
     std::vector<double> coarse;
+    bool factored = false;
 };
 
 //: Whether a cloth gets a coarse space: a grid (a mesh's listed springs are not assembled).
@@ -37,7 +39,8 @@ void shape_coarse_space(CoarseSpace& coarse, const Cloth& cloth, Index side);
 //: per-particle blocks and spring coefficients), P's columns the free particles' aggregate translations.
 void assemble_coarse_matrix(CoarseSpace& coarse, const Cloth& cloth, const double* mass, const Work& work);
 
-//: assemble_coarse_matrix and its Cholesky factor.
+//: assemble_coarse_matrix and its Cholesky factor (an aggregate of pinned particles alone, whose unknowns
+//: nothing couples, gets 1 on their diagonal).
 void build_coarse_space(CoarseSpace& coarse, const Cloth& cloth, const double* mass, const Work& work);
 
 //: z += P (P^T A P)^-1 P^T r for a (3, n) residual r (N) into z (m/s), after build_coarse_space.
