@@ -220,9 +220,9 @@ void surface_velocity(const Physics& phys, Index k, const double* p, double* u) 
     const double* w = shift + MOTION_SPIN;
     const double r[3] = {p[0] - centre[0] - shift[MOTION_NOW], p[1] - centre[1] - shift[MOTION_NOW + 1],
                          p[2] - centre[2] - shift[MOTION_NOW + 2]};
-    u[0] += w[1] * r[2] - w[2] * r[1];
-    u[1] += w[2] * r[0] - w[0] * r[2];
-    u[2] += w[0] * r[1] - w[1] * r[0];
+    double spin[3];
+    cross(w, r, spin);
+    for (int c = 0; c < 3; ++c) u[c] += spin[c];
 }
 
 bool held_rate(const Physics& phys, double held, Index n, Index i, const double* pos, double h, double* rate) {
@@ -349,9 +349,9 @@ void carry_held(Index n, const Physics& phys, const double* held, const double* 
             for (Index c = 0; c < 3; ++c) {
                 r[c] = trial_pos[c * n + i] - centre[c] - shift[MOTION_NOW + c] - h * shift[MOTION_VELOCITY + c];
             }
-            u[0] = shift[MOTION_VELOCITY] + w[1] * r[2] - w[2] * r[1];
-            u[1] = shift[MOTION_VELOCITY + 1] + w[2] * r[0] - w[0] * r[2];
-            u[2] = shift[MOTION_VELOCITY + 2] + w[0] * r[1] - w[1] * r[0];
+            double spin[3];
+            cross(w, r, spin);
+            for (Index c = 0; c < 3; ++c) u[c] = shift[MOTION_VELOCITY + c] + spin[c];
         }
         for (Index c = 0; c < 3; ++c) trial_vel[c * n + i] = u[c];
     }

@@ -76,8 +76,10 @@ bool bounds(const Physics& phys, const double* row, double* lo, double* hi) {
 double turning_bound(const Physics& phys, const double* row) {
     double lo[3], hi[3], far2 = 0.0;
     bounds(phys, row, lo, hi);
-    for (Index c = 0; c < 3; ++c) far2 += std::max(std::abs(lo[c] - row[C_X + c]), std::abs(hi[c] - row[C_X + c])) *
-                                          std::max(std::abs(lo[c] - row[C_X + c]), std::abs(hi[c] - row[C_X + c]));
+    for (Index c = 0; c < 3; ++c) {
+        const double extent = std::max(std::abs(lo[c] - row[C_X + c]), std::abs(hi[c] - row[C_X + c]));
+        far2 += extent * extent;
+    }
     return std::sqrt(far2);
 }
 
@@ -127,14 +129,11 @@ void carried_force(const Physics& phys, Index k, Index n, Index i, const double*
     if (!turns(shift)) return;
     const double* centre = phys.colliders + k * COLLIDER_COLUMNS + C_X;
     const double* w = shift + MOTION_SPIN;
-    double r[3], u[3];
+    double r[3], u[3], a[3];
     for (Index c = 0; c < 3; ++c) r[c] = pos[c * n + i] - centre[c] - shift[MOTION_NOW + c];
-    u[0] = w[1] * r[2] - w[2] * r[1];
-    u[1] = w[2] * r[0] - w[0] * r[2];
-    u[2] = w[0] * r[1] - w[1] * r[0];
-    f[0] -= mass[i] * (w[1] * u[2] - w[2] * u[1]);
-    f[1] -= mass[i] * (w[2] * u[0] - w[0] * u[2]);
-    f[2] -= mass[i] * (w[0] * u[1] - w[1] * u[0]);
+    cross(w, r, u);
+    cross(w, u, a);
+    for (Index c = 0; c < 3; ++c) f[c] -= mass[i] * a[c];
 }
 
 }  // namespace
