@@ -137,7 +137,7 @@ void forces(const Cloth& cloth, const Physics& phys, Work& work, const double* p
     if (is_mesh(cloth)) return mesh_forces(cloth, phys, work, pos, vel, water, 0.0, 0.0, false);
     const Index n = cloth.n;
     start_with_gravity(cloth, water, work.force);
-    if (cloth.families > 0 || cloth.pair_count > 0) {
+    if (cloth.families > 0) {  // (a mesh's listed springs: mesh_forces)
         update_saturation(cloth, phys, water, work.saturation);
         spring_forces(cloth, phys, work.saturation, pos, vel, work.force, work.buf);
     }
@@ -155,7 +155,7 @@ void forces_and_blocks(const Cloth& cloth, const Physics& phys, Work& work, cons
     start_with_gravity(cloth, water, work.force);
     fill_zero(work.diagonal_blocks, 6 * n);
     fill_zero(work.blocks, 6 * n);
-    if (cloth.families > 0 || cloth.pair_count > 0) {
+    if (cloth.families > 0) {  // (a mesh's listed springs: mesh_forces)
         update_saturation(cloth, phys, water, work.saturation);
         spring_forces_and_blocks(cloth, phys, work.saturation, pos, vel, h, slack_slope, work);
     }
