@@ -193,7 +193,8 @@ def collider_key_rows(keys) -> np.ndarray:
 
 
 def rotation_matrix(vector) -> np.ndarray:
-    """The rotation (3 x 3) by |vector| rad about vector (3): exp([vector]) (Rodrigues)."""
+    """The rotation (3 x 3) by |vector| rad about vector (3): exp([vector]) (Rodrigues).  (With numpy, not
+    scipy.spatial.transform, whose import takes 0.3 s of a fresh process's first scene with collider keys.)"""
     r = np.asarray(vector, dtype=np.float64)
     angle = float(np.linalg.norm(r))
     if angle == 0.0:
@@ -227,7 +228,7 @@ def rotation_vector(turn) -> np.ndarray:
 def _turn_between(a, b) -> float:
     """The angle (deg) of the rotation from rotation vector a to b (3, deg each): of R_b R_a^T."""
     relative = rotation_matrix(np.radians(b)) @ rotation_matrix(np.radians(a)).T
-    return math.degrees(math.acos(min(1.0, max(-1.0, 0.5 * (np.trace(relative) - 1.0)))))
+    return math.degrees(float(np.linalg.norm(rotation_vector(relative))))
 
 
 @dataclass(frozen=True)
