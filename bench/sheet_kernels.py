@@ -7,7 +7,9 @@ per call, best of --repeat rounds, for comparing builds of the core (run each bu
 forces_and_blocks: the forces and the Jacobian's pieces (a Newton iteration's residual); system_matvec:
 A p (a CG iteration's product); set_systems_from_jacobian: the fixed steps' three frame systems and
 their multigrid levels (once a Newton iteration); apply: the preconditioner with those systems (a CG
-iteration); dot: one of CG's dot products.
+iteration); coarse build: the coarse space's Galerkin matrix and its band factor (once a Newton
+iteration); coarse correction: its P (P^T A P)^-1 P^T r added to the preconditioner's z (a CG iteration);
+dot: one of CG's dot products.
 """
 
 from __future__ import annotations
@@ -47,12 +49,16 @@ def main() -> None:
     cloth, work, mass = model.cloth, model.work, sim._solver.mass
     p = np.random.default_rng(1).standard_normal((3, model.topology.n))
     out = np.zeros_like(p)
+    coarse = _core.CoarseSpace(cloth, _core.COARSE_SIDE)
+    assert coarse.build(cloth, work, mass)
     kernels = {
         "forces_and_blocks": (lambda: _core.forces_and_blocks(cloth, model.physics, work, buffers.pos, buffers.vel,
                                                               buffers.water, FRAME, 0.0), 50),
         "system_matvec": (lambda: _core.system_matvec(cloth, work, mass, p, out), 300),
         "set_systems_from_jacobian": (lambda: _core.set_systems_from_jacobian(plane, cloth, mass, work), 20),
         "apply": (lambda: _core.apply(plane, cloth.free, p, out), 200),
+        "coarse build": (lambda: coarse.build(cloth, work, mass), 100),
+        "coarse correction": (lambda: coarse.add_correction(cloth, p, out), 1000),
         "dot": (lambda: _core.dot(p, out), 1000),
     }
     print(f"hanging sheet 81 x 81 after 1 s of implicit_euler frame steps: CPU us per call, best of {args.repeat}")

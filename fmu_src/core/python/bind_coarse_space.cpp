@@ -1,4 +1,5 @@
-// Bindings of the frame steps' coarse space (coarse_space.cpp), for tests: its matrix and its correction.
+// Bindings of the frame steps' coarse space (coarse_space.cpp): for tests, its matrix and its correction;
+// for bench/sheet_kernels.py, a CoarseSpace kept between calls (its build and its correction timed apart).
 #include <algorithm>
 
 #include "convert.hpp"
@@ -38,6 +39,29 @@ WETCLOTH_BINDINGS(m) {
                                   argument<double>(z, "z", 3 * c.n));
         },
         nb::arg("cloth"), nb::arg("work"), nb::arg("mass"), nb::arg("side"), nb::arg("r"), nb::arg("z"));
+    nb::class_<CoarseSpace>(m, "CoarseSpace", "A grid cloth's coarse space of side x side aggregates, kept between calls.")
+        .def(
+            "__init__",
+            [](CoarseSpace* self, nb::handle cloth, Index side) {
+                new (self) CoarseSpace();
+                shape_coarse_space(*self, cloth_from(cloth), side);
+            },
+            nb::arg("cloth"), nb::arg("side"))
+        .def(
+            "build",
+            [](CoarseSpace& self, nb::handle cloth, nb::handle work, nb::handle mass) {
+                const Cloth c = cloth_from(cloth);
+                build_coarse_space(self, c, argument<const double>(mass, "mass", c.n), work_from(work, c));
+                return self.factored;
+            },
+            nb::arg("cloth"), nb::arg("work"), nb::arg("mass"), "build_coarse_space: whether it factored.")
+        .def(
+            "add_correction",
+            [](CoarseSpace& self, nb::handle cloth, nb::handle r, nb::handle z) {
+                const Cloth c = cloth_from(cloth);
+                add_coarse_correction(self, c, argument<const double>(r, "r", 3 * c.n), argument<double>(z, "z", 3 * c.n));
+            },
+            nb::arg("cloth"), nb::arg("r"), nb::arg("z"), "z += P (P^T A P)^-1 P^T r, after build.");
 }
 
 }  // namespace wc::py

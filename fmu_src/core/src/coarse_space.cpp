@@ -91,17 +91,37 @@ void build_coarse_space(CoarseSpace& coarse, const Cloth& cloth, const double* m
 
 void add_coarse_correction(CoarseSpace& coarse, const Cloth& cloth, const double* r, double* z) {
     if (!coarse.factored) return;
-    const Index n = cloth.n;
+    // By runs of a grid row within one aggregate (contiguous particles): P^T r summed run by run, then
+    // each run's particles take their aggregate's coarse solution.
+    const Index n = cloth.n, grid_x = cloth.grid_x, side = coarse.side, columns = coarse.columns;
     const double* free = cloth.free;
-    const Index* aggregate = coarse.aggregate.data();
     double* y = coarse.coarse.data();
     std::fill(coarse.coarse.begin(), coarse.coarse.end(), 0.0);
-    for (Index c = 0; c < 3; ++c) {
-        for (Index i = 0; i < n; ++i) y[3 * aggregate[i] + c] += free[i] * r[c * n + i];
+    for (Index first = 0; first < n; first += grid_x) {
+        const Index aggregate_row = (first / grid_x) / side * columns;
+        for (Index column = 0; column < columns; ++column) {
+            const Index start = first + column * side, end = std::min(start + side, first + grid_x);
+            double* target = y + 3 * (aggregate_row + column);
+            for (Index c = 0; c < 3; ++c) {
+                const double* rc = r + c * n;
+                double sum = 0.0;
+                for (Index i = start; i < end; ++i) sum += free[i] * rc[i];
+                target[c] += sum;
+            }
+        }
     }
     band_solve_one(coarse.band.data(), coarse.rows.data(), y, 3 * coarse.count, coarse.width);
-    for (Index c = 0; c < 3; ++c) {
-        for (Index i = 0; i < n; ++i) z[c * n + i] += free[i] * y[3 * aggregate[i] + c];
+    for (Index first = 0; first < n; first += grid_x) {
+        const Index aggregate_row = (first / grid_x) / side * columns;
+        for (Index column = 0; column < columns; ++column) {
+            const Index start = first + column * side, end = std::min(start + side, first + grid_x);
+            const double* source = y + 3 * (aggregate_row + column);
+            for (Index c = 0; c < 3; ++c) {
+                double* zc = z + c * n;
+                const double value = source[c];
+                for (Index i = start; i < end; ++i) zc[i] += free[i] * value;
+            }
+        }
     }
 }
 
