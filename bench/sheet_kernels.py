@@ -50,14 +50,14 @@ def main() -> None:
     p = np.random.default_rng(1).standard_normal((3, model.topology.n))
     out = np.zeros_like(p)
     coarse = _core.CoarseSpace(cloth, _core.COARSE_SIDE)
-    assert coarse.build(cloth, work, mass)
+    assert coarse.build(cloth, work, mass, buffers.pos)
     kernels = {
         "forces_and_blocks": (lambda: _core.forces_and_blocks(cloth, model.physics, work, buffers.pos, buffers.vel,
                                                               buffers.water, FRAME, 0.0), 50),
         "system_matvec": (lambda: _core.system_matvec(cloth, work, mass, p, out), 300),
         "set_systems_from_jacobian": (lambda: _core.set_systems_from_jacobian(plane, cloth, mass, work), 20),
         "apply": (lambda: _core.apply(plane, cloth.free, p, out), 200),
-        "coarse build": (lambda: coarse.build(cloth, work, mass), 100),
+        "coarse build": (lambda: coarse.build(cloth, work, mass, buffers.pos), 100),
         "coarse correction": (lambda: coarse.add_correction(cloth, p, out), 1000),
         "dot": (lambda: _core.dot(p, out), 1000),
     }

@@ -9,15 +9,17 @@ namespace wc::py {
 
 WETCLOTH_BINDINGS(m) {
     m.attr("COARSE_SIDE") = COARSE_SIDE;
+    m.attr("COARSE_UNKNOWNS") = COARSE_UNKNOWNS;
     m.def(
         "coarse_matrix",
-        [](nb::handle cloth, nb::handle work, nb::handle mass, Index side, nb::handle out) {
+        [](nb::handle cloth, nb::handle work, nb::handle mass, nb::handle pos, Index side, nb::handle out) {
             const Cloth c = cloth_from(cloth);
             const Work w = work_from(work, c);
             CoarseSpace coarse;
             shape_coarse_space(coarse, c, side);
-            assemble_coarse_matrix(coarse, c, argument<const double>(mass, "mass", c.n), w);
-            const Index size = 3 * coarse.count, stride = coarse.width + 1;
+            assemble_coarse_matrix(coarse, c, argument<const double>(mass, "mass", c.n), w,
+                                   argument<const double>(pos, "pos", 3 * c.n));
+            const Index size = COARSE_UNKNOWNS * coarse.count, stride = coarse.width + 1;
             double* dense = argument<double>(out, "out", size * size);
             for (Index row = 0; row < size; ++row) {
                 for (Index col = 0; col < size; ++col) {
@@ -26,19 +28,20 @@ WETCLOTH_BINDINGS(m) {
                 }
             }
         },
-        nb::arg("cloth"), nb::arg("work"), nb::arg("mass"), nb::arg("side"), nb::arg("out"));
+        nb::arg("cloth"), nb::arg("work"), nb::arg("mass"), nb::arg("pos"), nb::arg("side"), nb::arg("out"));
     m.def(
         "add_coarse_correction",
-        [](nb::handle cloth, nb::handle work, nb::handle mass, Index side, nb::handle r, nb::handle z) {
+        [](nb::handle cloth, nb::handle work, nb::handle mass, nb::handle pos, Index side, nb::handle r, nb::handle z) {
             const Cloth c = cloth_from(cloth);
             const Work w = work_from(work, c);
             CoarseSpace coarse;
             shape_coarse_space(coarse, c, side);
-            build_coarse_space(coarse, c, argument<const double>(mass, "mass", c.n), w);
+            build_coarse_space(coarse, c, argument<const double>(mass, "mass", c.n), w,
+                               argument<const double>(pos, "pos", 3 * c.n));
             add_coarse_correction(coarse, c, argument<const double>(r, "r", 3 * c.n),
                                   argument<double>(z, "z", 3 * c.n));
         },
-        nb::arg("cloth"), nb::arg("work"), nb::arg("mass"), nb::arg("side"), nb::arg("r"), nb::arg("z"));
+        nb::arg("cloth"), nb::arg("work"), nb::arg("mass"), nb::arg("pos"), nb::arg("side"), nb::arg("r"), nb::arg("z"));
     nb::class_<CoarseSpace>(m, "CoarseSpace", "A grid cloth's coarse space of side x side aggregates, kept between calls.")
         .def(
             "__init__",
@@ -49,12 +52,13 @@ WETCLOTH_BINDINGS(m) {
             nb::arg("cloth"), nb::arg("side"))
         .def(
             "build",
-            [](CoarseSpace& self, nb::handle cloth, nb::handle work, nb::handle mass) {
+            [](CoarseSpace& self, nb::handle cloth, nb::handle work, nb::handle mass, nb::handle pos) {
                 const Cloth c = cloth_from(cloth);
-                build_coarse_space(self, c, argument<const double>(mass, "mass", c.n), work_from(work, c));
+                build_coarse_space(self, c, argument<const double>(mass, "mass", c.n), work_from(work, c),
+                                   argument<const double>(pos, "pos", 3 * c.n));
                 return self.factored;
             },
-            nb::arg("cloth"), nb::arg("work"), nb::arg("mass"), "build_coarse_space: whether it factored.")
+            nb::arg("cloth"), nb::arg("work"), nb::arg("mass"), nb::arg("pos"), "build_coarse_space: whether it factored.")
         .def(
             "add_correction",
             [](CoarseSpace& self, nb::handle cloth, nb::handle r, nb::handle z) {
