@@ -4,6 +4,7 @@
 #include <algorithm>
 
 #include "wetcloth/band.hpp"
+#include "wetcloth/vec3.hpp"
 
 namespace wc {
 
@@ -13,13 +14,6 @@ constexpr Index U = COARSE_UNKNOWNS;
 
 //: Slot (xx, yy, zz, xy, xz, yz) of a symmetric 3x3 block's entry (c, d).
 constexpr int SLOT[3][3] = {{0, 3, 4}, {3, 1, 5}, {4, 5, 2}};
-
-//: a x b.
-inline void cross(const double* a, const double* b, double* out) {
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
 
 //: X(r) (3 x 3, row-major): column k is e_k x r, the motion a turn about axis k gives the arm r.
 inline void turn_matrix(const double* r, double* x) {

@@ -10,6 +10,7 @@
 #pragma once
 #include "wetcloth/colliders.hpp"
 #include "wetcloth/core.hpp"
+#include "wetcloth/vec3.hpp"
 
 namespace wc {
 
@@ -62,13 +63,6 @@ double collider_step_limit(const Physics& phys);
 //: The fraction of its half size a collider may move in one step: a particle it sweeps over in a step
 //: still lies on the side it entered from, and is pushed back out there.
 inline constexpr double MOTION_STEP_FRACTION = 0.5;
-
-//: out (3) = a x b.
-inline void cross(const double* a, const double* b, double* out) {
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
 
 //: Whether a collider's motion row (shift, or null) turns it.
 inline bool turns(const double* shift) { return shift != nullptr && shift[MOTION_TURNS] != 0.0; }
