@@ -400,8 +400,8 @@ Index release_from_colliders(Index n, const Physics& phys, const double* pos, co
 }
 
 double slip_on_supports(Index n, const Physics& phys, const double* force, const double* mass,
-                        const double* diagonal_blocks, const double* blocks, double h, double limit, double* free,
-                        double* held, const double* start, double* pos, double* vel) {
+                        const double* diagonal_blocks, const double* blocks, double h, double limit,
+                        const double* held, const double* start, double* pos, double* vel) {
     const double up[3] = {0.0, 0.0, 1.0};
     double farthest = 0.0;
     for (int pass = 0; pass < 2; ++pass) {  // first: how far each would move; second: move them
@@ -441,8 +441,6 @@ double slip_on_supports(Index n, const Physics& phys, const double* force, const
                 pos[c * n + i] += 0.5 * excess[c] / inertia * h * h;
                 vel[c * n + i] += excess[c] / inertia * h;
             }
-            held[i] = 0.0;
-            free[i] = 1.0;
         }
     }
     return farthest;

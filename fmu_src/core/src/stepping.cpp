@@ -294,8 +294,7 @@ Status step(Core& core, double remaining, double span) {
                                                 : 0);
             const double slipped = released == 0 && adaptive
                 ? slip_on_supports(n, phys, core.work.force, core.solver.mass, implicit ? core.work.diagonal_blocks : nullptr,
-                                   core.work.blocks, h, control.allowed, cloth.free, buf.held, buf.pos, buf.trial_pos,
-                                   buf.trial_vel)
+                                   core.work.blocks, h, control.allowed, buf.held, buf.pos, buf.trial_pos, buf.trial_vel)
                 : -1.0;
             if (slipped >= 0.0) {
                 trial.error = pymax(trial.error, slipped);

@@ -59,7 +59,8 @@ Index release_from_colliders(Index n, const Physics& phys, const double* pos, co
 //: Instead of taking the step again: the particles held on the floor or a collider that the step's force
 //: (N, (3, n)) would have slipped or lifted (release_slipping's and release_from_colliders's test) move
 //: as they would have from rest over the step of h s under the force's excess beyond friction
-//: (slip_force; a = excess / m_e): pos (3, n) by a h^2 / 2 and vel by a h, and are released; provided
+//: (slip_force; a = excess / m_e): pos (3, n) by a h^2 / 2 and vel by a h (they stay marked held: the step's
+//: end releases every hold, and a step taken again for its error holds them again, as its first try did); provided
 //: each of them moves at most `limit` m (the error the step may make) and a collider's is still on it (a
 //: moving collider's looked at where it held the particle: pos less its motion over the step, or its
 //: start (3, n) on a turning one, whose force is less mass times the surface's centripetal acceleration).
@@ -70,8 +71,8 @@ Index release_from_colliders(Index n, const Physics& phys, const double* pos, co
 //: Returns the farthest such move (m, 0 if none slips), or -1 with nothing changed when one would move
 //: farther (the step is then to be taken again).  Layers' holds are not looked at.
 double slip_on_supports(Index n, const Physics& phys, const double* force, const double* mass,
-                        const double* diagonal_blocks, const double* blocks, double h, double limit, double* free,
-                        double* held, const double* start, double* pos, double* vel);
+                        const double* diagonal_blocks, const double* blocks, double h, double limit,
+                        const double* held, const double* start, double* pos, double* vel);
 
 //: The particles on a collider (within gap m, where collider_contact left them) get the history of a
 //: straight motion along its normal (as the floor's agree_history).  Returns how many.
