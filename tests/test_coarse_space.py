@@ -113,7 +113,9 @@ def test_coarse_correction_solves_the_coarse_system(crumpled):
     r = rng.normal(size=p.shape[0]) * np.tile(model.cloth.free, 3)
     z0 = rng.normal(size=p.shape[0])
     z = z0.copy()
-    _core.add_coarse_correction(model.cloth, model.work, mass, pos, SIDE, r, z)
+    coarse = _core.CoarseSpace(model.cloth, SIDE)
+    assert coarse.build(model.cloth, model.work, mass, pos)
+    coarse.add_correction(model.cloth, r, z)
     y = np.linalg.solve(matrix, p.T @ r)
     tolerance = 10 * np.linalg.cond(matrix) * size * EPS
     assert np.abs(z - z0 - p @ y).max() <= tolerance * np.abs(y).max() * np.abs(p).sum(axis=1).max()

@@ -1,5 +1,5 @@
-// Bindings of the frame steps' coarse space (coarse_space.cpp): for tests, its matrix and its correction;
-// for bench/sheet_kernels.py, a CoarseSpace kept between calls (its build and its correction timed apart).
+// Bindings of the frame steps' coarse space (coarse_space.cpp): for tests, its matrix as a dense array; a
+// CoarseSpace kept between calls, built and applied apart (tests; bench/sheet_kernels.py times each).
 #include <algorithm>
 
 #include "convert.hpp"
@@ -29,19 +29,6 @@ WETCLOTH_BINDINGS(m) {
             }
         },
         nb::arg("cloth"), nb::arg("work"), nb::arg("mass"), nb::arg("pos"), nb::arg("side"), nb::arg("out"));
-    m.def(
-        "add_coarse_correction",
-        [](nb::handle cloth, nb::handle work, nb::handle mass, nb::handle pos, Index side, nb::handle r, nb::handle z) {
-            const Cloth c = cloth_from(cloth);
-            const Work w = work_from(work, c);
-            CoarseSpace coarse;
-            shape_coarse_space(coarse, c, side);
-            build_coarse_space(coarse, c, argument<const double>(mass, "mass", c.n), w,
-                               argument<const double>(pos, "pos", 3 * c.n));
-            add_coarse_correction(coarse, c, argument<const double>(r, "r", 3 * c.n),
-                                  argument<double>(z, "z", 3 * c.n));
-        },
-        nb::arg("cloth"), nb::arg("work"), nb::arg("mass"), nb::arg("pos"), nb::arg("side"), nb::arg("r"), nb::arg("z"));
     nb::class_<CoarseSpace>(m, "CoarseSpace", "A grid cloth's coarse space of side x side aggregates, kept between calls.")
         .def(
             "__init__",

@@ -21,9 +21,9 @@ inline constexpr Index COARSE_UNKNOWNS = 6;
 inline constexpr Index COARSE_NEIGHBOURS = 5;
 
 //: Particles per aggregate side, measured with translations alone.  Hanging 81 x 81 sheet, implicit_euler
-//: at 1/30 s, 3 s, self-collision on (bench/hanging_sheet.py): CG per Newton iteration 26.2 without, 18.6 at 27, 12.7 at 9, 11.5 at 7,
-//: 10.8 at 5, 9.0 at 4, 9.2 at 3; 9 and 7 the fastest (27 ms a frame against 38; 3: 52 ms, its band
-//: factor dominating).
+//: at 1/30 s, 3 s, self-collision on (bench/hanging_sheet.py): CG per Newton iteration 26.2 without, 18.6
+//: at 27, 12.7 at 9, 11.5 at 7, 10.8 at 5, 9.0 at 4, 9.2 at 3; 9 and 7 the fastest (27 ms a frame against
+//: 38; 3: 52 ms, its band factor dominating).
 inline constexpr Index COARSE_SIDE = 9;
 
 //: The aggregates of a grid (side x side particles, the last row and column of aggregates possibly
