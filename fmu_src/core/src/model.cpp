@@ -84,11 +84,22 @@ constexpr std::size_t PREAMBLE = MAGIC_SIZE + 4 + 8;  // magic, version, checksu
 //: Whether an nx x ny grid's preconditioner has a multigrid hierarchy, and so reused Jacobian systems.
 bool multigrid(Index nx, Index ny) { return std::min(nx, ny) > MULTIGRID_SIDE; }
 
+//: Where each kept array starts in `values` (doubles), and at [KEPT] their end, for n particles, `along`
+//: entries of the springs' Jacobian and a reused systems' source of `source` doubles.
+KeptOffsets kept_offsets(std::size_t n, std::size_t along, std::size_t source) {
+    const std::size_t rule = REUSE_RULE_SIZE;
+    const std::size_t sizes[KEPT] = {3 * n, 3 * n, n, 3 * n, 3 * n, n, 3 * n, 3 * n, n, along, n, 3 * n, rule, source};
+    KeptOffsets at{};
+    for (int k = 0; k < KEPT; ++k) at[k + 1] = at[k] + sizes[k];
+    return at;
+}
+
 //: Doubles of a checkpoint's `values` for an nx x ny grid and F spring families (see Checkpoint).
 std::size_t value_count(Index nx, Index ny, Index families) {
     const Index n = nx * ny;
-    return static_cast<std::size_t>((25 + families) * n + REUSE_RULE_SIZE +
-                                    (multigrid(nx, ny) ? reused_source_size(n, families) : 0));
+    const Index source = multigrid(nx, ny) ? reused_source_size(n, families) : 0;
+    return kept_offsets(static_cast<std::size_t>(n), static_cast<std::size_t>(families * n),
+                        static_cast<std::size_t>(source))[KEPT];
 }
 
 struct Writer {
@@ -1034,44 +1045,35 @@ std::string Simulation::blow_up_message() const {
 }
 
 // ------------------------------------------------------------------------------------------ checkpoints
+template <class Self>
+auto Simulation::kept_arrays(Self& self) {
+    using Array = std::conditional_t<std::is_const_v<Self>, const double*, double*>;
+    const Buffers& b = self.core_.buf;
+    const Plane& pl = self.core_.plane;
+    return std::array<Array, KEPT>{b.pos, b.vel, b.water, b.prev_pos, b.prev_vel, b.prev_water, b.acceleration,
+                                   b.anchor, pl.reference_mass, pl.jacobian_along, pl.jacobian_mass,
+                                   self.core_.contact.reference, self.reused_.rule.data(), self.reused_.source.data()};
+}
+
+KeptOffsets Simulation::offsets() const {
+    return kept_offsets(topo_.n, along_count(), core_.reused != nullptr ? reused_.source.size() : 0);
+}
+
 void Simulation::save(Checkpoint& cp) const {
-    const Index n = topo_.n, families = topo_.families();
-    const Buffers& b = core_.buf;
     const Plane& pl = core_.plane;
     cp.scene = scene_;
-    cp.families = families;
+    cp.families = topo_.families();
     std::copy(clock_, clock_ + CLOCK_SIZE, cp.clock);
     std::copy(pl.reference, pl.reference + 3, cp.plane_reference);
     cp.contact_margin = core_.contact.margin[0];
-    cp.values.resize(value_count());
-    double* out = cp.values.data();
-    auto put = [&out](const double* from, Index count) {
-        std::memcpy(out, from, static_cast<std::size_t>(count) * sizeof(double));
-        out += count;
-    };
-    put(b.pos, 3 * n);
-    put(b.vel, 3 * n);
-    put(b.water, n);
-    put(b.prev_pos, 3 * n);
-    put(b.prev_vel, 3 * n);
-    put(b.prev_water, n);
-    put(b.acceleration, 3 * n);
-    put(b.anchor, 3 * n);
-    put(pl.reference_mass, n);
-    put(pl.jacobian_along, along_count());
-    put(pl.jacobian_mass, n);
-    put(core_.contact.reference, 3 * n);
-    put(reused_.rule.data(), REUSE_RULE_SIZE);
-    if (core_.reused != nullptr) put(reused_.source.data(), static_cast<Index>(reused_.source.size()));
+    const auto at = offsets();
+    cp.values.resize(at[KEPT]);
+    const auto arrays = kept_arrays(*this);
+    for (int k = 0; k < KEPT; ++k) std::copy(arrays[k], arrays[k] + (at[k + 1] - at[k]), cp.values.data() + at[k]);
 }
 
 Index Simulation::along_count() const {
     return topo_.mesh != nullptr ? static_cast<Index>(topo_.mesh->pair_rest.size()) : topo_.families() * topo_.n;
-}
-
-std::size_t Simulation::value_count() const {
-    if (topo_.mesh == nullptr) return wc::value_count(scene_.nx, scene_.ny, topo_.families());
-    return static_cast<std::size_t>(25 * topo_.n + along_count() + REUSE_RULE_SIZE);  // no reused systems
 }
 
 void Simulation::check(const Checkpoint& cp) const {
@@ -1082,7 +1084,7 @@ void Simulation::check(const Checkpoint& cp) const {
     }
     const std::string fixed = fixed_differences(scene_, cp.scene);
     if (!fixed.empty()) throw SnapshotError("snapshot of another scene: " + fixed + " differ (only inputs may)");
-    if (cp.families != topo_.families() || cp.values.size() != value_count()) {
+    if (cp.families != topo_.families() || cp.values.size() != offsets()[KEPT]) {
         throw SnapshotError("snapshot of another simulation: its arrays do not fit this one's");
     }
     bool finite = std::isfinite(cp.contact_margin);
@@ -1094,20 +1096,20 @@ void Simulation::check(const Checkpoint& cp) const {
     }
     if (!finite) throw SnapshotError("snapshot holds values that are not finite");
     // The state's contents (stepping.hpp, state_problem; Simulation.check_snapshot in Python).
-    const Index n = topo_.n;
+    const auto at = offsets();
     const double* v = cp.values.data();
     StateView state;
-    state.pos = v;
-    state.vel = v + 3 * n;
-    state.water = v + 6 * n;
-    state.prev_pos = v + 7 * n;
-    state.prev_vel = v + 10 * n;
-    state.prev_water = v + 13 * n;
-    state.acceleration = v + 14 * n;
-    state.anchor = v + 17 * n;
-    state.others = v + 20 * n;  // the preconditioner's masses and Jacobian
-    state.other_count = 2 * n + along_count();
-    state.contact_reference = state.others + state.other_count;
+    state.pos = v + at[K_POS];
+    state.vel = v + at[K_VEL];
+    state.water = v + at[K_WATER];
+    state.prev_pos = v + at[K_PREV_POS];
+    state.prev_vel = v + at[K_PREV_VEL];
+    state.prev_water = v + at[K_PREV_WATER];
+    state.acceleration = v + at[K_ACCELERATION];
+    state.anchor = v + at[K_ANCHOR];
+    state.others = v + at[K_REFERENCE_MASS];  // the preconditioner's masses and Jacobian
+    state.other_count = static_cast<Index>(at[K_CONTACT_REFERENCE] - at[K_REFERENCE_MASS]);
+    state.contact_reference = v + at[K_CONTACT_REFERENCE];
     state.contact_margin = cp.contact_margin;
     state.clock = cp.clock;
     const std::string problem = state_problem(core_.cloth, core_.phys, core_.control, state);
@@ -1117,44 +1119,25 @@ void Simulation::check(const Checkpoint& cp) const {
 void Simulation::restore(const Checkpoint& cp) {
     check(cp);
     const Index n = topo_.n;
-    Buffers& b = core_.buf;
     Plane& pl = core_.plane;
+    const auto at = offsets();
+    const auto arrays = kept_arrays(*this);
     const double* in = cp.values.data();
-    auto get = [&in](double* to, Index count) {
-        std::memcpy(to, in, static_cast<std::size_t>(count) * sizeof(double));
-        in += count;
-    };
-    get(b.pos, 3 * n);
-    get(b.vel, 3 * n);
-    get(b.water, n);
-    get(b.prev_pos, 3 * n);
-    get(b.prev_vel, 3 * n);
-    get(b.prev_water, n);
-    get(b.acceleration, 3 * n);
-    get(b.anchor, 3 * n);
-    const double* reference_mass = in;
-    get(pl.reference_mass, n);
-    const double* jacobian_along = in;
-    get(pl.jacobian_along, along_count());
-    const double* jacobian_mass = in;
-    get(pl.jacobian_mass, n);
-    const double* contact_reference = in;
-    in += 3 * n;
-    get(reused_.rule.data(), REUSE_RULE_SIZE);
-    if (core_.reused != nullptr) get(reused_.source.data(), static_cast<Index>(reused_.source.size()));
+    for (int k = 0; k < KEPT; ++k) std::copy(in + at[k], in + at[k + 1], arrays[k]);
     std::copy(cp.clock, cp.clock + CLOCK_SIZE, clock_);
     // The preconditioner as it was factored (Simulation.restore: refresh, refresh_from_jacobian).
     pl.reference[0] = cp.plane_reference[0];
     pl.reference[1] = 0.0;
     pl.reference[2] = cp.plane_reference[2];
     if (cp.plane_reference[1] != 0.0) {
-        refresh(pl, core_.cloth, reference_mass, cp.plane_reference[0]);
-        if (cp.plane_reference[2] != 0.0) refresh_from_jacobian(pl, core_.cloth, jacobian_mass, jacobian_along);
+        refresh(pl, core_.cloth, in + at[K_REFERENCE_MASS], cp.plane_reference[0]);
+        if (cp.plane_reference[2] != 0.0) {
+            refresh_from_jacobian(pl, core_.cloth, in + at[K_JACOBIAN_MASS], in + at[K_JACOBIAN_ALONG]);
+        }
     }
     if (core_.reused != nullptr) rebuild_reused(reused_, core_.cloth);
     // Self-collision's candidate list, rebuilt from its reference and margin (self_contact.restore).
     Contact& contact = core_.contact;
-    std::memcpy(contact.reference, contact_reference, 3 * static_cast<std::size_t>(n) * sizeof(double));
     if (cp.contact_margin > 0.0) {
         build(contact, n, scene_.thickness, cp.contact_margin);
     } else {

@@ -14,6 +14,7 @@
 // Every formula keeps the Python's order of operations, so that the arrays agree to the bit.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -310,12 +311,20 @@ struct SnapshotError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
+//: The arrays of a Checkpoint's values, in their order: pos, vel, water, prev_pos, prev_vel, prev_water,
+//: acceleration, anchor (3n, 3n, n, 3n, 3n, n, 3n, 3n), reference_mass (n), jacobian_along (F n on a grid,
+//: a mesh's S springs), jacobian_mass (n), contact reference (3n), the reused Jacobian systems' rule
+//: (REUSE_RULE_SIZE) and, on a grid with a multigrid hierarchy, their source (reused_plane.hpp; else empty).
+enum KeptArray : int {
+    K_POS = 0, K_VEL, K_WATER, K_PREV_POS, K_PREV_VEL, K_PREV_WATER, K_ACCELERATION, K_ANCHOR, K_REFERENCE_MASS,
+    K_JACOBIAN_ALONG, K_JACOBIAN_MASS, K_CONTACT_REFERENCE, K_REUSE_RULE, K_REUSE_SOURCE, KEPT
+};
+//: Where each of a Checkpoint's arrays starts in its values (doubles); the last entry: their end.
+using KeptOffsets = std::array<std::size_t, KEPT + 1>;
+
 //: What evolves, copied out of a Simulation (Simulation.snapshot's values): the scene (its inputs may
 //: differ from the simulation's), the clock, the preconditioner's reference, self-collision's margin and
-//: the arrays `values` in the order pos, vel, water, prev_pos, prev_vel, prev_water, acceleration,
-//: anchor (3n, 3n, n, 3n, 3n, n, 3n, 3n), reference_mass (n), jacobian_along (F n), jacobian_mass (n),
-//: contact reference (3n), the reused Jacobian systems' rule (REUSE_RULE_SIZE) and, on a grid with a
-//: multigrid hierarchy, their source (reused_plane.hpp).
+//: the arrays `values` (KeptArray).
 struct Checkpoint {
     Scene scene;
     Index families = 0;
@@ -405,7 +414,11 @@ private:
     void build_plane();                  // make_plane, make_hierarchy
     void build_mesh_plane();             // make_mesh_plane from the ClothMesh's arrays
     Index along_count() const;           // size of the plane's jacobian_along: F n (grid), S (mesh)
-    std::size_t value_count() const;     // doubles of a Checkpoint's values
+    //: The arrays a Checkpoint's values keep, in their order (const for a const self), and where each
+    //: starts there (doubles; the last entry: their end).
+    template <class Self>
+    static auto kept_arrays(Self& self);
+    KeptOffsets offsets() const;
 
     Scene scene_;
     Fixtures fixtures_;
