@@ -13,6 +13,7 @@
 #include <new>
 #include <stdexcept>
 
+#include "wetcloth/byte_record.hpp"
 #include "wetcloth/stepping.hpp"
 #include "wetcloth_fmu_variables.hpp"  // generated: VARIABLES, INSTANTIATION_TOKEN, FMI_VERSION
 
@@ -205,48 +206,6 @@ constexpr char STATE_MAGIC[] = "wetcloth-native-fmu-state\n";
 constexpr std::size_t MAGIC_SIZE = sizeof(STATE_MAGIC) - 1;
 constexpr std::uint32_t STATE_VERSION = 1;
 
-std::uint64_t fnv1a(const unsigned char* data, std::size_t size) {
-    std::uint64_t hash = 0xcbf29ce484222325ull;
-    for (std::size_t i = 0; i < size; ++i) {
-        hash ^= data[i];
-        hash *= 0x100000001b3ull;
-    }
-    return hash;
-}
-
-struct Out {
-    std::vector<unsigned char>& bytes;
-    template <class T>
-    void put(const T& value) {
-        const auto* p = reinterpret_cast<const unsigned char*>(&value);
-        bytes.insert(bytes.end(), p, p + sizeof(T));
-    }
-    void text(const std::string& s) {
-        put(static_cast<std::uint64_t>(s.size()));
-        bytes.insert(bytes.end(), s.begin(), s.end());
-    }
-};
-
-struct In {
-    const std::vector<unsigned char>& bytes;
-    std::size_t at = 0;
-    template <class T>
-    T get() {
-        if (bytes.size() - at < sizeof(T)) throw StateError("serialized WetCloth FMU state is truncated");
-        T value;
-        std::memcpy(&value, bytes.data() + at, sizeof(T));
-        at += sizeof(T);
-        return value;
-    }
-    std::string text() {
-        const auto size = get<std::uint64_t>();
-        if (bytes.size() - at < size) throw StateError("serialized WetCloth FMU state is truncated");
-        std::string s(reinterpret_cast<const char*>(bytes.data() + at), static_cast<std::size_t>(size));
-        at += static_cast<std::size_t>(size);
-        return s;
-    }
-};
-
 //: Whether two scenes hold the same values (Python's Scene equality).
 bool same_scene(const Scene& a, const Scene& b) {
     std::vector<double> x, y;
@@ -270,14 +229,14 @@ Parsed parse(const std::vector<unsigned char>& bytes) {
         throw StateError("not a serialized state of a native WetCloth unit (" + std::to_string(bytes.size()) +
                          " bytes without its header)");
     }
-    In in{bytes, MAGIC_SIZE};
+    ByteReader<StateError> in{bytes.data(), bytes.size(), MAGIC_SIZE, "serialized WetCloth FMU state is truncated"};
     const auto version = in.get<std::uint32_t>();
     if (version != STATE_VERSION) {
         throw StateError("serialized WetCloth FMU state of format version " + std::to_string(version) +
                          "; this unit reads version " + std::to_string(STATE_VERSION));
     }
     const auto checksum = in.get<std::uint64_t>();
-    if (fnv1a(bytes.data() + in.at, bytes.size() - in.at) != checksum) {
+    if (!in.body_matches(checksum)) {
         throw StateError("serialized WetCloth FMU state is corrupt or truncated (its checksum does not match)");
     }
     Parsed p;
@@ -814,11 +773,9 @@ bool free_state(void* state) {
 }  // namespace
 
 std::vector<unsigned char> Unit::state() const {
-    std::vector<unsigned char> bytes(STATE_MAGIC, STATE_MAGIC + MAGIC_SIZE);
-    Out out{bytes};
-    out.put(STATE_VERSION);
-    out.put(std::uint64_t{0});  // the checksum, below
-    const std::size_t body = bytes.size();
+    std::vector<unsigned char> bytes;
+    ByteWriter out{bytes};
+    out.begin(STATE_MAGIC, MAGIC_SIZE, STATE_VERSION);
     out.put(static_cast<std::uint64_t>(variable_count()));
     for_each_field(values_, [&](const char*, const auto& v) { out.put(v); });
     out.text(mesh_output_dir_);
@@ -838,8 +795,7 @@ std::vector<unsigned char> Unit::state() const {
     } else {
         out.put(std::uint64_t{0});
     }
-    const std::uint64_t checksum = fnv1a(bytes.data() + body, bytes.size() - body);
-    std::memcpy(bytes.data() + MAGIC_SIZE + 4, &checksum, sizeof(checksum));
+    out.seal();
     return bytes;
 }
 

@@ -9,6 +9,7 @@
 #include <limits>
 #include <type_traits>
 
+#include "wetcloth/byte_record.hpp"
 #include "wetcloth/collider_mesh.hpp"
 #include "wetcloth/collider_motion.hpp"
 #include "wetcloth/colliders.hpp"
@@ -64,16 +65,6 @@ double np_min(const std::vector<double>& a) {
 constexpr double SHARE[6][2] = {{1.0, 0.0}, {0.0, 1.0}, {0.5, 0.5}, {0.5, 0.5}, {0.0, 0.0}, {0.0, 0.0}};
 constexpr Index SLOT[6] = {5, 7, 8, 6, -1, -1};
 
-//: 64-bit FNV-1a of bytes.
-std::uint64_t fnv1a(const unsigned char* data, std::size_t size) {
-    std::uint64_t hash = 0xcbf29ce484222325ull;
-    for (std::size_t i = 0; i < size; ++i) {
-        hash ^= data[i];
-        hash *= 0x100000001b3ull;
-    }
-    return hash;
-}
-
 constexpr char SNAPSHOT_MAGIC[] = "wetcloth-native-snapshot\n";
 constexpr std::size_t MAGIC_SIZE = sizeof(SNAPSHOT_MAGIC) - 1;
 //: 4: the reused Jacobian systems' rule and source; 3: the scene's 44 fields (pinned_vertices, grip_x/y/z); 2: 40
@@ -101,37 +92,6 @@ std::size_t value_count(Index nx, Index ny, Index families) {
     return kept_offsets(static_cast<std::size_t>(n), static_cast<std::size_t>(families * n),
                         static_cast<std::size_t>(source))[KEPT];
 }
-
-struct Writer {
-    std::vector<unsigned char>& out;
-    template <class T>
-    void put(const T& value) {
-        const auto* p = reinterpret_cast<const unsigned char*>(&value);
-        out.insert(out.end(), p, p + sizeof(T));
-    }
-    void put(const double* values, std::size_t count) {
-        const auto* p = reinterpret_cast<const unsigned char*>(values);
-        out.insert(out.end(), p, p + count * sizeof(double));
-    }
-};
-
-struct Reader {
-    const unsigned char* data;
-    std::size_t size, at = 0;
-    template <class T>
-    T get() {
-        if (size - at < sizeof(T)) throw SnapshotError("snapshot bytes are truncated");
-        T value;
-        std::memcpy(&value, data + at, sizeof(T));
-        at += sizeof(T);
-        return value;
-    }
-    void get(double* values, std::size_t count) {
-        if ((size - at) / sizeof(double) < count) throw SnapshotError("snapshot bytes are truncated");
-        std::memcpy(values, data + at, count * sizeof(double));
-        at += count * sizeof(double);
-    }
-};
 
 }  // namespace
 
@@ -1150,11 +1110,9 @@ void Simulation::restore(const Checkpoint& cp) {
 std::vector<unsigned char> Simulation::snapshot() const {
     Checkpoint cp;
     save(cp);
-    std::vector<unsigned char> out(SNAPSHOT_MAGIC, SNAPSHOT_MAGIC + MAGIC_SIZE);
-    Writer w{out};
-    w.put(SNAPSHOT_VERSION);
-    w.put(std::uint64_t{0});  // checksum, below
-    const std::size_t body = out.size();
+    std::vector<unsigned char> out;
+    ByteWriter w{out};
+    w.begin(SNAPSHOT_MAGIC, MAGIC_SIZE, SNAPSHOT_VERSION);
     w.put(cp.families);
     w.put(static_cast<std::int64_t>(cp.values.size()));
     for_each_field(cp.scene, [&](const char*, const auto& v) { w.put(v); });
@@ -1162,8 +1120,7 @@ std::vector<unsigned char> Simulation::snapshot() const {
     w.put(cp.plane_reference, 3);
     w.put(cp.contact_margin);
     w.put(cp.values.data(), cp.values.size());
-    const std::uint64_t checksum = fnv1a(out.data() + body, out.size() - body);
-    std::memcpy(out.data() + MAGIC_SIZE + 4, &checksum, sizeof(checksum));
+    w.seal();
     return out;
 }
 
@@ -1172,14 +1129,14 @@ Checkpoint Simulation::from_bytes(const unsigned char* data, std::size_t size) {
         throw SnapshotError("not a snapshot of a native wetcloth simulation (" + std::to_string(size) +
                             " bytes without its header)");
     }
-    Reader r{data, size, MAGIC_SIZE};
+    ByteReader<SnapshotError> r{data, size, MAGIC_SIZE, "snapshot bytes are truncated"};
     const auto version = r.get<std::uint32_t>();
     if (version != SNAPSHOT_VERSION) {
         throw SnapshotError("snapshot of format version " + std::to_string(version) + "; this build reads version " +
                             std::to_string(SNAPSHOT_VERSION));
     }
     const auto checksum = r.get<std::uint64_t>();
-    if (fnv1a(data + PREAMBLE, size - PREAMBLE) != checksum) {
+    if (!r.body_matches(checksum)) {
         throw SnapshotError("snapshot bytes are corrupt or truncated (their checksum does not match)");
     }
     Checkpoint cp;
