@@ -22,13 +22,6 @@ Cloth spring_cloth(Index n, nb::handle offsets, nb::handle rest, nb::handle tens
     return c;
 }
 
-//: Python's truth of a flag argument (bool, numpy.bool_, int), as numba takes it.
-bool truth(nb::handle value) {
-    const int r = PyObject_IsTrue(value.ptr());
-    if (r < 0) throw nb::python_error();
-    return r != 0;
-}
-
 }  // namespace
 
 WETCLOTH_BINDINGS(m) {

@@ -3,18 +3,7 @@
 #include "convert.hpp"
 #include "wetcloth/water.hpp"
 
-namespace {
-
 namespace nb = nanobind;
-
-//: Python's truth of a flag argument (bool, numpy.bool_, int), as numba takes it.
-bool truth(nb::handle value) {
-    const int r = PyObject_IsTrue(value.ptr());
-    if (r < 0) throw nb::python_error();
-    return r != 0;
-}
-
-}  // namespace
 
 WETCLOTH_BINDINGS(m) {
     using namespace wc;

@@ -58,6 +58,13 @@ inline Index size_of(nb::handle value) {
     return static_cast<Index>(a.size());
 }
 
+//: Python's truth of a flag argument (bool, numpy.bool_, int), as numba takes it.
+inline bool truth(nb::handle value) {
+    const int r = PyObject_IsTrue(value.ptr());
+    if (r < 0) throw nb::python_error();
+    return r != 0;
+}
+
 template <class T>
 T number(nb::handle bundle, const char* field) {
     return nb::cast<T>(bundle.attr(field));
