@@ -29,6 +29,9 @@ namespace {
 //: change of the surface's velocity over the last step's travel (hold_on_colliders).
 constexpr double HOLD_SLACK = 1e-9;
 
+//: A cylinder's normal within this of square to its axis (rounding of a turned one) lies on its side.
+constexpr double SIDE_ROUNDING = 1e-9;
+
 //: Particle i of pos (3, n) as a point.
 std::array<double, 3> buf_point(Index n, Index i, const double* pos) { return {pos[i], pos[n + i], pos[2 * n + i]}; }
 
@@ -336,6 +339,23 @@ Index collider_contact(Index n, const Physics& phys, const double* start, double
         }
     }
     return touching;
+}
+
+bool normal_turning(const Physics& phys, Index k, const double* nrm, const double* v, double* turning) {
+    const double* row = phys.colliders + k * COLLIDER_COLUMNS;
+    const Index shape = static_cast<Index>(row[C_SHAPE]);
+    turning[0] = turning[1] = turning[2] = 0.0;
+    if (shape != SPHERE && shape != CYLINDER) return false;
+    double axis[3] = {0.0, 0.0, 0.0};  // a sphere's normal turns along every direction
+    if (shape == CYLINDER) {
+        axis[2] = 1.0;
+        world_direction(collider_shift(phys, k), axis);
+        if (std::abs(nrm[0] * axis[0] + nrm[1] * axis[1] + nrm[2] * axis[2]) > SIDE_ROUNDING) return false;  // cap, rim
+    }
+    const double along = v[0] * axis[0] + v[1] * axis[1] + v[2] * axis[2];
+    const double radius = row[C_RADIUS] + 0.5 * phys.thickness;
+    for (int c = 0; c < 3; ++c) turning[c] = (v[c] - along * axis[c]) / radius;
+    return turning[0] != 0.0 || turning[1] != 0.0 || turning[2] != 0.0;
 }
 
 Index touched_collider(const Physics& phys, Index n, Index i, const double* pos, double* nrm) {

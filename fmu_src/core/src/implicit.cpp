@@ -124,7 +124,7 @@ void newton_residual(const Cloth& cloth, const Physics& phys, Work& work, Solver
                      double slack_slope) {
     const Index n = cloth.n;
     forces_and_blocks(cloth, phys, work, out_pos, out_vel, step_water, bh, slack_slope);
-    if (solver.sliding != nullptr) add_sliding_friction(*solver.sliding, n, work.force);
+    if (solver.sliding != nullptr) add_sliding_friction(*solver.sliding, n, solver.mass, work.force);
     const double* free = cloth.free;
     const double* mass = solver.mass;
     for (Index c = 0; c < 3; ++c) {

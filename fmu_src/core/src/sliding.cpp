@@ -23,18 +23,20 @@ namespace wc {
 
 namespace {
 
-//: The surface particle i lies on: the floor (centre at floor_z or below) or the collider it touches, its
-//: outward normal into nrm, its friction and its velocity u (m/s: a moving collider's, else 0); false if none.
+//: The surface particle i lies on: the floor (centre at floor_z or below) or the collider it touches (k, -1:
+//: the floor), its outward normal into nrm, its friction and its velocity u (m/s: a moving collider's, else 0);
+//: false if none.
 bool surface_under(const Physics& phys, Index n, Index i, const double* pos, double nrm[3], double& friction,
-                   bool& on_floor, double u[3]) {
+                   bool& on_floor, double u[3], Index& k) {
     nrm[0] = 0.0;
     nrm[1] = 0.0;
     nrm[2] = 1.0;
     u[0] = u[1] = u[2] = 0.0;
     friction = phys.floor_friction;
     on_floor = pos[2 * n + i] <= phys.floor_z;
+    k = -1;
     if (on_floor) return true;
-    const Index k = phys.collider_count > 0 ? touched_collider(phys, n, i, pos, nrm) : -1;
+    k = phys.collider_count > 0 ? touched_collider(phys, n, i, pos, nrm) : -1;
     if (k < 0) return false;
     friction = phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
     const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
@@ -53,16 +55,99 @@ double along_surface(const double a[3], const double nrm[3], double t[3]) {
     return std::sqrt(length2);
 }
 
+//: Add particle i, on collider k (-1: the floor), sliding along t (3, of `length`), its normal turning at
+//: turning (3, 1/s).
 void add_particle(Sliding& sliding, Index i, const double nrm[3], const double t[3], double length, double friction,
-                  bool on_floor, const double u[3]) {
+                  bool on_floor, const double u[3], Index k, const double turning[3]) {
     sliding.index.push_back(i);
+    double centripetal = 0.0;
     for (int c = 0; c < 3; ++c) {
         sliding.normal.push_back(nrm[c]);
+        sliding.start_normal.push_back(nrm[c]);
         sliding.direction.push_back(t[c] / length);
+        sliding.start_direction.push_back(t[c] / length);
         sliding.surface_velocity.push_back(u[c]);
+        sliding.turning.push_back(turning[c]);
+        centripetal += t[c] * turning[c];
     }
     sliding.friction.push_back(friction);
     sliding.on_floor.push_back(on_floor ? 1 : 0);
+    sliding.collider.push_back(k);
+    sliding.centripetal.push_back(centripetal);
+}
+
+//: The force (N) particle s of the set presses onto its surface with: the force (3, n) into it less what
+//: keeps it on a curved path (mass (n) kg times its centripetal acceleration); negative if it lifts off.
+double pressing(const Sliding& sliding, Index s, Index n, const double* mass, const double* force) {
+    const Index i = sliding.index[s];
+    const double* nrm = &sliding.normal[3 * s];
+    const double into = -(force[i] * nrm[0] + force[n + i] * nrm[1] + force[2 * n + i] * nrm[2]);
+    return sliding.centripetal[s] != 0.0 ? into - mass[i] * sliding.centripetal[s] : into;
+}
+
+//: Put sliding particle s, which the solve kept in the tangent plane of its path's predicted end over a
+//: curved collider (on the surface to fourth order in the step), exactly back onto it (at reach m, along its normal there), and turn
+//: its velocity relative to the surface along the surface there, keeping its speed.  Returns how far it moved (m).
+double onto_collider(const Sliding& sliding, Index s, Index n, const Physics& phys, double reach, double h,
+                     double* pos, double* vel) {
+    const Index i = sliding.index[s], k = sliding.collider[s];
+    const double* shift = collider_shift(phys, k);
+    const bool sphere = phys.colliders[k * COLLIDER_COLUMNS + C_SHAPE] == SPHERE;  // the same shape, turned
+    if (turns(shift) && !sphere) return 0.0;  // (left where the solve put it)
+    // The collider is where the step started (end_collider_motion comes after): p as seen from there.
+    const double* moved = shift != nullptr ? shift + MOTION_VELOCITY : nullptr;
+    double p[3];
+    for (int c = 0; c < 3; ++c) p[c] = pos[c * n + i] - (moved != nullptr ? h * moved[c] : 0.0);
+    double nrm[3], u[3];
+    const double off = reach - collider_distance(phys, k, p, 2.0 * reach, nrm);
+    const double q[3] = {pos[i] + off * nrm[0], pos[n + i] + off * nrm[1], pos[2 * n + i] + off * nrm[2]};
+    surface_velocity(phys, k, p, u);
+    double v[3], across = 0.0, speed2 = 0.0, along2 = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        v[c] = vel[c * n + i] - u[c];
+        across += v[c] * nrm[c];
+        speed2 += v[c] * v[c];
+    }
+    for (int c = 0; c < 3; ++c) {
+        v[c] -= across * nrm[c];
+        along2 += v[c] * v[c];
+    }
+    const double keep = along2 > 0.0 ? std::sqrt(speed2 / along2) : 1.0;  // its speed
+    for (int c = 0; c < 3; ++c) {
+        pos[c * n + i] = q[c];
+        vel[c * n + i] = u[c] + keep * v[c];
+    }
+    return std::abs(off);
+}
+
+//: Turn sliding particle s's normal and direction to the surface's where its path over a curved collider
+//: will end a step of h s (predicted from its start's velocity): the step's force across the surface acts
+//: along the end's normal, as the implicit step takes it, and its end lies in the end's tangent plane, which
+//: stands h^2 kappa s^2 / 2 (`curving`, m) farther out along that normal than the start.
+void to_end(Sliding& sliding, Index s, double h) {
+    const double* n0 = &sliding.start_normal[3 * s];
+    const double* t0 = &sliding.start_direction[3 * s];
+    double* nrm = &sliding.normal[3 * s];
+    double* t = &sliding.direction[3 * s];
+    double length2 = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        nrm[c] = n0[c] + h * sliding.turning[3 * s + c];
+        length2 += nrm[c] * nrm[c];
+    }
+    const double scale = 1.0 / std::sqrt(length2);
+    double across = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        nrm[c] *= scale;
+        across += t0[c] * nrm[c];
+    }
+    double along2 = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        t[c] = t0[c] - across * nrm[c];
+        along2 += t[c] * t[c];
+    }
+    const double unit = 1.0 / std::sqrt(along2);
+    for (int c = 0; c < 3; ++c) t[c] *= unit;
+    sliding.curving[s] = 0.5 * h * h * sliding.centripetal[s];
 }
 
 }  // namespace
@@ -75,20 +160,29 @@ Index gather_sliding(Index n, const Physics& phys, const double* pos, const doub
     sliding.direction.clear();
     sliding.on_floor.clear();
     sliding.surface_velocity.clear();
+    sliding.collider.clear();
+    sliding.start_normal.clear();
+    sliding.start_direction.clear();
+    sliding.turning.clear();
+    sliding.centripetal.clear();
     for (Index i = 0; i < n; ++i) {
         if (free[i] == 0.0) continue;  // pinned, or held at rest
         double nrm[3], friction, u[3];
         bool on_floor;
-        if (!surface_under(phys, n, i, pos, nrm, friction, on_floor, u)) continue;
+        Index k;
+        if (!surface_under(phys, n, i, pos, nrm, friction, on_floor, u, k)) continue;
         const double v[3] = {vel[i] - u[0], vel[n + i] - u[1], vel[2 * n + i] - u[2]};  // relative to the surface
         double t[3];
         const double slide = along_surface(v, nrm, t);
         if (!(slide > 0.0)) continue;
         const double vn = v[0] * nrm[0] + v[1] * nrm[1] + v[2] * nrm[2];
         if (vn > ACROSS_ROUNDING * slide) continue;  // leaving the surface
-        add_particle(sliding, i, nrm, t, slide, friction, on_floor, u);
+        double turning[3] = {0.0, 0.0, 0.0};
+        if (k >= 0) normal_turning(phys, k, nrm, t, turning);
+        add_particle(sliding, i, nrm, t, slide, friction, on_floor, u, k, turning);
     }
     sliding.normal_speed.assign(sliding.index.size(), 0.0);
+    sliding.curving.assign(sliding.index.size(), 0.0);
     return sliding.count();
 }
 
@@ -101,7 +195,8 @@ Index add_released(Index n, const Physics& phys, const double* pos, const double
         if (free[i] == 0.0 || listed[i]) continue;
         double nrm[3], friction, u[3];
         bool on_floor;
-        if (!surface_under(phys, n, i, pos, nrm, friction, on_floor, u)) continue;
+        Index k;
+        if (!surface_under(phys, n, i, pos, nrm, friction, on_floor, u, k)) continue;
         if (vel[i] != u[0] || vel[n + i] != u[1] || vel[2 * n + i] != u[2]) continue;  // not at rest on it
         const double f[3] = {force[i], force[n + i], force[2 * n + i]};
         const double fn = f[0] * nrm[0] + f[1] * nrm[1] + f[2] * nrm[2];
@@ -109,10 +204,12 @@ Index add_released(Index n, const Physics& phys, const double* pos, const double
         double t[3];
         const double along = along_surface(f, nrm, t);
         if (!(along > 0.0)) continue;
-        add_particle(sliding, i, nrm, t, along, friction, on_floor, u);
+        const double still[3] = {0.0, 0.0, 0.0};  // at rest: its normal does not turn yet
+        add_particle(sliding, i, nrm, t, along, friction, on_floor, u, k, still);
         added += 1;
     }
     sliding.normal_speed.assign(sliding.index.size(), 0.0);
+    sliding.curving.assign(sliding.index.size(), 0.0);
     return added;
 }
 
@@ -129,6 +226,7 @@ void prescribe_normal_speed(Sliding& sliding, Index n, const double* pos, const 
                             double* vel) {
     for (Index s = 0; s < sliding.count(); ++s) {
         const Index i = sliding.index[s];
+        if (sliding.centripetal[s] != 0.0) to_end(sliding, s, h);
         const double* nrm = &sliding.normal[3 * s];
         const double* u = &sliding.surface_velocity[3 * s];
         double gap = 0.0;
@@ -139,19 +237,19 @@ void prescribe_normal_speed(Sliding& sliding, Index n, const double* pos, const 
         }
         const double un = u[0] * nrm[0] + u[1] * nrm[1] + u[2] * nrm[2];
         if (un != 0.0) gap += h * un;  // (a still surface: as before, to the bit)
+        if (sliding.curving[s] != 0.0) gap += sliding.curving[s];
         const double speed = gap / bh;
         sliding.normal_speed[s] = speed;
         for (int c = 0; c < 3; ++c) vel[c * n + i] += (speed - vn) * nrm[c];
     }
 }
 
-void add_sliding_friction(const Sliding& sliding, Index n, double* force) {
+void add_sliding_friction(const Sliding& sliding, Index n, const double* mass, double* force) {
     for (Index s = 0; s < sliding.count(); ++s) {
         const Index i = sliding.index[s];
-        const double* nrm = &sliding.normal[3 * s];
-        const double pressing = -(force[i] * nrm[0] + force[n + i] * nrm[1] + force[2 * n + i] * nrm[2]);
-        if (!(pressing > 0.0)) continue;
-        const double kinetic = sliding.friction[s] * pressing;
+        const double onto = pressing(sliding, s, n, mass, force);
+        if (!(onto > 0.0)) continue;
+        const double kinetic = sliding.friction[s] * onto;
         for (int c = 0; c < 3; ++c) force[c * n + i] -= kinetic * sliding.direction[3 * s + c];
     }
 }
@@ -177,16 +275,19 @@ Index stop_reversed(const Sliding& sliding, Index n, const double* hat_pos, doub
     return stopped;
 }
 
-double lift_off(const Sliding& sliding, Index n, double floor_z, const double* force, const double* mass,
+double lift_off(const Sliding& sliding, Index n, const Physics& phys, const double* force, const double* mass,
                 const double* diagonal_blocks, const double* blocks, double h, double limit, double* pos, double* vel) {
     double farthest = 0.0;
+    const double reach = 0.5 * phys.thickness;
     for (int pass = 0; pass < 2; ++pass) {  // first: how far each would move; second: move them
         for (Index s = 0; s < sliding.count(); ++s) {
             const Index i = sliding.index[s];
             const double* nrm = &sliding.normal[3 * s];
+            const bool lifts = pressing(sliding, s, n, mass, force) < 0.0;
             const double lifting = force[i] * nrm[0] + force[n + i] * nrm[1] + force[2 * n + i] * nrm[2];
-            const double inertia = lifting > 0.0 ? effective_mass(n, i, mass, diagonal_blocks, blocks, nrm) : 1.0;
-            const double move = lifting > 0.0 ? 0.5 * lifting / inertia * h * h : 0.0;
+            const double inertia = lifts ? effective_mass(n, i, mass, diagonal_blocks, blocks, nrm) : 1.0;
+            // From the end's tangent plane to where it would have gone (along the start's velocity).
+            const double move = lifts ? 0.5 * lifting / inertia * h * h + sliding.curving[s] : 0.0;
             if (pass == 0) {
                 if (move > limit) return -1.0;
                 farthest = std::max(farthest, move);
@@ -196,29 +297,35 @@ double lift_off(const Sliding& sliding, Index n, double floor_z, const double* f
             const double vn = (vel[i] - u[0]) * nrm[0] + (vel[n + i] - u[1]) * nrm[1] + (vel[2 * n + i] - u[2]) * nrm[2];
             for (int c = 0; c < 3; ++c) {
                 pos[c * n + i] += move * nrm[c];
-                vel[c * n + i] += (lifting > 0.0 ? lifting / inertia * h : 0.0) * nrm[c] - vn * nrm[c];
+                vel[c * n + i] += (lifts ? lifting / inertia * h + 2.0 * sliding.curving[s] / h : 0.0) * nrm[c] - vn * nrm[c];
             }
-            if (sliding.on_floor[s] && lifting <= 0.0) pos[2 * n + i] = floor_z;
+            if (sliding.on_floor[s] && !lifts) pos[2 * n + i] = phys.floor_z;
+            if (sliding.curving[s] != 0.0 && !lifts) {
+                farthest = std::max(farthest, onto_collider(sliding, s, n, phys, reach, h, pos, vel));
+            }
         }
     }
     return farthest;
 }
 
-Index drop_lifting(Sliding& sliding, Index n, const double* force) {
+Index drop_lifting(Sliding& sliding, Index n, const double* mass, const double* force) {
     Index kept = 0;
     const Index count = sliding.count();
     for (Index s = 0; s < count; ++s) {
-        const Index i = sliding.index[s];
-        const double* nrm = &sliding.normal[3 * s];
-        if (force[i] * nrm[0] + force[n + i] * nrm[1] + force[2 * n + i] * nrm[2] > 0.0) continue;
-        sliding.index[kept] = i;
+        if (pressing(sliding, s, n, mass, force) < 0.0) continue;
+        sliding.index[kept] = sliding.index[s];
         for (int c = 0; c < 3; ++c) {
-            sliding.normal[3 * kept + c] = nrm[c];
+            sliding.normal[3 * kept + c] = sliding.normal[3 * s + c];
             sliding.direction[3 * kept + c] = sliding.direction[3 * s + c];
             sliding.surface_velocity[3 * kept + c] = sliding.surface_velocity[3 * s + c];
+            sliding.start_normal[3 * kept + c] = sliding.start_normal[3 * s + c];
+            sliding.start_direction[3 * kept + c] = sliding.start_direction[3 * s + c];
+            sliding.turning[3 * kept + c] = sliding.turning[3 * s + c];
         }
         sliding.friction[kept] = sliding.friction[s];
         sliding.on_floor[kept] = sliding.on_floor[s];
+        sliding.collider[kept] = sliding.collider[s];
+        sliding.centripetal[kept] = sliding.centripetal[s];
         kept += 1;
     }
     sliding.index.resize(kept);
@@ -227,7 +334,13 @@ Index drop_lifting(Sliding& sliding, Index n, const double* force) {
     sliding.surface_velocity.resize(3 * kept);
     sliding.friction.resize(kept);
     sliding.on_floor.resize(kept);
+    sliding.collider.resize(kept);
+    sliding.start_normal.resize(3 * kept);
+    sliding.start_direction.resize(3 * kept);
+    sliding.turning.resize(3 * kept);
+    sliding.centripetal.resize(kept);
     sliding.normal_speed.assign(kept, 0.0);
+    sliding.curving.assign(kept, 0.0);
     return count - kept;
 }
 

@@ -273,11 +273,11 @@ Status step(Core& core, double remaining, double span) {
         if (core.solver.sliding != nullptr && trial.converged) {
             // Those the step's force lifts off their surface move off it at the step's end if that moves
             // none farther than the allowed error (as slips do); else the step is taken again without them.
-            const double lifted = lift_off(core.sliding, n, phys.floor_z, core.work.force, core.solver.mass,
+            const double lifted = lift_off(core.sliding, n, phys, core.work.force, core.solver.mass,
                                            core.work.diagonal_blocks, core.work.blocks, h, adaptive ? control.allowed : 0.0,
                                            buf.trial_pos, buf.trial_vel);
             if (lifted < 0.0) {
-                drop_lifting(core.sliding, n, core.work.force);
+                drop_lifting(core.sliding, n, core.solver.mass, core.work.force);
                 if (core.sliding.count() == 0) core.solver.sliding = nullptr;
                 clock[REJECTED] += 1;
                 continue;

@@ -35,6 +35,13 @@ double table_distance(const Physics& phys, const double* row, const double* p, d
 Index collider_contact(Index n, const Physics& phys, const double* start, double* pos, double* vel,
                        double* kick = nullptr);
 
+//: How fast (1/s) the outward normal of the surface at thickness / 2 off collider k turns under a particle
+//: with normal nrm (3) there that slides at velocity v (3, m/s, along the surface, relative to it): into
+//: turning (3), the surface's shape operator applied to v: a sphere's v / (r + thickness / 2), a cylinder's
+//: side (v - (v . axis) axis) / (r + thickness / 2); zero on flat faces (planes, boxes, cylinders' caps,
+//: meshes) and on rounded edges and corners.  Returns whether it is not zero.
+bool normal_turning(const Physics& phys, Index k, const double* nrm, const double* v, double* turning);
+
 //: The first collider that particle i of pos (3, n) touches: within thickness / 2 of it, up to rounding
 //: (where collider_contact puts a particle), its normal there into nrm; -1 if none.
 Index touched_collider(const Physics& phys, Index n, Index i, const double* pos, double* nrm);

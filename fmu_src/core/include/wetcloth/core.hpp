@@ -166,7 +166,12 @@ enum SolverCounter : Index { NEWTON_ITERATIONS = 0, CG_ITERATIONS = 1, FACTORISA
 //: The particles sliding during a step: index (count), the surface's unit outward normal (3 per particle),
 //: its friction coefficient, the direction of sliding at the step's start (3 per particle, a unit vector
 //: along the surface), the prescribed velocity along the normal (m/s, set by the step) and whether the
-//: support is the floor (1) or a collider (0).
+//: support is the floor (1) or a collider (0); the collider (-1: the floor).  On a curved collider the
+//: normal turns as the particle slides, at `turning` (3 per particle, 1/s: the surface's shape operator
+//: applied to the sliding velocity at the step's start, zero on a flat surface), and the step holds the
+//: particle on the chord of its path: `normal` and `direction` are the surface's at the path's midpoint,
+//: start_normal and start_direction those at the step's start; `centripetal` is the path's kappa s^2 (m/s2)
+//: and `curving` h^2 kappa s^2 / 2 (m) how far the surface falls away from the start's tangent plane in a step.
 struct Sliding {
     std::vector<Index> index;
     std::vector<double> normal;
@@ -175,6 +180,10 @@ struct Sliding {
     std::vector<double> normal_speed;
     std::vector<char> on_floor;
     std::vector<double> surface_velocity;  // (3 each) m/s: a moving collider's, else 0
+    std::vector<Index> collider;
+    std::vector<double> start_normal, start_direction, turning;  // (3 each)
+    std::vector<double> centripetal;
+    std::vector<double> curving;
     Index count() const { return static_cast<Index>(index.size()); }
 };
 

@@ -26,14 +26,16 @@ Index add_released(Index n, const Physics& phys, const double* pos, const double
 void project_sliding(const Sliding& sliding, Index n, double* a);
 
 //: The sliding particles' velocities (3, n) get their prescribed normal part, speed (m/s) that keeps each
-//: where it is across the surface (moving with a moving surface over the step of h s): n . (pos + h u -
-//: hat_pos) / bh, pos the step's start, u the surface's velocity, hat_pos (3, n) the scheme's x^ with x+ = x^ + bh v+.
+//: where it is across the surface (moving with a moving surface over the step of h s, and falling away with a
+//: curved one): n . (pos + h u - hat_pos) / bh - h^2 kappa s^2 / (2 bh), pos the step's start, u the surface's
+//: velocity, hat_pos (3, n) the scheme's x^ with x+ = x^ + bh v+, kappa s^2 the path's centripetal acceleration.
 void prescribe_normal_speed(Sliding& sliding, Index n, const double* pos, const double* hat_pos, double h, double bh,
                             double* vel);
 
 //: Kinetic friction on the sliding particles into force (3, n, N): friction times the force pressing each
-//: onto its surface (zero if none), against its direction of sliding at the step's start.
-void add_sliding_friction(const Sliding& sliding, Index n, double* force);
+//: onto its surface (zero if none: the force into it less its mass (n, kg) times its path's centripetal
+//: acceleration), against its direction of sliding at the step's start.
+void add_sliding_friction(const Sliding& sliding, Index n, const double* mass, double* force);
 
 //: After the step's solve: a sliding particle whose velocity (3, n, m/s) along its direction of sliding is
 //: (relative to its surface's) no longer positive has stopped within the step: its velocity is set to its
@@ -42,14 +44,17 @@ void add_sliding_friction(const Sliding& sliding, Index n, double* force);
 Index stop_reversed(const Sliding& sliding, Index n, const double* hat_pos, double bh, double* pos, double* vel);
 
 //: After the step: the particles whose force (3, n) lifts them off their surface (their normal was held in the
-//: solve) move as they would have from rest along the normal under it, by F_n h^2 / (2 m_e) (m_e their
-//: inertia along it in the step's matrix, as slip_on_supports), and their velocity by F_n h / m_e; the
-//: others on the floor are put back exactly at floor_z (rounding).  Returns the largest such move (m), or -1
-//: without moving anything if one is beyond `limit` (m): the step is then taken again without them (drop_lifting).
-double lift_off(const Sliding& sliding, Index n, double floor_z, const double* force, const double* mass,
+//: solve; on a curved path, the force along the normal beyond mass times the path's centripetal acceleration)
+//: move as they would have from rest along the start's normal under it, by F_n h^2 / (2 m_e) (m_e their
+//: inertia along it in the step's matrix, as slip_on_supports) from the start's tangent plane, and their
+//: velocity by F_n h / m_e; the others on the floor are put back exactly at floor_z (rounding), those on a
+//: curved collider exactly onto it, their velocity along it.  Returns the largest such move (m), or -1 without
+//: moving anything if a lift is beyond `limit` (m): the step is then taken again without them (drop_lifting).
+double lift_off(const Sliding& sliding, Index n, const Physics& phys, const double* force, const double* mass,
                 const double* diagonal_blocks, const double* blocks, double h, double limit, double* pos, double* vel);
 
-//: Leave out of the sliding set the particles that the force (3, n) lifts off; returns how many.
-Index drop_lifting(Sliding& sliding, Index n, const double* force);
+//: Leave out of the sliding set the particles that the force (3, n) lifts off (as lift_off judges them, mass
+//: (n) kg); returns how many.
+Index drop_lifting(Sliding& sliding, Index n, const double* mass, const double* force);
 
 }  // namespace wc
