@@ -68,3 +68,34 @@ def test_a_blade_rising_through_a_coarse_sheet_lifts_it_instead_of_slicing_it(tm
     pos = sim.state.pos
     assert (pos[1] < 0).any() and (pos[1] > 0).any()
     assert top < pos[2].max() < top + 0.02
+
+
+def test_a_blade_sweeping_sideways_into_a_hanging_sheet_carries_it_instead_of_slicing_it(tmp_path):
+    """A 6 x 6 sheet 0.5 m wide (particles 10 cm apart) hangs by its top edge in the x-z plane; a vertical
+    blade 4 mm thick (in x, midway between two columns), 0.3 m long (in y) and 0.5 m tall, its top 15 cm below
+    the pinned edge and its bottom below the sheet's, sweeps 0.6 m along y through it in 1 s and stands.
+    Every frame for 1.5 s: no cloth edge crosses a blade triangle and no blade edge a cloth triangle, no
+    particle inside the blade; the sheet's lowest row rides in front of the blade's leading edge (which ends
+    at y = 0.45 m): its mean y beyond 0.3 m.  Without the moving mesh's edges the blade passes between two
+    columns and the sheet hangs on at y = 0."""
+    half = np.array([0.002, 0.15, 0.25])
+    blade = trimesh.creation.box(extents=2 * half)
+    path = tmp_path / "blade.stl"
+    blade.export(path)
+    centre0 = np.array([0.0, -0.3, 0.35])
+    scene = load_scene(nx=6, ny=6, width=0.5, length=0.5, initial_tilt=90.0, initial_height=0.5, pinned_edge="y_max",
+                       water_level=-0.5, floor_level=-1.0,
+                       colliders=({"shape": "mesh", "file": str(path), "y": centre0[1], "z": centre0[2]},),
+                       collider_keys=(dict(collider=1, time=1.0, y=0.6),))
+    sim = wetcloth.Simulation(scene)
+    assert np.abs(sim.state.pos[0]).min() > 0.04  # the blade lies between two columns
+    bottom = np.isclose(sim.state.pos[2], sim.state.pos[2].min())  # the sheet's free lower edge
+    faces, local = np.asarray(blade.faces), np.asarray(blade.vertices)
+    for _ in range(45):
+        sim.advance(1 / 30)
+        centre = centre0 + [0.0, 0.6 * min(sim.time, 1.0), 0.0]
+        points = local + centre
+        assert _crossings(sim.state.pos.T, np.asarray(sim.triangles), points, faces) == (0, 0), sim.time
+        assert not (np.abs(sim.state.pos.T - centre) < half).all(axis=1).any(), sim.time
+    lowest = sim.state.pos[1, bottom]
+    assert lowest.mean() > 0.3, lowest
