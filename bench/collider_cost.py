@@ -17,7 +17,8 @@ median), accepted and rejected steps, ms per step.
 Moving (``--part moving``, docs/model.md section 6.3 "Moving colliders"): the ``sweep`` preset (a ball
 sweeping through a hanging towel) for 4 s, with its collider keys and without them (the ball never
 reaches the towel), and with the ball also turning 170 deg about the vertical as it sweeps (a turning
-collider: friction against its surface's velocity), as the lying part prints them.
+collider: friction against its surface's velocity), and the same two with the ball a mesh (an icosphere of
+1280 faces: the edges' pass runs in its moving frame), as the lying part prints them.
 """
 from __future__ import annotations
 
@@ -76,10 +77,17 @@ def lying(repeat: int) -> None:
 
 
 def moving(repeat: int) -> None:
+    import trimesh
+
     sweep = wetcloth.load_scene("sweep")
     spinning = sweep.replace(collider_key2_rz=170.0)  # the ball turns 170 deg about the vertical as it sweeps
-    timed_cases({"sweep": (sweep, 4.0), "sweep, no keys": (sweep.replace(collider_keys=()), 4.0),
-                 "sweep, spinning": (spinning, 4.0)}, repeat)
+    with tempfile.TemporaryDirectory() as folder:
+        ball = os.path.join(folder, "ball.stl")  # the ball as a mesh (1280 faces): its edges' pass in its frame
+        trimesh.creation.icosphere(subdivisions=3, radius=0.12).export(ball)
+        mesh = sweep.replace(colliders=({"shape": "mesh", "file": ball, "y": -0.3, "z": 0.35, "friction": 0.4},))
+        timed_cases({"sweep": (sweep, 4.0), "sweep, no keys": (sweep.replace(collider_keys=()), 4.0),
+                     "sweep, spinning": (spinning, 4.0), "sweep, mesh ball": (mesh, 4.0),
+                     "mesh ball spinning": (mesh.replace(collider_key2_rz=170.0), 4.0)}, repeat)
 
 
 def main() -> None:

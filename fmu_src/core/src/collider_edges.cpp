@@ -86,6 +86,24 @@ inline double target_of(const Pair& pair, double reach) {
     return pair[P_KIND] == POINT_TRIANGLE && pair[P_POINTS] >= 0 ? reach : EDGE_GAP * reach;
 }
 
+//: The colliders a pass covers and the frame it runs in: the still meshes in the world (shift null), or the
+//: moving mesh collider `collider` in its table frame (shift its motion row, collider_motion.hpp), where it
+//: stands still: the cloth's start through its start place, its end and velocities (relative to its
+//: surface's) through its end place.
+struct Frame {
+    Index collider;
+    const double* shift;
+    bool covers(const Physics& phys, Index k) const {
+        if (static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_SHAPE]) != MESH) return false;
+        return shift == nullptr ? !collider_moves(phys, k) : k == collider;
+    }
+    //: Whether its pairs' time of contact looks no further than the step's end (time_of_contact): a moving
+    //: mesh's pairs approach at its speed (1 m/s, 12 mm in a step, a particle falling onto a box's top that
+    //: stops 2 mm above it), where a look past the end would stop the particle in mid-air as a last
+    //: resort.  (A still mesh's keep the look past it, as self-collision's: their results unchanged.)
+    bool within_step() const { return shift != nullptr; }
+};
+
 //: A pair's start points, motions over the step and inverse masses (0 without mass, kg, and free).
 struct Motion {
     int kind;
@@ -171,11 +189,11 @@ void gather(const Index* elements, Index count, int width, Index k, Index mesh, 
 }
 
 //: Treat one pair if it needs it (as self-collision's settle_pair, at distance gap); returns whether it did.
-bool settle_pair(const Pair& pair, double start, const Physics& phys, double gap, Index n, const double* mass,
-                 const double* free, const double* x0, double* x1, double* v1, ContactLists& lists) {
+bool settle_pair(const Pair& pair, double start, const Physics& phys, const Frame& frame, double gap, Index n,
+                 const double* mass, const double* free, const double* x0, double* x1, double* v1, ContactLists& lists) {
     const Motion mo = motion_of(pair, phys.meshes, n, mass, free, x0, x1);
     if (mo.inverse.sum() == 0.0) return false;
-    const ContactTime ct = contact_time(mo.kind, mo.x, mo.p, start, gap);
+    const ContactTime ct = contact_time(mo.kind, mo.x, mo.p, start, gap, frame.within_step());
     if (!ct.near) return false;
     const double when = ct.when;
     const double t = when == CLEAR ? 1.0 : when;
@@ -187,6 +205,8 @@ bool settle_pair(const Pair& pair, double start, const Physics& phys, double gap
     if (when == CLEAR && length >= (1.0 - SLACK) * gap) return false;
     if (!(length > 0.0)) return false;  // no side to push to: left to the last resort
     const Vec3 normal = {d.x / length, d.y / length, d.z / length};
+    double world[3] = {normal.x, normal.y, normal.z};  // the push's direction in the world
+    if (frame.shift != nullptr) world_direction(frame.shift, world);
     // The four points as particles 0..3 of their own (3, 4) arrays, the collider's at rest.
     double x[12], v[12];
     for (int k = 0; k < 4; ++k) {
@@ -206,9 +226,9 @@ bool settle_pair(const Pair& pair, double start, const Physics& phys, double gap
         if (side[k] == 0.0 || mo.inverse.m[k] == 0.0) continue;
         const double sign = side[k] > 0.0 ? 1.0 : -1.0;  // the point side moves along the normal, the other against it
         lists.collider_pushed[static_cast<std::size_t>(s)] = 1;
-        lists.collider_normals[static_cast<std::size_t>(s)] = sign * normal.x;
-        lists.collider_normals[static_cast<std::size_t>(n + s)] = sign * normal.y;
-        lists.collider_normals[static_cast<std::size_t>(2 * n + s)] = sign * normal.z;
+        lists.collider_normals[static_cast<std::size_t>(s)] = sign * world[0];
+        lists.collider_normals[static_cast<std::size_t>(n + s)] = sign * world[1];
+        lists.collider_normals[static_cast<std::size_t>(2 * n + s)] = sign * world[2];
     }
     return true;
 }
@@ -239,13 +259,10 @@ double largest_move(Index n, const double* x, const double* y) {
 
 //: Whether the kept list, gathered from phys's meshes, holds at positions x (3, n): no particle farther from
 //: its reference than its allowance.
-bool list_holds(const ContactLists& lists, const Physics& phys, Index n, const double* x) {
-    if (!(lists.collider_margin > 0.0) || lists.collider_key[0] != phys.meshes.vertices ||
-        lists.collider_key[1] != phys.colliders) {
-        return false;
-    }
-    const double* ref = lists.collider_reference.data();
-    const double* allowance = lists.collider_allowance.data();
+bool list_holds(const ColliderPairList& kept, const Physics& phys, Index n, const double* x) {
+    if (!(kept.margin > 0.0) || kept.key[0] != phys.meshes.vertices || kept.key[1] != phys.colliders) return false;
+    const double* ref = kept.reference.data();
+    const double* allowance = kept.allowance.data();
     for (Index i = 0; i < n; ++i) {
         double d2 = 0.0;
         for (Index c = 0; c < 3; ++c) d2 += (x[c * n + i] - ref[c * n + i]) * (x[c * n + i] - ref[c * n + i]);
@@ -272,25 +289,25 @@ void mark_near(const Index* elements, Index count, int width, Index mesh, const 
 //: may move twice the step's largest motion of those particles, at least LEAST_MARGIN of reach (thickness / 2,
 //: m), the others FAR_MARGIN of reach (or the near ones' margin if more); a cloth whose box is far from
 //: every mesh's box keeps an empty list while no particle moves more than what that distance allows.
-void keep_list(const Contact& contact, ContactLists& lists, const Physics& phys, Index n, const double* x0,
-               const double* x1, double reach) {
-    std::vector<double>& x = lists.collider_reference;
+void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& kept, const Physics& phys,
+               const Frame& frame, Index n, const double* x0, const double* x1, double reach) {
+    std::vector<double>& x = kept.reference;
     x.resize(3 * static_cast<std::size_t>(n));
     for (Index k = 0; k < 3 * n; ++k) x[static_cast<std::size_t>(k)] = 0.5 * (x0[k] + x1[k]);
-    std::vector<double>& near = lists.collider_allowance;  // first 1 for the particles near a mesh
+    std::vector<double>& near = kept.allowance;  // first 1 for the particles near a mesh
     near.assign(static_cast<std::size_t>(n), 0.0);
     std::vector<Index>& found = lists.collider_items;
-    std::vector<Pair>& pairs = lists.collider_list;
+    std::vector<Pair>& pairs = kept.pairs;
     pairs.clear();
-    lists.collider_key[0] = phys.meshes.vertices;
-    lists.collider_key[1] = phys.colliders;
+    kept.key[0] = phys.meshes.vertices;
+    kept.key[1] = phys.colliders;
     // Far from every mesh's box (no pair within 2 reach + LIST_MARGINS allowances): no pairs, and every
     // particle may move that allowance.
     const Box whole = path_box(nullptr, n, n, x.data(), x.data(), 0.0);
     double gap = std::numeric_limits<double>::infinity();
     for (Index k = 0; k < phys.collider_count; ++k) {
         const double* row = phys.colliders + k * COLLIDER_COLUMNS;
-        if (static_cast<Index>(row[C_SHAPE]) != MESH || collider_moves(phys, k)) continue;
+        if (!frame.covers(phys, k)) continue;
         const double* header = phys.meshes.headers + static_cast<Index>(row[C_RADIUS]) * MESH_COLUMNS;
         double gap2 = 0.0;
         for (Index c = 0; c < 3; ++c) {
@@ -302,7 +319,7 @@ void keep_list(const Contact& contact, ContactLists& lists, const Physics& phys,
     const double clear = (gap - 2.0 * reach) / LIST_MARGINS;
     if (clear >= LEAST_MARGIN * reach) {
         near.assign(static_cast<std::size_t>(n), py_min(clear, std::numeric_limits<double>::max()));
-        lists.collider_margin = near[0];
+        kept.margin = near[0];
         return;
     }
     std::vector<Index> reached;  // the meshes the cloth's box, grown by the far pad, reaches
@@ -311,7 +328,7 @@ void keep_list(const Contact& contact, ContactLists& lists, const Physics& phys,
     const Box cloth = path_box(nullptr, n, n, x.data(), x.data(), far_pad);  // a mesh it does not reach costs this
     for (Index k = 0; k < phys.collider_count; ++k) {
         const double* row = phys.colliders + k * COLLIDER_COLUMNS;
-        if (static_cast<Index>(row[C_SHAPE]) != MESH || collider_moves(phys, k)) continue;
+        if (!frame.covers(phys, k)) continue;
         const Index mesh = static_cast<Index>(row[C_RADIUS]);
         const double* header = phys.meshes.headers + mesh * MESH_COLUMNS;
         bool meets = true;
@@ -343,7 +360,7 @@ void keep_list(const Contact& contact, ContactLists& lists, const Physics& phys,
     }
     std::sort(pairs.begin(), pairs.end());
     pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-    lists.collider_margin = margin;
+    kept.margin = margin;
 }
 
 //: The pairs near enough to need a look over the step from x0 to x1, in lists.collider_pairs with their
@@ -351,12 +368,14 @@ void keep_list(const Contact& contact, ContactLists& lists, const Physics& phys,
 //: distance (target_of) plus reach (m) at the start less their motion's bound (pushes that move no particle
 //: more than reach / 4 leave the others out of reach).  Which list they come from changes nothing: a pair
 //: kept beyond them is never treated.
-void pairs_for_step(const Contact& contact, ContactLists& lists, const Physics& phys, Index n, const double* x0,
-                    const double* x1, double reach) {
-    if (!list_holds(lists, phys, n, x0) || !list_holds(lists, phys, n, x1)) keep_list(contact, lists, phys, n, x0, x1, reach);
+void pairs_for_step(const Contact& contact, ContactLists& lists, ColliderPairList& kept, const Physics& phys,
+                    const Frame& frame, Index n, const double* x0, const double* x1, double reach) {
+    if (!list_holds(kept, phys, n, x0) || !list_holds(kept, phys, n, x1)) {
+        keep_list(contact, lists, kept, phys, frame, n, x0, x1, reach);
+    }
     std::vector<Pair>& pairs = lists.collider_pairs;
     pairs.clear();
-    for (const Pair& pair : lists.collider_list) {
+    for (const Pair& pair : kept.pairs) {
         const Motion mo = motion_of(pair, phys.meshes, n, nullptr, nullptr, x0, x1);
         const double bound = motion_bound(mo.kind, mo.p[0], mo.p[1], mo.p[2], mo.p[3]);
         const double within = target_of(pair, reach) + reach;
@@ -371,12 +390,11 @@ void pairs_for_step(const Contact& contact, ContactLists& lists, const Physics& 
     for (std::size_t j = 0; j < pairs.size(); ++j) start[j] = gap_of(pairs[j][P_START]);
 }
 
-}  // namespace
-
-int collider_edge_contact(const Contact& contact, ContactLists& lists, const Physics& phys, Index n,
-                          const double* mass, const double* free, const double* x0, double* x1, double* v1) {
-    if (phys.meshes.count == 0 || n == 0) return UNTOUCHED;
-    const double reach = 0.5 * phys.thickness;  // the particles' contact distance: the pairs are gathered within it
+//: The pass of collider_edge_contact over frame's colliders, in its frame (x0, x1, v1 there; reach m);
+//: fresh: the pushes' marks are not yet cleared in this call (then cleared at the first pair).
+int edge_pass(const Contact& contact, ContactLists& lists, ColliderPairList& kept, const Physics& phys,
+              const Frame& frame, double reach, Index n, const double* mass, const double* free, const double* x0,
+              double* x1, double* v1, bool& fresh) {
     const std::size_t size = static_cast<std::size_t>(n);
     std::vector<double>& gathered = lists.collider_end;
     std::vector<Pair>& pairs = lists.collider_pairs;
@@ -385,24 +403,25 @@ int collider_edge_contact(const Contact& contact, ContactLists& lists, const Phy
     // The pairs that may need a push; gathered again if the pushes moved a particle farther than reach / 4
     // from where it was when they were (the pairs left out stay out of reach then).
     for (int attempt = 0; attempt < ATTEMPTS; ++attempt) {
-        pairs_for_step(contact, lists, phys, n, x0, x1, reach);
+        pairs_for_step(contact, lists, kept, phys, frame, n, x0, x1, reach);
         if (pairs.empty()) break;
-        if (attempt == 0) {
+        if (fresh) {
             lists.collider_pushed.assign(size, 0);
             lists.collider_normals.resize(3 * size);
+            fresh = false;
         }
         gathered.assign(x1, x1 + 3 * n);
         for (int pass = 0; pass < PASSES_MAX; ++pass) {
             Index treated = 0;
             for (std::size_t j = 0; j < pairs.size(); ++j)
-                treated += settle_pair(pairs[j], start[j], phys, target_of(pairs[j], reach), n, mass, free, x0, x1,
-                                       v1, lists);
+                treated += settle_pair(pairs[j], start[j], phys, frame, target_of(pairs[j], reach), n, mass, free, x0,
+                                       x1, v1, lists);
             if (treated == 0) break;
             result |= PUSHED;
         }
         if (largest_move(n, x1, gathered.data()) <= 0.25 * reach) break;  // a pair's motion bound grows by at most 4 times the move
         if (attempt + 1 < ATTEMPTS) continue;
-        pairs_for_step(contact, lists, phys, n, x0, x1, reach);  // for the last resort
+        pairs_for_step(contact, lists, kept, phys, frame, n, x0, x1, reach);  // for the last resort
     }
     if (pairs.empty()) return result;
     // The last resort: the particles of a pair whose motion is still not shown safe stay where they started.
@@ -419,7 +438,9 @@ int collider_edge_contact(const Contact& contact, ContactLists& lists, const Phy
             }
             if (!movable) continue;
             const Motion mo = motion_of(pair, phys.meshes, n, mass, free, x0, x1);
-            if (contact_time(mo.kind, mo.x, mo.p, start[j], target_of(pair, reach)).when == CLEAR) continue;
+            if (contact_time(mo.kind, mo.x, mo.p, start[j], target_of(pair, reach), frame.within_step()).when == CLEAR) {
+                continue;
+            }
             unsafe += 1;
             for (int k = 0; k < 4; ++k) {
                 const Index s = pair[P_POINTS + k];
@@ -435,14 +456,90 @@ int collider_edge_contact(const Contact& contact, ContactLists& lists, const Phy
     return result;
 }
 
+//: The cloth's start x0, end x1 and end velocities v1 (3, n each) in moving collider k's table frame, in
+//: frame (3, 3, n): the start through its place at the step's start, the end through its place now, the
+//: velocities relative to its surface's there, turned into it.
+void into_table_frame(const Physics& phys, Index k, Index n, const double* x0, const double* x1, const double* v1,
+                      double* frame) {
+    const double* shift = collider_shift(phys, k);
+    const double* centre = phys.colliders + k * COLLIDER_COLUMNS + C_X;
+    const double* R = shift + MOTION_TURN;
+    double* q0 = frame;
+    double* q1 = frame + 3 * n;
+    double* w1 = frame + 6 * n;
+    for (Index i = 0; i < n; ++i) {
+        const double a[3] = {x0[i], x0[n + i], x0[2 * n + i]}, e[3] = {x1[i], x1[n + i], x1[2 * n + i]};
+        double from[3], to[3], u[3];
+        table_point(shift, centre, a, true, from);
+        table_point(shift, centre, e, false, to);
+        surface_velocity(phys, k, e, u);
+        const double r[3] = {v1[i] - u[0], v1[n + i] - u[1], v1[2 * n + i] - u[2]};
+        for (Index c = 0; c < 3; ++c) {
+            q0[c * n + i] = from[c], q1[c * n + i] = to[c];
+            w1[c * n + i] = turns(shift) ? R[c] * r[0] + R[3 + c] * r[1] + R[6 + c] * r[2] : r[c];  // R^T r
+        }
+    }
+}
+
+//: Back from moving collider k's table frame: the particles whose end (q1) or velocity (w1) in frame
+//: (3, 3, n, into_table_frame's) the pass changed from their world end x1 and velocity v1 get them in the
+//: world (their velocities plus the surface's).
+void out_of_table_frame(const Physics& phys, Index k, Index n, const double* frame, const double* unchanged,
+                        double* x1, double* v1) {
+    const double* shift = collider_shift(phys, k);
+    const double* centre = phys.colliders + k * COLLIDER_COLUMNS + C_X;
+    const double* q1 = frame + 3 * n;
+    const double* w1 = frame + 6 * n;
+    for (Index i = 0; i < n; ++i) {
+        bool changed = false;
+        for (Index c = 0; c < 3; ++c) {
+            changed = changed || q1[c * n + i] != unchanged[c * n + i] || w1[c * n + i] != unchanged[3 * n + c * n + i];
+        }
+        if (!changed) continue;
+        const double q[3] = {q1[i], q1[n + i], q1[2 * n + i]};
+        double p[3], u[3], w[3] = {w1[i], w1[n + i], w1[2 * n + i]};
+        world_point(shift, centre, q, p);
+        world_direction(shift, w);
+        surface_velocity(phys, k, p, u);
+        for (Index c = 0; c < 3; ++c) x1[c * n + i] = p[c], v1[c * n + i] = w[c] + u[c];
+    }
+}
+
+}  // namespace
+
+int collider_edge_contact(const Contact& contact, ContactLists& lists, const Physics& phys, Index n,
+                          const double* mass, const double* free, const double* model_free, const double* x0,
+                          double* x1, double* v1) {
+    if (phys.meshes.count == 0 || n == 0) return UNTOUCHED;
+    const double reach = 0.5 * phys.thickness;  // the particles' contact distance: the pairs are gathered within it
+    bool fresh = true;
+    int result = edge_pass(contact, lists, lists.collider_kept, phys, Frame{-1, nullptr}, reach, n, mass, free, x0, x1,
+                           v1, fresh);
+    if (phys.collider_motion == nullptr) return result;
+    lists.collider_moving_kept.resize(static_cast<std::size_t>(phys.collider_count));
+    for (Index k = 0; k < phys.collider_count; ++k) {  // each moving mesh in its table frame
+        const Frame frame{k, collider_shift(phys, k)};
+        if (!collider_moves(phys, k) || !frame.covers(phys, k)) continue;
+        std::vector<double>& table = lists.collider_frame;
+        table.resize(15 * static_cast<std::size_t>(n));  // q0, q1, w1, then q1 and w1 as they came in
+        into_table_frame(phys, k, n, x0, x1, v1, table.data());
+        std::copy(table.begin() + 3 * n, table.begin() + 9 * n, table.begin() + 9 * n);
+        result |= edge_pass(contact, lists, lists.collider_moving_kept[static_cast<std::size_t>(k)], phys, frame, reach,
+                            n, mass, model_free, table.data(), table.data() + 3 * n, table.data() + 6 * n, fresh);
+        out_of_table_frame(phys, k, n, table.data(), table.data() + 9 * n, x1, v1);
+    }
+    return result;
+}
+
 Index hold_on_collider_edges(const Contact& contact, ContactLists& lists, const Physics& phys, Index n, const double* pos,
                              const double* vel, double* free, double* held) {
     if (phys.meshes.count == 0 || n == 0) return 0;
     const double reach = 0.5 * phys.thickness;
-    if (!list_holds(lists, phys, n, pos)) keep_list(contact, lists, phys, n, pos, pos, reach);
+    ColliderPairList& kept = lists.collider_kept;  // (a moving mesh's edges hold no particle: its pushes keep them off)
+    if (!list_holds(kept, phys, n, pos)) keep_list(contact, lists, kept, phys, Frame{-1, nullptr}, n, pos, pos, reach);
     lists.collider_rest.resize(4 * static_cast<std::size_t>(n));
     Index count = 0;
-    for (const Pair& pair : lists.collider_list) {
+    for (const Pair& pair : kept.pairs) {
         if (pair[P_KIND] == POINT_TRIANGLE && pair[P_POINTS] >= 0) continue;  // a particle: the particles' contact
         const Motion mo = motion_of(pair, phys.meshes, n, nullptr, nullptr, pos, pos);
         if (box_gap(mo.kind, mo.x) > (1.0 + RESTING_SLACK) * target_of(pair, reach)) continue;

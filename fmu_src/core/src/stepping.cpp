@@ -172,11 +172,11 @@ void maybe_sleep(Core& core, double h, bool exchanging) {
 }
 
 //: collider_edge_contact over the step from x0 to x1 (velocities v1), the particles held during the step
-//: (at rest on their support) not moved.
+//: (at rest on their support) not moved by still meshes (a moving one may come onto them).
 int collider_edges(Core& core, const double* x0, double* x1, double* v1) {
     if (core.phys.meshes.count == 0 || core.contact.lists == nullptr) return UNTOUCHED;
     return collider_edge_contact(core.contact, *core.contact.lists, core.phys, core.cloth.n, core.solver.mass,
-                                 core.contact.lists->collider_free.data(), x0, x1, v1);
+                                 core.contact.lists->collider_free.data(), core.cloth.free, x0, x1, v1);
 }
 
 //: Marks in pushed (n) the particles whose end of step (pos, vel: (3, n)) self-collision's pushes changed

@@ -20,19 +20,26 @@ enum EdgeContact : int { UNTOUCHED = 0, PUSHED = 1, STOPPED = 2 };
 //: self-collision treats a pair at the thickness: pushed apart to that distance (the collider not moving),
 //: its approaching velocity removed, its sliding reduced by the collider's friction times that.  Pairs whose
 //: motion still comes closer than a tenth of it (or half their start distance) then have their particles
-//: stay where they started, at rest.  The pairs come from a list kept across steps (gathered again when a
-//: particle moves beyond its allowance; docs/model.md section 6.3), which changes no result; a cloth far
-//: from every mesh's box costs a look at each particle's move.  Particles with free 0 (pinned, or held for
-//: the step) are not moved.  Returns EdgeContact flags; lists holds the pairs, the pushes and scratch.
+//: stay where they started, at rest.  A collider moved by keys (collider_motion.hpp) is treated so in its
+//: table frame, where it stands still: the start through its place at the step's start, the end through
+//: its place at the step's end, the velocities relative to its surface's; the results turned back (a
+//: particle that stays where it started is carried with it).  The pairs come from lists kept across steps
+//: (one for the still meshes, one for each moving one in its frame; gathered again when a particle moves
+//: beyond its allowance; docs/model.md section 6.3), which changes no result; a cloth far from every mesh's
+//: box costs a look at each particle's move.  Particles with free 0 (pinned, or held for the step) are not
+//: moved by a still mesh, those with model_free 0 (pinned) not by a moving one (which may come onto a
+//: particle held on the floor).  Returns EdgeContact flags; lists holds the pairs, the pushes and scratch.
 int collider_edge_contact(const Contact& contact, ContactLists& lists, const Physics& phys, Index n,
-                          const double* mass, const double* free, const double* x0, double* x1, double* v1);
+                          const double* mass, const double* free, const double* model_free, const double* x0,
+                          double* x1, double* v1);
 
 //: The value of Buffers::held for a particle resting on a mesh collider's edge or vertex (the floor's is 1,
 //: a layer's 2, an analytic or mesh collider k's surface 3 + k).
 inline constexpr double EDGE_HELD = -1.0;
 
 //: Before a step from pos (3, n, m) at vel (3, n, m/s): the free particles of the cloth's edges and
-//: triangles (contact's) that lie on a mesh collider's edge or vertex, within twice their distance (the
+//: triangles (contact's) that lie on a still mesh collider's edge or vertex (a moving one's pushes alone
+//: keep them off it), within twice their distance (the
 //: edge-edge and vertex-triangle pairs collider_edge_contact keeps apart), at rest there or coming onto it
 //: slowly enough that the collider's friction stops them (comes_to_rest), are held for the step as the
 //: floor holds its particles (free 0, held EDGE_HELD), each with the direction a push would move it

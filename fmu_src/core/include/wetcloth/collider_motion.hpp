@@ -30,8 +30,8 @@ enum ColliderKeyColumn : Index { K_COLLIDER = 0, K_TIME, K_X, K_Y, K_Z, K_RX, K_
 //: ends on it by rounding leaves no sliver.
 inline double key_slack(double t) { return 1e-12 * (t > 1.0 ? t : 1.0); }
 
-//: Whether collider k has a key of nonzero displacement or rotation (a moving mesh's edges are left out of the edges'
-//: pass, collider_edges.hpp: only the particles' contact keeps the cloth off it).
+//: Whether collider k has a key of nonzero displacement or rotation (a moving mesh's edges' pass runs in its
+//: table frame, collider_edges.hpp).
 bool collider_moves(const Physics& phys, Index k);
 
 //: Set every collider's motion for a step from t (s): its displacement at t, now and at the step's start,

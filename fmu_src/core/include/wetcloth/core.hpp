@@ -308,6 +308,16 @@ struct ReusedPlane {
     std::array<double, 3> rule{};
 };
 
+//: The cloth's pairs with mesh colliders' features near the reference positions, kept across steps
+//: (collider_edges.cpp), in the frame they were gathered in.
+struct ColliderPairList {
+    std::vector<std::array<Index, 7>> pairs;
+    std::vector<double> reference;  // (3, n) the positions the pairs were gathered at, m
+    std::vector<double> allowance;  // (n) m: how far each particle may move from them
+    double margin = 0.0;            // m: the allowance of those near a mesh (0: no list)
+    const void* key[2] = {nullptr, nullptr};  // the meshes and collider rows it was gathered from
+};
+
 //: Self-collision's candidate lists and scratch, owned by the core (self_contact/*.cpp): the
 //: point-triangle (particle, triangle) and edge-edge (edge, edge) candidate pairs, and whatever
 //: scratch the broad phase and the response need between calls; the rest sheet's tiers of cells and
@@ -325,11 +335,9 @@ struct ContactLists {
     std::vector<Index> resting;         // (n, 3) what a particle held on a layer rests on (-1 padding)
     std::vector<double> resting_normal;  // (n, 3) the unit normal from that support to the particle
     std::vector<std::array<Index, 7>> collider_pairs;  // the cloth's pairs with mesh colliders' features (collider_edges.hpp)
-    std::vector<std::array<Index, 7>> collider_list;   // the pairs near the reference positions, kept across steps
-    std::vector<double> collider_reference;  // (3, n) the positions that list was gathered at, m
-    std::vector<double> collider_allowance;  // (n) m: how far each particle may move from them
-    double collider_margin = 0.0;            // m: the allowance of those near a mesh (0: no list)
-    const void* collider_key[2] = {nullptr, nullptr};  // the meshes and collider rows it was gathered from
+    ColliderPairList collider_kept;      // the still meshes' pairs, in the world
+    std::vector<ColliderPairList> collider_moving_kept;  // (collider_count) a moving mesh k's, in its table frame
+    std::vector<double> collider_frame;  // (3, 3, n) scratch: the cloth's start, end and end velocity in a table frame
     std::vector<double> collider_free;   // (n) Cloth::free during the step: 0 also for the particles held in it
     std::vector<double> collider_rest;   // (4, n) a particle resting on a mesh's edge or vertex: its normal (3), friction
     std::vector<Index> collider_items;   // their search's scratch

@@ -30,7 +30,8 @@ Vec3 degenerate_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3
 }
 
 double time_of_contact(int kind, const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, const Vec3& p0,
-                       const Vec3& p1, const Vec3& p2, const Vec3& p3, double start_distance, double minimum) {
+                       const Vec3& p1, const Vec3& p2, const Vec3& p3, double start_distance, double minimum,
+                       bool within_step) {
     const double bound = motion_bound(kind, p0, p1, p2, p3);
     double gap = start_distance - minimum;
     if (bound <= 0.0 || gap >= bound) return CLEAR;
@@ -39,7 +40,7 @@ double time_of_contact(int kind, const Vec3& x0, const Vec3& x1, const Vec3& x2,
     double t = 0.0;
     double advance = (1.0 - CCD_REPORT) * gap / bound;
     for (int iteration = 0; iteration < CCD_ITERATIONS; ++iteration) {
-        const double trial = t + advance;
+        const double trial = within_step ? py_min(1.0, t + advance) : t + advance;
         const double d = distance(kind, along(x0, trial, p0), along(x1, trial, p1), along(x2, trial, p2),
                                   along(x3, trial, p3));
         gap = d - minimum;

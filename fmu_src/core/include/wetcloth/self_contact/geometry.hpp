@@ -179,8 +179,11 @@ inline double motion_bound(int kind, const Vec3& p0, const Vec3& p1, const Vec3&
 //: Additive CCD: the pair moves from x0..x3 by p0..p3 over the step (fraction 0 to 1).  Returns CLEAR if
 //: its distance provably stays above `minimum` (m) throughout, else a fraction at which it is still above
 //: `minimum` but has lost at least 1 - CCD_REPORT of its starting gap (start_distance - minimum, which
-//: must be positive): the moment to treat the contact.
+//: must be positive): the moment to treat the contact.  Its last trial may look past the step's end (at a
+//: fraction above 1) unless within_step, when it looks at the end instead: a fast approach that stops
+//: short of `minimum` at the end is then CLEAR.
 double time_of_contact(int kind, const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, const Vec3& p0,
-                       const Vec3& p1, const Vec3& p2, const Vec3& p3, double start_distance, double minimum);
+                       const Vec3& p1, const Vec3& p2, const Vec3& p3, double start_distance, double minimum,
+                       bool within_step = false);
 
 }  // namespace wc::self_contact

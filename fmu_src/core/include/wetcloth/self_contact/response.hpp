@@ -42,11 +42,14 @@ struct ContactTime {
 
 //: The ContactTime of a pair of kind `kind` whose points x[0..3] move by p[0..3] over the step, `start`
 //: (m) apart at its start, to be kept `gap` (m) apart: near unless its motion bound cannot take it within
-//: gap; when from time_of_contact, down to SAFE_FRACTION of gap (or half of start, if less).
-inline ContactTime contact_time(int kind, const Vec3 x[4], const Vec3 p[4], double start, double gap) {
+//: gap; when from time_of_contact (within_step passed on), down to SAFE_FRACTION of gap (or half of
+//: start, if less).
+inline ContactTime contact_time(int kind, const Vec3 x[4], const Vec3 p[4], double start, double gap,
+                                bool within_step = false) {
     if (start - motion_bound(kind, p[0], p[1], p[2], p[3]) >= gap) return {CLEAR, false};
     const double minimum = py_min(SAFE_FRACTION * gap, 0.5 * start);
-    return {time_of_contact(kind, x[0], x[1], x[2], x[3], p[0], p[1], p[2], p[3], start, minimum), true};
+    return {time_of_contact(kind, x[0], x[1], x[2], x[3], p[0], p[1], p[2], p[3], start, minimum, within_step),
+            true};
 }
 
 //: Move the end positions x1 (3, n) of the pair's particles idx so that its separation along `normal`
