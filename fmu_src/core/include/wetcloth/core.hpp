@@ -318,6 +318,19 @@ struct ColliderPairList {
     const void* key[2] = {nullptr, nullptr};  // the meshes and collider rows it was gathered from
 };
 
+//: What the checks of a candidate list keep between steps (self_contact/tiers.cpp): per tier (the fine tier
+//: last), its windows' shapes in the reference positions `reference` (3, n) m, if `shaped`, and their fits at
+//: the positions `end` (3, n) m where the last step checked ended, if `kept` (the next step starts there: its
+//: check then fits only its own end); both for the tiers as cut `tiers_made` times.  `next` and `made`: the
+//: fits of the current check at its end; `cells`, `shape`, `start_fit`, `end_fit`: scratch.
+struct WindowFits {
+    std::vector<double> reference, end;
+    Index tiers_made = -1;
+    std::vector<std::vector<double>> shapes, at, next;
+    std::vector<char> shaped, kept, made;
+    std::vector<double> cells, shape, start_fit, end_fit;
+};
+
 //: Self-collision's candidate lists and scratch, owned by the core (self_contact/*.cpp): the
 //: point-triangle (particle, triangle) and edge-edge (edge, edge) candidate pairs, and whatever
 //: scratch the broad phase and the response need between calls; the rest sheet's tiers of cells and
@@ -332,6 +345,8 @@ struct ContactLists {
     std::vector<double> particle_allowances;  // (2, n) m: how far each particle may in the finest tier, for the
                                               // pairs of the fine tier's windows, then the others (empty: none)
     std::vector<double> tier_scratch;   // the tiers' sums and fits
+    Index tiers_made = 0;               // how many times `tiers` was cut
+    WindowFits fits;                    // the tiers' shapes and fits kept between steps
     std::vector<Index> resting;         // (n, 3) what a particle held on a layer rests on (-1 padding)
     std::vector<double> resting_normal;  // (n, 3) the unit normal from that support to the particle
     std::vector<std::array<Index, 7>> collider_pairs;  // the cloth's pairs with mesh colliders' features (collider_edges.hpp)

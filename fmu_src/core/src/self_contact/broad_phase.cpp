@@ -250,13 +250,13 @@ bool holds(const Contact& contact, Index n, const double* x0, const double* x1, 
     double bound = shifted;  // the least deviation found so far of this tier or a coarser one
     bool found[TIERS] = {};
     const std::vector<double>& own = contact.lists->particle_allowances;
+    StepFits fits(contact, n, x0, x1);
     for (int s = TIERS - 1; s >= 0; --s) {
         // The finest tier's pairs, where its particles have allowances of their own: each particle within its
         // own in every window (at least the margin, so nothing else can hold where this does not, but the
         // coarser tiers' windows not yet looked at).
         if (s == 0 && !own.empty() && !(bound <= allowance[0])) {
-            if (within_allowances(contact, n, FINE_TIER, contact.reference, x0, x1, own.data()) &&
-                within_allowances(contact, n, 0, contact.reference, x0, x1, own.data() + n))
+            if (fits.within_allowances(FINE_TIER, own.data()) && fits.within_allowances(0, own.data() + n))
                 break;
             found[0] = true;
         }
@@ -265,7 +265,7 @@ bool holds(const Contact& contact, Index n, const double* x0, const double* x1, 
         for (int t = s; t < TIERS && !(bound <= allowance[s]); ++t) {
             if (found[t]) continue;
             found[t] = true;
-            const double d = deviation(contact, n, t, contact.reference, x0, x1);
+            const double d = fits.deviation(t);
             if (!(d == d)) return false;
             bound = py_min(bound, d);
         }

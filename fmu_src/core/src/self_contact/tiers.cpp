@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "wetcloth/self_contact/geometry.hpp"
@@ -15,11 +16,16 @@ namespace {
 constexpr double INF = std::numeric_limits<double>::infinity();
 constexpr Index HEADER = 2;  // a tier's cells along x and y, before its arrays
 
-//: Per cell sums of a deviation: count; rest position (2); reference (3); ends x0, x1 (3 each); reference
-//: and each end times the rest position (3 x 2 each, row by row).
-enum Sum : Index {
-    COUNT = 0, REST = 1, REF = 3, END0 = 6, END1 = 9, REF_REST = 12, END0_REST = 18, END1_REST = 24, SUMS = 30
-};
+//: Per cell sums of the reference: count; rest position (2); reference (3); reference times the rest position
+//: (3 x 2, row by row).  Of one end of a motion: the end (3); the end times the rest position (3 x 2).
+enum RefSum : Index { COUNT = 0, REST = 1, REF = 3, REF_REST = 6, REF_SUMS = 12 };
+enum EndSum : Index { END = 0, END_REST = 3, END_SUMS = 9 };
+//: A window's shape in the reference: its count and rest position sums (as RefSum), whether its frame is
+//: not degenerate, the frame (9), the centroid (3) and the largest squared distance of a particle from it.
+enum Shape : Index { S_OK = 3, S_FRAME = 4, S_CENTROID = 13, S_RADIUS = 16, SHAPE = 17 };
+//: A window's fit at one end: the rotation from the reference (9, row-major), the end's centroid (3), the
+//: largest squared distance of a particle from where these take its reference position.
+enum Fit : Index { ROTATION = 0, CENTROID = 9, WORST = 12, FIT = 13 };
 
 //: The cells along one axis of tier s: cell side `side` (m) from `origin`, over rest coordinates up to `top`.
 inline Index cells_along(double origin, double side, double top) {
@@ -48,12 +54,13 @@ bool frame(const double f[6], double e[9]) {
     return true;
 }
 
-//: The frame of the positions whose sums start at `at` (REF, END0 or END1; their products with the rest
-//: position at `times`) in window sums w: of their gradient along the rest sheet's axes (least squares).
-bool frame_of(const double* w, Index at, Index times, double e[9]) {
+//: The frame of the positions whose sums are `pos` (3) and, times the rest position, `pos_rest` (6) over the
+//: particles whose count and rest position sums start `rest` (as RefSum): of their gradient along the rest
+//: sheet's axes (least squares).
+bool frame_of(const double* rest, const double* pos, const double* pos_rest, double e[9]) {
     double f[6];
     for (int c = 0; c < 3; ++c)
-        for (int k = 0; k < 2; ++k) f[2 * c + k] = w[times + 2 * c + k] - w[at + c] * w[REST + k] / w[COUNT];
+        for (int k = 0; k < 2; ++k) f[2 * c + k] = pos_rest[2 * c + k] - pos[c] * rest[REST + k] / rest[COUNT];
     return frame(f, e);
 }
 
@@ -120,6 +127,7 @@ void prepare_tiers(Contact& contact, Index n) {
     const double median = median_edge(contact, n);
     std::vector<Index>& out = contact.lists->tiers;
     out.clear();
+    contact.lists->tiers_made += 1;
     for (int s = 0; s <= FINE_TIER; ++s) {
         const Spacing h = s == FINE_TIER ? Spacing{median, median} : longest;
         const double side_x = (s == FINE_TIER ? FINE_CELLS : whole(s) ? 0 : TIER_CELLS[s]) * h.x;
@@ -176,92 +184,196 @@ double rest_distance_beyond(const Contact& contact, Index n, int s) {
 
 namespace {
 
-//: Each window of tier s, moving from x0 to x1 away from a rigid motion of `ref` (all (3, n)): for each of its
-//: particles i, particle(i, d2, a2, blend) with d2 the larger squared distance, at the two ends, from where
-//: the window's rigid motion takes it, a2 its squared distance from the window's centroid at `ref` and
-//: blend how far, per metre of that, the straight lines between the two rotations fall short of a rotation;
-//: then window(blend).  Either returning false stops the scan (and it returns false).
-template <class Particle, class Window>
-bool scan_windows(const Contact& contact, Index n, int s, const double* ref, const double* x0, const double* x1,
-                  Particle particle, Window window) {
-    const Tier t = tier_of(contact, n, s);
-    const Index cells = t.nx * t.ny;
-    std::vector<double>& sums = contact.lists->tier_scratch;
-    sums.assign(static_cast<std::size_t>((cells + 1) * SUMS), 0.0);
+//: Tier s's windows in the order they are scanned (wx fastest): `across` x `down` of `wide_x` x `wide_y` cells.
+struct Windows {
+    Index wide_x, wide_y, across, down;
+    explicit Windows(const Tier& t)
+        : wide_x(std::min(WINDOW, t.nx)), wide_y(std::min(WINDOW, t.ny)), across(t.nx - wide_x + 1),
+          down(t.ny - wide_y + 1) {}
+    Index count() const { return across * down; }
+};
+
+//: Add the sums (`width` each) of the cells of window (wx, wy) to w (zeroed first).
+void window_sums(const Tier& t, const Windows& ws, Index wx, Index wy, const double* cells, Index width, double* w) {
+    for (Index k = 0; k < width; ++k) w[k] = 0.0;
+    for (Index cy = wy; cy < wy + ws.wide_y; ++cy)
+        for (Index cx = wx; cx < wx + ws.wide_x; ++cx) {
+            const double* c = cells + (cx + t.nx * cy) * width;
+            for (Index k = 0; k < width; ++k) w[k] += c[k];
+        }
+}
+
+//: Call visit(i) for each particle of window (wx, wy), cell by cell.
+template <class Visit>
+inline void for_members(const Tier& t, const Windows& ws, Index wx, Index wy, Visit visit) {
+    for (Index cy = wy; cy < wy + ws.wide_y; ++cy)
+        for (Index cx = wx; cx < wx + ws.wide_x; ++cx) {
+            const Index c = cx + t.nx * cy;
+            for (Index k = t.start[c]; k < t.start[c + 1]; ++k) visit(t.members[k]);
+        }
+}
+
+//: Tier t's windows' shapes in the reference positions `ref` (3, n), SHAPE each in scan order, then the whole
+//: sheet's, into `out` (`cells`: scratch).
+void shapes_of(const Contact& contact, Index n, const Tier& t, const double* ref, std::vector<double>& cells,
+               std::vector<double>& out) {
+    const Windows ws(t);
+    const Index count = t.nx * t.ny;
+    cells.assign(static_cast<std::size_t>(count * REF_SUMS), 0.0);
     const double* rest = contact.rest;
     for (Index i = 0; i < n; ++i) {
-        double* c = sums.data() + t.cell[i] * SUMS;
+        double* c = cells.data() + t.cell[i] * REF_SUMS;
         const double r[2] = {rest[i], rest[n + i]};
         c[COUNT] += 1.0;
         for (int k = 0; k < 2; ++k) c[REST + k] += r[k];
         for (int d = 0; d < 3; ++d) {
-            const double y = ref[d * n + i], a = x0[d * n + i], b = x1[d * n + i];
+            const double y = ref[d * n + i];
             c[REF + d] += y;
-            c[END0 + d] += a;
-            c[END1 + d] += b;
-            for (int k = 0; k < 2; ++k) {
-                c[REF_REST + 2 * d + k] += y * r[k];
-                c[END0_REST + 2 * d + k] += a * r[k];
-                c[END1_REST + 2 * d + k] += b * r[k];
-            }
+            for (int k = 0; k < 2; ++k) c[REF_REST + 2 * d + k] += y * r[k];
         }
     }
-    double* w = sums.data() + cells * SUMS;  // the window's sums
-    // The whole sheet's rotation at each end (identity if degenerate): that of a window whose particles lie
-    // on a line in the rest sheet (a few on the rim of a mesh), rather than none.
-    double sheet0[9], sheet1[9];
+    out.assign(static_cast<std::size_t>((ws.count() + 1) * SHAPE), 0.0);
+    double w[REF_SUMS];
+    // The whole sheet's: its frame alone.
+    for (Index k = 0; k < REF_SUMS; ++k) w[k] = 0.0;
+    for (Index c = 0; c < count; ++c)
+        for (Index k = 0; k < REF_SUMS; ++k) w[k] += cells[c * REF_SUMS + k];
+    double* sheet = out.data() + ws.count() * SHAPE;
+    for (Index k = 0; k < S_OK; ++k) sheet[k] = w[k];
+    sheet[S_OK] = frame_of(w, w + REF, w + REF_REST, sheet + S_FRAME) ? 1.0 : 0.0;
+    for (Index wy = 0; wy < ws.down; ++wy) {
+        for (Index wx = 0; wx < ws.across; ++wx) {
+            double* shape = out.data() + (wx + ws.across * wy) * SHAPE;
+            window_sums(t, ws, wx, wy, cells.data(), REF_SUMS, w);
+            for (Index k = 0; k < S_OK; ++k) shape[k] = w[k];
+            if (w[COUNT] == 0.0) continue;
+            shape[S_OK] = frame_of(w, w + REF, w + REF_REST, shape + S_FRAME) ? 1.0 : 0.0;
+            const double inv = 1.0 / w[COUNT];
+            const double* centroid = shape + S_CENTROID;
+            for (int d = 0; d < 3; ++d) shape[S_CENTROID + d] = w[REF + d] * inv;
+            double radius = 0.0;
+            for_members(t, ws, wx, wy, [&](Index i) {
+                const double ax = ref[i] - centroid[0], ay = ref[n + i] - centroid[1], az = ref[2 * n + i] - centroid[2];
+                radius = py_max(radius, ax * ax + ay * ay + az * az);
+            });
+            shape[S_RADIUS] = radius;
+        }
+    }
+}
+
+//: Tier t's windows' fits (FIT each, in scan order) at positions x (3, n), from their shapes in `ref` (3, n), into
+//: `out`; then, if `visits`, each window's particles' squared distances from where its fit takes them, in scan
+//: order.  A window's rotation is the whole sheet's where its frame is degenerate (its particles on a line in
+//: the rest sheet, as on a mesh's rim: any rotation gives a valid bound), the identity where that one is.
+void fit_end(const Contact& contact, Index n, const Tier& t, const double* ref, const double* shapes,
+             const double* x, bool visits, std::vector<double>& cells, std::vector<double>& out) {
+    const Windows ws(t);
+    const Index count = t.nx * t.ny;
+    cells.assign(static_cast<std::size_t>(count * END_SUMS), 0.0);
+    const double* rest = contact.rest;
+    for (Index i = 0; i < n; ++i) {
+        double* c = cells.data() + t.cell[i] * END_SUMS;
+        const double r[2] = {rest[i], rest[n + i]};
+        for (int d = 0; d < 3; ++d) {
+            const double a = x[d * n + i];
+            c[END + d] += a;
+            for (int k = 0; k < 2; ++k) c[END_REST + 2 * d + k] += a * r[k];
+        }
+    }
+    out.resize(static_cast<std::size_t>(ws.count() * FIT));
+    double w[END_SUMS];
+    double sheet_rotation[9];
     {
         const double identity[9] = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
-        for (Index k = 0; k < SUMS; ++k) w[k] = 0.0;
-        for (Index c = 0; c < cells; ++c)
-            for (Index k = 0; k < SUMS; ++k) w[k] += sums[c * SUMS + k];
-        double e_ref[9], e0[9], e1[9];
-        const bool ref_ok = frame_of(w, REF, REF_REST, e_ref);
-        rotation(ref_ok, e_ref, frame_of(w, END0, END0_REST, e0), e0, identity, sheet0);
-        rotation(ref_ok, e_ref, frame_of(w, END1, END1_REST, e1), e1, identity, sheet1);
+        for (Index k = 0; k < END_SUMS; ++k) w[k] = 0.0;
+        for (Index c = 0; c < count; ++c)
+            for (Index k = 0; k < END_SUMS; ++k) w[k] += cells[c * END_SUMS + k];
+        const double* sheet = shapes + ws.count() * SHAPE;
+        double e[9];
+        const bool ok = frame_of(sheet, w + END, w + END_REST, e);
+        rotation(sheet[S_OK] != 0.0, sheet + S_FRAME, ok, e, identity, sheet_rotation);
     }
-    const Index wide_x = py_min(WINDOW, t.nx), wide_y = py_min(WINDOW, t.ny);
-    for (Index wy = 0; wy + wide_y <= t.ny; ++wy) {
-        for (Index wx = 0; wx + wide_x <= t.nx; ++wx) {
-            for (Index k = 0; k < SUMS; ++k) w[k] = 0.0;
-            for (Index cy = wy; cy < wy + wide_y; ++cy)
-                for (Index cx = wx; cx < wx + wide_x; ++cx) {
-                    const double* c = sums.data() + (cx + t.nx * cy) * SUMS;
-                    for (Index k = 0; k < SUMS; ++k) w[k] += c[k];
-                }
-            if (w[COUNT] == 0.0) continue;
-            // A rotation for each end, and a translation: the window's centroid to the end's.
-            double e_ref[9], e0[9], e1[9], r0[9], r1[9];
-            const bool ref_ok = frame_of(w, REF, REF_REST, e_ref);
-            rotation(ref_ok, e_ref, frame_of(w, END0, END0_REST, e0), e0, sheet0, r0);
-            rotation(ref_ok, e_ref, frame_of(w, END1, END1_REST, e1), e1, sheet1, r1);
-            const double inv = 1.0 / w[COUNT];
-            const double ry[3] = {w[REF] * inv, w[REF + 1] * inv, w[REF + 2] * inv};
-            const double m0[3] = {w[END0] * inv, w[END0 + 1] * inv, w[END0 + 2] * inv};
-            const double m1[3] = {w[END1] * inv, w[END1 + 1] * inv, w[END1 + 2] * inv};
-            // Along the motion the window's linear blend of the two rotations is within (1 - cos(angle / 2))
-            // of a rotation at every point, at most (1 - cos(angle)) / 2 = (3 - trace(r0^T r1)) / 4.
-            double trace = 0.0;
-            for (int k = 0; k < 9; ++k) trace += r0[k] * r1[k];
-            const double blend = py_max(0.0, 0.25 * (3.0 - trace));
-            for (Index cy = wy; cy < wy + wide_y; ++cy) {
-                for (Index cx = wx; cx < wx + wide_x; ++cx) {
-                    const Index c = cx + t.nx * cy;
-                    for (Index k = t.start[c]; k < t.start[c + 1]; ++k) {
-                        const Index i = t.members[k];
-                        const double ax = ref[i] - ry[0], ay = ref[n + i] - ry[1], az = ref[2 * n + i] - ry[2];
-                        const double d0x = x0[i] - m0[0] - (r0[0] * ax + r0[1] * ay + r0[2] * az);
-                        const double d0y = x0[n + i] - m0[1] - (r0[3] * ax + r0[4] * ay + r0[5] * az);
-                        const double d0z = x0[2 * n + i] - m0[2] - (r0[6] * ax + r0[7] * ay + r0[8] * az);
-                        const double d1x = x1[i] - m1[0] - (r1[0] * ax + r1[1] * ay + r1[2] * az);
-                        const double d1y = x1[n + i] - m1[1] - (r1[3] * ax + r1[4] * ay + r1[5] * az);
-                        const double d1z = x1[2 * n + i] - m1[2] - (r1[6] * ax + r1[7] * ay + r1[8] * az);
-                        const double d2 = worse(d0x * d0x + d0y * d0y + d0z * d0z, d1x * d1x + d1y * d1y + d1z * d1z);
-                        if (!particle(i, d2, ax * ax + ay * ay + az * az, blend)) return false;
-                    }
-                }
-            }
-            if (!window(blend)) return false;
+    for (Index wy = 0; wy < ws.down; ++wy) {
+        for (Index wx = 0; wx < ws.across; ++wx) {
+            const Index at = wx + ws.across * wy;
+            const double* shape = shapes + at * SHAPE;
+            if (shape[COUNT] == 0.0) continue;
+            window_sums(t, ws, wx, wy, cells.data(), END_SUMS, w);
+            double e[9];
+            const bool ok = frame_of(shape, w + END, w + END_REST, e);
+            double r[9];
+            rotation(shape[S_OK] != 0.0, shape + S_FRAME, ok, e, sheet_rotation, r);
+            const double inv = 1.0 / shape[COUNT];
+            const double m[3] = {w[END] * inv, w[END + 1] * inv, w[END + 2] * inv};
+            const double y[3] = {shape[S_CENTROID], shape[S_CENTROID + 1], shape[S_CENTROID + 2]};
+            double worst = 0.0;
+            for_members(t, ws, wx, wy, [&](Index i) {
+                const double ax = ref[i] - y[0], ay = ref[n + i] - y[1], az = ref[2 * n + i] - y[2];
+                const double dx = x[i] - m[0] - (r[0] * ax + r[1] * ay + r[2] * az);
+                const double dy = x[n + i] - m[1] - (r[3] * ax + r[4] * ay + r[5] * az);
+                const double dz = x[2 * n + i] - m[2] - (r[6] * ax + r[7] * ay + r[8] * az);
+                const double d2 = dx * dx + dy * dy + dz * dz;
+                worst = worse(worst, d2);
+                if (visits) out.push_back(d2);
+            });
+            double* fit = out.data() + at * FIT;  // (after the visits, which may move `out`)
+            for (int k = 0; k < 9; ++k) fit[ROTATION + k] = r[k];
+            for (int d = 0; d < 3; ++d) fit[CENTROID + d] = m[d];
+            fit[WORST] = worst;
+        }
+    }
+}
+
+//: Whether fits (as fit_end makes them) hold each visit's squared distance.
+inline bool has_visits(const std::vector<double>& fits, const Tier& t) {
+    return fits.size() > static_cast<std::size_t>(Windows(t).count() * FIT);
+}
+
+//: How far the straight lines between a window's rotations at the two ends (fits f0, f1) fall short of a
+//: rotation, per metre from its centroid: (1 - cos(angle / 2)) at every point along the motion, at most
+//: (1 - cos(angle)) / 2 = (3 - trace(r0^T r1)) / 4.
+inline double blend_of(const double* f0, const double* f1) {
+    double trace = 0.0;
+    for (int k = 0; k < 9; ++k) trace += f0[ROTATION + k] * f1[ROTATION + k];
+    return py_max(0.0, 0.25 * (3.0 - trace));
+}
+
+//: The largest deviation over tier t's windows of shapes `shapes` of the motion between fits f0 and f1.
+double deviation_of(const Tier& t, const double* shapes, const double* f0, const double* f1) {
+    const Windows ws(t);
+    double largest = 0.0;
+    for (Index at = 0; at < ws.count(); ++at) {
+        const double* shape = shapes + at * SHAPE;
+        if (shape[COUNT] == 0.0) continue;
+        const double* a = f0 + at * FIT;
+        const double* b = f1 + at * FIT;
+        const double worst = worse(a[WORST], b[WORST]);
+        largest = worse(largest, std::sqrt(worst) + blend_of(a, b) * std::sqrt(shape[S_RADIUS]));
+    }
+    return largest;
+}
+
+//: Whether the motion between fits f0 and f1 (with visits) of tier t's windows of shapes `shapes` in `ref`
+//: (3, n) leaves each particle i within allowance[i] (m); false if a position is not finite.
+bool within_of(Index n, const Tier& t, const double* ref, const double* shapes, const std::vector<double>& f0,
+               const std::vector<double>& f1, const double* allowance) {
+    const Windows ws(t);
+    std::size_t visit = static_cast<std::size_t>(ws.count() * FIT);
+    for (Index wy = 0; wy < ws.down; ++wy) {
+        for (Index wx = 0; wx < ws.across; ++wx) {
+            const Index at = wx + ws.across * wy;
+            const double* shape = shapes + at * SHAPE;
+            if (shape[COUNT] == 0.0) continue;
+            const double blend = blend_of(f0.data() + at * FIT, f1.data() + at * FIT);
+            const double* y = shape + S_CENTROID;
+            bool within = true;
+            for_members(t, ws, wx, wy, [&](Index i) {
+                const double ax = ref[i] - y[0], ay = ref[n + i] - y[1], az = ref[2 * n + i] - y[2];
+                const double d2 = worse(f0[visit], f1[visit]);
+                visit += 1;
+                within = within && std::sqrt(d2) + blend * std::sqrt(ax * ax + ay * ay + az * az) <= allowance[i];
+            });
+            if (!within) return false;  // also if NaN
         }
     }
     return true;
@@ -270,30 +382,75 @@ bool scan_windows(const Contact& contact, Index n, int s, const double* ref, con
 }  // namespace
 
 double deviation(const Contact& contact, Index n, int s, const double* ref, const double* x0, const double* x1) {
-    double largest = 0.0, worst = 0.0, radius = 0.0;
-    scan_windows(
-        contact, n, s, ref, x0, x1,
-        [&](Index, double d2, double a2, double) {
-            worst = worse(worst, d2);
-            radius = py_max(radius, a2);
-            return true;
-        },
-        [&](double blend) {
-            largest = worse(largest, std::sqrt(worst) + blend * std::sqrt(radius));
-            worst = 0.0, radius = 0.0;
-            return true;
-        });
-    return largest;
+    WindowFits& scratch = contact.lists->fits;
+    const Tier t = tier_of(contact, n, s);
+    shapes_of(contact, n, t, ref, scratch.cells, scratch.shape);
+    fit_end(contact, n, t, ref, scratch.shape.data(), x0, false, scratch.cells, scratch.start_fit);
+    fit_end(contact, n, t, ref, scratch.shape.data(), x1, false, scratch.cells, scratch.end_fit);
+    return deviation_of(t, scratch.shape.data(), scratch.start_fit.data(), scratch.end_fit.data());
 }
 
-bool within_allowances(const Contact& contact, Index n, int s, const double* ref, const double* x0,
-                       const double* x1, const double* allowance) {
-    return scan_windows(
-        contact, n, s, ref, x0, x1,
-        [&](Index i, double d2, double a2, double blend) {
-            return std::sqrt(d2) + blend * std::sqrt(a2) <= allowance[i];  // false if NaN
-        },
-        [](double) { return true; });
+StepFits::StepFits(const Contact& contact, Index n, const double* x0, const double* x1)
+    : contact_(contact), n_(n), x0_(x0), x1_(x1), kept_(contact.lists->fits) {
+    const std::size_t size = static_cast<std::size_t>(3 * n);
+    const std::size_t tiers = static_cast<std::size_t>(FINE_TIER + 1);
+    const double* ref = contact.reference;
+    const bool same_tiers = kept_.tiers_made == contact.lists->tiers_made;
+    const bool same_reference = same_tiers && kept_.reference.size() == size &&
+                                std::memcmp(kept_.reference.data(), ref, size * sizeof(double)) == 0;
+    const bool starts_at_end = same_reference && kept_.end.size() == size &&
+                               std::memcmp(kept_.end.data(), x0, size * sizeof(double)) == 0;
+    if (kept_.shapes.size() != tiers) {
+        kept_.shapes.assign(tiers, {}), kept_.at.assign(tiers, {}), kept_.next.assign(tiers, {});
+        kept_.shaped.assign(tiers, 0), kept_.kept.assign(tiers, 0);
+    }
+    if (!same_reference) {
+        kept_.reference.assign(ref, ref + size);
+        kept_.tiers_made = contact.lists->tiers_made;
+        kept_.shaped.assign(tiers, 0);
+    }
+    if (!starts_at_end) kept_.kept.assign(tiers, 0);
+    kept_.made.assign(tiers, 0);
+}
+
+StepFits::~StepFits() {
+    for (std::size_t s = 0; s < kept_.made.size(); ++s) {
+        if (kept_.made[s]) kept_.at[s].swap(kept_.next[s]);
+        kept_.kept[s] = kept_.made[s];
+    }
+    kept_.end.assign(x1_, x1_ + 3 * n_);
+}
+
+const double* StepFits::shapes(int s, const Tier& t) {
+    if (!kept_.shaped[s]) {
+        shapes_of(contact_, n_, t, contact_.reference, kept_.cells, kept_.shapes[s]);
+        kept_.shaped[s] = 1;
+    }
+    return kept_.shapes[s].data();
+}
+
+void StepFits::fit(int s, const Tier& t, bool visits) {
+    const double* shape = shapes(s, t);
+    if (!(kept_.kept[s] && (!visits || has_visits(kept_.at[s], t)))) {
+        fit_end(contact_, n_, t, contact_.reference, shape, x0_, visits, kept_.cells, kept_.at[s]);
+        kept_.kept[s] = 1;
+    }
+    if (!(kept_.made[s] && (!visits || has_visits(kept_.next[s], t)))) {
+        fit_end(contact_, n_, t, contact_.reference, shape, x1_, visits, kept_.cells, kept_.next[s]);
+        kept_.made[s] = 1;
+    }
+}
+
+double StepFits::deviation(int s) {
+    const Tier t = tier_of(contact_, n_, s);
+    fit(s, t, false);
+    return deviation_of(t, kept_.shapes[s].data(), kept_.at[s].data(), kept_.next[s].data());
+}
+
+bool StepFits::within_allowances(int s, const double* allowance) {
+    const Tier t = tier_of(contact_, n_, s);
+    fit(s, t, true);
+    return within_of(n_, t, contact_.reference, kept_.shapes[s].data(), kept_.at[s], kept_.next[s], allowance);
 }
 
 double shifted_deviation(Index n, const double* ref, const double* x0, const double* x1) {

@@ -84,12 +84,33 @@ double rest_distance_beyond(const Contact& contact, Index n, int s);
 //: rotation.  NaN if a position is not finite.
 double deviation(const Contact& contact, Index n, int s, const double* ref, const double* x0, const double* x1);
 
-//: Whether the straight-line motion from x0 to x1 (both (3, n)) leaves each particle i of every window of tier
-//: s within allowance[i] (m) of the window's rigid motion of `ref` (3, n), as deviation() finds it (the
-//: shortfall of the straight lines between the rotations counted at the particle's own distance from the
-//: window's centroid, not the window's farthest).  False if a position is not finite.
-bool within_allowances(const Contact& contact, Index n, int s, const double* ref, const double* x0,
-                       const double* x1, const double* allowance);
+//: One step's check of the motion from x0 to x1 (both (3, n)) against rigid motions of contact.reference, tier
+//: by tier, with the same figures as deviation() (bit for bit).  Each tier's windows are fitted at either end;
+//: the fits at x0 are those a check kept where the last step it checked ended at x0 (compared bit for bit;
+//: the reference and the tiers the same), so a step's check usually fits only its end.  When it ends, it
+//: keeps its fits at x1 (ContactLists::fits).
+class StepFits {
+public:
+    StepFits(const Contact& contact, Index n, const double* x0, const double* x1);
+    ~StepFits();
+    StepFits(const StepFits&) = delete;
+    StepFits& operator=(const StepFits&) = delete;
+    //: deviation(contact, n, s, contact.reference, x0, x1).
+    double deviation(int s);
+    //: Whether the motion leaves each particle i of every window of tier s within allowance[i] (m) of the
+    //: window's rigid motion, as deviation() finds it (the shortfall of the straight lines between the
+    //: rotations counted at the particle's own distance from the window's centroid, not the window's
+    //: farthest).  False if a position is not finite.
+    bool within_allowances(int s, const double* allowance);
+
+private:
+    const double* shapes(int s, const Tier& t);
+    void fit(int s, const Tier& t, bool visits);
+    const Contact& contact_;
+    Index n_;
+    const double *x0_, *x1_;
+    WindowFits& kept_;
+};
 
 //: The deviation (m) of the straight-line motion from x0 to x1 (both (3, n)) from a translation of the whole
 //: sheet's reference positions `ref` (3, n), the mid-range of each end's displacements (what a cloth that

@@ -1,0 +1,57 @@
+"""The self-collision list's check keeps its windows' fits at the end of the step it checked and reuses them
+for the next step, which starts there (tiers.hpp, StepFits): it must decide exactly as a check that fits both
+ends afresh."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import wetcloth
+from wetcloth import _core
+
+
+def swinging_states() -> tuple[wetcloth.Simulation, list[np.ndarray]]:
+    """A 21 x 21 sheet hanging from one edge, released horizontal: its positions (3, n) m at 0.20, 0.21 and
+    0.22 s (it swings down, turns and bends, so the check looks at its windows, not only at a translation)."""
+    sim = wetcloth.Simulation(wetcloth.load_scene(nx=21, ny=21, width=1.0, length=1.0, pinned_edge="y_max",
+                                                  initial_tilt=0.0, initial_height=2.0, water_level=-10.0,
+                                                  floor_level=-20.0))
+    states = []
+    for duration in (0.2, 0.01, 0.01):
+        sim.advance(duration)
+        states.append(sim.state.pos.copy())
+    return sim, states
+
+
+def test_a_check_starting_where_the_last_ended_decides_as_a_fresh_one():
+    """The list is built (the widest margin that keeps it empty) at the midpoint of the motion from the first
+    state to the second; the next motion runs from the second state to the third moved on by a factor f of
+    its own motion.  The largest f for which the list holds (bisected to 1e-12), once right after a check of
+    the first motion (which ended where the next starts: its fits are reused) and once after a check that
+    ended elsewhere (both ends fitted afresh), must be the same number: the reused fits are the same figures
+    bit for bit.  It must lie within the bisection's range (1, the third state, to 200), so the check is made
+    at its limit and both answers occur."""
+    sim, (x0, x1, x2) = swinging_states()
+    contact, thickness = sim._contact, sim.scene.thickness
+    widest = max(contact.least_margin, 0.5 * (_core.WIDE_REACH * contact.rest_gap - thickness))
+    contact.reference[...] = 0.5 * (x0 + x1)
+    lists = _core.ContactState()
+    _core.build_widest(contact, thickness, contact.least_margin, widest, lists=lists)
+    assert _core.covers(contact, x0, x1, lists=lists)
+
+    def holds(f: float, reused: bool) -> bool:
+        if reused:
+            _core.covers(contact, x0, x1, lists=lists)  # ends at x1, where the next motion starts
+        else:
+            _core.covers(contact, x1, x0, lists=lists)  # ends elsewhere
+        return _core.covers(contact, x1, x1 + f * (x2 - x1), lists=lists)
+
+    limits = []
+    for reused in (True, False):
+        low, high = 1.0, 200.0
+        assert holds(low, reused) and not holds(high, reused)
+        while high - low > 1e-12 * high:
+            middle = 0.5 * (low + high)
+            low, high = (middle, high) if holds(middle, reused) else (low, middle)
+        limits.append(low)
+    assert limits[0] == limits[1], limits
