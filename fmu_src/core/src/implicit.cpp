@@ -310,7 +310,9 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
         if (!adaptive) {  // the frame where the step ends (a frame-long step turns the cloth)
             follow_cloth(plane, cloth, out_pos);
             set_systems_from_jacobian(plane, cloth, mass, work);
-            if (coarse != nullptr) build_coarse_space(*coarse, cloth, mass, work, out_pos);  // (turns about the centres there)
+            if (coarse != nullptr && iteration < COARSE_BUILDS) {  // (turns about the centres there)
+                build_coarse_space(*coarse, cloth, mass, work, out_pos);
+            }
             solver.counters[FACTORISATIONS] += 1;
         } else {
             if (jacobian_refresh_pays(plane, memory[3])) {

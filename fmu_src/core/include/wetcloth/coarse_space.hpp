@@ -26,6 +26,14 @@ inline constexpr Index COARSE_NEIGHBOURS = 5;
 //: 38; 3: 52 ms, its band factor dominating).
 inline constexpr Index COARSE_SIDE = 9;
 
+//: A step's Newton iterations at which the coarse space is built: the later ones (at most two more) keep the
+//: last (a coarse matrix that no longer matches A is still a valid, symmetric positive definite,
+//: preconditioner; the step's later corrections move the cloth little).  Hanging 81 x 81 sheet, implicit_euler
+//: frame steps, 3 s: 1 build a step: 11.4 CG per Newton iteration against 8.4 (27-28 ms a frame); 2: 8.7
+//: CG per Newton iteration, 190 Newton iterations against 197 (23-25 ms a frame against 26-27); the last
+//: step's coarse space kept for the next step's first iteration: 13.0 CG per Newton iteration (37 ms).
+inline constexpr Index COARSE_BUILDS = 2;
+
 //: The aggregates of a grid (side x side particles, the last row and column of aggregates possibly
 //: narrower) and the coarse matrix, COARSE_UNKNOWNS per aggregate (aggregate-major; kg, kg m, kg m^2), in
 //: band.hpp's lower band form (half-bandwidth width), factored by build_coarse_space with band_factor (its
