@@ -286,7 +286,9 @@ void mark_near(const Index* elements, Index count, int width, Index mesh, const 
 }
 
 //: Gather the kept list for the step from x0 to x1: its reference their midpoint; a particle near a mesh
-//: may move twice the step's largest motion of those particles, at least LEAST_MARGIN of reach (thickness / 2,
+//: may move the step's largest motion of those particles (twice what the step takes it from the midpoint; a
+//: wider margin keeps a list longer but makes it larger: against a moving mesh, whose relative motion is
+//: large, twice that margin cost 3x the time), at least LEAST_MARGIN of reach (thickness / 2,
 //: m), the others FAR_MARGIN of reach (or the near ones' margin if more); a cloth whose box is far from
 //: every mesh's box keeps an empty list while no particle moves more than what that distance allows.
 void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& kept, const Physics& phys,
@@ -346,7 +348,7 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
         for (Index c = 0; c < 3; ++c) d2 += (x1[c * n + i] - x0[c * n + i]) * (x1[c * n + i] - x0[c * n + i]);
         motion2 = py_max(motion2, d2);
     }
-    const double margin = py_max(LEAST_MARGIN * reach, 2.0 * std::sqrt(motion2));
+    const double margin = py_max(LEAST_MARGIN * reach, std::sqrt(motion2));
     far = py_max(far, margin);  // (a far pad too small for it: every particle near)
     for (double& a : near) a = a != 0.0 || far == margin ? margin : far;
     const double extra = reach + LIST_MARGINS * margin;
