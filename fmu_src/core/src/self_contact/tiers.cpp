@@ -213,31 +213,41 @@ inline void for_members(const Tier& t, const Windows& ws, Index wx, Index wy, Vi
         }
 }
 
+//: Tier t's cells' sums (`stride` doubles a cell) of their particles' positions x (3, n), at columns at ..
+//: at + 2, and of those times the particles' rest coordinates, at at_rest .. at_rest + 5; `with_rest`: also
+//: their count (COUNT) and rest coordinates (REST).  Into `cells`, and the whole sheet's into `whole` (stride).
+void cell_sums(const Contact& contact, Index n, const Tier& t, const double* x, Index stride, Index at, Index at_rest,
+               bool with_rest, std::vector<double>& cells, double* whole) {
+    const Index count = t.nx * t.ny;
+    cells.assign(static_cast<std::size_t>(count * stride), 0.0);
+    const double* rest = contact.rest;
+    for (Index i = 0; i < n; ++i) {
+        double* c = cells.data() + t.cell[i] * stride;
+        const double r[2] = {rest[i], rest[n + i]};
+        if (with_rest) {
+            c[COUNT] += 1.0;
+            for (int k = 0; k < 2; ++k) c[REST + k] += r[k];
+        }
+        for (int d = 0; d < 3; ++d) {
+            const double y = x[d * n + i];
+            c[at + d] += y;
+            for (int k = 0; k < 2; ++k) c[at_rest + 2 * d + k] += y * r[k];
+        }
+    }
+    for (Index k = 0; k < stride; ++k) whole[k] = 0.0;
+    for (Index c = 0; c < count; ++c)
+        for (Index k = 0; k < stride; ++k) whole[k] += cells[c * stride + k];
+}
+
 //: Tier t's windows' shapes in the reference positions `ref` (3, n), SHAPE each in scan order, then the whole
 //: sheet's, into `out` (`cells`: scratch).
 void shapes_of(const Contact& contact, Index n, const Tier& t, const double* ref, std::vector<double>& cells,
                std::vector<double>& out) {
     const Windows ws(t);
-    const Index count = t.nx * t.ny;
-    cells.assign(static_cast<std::size_t>(count * REF_SUMS), 0.0);
-    const double* rest = contact.rest;
-    for (Index i = 0; i < n; ++i) {
-        double* c = cells.data() + t.cell[i] * REF_SUMS;
-        const double r[2] = {rest[i], rest[n + i]};
-        c[COUNT] += 1.0;
-        for (int k = 0; k < 2; ++k) c[REST + k] += r[k];
-        for (int d = 0; d < 3; ++d) {
-            const double y = ref[d * n + i];
-            c[REF + d] += y;
-            for (int k = 0; k < 2; ++k) c[REF_REST + 2 * d + k] += y * r[k];
-        }
-    }
-    out.assign(static_cast<std::size_t>((ws.count() + 1) * SHAPE), 0.0);
     double w[REF_SUMS];
+    cell_sums(contact, n, t, ref, REF_SUMS, REF, REF_REST, true, cells, w);
+    out.assign(static_cast<std::size_t>((ws.count() + 1) * SHAPE), 0.0);
     // The whole sheet's: its frame alone.
-    for (Index k = 0; k < REF_SUMS; ++k) w[k] = 0.0;
-    for (Index c = 0; c < count; ++c)
-        for (Index k = 0; k < REF_SUMS; ++k) w[k] += cells[c * REF_SUMS + k];
     double* sheet = out.data() + ws.count() * SHAPE;
     for (Index k = 0; k < S_OK; ++k) sheet[k] = w[k];
     sheet[S_OK] = frame_of(w, w + REF, w + REF_REST, sheet + S_FRAME) ? 1.0 : 0.0;
@@ -268,26 +278,12 @@ void shapes_of(const Contact& contact, Index n, const Tier& t, const double* ref
 void fit_end(const Contact& contact, Index n, const Tier& t, const double* ref, const double* shapes,
              const double* x, bool visits, std::vector<double>& cells, std::vector<double>& out) {
     const Windows ws(t);
-    const Index count = t.nx * t.ny;
-    cells.assign(static_cast<std::size_t>(count * END_SUMS), 0.0);
-    const double* rest = contact.rest;
-    for (Index i = 0; i < n; ++i) {
-        double* c = cells.data() + t.cell[i] * END_SUMS;
-        const double r[2] = {rest[i], rest[n + i]};
-        for (int d = 0; d < 3; ++d) {
-            const double a = x[d * n + i];
-            c[END + d] += a;
-            for (int k = 0; k < 2; ++k) c[END_REST + 2 * d + k] += a * r[k];
-        }
-    }
-    out.resize(static_cast<std::size_t>(ws.count() * FIT));
     double w[END_SUMS];
+    cell_sums(contact, n, t, x, END_SUMS, END, END_REST, false, cells, w);
+    out.resize(static_cast<std::size_t>(ws.count() * FIT));
     double sheet_rotation[9];
     {
         const double identity[9] = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
-        for (Index k = 0; k < END_SUMS; ++k) w[k] = 0.0;
-        for (Index c = 0; c < count; ++c)
-            for (Index k = 0; k < END_SUMS; ++k) w[k] += cells[c * END_SUMS + k];
         const double* sheet = shapes + ws.count() * SHAPE;
         double e[9];
         const bool ok = frame_of(sheet, w + END, w + END_REST, e);
