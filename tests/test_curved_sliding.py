@@ -1,4 +1,4 @@
-"""Sliding over a curved collider (docs/model.md section 6.1): a bead released near the top of a frictionless
+"""Sliding over a curved collider (docs/model.md section 6.3): a bead released near the top of a frictionless
 ball slides down its side and leaves it where the ball no longer needs to push it, cos(theta) = 2/3
 cos(theta_0) (theta from the top), then flies on a parabola.
 
