@@ -465,7 +465,6 @@ void into_table_frame(const Physics& phys, Index k, Index n, const double* x0, c
                       double* frame) {
     const double* shift = collider_shift(phys, k);
     const double* centre = phys.colliders + k * COLLIDER_COLUMNS + C_X;
-    const double* R = shift + MOTION_TURN;
     double* q0 = frame;
     double* q1 = frame + 3 * n;
     double* w1 = frame + 6 * n;
@@ -475,11 +474,9 @@ void into_table_frame(const Physics& phys, Index k, Index n, const double* x0, c
         table_point(shift, centre, a, true, from);
         table_point(shift, centre, e, false, to);
         surface_velocity(phys, k, e, u);
-        const double r[3] = {v1[i] - u[0], v1[n + i] - u[1], v1[2 * n + i] - u[2]};
-        for (Index c = 0; c < 3; ++c) {
-            q0[c * n + i] = from[c], q1[c * n + i] = to[c];
-            w1[c * n + i] = turns(shift) ? R[c] * r[0] + R[3 + c] * r[1] + R[6 + c] * r[2] : r[c];  // R^T r
-        }
+        double r[3] = {v1[i] - u[0], v1[n + i] - u[1], v1[2 * n + i] - u[2]};
+        table_direction(shift, r);
+        for (Index c = 0; c < 3; ++c) q0[c * n + i] = from[c], q1[c * n + i] = to[c], w1[c * n + i] = r[c];
     }
 }
 

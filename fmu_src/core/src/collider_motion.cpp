@@ -208,6 +208,13 @@ void world_direction(const double* shift, double* v) {
     for (int c = 0; c < 3; ++c) v[c] = R[3 * c] * w[0] + R[3 * c + 1] * w[1] + R[3 * c + 2] * w[2];
 }
 
+void table_direction(const double* shift, double* v) {
+    if (!turns(shift)) return;
+    const double* R = shift + MOTION_TURN;
+    const double w[3] = {v[0], v[1], v[2]};
+    for (int c = 0; c < 3; ++c) v[c] = R[c] * w[0] + R[3 + c] * w[1] + R[6 + c] * w[2];
+}
+
 void surface_velocity(const Physics& phys, Index k, const double* p, double* u) {
     const double* shift = collider_shift(phys, k);
     if (shift == nullptr) {

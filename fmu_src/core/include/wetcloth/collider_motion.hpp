@@ -78,6 +78,9 @@ void world_point(const double* shift, const double* centre, const double* q, dou
 //: The world direction (3) of a table-frame direction v (3) now: R v in place (unchanged if it does not turn).
 void world_direction(const double* shift, double* v);
 
+//: The table-frame direction (3) of a world direction v (3) now: R^T v in place (world_direction's inverse).
+void table_direction(const double* shift, double* v);
+
 //: The velocity (3, m/s) over the step of collider k's surface at world point p (3):
 //: v_k + omega x (p - c - d) (d now); 0 when it does not move.
 void surface_velocity(const Physics& phys, Index k, const double* p, double* u);
