@@ -86,8 +86,9 @@ double pressing(const Sliding& sliding, Index s, Index n, const double* mass, co
 }
 
 //: Put sliding particle s, which the solve kept in the tangent plane of its path's predicted end over a
-//: curved collider (on the surface to fourth order in the step), exactly back onto it (at reach m, along its normal there), and turn
-//: its velocity relative to the surface along the surface there, keeping its speed.  Returns how far it moved (m).
+//: curved collider (on the surface to fourth order in the step), exactly back onto it (at reach m, along its
+//: normal there), and turn its velocity relative to the surface along the surface there, keeping its speed.
+//: Returns how far it moved (m).
 double onto_collider(const Sliding& sliding, Index s, Index n, const Physics& phys, double reach, double h,
                      double* pos, double* vel) {
     const Index i = sliding.index[s], k = sliding.collider[s];

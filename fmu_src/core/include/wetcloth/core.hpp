@@ -168,10 +168,10 @@ enum SolverCounter : Index { NEWTON_ITERATIONS = 0, CG_ITERATIONS = 1, FACTORISA
 //: along the surface), the prescribed velocity along the normal (m/s, set by the step) and whether the
 //: support is the floor (1) or a collider (0); the collider (-1: the floor).  On a curved collider the
 //: normal turns as the particle slides, at `turning` (3 per particle, 1/s: the surface's shape operator
-//: applied to the sliding velocity at the step's start, zero on a flat surface), and the step holds the
-//: particle on the chord of its path: `normal` and `direction` are the surface's at the path's midpoint,
-//: start_normal and start_direction those at the step's start; `centripetal` is the path's kappa s^2 (m/s2)
-//: and `curving` h^2 kappa s^2 / 2 (m) how far the surface falls away from the start's tangent plane in a step.
+//: applied to the sliding velocity at the step's start, zero on a flat surface), and the step takes the
+//: surface at the path's predicted end: `normal` and `direction` are the surface's there, start_normal and
+//: start_direction those at the step's start; `centripetal` is the path's kappa s^2 (m/s2) and `curving`
+//: h^2 kappa s^2 / 2 (m) how much farther out along `normal` the end's tangent plane stands than the start.
 struct Sliding {
     std::vector<Index> index;
     std::vector<double> normal;

@@ -26,9 +26,10 @@ Index add_released(Index n, const Physics& phys, const double* pos, const double
 void project_sliding(const Sliding& sliding, Index n, double* a);
 
 //: The sliding particles' velocities (3, n) get their prescribed normal part, speed (m/s) that keeps each
-//: where it is across the surface (moving with a moving surface over the step of h s, and falling away with a
-//: curved one): n . (pos + h u - hat_pos) / bh - h^2 kappa s^2 / (2 bh), pos the step's start, u the surface's
-//: velocity, hat_pos (3, n) the scheme's x^ with x+ = x^ + bh v+, kappa s^2 the path's centripetal acceleration.
+//: where it is across the surface (moving with a moving surface over the step of h s; on a curved one, in the
+//: tangent plane of its path's predicted end, n then that end's normal): n . (pos + h u - hat_pos) / bh +
+//: h^2 kappa s^2 / (2 bh), pos the step's start, u the surface's velocity, hat_pos (3, n) the scheme's x^ with
+//: x+ = x^ + bh v+, kappa s^2 the path's centripetal acceleration (0 on a flat surface).
 void prescribe_normal_speed(Sliding& sliding, Index n, const double* pos, const double* hat_pos, double h, double bh,
                             double* vel);
 
