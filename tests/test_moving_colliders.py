@@ -210,6 +210,15 @@ def test_bad_collider_keys_are_named_with_their_allowed_range(keys, name, words)
     assert name in str(exc.value) and words in str(exc.value), str(exc.value)
 
 
+def test_a_faulty_collider_is_one_mistake_not_one_for_each_of_its_keys():
+    """A collider with a bad field is reported once: its keys still name it by its place among the tables
+    given (before, each key also got 'names no collider (the scene has 0)')."""
+    with pytest.raises(ParameterError) as exc:
+        load_scene("sweep", collider1_radius=-1.0)
+    assert str(exc.value).startswith("parameter 'collider1_radius': -1.0 is out of range"), str(exc.value)
+    assert "names no collider" not in str(exc.value) and "mistakes" not in str(exc.value), str(exc.value)
+
+
 def test_bad_collider_key_names_and_tables_are_refused(tmp_path):
     with pytest.raises(ParameterError, match="collider_key1_speed.*unknown collider key field.*one of collider, "
                                              "time, x, y, z"):

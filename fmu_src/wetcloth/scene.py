@@ -474,9 +474,12 @@ def validate(scene: Scene) -> None:
     for name in PARAMETERS:
         with mistakes.collect():
             object.__setattr__(scene, name, check_value(name, getattr(scene, name)))
+    # Keys name colliders by their place among those given, a faulty one included (its own mistake is
+    # reported, not one for each key that moves it).
+    given = len(scene.colliders) if isinstance(scene.colliders, (tuple, list)) else 0
     object.__setattr__(scene, "colliders", _checked_colliders(scene.colliders, mistakes))
     object.__setattr__(scene, "grip_keys", _checked_grip_keys(scene, mistakes))
-    object.__setattr__(scene, "collider_keys", _checked_collider_keys(scene, mistakes))
+    object.__setattr__(scene, "collider_keys", _checked_collider_keys(scene, given, mistakes))
     mistakes.raise_if_any()
     start = _check_mesh_start(scene) if is_mesh(scene.cloth_mesh) else None
     if start is None:
@@ -582,9 +585,10 @@ def _checked_grip_keys(scene: Scene, mistakes: Mistakes) -> tuple:
     return tuple(out)
 
 
-def _checked_collider_keys(scene: Scene, mistakes: Mistakes) -> tuple:
+def _checked_collider_keys(scene: Scene, colliders: int, mistakes: Mistakes) -> tuple:
     """The collider keys as ColliderKey objects (from ColliderKey or dicts of fields), each field checked under
-    its flattened name; each names a collider of the scene, and the times of one collider's keys increase."""
+    its flattened name; each names one of the scene's ``colliders`` [[collider]] tables, and the times of one
+    collider's keys increase."""
     keys = scene.collider_keys
     if not isinstance(keys, (tuple, list)):
         with mistakes.collect():
@@ -602,13 +606,13 @@ def _checked_collider_keys(scene: Scene, mistakes: Mistakes) -> tuple:
                 if required not in values:
                     name = f"collider_key{k}_{required}"
                     raise ParameterError(name, f"a collider key needs its {required}; allowed: "
-                                         + _key_range(required, name, scene))
+                                         + _key_range(required, name, colliders))
             checked = {name: check_value(f"collider_key{k}_{name}", value) for name, value in values.items()}
             collider = checked["collider"]
-            if collider > len(scene.colliders):
+            if collider > colliders:
                 raise ParameterError(f"collider_key{k}_collider", f"{collider} names no collider (the scene has "
-                                     f"{len(scene.colliders)}); allowed: "
-                                     + _key_range("collider", f"collider_key{k}_collider", scene))
+                                     f"{colliders}); allowed: "
+                                     + _key_range("collider", f"collider_key{k}_collider", colliders))
             if collider in last and checked["time"] <= last[collider][1]:
                 before, time = last[collider]
                 raise ParameterError(f"collider_key{k}_time", f"{checked['time']!r} s is not after "
@@ -635,10 +639,10 @@ def _checked_collider_keys(scene: Scene, mistakes: Mistakes) -> tuple:
 MAX_KEY_TURN = 179.0
 
 
-def _key_range(field_name: str, name: str, scene: Scene) -> str:
-    """What a collider key's field allows: its range, the collider number within the scene's colliders."""
+def _key_range(field_name: str, name: str, colliders: int) -> str:
+    """What a collider key's field allows: its range, the collider number within the scene's ``colliders``."""
     if field_name == "collider":
-        return (f"1 <= {name} <= {len(scene.colliders)} (the scene's [[collider]] tables)" if scene.colliders
+        return (f"1 <= {name} <= {colliders} (the scene's [[collider]] tables)" if colliders
                 else "a collider key moves a [[collider]] of the scene, and it has none")
     return describe_range(COLLIDER_KEY_FIELDS[field_name], name)
 
