@@ -87,3 +87,36 @@ def test_a_bead_slides_off_a_frictionless_ball_as_the_analytic_bead_does(departu
     assert sim.rejected_steps < 0.1 * sim.steps  # the curved path no longer throws particles off the ball
     tight, _ = largest_error(5e-7, departure)
     assert tight < loose / 2.5
+
+
+@pytest.mark.parametrize("tilt", [30.0, 60.0])
+def test_a_particle_that_slips_over_a_ball_ends_on_it(tilt):
+    """A particle held at rest on a ball whose weight there beats friction slips
+    for a step of h s without the step being taken again (slip_on_supports, docs/model.md 6.1).  It ends on
+    the surface (at r + thickness / 2 from the centre, to rounding: 1e-15 m on 0.3 m), moving along it at
+    the speed a h its slip gives, a = g (sin th - mu cos th); and where it ends along the surface matches the
+    move a h^2 / 2 to second order in it (arc against chord: a few nm here).  Before, the straight move left
+    it move^2 / 2R (2e-8 m here) off the surface and moving away, free in the next step, to fall back in
+    and kink the step's error estimate."""
+    from wetcloth import _core
+    from wetcloth.collider_meshes import meshes_of
+    from wetcloth.scene import Collider
+
+    mu, h, mass = 0.3, 0.01, 1e-3
+    rows, meshes = meshes_of((Collider(shape="sphere", radius=RADIUS, friction=mu),))
+    th = math.radians(tilt)  # from the top, in the y-z plane
+    pos = np.array([[0.0], [PATH_RADIUS * math.sin(th)], [PATH_RADIUS * math.cos(th)]])
+    vel = np.zeros((3, 1))
+    force = np.array([[0.0], [0.0], [-mass * GRAVITY]])
+    held = np.array([3.0])  # on collider 0 (collider_held(0))
+    moved = _core.slip_on_supports(rows, meshes, THICKNESS, -10.0, 0.5, force, np.array([mass]), h, 1.0, held,
+                                   pos, vel)
+    a = GRAVITY * (math.sin(th) - mu * math.cos(th))
+    assert moved == pytest.approx(0.5 * a * h * h, rel=1e-6)
+    radius = np.linalg.norm(pos[:, 0])
+    assert abs(radius - PATH_RADIUS) < 1e-15
+    normal = pos[:, 0] / radius
+    assert abs(vel[:, 0] @ normal) < 1e-12 * np.linalg.norm(vel)
+    assert np.linalg.norm(vel) == pytest.approx(a * h, rel=1e-12)
+    travelled = PATH_RADIUS * (math.atan2(pos[1, 0], pos[2, 0]) - th)  # along the surface (m)
+    assert travelled == pytest.approx(0.5 * a * h * h, rel=(0.5 * a * h * h / PATH_RADIUS) ** 2)

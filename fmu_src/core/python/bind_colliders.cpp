@@ -1,4 +1,6 @@
 // Bindings of the colliders' geometry (colliders.cpp, collider_mesh.cpp), for tests and callers that check a scene.
+#include <vector>
+
 #include "convert.hpp"
 #include "wetcloth/collider_mesh.hpp"
 #include "wetcloth/collider_motion.hpp"
@@ -35,6 +37,31 @@ WETCLOTH_BINDINGS(m) {
         "Signed distance (m) of points (3, m) to collider k of the rows colliders (k, COLLIDER_COLUMNS) into distance "
         "(m), the outward normals into normal (3, m); a mesh collider's (its triangles in meshes, a ColliderMeshes) "
         "at most reach (m).");
+    m.def(
+        "slip_on_supports",
+        [](nb::handle colliders, nb::handle meshes, double thickness, double floor_z, double floor_friction,
+           nb::handle force, nb::handle mass, double h, double limit, nb::handle held, nb::handle pos, nb::handle vel) {
+            Physics phys;
+            phys.collider_count = size_of(colliders) / COLLIDER_COLUMNS;
+            phys.colliders = argument<const double>(colliders, "colliders", phys.collider_count * COLLIDER_COLUMNS);
+            phys.meshes = meshes_from(meshes);
+            phys.thickness = thickness;
+            phys.floor_z = floor_z;
+            phys.floor_friction = floor_friction;
+            const Index n = size_of(mass);
+            double* p = argument<double>(pos, "pos", 3 * n);
+            const std::vector<double> start(p, p + 3 * n);
+            return slip_on_supports(n, phys, argument<const double>(force, "force", 3 * n),
+                                    argument<const double>(mass, "mass", n), nullptr, nullptr, h, limit,
+                                    argument<const double>(held, "held", n), start.data(), p,
+                                    argument<double>(vel, "vel", 3 * n));
+        },
+        nb::arg("colliders"), nb::arg("meshes"), nb::arg("thickness"), nb::arg("floor_z"), nb::arg("floor_friction"),
+        nb::arg("force"), nb::arg("mass"), nb::arg("h"), nb::arg("limit"), nb::arg("held"), nb::arg("pos"),
+        nb::arg("vel"),
+        "Move the particles held (n) on the floor or a still collider that force (3, n) N slips, as a step of h s "
+        "would have (pos, vel (3, n) in place, from rest at pos); their masses (n) kg.  Returns the farthest move "
+        "(m), or -1 with nothing moved if one would move farther than limit (m).");
 }
 
 }  // namespace wc::py

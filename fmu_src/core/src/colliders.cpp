@@ -419,6 +419,36 @@ Index release_from_colliders(Index n, const Physics& phys, const double* pos, co
     return released;
 }
 
+double onto_surface(const Physics& phys, Index k, Index n, Index i, double reach, double h, double* pos, double* vel) {
+    const double* shift = collider_shift(phys, k);
+    const bool sphere = phys.colliders[k * COLLIDER_COLUMNS + C_SHAPE] == SPHERE;  // the same shape, turned
+    if (turns(shift) && !sphere) return 0.0;  // (left where the solve put it)
+    // The collider is where the step started (end_collider_motion comes after): p as seen from there.
+    const double* moved = shift != nullptr ? shift + MOTION_VELOCITY : nullptr;
+    double p[3];
+    for (int c = 0; c < 3; ++c) p[c] = pos[c * n + i] - (moved != nullptr ? h * moved[c] : 0.0);
+    double nrm[3], u[3];
+    const double off = reach - collider_distance(phys, k, p, 2.0 * reach, nrm);
+    const double q[3] = {pos[i] + off * nrm[0], pos[n + i] + off * nrm[1], pos[2 * n + i] + off * nrm[2]};
+    surface_velocity(phys, k, p, u);
+    double v[3], across = 0.0, speed2 = 0.0, along2 = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        v[c] = vel[c * n + i] - u[c];
+        across += v[c] * nrm[c];
+        speed2 += v[c] * v[c];
+    }
+    for (int c = 0; c < 3; ++c) {
+        v[c] -= across * nrm[c];
+        along2 += v[c] * v[c];
+    }
+    const double keep = along2 > 0.0 ? std::sqrt(speed2 / along2) : 1.0;  // its speed
+    for (int c = 0; c < 3; ++c) {
+        pos[c * n + i] = q[c];
+        vel[c * n + i] = u[c] + keep * v[c];
+    }
+    return std::abs(off);
+}
+
 double slip_on_supports(Index n, const Physics& phys, const double* force, const double* mass,
                         const double* diagonal_blocks, const double* blocks, double h, double limit,
                         const double* held, const double* start, double* pos, double* vel) {
@@ -430,8 +460,8 @@ double slip_on_supports(Index n, const Physics& phys, const double* force, const
             if (!on_floor && held[i] < collider_held(0)) continue;  // free, or on a layer
             double nrm[3] = {up[0], up[1], up[2]};
             double friction = phys.floor_friction;
+            const Index k = on_floor ? -1 : static_cast<Index>(held[i] - collider_held(0));
             if (!on_floor) {
-                const Index k = static_cast<Index>(held[i] - collider_held(0));
                 double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
                 const double* shift = collider_shift(phys, k);
                 if (turns(shift)) {  // where a moving collider held it, at the step's start
@@ -443,7 +473,7 @@ double slip_on_supports(Index n, const Physics& phys, const double* force, const
                 friction = phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
             }
             double f[3] = {force[i], force[n + i], force[2 * n + i]};
-            if (!on_floor) carried_force(phys, static_cast<Index>(held[i] - collider_held(0)), n, i, start, mass, f);
+            if (!on_floor) carried_force(phys, k, n, i, start, mass, f);
             if (!slips(f, nrm, friction)) continue;
             double excess[3];
             slip_force(f, nrm, friction, excess);
@@ -460,6 +490,12 @@ double slip_on_supports(Index n, const Physics& phys, const double* force, const
             for (int c = 0; c < 3; ++c) {
                 pos[c * n + i] += 0.5 * excess[c] / inertia * h * h;
                 vel[c * n + i] += excess[c] / inertia * h;
+            }
+            // Pressed onto a curved collider, that straight move ends move^2 / 2R off it, moving away: back onto it.
+            const bool pressed = f[0] * nrm[0] + f[1] * nrm[1] + f[2] * nrm[2] < 0.0;
+            double turning[3];
+            if (!on_floor && pressed && normal_turning(phys, k, nrm, e, turning)) {
+                farthest = std::max(farthest, onto_surface(phys, k, n, i, 0.5 * phys.thickness, h, pos, vel));
             }
         }
     }

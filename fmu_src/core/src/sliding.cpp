@@ -85,42 +85,6 @@ double pressing(const Sliding& sliding, Index s, Index n, const double* mass, co
     return sliding.centripetal[s] != 0.0 ? into - mass[i] * sliding.centripetal[s] : into;
 }
 
-//: Put sliding particle s, which the solve kept in the tangent plane of its path's predicted end over a
-//: curved collider (on the surface to fourth order in the step), exactly back onto it (at reach m, along its
-//: normal there), and turn its velocity relative to the surface along the surface there, keeping its speed.
-//: Returns how far it moved (m).
-double onto_collider(const Sliding& sliding, Index s, Index n, const Physics& phys, double reach, double h,
-                     double* pos, double* vel) {
-    const Index i = sliding.index[s], k = sliding.collider[s];
-    const double* shift = collider_shift(phys, k);
-    const bool sphere = phys.colliders[k * COLLIDER_COLUMNS + C_SHAPE] == SPHERE;  // the same shape, turned
-    if (turns(shift) && !sphere) return 0.0;  // (left where the solve put it)
-    // The collider is where the step started (end_collider_motion comes after): p as seen from there.
-    const double* moved = shift != nullptr ? shift + MOTION_VELOCITY : nullptr;
-    double p[3];
-    for (int c = 0; c < 3; ++c) p[c] = pos[c * n + i] - (moved != nullptr ? h * moved[c] : 0.0);
-    double nrm[3], u[3];
-    const double off = reach - collider_distance(phys, k, p, 2.0 * reach, nrm);
-    const double q[3] = {pos[i] + off * nrm[0], pos[n + i] + off * nrm[1], pos[2 * n + i] + off * nrm[2]};
-    surface_velocity(phys, k, p, u);
-    double v[3], across = 0.0, speed2 = 0.0, along2 = 0.0;
-    for (int c = 0; c < 3; ++c) {
-        v[c] = vel[c * n + i] - u[c];
-        across += v[c] * nrm[c];
-        speed2 += v[c] * v[c];
-    }
-    for (int c = 0; c < 3; ++c) {
-        v[c] -= across * nrm[c];
-        along2 += v[c] * v[c];
-    }
-    const double keep = along2 > 0.0 ? std::sqrt(speed2 / along2) : 1.0;  // its speed
-    for (int c = 0; c < 3; ++c) {
-        pos[c * n + i] = q[c];
-        vel[c * n + i] = u[c] + keep * v[c];
-    }
-    return std::abs(off);
-}
-
 //: Turn sliding particle s's normal and direction to the surface's where its path over a curved collider
 //: will end a step of h s (predicted from its start's velocity): the step's force across the surface acts
 //: along the end's normal, as the implicit step takes it, and its end lies in the end's tangent plane, which
@@ -302,7 +266,7 @@ double lift_off(const Sliding& sliding, Index n, const Physics& phys, const doub
             }
             if (sliding.on_floor[s] && !lifts) pos[2 * n + i] = phys.floor_z;
             if (sliding.curving[s] != 0.0 && !lifts) {
-                farthest = std::max(farthest, onto_collider(sliding, s, n, phys, reach, h, pos, vel));
+                farthest = std::max(farthest, onto_surface(phys, sliding.collider[s], n, i, reach, h, pos, vel));
             }
         }
     }

@@ -63,6 +63,13 @@ Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const d
 Index release_from_colliders(Index n, const Physics& phys, const double* pos, const double* force, const double* mass,
                              double* free, double* held, double cone = 1.0);
 
+//: Put particle i, which a step moved along a tangent plane of collider k where it curves (a sphere, a
+//: cylinder's side), exactly back onto it (at reach m along its normal there) and turn its velocity relative
+//: to the surface along the surface there, keeping its speed; pos (3, n) is the step's end, seen with the
+//: collider where the step started (end_collider_motion comes after).  A turning collider other than a
+//: sphere is left alone.  Returns how far it moved (m).
+double onto_surface(const Physics& phys, Index k, Index n, Index i, double reach, double h, double* pos, double* vel);
+
 //: Instead of taking the step again: the particles held on the floor or a collider that the step's force
 //: (N, (3, n)) would have slipped or lifted (release_slipping's and release_from_colliders's test) move
 //: as they would have from rest over the step of h s under the force's excess beyond friction
@@ -74,7 +81,8 @@ Index release_from_colliders(Index n, const Physics& phys, const double* pos, co
 //: m_e (kg) is the particle's effective mass along the excess in the step's own matrix: its mass (n)
 //: plus e^T (D_i + B_i) e, e the excess's direction, D_i its springs' part of its diagonal block
 //: (diagonal_blocks (6, n)) and B_i its own (blocks (6, n): drag, buoyancy), as the implicit step left
-//: them (docs/model.md section 6.1); the mass alone when diagonal_blocks is null (explicit schemes).
+//: them (docs/model.md section 6.1); the mass alone when diagonal_blocks is null (explicit schemes).  One
+//: that slips over a curved collider is put back onto it (onto_surface) and turned along it.
 //: Returns the farthest such move (m, 0 if none slips), or -1 with nothing changed when one would move
 //: farther (the step is then to be taken again).  Layers' holds are not looked at.
 double slip_on_supports(Index n, const Physics& phys, const double* force, const double* mass,
