@@ -20,26 +20,67 @@ namespace {
 inline double py_max(double a, double b) { return b > a ? b : a; }
 inline double py_min(double a, double b) { return b < a ? b : a; }
 
+//: The largest of SUM_LANES running maxima.  A maximum of |values| kept in lanes (as sums are:
+//: integration.hpp) is the one a single running py_max finds, whatever the order: a NaN is never taken.
+double largest_lane(const double* largest) {
+    double result = 0.0;
+    for (Index l = 0; l < SUM_LANES; ++l) result = py_max(result, largest[l]);
+    return result;
+}
+
 //: Largest |a| over a (3, n) array.
 double largest_of(Index n, const double* a) {
-    double largest = 0.0;
-    for (Index k = 0; k < 3 * n; ++k) largest = py_max(largest, std::fabs(a[k]));
-    return largest;
+    double largest[SUM_LANES] = {};
+    const Index count = 3 * n;
+    const Index whole = count - count % SUM_LANES;
+    for (Index k = 0; k < whole; k += SUM_LANES)
+        for (Index l = 0; l < SUM_LANES; ++l) largest[l] = py_max(largest[l], std::fabs(a[k + l]));
+    for (Index k = whole; k < count; ++k) largest[k - whole] = py_max(largest[k - whole], std::fabs(a[k]));
+    return largest_lane(largest);
 }
 
 struct DotAndLargest {
     double dot, largest;
 };
 
-//: dot(n, r, z) and largest_of(n, z) in one pass (the same sums and comparisons, in the same order).
+//: dot(n, r, z) and largest_of(n, z) in one pass (the same sums and comparisons, in the same lanes).
 DotAndLargest dot_and_largest(Index n, const double* r, const double* z) {
-    double sum = 0.0;
-    double largest = 0.0;
-    for (Index k = 0; k < 3 * n; ++k) {
-        sum += r[k] * z[k];
-        largest = py_max(largest, std::fabs(z[k]));
+    double sum[SUM_LANES] = {};
+    double largest[SUM_LANES] = {};
+    const Index count = 3 * n;
+    const Index whole = count - count % SUM_LANES;
+    for (Index k = 0; k < whole; k += SUM_LANES) {
+        for (Index l = 0; l < SUM_LANES; ++l) {
+            sum[l] += r[k + l] * z[k + l];
+            largest[l] = py_max(largest[l], std::fabs(z[k + l]));
+        }
     }
-    return {sum, largest};
+    for (Index k = whole; k < count; ++k) {
+        sum[k - whole] += r[k] * z[k];
+        largest[k - whole] = py_max(largest[k - whole], std::fabs(z[k]));
+    }
+    return {add_lanes(sum), largest_lane(largest)};
+}
+
+struct Corrections {
+    double largest;    // m/s, the largest |length dv|
+    double increment;  // m/s, the largest |v+ - v| or |v+|
+};
+
+//: Newton's convergence measures over (3, n) arrays, in SUM_LANES lanes (the same maxima: largest_lane).
+Corrections corrections(Index n, double length, const double* dv, const double* out_vel, const double* vel) {
+    double largest[SUM_LANES] = {};
+    double increment[SUM_LANES] = {};
+    const Index count = 3 * n;
+    const auto add = [&](Index l, Index k) {
+        largest[l] = py_max(largest[l], std::fabs(length * dv[k]));
+        increment[l] = py_max(py_max(increment[l], std::fabs(out_vel[k] - vel[k])), std::fabs(out_vel[k]));
+    };
+    const Index whole = count - count % SUM_LANES;
+    for (Index k = 0; k < whole; k += SUM_LANES)
+        for (Index l = 0; l < SUM_LANES; ++l) add(l, k + l);
+    for (Index k = whole; k < count; ++k) add(k - whole, k);
+    return {largest_lane(largest), largest_lane(increment)};
 }
 
 struct PlaneSolve {
@@ -352,12 +393,9 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
                 out_pos[k] = hat_pos[k] + bh * out_vel[k];
             }
         }
-        double largest = 0.0;
-        double increment = 0.0;
-        for (Index k = 0; k < 3 * n; ++k) {
-            largest = py_max(largest, std::fabs(length * dv[k]));
-            increment = py_max(py_max(increment, std::fabs(out_vel[k] - vel[k])), std::fabs(out_vel[k]));
-        }
+        const Corrections measured = corrections(n, length, dv, out_vel, vel);
+        const double largest = measured.largest;
+        const double increment = measured.increment;
         correction = largest;
         if (!std::isfinite(largest)) break;
         if (descent && !adaptive && energy_settled(n, mass, free, out_vel, hat_vel, rhs)) break;
