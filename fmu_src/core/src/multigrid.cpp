@@ -5,12 +5,22 @@ namespace wc {
 
 namespace {
 
-void zero_level(Hierarchy& h, Index level, double* v, Index components) {
+//: Zero the padding of `level` in v (the line before its first row and column, the two after its last):
+//: the neighbours a sweep from zero and its residual read beyond the grid.  The sweep itself writes every
+//: point of the level before anything reads it.
+void zero_padding(Hierarchy& h, Index level, double* v, Index components) {
+    const Index nx = level_value(h.levels, level, NX), ny = level_value(h.levels, level, NY);
+    const Index pad = level_value(h.levels, level, PAD_X);
     const Index start = level_value(h.levels, level, START);
-    const Index end = start + level_value(h.levels, level, PAD_X) * (level_value(h.levels, level, NY) + 3);
     for (Index c = 0; c < components; ++c) {
-        double* vc = v + c * h.size;
-        for (Index p = start; p < end; ++p) vc[p] = 0.0;
+        double* vc = v + c * h.size + start;
+        for (Index p = 0; p < pad; ++p) vc[p] = 0.0;  // the line before the first row
+        for (Index row = 1; row <= ny; ++row) {
+            vc[row * pad] = 0.0;
+            vc[row * pad + nx + 1] = 0.0;
+            vc[row * pad + nx + 2] = 0.0;
+        }
+        for (Index p = (ny + 1) * pad; p < (ny + 3) * pad; ++p) vc[p] = 0.0;  // the two after the last
     }
 }
 
@@ -317,7 +327,7 @@ void interpolate(Hierarchy& h, Index level, Index components) {
 
 void v_cycle_down(Hierarchy& h, Index components) {
     for (Index level = 0; level < h.level_count - 1; ++level) {
-        zero_level(h, level, h.x, components);
+        zero_padding(h, level, h.x, components);
         for (Index s = 0; s < SWEEPS; ++s) sweep(h, level, true, s == 0, components);
         restrict_swept_residual(h, level, components);
     }
