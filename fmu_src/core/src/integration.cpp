@@ -92,13 +92,9 @@ void system_matvec(const Cloth& cloth, const Work& work, const double* mass, con
 }
 
 double dot(Index n, const double* a, const double* b) {
-    double sum[SUM_LANES] = {};
-    const Index count = 3 * n;
-    const Index whole = count - count % SUM_LANES;
-    for (Index k = 0; k < whole; k += SUM_LANES)
-        for (Index l = 0; l < SUM_LANES; ++l) sum[l] += a[k + l] * b[k + l];
-    for (Index k = whole; k < count; ++k) sum[k - whole] += a[k] * b[k];
-    return add_lanes(sum);
+    double sum = 0.0;
+    for (Index k = 0; k < 3 * n; ++k) sum += a[k] * b[k];
+    return sum;
 }
 
 void conjugate_gradient_step(Index n, double alpha, const double* p, const double* ap, double* x, double* r) {

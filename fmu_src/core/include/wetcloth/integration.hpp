@@ -29,19 +29,7 @@ double total(Index count, const double* a);
 //: out = A p with A = M + work.blocks + spring blocks, rows of pinned particles zeroed.
 void system_matvec(const Cloth& cloth, const Work& work, const double* mass, const double* p, double* out);
 
-//: A long sum keeps SUM_LANES partial sums side by side (value k into sum k % SUM_LANES) and adds them
-//: pairwise at its end (add_lanes).  The order is the source's, so the bits do not depend on the vector
-//: width, but the partial sums vectorise, where a single running sum waits out each addition's latency in
-//: turn (the conjugate gradients' dot products took 5 % of the hanging sheet's time so; docs/benchmarks.md).
-inline constexpr Index SUM_LANES = 8;
-static_assert(SUM_LANES == 8, "add_lanes adds 8 partial sums");
-
-//: ((s0 + s1) + (s2 + s3)) + ((s4 + s5) + (s6 + s7)) of the SUM_LANES partial sums s.
-inline double add_lanes(const double* s) {
-    return ((s[0] + s[1]) + (s[2] + s[3])) + ((s[4] + s[5]) + (s[6] + s[7]));
-}
-
-//: Sum over 3 n values of a[k] b[k], in SUM_LANES partial sums.
+//: Sum over 3 n values of a[k] b[k], in order.
 double dot(Index n, const double* a, const double* b);
 
 //: The adjugate of the symmetric 3x3 matrix [[a, d, e], [d, b, f], [e, f, c]] and its determinant; the
