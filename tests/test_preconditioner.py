@@ -4,6 +4,7 @@ grids (``multigrid.cpp``) against the banded Cholesky factors it replaces there.
 import numpy as np
 import pytest
 import scipy.sparse
+import scipy.sparse.linalg
 
 import wetcloth
 from wetcloth import _core
@@ -161,6 +162,46 @@ def test_coarse_stencils_are_the_galerkin_products():
             beyond = (qx + k % 3 - 1 < 0) | (qx + k % 3 - 1 >= cx) | (qy + k // 3 - 1 < 0) | (qy + k // 3 - 1 >= cy)
             assert np.all(grid.coef[0, k, coarse_padded[beyond]] == 0.0)
         assert np.array_equal(grid.inverse_diagonal[0, fine_padded], 1.0 / fine.diagonal())
+
+
+def test_the_cycles_way_down_sweeps_and_restricts_the_residual():
+    """``v_cycle_down`` on random diagonally dominant 9-point stencils (three levels, coarse ones the
+    Galerkin products), whatever x held before: on each level but the coarsest x solves (D + L) x = b
+    (a forward Gauss-Seidel sweep from zero, L the neighbours before a point in row-major order), and the
+    next level's b is P^T (b - A x), which the core takes as -U x (only the neighbours the sweep had not
+    reached).  Compared with scipy: forward substitution with a diagonal at least 10 against 8
+    neighbours of at most 1 contracts, so each x errs by at most about 10 eps |x|max; a coarse b sums
+    at most 9 terms of r per point, each within 10 eps (|b| + |A| |x|) of the exact one (measured: at most
+    0.75 and 0.52 of those units; the full residual b - A x of aa25dcf 0.51 and 0.37)."""
+    sizes = level_sizes(36, 41, 12)[:3]
+    grid = make_hierarchy(sizes)
+    rng = np.random.default_rng(5)
+    _, padded = stencil_matrix(grid, 0)
+    for k in range(9):
+        grid.coef[:, k, padded] = rng.uniform(-1.0, 1.0, (grid.coef.shape[0], padded.size))
+    grid.coef[:, 4, padded] = rng.uniform(10.0, 20.0, (grid.coef.shape[0], padded.size))
+    nx, ny = sizes[0]
+    ix, iy = np.arange(nx * ny) % nx, np.arange(nx * ny) // nx
+    for k in range(9):  # no neighbours beyond the grid
+        jx, jy = ix + k % 3 - 1, iy + k // 3 - 1
+        grid.coef[:, k, padded[(jx < 0) | (jx >= nx) | (jy < 0) | (jy >= ny)]] = 0.0
+    for level in range(2):
+        _core.galerkin(grid, level)
+    grid.b[:, padded] = rng.standard_normal((grid.b.shape[0], padded.size))
+    for level in range(3):  # what an earlier cycle left on the levels' points
+        grid.x[:, stencil_matrix(grid, level)[1]] = rng.standard_normal((grid.x.shape[0], 1))
+    b = grid.b[0, padded].copy()
+    _core.v_cycle_down(grid)
+    for level in range(2):
+        matrix, points = stencil_matrix(grid, level)
+        x = grid.x[0, points]
+        expected = scipy.sparse.linalg.spsolve_triangular(scipy.sparse.tril(matrix).tocsr(), b)
+        assert np.all(np.abs(x - expected) <= 10 * EPS * np.abs(expected).max()), level
+        p = interpolation(sizes[level], sizes[level + 1])
+        coarse = grid.b[0, stencil_matrix(grid, level + 1)[1]]
+        bound = 10 * EPS * (p.T @ (np.abs(b) + abs(matrix) @ np.abs(x)))
+        assert np.all(np.abs(coarse - p.T @ (b - matrix @ x)) <= bound), level
+        b = coarse.copy()
 
 
 def test_v_cycle_reduces_the_error_of_its_own_matrix(towel):

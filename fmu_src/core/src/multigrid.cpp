@@ -5,12 +5,22 @@ namespace wc {
 
 namespace {
 
-void zero_level(Hierarchy& h, Index level, double* v, Index components) {
+//: Zero the padding of `level` in v (the line before its first row and column, the two after its last):
+//: the neighbours a sweep from zero and its residual read beyond the grid.  The sweep itself writes every
+//: point of the level before anything reads it.
+void zero_padding(Hierarchy& h, Index level, double* v, Index components) {
+    const Index nx = level_value(h.levels, level, NX), ny = level_value(h.levels, level, NY);
+    const Index pad = level_value(h.levels, level, PAD_X);
     const Index start = level_value(h.levels, level, START);
-    const Index end = start + level_value(h.levels, level, PAD_X) * (level_value(h.levels, level, NY) + 3);
     for (Index c = 0; c < components; ++c) {
-        double* vc = v + c * h.size;
-        for (Index p = start; p < end; ++p) vc[p] = 0.0;
+        double* vc = v + c * h.size + start;
+        for (Index p = 0; p < pad; ++p) vc[p] = 0.0;  // the line before the first row
+        for (Index row = 1; row <= ny; ++row) {
+            vc[row * pad] = 0.0;
+            vc[row * pad + nx + 1] = 0.0;
+            vc[row * pad + nx + 2] = 0.0;
+        }
+        for (Index p = (ny + 1) * pad; p < (ny + 3) * pad; ++p) vc[p] = 0.0;  // the two after the last
     }
 }
 
@@ -235,24 +245,18 @@ void sweep(Hierarchy& h, Index level, bool forward, bool from_zero, Index compon
 
 namespace {
 
-//: r = b - A x over m points of a row (coef (9, size) from the row's first point; below, here,
-//: above views of x from one point before the row).
-void residual_row(double* __restrict r, const double* __restrict b, const double* __restrict coef, Index size,
-                  const double* __restrict below, const double* __restrict here, const double* __restrict above,
-                  Index m) {
-    const double* a0 = coef + 0 * size;
-    const double* a1 = coef + 1 * size;
-    const double* a2 = coef + 2 * size;
-    const double* a3 = coef + 3 * size;
-    const double* a4 = coef + 4 * size;
+//: r = b - A x over m points of a row after one forward sweep from x = 0, which solved each point's
+//: equation with the values then known: what is left is -U x, the neighbours it had not reached (right,
+//: and the row above; coef (9, size) from the row's first point; here, above views of x from one point
+//: before the row).
+void swept_residual_row(double* __restrict r, const double* __restrict coef, Index size,
+                        const double* __restrict here, const double* __restrict above, Index m) {
     const double* a5 = coef + 5 * size;
     const double* a6 = coef + 6 * size;
     const double* a7 = coef + 7 * size;
     const double* a8 = coef + 8 * size;
     for (Index s = 0; s < m; ++s)
-        r[s] = b[s] - a0[s] * below[s] - a1[s] * below[s + 1] - a2[s] * below[s + 2] - a3[s] * here[s] -
-               a4[s] * here[s + 1] - a5[s] * here[s + 2] - a6[s] * above[s] - a7[s] * above[s + 1] -
-               a8[s] * above[s + 2];
+        r[s] = -(a5[s] * here[s + 2]) - a6[s] * above[s] - a7[s] * above[s + 1] - a8[s] * above[s + 2];
 }
 
 //: b of a coarse row from the fine residual rows around its fine row (views from one point before it).
@@ -267,7 +271,8 @@ void restrict_row(double* __restrict b, const double* __restrict below, const do
 
 }  // namespace
 
-void restrict_residual(Hierarchy& h, Index level, Index components) {
+void restrict_swept_residual(Hierarchy& h, Index level, Index components) {
+    static_assert(SWEEPS == 1, "the residual is -U x after one sweep from zero");
     const Index* levels = h.levels;
     const Index size = h.size;
     const Index nx = level_value(levels, level, NX), ny = level_value(levels, level, NY);
@@ -280,7 +285,7 @@ void restrict_residual(Hierarchy& h, Index level, Index components) {
         double* r = h.r + c * size;
         for (Index iy = 0; iy < ny; ++iy) {
             const Index base = padded_index(levels, level, 0, iy);
-            residual_row(r + base, b + base, coef + base, size, x + base - pad - 1, x + base - 1, x + base + pad - 1, nx);
+            swept_residual_row(r + base, coef + base, size, x + base - 1, x + base + pad - 1, nx);
         }
         // each coarse point gathers its fine point with weight 1, those beside it with 1/2 and
         // those diagonal to it with 1/4
@@ -322,9 +327,9 @@ void interpolate(Hierarchy& h, Index level, Index components) {
 
 void v_cycle_down(Hierarchy& h, Index components) {
     for (Index level = 0; level < h.level_count - 1; ++level) {
-        zero_level(h, level, h.x, components);
+        zero_padding(h, level, h.x, components);
         for (Index s = 0; s < SWEEPS; ++s) sweep(h, level, true, s == 0, components);
-        restrict_residual(h, level, components);
+        restrict_swept_residual(h, level, components);
     }
 }
 

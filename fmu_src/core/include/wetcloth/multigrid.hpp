@@ -35,8 +35,9 @@ void galerkin(Hierarchy& hierarchy, Index level, Index first = 0, Index end = CO
 //: The V-cycle's functions work on the first `components` components (2: t1 and t2; 3: and the normal).
 void sweep(Hierarchy& hierarchy, Index level, bool forward, bool from_zero, Index components = COMPONENTS);
 
-//: r = b - A x on `level`, and b of level + 1 = P^T r.
-void restrict_residual(Hierarchy& hierarchy, Index level, Index components = COMPONENTS);
+//: r = b - A x on `level` after one forward sweep from x = 0 (then -U x: only the neighbours the sweep
+//: had not reached), and b of level + 1 = P^T r.
+void restrict_swept_residual(Hierarchy& hierarchy, Index level, Index components = COMPONENTS);
 
 //: x of `level` += P x of level + 1.
 void interpolate(Hierarchy& hierarchy, Index level, Index components = COMPONENTS);
