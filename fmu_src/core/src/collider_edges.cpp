@@ -298,8 +298,10 @@ void mark_near(const Index* elements, Index count, int width, Index mesh, const 
 //: may move the step's largest motion of those particles (twice what the step takes it from the midpoint; a
 //: wider margin keeps a list longer but makes it larger: against a moving mesh, whose relative motion is
 //: large, twice that margin cost 3x the time when every kept pair was looked at in each step), at least
-//: LEAST_MARGIN of reach (thickness / 2, m; MOVING_LEAST_MARGIN in a moving mesh's frame), the others FAR_MARGIN of reach (or the near ones' margin if more); a cloth whose box is far from
-//: every mesh's box keeps an empty list while no particle moves more than what that distance allows.
+//: LEAST_MARGIN of reach (thickness / 2, m; MOVING_LEAST_MARGIN in a moving mesh's frame), the others
+//: FAR_MARGIN of reach (or the near ones' margin if more); a cloth whose box is far from every mesh's box
+//: keeps an empty list while no particle moves more than what that distance allows.  Each pair keeps the
+//: bits of its distance at the reference (P_START), and kept.members lists the particles of its pairs.
 void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& kept, const Physics& phys,
                const Frame& frame, Index n, const double* x0, const double* x1, double reach) {
     std::vector<double>& x = kept.reference;
@@ -402,12 +404,13 @@ void pairs_for_step(const Contact& contact, ContactLists& lists, ColliderPairLis
     // A pair's start distance is at least its distance at the reference less its cloth points' largest
     // move from there, and its motion's bound at most 2.5 times their largest motion over the step (a
     // vertex and a cloth triangle's; a cloth edge's 1.5, a particle's 1): a pair farther at the reference
-    // than its distance plus reach plus those two (and a nanometre for rounding) is left out unlooked at.
+    // than its distance plus reach plus those two (and a nanometre for rounding) is left out without a look.
     double moved2 = 0.0, motion2 = 0.0;
     for (const Index i : kept.members) {
         double a2 = 0.0, b2 = 0.0;
         for (Index c = 0; c < 3; ++c) {
-            const double a = x0[c * n + i] - kept.reference[static_cast<std::size_t>(c * n + i)], b = x1[c * n + i] - x0[c * n + i];
+            const double a = x0[c * n + i] - kept.reference[static_cast<std::size_t>(c * n + i)];
+            const double b = x1[c * n + i] - x0[c * n + i];
             a2 += a * a, b2 += b * b;
         }
         moved2 = py_max(moved2, a2), motion2 = py_max(motion2, b2);
