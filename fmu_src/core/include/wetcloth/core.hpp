@@ -311,7 +311,8 @@ struct ReusedPlane {
 //: The cloth's pairs with mesh colliders' features near the reference positions, kept across steps
 //: (collider_edges.cpp), in the frame they were gathered in.
 struct ColliderPairList {
-    std::vector<std::array<Index, 7>> pairs;
+    std::vector<std::array<Index, 7>> pairs;  // with the bits of their distances at the reference (m)
+    std::vector<Index> members;     // the particles of its pairs
     std::vector<double> reference;  // (3, n) the positions the pairs were gathered at, m
     std::vector<double> allowance;  // (n) m: how far each particle may move from them
     double margin = 0.0;            // m: the allowance of those near a mesh (0: no list)
