@@ -130,6 +130,22 @@ def interpolation(fine, coarse):
     return scipy.sparse.csr_matrix(np.kron(along(fy, cy), along(fx, cx)))
 
 
+def fill_random_stencils(grid, size, rng, diagonal):
+    """Random 9-point stencils on ``grid``'s finest level (``size`` = (nx, ny)): entries uniform in [-1, 1],
+    the diagonal's then replaced by ``diagonal(entries)``, and none towards points beyond the grid.  Returns
+    the level's padded indices."""
+    _, padded = stencil_matrix(grid, 0)
+    for k in range(9):
+        grid.coef[:, k, padded] = rng.uniform(-1.0, 1.0, (grid.coef.shape[0], padded.size))
+    grid.coef[:, 4, padded] = diagonal(grid.coef[:, 4, padded])
+    nx, ny = size
+    ix, iy = np.arange(nx * ny) % nx, np.arange(nx * ny) // nx
+    for k in range(9):
+        jx, jy = ix + k % 3 - 1, iy + k // 3 - 1
+        grid.coef[:, k, padded[(jx < 0) | (jx >= nx) | (jy < 0) | (jy >= ny)]] = 0.0
+    return padded
+
+
 def test_coarse_stencils_are_the_galerkin_products():
     """Each coarser level's stencils are P^T A P of the finer one's (``galerkin``), for random 9-point
     stencils (not symmetric) on a grid with an even and an odd side, two levels down, and the finer
@@ -138,16 +154,7 @@ def test_coarse_stencils_are_the_galerkin_products():
     most 576 eps times the sum of their magnitudes, (P^T |A| P)_ij."""
     sizes = level_sizes(36, 41, 12)[:3]
     grid = make_hierarchy(sizes)
-    rng = np.random.default_rng(11)
-    _, padded = stencil_matrix(grid, 0)
-    for k in range(9):
-        grid.coef[:, k, padded] = rng.uniform(-1.0, 1.0, (grid.coef.shape[0], padded.size))
-    grid.coef[:, 4, padded] += 10.0  # a diagonal far from 0
-    nx, ny = sizes[0]
-    ix, iy = np.arange(nx * ny) % nx, np.arange(nx * ny) // nx
-    for k in range(9):  # no neighbours beyond the grid
-        jx, jy = ix + k % 3 - 1, iy + k // 3 - 1
-        grid.coef[:, k, padded[(jx < 0) | (jx >= nx) | (jy < 0) | (jy >= ny)]] = 0.0
+    fill_random_stencils(grid, sizes[0], np.random.default_rng(11), lambda d: d + 10.0)  # a diagonal far from 0
     for level in range(2):
         _core.galerkin(grid, level)
         fine, fine_padded = stencil_matrix(grid, level)
@@ -176,15 +183,7 @@ def test_the_cycles_way_down_sweeps_and_restricts_the_residual():
     sizes = level_sizes(36, 41, 12)[:3]
     grid = make_hierarchy(sizes)
     rng = np.random.default_rng(5)
-    _, padded = stencil_matrix(grid, 0)
-    for k in range(9):
-        grid.coef[:, k, padded] = rng.uniform(-1.0, 1.0, (grid.coef.shape[0], padded.size))
-    grid.coef[:, 4, padded] = rng.uniform(10.0, 20.0, (grid.coef.shape[0], padded.size))
-    nx, ny = sizes[0]
-    ix, iy = np.arange(nx * ny) % nx, np.arange(nx * ny) // nx
-    for k in range(9):  # no neighbours beyond the grid
-        jx, jy = ix + k % 3 - 1, iy + k // 3 - 1
-        grid.coef[:, k, padded[(jx < 0) | (jx >= nx) | (jy < 0) | (jy >= ny)]] = 0.0
+    padded = fill_random_stencils(grid, sizes[0], rng, lambda d: rng.uniform(10.0, 20.0, d.shape))
     for level in range(2):
         _core.galerkin(grid, level)
     grid.b[:, padded] = rng.standard_normal((grid.b.shape[0], padded.size))
