@@ -25,13 +25,16 @@ from wetcloth.batch.spec import load_study  # noqa: E402
 from wetcloth.scene import preset_dir  # noqa: E402
 
 
-def study_runs(description: str, top: int, top_help: str):
-    """The command line of a study benchmark (--study, --top, --every): its arguments, the study and
-    the runs to take (every ``--every``-th)."""
+def study_runs(description: str, top: int | None, top_help: str = "", every: int = 1, more=None):
+    """The command line of a study benchmark (--study, --every, and --top unless top is None; ``more(parser)``
+    adds its own): its arguments, the study and the runs to take (every ``--every``-th)."""
     parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--study", type=Path, default=preset_dir() / "studies" / "towel_sink_sensitivity.toml")
-    parser.add_argument("--top", type=int, default=top, help=f"{top_help} (default {top})")
-    parser.add_argument("--every", type=int, default=1, help="run every k-th run only (default 1: all)")
+    if top is not None:
+        parser.add_argument("--top", type=int, default=top, help=f"{top_help} (default {top})")
+    parser.add_argument("--every", type=int, default=every, help=f"run every k-th run only (default {every})")
+    if more is not None:
+        more(parser)
     args = parser.parse_args()
     if args.every < 1:
         parser.error("--every must be at least 1")
