@@ -8,6 +8,7 @@
 #include "wetcloth/coarse_space.hpp"
 #include "wetcloth/collider_motion.hpp"
 #include "wetcloth/integration.hpp"
+#include "wetcloth/lanes.hpp"
 #include "wetcloth/plane.hpp"
 #include "wetcloth/reused_plane.hpp"
 #include "wetcloth/sliding.hpp"
@@ -20,8 +21,8 @@ namespace {
 inline double py_max(double a, double b) { return b > a ? b : a; }
 inline double py_min(double a, double b) { return b < a ? b : a; }
 
-//: Maxima of |values| over (3, n) arrays are kept in MAX_LANES running maxima side by side (value k in lane
-//: k % MAX_LANES), which do not wait on each other as one running maximum does: the same value as one pass
+//: Maxima of |values| over (3, n) arrays are kept in MAX_LANES running maxima side by side (in_lanes), which
+//: do not wait on each other as one running maximum does: the same value as one pass
 //: in order, whatever the order (py_max never takes a NaN).  (Sums keep their one running sum: their
 //: rounding depends on the order, and the swinging sheet of tests/test_accuracy.py took 333-342 steps
 //: instead of 188 with the conjugate gradients' dot products summed in 8 lanes, or backwards.)
@@ -37,11 +38,7 @@ double largest_lane(const double* largest) {
 //: Largest |a| over a (3, n) array.
 double largest_of(Index n, const double* a) {
     double largest[MAX_LANES] = {};
-    const Index count = 3 * n;
-    const Index whole = count - count % MAX_LANES;
-    for (Index k = 0; k < whole; k += MAX_LANES)
-        for (Index l = 0; l < MAX_LANES; ++l) largest[l] = py_max(largest[l], std::fabs(a[k + l]));
-    for (Index k = whole; k < count; ++k) largest[k - whole] = py_max(largest[k - whole], std::fabs(a[k]));
+    in_lanes<MAX_LANES>(3 * n, [&](Index l, Index k) { largest[l] = py_max(largest[l], std::fabs(a[k])); });
     return largest_lane(largest);
 }
 
@@ -69,15 +66,10 @@ struct Corrections {
 Corrections corrections(Index n, double length, const double* dv, const double* out_vel, const double* vel) {
     double largest[MAX_LANES] = {};
     double increment[MAX_LANES] = {};
-    const Index count = 3 * n;
-    const auto add = [&](Index l, Index k) {
+    in_lanes<MAX_LANES>(3 * n, [&](Index l, Index k) {
         largest[l] = py_max(largest[l], std::fabs(length * dv[k]));
         increment[l] = py_max(py_max(increment[l], std::fabs(out_vel[k] - vel[k])), std::fabs(out_vel[k]));
-    };
-    const Index whole = count - count % MAX_LANES;
-    for (Index k = 0; k < whole; k += MAX_LANES)
-        for (Index l = 0; l < MAX_LANES; ++l) add(l, k + l);
-    for (Index k = whole; k < count; ++k) add(k - whole, k);
+    });
     return {largest_lane(largest), largest_lane(increment)};
 }
 

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 
+#include "wetcloth/lanes.hpp"
 #include "wetcloth/self_contact/geometry.hpp"
 
 namespace wc::self_contact {
@@ -450,23 +451,19 @@ bool StepFits::within_allowances(int s, const double* allowance) {
 }
 
 double shifted_deviation(Index n, const double* ref, const double* x0, const double* x1) {
-    // Particles in SHIFT_LANES interleaved lanes (particle i in lane i % SHIFT_LANES), so that the lanes'
-    // comparisons do not wait on each other: the same extremes as one pass in order (py_min and py_max never
-    // take a NaN, `worse` keeps one wherever it comes).
+    // Particles in SHIFT_LANES interleaved lanes (in_lanes), so that the lanes' comparisons do not wait on each
+    // other: the same extremes as one pass in order (py_min and py_max never take a NaN, `worse` keeps one
+    // wherever it comes).
     constexpr Index SHIFT_LANES = 4;
-    const Index whole = n - n % SHIFT_LANES;
     double shift0[3], shift1[3];
     for (int c = 0; c < 3; ++c) {
         double lo0[SHIFT_LANES], hi0[SHIFT_LANES], lo1[SHIFT_LANES], hi1[SHIFT_LANES];
         for (Index l = 0; l < SHIFT_LANES; ++l) lo0[l] = INF, hi0[l] = -INF, lo1[l] = INF, hi1[l] = -INF;
-        const auto add = [&](Index l, Index i) {
+        in_lanes<SHIFT_LANES>(n, [&](Index l, Index i) {
             const double y = ref[c * n + i], d0 = x0[c * n + i] - y, d1 = x1[c * n + i] - y;
             lo0[l] = py_min(lo0[l], d0), hi0[l] = py_max(hi0[l], d0);
             lo1[l] = py_min(lo1[l], d1), hi1[l] = py_max(hi1[l], d1);
-        };
-        for (Index i = 0; i < whole; i += SHIFT_LANES)
-            for (Index l = 0; l < SHIFT_LANES; ++l) add(l, i + l);
-        for (Index i = whole; i < n; ++i) add(i - whole, i);
+        });
         for (Index l = 1; l < SHIFT_LANES; ++l) {
             lo0[0] = py_min(lo0[0], lo0[l]), hi0[0] = py_max(hi0[0], hi0[l]);
             lo1[0] = py_min(lo1[0], lo1[l]), hi1[0] = py_max(hi1[0], hi1[l]);
@@ -474,7 +471,7 @@ double shifted_deviation(Index n, const double* ref, const double* x0, const dou
         shift0[c] = 0.5 * (lo0[0] + hi0[0]), shift1[c] = 0.5 * (lo1[0] + hi1[0]);
     }
     double worst[SHIFT_LANES] = {};
-    const auto add = [&](Index l, Index i) {
+    in_lanes<SHIFT_LANES>(n, [&](Index l, Index i) {
         double a2 = 0.0, b2 = 0.0;
         for (int c = 0; c < 3; ++c) {
             const double y = ref[c * n + i], a = x0[c * n + i] - y - shift0[c], b = x1[c * n + i] - y - shift1[c];
@@ -482,10 +479,7 @@ double shifted_deviation(Index n, const double* ref, const double* x0, const dou
             b2 += b * b;
         }
         worst[l] = worse(worse(worst[l], a2), b2);
-    };
-    for (Index i = 0; i < whole; i += SHIFT_LANES)
-        for (Index l = 0; l < SHIFT_LANES; ++l) add(l, i + l);
-    for (Index i = whole; i < n; ++i) add(i - whole, i);
+    });
     for (Index l = 1; l < SHIFT_LANES; ++l) worst[0] = worse(worst[0], worst[l]);
     return std::sqrt(worst[0]);
 }
