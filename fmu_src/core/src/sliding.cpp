@@ -74,6 +74,8 @@ void add_particle(Sliding& sliding, Index i, const double nrm[3], const double t
     sliding.on_floor.push_back(on_floor ? 1 : 0);
     sliding.collider.push_back(k);
     sliding.centripetal.push_back(centripetal);
+    sliding.normal_speed.push_back(0.0);
+    sliding.curving.push_back(0.0);
 }
 
 //: The force (N) particle s of the set presses onto its surface with: the force (3, n) into it less what
@@ -117,19 +119,42 @@ void to_end(Sliding& sliding, Index s, double h) {
 
 }  // namespace
 
+void Sliding::resize(Index count) {
+    const auto each = static_cast<std::size_t>(count), three = 3 * each;
+    index.resize(each);
+    normal.resize(three);
+    friction.resize(each);
+    direction.resize(three);
+    on_floor.resize(each);
+    surface_velocity.resize(three);
+    collider.resize(each);
+    start_normal.resize(three);
+    start_direction.resize(three);
+    turning.resize(three);
+    centripetal.resize(each);
+    normal_speed.assign(each, 0.0);
+    curving.assign(each, 0.0);
+}
+
+void Sliding::move_entry(Index to, Index from) {
+    index[to] = index[from];
+    for (Index c = 0; c < 3; ++c) {
+        normal[3 * to + c] = normal[3 * from + c];
+        direction[3 * to + c] = direction[3 * from + c];
+        surface_velocity[3 * to + c] = surface_velocity[3 * from + c];
+        start_normal[3 * to + c] = start_normal[3 * from + c];
+        start_direction[3 * to + c] = start_direction[3 * from + c];
+        turning[3 * to + c] = turning[3 * from + c];
+    }
+    friction[to] = friction[from];
+    on_floor[to] = on_floor[from];
+    collider[to] = collider[from];
+    centripetal[to] = centripetal[from];
+}
+
 Index gather_sliding(Index n, const Physics& phys, const double* pos, const double* vel, const double* free,
                      Sliding& sliding) {
-    sliding.index.clear();
-    sliding.normal.clear();
-    sliding.friction.clear();
-    sliding.direction.clear();
-    sliding.on_floor.clear();
-    sliding.surface_velocity.clear();
-    sliding.collider.clear();
-    sliding.start_normal.clear();
-    sliding.start_direction.clear();
-    sliding.turning.clear();
-    sliding.centripetal.clear();
+    sliding.resize(0);
     for (Index i = 0; i < n; ++i) {
         if (free[i] == 0.0) continue;  // pinned, or held at rest
         double nrm[3], friction, u[3];
@@ -146,8 +171,6 @@ Index gather_sliding(Index n, const Physics& phys, const double* pos, const doub
         if (k >= 0) normal_turning(phys, k, nrm, t, turning);
         add_particle(sliding, i, nrm, t, slide, friction, on_floor, u, k, turning);
     }
-    sliding.normal_speed.assign(sliding.index.size(), 0.0);
-    sliding.curving.assign(sliding.index.size(), 0.0);
     return sliding.count();
 }
 
@@ -173,8 +196,6 @@ Index add_released(Index n, const Physics& phys, const double* pos, const double
         add_particle(sliding, i, nrm, t, along, friction, on_floor, u, k, still);
         added += 1;
     }
-    sliding.normal_speed.assign(sliding.index.size(), 0.0);
-    sliding.curving.assign(sliding.index.size(), 0.0);
     return added;
 }
 
@@ -278,34 +299,10 @@ Index drop_lifting(Sliding& sliding, Index n, const double* mass, const double* 
     const Index count = sliding.count();
     for (Index s = 0; s < count; ++s) {
         if (pressing(sliding, s, n, mass, force) < 0.0) continue;
-        sliding.index[kept] = sliding.index[s];
-        for (int c = 0; c < 3; ++c) {
-            sliding.normal[3 * kept + c] = sliding.normal[3 * s + c];
-            sliding.direction[3 * kept + c] = sliding.direction[3 * s + c];
-            sliding.surface_velocity[3 * kept + c] = sliding.surface_velocity[3 * s + c];
-            sliding.start_normal[3 * kept + c] = sliding.start_normal[3 * s + c];
-            sliding.start_direction[3 * kept + c] = sliding.start_direction[3 * s + c];
-            sliding.turning[3 * kept + c] = sliding.turning[3 * s + c];
-        }
-        sliding.friction[kept] = sliding.friction[s];
-        sliding.on_floor[kept] = sliding.on_floor[s];
-        sliding.collider[kept] = sliding.collider[s];
-        sliding.centripetal[kept] = sliding.centripetal[s];
+        sliding.move_entry(kept, s);
         kept += 1;
     }
-    sliding.index.resize(kept);
-    sliding.normal.resize(3 * kept);
-    sliding.direction.resize(3 * kept);
-    sliding.surface_velocity.resize(3 * kept);
-    sliding.friction.resize(kept);
-    sliding.on_floor.resize(kept);
-    sliding.collider.resize(kept);
-    sliding.start_normal.resize(3 * kept);
-    sliding.start_direction.resize(3 * kept);
-    sliding.turning.resize(3 * kept);
-    sliding.centripetal.resize(kept);
-    sliding.normal_speed.assign(kept, 0.0);
-    sliding.curving.assign(kept, 0.0);
+    sliding.resize(kept);
     return count - kept;
 }
 

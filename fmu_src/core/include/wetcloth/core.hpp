@@ -185,6 +185,11 @@ struct Sliding {
     std::vector<double> centripetal;
     std::vector<double> curving;
     Index count() const { return static_cast<Index>(index.size()); }
+    //: Keep the first `count` particles of the set (0: none); their per-step values (normal_speed, curving:
+    //: prescribe_normal_speed's) zero.  (sliding.cpp)
+    void resize(Index count);
+    //: Particle `from`'s entries, all but the per-step values, at place `to` (compacting the set: to <= from).
+    void move_entry(Index to, Index from);
 };
 
 struct Solver {
