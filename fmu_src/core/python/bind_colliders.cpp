@@ -8,6 +8,19 @@
 
 namespace wc::py {
 
+namespace {
+
+//: Physics holding only the collider rows (k, COLLIDER_COLUMNS) and their meshes (a ColliderMeshes).
+Physics with_colliders(nb::handle colliders, nb::handle meshes) {
+    Physics phys;
+    phys.collider_count = size_of(colliders) / COLLIDER_COLUMNS;
+    phys.colliders = argument<const double>(colliders, "colliders", phys.collider_count * COLLIDER_COLUMNS);
+    phys.meshes = meshes_from(meshes);
+    return phys;
+}
+
+}  // namespace
+
 WETCLOTH_BINDINGS(m) {
     m.attr("COLLIDER_COLUMNS") = static_cast<Index>(COLLIDER_COLUMNS);
     m.attr("MESH_COLUMNS") = static_cast<Index>(MESH_COLUMNS);
@@ -16,10 +29,7 @@ WETCLOTH_BINDINGS(m) {
         "collider_distance",
         [](nb::handle colliders, nb::handle meshes, Index k, nb::handle points, double reach, nb::handle distance,
            nb::handle normal) {
-            Physics phys;
-            phys.collider_count = size_of(colliders) / COLLIDER_COLUMNS;
-            phys.colliders = argument<const double>(colliders, "colliders", phys.collider_count * COLLIDER_COLUMNS);
-            phys.meshes = meshes_from(meshes);
+            const Physics phys = with_colliders(colliders, meshes);
             if (k < 0 || k >= phys.collider_count) throw std::out_of_range("collider index out of range");
             const Index count = size_of(distance);
             const double* p = argument<const double>(points, "points", 3 * count);
@@ -41,10 +51,7 @@ WETCLOTH_BINDINGS(m) {
         "slip_on_supports",
         [](nb::handle colliders, nb::handle meshes, double thickness, double floor_z, double floor_friction,
            nb::handle force, nb::handle mass, double h, double limit, nb::handle held, nb::handle pos, nb::handle vel) {
-            Physics phys;
-            phys.collider_count = size_of(colliders) / COLLIDER_COLUMNS;
-            phys.colliders = argument<const double>(colliders, "colliders", phys.collider_count * COLLIDER_COLUMNS);
-            phys.meshes = meshes_from(meshes);
+            Physics phys = with_colliders(colliders, meshes);
             phys.thickness = thickness;
             phys.floor_z = floor_z;
             phys.floor_friction = floor_friction;
