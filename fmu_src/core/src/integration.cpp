@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "wetcloth/lanes.hpp"
 #include "wetcloth/springs.hpp"
 
 namespace wc {
@@ -92,9 +93,9 @@ void system_matvec(const Cloth& cloth, const Work& work, const double* mass, con
 }
 
 double dot(Index n, const double* a, const double* b) {
-    double sum = 0.0;
-    for (Index k = 0; k < 3 * n; ++k) sum += a[k] * b[k];
-    return sum;
+    double sums[DOT_LANES] = {};
+    in_lanes<DOT_LANES>(3 * n, [&](Index l, Index k) { sums[l] += a[k] * b[k]; });
+    return sum_of_lanes<DOT_LANES>(sums);
 }
 
 void conjugate_gradient_step(Index n, double alpha, const double* p, const double* ap, double* x, double* r) {
