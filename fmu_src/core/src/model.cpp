@@ -726,6 +726,12 @@ void Simulation::build_plane() {
     g.b = g.x + components * size;
     g.r = g.b + components * size;
     g.row = g.r + components * size;
+    single_grid_.assign(9 * components * size + 4 * components * size, 0.0f);
+    g.single_coef = single_grid_.data();
+    g.single_inverse_diagonal = g.single_coef + 9 * components * size;
+    g.single_x = g.single_inverse_diagonal + components * size;
+    g.single_b = g.single_x + components * size;
+    g.single_r = g.single_b + components * size;
 
     const auto [cx, cy] = sizes.back();
     const Index n_c = cx * cy;
