@@ -36,11 +36,11 @@ _SLOT = {"structural_x": 5, "structural_y": 7, "shear_up_right": 8, "shear_up_le
 
 #: The multigrid hierarchy: ``levels`` (L, 4) int64 (nx, ny, first padded index, padded row length),
 #: level 0 the particles' grid; ``coef`` (2, 9, size) both components' 9-point stencils;
-#: ``inverse_diagonal``, ``x``, ``b``, ``r`` (2, size); ``row`` (nx + 3) scratch.  Each level is
+#: ``inverse_diagonal``, ``x``, ``b`` (2, size); ``row`` (nx + 3) scratch.  Each level is
 #: padded by one line of zeros before its first row and column and two after its last.  The V-cycle
 #: runs in single precision (float32) on ``single_coef``, ``single_inverse_diagonal``, ``single_x``,
 #: ``single_b``, ``single_r``, of the same shapes (``galerkin`` rounds the stencils into them).
-Hierarchy = namedtuple("Hierarchy", "levels coef inverse_diagonal x b r row single_coef single_inverse_diagonal "
+Hierarchy = namedtuple("Hierarchy", "levels coef inverse_diagonal x b row single_coef single_inverse_diagonal "
                                     "single_x single_b single_r")
 
 #: ``stiffness`` (F, n) per spring, N/m; ``slots`` (F) int64 each family's stencil slot (-1: left
@@ -94,7 +94,7 @@ def _hierarchy(levels: np.ndarray, size: int, row: int) -> Hierarchy:
     def vectors(dtype):
         return np.zeros((COMPONENTS, size), dtype=dtype)
     return Hierarchy(levels=levels, coef=np.zeros((COMPONENTS, 9, size)), inverse_diagonal=vectors(np.float64),
-                     x=vectors(np.float64), b=vectors(np.float64), r=vectors(np.float64), row=np.zeros(row),
+                     x=vectors(np.float64), b=vectors(np.float64), row=np.zeros(row),
                      single_coef=np.zeros((COMPONENTS, 9, size), dtype=np.float32),
                      single_inverse_diagonal=vectors(np.float32), single_x=vectors(np.float32),
                      single_b=vectors(np.float32), single_r=vectors(np.float32))

@@ -219,7 +219,7 @@ inline constexpr Index NORMAL = 2;
 
 //: The multigrid hierarchy (multigrid.cpp): levels (L, 4) int64 (nx, ny, first padded index, padded
 //: row length), level 0 the particles' grid; coef (COMPONENTS, 9, size) the components' 9-point
-//: stencils; inverse_diagonal, x, b, r (COMPONENTS, size); row (grid_x + 3) scratch.  The V-cycle runs
+//: stencils; inverse_diagonal, x, b (COMPONENTS, size); row (grid_x + 3) scratch.  The V-cycle runs
 //: in single precision on its own copies: single_coef (COMPONENTS, 9, size) and single_inverse_diagonal
 //: (COMPONENTS, size) of every level but the coarsest (galerkin writes them), and its vectors single_x,
 //: single_b, single_r (COMPONENTS, size); it takes b of level 0 and x of the coarsest level from the
@@ -232,7 +232,6 @@ struct Hierarchy {
     double* inverse_diagonal = nullptr;
     double* x = nullptr;
     double* b = nullptr;
-    double* r = nullptr;
     double* row = nullptr;
     float* single_coef = nullptr;
     float* single_inverse_diagonal = nullptr;
