@@ -16,6 +16,8 @@ from wetcloth.state import initial_state
 from support.rollback import assert_restored_run_repeats
 
 EPS = np.finfo(float).eps
+#: The unit roundoff of the V-cycle's own arithmetic (multigrid.cpp runs in single precision).
+EPS_SINGLE = float(np.finfo(np.float32).eps)
 #: A grid with uneven sides (an even count leaves a coarse line past the end), three multigrid
 #: levels, and the step of a 1/30 s BDF2 step (beta = 2/3).
 GRID = dict(nx=36, ny=41)
@@ -78,9 +80,10 @@ def test_multigrid_is_symmetric_positive_definite(towel):
     """x^T P^-1 y = y^T P^-1 x for random x, y, and x^T P^-1 x > 0, in crumpled frames.
 
     Tolerance: P^-1 is applied in about 100 rounded operations per value (frames, 1 + 3 + 1
-    stencil passes on each of 4 levels, the coarse band solve), each with a relative error of eps;
-    the computed products then differ from the exact, symmetric ones by at most about
-    100 eps |x| |P^-1 y| (Cauchy-Schwarz scale; measured 0.03 eps)."""
+    stencil passes on each of 4 levels, the coarse band solve), each with a relative error of at most
+    the single-precision eps of the V-cycle's arithmetic (its stencils are rounded to it too); the
+    computed products then differ from the exact, symmetric ones by at most about 100 eps |x| |P^-1 y|
+    (Cauchy-Schwarz scale; measured 0.004 eps, 0.03 double-precision eps with the cycle in double)."""
     _, model, mass = towel
     topology = model.topology
     _, plane = make_planes(topology, mass)
@@ -93,7 +96,7 @@ def test_multigrid_is_symmetric_positive_definite(towel):
         _core.apply(plane, free, x, px)
         _core.apply(plane, free, y, py)
         scale = np.linalg.norm(x) * np.linalg.norm(py)
-        assert abs(np.sum(x * py) - np.sum(y * px)) <= 100 * EPS * scale
+        assert abs(np.sum(x * py) - np.sum(y * px)) <= 100 * EPS_SINGLE * scale
         assert np.sum(x * px) > 0.0
 
 
@@ -151,7 +154,8 @@ def test_coarse_stencils_are_the_galerkin_products():
     stencils (not symmetric) on a grid with an even and an odd side, two levels down, and the finer
     level's inverse diagonals 1 / A_ii.  Compared with scipy's products: a coarse entry sums at most 576
     terms (16 per fine entry, each a / 16 times interpolation weights), so in any order it errs by at
-    most 576 eps times the sum of their magnitudes, (P^T |A| P)_ij."""
+    most 576 eps times the sum of their magnitudes, (P^T |A| P)_ij.  The V-cycle's single-precision
+    copies of the finer level's stencils and inverse diagonals are those values rounded."""
     sizes = level_sizes(36, 41, 12)[:3]
     grid = make_hierarchy(sizes)
     fill_random_stencils(grid, sizes[0], np.random.default_rng(11), lambda d: d + 10.0)  # a diagonal far from 0
@@ -169,6 +173,9 @@ def test_coarse_stencils_are_the_galerkin_products():
             beyond = (qx + k % 3 - 1 < 0) | (qx + k % 3 - 1 >= cx) | (qy + k // 3 - 1 < 0) | (qy + k // 3 - 1 >= cy)
             assert np.all(grid.coef[0, k, coarse_padded[beyond]] == 0.0)
         assert np.array_equal(grid.inverse_diagonal[0, fine_padded], 1.0 / fine.diagonal())
+        assert np.array_equal(grid.single_coef[:, :, fine_padded], grid.coef[:, :, fine_padded].astype(np.float32))
+        assert np.array_equal(grid.single_inverse_diagonal[:, fine_padded],
+                              grid.inverse_diagonal[:, fine_padded].astype(np.float32))
 
 
 def test_the_cycles_way_down_sweeps_and_restricts_the_residual():
@@ -176,10 +183,13 @@ def test_the_cycles_way_down_sweeps_and_restricts_the_residual():
     Galerkin products), whatever x held before: on each level but the coarsest x solves (D + L) x = b
     (a forward Gauss-Seidel sweep from zero, L the neighbours before a point in row-major order), and the
     next level's b is P^T (b - A x), which the core takes as -U x (only the neighbours the sweep had not
-    reached).  Compared with scipy: forward substitution with a diagonal at least 10 against 8
-    neighbours of at most 1 contracts, so each x errs by at most about 10 eps |x|max; a coarse b sums
-    at most 9 terms of r per point, each within 10 eps (|b| + |A| |x|) of the exact one (measured: at most
-    0.75 and 0.52 of those units; the full residual b - A x of aa25dcf 0.51 and 0.37)."""
+    reached).  The cycle runs in single precision (its x and b of the levels in ``single_x`` and
+    ``single_b``; the coarsest level's b back in ``b``), on the stencils and level 0's b rounded to it.
+    Compared with scipy in double: forward substitution with a diagonal at least 10 against 8 neighbours
+    of at most 1 contracts, so each x errs by at most about 10 eps |x|max, eps single precision's (the
+    rounded A and b perturb it by eps relative); a coarse b sums at most 9 terms of r per point, each
+    within 10 eps (|b| + |A| |x|) of the exact one (measured: at most 1.22 and 0.68 of those units; the
+    cycle in double 0.75 and 0.52 of double-precision eps)."""
     sizes = level_sizes(36, 41, 12)[:3]
     grid = make_hierarchy(sizes)
     rng = np.random.default_rng(5)
@@ -188,17 +198,18 @@ def test_the_cycles_way_down_sweeps_and_restricts_the_residual():
         _core.galerkin(grid, level)
     grid.b[:, padded] = rng.standard_normal((grid.b.shape[0], padded.size))
     for level in range(3):  # what an earlier cycle left on the levels' points
-        grid.x[:, stencil_matrix(grid, level)[1]] = rng.standard_normal((grid.x.shape[0], 1))
+        grid.single_x[:, stencil_matrix(grid, level)[1]] = rng.standard_normal((grid.x.shape[0], 1))
     b = grid.b[0, padded].copy()
     _core.v_cycle_down(grid)
     for level in range(2):
         matrix, points = stencil_matrix(grid, level)
-        x = grid.x[0, points]
+        x = grid.single_x[0, points].astype(float)
         expected = scipy.sparse.linalg.spsolve_triangular(scipy.sparse.tril(matrix).tocsr(), b)
-        assert np.all(np.abs(x - expected) <= 10 * EPS * np.abs(expected).max()), level
+        assert np.all(np.abs(x - expected) <= 10 * EPS_SINGLE * np.abs(expected).max()), level
         p = interpolation(sizes[level], sizes[level + 1])
-        coarse = grid.b[0, stencil_matrix(grid, level + 1)[1]]
-        bound = 10 * EPS * (p.T @ (np.abs(b) + abs(matrix) @ np.abs(x)))
+        coarse_points = stencil_matrix(grid, level + 1)[1]
+        coarse = (grid.b if level + 1 == 2 else grid.single_b)[0, coarse_points].astype(float)  # 2: the coarsest
+        bound = 10 * EPS_SINGLE * (p.T @ (np.abs(b) + abs(matrix) @ np.abs(x)))
         assert np.all(np.abs(coarse - p.T @ (b - matrix @ x)) <= bound), level
         b = coarse.copy()
 
@@ -347,7 +358,8 @@ def test_systems_from_the_jacobian_are_its_projection_on_the_frames():
     independently from A's products with unit vectors; the banded factors invert it to round-off:
     applied to V_a S_a e the preconditioner returns V_a e (the frames are orthonormal, so the other
     axes see nothing), relative 1e-10 as the rest-stiffness factors above.  On the multigrid the
-    same systems give a symmetric positive definite cycle (as in the test above)."""
+    same systems give a symmetric positive definite cycle (as in the test above, to its single
+    precision)."""
     scene = wetcloth.load_scene(nx=30, ny=27, pinned_edge="y_max")
     model = Model(scene)
     topology, n = model.topology, model.topology.n
@@ -385,7 +397,7 @@ def test_systems_from_the_jacobian_are_its_projection_on_the_frames():
         assert np.abs(v.T @ z.ravel() - e).max() <= 1e-10 * np.abs(e).max(), a
     x, y = rng.standard_normal((2, 3, n)) * free
     px, py = apply(multigrid, model, x), apply(multigrid, model, y)
-    assert abs(np.sum(x * py) - np.sum(y * px)) <= 100 * EPS * np.linalg.norm(x) * np.linalg.norm(py)
+    assert abs(np.sum(x * py) - np.sum(y * px)) <= 100 * EPS_SINGLE * np.linalg.norm(x) * np.linalg.norm(py)
     assert np.sum(x * px) > 0.0
 
 

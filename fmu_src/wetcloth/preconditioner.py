@@ -36,9 +36,12 @@ _SLOT = {"structural_x": 5, "structural_y": 7, "shear_up_right": 8, "shear_up_le
 
 #: The multigrid hierarchy: ``levels`` (L, 4) int64 (nx, ny, first padded index, padded row length),
 #: level 0 the particles' grid; ``coef`` (2, 9, size) both components' 9-point stencils;
-#: ``inverse_diagonal``, ``x``, ``b``, ``r`` (2, size); ``row`` (nx + 3) scratch.  Each level is
-#: padded by one line of zeros before its first row and column and two after its last.
-Hierarchy = namedtuple("Hierarchy", "levels coef inverse_diagonal x b r row")
+#: ``inverse_diagonal``, ``x``, ``b`` (2, size); ``row`` (nx + 3) scratch.  Each level is
+#: padded by one line of zeros before its first row and column and two after its last.  The V-cycle
+#: runs in single precision (float32) on ``single_coef``, ``single_inverse_diagonal``, ``single_x``,
+#: ``single_b``, ``single_r``, of the same shapes (``galerkin`` rounds the stencils into them).
+Hierarchy = namedtuple("Hierarchy", "levels coef inverse_diagonal x b row single_coef single_inverse_diagonal "
+                                    "single_x single_b single_r")
 
 #: ``stiffness`` (F, n) per spring, N/m; ``slots`` (F) int64 each family's stencil slot (-1: left
 #: out); ``grid`` the ``Hierarchy`` (one level on small grids); on the coarsest level, ``order``
@@ -83,9 +86,18 @@ def make_hierarchy(sizes: list[tuple[int, int]]) -> Hierarchy:
     for level, (nx, ny) in enumerate(sizes):
         levels[level] = nx, ny, start, nx + 3
         start += (nx + 3) * (ny + 3)
-    return Hierarchy(levels=levels, coef=np.zeros((COMPONENTS, 9, start)), inverse_diagonal=np.zeros((COMPONENTS, start)),
-                     x=np.zeros((COMPONENTS, start)), b=np.zeros((COMPONENTS, start)), r=np.zeros((COMPONENTS, start)),
-                     row=np.zeros(sizes[0][0] + 3))
+    return _hierarchy(levels, start, sizes[0][0] + 3)
+
+
+def _hierarchy(levels: np.ndarray, size: int, row: int) -> Hierarchy:
+    """Zeroed arrays of a hierarchy of ``size`` padded points over ``levels``, scratch ``row`` long."""
+    def vectors(dtype):
+        return np.zeros((COMPONENTS, size), dtype=dtype)
+    return Hierarchy(levels=levels, coef=np.zeros((COMPONENTS, 9, size)), inverse_diagonal=vectors(np.float64),
+                     x=vectors(np.float64), b=vectors(np.float64), row=np.zeros(row),
+                     single_coef=np.zeros((COMPONENTS, 9, size), dtype=np.float32),
+                     single_inverse_diagonal=vectors(np.float32), single_x=vectors(np.float32),
+                     single_b=vectors(np.float32), single_r=vectors(np.float32))
 
 
 def make_plane(grid_x: int, grid_y: int, family_names: tuple, stiffness: np.ndarray,
@@ -244,9 +256,7 @@ def make_mesh_plane(n: int, pairs: np.ndarray, tension_count: int, stiffness: np
     rows, columns = coarsest.nonzero()
     kd = int(np.abs(rank[rows] - rank[columns]).max()) if n_c > 1 else 0
     kd = max(1, min(kd, n_c - 1))
-    grid = Hierarchy(levels=np.zeros((0, 4), dtype=np.int64), coef=np.zeros((COMPONENTS, 9, 0)),
-                     inverse_diagonal=np.zeros((COMPONENTS, 0)), x=np.zeros((COMPONENTS, 0)),
-                     b=np.zeros((COMPONENTS, 0)), r=np.zeros((COMPONENTS, 0)), row=np.zeros(0))
+    grid = _hierarchy(np.zeros((0, 4), dtype=np.int64), 0, 0)
     count = pairs.shape[1]
     return Plane(stiffness=np.ascontiguousarray(stiffness, dtype=float), slots=np.zeros(0, dtype=np.int64), grid=grid,
                  order=order, rank=rank, bands=np.zeros((COMPONENTS, n_c, kd + 1)),

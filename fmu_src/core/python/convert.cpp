@@ -185,8 +185,12 @@ Hierarchy hierarchy_from(nb::handle h) {
     g.inverse_diagonal = array<double>(h, "inverse_diagonal", COMPONENTS * g.size);
     g.x = array<double>(h, "x", COMPONENTS * g.size);
     g.b = array<double>(h, "b", COMPONENTS * g.size);
-    g.r = array<double>(h, "r", COMPONENTS * g.size);
     g.row = g.level_count > 0 ? array<double>(h, "row", g.levels[NX] + 3) : nullptr;
+    g.single_coef = array<float>(h, "single_coef", COMPONENTS * 9 * g.size);
+    g.single_inverse_diagonal = array<float>(h, "single_inverse_diagonal", COMPONENTS * g.size);
+    g.single_x = array<float>(h, "single_x", COMPONENTS * g.size);
+    g.single_b = array<float>(h, "single_b", COMPONENTS * g.size);
+    g.single_r = array<float>(h, "single_r", COMPONENTS * g.size);
     return g;
 }
 

@@ -24,8 +24,9 @@ T* array(nb::handle bundle, const char* field, Index count = -1) {
     nb::ndarray<T, nb::c_contig, nb::device::cpu> a;
     if (!nb::try_cast(value, a, false)) {
         throw nb::type_error(("field '" + std::string(field) + "': expected a C-contiguous array of " +
-                              (std::is_same_v<std::remove_const_t<T>, double> ? "float64"
-                               : std::is_same_v<std::remove_const_t<T>, bool> ? "bool" : "int64"))
+                              (std::is_same_v<std::remove_const_t<T>, double>  ? "float64"
+                               : std::is_same_v<std::remove_const_t<T>, float> ? "float32"
+                               : std::is_same_v<std::remove_const_t<T>, bool>  ? "bool" : "int64"))
                                  .c_str());
     }
     if (count >= 0 && static_cast<Index>(a.size()) < count) {

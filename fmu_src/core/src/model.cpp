@@ -715,7 +715,7 @@ void Simulation::build_plane() {
     }
     const std::size_t size = static_cast<std::size_t>(start);
     const std::size_t components = COMPONENTS;
-    grid_.assign(9 * components * size + 4 * components * size + static_cast<std::size_t>(nx + 3), 0.0);
+    grid_.assign(9 * components * size + 3 * components * size + static_cast<std::size_t>(nx + 3), 0.0);
     Hierarchy& g = core_.plane.grid;
     g.level_count = levels;
     g.size = start;
@@ -724,8 +724,13 @@ void Simulation::build_plane() {
     g.inverse_diagonal = g.coef + 9 * components * size;
     g.x = g.inverse_diagonal + components * size;
     g.b = g.x + components * size;
-    g.r = g.b + components * size;
-    g.row = g.r + components * size;
+    g.row = g.b + components * size;
+    single_grid_.assign(9 * components * size + 4 * components * size, 0.0f);
+    g.single_coef = single_grid_.data();
+    g.single_inverse_diagonal = g.single_coef + 9 * components * size;
+    g.single_x = g.single_inverse_diagonal + components * size;
+    g.single_b = g.single_x + components * size;
+    g.single_r = g.single_b + components * size;
 
     const auto [cx, cy] = sizes.back();
     const Index n_c = cx * cy;

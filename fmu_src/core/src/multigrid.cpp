@@ -8,20 +8,40 @@ namespace {
 //: Zero the padding of `level` in v (the line before its first row and column, the two after its last):
 //: the neighbours a sweep from zero and its residual read beyond the grid.  The sweep itself writes every
 //: point of the level before anything reads it.
-void zero_padding(Hierarchy& h, Index level, double* v, Index components) {
+void zero_padding(Hierarchy& h, Index level, float* v, Index components) {
     const Index nx = level_value(h.levels, level, NX), ny = level_value(h.levels, level, NY);
     const Index pad = level_value(h.levels, level, PAD_X);
     const Index start = level_value(h.levels, level, START);
     for (Index c = 0; c < components; ++c) {
-        double* vc = v + c * h.size + start;
-        for (Index p = 0; p < pad; ++p) vc[p] = 0.0;  // the line before the first row
+        float* vc = v + c * h.size + start;
+        for (Index p = 0; p < pad; ++p) vc[p] = 0.0f;  // the line before the first row
         for (Index row = 1; row <= ny; ++row) {
-            vc[row * pad] = 0.0;
-            vc[row * pad + nx + 1] = 0.0;
-            vc[row * pad + nx + 2] = 0.0;
+            vc[row * pad] = 0.0f;
+            vc[row * pad + nx + 1] = 0.0f;
+            vc[row * pad + nx + 2] = 0.0f;
         }
-        for (Index p = (ny + 1) * pad; p < (ny + 3) * pad; ++p) vc[p] = 0.0;  // the two after the last
+        for (Index p = (ny + 1) * pad; p < (ny + 3) * pad; ++p) vc[p] = 0.0f;  // the two after the last
     }
+}
+
+//: The padded points of `level`: its first index and how many.
+Index level_begin(const Hierarchy& h, Index level) { return level_value(h.levels, level, START); }
+Index level_length(const Hierarchy& h, Index level) {
+    return level_value(h.levels, level, PAD_X) * (level_value(h.levels, level, NY) + 3);
+}
+
+//: to = from, rounded to single precision, over `level`'s padded points of the first `components` components.
+void to_single(const Hierarchy& h, Index level, const double* from, float* to, Index components) {
+    const Index begin = level_begin(h, level), end = begin + level_length(h, level);
+    for (Index c = 0; c < components; ++c)
+        for (Index p = c * h.size + begin; p < c * h.size + end; ++p) to[p] = static_cast<float>(from[p]);
+}
+
+//: to = from over `level`'s padded points of the first `components` components.
+void to_double(const Hierarchy& h, Index level, const float* from, double* to, Index components) {
+    const Index begin = level_begin(h, level), end = begin + level_length(h, level);
+    for (Index c = 0; c < components; ++c)
+        for (Index p = c * h.size + begin; p < c * h.size + end; ++p) to[p] = from[p];
 }
 
 }  // namespace
@@ -112,6 +132,13 @@ void galerkin(Hierarchy& h, Index level, Index first, Index end) {
                 }
             }
         }
+        // the level's stencils and inverse diagonals as the V-cycle reads them
+        const Index level_first = level_begin(h, level), level_end = level_first + level_length(h, level);
+        float* single = h.single_coef + c * 9 * size;
+        for (Index k = 0; k < 9; ++k)
+            for (Index p = level_first; p < level_end; ++p) single[k * size + p] = static_cast<float>(coef[k * size + p]);
+        float* single_inverse = h.single_inverse_diagonal + c * size;
+        for (Index p = level_first; p < level_end; ++p) single_inverse[p] = static_cast<float>(inverse[p]);
     }
 }
 
@@ -123,27 +150,27 @@ constexpr Index BLOCK = 64;
 
 //: known = b - (the row below's three neighbours) for m points from s (a forward sweep from x = 0).
 //: coef (9, size) from the row's first point; below a view from one point before the row.
-void known_from_zero(double* __restrict known, const double* __restrict b, const double* __restrict coef,
-                     Index size, const double* __restrict below, Index s, Index m) {
-    const double* a0 = coef + 0 * size + s;
-    const double* a1 = coef + 1 * size + s;
-    const double* a2 = coef + 2 * size + s;
+void known_from_zero(float* __restrict known, const float* __restrict b, const float* __restrict coef,
+                     Index size, const float* __restrict below, Index s, Index m) {
+    const float* a0 = coef + 0 * size + s;
+    const float* a1 = coef + 1 * size + s;
+    const float* a2 = coef + 2 * size + s;
     b += s;
     below += s;
     for (Index i = 0; i < m; ++i) known[i] = b[i] - a0[i] * below[i] - a1[i] * below[i + 1] - a2[i] * below[i + 2];
 }
 
 //: known = b - every neighbour but the one the forward recurrence updates (left: slot 3).
-void known_forward(double* __restrict known, const double* __restrict b, const double* __restrict coef, Index size,
-                   const double* __restrict below, const double* __restrict here, const double* __restrict above,
+void known_forward(float* __restrict known, const float* __restrict b, const float* __restrict coef, Index size,
+                   const float* __restrict below, const float* __restrict here, const float* __restrict above,
                    Index s, Index m) {
-    const double* a0 = coef + 0 * size + s;
-    const double* a1 = coef + 1 * size + s;
-    const double* a2 = coef + 2 * size + s;
-    const double* a5 = coef + 5 * size + s;
-    const double* a6 = coef + 6 * size + s;
-    const double* a7 = coef + 7 * size + s;
-    const double* a8 = coef + 8 * size + s;
+    const float* a0 = coef + 0 * size + s;
+    const float* a1 = coef + 1 * size + s;
+    const float* a2 = coef + 2 * size + s;
+    const float* a5 = coef + 5 * size + s;
+    const float* a6 = coef + 6 * size + s;
+    const float* a7 = coef + 7 * size + s;
+    const float* a8 = coef + 8 * size + s;
     b += s;
     below += s;
     here += s;
@@ -154,16 +181,16 @@ void known_forward(double* __restrict known, const double* __restrict b, const d
 }
 
 //: known = b - every neighbour but the one the backward recurrence updates (right: slot 5).
-void known_backward(double* __restrict known, const double* __restrict b, const double* __restrict coef,
-                    Index size, const double* __restrict below, const double* __restrict here,
-                    const double* __restrict above, Index s, Index m) {
-    const double* a0 = coef + 0 * size + s;
-    const double* a1 = coef + 1 * size + s;
-    const double* a2 = coef + 2 * size + s;
-    const double* a3 = coef + 3 * size + s;
-    const double* a6 = coef + 6 * size + s;
-    const double* a7 = coef + 7 * size + s;
-    const double* a8 = coef + 8 * size + s;
+void known_backward(float* __restrict known, const float* __restrict b, const float* __restrict coef,
+                    Index size, const float* __restrict below, const float* __restrict here,
+                    const float* __restrict above, Index s, Index m) {
+    const float* a0 = coef + 0 * size + s;
+    const float* a1 = coef + 1 * size + s;
+    const float* a2 = coef + 2 * size + s;
+    const float* a3 = coef + 3 * size + s;
+    const float* a6 = coef + 6 * size + s;
+    const float* a7 = coef + 7 * size + s;
+    const float* a8 = coef + 8 * size + s;
     b += s;
     below += s;
     here += s;
@@ -187,19 +214,19 @@ void sweep_components(Hierarchy& h, Index level, bool forward, bool from_zero) {
     const Index size = h.size;
     const Index nx = level_value(levels, level, NX), ny = level_value(levels, level, NY);
     const Index pad = level_value(levels, level, PAD_X);
-    double known[C][BLOCK];
+    float known[C][BLOCK];
     for (Index t = 0; t < ny; ++t) {
         const Index iy = forward ? t : ny - 1 - t;
         const Index base = padded_index(levels, level, 0, iy);
         const Index below = base - pad - 1, here = base - 1, above = base + pad - 1;
-        double last[C] = {};  // the row's neighbour just updated (none before the first)
+        float last[C] = {};  // the row's neighbour just updated (none before the first)
         for (Index done = 0; done < nx; done += BLOCK) {
             const Index m = nx - done < BLOCK ? nx - done : BLOCK;
             const Index s = forward ? done : nx - done - m;  // the block's first point
             for (Index c = 0; c < C; ++c) {
-                const double* coef = h.coef + c * 9 * size + base;
-                const double* b = h.b + c * size + base;
-                const double* x = h.x + c * size;
+                const float* coef = h.single_coef + c * 9 * size + base;
+                const float* b = h.single_b + c * size + base;
+                const float* x = h.single_x + c * size;
                 if (forward && from_zero) {
                     known_from_zero(known[c], b, coef, size, x + below, s, m);
                 } else if (forward) {
@@ -208,13 +235,13 @@ void sweep_components(Hierarchy& h, Index level, bool forward, bool from_zero) {
                     known_backward(known[c], b, coef, size, x + below, x + here, x + above, s, m);
                 }
             }
-            double* xc[C];
-            const double* ic[C];
-            const double* neighbour[C];  // the slot the recurrence updates: left (3) or right (5)
+            float* xc[C];
+            const float* ic[C];
+            const float* neighbour[C];  // the slot the recurrence updates: left (3) or right (5)
             for (Index c = 0; c < C; ++c) {
-                xc[c] = h.x + c * size + base + s;
-                ic[c] = h.inverse_diagonal + c * size + base + s;
-                neighbour[c] = h.coef + (c * 9 + (forward ? 3 : 5)) * size + base + s;
+                xc[c] = h.single_x + c * size + base + s;
+                ic[c] = h.single_inverse_diagonal + c * size + base + s;
+                neighbour[c] = h.single_coef + (c * 9 + (forward ? 3 : 5)) * size + base + s;
             }
             if (forward) {
                 for (Index i = 0; i < m; ++i) {
@@ -249,23 +276,23 @@ namespace {
 //: equation with the values then known: what is left is -U x, the neighbours it had not reached (right,
 //: and the row above; coef (9, size) from the row's first point; here, above views of x from one point
 //: before the row).
-void swept_residual_row(double* __restrict r, const double* __restrict coef, Index size,
-                        const double* __restrict here, const double* __restrict above, Index m) {
-    const double* a5 = coef + 5 * size;
-    const double* a6 = coef + 6 * size;
-    const double* a7 = coef + 7 * size;
-    const double* a8 = coef + 8 * size;
+void swept_residual_row(float* __restrict r, const float* __restrict coef, Index size,
+                        const float* __restrict here, const float* __restrict above, Index m) {
+    const float* a5 = coef + 5 * size;
+    const float* a6 = coef + 6 * size;
+    const float* a7 = coef + 7 * size;
+    const float* a8 = coef + 8 * size;
     for (Index s = 0; s < m; ++s)
         r[s] = -(a5[s] * here[s + 2]) - a6[s] * above[s] - a7[s] * above[s + 1] - a8[s] * above[s + 2];
 }
 
 //: b of a coarse row from the fine residual rows around its fine row (views from one point before it).
-void restrict_row(double* __restrict b, const double* __restrict below, const double* __restrict here,
-                  const double* __restrict above, Index coarse_nx) {
+void restrict_row(float* __restrict b, const float* __restrict below, const float* __restrict here,
+                  const float* __restrict above, Index coarse_nx) {
     for (Index s = 0; s < coarse_nx; ++s) {
         const Index t = 2 * s;
-        b[s] = here[t + 1] + 0.5 * (here[t] + here[t + 2] + below[t + 1] + above[t + 1]) +
-               0.25 * (below[t] + below[t + 2] + above[t] + above[t + 2]);
+        b[s] = here[t + 1] + 0.5f * (here[t] + here[t + 2] + below[t + 1] + above[t + 1]) +
+               0.25f * (below[t] + below[t + 2] + above[t] + above[t + 2]);
     }
 }
 
@@ -279,10 +306,10 @@ void restrict_swept_residual(Hierarchy& h, Index level, Index components) {
     const Index pad = level_value(levels, level, PAD_X);
     const Index coarse_nx = level_value(levels, level + 1, NX), coarse_ny = level_value(levels, level + 1, NY);
     for (Index c = 0; c < components; ++c) {
-        const double* coef = h.coef + c * 9 * size;
-        const double* x = h.x + c * size;
-        double* b = h.b + c * size;
-        double* r = h.r + c * size;
+        const float* coef = h.single_coef + c * 9 * size;
+        const float* x = h.single_x + c * size;
+        float* b = h.single_b + c * size;
+        float* r = h.single_r + c * size;
         for (Index iy = 0; iy < ny; ++iy) {
             const Index base = padded_index(levels, level, 0, iy);
             swept_residual_row(r + base, coef + base, size, x + base - 1, x + base + pad - 1, nx);
@@ -301,13 +328,13 @@ namespace {
 
 //: A fine row += its coarse rows' interpolation (lc, hc the coarse rows iy // 2 and (iy + 1) // 2):
 //: fine point ix takes its parents ix // 2 and (ix + 1) // 2, the even and odd points in pairs.
-void interpolate_row(double* __restrict xc, const double* __restrict lc, const double* __restrict hc, Index nx) {
+void interpolate_row(float* __restrict xc, const float* __restrict lc, const float* __restrict hc, Index nx) {
     const Index pairs = nx / 2;
     for (Index s = 0; s < pairs; ++s) {
-        xc[2 * s] += 0.25 * (lc[s] + lc[s] + hc[s] + hc[s]);
-        xc[2 * s + 1] += 0.25 * (lc[s] + lc[s + 1] + hc[s] + hc[s + 1]);
+        xc[2 * s] += 0.25f * (lc[s] + lc[s] + hc[s] + hc[s]);
+        xc[2 * s + 1] += 0.25f * (lc[s] + lc[s + 1] + hc[s] + hc[s + 1]);
     }
-    if (nx % 2 != 0) xc[nx - 1] += 0.25 * (lc[pairs] + lc[pairs] + hc[pairs] + hc[pairs]);
+    if (nx % 2 != 0) xc[nx - 1] += 0.25f * (lc[pairs] + lc[pairs] + hc[pairs] + hc[pairs]);
 }
 
 }  // namespace
@@ -316,7 +343,7 @@ void interpolate(Hierarchy& h, Index level, Index components) {
     const Index* levels = h.levels;
     const Index nx = level_value(levels, level, NX), ny = level_value(levels, level, NY);
     for (Index c = 0; c < components; ++c) {
-        double* x = h.x + c * h.size;
+        float* x = h.single_x + c * h.size;
         for (Index iy = 0; iy < ny; ++iy) {
             const Index low = padded_index(levels, level + 1, 0, iy / 2);
             const Index high = padded_index(levels, level + 1, 0, (iy + 1) / 2);
@@ -326,18 +353,26 @@ void interpolate(Hierarchy& h, Index level, Index components) {
 }
 
 void v_cycle_down(Hierarchy& h, Index components) {
-    for (Index level = 0; level < h.level_count - 1; ++level) {
-        zero_padding(h, level, h.x, components);
+    const Index coarsest = h.level_count - 1;
+    if (coarsest < 1) return;
+    to_single(h, 0, h.b, h.single_b, components);
+    for (Index level = 0; level < coarsest; ++level) {
+        zero_padding(h, level, h.single_x, components);
         for (Index s = 0; s < SWEEPS; ++s) sweep(h, level, true, s == 0, components);
         restrict_swept_residual(h, level, components);
     }
+    to_double(h, coarsest, h.single_b, h.b, components);
 }
 
 void v_cycle_up(Hierarchy& h, Index components) {
-    for (Index level = h.level_count - 2; level >= 0; --level) {
+    const Index coarsest = h.level_count - 1;
+    if (coarsest < 1) return;
+    to_single(h, coarsest, h.x, h.single_x, components);
+    for (Index level = coarsest - 1; level >= 0; --level) {
         interpolate(h, level, components);
         for (Index s = 0; s < SWEEPS; ++s) sweep(h, level, false, false, components);
     }
+    to_double(h, 0, h.single_x, h.x, components);
 }
 
 }  // namespace wc

@@ -56,6 +56,9 @@ void attach_reused(ReusedPlane& reused, const Plane& plane, Index n) {
     p.bands = take(band);
     p.rows = take(band);
     p.reference = take(4);
+    reused.single_storage.assign(static_cast<std::size_t>(10 * COMPONENTS * size), 0.0f);
+    p.grid.single_coef = reused.single_storage.data();
+    p.grid.single_inverse_diagonal = p.grid.single_coef + 9 * COMPONENTS * size;
 }
 
 bool reuse_expired(const ReusedPlane& reused, double scale, double last_solve) {

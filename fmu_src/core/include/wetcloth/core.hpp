@@ -219,7 +219,11 @@ inline constexpr Index NORMAL = 2;
 
 //: The multigrid hierarchy (multigrid.cpp): levels (L, 4) int64 (nx, ny, first padded index, padded
 //: row length), level 0 the particles' grid; coef (COMPONENTS, 9, size) the components' 9-point
-//: stencils; inverse_diagonal, x, b, r (COMPONENTS, size); row (grid_x + 3) scratch.
+//: stencils; inverse_diagonal, x, b (COMPONENTS, size); row (grid_x + 3) scratch.  The V-cycle runs
+//: in single precision on its own copies: single_coef (COMPONENTS, 9, size) and single_inverse_diagonal
+//: (COMPONENTS, size) of every level but the coarsest (galerkin writes them), and its vectors single_x,
+//: single_b, single_r (COMPONENTS, size); it takes b of level 0 and x of the coarsest level from the
+//: double vectors and gives back b of the coarsest level and x of level 0 there.
 struct Hierarchy {
     Index level_count = 0;
     Index size = 0;
@@ -228,8 +232,12 @@ struct Hierarchy {
     double* inverse_diagonal = nullptr;
     double* x = nullptr;
     double* b = nullptr;
-    double* r = nullptr;
     double* row = nullptr;
+    float* single_coef = nullptr;
+    float* single_inverse_diagonal = nullptr;
+    float* single_x = nullptr;
+    float* single_b = nullptr;
+    float* single_r = nullptr;
 };
 
 //: Columns of Algebraic::levels.
@@ -300,7 +308,8 @@ struct Plane {
 //: The in-plane systems of the plane preconditioner built from the Jacobian at one Newton iteration and
 //: reused for the linear solves of the adaptive steps after it (reused_plane.hpp), while `Core::plane`
 //: keeps the rest-stiffness systems that filter the step's error estimate.  `plane` views `storage` for
-//: what it factors (stencils, inverse diagonals, band factors, reference) and shares everything else with
+//: what it factors (stencils, inverse diagonals, band factors, reference), `single_storage` for the
+//: V-cycle's single-precision stencils and inverse diagonals, and shares everything else with
 //: Core::plane (its frame and normal diagonal among them); frame_at_build (3, 3, n) is the frame it was
 //: projected on.  `source` holds what it was built from, so that a restored run rebuilds the same
 //: factors: positions (3, n) m, mass (n) kg, blocks (6, n), direction (F, 3, n), along, across (F, n)
@@ -308,6 +317,7 @@ struct Plane {
 struct ReusedPlane {
     Plane plane;
     std::vector<double> storage;
+    std::vector<float> single_storage;
     std::vector<double> frame_at_build;
     std::vector<double> source;
     std::array<double, 3> rule{};

@@ -442,6 +442,7 @@ private:
     // Plane and its hierarchy
     std::vector<Index> slots_, order_, rank_, levels_, marker_;
     std::vector<double> plane_, grid_, algebraic_;  // algebraic_: a mesh's hierarchy's values and vectors
+    std::vector<float> single_grid_;                 // the V-cycle's single-precision stencils and vectors
     ReusedPlane reused_;
     // Contact
     std::vector<Index> edges_, zone_, contact_counters_;

@@ -9,6 +9,12 @@
 // after level, each level padded by one line of zeros before its first row and column and two after
 // its last (levels[l, PAD_X] = nx + 3 values per padded row); coef[c, k, p] is the entry of point p
 // and its neighbour p + (dy - 1) pad_x + dx - 1 for k = 3 dy + dx (CENTRE = 4 the diagonal).
+//
+// The cycle only approximates A^-1, so it runs in single precision (half the memory traffic of its
+// stencils, twice the SIMD lanes): galerkin computes the stencils in double and rounds each level's
+// into Hierarchy::single_coef and single_inverse_diagonal; the sweeps, residuals and transfers work on
+// single_x, single_b, single_r.  The cycle takes level 0's b and the coarsest level's x (solved in
+// double by the band factors) from the double vectors and gives back its results there.
 #pragma once
 #include "wetcloth/core.hpp"
 
