@@ -5,8 +5,11 @@ at most 1.5x).
 
 The mesh is docs/make_meshes.py's irregular disc (rings of jittered points, Delaunay) with about
 ``--vertices`` vertices and the area of the square it is compared with: a square grid of as many
-particles.  Both drop flat from 5 cm onto water (the default towel's fabric, air and water), and hang
-in air from the part of them at y >= 0.6 m (pinned by a box); CPU seconds, steps, Newton and CG iterations
+particles.  Both drop flat from 5 cm onto water (the default towel's fabric, air and water), hang in air
+from the part of them at y >= 0.6 m (pinned by a box: the disc by its cap, 0.72 m across, but the square by its
+whole top edge, so that only the disc folds in as it falls), and hang in air by that cap's chord (the box
+narrowed to |x| <= 0.36 m: the disc's pins are the same, the square's the middle of its top edge, so that both
+fold in); CPU seconds, steps, Newton and CG iterations
 for each (and the self-collision candidate lists built; ``--self-collision off`` leaves that stage out), and the
 ratio of CPU time per vertex.  The mesh takes the core's listed springs and its
 algebraic multigrid preconditioner (mesh_plane.cpp); the grid its families and geometric multigrid.
@@ -15,7 +18,7 @@ Between them the grid's own cloth as a quad mesh file ("quads"), its vertices nu
 listed springs, face drag over triangles, the algebraic multigrid.  ``--square-meshes`` adds two triangle
 meshes of the grid's square between them: its cells split in two ("split": the mesh path with a triangle
 mesh's springs, a regular one), and its inner points moved at random by up to a quarter of the spacing
-and triangulated by Delaunay ("jittered": irregular in the square's outline; the hanging case's box pins
+and triangulated by Delaunay ("jittered": irregular in the square's outline; the hanging cases' boxes pin
 the inner points moved into it too).
 """
 
@@ -88,11 +91,15 @@ def square_file(path: Path, scene: wetcloth.Scene, jitter: float) -> Path:
     return path
 
 
-CASES = {  # scene settings of each case (the hanging one adds PIN)
+HANGING = dict(initial_tilt=0.0, initial_height=2.0, water_level=-10.0, floor_level=-20.0)
+CASES = {  # scene settings of each case (the hanging ones add their PINS)
     "landing on water": dict(initial_tilt=0.0, initial_height=0.05),
-    "hanging in air": dict(initial_tilt=0.0, initial_height=2.0, water_level=-10.0, floor_level=-20.0),
+    "hanging in air": HANGING,
+    "hanging by a chord": HANGING,
 }
 PIN = "box:-9,0.6,-9,9,9,9"  # the hanging case's pins: every particle at y >= 0.6 m
+CHORD = math.sqrt(make_meshes.RADIUS**2 - 0.6**2) + 1e-9  # m, half the chord of the disc's cap y >= 0.6 m (0.36)
+PINS = {"hanging in air": PIN, "hanging by a chord": f"box:{-CHORD},0.6,-9,{CHORD},9,9"}
 
 
 def shapes_of(vertices: int, shuffle: bool, square_meshes: bool) -> dict:
@@ -133,7 +140,7 @@ def main() -> None:
     print(f"disc of {disc} vertices ({rings} rings) against a {side} x {side} grid, {args.duration} s")
     for label, base in CASES.items():
         results, best = {}, {}
-        extra = dict(pinned_vertices=PIN) if label.startswith("hanging") else {}
+        extra = dict(pinned_vertices=PINS[label]) if label in PINS else {}
         extra["self_collision"] = args.self_collision
         for _ in range(args.repeat):
             for kind, shape in shapes.items():

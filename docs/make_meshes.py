@@ -27,8 +27,10 @@ RINGS = 25  # ~2k vertices; the vertex count grows as pi * rings^2
 SEED = 26
 
 
-def round_cloth(radius: float = RADIUS, rings: int = RINGS, seed: int = SEED) -> tuple[np.ndarray, np.ndarray]:
-    """Points (n, 3) m and triangles (m, 3) of an irregular disc of ``radius`` m with ``rings`` rings."""
+def round_cloth(radius: float = RADIUS, rings: int = RINGS, seed: int = SEED,
+                jitter: float = 0.25) -> tuple[np.ndarray, np.ndarray]:
+    """Points (n, 3) m and triangles (m, 3) of an irregular disc of ``radius`` m with ``rings`` rings, each
+    point moved at random by up to ``jitter`` times the spacing (0: rings of evenly spaced points)."""
     from scipy.spatial import Delaunay
 
     rng = np.random.default_rng(seed)
@@ -36,8 +38,8 @@ def round_cloth(radius: float = RADIUS, rings: int = RINGS, seed: int = SEED) ->
     points = [np.zeros((1, 2))]
     for k in range(1, rings + 1):
         count = round(2.0 * math.pi * k)
-        angle = (np.arange(count) + rng.uniform(-0.25, 0.25, count)) * (2.0 * math.pi / count) + rng.uniform(0, 2 * math.pi)
-        r = np.full(count, k * spacing) if k == rings else k * spacing + rng.uniform(-0.25, 0.25, count) * spacing
+        angle = (np.arange(count) + rng.uniform(-jitter, jitter, count)) * (2.0 * math.pi / count) + rng.uniform(0, 2 * math.pi)
+        r = np.full(count, k * spacing) if k == rings else k * spacing + rng.uniform(-jitter, jitter, count) * spacing
         points.append(np.column_stack([r * np.cos(angle), r * np.sin(angle)]))
     xy = np.concatenate(points)
     triangles = Delaunay(xy).simplices.astype(np.int64)
