@@ -160,43 +160,26 @@ void known_from_zero(float* __restrict known, const float* __restrict b, const f
     for (Index i = 0; i < m; ++i) known[i] = b[i] - a0[i] * below[i] - a1[i] * below[i + 1] - a2[i] * below[i + 2];
 }
 
-//: known = b - every neighbour but the one the forward recurrence updates (left: slot 3).
-void known_forward(float* __restrict known, const float* __restrict b, const float* __restrict coef, Index size,
-                   const float* __restrict below, const float* __restrict here, const float* __restrict above,
-                   Index s, Index m) {
+//: known = b - every neighbour but the one the recurrence updates: the left one (slot 3) going forward,
+//: the right one (slot 5) going backward.  The row's other neighbour (`side`) takes the same place in the
+//: sum both ways.
+template <bool FORWARD>
+void known_beside(float* __restrict known, const float* __restrict b, const float* __restrict coef, Index size,
+                  const float* __restrict below, const float* __restrict here, const float* __restrict above,
+                  Index s, Index m) {
     const float* a0 = coef + 0 * size + s;
     const float* a1 = coef + 1 * size + s;
     const float* a2 = coef + 2 * size + s;
-    const float* a5 = coef + 5 * size + s;
+    const float* side = coef + (FORWARD ? 5 : 3) * size + s;  // the neighbour not yet updated
     const float* a6 = coef + 6 * size + s;
     const float* a7 = coef + 7 * size + s;
     const float* a8 = coef + 8 * size + s;
     b += s;
     below += s;
-    here += s;
+    here += s + (FORWARD ? 2 : 0);
     above += s;
     for (Index i = 0; i < m; ++i)
-        known[i] = b[i] - a0[i] * below[i] - a1[i] * below[i + 1] - a2[i] * below[i + 2] - a5[i] * here[i + 2] -
-                   a6[i] * above[i] - a7[i] * above[i + 1] - a8[i] * above[i + 2];
-}
-
-//: known = b - every neighbour but the one the backward recurrence updates (right: slot 5).
-void known_backward(float* __restrict known, const float* __restrict b, const float* __restrict coef,
-                    Index size, const float* __restrict below, const float* __restrict here,
-                    const float* __restrict above, Index s, Index m) {
-    const float* a0 = coef + 0 * size + s;
-    const float* a1 = coef + 1 * size + s;
-    const float* a2 = coef + 2 * size + s;
-    const float* a3 = coef + 3 * size + s;
-    const float* a6 = coef + 6 * size + s;
-    const float* a7 = coef + 7 * size + s;
-    const float* a8 = coef + 8 * size + s;
-    b += s;
-    below += s;
-    here += s;
-    above += s;
-    for (Index i = 0; i < m; ++i)
-        known[i] = b[i] - a0[i] * below[i] - a1[i] * below[i + 1] - a2[i] * below[i + 2] - a3[i] * here[i] -
+        known[i] = b[i] - a0[i] * below[i] - a1[i] * below[i + 1] - a2[i] * below[i + 2] - side[i] * here[i] -
                    a6[i] * above[i] - a7[i] * above[i + 1] - a8[i] * above[i + 2];
 }
 
@@ -230,9 +213,9 @@ void sweep_components(Hierarchy& h, Index level, bool forward, bool from_zero) {
                 if (forward && from_zero) {
                     known_from_zero(known[c], b, coef, size, x + below, s, m);
                 } else if (forward) {
-                    known_forward(known[c], b, coef, size, x + below, x + here, x + above, s, m);
+                    known_beside<true>(known[c], b, coef, size, x + below, x + here, x + above, s, m);
                 } else {
-                    known_backward(known[c], b, coef, size, x + below, x + here, x + above, s, m);
+                    known_beside<false>(known[c], b, coef, size, x + below, x + here, x + above, s, m);
                 }
             }
             float* xc[C];
