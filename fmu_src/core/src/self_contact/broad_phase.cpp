@@ -411,7 +411,11 @@ void build_lists(Contact& contact, Index n, double thickness, double least, doub
     lists.allowances.assign(TIERS, margin);
     for (int s = 1; s < TIERS; ++s) {
         const double wide = widest_allowance(contact, n, thickness, s);
-        if (!(wide > margin) || wide == INF) continue;  // no room beyond the margin, or no pair of this tier
+        if (wide == INF) {  // no pair of this tier (one window of the finer tier holds the whole sheet)
+            lists.allowances[s] = INF;
+            continue;
+        }
+        if (!(wide > margin)) continue;  // no room beyond the margin
         if (!(nearest[s] < reach)) {
             nearest[s] = nearest_far_pair(contact, n, x, s - 1, thickness + 2.0 * wide, thickness, triangle_boxes,
                                           edge_boxes);
