@@ -615,7 +615,8 @@ def test_a_small_sheet_bending_as_a_whole_keeps_its_empty_list():
         held[angle] = _core.covers(contact, x0, x1, lists=lists)
         if held[angle]:
             for t in (0.0, 0.25, 0.5, 0.75, 1.0):
-                close = close_pairs(((1.0 - t) * x0 + t * x1).T, sim.triangles, contact.edges, thickness)
+                with np.errstate(over="ignore"):  # the grid's parallel edges: segment_distances' unused interior
+                    close = close_pairs(((1.0 - t) * x0 + t * x1).T, sim.triangles, contact.edges, thickness)
                 assert not close, (angle, t, min(close.values()))
     assert held[0.5] and not held[6.5] and not held[7.0], held
 
