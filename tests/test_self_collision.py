@@ -581,6 +581,46 @@ def test_a_mesh_lists_its_particles_own_allowances_and_keeps_its_promise(tmp_pat
     assert nearest <= thickness + 0.4 * own.max() + 1e-4 * thickness, nearest
 
 
+def test_a_small_sheet_bending_as_a_whole_keeps_its_empty_list():
+    """On a sheet that one window of the 12-spacing tier holds whole (11 x 15 particles, 5 cm apart), no pair
+    is left for the whole sheet's tier: its windows' rigid motions bound the distance of every pair, so the
+    whole sheet may bend beyond the margin (as a small cloth drapes over a ball: the 817-vertex round cloth
+    of ``bench/draped_tries.py`` built 264 empty lists in 709 steps, 263 after that tier's check failed).
+    The flat sheet's list (empty, the widest margin: 14.9 mm) is checked for motions that roll it about an
+    axis along x by a total angle from 0.1 to 7 rad (moved by 10 cm and turned by up to 0.3 rad): it must
+    hold for 0.5 rad (a sagitta of 44 mm, 3 times the margin; refused before, when that tier's allowance
+    was the margin: it held to 0.2 rad) and not once the rolled sheet closes on itself (2 pi: the ends
+    meet); along every motion it holds for, no pair comes closer than the thickness."""
+    sim = wetcloth.Simulation(wetcloth.load_scene(nx=11, ny=15, initial_tilt=0.0))
+    contact, thickness = sim._contact, sim.scene.thickness
+    ref = sim.state.pos.copy()  # flat, in a horizontal plane
+    contact.reference[...] = ref
+    lists = _core.ContactState()
+    widest = 0.5 * (_core.WIDE_REACH * contact.rest_gap - thickness)
+    _core.build_widest(contact, thickness, contact.least_margin, widest, lists=lists)
+    assert lists.point_triangle_count + lists.edge_edge_count == 0 and float(contact.margin[0]) == widest
+    rng = np.random.default_rng(27)
+    centre = ref.mean(axis=1, keepdims=True)
+    y = ref[1] - centre[1, 0]
+    held = {}
+    for angle in (0.1, 0.2, 0.5, 1.0, 2.0, 4.0, 6.5, 7.0):
+        radius = (ref[1].max() - ref[1].min()) / angle
+        rolled = ref.copy()
+        rolled[1] = centre[1, 0] + radius * np.sin(y / radius)
+        rolled[2] = ref[2] + radius * (1.0 - np.cos(y / radius))
+        axis = rng.normal(size=3)
+        turn = Rotation.from_rotvec(rng.uniform(0.0, 0.3) * axis / np.linalg.norm(axis)).as_matrix()
+        shift = rng.uniform(-0.1, 0.1, size=(3, 1))
+        x0, x1 = ref, turn @ (rolled - centre) + centre + shift
+        held[angle] = _core.covers(contact, x0, x1, lists=lists)
+        if held[angle]:
+            for t in (0.0, 0.25, 0.5, 0.75, 1.0):
+                with np.errstate(over="ignore"):  # the grid's parallel edges: segment_distances' unused interior
+                    close = close_pairs(((1.0 - t) * x0 + t * x1).T, sim.triangles, contact.edges, thickness)
+                assert not close, (angle, t, min(close.values()))
+    assert held[0.5] and not held[6.5] and not held[7.0], held
+
+
 def test_a_swinging_sheet_keeps_an_empty_list():
     """A 41 x 41 sheet (1 m square) pinned along one edge and released horizontal in air swings down and
     whips its free edge, but never comes near itself: its first 0.5 s run bit for bit as with the stage

@@ -407,11 +407,16 @@ void build_lists(Contact& contact, Index n, double thickness, double least, doub
     // rest sheet leaves room for, and at least the margin (their pairs within the margin's reach are in the
     // list already).  A tier with a pair found above has its nearest one (a folded cloth's layers); the
     // others are searched as wide as their allowance can be (a sheet without folds, where the cells keep
-    // the search cheap).  Either way the allowance is the one build() for the margin kept finds.
+    // the search cheap).  Either way the allowance is the one build() for the margin kept finds.  A tier
+    // without pairs (one window of the finer tier holds the whole sheet) has nothing to keep out: infinite.
     lists.allowances.assign(TIERS, margin);
     for (int s = 1; s < TIERS; ++s) {
         const double wide = widest_allowance(contact, n, thickness, s);
-        if (!(wide > margin) || wide == INF) continue;  // no room beyond the margin, or no pair of this tier
+        if (wide == INF) {
+            lists.allowances[s] = INF;
+            continue;
+        }
+        if (!(wide > margin)) continue;  // no room beyond the margin
         if (!(nearest[s] < reach)) {
             nearest[s] = nearest_far_pair(contact, n, x, s - 1, thickness + 2.0 * wide, thickness, triangle_boxes,
                                           edge_boxes);

@@ -10,7 +10,8 @@
 // the margin: half what its nearest pair left out has beyond the thickness; ContactLists::particle_allowances);
 // a coarser tier's pairs lie farther apart in the rest sheet, and its
 // allowance is the widest that keeps them out of the list (its nearest pair at the reference positions, out
-// of reach), up to what their distance in the rest sheet leaves room for, and at least the margin.  The list
+// of reach), up to what their distance in the rest sheet leaves room for, and at least the margin (infinite
+// for a tier without pairs, whose finer tier's one window holds the whole sheet).  The list
 // and the allowances depend on the reference positions and the margin alone (its pairs ascend, whatever the
 // hash), so a run restored from a snapshot of those two rebuilds exactly the same list.
 //
