@@ -120,7 +120,7 @@ struct Physics {
 //: face-drag rows (cells_length); wick_buffer (6, n);
 //: pair_direction (3, S), pair_along, pair_across (S) the listed springs' blocks; single_blocks (F, 5, n)
 //: each family spring's block in single precision for CG's products (rows ux, uy, uz, across, along - across);
-//: single_buf (9, n) those products' scratch.
+//: single_buf (6, n) those products' scratch.
 struct Work {
     double* force = nullptr;
     double* submerged = nullptr;
