@@ -5,7 +5,8 @@ per call, best of --repeat rounds, for comparing builds of the core (run each bu
     .venv/bin/python bench/sheet_kernels.py [--repeat 5]
 
 forces_and_blocks: the forces and the Jacobian's pieces (a Newton iteration's residual); system_matvec:
-A p (a CG iteration's product); set_systems_from_jacobian: the fixed steps' three frame systems and
+A p with the springs' blocks in double precision; its single form: a CG iteration's product, the families'
+blocks read in single precision (builds without it: not shown); set_systems_from_jacobian: the fixed steps' three frame systems and
 their multigrid levels (once a Newton iteration); apply: the preconditioner with those systems (a CG
 iteration); coarse build: the coarse space's Galerkin matrix and its band factor (once a Newton
 iteration); coarse correction: its P (P^T A P)^-1 P^T r added to the preconditioner's z (a CG iteration);
@@ -55,12 +56,15 @@ def main() -> None:
         "forces_and_blocks": (lambda: _core.forces_and_blocks(cloth, model.physics, work, buffers.pos, buffers.vel,
                                                               buffers.water, FRAME, 0.0), 50),
         "system_matvec": (lambda: _core.system_matvec(cloth, work, mass, p, out), 300),
+        "system_matvec, single springs": (lambda: _core._system_matvec_single(cloth, work, mass, p, out), 300),
         "set_systems_from_jacobian": (lambda: _core.set_systems_from_jacobian(plane, cloth, mass, work), 20),
         "apply": (lambda: _core.apply(plane, cloth.free, p, out), 200),
         "coarse build": (lambda: coarse.build(cloth, work, mass, buffers.pos), 100),
         "coarse correction": (lambda: coarse.add_correction(cloth, p, out), 1000),
         "dot": (lambda: _core.dot(p, out), 1000),
     }
+    if not hasattr(_core, "_system_matvec_single"):
+        del kernels["system_matvec, single springs"]
     print(f"hanging sheet 81 x 81 after 1 s of implicit_euler frame steps: CPU us per call, best of {args.repeat}")
     for name, (call, calls) in kernels.items():
         print(f"{name:<28} {best_time(call, calls, args.repeat):9.1f} us", flush=True)

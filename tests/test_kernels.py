@@ -231,3 +231,35 @@ def test_band_solves_match_a_dense_solve():
         for c in range(2):
             expected = np.linalg.solve(dense[c], b[c])
             np.testing.assert_allclose(x[c], expected, rtol=0, atol=1e-12 * np.abs(expected).max())
+
+
+def _spring_magnitudes(model, p):
+    """Per particle (n): the sum over its springs of (|across| + |along - across|) |p_i - p_j|, a bound on
+    the size of every spring term the springs' product adds to it."""
+    n, w = model.topology.n, model.work
+    total = np.zeros(n)
+    for f, off in enumerate(model.topology.spring_offset):
+        size = (np.abs(w.across[f]) + np.abs(w.along[f] - w.across[f]))[:n - off]
+        term = size * np.linalg.norm(p[:, :n - off] - p[:, off:], axis=0)
+        total[:n - off] += term
+        total[off:] += term
+    return total
+
+
+def test_cgs_single_precision_product_is_the_double_one_to_float_rounding():
+    """CG's product reads the families' blocks rounded to float and sums their terms in float: each of a
+    particle's components differs from the double product by at most 2^-24 (float's unit roundoff) times
+    a few dozen roundings (five rounded block values, three rounded differences, ten operations on a
+    spring, twelve terms summed) of the largest terms: 64 u times the sum of their sizes bounds it."""
+    from wetcloth import _core
+
+    scene = wetcloth.load_scene(nx=9, ny=11, initial_tilt=0.0, initial_height=0.0)
+    model, state = disturbed_state(scene, seed=4, spread=2e-4, stretch=1.02)
+    model.forces_and_blocks(state.pos, state.vel, state.water, 2e-3)
+    mass = model.mass(state.water)
+    for p in (np.random.default_rng(5).normal(size=state.pos.shape), state.pos + 1.0):
+        double, single = np.zeros_like(p), np.zeros_like(p)
+        _core.system_matvec(model.cloth, model.work, mass, p, double)
+        _core._system_matvec_single(model.cloth, model.work, mass, p, single)
+        assert (np.abs(single - double) <= 64 * 2.0**-24 * _spring_magnitudes(model, p)).all()
+        assert not np.array_equal(single, double)  # the float path is the one taken

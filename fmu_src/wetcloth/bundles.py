@@ -44,9 +44,11 @@ Physics = namedtuple("Physics", "projected wet_factor water_level water_density 
 #: xy, xz, yz) of the system matrix; ``diagonal_blocks`` (6, n) the springs' part of its diagonal
 #: blocks; ``direction`` (F, 3, n), ``along``, ``across`` (F, n) each spring's block; ``buf`` (4, n);
 #: ``cells`` (2, 9, n + nx + 1) a grid's face-drag rows (a mesh's: its particles' records,
-#: mesh_records.hpp); ``wick_buffer`` (6, n); ``pair_direction`` (3, S), ``pair_along``, ``pair_across`` (S) the listed springs' blocks.
+#: mesh_records.hpp); ``wick_buffer`` (6, n); ``pair_direction`` (3, S), ``pair_along``, ``pair_across`` (S) the listed springs' blocks;
+#: ``single_blocks`` (F, 5, n) float32: each spring's block for CG's products (ux, uy, uz, across, along - across);
+#: ``single_buf`` (6, n) float32 those products' scratch.
 Work = namedtuple("Work", "force submerged saturation blocks diagonal_blocks direction along across buf cells "
-                          "wick_buffer pair_direction pair_along pair_across")
+                          "wick_buffer pair_direction pair_along pair_across single_blocks single_buf")
 #: Integrator and controller settings: ``integrator`` (code: ``wetcloth.integrators.INTEGRATORS``),
 #: ``tolerance`` (-), ``allowed`` local position error per step (m, 0 = fixed steps of ``max_step``
 #: s); ``newton_tolerance`` (m); ``cg_tolerance`` (-, BDF2's linear solves, relative to the
@@ -78,7 +80,9 @@ def make_work(n: int, families: int, grid_x: int, pairs: int = 0) -> Work:
                 diagonal_blocks=np.zeros((6, n)), direction=np.zeros((families, 3, n)),
                 along=np.zeros((families, n)), across=np.zeros((families, n)),
                 buf=np.zeros((4, n)), cells=np.zeros((2, 9, cells)), wick_buffer=np.zeros((6, n)),
-                pair_direction=np.zeros((3, pairs)), pair_along=np.zeros(pairs), pair_across=np.zeros(pairs))
+                pair_direction=np.zeros((3, pairs)), pair_along=np.zeros(pairs), pair_across=np.zeros(pairs),
+                single_blocks=np.zeros((families, 5, n), dtype=np.float32),
+                single_buf=np.zeros((6, n), dtype=np.float32))
 
 
 def make_solver(n: int) -> Solver:

@@ -87,6 +87,16 @@ WETCLOTH_BINDINGS(m) {
         },
         nb::arg("cloth"), nb::arg("work"), nb::arg("mass"), nb::arg("p"), nb::arg("out"));
     m.def(
+        "_system_matvec_single",
+        [](nb::handle cloth, nb::handle work, nb::handle mass, nb::handle p, nb::handle out) {
+            const Cloth c = cloth_from(cloth);
+            const Work w = work_from(work, c);
+            system_matvec(c, w, argument<const double>(mass, "mass", c.n), argument<const double>(p, "p", 3 * c.n),
+                          argument<double>(out, "out", 3 * c.n), Precision::SINGLE);
+        },
+        nb::arg("cloth"), nb::arg("work"), nb::arg("mass"), nb::arg("p"), nb::arg("out"),
+        "system_matvec as CG takes it: the families' blocks from work.single_blocks.");
+    m.def(
         "_system_matvec",
         [](nb::handle offsets, nb::handle direction, nb::handle along, nb::handle across, nb::handle mass,
            nb::handle blocks, nb::handle free, nb::handle p, nb::handle out, nb::handle buf) {

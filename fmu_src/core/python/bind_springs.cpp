@@ -1,5 +1,7 @@
 // Bindings of the spring kernels (bf41571:fmu_src/wetcloth/kernels/springs.py) for tests and benchmarks: the same names
 // and arguments as the numba kernels (arrays as NumPy arrays, C-contiguous; n from pos / p).
+#include <vector>
+
 #include "convert.hpp"
 #include "wetcloth/springs.hpp"
 
@@ -74,6 +76,8 @@ WETCLOTH_BINDINGS(m) {
             work.along = argument<double>(along, "along", f * n);
             work.across = argument<double>(across, "across", f * n);
             work.buf = argument<double>(buf, "buf", n);
+            std::vector<float> single_blocks(static_cast<std::size_t>(f * 5 * n));  // written, not returned
+            work.single_blocks = single_blocks.data();
             spring_forces_and_blocks(cloth, phys, argument<const double>(saturation, "saturation", n),
                                      argument<const double>(pos, "pos", 3 * n),
                                      argument<const double>(vel, "vel", 3 * n), h, slack_slope, work);

@@ -156,6 +156,8 @@ Work work_from(nb::handle h, const Cloth& cloth) {
     w.pair_direction = array<double>(h, "pair_direction", 3 * cloth.pair_count);
     w.pair_along = array<double>(h, "pair_along", cloth.pair_count);
     w.pair_across = array<double>(h, "pair_across", cloth.pair_count);
+    w.single_blocks = array<float>(h, "single_blocks", f * 5 * n);
+    w.single_buf = array<float>(h, "single_buf", 6 * n);
     return w;
 }
 

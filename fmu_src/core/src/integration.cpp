@@ -63,7 +63,8 @@ double total(Index count, const double* a) {
     return s;
 }
 
-void system_matvec(const Cloth& cloth, const Work& work, const double* mass, const double* p, double* out) {
+void system_matvec(const Cloth& cloth, const Work& work, const double* mass, const double* p, double* out,
+                   Precision springs) {
     const Index n = cloth.n;
     const double* __restrict b = work.blocks;
     const double* __restrict px = p;
@@ -84,7 +85,7 @@ void system_matvec(const Cloth& cloth, const Work& work, const double* mass, con
         oy[i] = mass[i] * y + b3[i] * x + b1[i] * y + b5[i] * z;
         oz[i] = mass[i] * z + b4[i] * x + b5[i] * y + b2[i] * z;
     }
-    spring_matvec(cloth, work, p, out);
+    spring_matvec(cloth, work, p, out, springs);
     const double* __restrict free = cloth.free;
     for (Index c = 0; c < 3; ++c) {
         double* __restrict oc = out + c * n;

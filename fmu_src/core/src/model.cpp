@@ -530,6 +530,9 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
         w.pair_along = take(pairs);
         w.pair_across = take(pairs);
     }
+    single_work_.assign((5 * uf + 6) * un, 0.0f);
+    core_.work.single_blocks = single_work_.data();
+    core_.work.single_buf = core_.work.single_blocks + 5 * uf * un;
 
     // Solver (make_solver).
     solver_.assign(un * (1 + 10 * 3), 0.0);

@@ -176,6 +176,40 @@ void add_blocks(Index n, Index off, const double* along, const double* across, c
                    row(3, tail), row(4, tail), row(5, tail));
 }
 
+//: One family's blocks in single precision (Work::single_blocks' rows), for springs k < m.
+inline void single_blocks_loop(Index m, const double* __restrict ux, const double* __restrict uy,
+                               const double* __restrict uz, const double* __restrict al,
+                               const double* __restrict ac, float* __restrict sux, float* __restrict suy,
+                               float* __restrict suz, float* __restrict sac, float* __restrict saniso) {
+    for (Index k = 0; k < m; ++k) {
+        sux[k] = static_cast<float>(ux[k]);
+        suy[k] = static_cast<float>(uy[k]);
+        suz[k] = static_cast<float>(uz[k]);
+        sac[k] = static_cast<float>(ac[k]);
+        saniso[k] = static_cast<float>(al[k] - ac[k]);
+    }
+}
+
+//: One family's product per spring as product_loop in single precision from its blocks' rows (ux, uy,
+//: uz, across, along - across); p's differences (first ends from xi, ..., second ends from xj, ...) taken
+//: in double precision, then rounded.
+inline void single_product_loop(Index m, const float* __restrict ux, const float* __restrict uy,
+                                const float* __restrict uz, const float* __restrict ac,
+                                const float* __restrict aniso, const double* __restrict xi,
+                                const double* __restrict yi, const double* __restrict zi,
+                                const double* __restrict xj, const double* __restrict yj,
+                                const double* __restrict zj, float* __restrict sx, float* __restrict sy,
+                                float* __restrict sz) {
+    for (Index k = 0; k < m; ++k) {
+        const float dx = static_cast<float>(xi[k] - xj[k]), dy = static_cast<float>(yi[k] - yj[k]),
+                    dz = static_cast<float>(zi[k] - zj[k]);
+        const float proj = aniso[k] * (ux[k] * dx + uy[k] * dy + uz[k] * dz);
+        sx[k] = ac[k] * dx + proj * ux[k];
+        sy[k] = ac[k] * dy + proj * uy[k];
+        sz[k] = ac[k] * dz + proj * uz[k];
+    }
+}
+
 //: One family's product per spring: s = S (p_i - p_j) for each spring k < m (S = across I + (along -
 //: across) u u^T, its block), into the rows sx, sy, sz (p's first ends from xi, ..., its second ends
 //: from xj, ...).
@@ -194,20 +228,58 @@ inline void product_loop(Index m, const double* __restrict ux, const double* __r
 }
 
 //: o[k] += s[k] for k < count.
-inline void add_row(Index count, const double* __restrict s, double* __restrict o) {
+template <class T>
+inline void add_row(Index count, const T* __restrict s, T* __restrict o) {
     for (Index k = 0; k < count; ++k) o[k] += s[k];
 }
 
 //: o[k] = (o[k] + first[k]) - second[k] for k < count: a particle that is the first end of one spring
 //: and the second end of another, in the order of two passes over the ends.
-inline void add_both_ends(Index count, const double* __restrict first, const double* __restrict second,
-                          double* __restrict o) {
+template <class T>
+inline void add_both_ends(Index count, const T* __restrict first, const T* __restrict second, T* __restrict o) {
     for (Index k = 0; k < count; ++k) o[k] = (o[k] + first[k]) - second[k];
 }
 
 //: o[k] -= s[k] for k < count.
-inline void subtract_row(Index count, const double* __restrict s, double* __restrict o) {
+template <class T>
+inline void subtract_row(Index count, const T* __restrict s, T* __restrict o) {
     for (Index k = 0; k < count; ++k) o[k] -= s[k];
+}
+
+//: out += the product's per-spring rows s (3, n, a family of offset off joining m = n - off pairs):
+//: added at each spring's first end, subtracted at its second (particle j is the first end of spring j
+//: and the second of spring j - off: its own first, in one pass that reads and writes it once).
+template <class T>
+void scatter(Index n, Index off, const T* s, T* out) {
+    const Index m = n - off;
+    const Index head = off < m ? off : m;  // particles 0 .. head - 1: first ends only
+    const Index tail = m > off ? m : off;  // particles tail .. n - 1: second ends only
+    for (Index c = 0; c < 3; ++c) {
+        const T* sc = s + c * n;
+        T* o = out + c * n;
+        add_row(head, sc, o);
+        if (m > off) add_both_ends(m - off, sc + off, sc, o + off);
+        subtract_row(n - tail, sc + tail - off, o + tail);
+    }
+}
+
+//: The families' product in single precision (work.single_blocks, summed in float over the families in
+//: work.single_buf), then added to out.
+void single_families_matvec(const Cloth& cloth, const Work& work, const double* p, double* out) {
+    const Index n = cloth.n;
+    float* scratch = work.single_buf;  // (3, n) one family's per-spring products
+    float* sum = scratch + 3 * n;      // (3, n) the families' sum
+    for (Index k = 0; k < 3 * n; ++k) sum[k] = 0.0f;
+    for (Index f = 0; f < cloth.families; ++f) {
+        const Index off = cloth.offsets[f];
+        const Index m = n - off;
+        if (m <= 0) continue;
+        const float* b = work.single_blocks + f * 5 * n;
+        single_product_loop(m, b, b + n, b + 2 * n, b + 3 * n, b + 4 * n, p, p + n, p + 2 * n, p + off,
+                            p + n + off, p + 2 * n + off, scratch, scratch + n, scratch + 2 * n);
+        scatter(n, off, scratch, sum);
+    }
+    for (Index k = 0; k < 3 * n; ++k) out[k] += static_cast<double>(sum[k]);
 }
 
 }  // namespace
@@ -264,30 +336,27 @@ void spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const dou
         }
         add_spring_forces(n, off, t, phys.projected, cf, pos, vel, work.force);
         add_blocks(n, off, along, across, u, work.diagonal_blocks);
+        float* single = work.single_blocks + f * 5 * n;
+        single_blocks_loop(n - off, u, u + n, u + 2 * n, along, across, single, single + n, single + 2 * n,
+                           single + 3 * n, single + 4 * n);
     }
 }
 
-// Per family, each spring's product into a scratch row (3, n), then one pass over out's rows adding
-// it to the first end and subtracting it from the second (particle j is the first end of spring j and
-// the second of spring j - off: its own first, in one pass that reads and writes it once).
-void spring_matvec(const Cloth& cloth, const Work& work, const double* p, double* out) {
+// Per family, each spring's product into a scratch row (3, n), then scattered to its ends.
+void spring_matvec(const Cloth& cloth, const Work& work, const double* p, double* out, Precision blocks) {
     const Index n = cloth.n;
-    double* scratch = work.buf;  // (3, n)
-    for (Index f = 0; f < cloth.families; ++f) {
-        const Index off = cloth.offsets[f];
-        const Index m = n - off;
-        if (m <= 0) continue;
-        const double* u = work.direction + f * 3 * n;
-        product_loop(m, u, u + n, u + 2 * n, work.along + f * n, work.across + f * n, p, p + n, p + 2 * n, p + off,
-                     p + n + off, p + 2 * n + off, scratch, scratch + n, scratch + 2 * n);
-        const Index head = off < m ? off : m;  // particles 0 .. head - 1: first ends only
-        const Index tail = m > off ? m : off;  // particles tail .. n - 1: second ends only
-        for (Index c = 0; c < 3; ++c) {
-            const double* s = scratch + c * n;
-            double* o = out + c * n;
-            add_row(head, s, o);
-            if (m > off) add_both_ends(m - off, s + off, s, o + off);
-            subtract_row(n - tail, s + tail - off, o + tail);
+    if (blocks == Precision::SINGLE && cloth.families > 0) {
+        single_families_matvec(cloth, work, p, out);
+    } else {
+        double* scratch = work.buf;  // (3, n)
+        for (Index f = 0; f < cloth.families; ++f) {
+            const Index off = cloth.offsets[f];
+            const Index m = n - off;
+            if (m <= 0) continue;
+            const double* u = work.direction + f * 3 * n;
+            product_loop(m, u, u + n, u + 2 * n, work.along + f * n, work.across + f * n, p, p + n, p + 2 * n,
+                         p + off, p + n + off, p + 2 * n + off, scratch, scratch + n, scratch + 2 * n);
+            scatter(n, off, scratch, out);
         }
     }
     if (cloth.pair_count > 0) listed_spring_matvec(cloth, work, p, out);

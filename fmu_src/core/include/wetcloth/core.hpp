@@ -118,7 +118,9 @@ struct Physics {
 //: diagonal_blocks (6, n) the springs' part of its diagonal blocks; direction (F, 3, n), along,
 //: across (F, n) each spring's block; buf (4, n); cells (2, 9, n + grid_x + 1)
 //: face-drag rows (cells_length); wick_buffer (6, n);
-//: pair_direction (3, S), pair_along, pair_across (S) the listed springs' blocks.
+//: pair_direction (3, S), pair_along, pair_across (S) the listed springs' blocks; single_blocks (F, 5, n)
+//: each family spring's block in single precision for CG's products (rows ux, uy, uz, across, along - across);
+//: single_buf (6, n) those products' scratch.
 struct Work {
     double* force = nullptr;
     double* submerged = nullptr;
@@ -134,6 +136,8 @@ struct Work {
     double* pair_direction = nullptr;
     double* pair_along = nullptr;
     double* pair_across = nullptr;
+    float* single_blocks = nullptr;
+    float* single_buf = nullptr;
 };
 
 //: t^T S t for the symmetric 3x3 block S of slots s (xx, yy, zz, xy, xz, yz; a Work::blocks layout) and

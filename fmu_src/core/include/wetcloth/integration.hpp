@@ -2,6 +2,7 @@
 // (port of bf41571:fmu_src/wetcloth/kernels/integration.py).
 #pragma once
 #include "wetcloth/core.hpp"
+#include "wetcloth/springs.hpp"
 
 namespace wc {
 
@@ -26,8 +27,10 @@ void copy(Index count, const double* source, double* target);
 //: Sum of count values, in order.
 double total(Index count, const double* a);
 
-//: out = A p with A = M + work.blocks + spring blocks, rows of pinned particles zeroed.
-void system_matvec(const Cloth& cloth, const Work& work, const double* mass, const double* p, double* out);
+//: out = A p with A = M + work.blocks + spring blocks (of the precision `springs`), rows of pinned
+//: particles zeroed.
+void system_matvec(const Cloth& cloth, const Work& work, const double* mass, const double* p, double* out,
+                   Precision springs = Precision::DOUBLE);
 
 //: Sum over 3 n values of a[k] b[k], in DOT_LANES partial sums (lanes.hpp) that do not wait on each other:
 //: 4 us a product on the 81 x 81 sheet against 10 us for one running sum (bench/sheet_kernels.py).

@@ -437,6 +437,7 @@ private:
     double omega_squared_ = 0.0, damping_rate_ = 0.0, spring_limit_ = 0.0;
     // Work, Solver
     std::vector<double> work_;
+    std::vector<float> single_work_;  // Work::single_blocks, single_buf
     std::vector<double> solver_;
     std::vector<Index> counters_;
     // Plane and its hierarchy

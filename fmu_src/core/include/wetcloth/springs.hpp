@@ -25,14 +25,21 @@ void spring_forces(const Cloth& cloth, const Physics& phys, const double* satura
                    const double* vel, double* force, double* buf);
 
 //: Forces as spring_forces plus one backward-Euler Newton step's pieces: adds to work.force and
-//: work.diagonal_blocks; writes work.direction, along, across; work.buf as scratch.  A
+//: work.diagonal_blocks; writes work.direction, along, across and their single_blocks; work.buf as scratch.  A
 //: tension-only spring's stiffness along itself enters the blocks at no less than slack_slope times k
 //: (0: its true slope, nothing while slack).
 void spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const double* saturation, const double* pos,
                               const double* vel, double h, double slack_slope, Work& work);
 
-//: Add the springs' part of the system matrix (work.direction, along, across) times p (3, n) to out;
-//: rows 0 to 2 of work.buf as scratch.
-void spring_matvec(const Cloth& cloth, const Work& work, const double* p, double* out);
+//: Which copy of the families' blocks a product reads: work.direction, along, across (DOUBLE) or
+//: work.single_blocks (SINGLE: the families' product all in single precision, p rounded to float and
+//: summed over the families in work.single_buf, then added to out: four lanes a vector instead of two,
+//: what CG's products need at its tolerance).  The listed springs' product stays in double precision.
+enum class Precision { DOUBLE, SINGLE };
+
+//: Add the springs' part of the system matrix (work.direction, along, across, or single_blocks) times p
+//: (3, n) to out; rows 0 to 2 of work.buf as scratch.
+void spring_matvec(const Cloth& cloth, const Work& work, const double* p, double* out,
+                   Precision blocks = Precision::DOUBLE);
 
 }  // namespace wc
