@@ -77,25 +77,20 @@ WETCLOTH_BINDINGS(m) {
         nb::arg("source"), nb::arg("target"));
     m.def(
         "total", [](nb::handle a) { return total(size_of(a), argument<const double>(a, "a")); }, nb::arg("a"));
-    m.def(
-        "system_matvec",
-        [](nb::handle cloth, nb::handle work, nb::handle mass, nb::handle p, nb::handle out) {
+    // system_matvec in double precision, and as CG takes it (the families' blocks from work.single_blocks).
+    const auto system_matvec_in = [](Precision precision) {
+        return [precision](nb::handle cloth, nb::handle work, nb::handle mass, nb::handle p, nb::handle out) {
             const Cloth c = cloth_from(cloth);
             const Work w = work_from(work, c);
             system_matvec(c, w, argument<const double>(mass, "mass", c.n), argument<const double>(p, "p", 3 * c.n),
-                          argument<double>(out, "out", 3 * c.n));
-        },
-        nb::arg("cloth"), nb::arg("work"), nb::arg("mass"), nb::arg("p"), nb::arg("out"));
-    m.def(
-        "_system_matvec_single",
-        [](nb::handle cloth, nb::handle work, nb::handle mass, nb::handle p, nb::handle out) {
-            const Cloth c = cloth_from(cloth);
-            const Work w = work_from(work, c);
-            system_matvec(c, w, argument<const double>(mass, "mass", c.n), argument<const double>(p, "p", 3 * c.n),
-                          argument<double>(out, "out", 3 * c.n), Precision::SINGLE);
-        },
-        nb::arg("cloth"), nb::arg("work"), nb::arg("mass"), nb::arg("p"), nb::arg("out"),
-        "system_matvec as CG takes it: the families' blocks from work.single_blocks.");
+                          argument<double>(out, "out", 3 * c.n), precision);
+        };
+    };
+    m.def("system_matvec", system_matvec_in(Precision::DOUBLE), nb::arg("cloth"), nb::arg("work"), nb::arg("mass"),
+          nb::arg("p"), nb::arg("out"));
+    m.def("_system_matvec_single", system_matvec_in(Precision::SINGLE), nb::arg("cloth"), nb::arg("work"),
+          nb::arg("mass"), nb::arg("p"), nb::arg("out"),
+          "system_matvec as CG takes it: the families' blocks from work.single_blocks.");
     m.def(
         "_system_matvec",
         [](nb::handle offsets, nb::handle direction, nb::handle along, nb::handle across, nb::handle mass,
