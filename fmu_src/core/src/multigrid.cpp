@@ -30,11 +30,15 @@ Index level_length(const Hierarchy& h, Index level) {
     return level_value(h.levels, level, PAD_X) * (level_value(h.levels, level, NY) + 3);
 }
 
+//: to[p] = from[p] rounded to single precision, for p from `begin` to `end` (exclusive).
+void round_range(const double* from, float* to, Index begin, Index end) {
+    for (Index p = begin; p < end; ++p) to[p] = static_cast<float>(from[p]);
+}
+
 //: to = from, rounded to single precision, over `level`'s padded points of the first `components` components.
 void to_single(const Hierarchy& h, Index level, const double* from, float* to, Index components) {
     const Index begin = level_begin(h, level), end = begin + level_length(h, level);
-    for (Index c = 0; c < components; ++c)
-        for (Index p = c * h.size + begin; p < c * h.size + end; ++p) to[p] = static_cast<float>(from[p]);
+    for (Index c = 0; c < components; ++c) round_range(from + c * h.size, to + c * h.size, begin, end);
 }
 
 //: to = from over `level`'s padded points of the first `components` components.
@@ -135,10 +139,8 @@ void galerkin(Hierarchy& h, Index level, Index first, Index end) {
         // the level's stencils and inverse diagonals as the V-cycle reads them
         const Index level_first = level_begin(h, level), level_end = level_first + level_length(h, level);
         float* single = h.single_coef + c * 9 * size;
-        for (Index k = 0; k < 9; ++k)
-            for (Index p = level_first; p < level_end; ++p) single[k * size + p] = static_cast<float>(coef[k * size + p]);
-        float* single_inverse = h.single_inverse_diagonal + c * size;
-        for (Index p = level_first; p < level_end; ++p) single_inverse[p] = static_cast<float>(inverse[p]);
+        for (Index k = 0; k < 9; ++k) round_range(coef + k * size, single + k * size, level_first, level_end);
+        round_range(inverse, h.single_inverse_diagonal + c * size, level_first, level_end);
     }
 }
 

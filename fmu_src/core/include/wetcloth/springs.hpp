@@ -32,9 +32,10 @@ void spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const dou
                               const double* vel, double h, double slack_slope, Work& work);
 
 //: Which copy of the families' blocks a product reads: work.direction, along, across (DOUBLE) or
-//: work.single_blocks (SINGLE: the families' product all in single precision, p rounded to float and
-//: summed over the families in work.single_buf, then added to out: four lanes a vector instead of two,
-//: what CG's products need at its tolerance).  The listed springs' product stays in double precision.
+//: work.single_blocks (SINGLE: the families' product in single precision, p's differences taken in double
+//: and rounded to float, summed over the families in work.single_buf, then added to out: four lanes a
+//: vector instead of two, what CG's products need at its tolerance).  The listed springs' product stays in
+//: double precision.
 enum class Precision { DOUBLE, SINGLE };
 
 //: Add the springs' part of the system matrix (work.direction, along, across, or single_blocks) times p
