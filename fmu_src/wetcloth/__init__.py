@@ -6,6 +6,10 @@
     sim.outputs()
 """
 
+from wetcloth import core_build as _core_build
+
+_core_build.load()  # the build of the compiled core this CPU runs fastest, as wetcloth._core
+
 from wetcloth.errors import BlowUpError, ConfigError, ParameterError
 from wetcloth.scene import Scene, load_scene
 from wetcloth.simulation import OUTPUT_NAMES, Simulation

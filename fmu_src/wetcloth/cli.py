@@ -7,6 +7,7 @@ import importlib
 import sys
 
 import wetcloth
+from wetcloth import core_build
 from wetcloth.commands.common import FAILED, INTERRUPTED
 from wetcloth.errors import BlowUpError
 
@@ -27,7 +28,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="wetcloth",
         description="Cloth that meets water: simulate, co-simulate (FMI 2.0) and export to Blender.",
     )
-    parser.add_argument("--version", action="version", version=f"wetcloth {wetcloth.__version__}")
+    parser.add_argument("--version", action="version", version=f"wetcloth {wetcloth.__version__} (compiled core: {core_build.running()} build)")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMAND_MODULES:
         importlib.import_module(name).add_parser(sub)

@@ -33,6 +33,7 @@ from string import Template
 
 import wetcloth
 import wetcloth.fmu as fmu_package
+from wetcloth import core_build
 from wetcloth.files import whole_file
 from wetcloth.fmu import MODEL_NAME, default_fmu_path, packed_scene
 from wetcloth.fmu.bootstrap import MANIFEST_NAME, MODULE_NAME, bundle_digest, digest
@@ -65,9 +66,10 @@ def package_dir() -> Path:
     return Path(wetcloth.__file__).resolve().parent
 
 
-def core_module() -> Path:
-    """The compiled core's extension module file (``wetcloth._core``), wherever the install put it."""
-    return Path(importlib.util.find_spec("wetcloth._core").origin).resolve()
+def core_modules() -> list[Path]:
+    """The compiled core's extension module files (one per build: the unit's host picks the one its CPU
+    runs, wetcloth/core_build.py), wherever the install put them."""
+    return core_build.module_files()
 
 
 def _mapped_subpackages() -> dict[str, Path]:
@@ -91,8 +93,7 @@ def _files(folder: Path, patterns=("*",)) -> list[Path]:
 def source_files() -> list[Path]:
     """The files the FMU carries: the wetcloth package, its compiled core, presets and exporter (no caches)."""
     files = _files(package_dir())
-    if package_dir() not in core_module().parents:
-        files.append(core_module())
+    files += [module for module in core_modules() if package_dir() not in module.parents]
     for sub, location in _mapped_subpackages().items():
         files += _files(location, PRESET_PATTERNS if sub == "presets" else ("*",))
     return files
@@ -113,8 +114,9 @@ def _stage_package(stage: Path) -> tuple[dict[str, str], dict[str, str]]:
     bundle = stage / "wetcloth"
     shutil.copytree(package_dir(), bundle, ignore=_SKIP)
     package_files = {p.relative_to(bundle).as_posix(): digest(p) for p in _files(bundle)}
-    if not (bundle / core_module().name).exists():  # an editable install keeps it outside the package folder
-        shutil.copy2(core_module(), bundle / core_module().name)
+    for module in core_modules():
+        if not (bundle / module.name).exists():  # an editable install keeps them outside the package folder
+            shutil.copy2(module, bundle / module.name)
     for sub, location in _mapped_subpackages().items():
         for p in _files(location, PRESET_PATTERNS if sub == "presets" else ("*",)):
             target = bundle / sub / p.relative_to(location)
