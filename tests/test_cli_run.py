@@ -275,8 +275,8 @@ def test_empty_paths_are_refused(capsys):
 def test_version_and_params(capsys):
     with pytest.raises(SystemExit) as info:
         main(["--version"])
-    running = wetcloth.core_build.running()
-    assert info.value.code == 0 and capsys.readouterr().out == f"wetcloth {wetcloth.__version__} (compiled core: {running} build)\n"
+    expected = f"wetcloth {wetcloth.__version__} (compiled core: {wetcloth.core_build.running()} build)\n"
+    assert info.value.code == 0 and capsys.readouterr().out == expected
     assert main(["params", "thesis_sink", "--json"]) == 0
     rows = {r["name"]: r for r in json.loads(capsys.readouterr().out)}
     assert len(rows) == len(wetcloth.scene.PARAMETERS) + 2  # and duration, fps of [run]
