@@ -99,3 +99,11 @@ def test_the_choice_falls_back_to_the_baseline_where_the_cpu_or_the_install_lack
 def test_a_build_the_environment_cannot_have_is_refused_by_name(requested, features, available, message):
     with pytest.raises(ImportError, match=message):
         core_build.choose(requested, features, available)
+
+
+def test_the_loaded_build_is_wetcloth_core_by_every_way_of_naming_it():
+    import wetcloth
+    from wetcloth import _core
+
+    assert wetcloth._core is _core is sys.modules["wetcloth._core"]
+    assert _core.__spec__.name == core_build.MODULES[core_build.running()]

@@ -72,6 +72,7 @@ def load() -> ModuleType:
     """Import the chosen build and make it ``wetcloth._core``."""
     core = importlib.import_module(MODULES[chosen()])
     sys.modules["wetcloth._core"] = core
+    sys.modules["wetcloth"]._core = core  # (as importing wetcloth._core itself would set it)
     return core
 
 
