@@ -238,7 +238,7 @@ def test_a_coarse_sheet_drapes_over_a_blade_that_fits_between_its_particles(tmp_
 def test_a_mesh_sphere_holds_a_sheet_as_the_analytic_sphere_does(tmp_path):
     """A sheet dropped onto an icosphere collider (a file) lies on its top, as on the analytic sphere it is
     inscribed in: the centre particle at the top + thickness/2 within the mesh's sagitta, and never closer
-    to the mesh than thickness/2 less 0.1 mm."""
+    to the mesh than thickness/2 less 0.1 mm; the steps are seldom taken again."""
     sphere = trimesh.creation.icosphere(subdivisions=4, radius=0.15)
     path = tmp_path / "ball.stl"
     sphere.export(path)
@@ -254,6 +254,10 @@ def test_a_mesh_sphere_holds_a_sheet_as_the_analytic_sphere_does(tmp_path):
         assert body.distance(sim.state.pos).min() >= gap - 1e-4
     centre = sim.state.pos[:, 7 * 15 + 7]
     assert abs(centre[2] - (0.15 + gap)) <= sagitta + 1e-4
+    # Particles held on the mesh's edges and vertices that the step's force slides are slid within the
+    # step, as the floor's are (slip_on_collider_edges): 1211 tries retaken in 3783 steps; released and
+    # the step taken again instead, 5609 in 4920.
+    assert sim.rejected_steps < 0.5 * sim.steps
 
 
 def test_bad_mesh_colliders_are_refused_naming_the_field(tmp_path):

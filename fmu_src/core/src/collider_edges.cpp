@@ -620,6 +620,39 @@ Index release_from_collider_edges(const ContactLists& lists, Index n, const doub
     return released;
 }
 
+double slip_on_collider_edges(const ContactLists& lists, Index n, const double* force, const double* mass,
+                              const double* diagonal_blocks, const double* blocks, double h, double limit,
+                              double* free, double* held, double* pos, double* vel) {
+    double farthest = 0.0;
+    for (int pass = 0; pass < 2; ++pass) {  // first: how far each would slide; second: slide them
+        for (Index i = 0; i < n; ++i) {
+            if (held[i] != EDGE_HELD) continue;
+            const double* rest = lists.collider_rest.data() + 4 * static_cast<std::size_t>(i);
+            const double f[3] = {force[i], force[n + i], force[2 * n + i]};
+            if (!slips(f, rest, rest[3])) continue;
+            if (f[0] * rest[0] + f[1] * rest[1] + f[2] * rest[2] > 0.0) return -1.0;  // lifted off its support
+            double excess[3];
+            slip_force(f, rest, rest[3], excess);
+            const double size = std::sqrt(excess[0] * excess[0] + excess[1] * excess[1] + excess[2] * excess[2]);
+            const double e[3] = {excess[0] / size, excess[1] / size, excess[2] / size};  // (size > 0: it slips)
+            const double inertia = effective_mass(n, i, mass, diagonal_blocks, blocks, e);
+            if (pass == 0) {
+                const double slide = 0.5 * size / inertia * h * h;
+                if (slide > limit) return -1.0;
+                farthest = std::max(farthest, slide);
+                continue;
+            }
+            for (int c = 0; c < 3; ++c) {
+                pos[c * n + i] += 0.5 * excess[c] / inertia * h * h;
+                vel[c * n + i] += excess[c] / inertia * h;
+            }
+            held[i] = 0.0;
+            free[i] = 1.0;
+        }
+    }
+    return farthest;
+}
+
 void collider_edge_history(const ContactLists& lists, Index n, const double* pos, const double* vel, double* prev_pos,
                            double* prev_vel, double h) {
     if (static_cast<Index>(lists.collider_pushed.size()) != n) return;

@@ -288,21 +288,28 @@ Status step(Core& core, double remaining, double span) {
             // Slips on the floor or a collider that move no particle farther than the step's allowed error
             // need no second try: they are made now (most are: a draping cloth releases a few every step).
             // Layers' and collider edges' releases take the step again.
-            Index released = release_unsupported(core.contact, n, cloth.free, buf.held) +
-                             (held_on_edges > 0 ? release_from_collider_edges(*core.contact.lists, n, core.work.force,
-                                                                               cloth.free, buf.held)
-                                                : 0);
-            const double slipped = released == 0 && adaptive
-                ? slip_on_supports(n, phys, core.work.force, core.solver.mass, implicit ? core.work.diagonal_blocks : nullptr,
-                                   core.work.blocks, h, control.allowed, buf.held, buf.pos, buf.trial_pos, buf.trial_vel)
+            Index released = release_unsupported(core.contact, n, cloth.free, buf.held);
+            const double* diagonal_blocks = implicit ? core.work.diagonal_blocks : nullptr;
+            double slipped = released == 0 && adaptive
+                ? slip_on_supports(n, phys, core.work.force, core.solver.mass, diagonal_blocks, core.work.blocks, h,
+                                   control.allowed, buf.held, buf.pos, buf.trial_pos, buf.trial_vel)
                 : -1.0;
+            if (slipped >= 0.0 && held_on_edges > 0) {
+                const double on_edges = slip_on_collider_edges(*core.contact.lists, n, core.work.force, core.solver.mass,
+                                                               diagonal_blocks, core.work.blocks, h, control.allowed,
+                                                               cloth.free, buf.held, buf.trial_pos, buf.trial_vel);
+                slipped = on_edges >= 0.0 ? pymax(slipped, on_edges) : -1.0;
+            }
             if (slipped >= 0.0) {
                 trial.error = pymax(trial.error, slipped);
             } else {
                 released += release_slipping(n, phys.floor_friction, core.work.force, cloth.free, buf.held) +
                             (held_on_colliders > 0
                                  ? release_from_colliders(n, phys, buf.pos, core.work.force, core.solver.mass, cloth.free, buf.held)
-                                 : 0);
+                                 : 0) +
+                            (held_on_edges > 0 ? release_from_collider_edges(*core.contact.lists, n, core.work.force,
+                                                                              cloth.free, buf.held)
+                                               : 0);
             }
             if (released > 0) {  // redo the step with them free, and with them those near slipping too
                 held -= released + release_slipping(n, RELEASE_ROUND_CONE * phys.floor_friction, core.work.force,

@@ -52,6 +52,15 @@ Index hold_on_collider_edges(const Contact& contact, ContactLists& lists, const 
 Index release_from_collider_edges(const ContactLists& lists, Index n, const double* force, double* free, double* held,
                                   double cone = 1.0);
 
+//: After an accepted step (pos, vel (3, n) its end): the particles hold_on_collider_edges held that the step's
+//: force slides along their support, slid as slip_on_supports slides the floor's (the excess over
+//: friction on their inertia, mass and blocks as there, for the step h), and freed for the edges' pass
+//: that follows (they moved).  Returns the farthest slide (m), or -1 without moving any if one would
+//: slide farther than limit (m) or the force lifts it off: the step is then taken again without them.
+double slip_on_collider_edges(const ContactLists& lists, Index n, const double* force, const double* mass,
+                              const double* diagonal_blocks, const double* blocks, double h, double limit,
+                              double* free, double* held, double* pos, double* vel);
+
 //: After the step is taken (pos, vel its end, prev_pos, prev_vel its start, (3, n)): the particles that
 //: collider_edge_contact pushed get the history of a straight motion along their last push (as the
 //: floor's normal_history), so that BDF2 goes on.
