@@ -5,8 +5,8 @@ cloth (817 vertices: 16 rings of 48 quads around a fan of triangles) dropped on 
 
 Prints CPU time, accepted and rejected steps (a step is taken again when Newton fails, its error is
 too large, or particles held on the ball slip farther than the step's allowed error: docs/model.md
-section 6.1) the tries per accepted step, Newton iterations and CG iterations per Newton iteration; with ``--accuracy``, also the largest distance (mm) of a
-particle at the end from where a run at 1/1000 of the tolerance leaves it, for the run advanced in one call
+section 6.1), the tries per accepted step, Newton iterations and CG iterations per Newton iteration; with
+``--accuracy``, also the largest distance (mm) of a particle at the end from where a run at 1/1000 of the tolerance leaves it, for the run advanced in one call
 and in calls of 0.1 s, 0.05 s and 1/30 s (where the calls end moves the steps: a drape's distance varies
 several fold with it, so one figure alone says little), and their root mean square over the particles.
 """
