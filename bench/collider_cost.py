@@ -12,7 +12,7 @@ runs are the same.
 Lying (``--part lying``): a cloth that lies on a mesh collider, where the edges' pass (docs/model.md
 section 6.3) works in every step: the ``bucket`` preset for 6 s, and a 15 x 15 sheet (0.4 m) dropped onto
 an icosphere of 5120 faces (radius 0.15 m, tests/test_mesh_colliders.py) for 2 s.  CPU seconds (best and
-median), accepted and rejected steps, ms per step.
+median), accepted and rejected steps, ms per step, CG iterations per Newton iteration.
 
 Moving (``--part moving``, docs/model.md section 6.3 "Moving colliders"): the ``sweep`` preset (a ball
 sweeping through a hanging towel) for 4 s, with its collider keys and without them (the ball never
@@ -55,7 +55,7 @@ def lying_cases(folder: str) -> dict:
 
 def timed_cases(cases: dict, repeat: int) -> None:
     """Run each case (name -> (scene, duration s)) ``repeat`` times in turn; print CPU seconds (best, median),
-    accepted and rejected steps, ms per step."""
+    accepted and rejected steps, ms per step, CG iterations per Newton iteration."""
     times = {name: [] for name in cases}
     counts = {}
     for _ in range(repeat):
@@ -64,11 +64,14 @@ def timed_cases(cases: dict, repeat: int) -> None:
             start = time.process_time()
             sim.advance(duration)
             times[name].append(time.process_time() - start)
-            counts[name] = (duration, sim.steps, sim.rejected_steps)
+            solves = sim.solver_counts
+            counts[name] = (duration, sim.steps, sim.rejected_steps,
+                            solves["cg_iterations"] / solves["newton_iterations"])
     for name, t in times.items():
-        duration, steps, rejected = counts[name]
+        duration, steps, rejected, cg = counts[name]
         print(f"{name:<18} {duration:3.0f} s  best {min(t):6.2f} s  median {statistics.median(t):6.2f} s  "
-              f"steps {steps:5d}  rejected {rejected:5d}  {1000 * min(t) / steps:.2f} ms a step", flush=True)
+              f"steps {steps:5d}  rejected {rejected:5d}  {1000 * min(t) / steps:.2f} ms a step  "
+              f"CG a Newton iteration {cg:.2f}", flush=True)
 
 
 def lying(repeat: int) -> None:

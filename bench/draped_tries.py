@@ -5,10 +5,11 @@ cloth (817 vertices: 16 rings of 48 quads around a fan of triangles) dropped on 
 
 Prints CPU time, accepted and rejected steps (a step is taken again when Newton fails, its error is
 too large, or particles held on the ball slip farther than the step's allowed error: docs/model.md
-section 6.1) and the tries per accepted step; with ``--accuracy``, also the largest distance (mm) of a
-particle at the end from where a run at 1/1000 of the tolerance leaves it, for the run advanced in one call
-and in calls of 0.1 s, 0.05 s and 1/30 s (where the calls end moves the steps: a drape's distance varies
-several fold with it, so one figure alone says little), and their root mean square over the particles.
+section 6.1), the tries per accepted step, Newton iterations and CG iterations per Newton iteration;
+with ``--accuracy``, also the largest distance (mm) of a particle at the end from where a run at 1/1000
+of the tolerance leaves it, for the run advanced in one call and in calls of 0.1 s, 0.05 s and 1/30 s
+(where the calls end moves the steps: a drape's distance varies several fold with it, so one figure
+alone says little), and their root mean square over the particles.
 """
 
 from __future__ import annotations
@@ -49,8 +50,11 @@ def report(label: str, scene: wetcloth.Scene, duration: float, accuracy: bool) -
     start = time.process_time()
     sim.advance(duration)
     spent = time.process_time() - start
+    solves = sim.solver_counts
+    newton = solves["newton_iterations"]
     line = (f"{label:<28} {spent:6.2f} s CPU  steps {sim.steps:5d}  rejected {sim.rejected_steps:5d}  "
-            f"tries per step {(sim.steps + sim.rejected_steps) / sim.steps:4.2f}")
+            f"tries per step {(sim.steps + sim.rejected_steps) / sim.steps:4.2f}  "
+            f"Newton {newton}  CG a Newton iteration {solves['cg_iterations'] / newton:.2f}")
     if accuracy:
         reference = wetcloth.Simulation(scene.replace(tolerance=scene.tolerance / 1000))
         reference.advance(duration)

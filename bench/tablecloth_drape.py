@@ -47,7 +47,10 @@ def drape(rings: int, duration: float) -> float:
         deepest = max(deepest, gap - table.distance(sim.state.pos).min())
     pos = sim.state.pos
     hem = float(pos[2, rim].mean())
+    solves = sim.solver_counts
     print(f"{len(points):6d} vertices: {spent:7.1f} s CPU  steps {sim.steps:6d}  rejected {sim.rejected_steps:6d}  "
+          f"Newton {solves['newton_iterations']}  CG a Newton iteration "
+          f"{solves['cg_iterations'] / solves['newton_iterations']:.2f}  "
           f"deepest into the table {1e3 * deepest:+.4f} mm  centre {1e3 * (pos[2, centre] - TABLE_TOP - gap):+.4f} mm "
           f"above top + thickness/2  hem at z = {hem:.4f} m", flush=True)
     return hem

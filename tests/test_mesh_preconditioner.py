@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import scipy.linalg
 import scipy.sparse
 
 import wetcloth
@@ -136,6 +137,69 @@ def test_v_cycle_is_symmetric_positive_definite(disc):
         _core.apply(plane, free, y, py)
         assert abs(np.sum(x * py) - np.sum(y * px)) <= 100 * EPS * np.linalg.norm(x) * np.linalg.norm(py)
         assert np.sum(x * px) > 0.0
+
+
+def preconditioned_spread(plane, matrix, free, whole):
+    """The condition number of P^-1 B_FF on the free rows (B_FF: the in-plane matrix's rows and columns
+    of the free particles, P^-1 the cycle's t1 component with flat frames), which bounds CG's iterations;
+    ``whole``: the whole mesh's cycle, its held rows zeroed after it (the cycle before it kept to them)."""
+    n = len(free)
+    kept = np.flatnonzero(free)
+    inverse = np.zeros((len(kept), len(kept)))
+    for k, i in enumerate(kept):
+        r = np.zeros((3, n))
+        r[0, i] = 1.0
+        z = np.zeros_like(r)
+        _core.apply(plane, np.ones(n) if whole else free, r, z)
+        inverse[:, k] = z[0, kept] * free[kept]
+    inverse = 0.5 * (inverse + inverse.T)  # symmetric to round-off
+    values = scipy.linalg.eigvalsh(matrix[np.ix_(kept, kept)].toarray(), np.linalg.inv(inverse))
+    return values.max() / values.min()
+
+
+def test_held_particles_are_dirichlet_rows_of_the_v_cycle(disc):
+    """Particles held in a step (free 0: at rest on a support, or pinned) are constraints of its solve,
+    which the V-cycle keeps to on its finest level: its sweeps leave them at zero and restrict no residual
+    from them (its coarse levels stay the whole mesh's).  Free particles whose neighbours are all held
+    have a diagonal system, which the cycle then inverts to round-off (a division and a correction:
+    within 4 eps, measured 1.9; the whole mesh's cycle, its held rows zeroed after it, as before, was 31
+    times the diagonal's inverse off in norm).  With half the disc held, or a random third, the free
+    rows' preconditioned matrix is better conditioned than with the whole mesh's cycle (measured 26.1
+    against 56.5, 150 against 674: at most 2/3 of it asked), and the cycle stays symmetric positive
+    definite there (within 100 eps, as in test_v_cycle_is_symmetric_positive_definite)."""
+    model, mass, (_, plane) = disc
+    topology, n = model.topology, model.topology.n
+    _core.follow_cloth(plane, model.cloth, topology.rest_pos)  # flat frames: t1, t2 the x and y axes
+    _core.refresh(plane, model.cloth, mass, SCALE)
+    matrix = system(topology, mass)
+    rng = np.random.default_rng(5)
+    t = topology.pair_tension_count
+    neighbours = [[] for _ in range(n)]
+    for i, j in topology.pairs[:, :t].T:
+        neighbours[i].append(j)
+        neighbours[j].append(i)
+    alone = np.zeros(n)  # free particles no spring joins (chosen greedily), every other particle held
+    for i in rng.permutation(n):
+        if not any(alone[j] for j in neighbours[i]):
+            alone[i] = 1.0
+    r = rng.standard_normal((3, n)) * alone
+    r[2] = 0.0
+    z = np.zeros_like(r)
+    _core.apply(plane, alone, r, z)
+    exact = r[:2] / matrix.diagonal()
+    assert np.all(np.abs(z[:2] - exact) <= 4 * EPS * np.abs(exact))
+    half = (topology.rest_pos[0] < 0.0).astype(float)
+    third = (rng.uniform(size=n) > 1 / 3).astype(float)
+    for free in (half, third):
+        spread = preconditioned_spread(plane, matrix, free, whole=False)
+        assert spread <= 2 / 3 * preconditioned_spread(plane, matrix, free, whole=True), spread
+        for _ in range(3):
+            x, y = rng.standard_normal((2, 3, n)) * free
+            px, py = np.zeros_like(x), np.zeros_like(y)
+            _core.apply(plane, free, x, px)
+            _core.apply(plane, free, y, py)
+            assert abs(np.sum(x * py) - np.sum(y * px)) <= 100 * EPS * np.linalg.norm(x) * np.linalg.norm(py)
+            assert np.sum(x * px) > 0.0
 
 
 def test_the_hierarchy_is_the_same_every_time_it_is_built(disc):

@@ -5,7 +5,13 @@
 // computed here at every rebuild, Gauss-Seidel sweeps as on the grid (multigrid.hpp's SWEEPS, forward
 // before the coarse correction, backward after it: the cycle is symmetric positive definite), and the
 // coarsest level's band factors (band.cpp) in the reverse Cuthill-McKee order of its graph.  A mesh of
-// at most ALGEBRAIC_SIZE particles has one level: its band factors solve the systems exactly.
+// at most ALGEBRAIC_SIZE particles has one level: its band factors solve the systems exactly.  The
+// particles a step holds (free 0: at rest on a support, or pinned) are constraints of its solve; on the
+// finest level the cycle keeps to them, as the Jacobian's systems do (no coupling to a held end): its
+// sweeps leave them at zero and no residual is restricted from them, so that the sweeps are those of the
+// free particles' own system (the coarse levels stay the whole mesh's, factored once for many steps).  The
+// round mesh draped on a ball takes 5.1 CG iterations per Newton iteration so, 6.9 with the whole mesh's
+// cycle (docs/benchmarks.md).
 #include <cmath>
 #include <vector>
 
@@ -131,9 +137,10 @@ struct Rows {
 
 //: Down one level: a forward Gauss-Seidel sweep from x = 0 (only the entries left of the diagonal
 //: meet values already set), then the residual b - A x, which that sweep leaves as -U x (U the
-//: entries right of the diagonal), restricted to b of level + 1 (P^T, row by row of P).
+//: entries right of the diagonal), restricted to b of level + 1 (P^T, row by row of P).  With `free`
+//: (level 0's, else nullptr) the rows of held particles (free 0) stay zero and restrict nothing.
 template <Index C>
-void down(Algebraic& h, Index level) {
+void down(Algebraic& h, Index level, const double* free) {
     static_assert(SWEEPS == 1, "the residual is -U x after one sweep from zero");
     const Rows<C> m(h, level);
     const Index coarse_first = level_of(h, level + 1, VECTOR), coarse_n = level_of(h, level + 1, SIZE);
@@ -148,9 +155,11 @@ void down(Algebraic& h, Index level) {
         for (Index c = 0; c < C; ++c) s[c] = m.b[c][i];
         for (Index e = m.start[i]; e < m.diagonal[i]; ++e)
             for (Index c = 0; c < C; ++c) s[c] -= m.a[m.system(c)][e] * m.x[c][m.column[e]];
-        for (Index c = 0; c < C; ++c) m.x[c][i] = s[c] * m.inverse[m.system(c)][i];
+        const double keep = free != nullptr ? free[i] : 1.0;
+        for (Index c = 0; c < C; ++c) m.x[c][i] = keep * s[c] * m.inverse[m.system(c)][i];
     }
     for (Index i = 0; i < m.n; ++i) {
+        if (free != nullptr && free[i] == 0.0) continue;  // a held row's residual is zero
         double s[C] = {};
         for (Index e = m.diagonal[i] + 1; e < m.start[i + 1]; ++e)
             for (Index c = 0; c < C; ++c) s[c] -= m.a[m.system(c)][e] * m.x[c][m.column[e]];
@@ -160,18 +169,21 @@ void down(Algebraic& h, Index level) {
 }
 
 //: Up one level, once x of level + 1 holds its correction: x += P x of level + 1, then a backward
-//: Gauss-Seidel sweep.
+//: Gauss-Seidel sweep; with `free`, both on the free rows alone.
 template <Index C>
-void up(Algebraic& h, Index level) {
+void up(Algebraic& h, Index level, const double* free) {
     const Rows<C> m(h, level);
     const Index coarse_first = level_of(h, level + 1, VECTOR);
     const Index* p_rows = h.p_start + level_of(h, level, P_ROWS);
     const double* coarse_x[C];
     for (Index c = 0; c < C; ++c) coarse_x[c] = h.x + c * h.vectors + coarse_first;
-    for (Index i = 0; i < m.n; ++i)
+    for (Index i = 0; i < m.n; ++i) {
+        if (free != nullptr && free[i] == 0.0) continue;  // held rows stay zero
         for (Index u = p_rows[i]; u < p_rows[i + 1]; ++u)
             for (Index c = 0; c < C; ++c) m.x[c][i] += h.p_value[u] * coarse_x[c][h.p_column[u]];
+    }
     for (Index i = m.n - 1; i >= 0; --i) {
+        if (free != nullptr && free[i] == 0.0) continue;
         double s[C];
         for (Index c = 0; c < C; ++c) s[c] = m.b[c][i];
         for (Index e = m.start[i]; e < m.start[i + 1]; ++e)
@@ -181,24 +193,26 @@ void up(Algebraic& h, Index level) {
 }
 
 //: First half of the V-cycle from b of level 0, for the first `components` components: leaves the
-//: coarsest level's right-hand side in b.
-void cycle_down(Algebraic& h, Index components) {
+//: coarsest level's right-hand side in b.  free (n): the particles' flags, held ones (0) kept at zero.
+void cycle_down(Algebraic& h, Index components, const double* free) {
     for (Index level = 0; level + 1 < h.level_count; ++level) {
+        const double* held_rows = level == 0 ? free : nullptr;
         if (components == COMPONENTS) {
-            down<COMPONENTS>(h, level);
+            down<COMPONENTS>(h, level, held_rows);
         } else {
-            down<NORMAL>(h, level);
+            down<NORMAL>(h, level, held_rows);
         }
     }
 }
 
 //: Second half, once x of the coarsest level holds its solution; leaves the result in x of level 0.
-void cycle_up(Algebraic& h, Index components) {
+void cycle_up(Algebraic& h, Index components, const double* free) {
     for (Index level = h.level_count - 2; level >= 0; --level) {
+        const double* held_rows = level == 0 ? free : nullptr;
         if (components == COMPONENTS) {
-            up<COMPONENTS>(h, level);
+            up<COMPONENTS>(h, level, held_rows);
         } else {
-            up<NORMAL>(h, level);
+            up<NORMAL>(h, level, held_rows);
         }
     }
 }
@@ -303,7 +317,7 @@ void mesh_apply(Plane& plane, Index n, const double* free, const double* r, doub
     double* normal = h.x + NORMAL * h.vectors;
     if (components == NORMAL)
         for (Index i = 0; i < n; ++i) normal[i] = h.b[NORMAL * h.vectors + i] / plane.normal[i];
-    cycle_down(h, components);
+    cycle_down(h, components, free);
     const Index coarse_n = plane.coarse_n, last = level_of(h, h.level_count - 1, VECTOR);
     double* local = plane.local;  // (COMPONENTS, n_c) in band order
     for (Index c = 0; c < components; ++c)
@@ -315,7 +329,7 @@ void mesh_apply(Plane& plane, Index n, const double* free, const double* r, doub
     for (Index c = 0; c < components; ++c)
         for (Index position = 0; position < coarse_n; ++position)
             h.x[c * h.vectors + last + plane.order[position]] = local[c * coarse_n + position];
-    cycle_up(h, components);
+    cycle_up(h, components, free);
     const double* x0 = h.x;
     const double* x1 = h.x + h.vectors;
     for (Index i = 0; i < n; ++i)

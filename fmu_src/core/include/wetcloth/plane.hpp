@@ -63,7 +63,8 @@ void set_normal_diagonal(Plane& plane, Index n, const double* mass, const double
 Index set_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const Work& work,
                                 Index components = COMPONENTS);
 
-//: z = P^-1 r (both (3, n)), rows of pinned particles (free == 0) zero.
+//: z = P^-1 r (both (3, n)), rows of held or pinned particles (free == 0) zero; a mesh's cycle keeps
+//: them at zero on its finest level too (mesh_plane.cpp).
 void apply(Plane& plane, Index n, const double* free, const double* r, double* z);
 
 }  // namespace wc

@@ -57,7 +57,7 @@ void mesh_follow_cloth(Plane& plane, const Cloth& cloth, const double* pos);
 //: set_systems_from_jacobian for a mesh.
 Index mesh_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const Work& work);
 
-//: apply for a mesh.
+//: apply for a mesh: held particles (free 0) are zero rows of its cycle's finest level.
 void mesh_apply(Plane& plane, Index n, const double* free, const double* r, double* z);
 
 }  // namespace wc
