@@ -1,6 +1,6 @@
 """One run of a study, as a Dask task: simulate a scene, compute its metrics, never raise.
 
-Two engines give the output time series: ``python`` (``wetcloth.runner.run``, the default) and
+Two engines give the output time series: ``python`` (``Simulation.sample``, the default) and
 ``fmu`` (``models/WetCloth.fmu`` co-simulated through fmpy by ``wetcloth.fmu.cosim.simulate``).  An exception in a
 run becomes a result with status ``error`` and the exception's text, so the study goes on.  A study
 that keeps curves (``series``) gets them back with the result, under ``series``.
