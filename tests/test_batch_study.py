@@ -294,6 +294,24 @@ def test_results_table_round_trips_through_parquet(tmp_path):
     assert len(read_table(tmp_path / "missing.parquet")) == 0
 
 
+@pytest.mark.parametrize("duration", [3.0, 2.05])
+def test_a_study_run_gives_the_frames_and_values_of_runner_run_bit_for_bit(duration):
+    """python_series (what a study's workers call) against runner.run's columns, on a run of the sensitivity
+    example (its towel lands on the water within these seconds); 2.05 s ends on a frame of its own."""
+    from wetcloth.batch.engines import RUN_SERIES, python_series
+    from wetcloth.runner import run
+    from wetcloth.scene import from_dict
+
+    study = load_study(ROOT / "models" / "studies" / "towel_sink_sensitivity.toml")
+    params = study.runs()[0].params
+    series = python_series(params, duration, study.sample_rate)
+    result = run(from_dict(params), duration, study.sample_rate, shapes=0, progress=False, warn=None)
+    assert list(series) == list(RUN_SERIES)
+    for name in RUN_SERIES:
+        expected = result.column(name)
+        assert series[name].dtype == expected.dtype and series[name].tobytes() == expected.tobytes(), name
+
+
 def test_importing_wetcloth_does_not_import_dask():
     code = ("import sys, wetcloth; assert 'study' in wetcloth.__all__ and callable(wetcloth.study); "
             "print(sorted(m for m in ('dask', 'distributed', 'pandas') if m in sys.modules))")

@@ -30,8 +30,12 @@ class Model:
         self.skip_idle_work = skip_idle_work  # False: run the water kernels on dry cloth too (benchmarks)
         self.free = (~topo.pinned).astype(np.float64)  # 1 for moving particles, 0 for pinned
         self.grid_x, self.grid_y = (0, 0) if topo.listed else (topo.nx, topo.ny)
-        self.cloth_order = cloth_order(topo.triangles) if topo.listed else np.arange(len(topo.triangles))
-        self.corner_shares = corner_shares(topo.rest_pos, topo.triangles)[self.cloth_order]
+        if topo.listed:  # a mesh's face drag goes over its triangles, in the core's order, shared among their corners
+            self.cloth_order = cloth_order(topo.triangles)
+            self.corner_shares = corner_shares(topo.rest_pos, topo.triangles)[self.cloth_order]
+        else:  # a grid's goes over its rows: the core takes no triangles from it (nor does the native unit's grid)
+            self.cloth_order = np.zeros(0, dtype=np.int64)
+            self.corner_shares = np.zeros((0, 3))
         self.work = make_work(topo.n, len(topo.spring_offset), self.grid_x, len(topo.pair_rest))
         # Where the grip's zero displacement holds the particles (m, (3, n)): their start positions (fixed
         # parameters only); empty when nothing is pinned, so that the grip has nothing to move.

@@ -47,10 +47,13 @@ def rest_gap(dx: float, dy: float) -> float:
 
 
 def grid_edges(triangles: np.ndarray) -> np.ndarray:
-    """The distinct edges (k, 2) of a triangle mesh, each as (lower index, higher index)."""
-    edges = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+    """The distinct edges (k, 2) int64 of a triangle mesh, each as (lower index, higher index), in ascending order."""
+    edges = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]).astype(np.int64)
     edges.sort(axis=1)
-    return np.unique(edges, axis=0).astype(np.int64)
+    # One number per edge that sorts as its row does (a third of the time of np.unique over the rows).
+    span = int(edges.max()) + 1 if len(edges) else 1
+    keys = np.unique(edges[:, 0] * span + edges[:, 1])
+    return np.stack([keys // span, keys % span], axis=1)
 
 
 def altitudes(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:

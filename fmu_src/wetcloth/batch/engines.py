@@ -1,6 +1,6 @@
 """One run of a study, as a Dask task: simulate a scene, compute its metrics, never raise.
 
-Two engines give the output time series: ``python`` (``wetcloth.runner.run``, the default) and
+Two engines give the output time series: ``python`` (``Simulation.sample``, the default) and
 ``fmu`` (``models/WetCloth.fmu`` co-simulated through fmpy by ``wetcloth.fmu.cosim.simulate``).  An exception in a
 run becomes a result with status ``error`` and the exception's text, so the study goes on.  A study
 that keeps curves (``series``) gets them back with the result, under ``series``.
@@ -29,12 +29,16 @@ ERROR = "error"
 
 
 def python_series(params: dict[str, Any], duration: float, sample_rate: float) -> dict[str, np.ndarray]:
-    """Outputs of the Python simulator sampled at ``sample_rate`` Hz from 0 to ``duration`` s."""
-    from wetcloth.runner import run
+    """Outputs of the Python simulator sampled at ``sample_rate`` Hz from 0 to ``duration`` s: the frames
+    and values of ``wetcloth.runner.run`` with no shapes, sampled in one compiled call and kept as arrays
+    (a run's table of rows, one dict per frame, cost as much as building its scene)."""
+    from wetcloth.runner import frame_times
     from wetcloth.scene import from_dict
+    from wetcloth.simulation import Simulation
 
-    result = run(from_dict(params), duration, sample_rate, shapes=0, progress=False, warn=None)
-    return {name: result.column(name) for name in RUN_SERIES}
+    times = frame_times(duration, sample_rate)
+    outputs = Simulation(from_dict(params)).sample(times)
+    return {"time": times, **{name: outputs[:, k].copy() for k, name in enumerate(OUTPUT_NAMES)}}
 
 
 def fmu_series(params: dict[str, Any], duration: float, sample_rate: float, fmu: str) -> dict[str, np.ndarray]:
