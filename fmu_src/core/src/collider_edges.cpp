@@ -631,21 +631,13 @@ double slip_on_collider_edges(const ContactLists& lists, Index n, const double* 
             const double f[3] = {force[i], force[n + i], force[2 * n + i]};
             if (!slips(f, rest, rest[3])) continue;
             if (f[0] * rest[0] + f[1] * rest[1] + f[2] * rest[2] > 0.0) return -1.0;  // lifted off its support
-            double excess[3];
-            slip_force(f, rest, rest[3], excess);
-            const double size = std::sqrt(excess[0] * excess[0] + excess[1] * excess[1] + excess[2] * excess[2]);
-            const double e[3] = {excess[0] / size, excess[1] / size, excess[2] / size};  // (size > 0: it slips)
-            const double inertia = effective_mass(n, i, mass, diagonal_blocks, blocks, e);
+            const Slide slide = slide_of(n, i, f, rest, rest[3], mass, diagonal_blocks, blocks);
             if (pass == 0) {
-                const double slide = 0.5 * size / inertia * h * h;
-                if (slide > limit) return -1.0;
-                farthest = std::max(farthest, slide);
+                if (slide.length(h) > limit) return -1.0;
+                farthest = std::max(farthest, slide.length(h));
                 continue;
             }
-            for (int c = 0; c < 3; ++c) {
-                pos[c * n + i] += 0.5 * excess[c] / inertia * h * h;
-                vel[c * n + i] += excess[c] / inertia * h;
-            }
+            slide.apply(n, i, h, pos, vel);
             held[i] = 0.0;
             free[i] = 1.0;
         }

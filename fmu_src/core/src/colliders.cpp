@@ -475,26 +475,17 @@ double slip_on_supports(Index n, const Physics& phys, const double* force, const
             double f[3] = {force[i], force[n + i], force[2 * n + i]};
             if (!on_floor) carried_force(phys, k, n, i, start, mass, f);
             if (!slips(f, nrm, friction)) continue;
-            double excess[3];
-            slip_force(f, nrm, friction, excess);
-            const double size = std::sqrt(excess[0] * excess[0] + excess[1] * excess[1] + excess[2] * excess[2]);
-            const double scale = size > 0.0 ? 1.0 / size : 0.0;  // (a force of exactly zero lifting off: no move)
-            const double e[3] = {excess[0] * scale, excess[1] * scale, excess[2] * scale};
-            const double inertia = effective_mass(n, i, mass, diagonal_blocks, blocks, e);
-            const double move = 0.5 * size / inertia * h * h;
+            const Slide slide = slide_of(n, i, f, nrm, friction, mass, diagonal_blocks, blocks);
             if (pass == 0) {
-                if (move > limit) return -1.0;
-                farthest = std::max(farthest, move);
+                if (slide.length(h) > limit) return -1.0;
+                farthest = std::max(farthest, slide.length(h));
                 continue;
             }
-            for (int c = 0; c < 3; ++c) {
-                pos[c * n + i] += 0.5 * excess[c] / inertia * h * h;
-                vel[c * n + i] += excess[c] / inertia * h;
-            }
+            slide.apply(n, i, h, pos, vel);
             // Pressed onto a curved collider, that straight move ends move^2 / 2R off it, moving away: back onto it.
             const bool pressed = f[0] * nrm[0] + f[1] * nrm[1] + f[2] * nrm[2] < 0.0;
             double turning[3];
-            if (!on_floor && pressed && normal_turning(phys, k, nrm, e, turning)) {
+            if (!on_floor && pressed && normal_turning(phys, k, nrm, slide.direction, turning)) {
                 farthest = std::max(farthest, onto_surface(phys, k, n, i, 0.5 * phys.thickness, h, pos, vel));
             }
         }

@@ -89,6 +89,39 @@ inline double effective_mass(Index n, Index i, const double* mass, const double*
     return mass[i] + block_quadratic(s, e[0], e[1], e[2]);
 }
 
+//: How particle i, held on a surface (unit outward normal, friction) that the force f (3, N) slips it off,
+//: slides through a step of h s: by the force's excess over friction (slip_force, N) on its inertia along
+//: that excess (effective_mass, kg), from rest, as the floor's and colliders' slips and those on a mesh's
+//: edges go.
+struct Slide {
+    double excess[3];     // N
+    double direction[3];  // the excess's unit vector (zero for a zero excess)
+    double inertia;       // kg
+
+    //: How far (m) it slides in h s.
+    double length(double h) const {
+        return 0.5 * std::sqrt(excess[0] * excess[0] + excess[1] * excess[1] + excess[2] * excess[2]) / inertia * h * h;
+    }
+    //: Slide particle i of pos, vel (3, n) through the step.
+    void apply(Index n, Index i, double h, double* pos, double* vel) const {
+        for (int c = 0; c < 3; ++c) {
+            pos[c * n + i] += 0.5 * excess[c] / inertia * h * h;
+            vel[c * n + i] += excess[c] / inertia * h;
+        }
+    }
+};
+
+inline Slide slide_of(Index n, Index i, const double* f, const double* normal, double friction, const double* mass,
+                      const double* diagonal_blocks, const double* blocks) {
+    Slide s;
+    slip_force(f, normal, friction, s.excess);
+    const double size = std::sqrt(s.excess[0] * s.excess[0] + s.excess[1] * s.excess[1] + s.excess[2] * s.excess[2]);
+    const double scale = size > 0.0 ? 1.0 / size : 0.0;  // (a force of exactly zero lifting off: no move)
+    for (int c = 0; c < 3; ++c) s.direction[c] = s.excess[c] * scale;
+    s.inertia = effective_mass(n, i, mass, diagonal_blocks, blocks, s.direction);
+    return s;
+}
+
 //: Keep particle centres at or above z_min (m); stop their fall and apply friction.  Returns how many touch.
 Index floor_contact(Index n, double z_min, double friction, double* pos, double* vel);
 
