@@ -67,7 +67,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--cases", nargs="+", choices=CASES, default=list(CASES))
     args = parser.parse_args()
-    if not (core_build.installed("x86-64-v3") and core_build.runs("x86-64-v3", core_build.cpu_features())):
+    if not core_build.runnable("x86-64-v3"):
         parser.exit(1, "the x86-64-v3 build is not installed or this CPU does not run it: nothing to compare\n")
     print("| case | baseline (s) | x86-64-v3 (s) | ratio | same result |\n|---|---|---|---|---|")
     for case in args.cases:

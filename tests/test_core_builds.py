@@ -55,11 +55,7 @@ def run_child(build: str | None) -> dict:
     return json.loads(done.stdout.splitlines()[-1])
 
 
-def v3_here() -> bool:
-    return core_build.installed("x86-64-v3") and core_build.runs("x86-64-v3", core_build.cpu_features())
-
-
-@pytest.mark.skipif(not v3_here(), reason="the x86-64-v3 build is not installed or this CPU does not run it")
+@pytest.mark.skipif(not core_build.runnable("x86-64-v3"), reason="the x86-64-v3 build is not installed or this CPU does not run it")
 def test_both_builds_step_every_kind_of_scene_to_the_same_bits():
     """Without fast-math or fused multiply-adds, wider vectors change no result: the same steps, the same
     Newton and CG counts and the same bytes of positions, velocities and water in every scene."""
@@ -70,7 +66,7 @@ def test_both_builds_step_every_kind_of_scene_to_the_same_bits():
 
 
 def test_import_loads_the_fastest_build_this_cpu_runs():
-    assert run_child(None)["build"] == ("x86-64-v3" if v3_here() else "baseline")
+    assert run_child(None)["build"] == ("x86-64-v3" if core_build.runnable("x86-64-v3") else "baseline")
 
 
 V3_CPU = {"X86_V3": True}

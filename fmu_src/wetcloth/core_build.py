@@ -50,6 +50,11 @@ def installed(build: str) -> bool:
     return importlib.util.find_spec(MODULES[build]) is not None
 
 
+def runnable(build: str) -> bool:
+    """Whether `build` is installed and this CPU runs it."""
+    return installed(build) and runs(build, cpu_features())
+
+
 def choose(requested: str | None, features: dict[str, bool], available) -> str:
     """The build to load: `requested` (the environment's value) if given, else the fastest that is
     `available` (a predicate on names) and that the CPU runs.  Raises ImportError, naming the variable and
@@ -89,8 +94,7 @@ def running() -> str:
 
 def module_files() -> list[Path]:
     """Every installed build's module file, for packing the core into a unit that may run on any CPU."""
-    loaded = sys.modules.get("wetcloth._core") or load()
-    folder = Path(loaded.__file__).resolve().parent
+    folder = Path(sys.modules["wetcloth._core"].__file__).resolve().parent  # (import wetcloth loaded it)
     files = []
     for module in MODULES.values():
         spec = importlib.machinery.PathFinder.find_spec(module.rpartition(".")[2], [str(folder)])

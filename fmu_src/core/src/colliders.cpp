@@ -477,8 +477,9 @@ double slip_on_supports(Index n, const Physics& phys, const double* force, const
             if (!slips(f, nrm, friction)) continue;
             const Slide slide = slide_of(n, i, f, nrm, friction, mass, diagonal_blocks, blocks);
             if (pass == 0) {
-                if (slide.length(h) > limit) return -1.0;
-                farthest = std::max(farthest, slide.length(h));
+                const double length = slide.length(h);
+                if (length > limit) return -1.0;
+                farthest = std::max(farthest, length);
                 continue;
             }
             slide.apply(n, i, h, pos, vel);

@@ -285,9 +285,9 @@ Status step(Core& core, double remaining, double span) {
             trial.error = pymax(trial.error, lifted);
         }
         if (held > 0 && trial.converged) {
-            // Slips on the floor or a collider that move no particle farther than the step's allowed error
-            // need no second try: they are made now (most are: a draping cloth releases a few every step).
-            // Layers' and collider edges' releases take the step again.
+            // Slips on the floor, a collider or a mesh collider's edges that move no particle farther than the
+            // step's allowed error need no second try: they are made now (most are: a draping cloth releases a
+            // few every step).  Layers' releases, longer slips and lift-offs from edges take the step again.
             Index released = release_unsupported(core.contact, n, cloth.free, buf.held);
             const double* diagonal_blocks = implicit ? core.work.diagonal_blocks : nullptr;
             double slipped = released == 0 && adaptive
