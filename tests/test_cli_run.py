@@ -37,7 +37,8 @@ def test_run_writes_csv_and_plot(tmp_path):
 def test_run_reports_each_frames_step_error(tmp_path, capsys, export):
     """Frame steps (``implicit_euler``, ``tolerance = 0``, one step a frame): the CSV's ``step_error`` of
     each frame is the error estimate of the step that reached it (``error_estimate`` after an ``advance``
-    of one frame, run here), with frames exported or not; the command prints the largest and its time."""
+    of one frame, run here), with frames exported or not; the command prints the largest and its time, and
+    where the cloth ends (above the water here)."""
     settings = dict(nx=7, ny=7, integrator="implicit_euler", tolerance=0.0, max_step=0.125, pinned_edge="y_max",
                     initial_tilt=0.0, water_level=-50.0, floor_level=-100.0)
     csv_path = tmp_path / "o.csv"
@@ -55,6 +56,7 @@ def test_run_reports_each_frames_step_error(tmp_path, capsys, export):
     worst = max(range(9), key=expected.__getitem__)
     out = capsys.readouterr().out
     assert f"at most {expected[worst] * 1000:.3g} mm in a frame (t = {worst / 8:g} s; column step_error)" in out
+    assert f"centroid {-sim.outputs()['depth']:.2f} m above the water" in out  # in air, 50 m over it
 
 
 def test_bad_override_names_parameter_and_range(tmp_path, capsys):

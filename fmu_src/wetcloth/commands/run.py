@@ -90,7 +90,7 @@ def main(args) -> int:
     if stop is None:
         last = result.rows[-1]
         worst = max(result.rows, key=lambda row: row["step_error"])
-        print(f"simulated {settings.duration:g} s: depth {last['depth'] * 100:.2f} cm, "
+        print(f"simulated {settings.duration:g} s: centroid {_below_water(last['depth'])}, "
               f"wet mass {last['wet_mass'] * 1000:.1f} g; the steps' own error estimate at most "
               f"{worst['step_error'] * 1000:.3g} mm in a frame (t = {worst['time']:g} s; column step_error)")
         if problems:
@@ -135,6 +135,13 @@ def _keep(result, sequence, args, title: str, complete: bool, problems: list[str
 
 def _warn(message: str) -> None:
     tqdm.write(f"wetcloth run: warning: {message}", file=sys.stderr)
+
+
+def _below_water(depth: float) -> str:
+    """Where a centroid ``depth`` m under the water surface is, in words (cm; metres when far)."""
+    side = "below" if depth >= 0.0 else "above"
+    size = abs(depth)
+    return f"{size * 100:.2f} cm {side} the water" if size < 1.0 else f"{size:.2f} m {side} the water"
 
 
 def _check_writable(path: Path, option: str) -> None:
