@@ -292,6 +292,18 @@ def test_version_and_params(capsys):
     assert any(re.match(r"thickness +0\.002 +0\.002 +m +envelope thickness", line) for line in table), table
 
 
+def test_params_keeps_its_columns_beside_a_long_path(capsys, monkeypatch):
+    """A preset's mesh file (a long absolute path) runs past its column on a line of its own: the other
+    rows keep their columns and the terminal's width (before, the path widened the value column for all
+    and pushed the meanings past the width)."""
+    monkeypatch.setenv("COLUMNS", "100")
+    assert main(["params", "tablecloth"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    meaning = lines[0].index("meaning")
+    assert next(line for line in lines if "the cloth's mesh file" in line).index("the cloth's mesh file") == meaning
+    assert all(len(line) <= 100 for line in lines if "round_tablecloth.ply" not in line)
+
+
 def test_an_operating_system_error_is_one_clear_line(tmp_path, capsys):
     """Any command: an OSError (here a file standing where a folder must be) is a one-line error, exit 2."""
     (tmp_path / "afile").write_text("")

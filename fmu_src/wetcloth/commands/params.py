@@ -51,6 +51,9 @@ def rows(scene: str | None) -> list[dict]:
     return out
 
 
+COLUMN_MOST = 24  # characters of a column but the last: a longer value runs past it, the row going on below
+
+
 def main(args) -> int:
     table = rows(args.scene)
     if args.json:
@@ -59,14 +62,30 @@ def main(args) -> int:
     heads = ("name", "value", "default", "unit", "meaning; allowed values")
     cells = [(("[run] " if r["table"] else "") + r["name"], _text(r["value"]), _text(r["default"]), r["unit"],
               f"{r['doc']}; {r['range']}") for r in table]
-    widths = [max(len(h), *(len(c[i]) for c in cells)) for i, h in enumerate(heads[:-1])]
+    widths = [min(COLUMN_MOST, max(len(h), *(len(c[i]) for c in cells))) for i, h in enumerate(heads[:-1])]
     indent = sum(widths) + 2 * len(widths)
     room = max(shutil.get_terminal_size((120, 24)).columns - indent, 30)
     for cell in [heads, *cells]:
         meaning = textwrap.wrap(cell[-1], room) or [""]
-        print("  ".join(c.ljust(w) for c, w in zip(cell, widths)) + "  " + meaning[0])
+        print("\n".join(_row_lines([*cell[:-1], meaning[0]], widths)))
         for more in meaning[1:]:
             print(" " * indent + more)
+    return 0
+
+
+def _row_lines(cells, widths) -> list[str]:
+    """A table row's lines: each cell at its column's start (widths: all but the last column's, two spaces
+    apart); a cell that runs past the next column's start (a mesh file's path) goes on alone, and the row
+    continues on the next line."""
+    lines, line, start = [], "", 0
+    for k, cell in enumerate(cells):
+        if len(line) > start:
+            lines.append(line)
+            line = ""
+        line = line.ljust(start) + cell
+        if k < len(widths):
+            start += widths[k] + 2
+    return [*lines, line]
     return 0
 
 
