@@ -304,6 +304,16 @@ def test_params_keeps_its_columns_beside_a_long_path(capsys, monkeypatch):
     assert all(len(line) <= 100 for line in lines if "round_tablecloth.ply" not in line)
 
 
+def test_a_reader_that_leaves_stops_the_command_quietly():
+    """``wetcloth params | head -1``: the pipe closed before the table is written (its reader gone) stops the
+    command with exit 1 or more and nothing on stderr (before: 'error: [Errno 32] Broken pipe')."""
+    proc = subprocess.Popen([sys.executable, "-m", "wetcloth.cli", "params"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    proc.stdout.close()
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode != 0 and err == ""
+
+
 def test_an_operating_system_error_is_one_clear_line(tmp_path, capsys):
     """Any command: an OSError (here a file standing where a folder must be) is a one-line error, exit 2."""
     (tmp_path / "afile").write_text("")

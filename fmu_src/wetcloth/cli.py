@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
 import wetcloth
@@ -40,6 +41,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
+    except BrokenPipeError:  # the output's reader left (`wetcloth params | head`): stop quietly, as Unix tools do
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # so that the exit's flush cannot fail
+        return FAILED
     except (BlowUpError, OSError, ValueError) as exc:  # a clear line, not a traceback
         print(f"wetcloth {args.command}: error: {exc}", file=sys.stderr)
         return FAILED
