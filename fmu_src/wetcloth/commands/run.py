@@ -18,6 +18,7 @@ from wetcloth.errors import BlowUpError
 from wetcloth.runner import run
 from wetcloth.scene import read_scene_file
 
+
 def parse_assignment(text: str) -> tuple[str, str]:
     """'name=value' from ``--set``."""
     name, sep, value = text.partition("=")
@@ -42,7 +43,8 @@ def add_parser(sub) -> None:
     p.add_argument("--writer", choices=["trimesh", "meshio"],
                    help="mesh writer of ply and obj frames (default trimesh; usd is written by usd-core)")
     p.add_argument("--faces", default="quads", choices=["quads", "triangles"],
-                   help="mesh faces: one quad per grid cell or two triangles (default quads)")
+                   help="mesh faces of a rectangle: one quad per grid cell or two triangles (default quads); a cloth "
+                        "from a mesh file keeps its file's faces with quads, else its triangles")
     p.add_argument("--first-frame", type=int, default=1, metavar="N",
                    help="number of the first frame: file <prefix>_N, USD time code N, Blender frame N (default 1)")
     p.add_argument("--overwrite", action="store_true",
