@@ -347,9 +347,13 @@ void mesh_apply(Plane& plane, Index n, const double* free, const double* r, doub
     cycle_up(h, components, free);
     const double* x0 = h.x;
     const double* x1 = h.x + h.vectors;
-    for (Index i = 0; i < n; ++i)
-        for (Index c = 0; c < 3; ++c)
-            z[c * n + i] = free[i] * (f[c * n + i] * x0[i] + f[(3 + c) * n + i] * x1[i] + f[(6 + c) * n + i] * normal[i]);
+    for (Index c = 0; c < 3; ++c) {  // one row of z at a time: contiguous loops, vectorised
+        const double* t1 = f + c * n;
+        const double* t2 = f + (3 + c) * n;
+        const double* axis = f + (6 + c) * n;
+        double* zc = z + c * n;
+        for (Index i = 0; i < n; ++i) zc[i] = free[i] * (t1[i] * x0[i] + t2[i] * x1[i] + axis[i] * normal[i]);
+    }
 }
 
 }  // namespace wc
