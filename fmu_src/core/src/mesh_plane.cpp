@@ -125,7 +125,7 @@ struct Rows {
     //: The system component c's loops read (component 0's for both in-plane components when C is 2).
     static constexpr Index system(Index c) { return C == NORMAL ? 0 : c; }
     const Index* start;   // the level's rows in a_start
-    const Index* column;  // a_column
+    const Column* column;  // a_column
     const Index* diagonal;
     const double* a[C];
     const double* inverse[C];
@@ -185,7 +185,7 @@ SCALAR_ROWS void up(Algebraic& h, Index level, const double* free) {
     const Rows<C> m(h, level);
     const Index coarse_first = level_of(h, level + 1, VECTOR);
     const Index* p_rows = h.p_start + level_of(h, level, P_ROWS);
-    const Index* p_column = h.p_column;
+    const Column* p_column = h.p_column;
     const double* p_value = h.p_value;
     const double* coarse_x[C];
     for (Index c = 0; c < C; ++c) coarse_x[c] = h.x + c * h.vectors + coarse_first;
