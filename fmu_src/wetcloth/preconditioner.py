@@ -64,9 +64,10 @@ Plane = namedtuple("Plane", "stiffness slots grid order rank bands rows referenc
 #: positions in ``a_column``, level-local columns (int32), ``a_value`` (COMPONENTS, entries));
 #: ``diagonal`` each row's diagonal position; the prolongators P and their transposes R in CSR (columns
 #: int32); ``spring_entries`` (2, T) the positions of each tension-only spring's (i, j) and (j, i) at level 0;
-#: ``inverse_diagonal``, ``x``, ``b`` (COMPONENTS, vectors); ``marker`` (n) int64 scratch.
+#: ``inverse_diagonal``, ``x``, ``b``, ``r`` (COMPONENTS, vectors: r the residuals R restricts); ``marker``
+#: (n) int64 scratch.
 Algebraic = namedtuple("Algebraic", "levels a_start a_column a_value diagonal p_start p_column p_value r_start "
-                                    "r_column r_value spring_entries inverse_diagonal x b marker")
+                                    "r_column r_value spring_entries inverse_diagonal x b r marker")
 
 
 def level_sizes(nx: int, ny: int, coarsest_side: int) -> list[tuple[int, int]]:
@@ -203,7 +204,8 @@ def make_algebraic(patterns: list, prolongators: list) -> Algebraic:
                      p_column=joined(p_column, np.int32), p_value=joined(p_value, float), r_start=joined(r_start),
                      r_column=joined(r_column, np.int32), r_value=joined(r_value, float),
                      spring_entries=np.zeros((2, 0), dtype=np.int64), inverse_diagonal=np.zeros((COMPONENTS, vector)),
-                     x=np.zeros((COMPONENTS, vector)), b=np.zeros((COMPONENTS, vector)), marker=np.zeros(max(sizes, default=0), dtype=np.int64))
+                     x=np.zeros((COMPONENTS, vector)), b=np.zeros((COMPONENTS, vector)), r=np.zeros((COMPONENTS, vector)),
+                     marker=np.zeros(max(sizes, default=0), dtype=np.int64))
 
 
 def aggregation(laplacian, coarsest_size: int = COARSEST_SIZE) -> list:

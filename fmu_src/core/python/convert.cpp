@@ -216,6 +216,7 @@ Algebraic algebraic_from(nb::handle h) {
     a.inverse_diagonal = array<double>(h, "inverse_diagonal", COMPONENTS * a.vectors);
     a.x = array<double>(h, "x", COMPONENTS * a.vectors);
     a.b = array<double>(h, "b", COMPONENTS * a.vectors);
+    a.r = array<double>(h, "r", COMPONENTS * a.vectors);
     a.marker = array<Index>(h, "marker");
     return a;
 }

@@ -147,18 +147,21 @@ struct Rows {
 
 //: Down one level: a forward Gauss-Seidel sweep from x = 0 (only the entries left of the diagonal
 //: meet values already set), then the residual b - A x, which that sweep leaves as -U x (U the
-//: entries right of the diagonal), restricted to b of level + 1 (P^T, row by row of P).  With `free`
-//: (level 0's, else nullptr) the rows of held particles (free 0) stay zero and restrict nothing.
+//: entries right of the diagonal), into r, restricted to b of level + 1 (R = P^T, row by row of R: each
+//: coarse sum in a register, its terms in the order of the fine rows).  With `free` (level 0's, else
+//: nullptr) the rows of held particles (free 0) stay zero and their residual is zero.
 template <Index C>
 SCALAR_ROWS void down(Algebraic& h, Index level, const double* free) {
     static_assert(SWEEPS == 1, "the residual is -U x after one sweep from zero");
     const Rows<C> m(h, level);
+    const Index first = level_of(h, level, VECTOR);
     const Index coarse_first = level_of(h, level + 1, VECTOR), coarse_n = level_of(h, level + 1, SIZE);
-    const Index* p_rows = h.p_start + level_of(h, level, P_ROWS);
+    const Index* r_rows = h.r_start + level_of(h, level, R_ROWS);
+    double* residual[C];
     double* coarse_b[C];
     for (Index c = 0; c < C; ++c) {
+        residual[c] = h.r + c * h.vectors + first;
         coarse_b[c] = h.b + c * h.vectors + coarse_first;
-        for (Index k = 0; k < coarse_n; ++k) coarse_b[c][k] = 0.0;
     }
     for (Index i = 0; i < m.n; ++i) {
         double s[C];
@@ -169,12 +172,19 @@ SCALAR_ROWS void down(Algebraic& h, Index level, const double* free) {
         for (Index c = 0; c < C; ++c) m.x[c][i] = keep * s[c] * m.inverse[m.system(c)][i];
     }
     for (Index i = 0; i < m.n; ++i) {
-        if (free != nullptr && free[i] == 0.0) continue;  // a held row's residual is zero
         double s[C] = {};
-        for (Index e = m.diagonal[i] + 1; e < m.start[i + 1]; ++e)
-            for (Index c = 0; c < C; ++c) s[c] -= m.a[m.system(c)][e] * m.x[c][m.column[e]];
-        for (Index u = p_rows[i]; u < p_rows[i + 1]; ++u)
-            for (Index c = 0; c < C; ++c) coarse_b[c][h.p_column[u]] += h.p_value[u] * s[c];
+        if (free == nullptr || free[i] != 0.0)  // a held row's residual is zero
+            for (Index e = m.diagonal[i] + 1; e < m.start[i + 1]; ++e)
+                for (Index c = 0; c < C; ++c) s[c] -= m.a[m.system(c)][e] * m.x[c][m.column[e]];
+        for (Index c = 0; c < C; ++c) residual[c][i] = s[c];
+    }
+    const Column* r_column = h.r_column;
+    const double* r_value = h.r_value;
+    for (Index k = 0; k < coarse_n; ++k) {
+        double s[C] = {};
+        for (Index t = r_rows[k]; t < r_rows[k + 1]; ++t)
+            for (Index c = 0; c < C; ++c) s[c] += r_value[t] * residual[c][r_column[t]];
+        for (Index c = 0; c < C; ++c) coarse_b[c][k] = s[c];
     }
 }
 
