@@ -61,12 +61,13 @@ Plane = namedtuple("Plane", "stiffness slots grid order rank bands rows referenc
 #: A mesh's algebraic multigrid hierarchy (the core's mesh_plane.cpp; core.hpp's Algebraic): ``levels``
 #: (L, ALGEBRAIC_COLUMNS) int64 each level's size, first index in the per-level vectors, and first
 #: index in ``a_start``, ``p_start``, ``r_start``; every level's matrix in CSR (``a_start`` absolute
-#: positions in ``a_column``, level-local columns, ``a_value`` (COMPONENTS, entries)); ``diagonal``
-#: each row's diagonal position; the prolongators P and their transposes R in CSR; ``spring_entries``
-#: (2, T) the positions of each tension-only spring's (i, j) and (j, i) at level 0;
-#: ``inverse_diagonal``, ``x``, ``b`` (COMPONENTS, vectors); ``marker`` (n) int64 scratch.
+#: positions in ``a_column``, level-local columns (int32), ``a_value`` (COMPONENTS, entries));
+#: ``diagonal`` each row's diagonal position; the prolongators P and their transposes R in CSR (columns
+#: int32); ``spring_entries`` (2, T) the positions of each tension-only spring's (i, j) and (j, i) at level 0;
+#: ``inverse_diagonal``, ``x``, ``b``, ``r`` (COMPONENTS, vectors: r the residuals R restricts); ``marker``
+#: (n) int64 scratch.
 Algebraic = namedtuple("Algebraic", "levels a_start a_column a_value diagonal p_start p_column p_value r_start "
-                                    "r_column r_value spring_entries inverse_diagonal x b marker")
+                                    "r_column r_value spring_entries inverse_diagonal x b r marker")
 
 
 def level_sizes(nx: int, ny: int, coarsest_side: int) -> list[tuple[int, int]]:
@@ -198,12 +199,13 @@ def make_algebraic(patterns: list, prolongators: list) -> Algebraic:
     def joined(parts, dtype=np.int64):
         return np.concatenate(parts).astype(dtype) if parts else np.zeros(0, dtype=dtype)
 
-    return Algebraic(levels=levels, a_start=joined(a_start), a_column=joined(a_column),
+    return Algebraic(levels=levels, a_start=joined(a_start), a_column=joined(a_column, np.int32),
                      a_value=np.zeros((COMPONENTS, entries)), diagonal=joined(diagonal), p_start=joined(p_start),
-                     p_column=joined(p_column), p_value=joined(p_value, float), r_start=joined(r_start),
-                     r_column=joined(r_column), r_value=joined(r_value, float),
+                     p_column=joined(p_column, np.int32), p_value=joined(p_value, float), r_start=joined(r_start),
+                     r_column=joined(r_column, np.int32), r_value=joined(r_value, float),
                      spring_entries=np.zeros((2, 0), dtype=np.int64), inverse_diagonal=np.zeros((COMPONENTS, vector)),
-                     x=np.zeros((COMPONENTS, vector)), b=np.zeros((COMPONENTS, vector)), marker=np.zeros(max(sizes, default=0), dtype=np.int64))
+                     x=np.zeros((COMPONENTS, vector)), b=np.zeros((COMPONENTS, vector)), r=np.zeros((COMPONENTS, vector)),
+                     marker=np.zeros(max(sizes, default=0), dtype=np.int64))
 
 
 def aggregation(laplacian, coarsest_size: int = COARSEST_SIZE) -> list:

@@ -203,19 +203,20 @@ Algebraic algebraic_from(nb::handle h) {
     a.entries = size_of(h.attr("a_column"));
     a.vectors = size_of(h.attr("diagonal"));
     a.a_start = array<const Index>(h, "a_start");
-    a.a_column = array<const Index>(h, "a_column");
+    a.a_column = array<const Column>(h, "a_column");
     a.a_value = array<double>(h, "a_value", COMPONENTS * a.entries);
     a.diagonal = array<const Index>(h, "diagonal");
     a.p_start = array<const Index>(h, "p_start");
-    a.p_column = array<const Index>(h, "p_column");
+    a.p_column = array<const Column>(h, "p_column");
     a.p_value = array<const double>(h, "p_value", size_of(h.attr("p_column")));
     a.r_start = array<const Index>(h, "r_start");
-    a.r_column = array<const Index>(h, "r_column");
+    a.r_column = array<const Column>(h, "r_column");
     a.r_value = array<const double>(h, "r_value", size_of(h.attr("r_column")));
     a.spring_entries = array<const Index>(h, "spring_entries");
     a.inverse_diagonal = array<double>(h, "inverse_diagonal", COMPONENTS * a.vectors);
     a.x = array<double>(h, "x", COMPONENTS * a.vectors);
     a.b = array<double>(h, "b", COMPONENTS * a.vectors);
+    a.r = array<double>(h, "r", COMPONENTS * a.vectors);
     a.marker = array<Index>(h, "marker");
     return a;
 }

@@ -26,7 +26,8 @@ T* array(nb::handle bundle, const char* field, Index count = -1) {
         throw nb::type_error(("field '" + std::string(field) + "': expected a C-contiguous array of " +
                               (std::is_same_v<std::remove_const_t<T>, double>  ? "float64"
                                : std::is_same_v<std::remove_const_t<T>, float> ? "float32"
-                               : std::is_same_v<std::remove_const_t<T>, bool>  ? "bool" : "int64"))
+                               : std::is_same_v<std::remove_const_t<T>, bool>  ? "bool"
+                               : std::is_same_v<std::remove_const_t<T>, Column> ? "int32" : "int64"))
                                  .c_str());
     }
     if (count >= 0 && static_cast<Index>(a.size()) < count) {

@@ -812,11 +812,12 @@ void Simulation::build_mesh_plane() {
     h.r_value = m.r_value.data();
     h.spring_entries = m.spring_entries.data();
     const std::size_t entries = static_cast<std::size_t>(h.entries), vectors = static_cast<std::size_t>(h.vectors);
-    algebraic_.assign(COMPONENTS * (entries + 3 * vectors), 0.0);
+    algebraic_.assign(COMPONENTS * (entries + 4 * vectors), 0.0);
     h.a_value = algebraic_.data();
     h.inverse_diagonal = h.a_value + COMPONENTS * entries;
     h.x = h.inverse_diagonal + COMPONENTS * vectors;
     h.b = h.x + COMPONENTS * vectors;
+    h.r = h.b + COMPONENTS * vectors;
     marker_.assign(static_cast<std::size_t>(m.marker_size), 0);
     h.marker = marker_.data();
 }

@@ -159,12 +159,12 @@ def _c_double(value) -> str:
 
 
 def _c_array(name: str, kind: str, values) -> str:
-    """The C++ array ``NAME[]`` of ``values`` ("double" or "Index" elements, with a trailing 0: C++ has no
-    empty arrays) and its length ``NAME_SIZE``."""
+    """The C++ array ``NAME[]`` of ``values`` ("double", "Index" or "Column" elements, with a trailing 0: C++ has
+    no empty arrays) and its length ``NAME_SIZE``."""
     import numpy as np
 
     values = np.ascontiguousarray(values).ravel()
-    text = ", ".join(str(int(v)) if kind == "Index" else _c_double(v) for v in values)
+    text = ", ".join(_c_double(v) if kind == "double" else str(int(v)) for v in values)
     return (f"inline constexpr std::size_t {name}_SIZE = {values.size};\n"
             f"inline constexpr {kind} {name}[] = {{{text}{', ' if text else ''}0}};")
 

@@ -31,10 +31,10 @@ CLOTH_ARRAYS = (
     ("CLOTH_TRIANGLES", "Index", "triangles"), ("CLOTH_CORNER_SHARES", "double", "corner_shares"),
     ("CLOTH_ORDER", "Index", "order"), ("CLOTH_RANK", "Index", "rank"),
     ("CLOTH_LEVELS", "Index", "levels"), ("CLOTH_A_START", "Index", "a_start"),
-    ("CLOTH_A_COLUMN", "Index", "a_column"), ("CLOTH_DIAGONAL", "Index", "diagonal"),
-    ("CLOTH_P_START", "Index", "p_start"), ("CLOTH_P_COLUMN", "Index", "p_column"),
+    ("CLOTH_A_COLUMN", "Column", "a_column"), ("CLOTH_DIAGONAL", "Index", "diagonal"),
+    ("CLOTH_P_START", "Index", "p_start"), ("CLOTH_P_COLUMN", "Column", "p_column"),
     ("CLOTH_P_VALUE", "double", "p_value"), ("CLOTH_R_START", "Index", "r_start"),
-    ("CLOTH_R_COLUMN", "Index", "r_column"), ("CLOTH_R_VALUE", "double", "r_value"),
+    ("CLOTH_R_COLUMN", "Column", "r_column"), ("CLOTH_R_VALUE", "double", "r_value"),
     ("CLOTH_SPRING_ENTRIES", "Index", "spring_entries"),
 )
 #: The ClothMesh numbers, in the order of the header's CLOTH_SCALARS and CLOTH_COUNTS (unit.cpp reads them so).

@@ -17,6 +17,8 @@
 namespace wc {
 
 using Index = std::int64_t;
+//: A column of the algebraic hierarchy's sparse matrices (Algebraic): half an Index's bytes to read.
+using Column = std::int32_t;
 
 //: Acceleration of gravity (m/s2), acting along -z.
 inline constexpr double GRAVITY = 9.81;
@@ -250,30 +252,32 @@ enum AlgebraicColumn : Index { SIZE = 0, VECTOR = 1, A_ROWS = 2, P_ROWS = 3, R_R
 //: A mesh's algebraic multigrid hierarchy (mesh_plane.cpp; aggregation from the spring graph, built once
 //: in Python): levels (L, ALGEBRAIC_COLUMNS) int64 per level its size n_l, its first index in the
 //: per-level vectors, and its first index in a_start, p_start and r_start.  Level l's matrix in CSR:
-//: rows a_start[A_ROWS + i] .. a_start[A_ROWS + i + 1] of a_column (level-local columns) and of
+//: rows a_start[A_ROWS + i] .. a_start[A_ROWS + i + 1] of a_column (level-local columns, int32) and of
 //: a_value (COMPONENTS, entries); diagonal (vectors) the position of each row's diagonal entry.  For
 //: l < L - 1 the prolongator P_l (n_l, n_{l+1}) in p_start, p_column, p_value and its transpose R_l in
-//: r_start, r_column, r_value.  spring_entries (2, T) the positions of each tension-only spring's
-//: (i, j) and (j, i) entries at level 0; inverse_diagonal, x, b, r (COMPONENTS, vectors); marker
+//: r_start, r_column, r_value (columns int32).  spring_entries (2, T) the positions of each tension-only spring's
+//: (i, j) and (j, i) entries at level 0; inverse_diagonal, x, b, r (COMPONENTS, vectors: r a level's
+//: residual after its forward sweep, which R restricts row by row); marker
 //: (n_0) scratch.  The coarsest level is solved by the plane's band factors.  A grid has none (L = 0).
 struct Algebraic {
     Index level_count = 0;
     Index entries = 0, vectors = 0;
     const Index* levels = nullptr;
     const Index* a_start = nullptr;
-    const Index* a_column = nullptr;
+    const Column* a_column = nullptr;
     double* a_value = nullptr;
     const Index* diagonal = nullptr;
     const Index* p_start = nullptr;
-    const Index* p_column = nullptr;
+    const Column* p_column = nullptr;
     const double* p_value = nullptr;
     const Index* r_start = nullptr;
-    const Index* r_column = nullptr;
+    const Column* r_column = nullptr;
     const double* r_value = nullptr;
     const Index* spring_entries = nullptr;
     double* inverse_diagonal = nullptr;
     double* x = nullptr;
     double* b = nullptr;
+    double* r = nullptr;
     Index* marker = nullptr;
 };
 

@@ -221,7 +221,8 @@ struct ClothMesh {
     // the algebraic hierarchy's arrays (core.hpp's Algebraic; the values filled by the core at each refresh).
     std::vector<Index> order, rank;
     Index kd = 0;
-    std::vector<Index> levels, a_start, a_column, diagonal, p_start, p_column, r_start, r_column, spring_entries;
+    std::vector<Index> levels, a_start, diagonal, p_start, r_start, spring_entries;
+    std::vector<Column> a_column, p_column, r_column;
     std::vector<double> p_value, r_value;
     Index marker_size = 0;
     // What the structure was built for: whether it has bending springs (bend_stiffness != 0), and, with an
