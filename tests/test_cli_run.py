@@ -18,6 +18,7 @@ import pytest
 
 import wetcloth
 from wetcloth.cli import main
+from wetcloth.commands.params import _row_lines
 from wetcloth.runner import run
 from wetcloth.simulation import OUTPUT_NAMES
 
@@ -302,6 +303,8 @@ def test_params_keeps_its_columns_beside_a_long_path(capsys, monkeypatch):
     meaning = lines[0].index("meaning")
     assert next(line for line in lines if "the cloth's mesh file" in line).index("the cloth's mesh file") == meaning
     assert all(len(line) <= 100 for line in lines if "round_tablecloth.ply" not in line)
+    # a value 1 or 2 characters too long for its column also goes on alone (not glued to the next cell)
+    assert _row_lines(["x", "a" * 25, "d"], [1, 24]) == ["x  " + "a" * 25, " " * 29 + "d"]
 
 
 def test_a_reader_that_leaves_stops_the_command_quietly():

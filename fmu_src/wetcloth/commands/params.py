@@ -75,11 +75,11 @@ def main(args) -> int:
 
 def _row_lines(cells, widths) -> list[str]:
     """A table row's lines: each cell at its column's start (widths: all but the last column's, two spaces
-    apart); a cell that runs past the next column's start (a mesh file's path) goes on alone, and the row
-    continues on the next line."""
+    apart); a cell that leaves less than those two spaces before the next column (a mesh file's path) goes
+    on alone, and the row continues on the next line."""
     lines, line, start = [], "", 0
     for k, cell in enumerate(cells):
-        if len(line) > start:
+        if line and len(line) + 2 > start:
             lines.append(line)
             line = ""
         line = line.ljust(start) + cell
