@@ -633,9 +633,7 @@ double slip_on_collider_edges(const ContactLists& lists, Index n, const double* 
             if (f[0] * rest[0] + f[1] * rest[1] + f[2] * rest[2] > 0.0) return -1.0;  // lifted off its support
             const Slide slide = slide_of(n, i, f, rest, rest[3], mass, diagonal_blocks, blocks);
             if (pass == 0) {
-                const double length = slide.length(h);
-                if (length > limit) return -1.0;
-                farthest = std::max(farthest, length);
+                if (!slide.fits(h, limit, farthest)) return -1.0;
                 continue;
             }
             slide.apply(n, i, h, pos, vel);

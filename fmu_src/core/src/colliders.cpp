@@ -477,9 +477,7 @@ double slip_on_supports(Index n, const Physics& phys, const double* force, const
             if (!slips(f, nrm, friction)) continue;
             const Slide slide = slide_of(n, i, f, nrm, friction, mass, diagonal_blocks, blocks);
             if (pass == 0) {
-                const double length = slide.length(h);
-                if (length > limit) return -1.0;
-                farthest = std::max(farthest, length);
+                if (!slide.fits(h, limit, farthest)) return -1.0;
                 continue;
             }
             slide.apply(n, i, h, pos, vel);

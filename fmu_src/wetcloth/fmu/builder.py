@@ -66,12 +66,6 @@ def package_dir() -> Path:
     return Path(wetcloth.__file__).resolve().parent
 
 
-def core_modules() -> list[Path]:
-    """The compiled core's extension module files (one per build: the unit's host picks the one its CPU
-    runs, wetcloth/core_build.py), wherever the install put them."""
-    return core_build.module_files()
-
-
 def _mapped_subpackages() -> dict[str, Path]:
     """Subpackages the unit needs that live outside the package folder (editable installs map them)."""
     found = {}
@@ -93,7 +87,8 @@ def _files(folder: Path, patterns=("*",)) -> list[Path]:
 def source_files() -> list[Path]:
     """The files the FMU carries: the wetcloth package, its compiled core, presets and exporter (no caches)."""
     files = _files(package_dir())
-    files += [module for module in core_modules() if package_dir() not in module.parents]
+    # the compiled core, one module per build (the unit's host loads the one its CPU runs)
+    files += [module for module in core_build.module_files() if package_dir() not in module.parents]
     for sub, location in _mapped_subpackages().items():
         files += _files(location, PRESET_PATTERNS if sub == "presets" else ("*",))
     return files
@@ -114,7 +109,7 @@ def _stage_package(stage: Path) -> tuple[dict[str, str], dict[str, str]]:
     bundle = stage / "wetcloth"
     shutil.copytree(package_dir(), bundle, ignore=_SKIP)
     package_files = {p.relative_to(bundle).as_posix(): digest(p) for p in _files(bundle)}
-    for module in core_modules():
+    for module in core_build.module_files():
         if not (bundle / module.name).exists():  # an editable install keeps them outside the package folder
             shutil.copy2(module, bundle / module.name)
     for sub, location in _mapped_subpackages().items():

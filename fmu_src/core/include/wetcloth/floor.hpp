@@ -1,5 +1,6 @@
 // The tank floor: a rigid plane with Coulomb friction (port of bf41571:fmu_src/wetcloth/kernels/floor.py).
 #pragma once
+#include <algorithm>
 #include <cmath>
 
 #include "wetcloth/core.hpp"
@@ -98,9 +99,14 @@ struct Slide {
     double direction[3];  // the excess's unit vector (zero for a zero excess)
     double inertia;       // kg
 
-    //: How far (m) it slides in h s.
-    double length(double h) const {
-        return 0.5 * std::sqrt(excess[0] * excess[0] + excess[1] * excess[1] + excess[2] * excess[2]) / inertia * h * h;
+    //: The first of the slips' two passes (measure all, then slide all): whether it slides no farther than
+    //: limit (m) in h s; if so, farthest (m) raised to how far it does.
+    bool fits(double h, double limit, double& farthest) const {
+        const double length = 0.5 * std::sqrt(excess[0] * excess[0] + excess[1] * excess[1] + excess[2] * excess[2]) /
+                              inertia * h * h;
+        if (length > limit) return false;
+        farthest = std::max(farthest, length);
+        return true;
     }
     //: Slide particle i of pos, vel (3, n) through the step.
     void apply(Index n, Index i, double h, double* pos, double* vel) const {
