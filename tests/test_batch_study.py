@@ -193,6 +193,12 @@ def test_scene_path_relative_to_the_study_file(tmp_path):
     assert load_study(study).runs()[0].params["nx"] == 5
 
 
+def test_a_study_preset_loads_by_name_and_a_misspelled_one_gets_the_nearest():
+    assert load_study("sink_map").name == "sink_map"
+    with pytest.raises(FileNotFoundError, match="'sinkmap' is not a file: .*did you mean 'sink_map'\\?$"):
+        load_study("sinkmap")
+
+
 @pytest.mark.parametrize("name", ["../../x", "/tmp/x", "..", "a/b", "a\\b", ""])
 def test_a_study_name_cannot_leave_the_output_folder(name):
     with pytest.raises(StudyError, match="must be a plain file name"):

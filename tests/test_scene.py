@@ -90,8 +90,13 @@ def test_cloth_starting_below_the_floor_is_refused():
 
 
 def test_missing_scene_file_lists_the_presets(tmp_path):
-    with pytest.raises(FileNotFoundError, match="thesis_fast"):
+    with pytest.raises(FileNotFoundError, match="presets: .*thesis_fast"):
         load_scene(tmp_path / "nope.toml")
+
+
+def test_a_misspelled_preset_gets_the_nearest_names():
+    with pytest.raises(FileNotFoundError, match="'tablcloth' is not a file: .*did you mean 'tablecloth'\\?$"):
+        load_scene("tablcloth")
 
 
 def test_broken_toml_names_the_file(tmp_path):

@@ -27,7 +27,7 @@ COMMAND_MODULES = (
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="wetcloth",
-        description="Cloth that meets water: simulate, co-simulate (FMI 2.0) and export to Blender.",
+        description="Cloth that meets water: simulate, co-simulate (FMI 2.0 and 3.0), export to Blender, run studies.",
     )
     parser.add_argument("--version", action="version", version=f"wetcloth {wetcloth.__version__} (compiled core: {core_build.running()} build)")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")

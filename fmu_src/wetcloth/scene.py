@@ -721,14 +721,21 @@ def resolve_scene_path(path: str | Path | None) -> Path:
     """A scene file from a path, or a preset name such as 'thesis_fast'; None is the default towel."""
     if path is None:
         return preset_dir() / "towel.toml"
+    return resolve_preset_path(path, preset_dir(), "scene")
+
+
+def resolve_preset_path(path: str | Path, folder: Path, what: str) -> Path:
+    """``path`` if it is a file, else the preset ``folder``/NAME.toml it names; a FileNotFoundError naming
+    the nearest presets (``what``: 'scene', 'study') if neither exists."""
     candidate = Path(path)
     if candidate.exists():
         return candidate
-    preset = preset_dir() / (candidate.name if candidate.suffix == ".toml" else candidate.name + ".toml")
+    preset = folder / (candidate.name if candidate.suffix == ".toml" else candidate.name + ".toml")
     if preset.exists():
         return preset
-    names = ", ".join(sorted(p.stem for p in preset_dir().glob("*.toml")))
-    raise FileNotFoundError(f"scene file {str(path)!r} not found (presets: {names})")
+    names = sorted(p.stem for p in folder.glob("*.toml"))
+    hint = did_you_mean(candidate.stem, names, what=f"{what} preset", listing="presets: " + ", ".join(names))
+    raise FileNotFoundError(f"{what} {str(path)!r} is not a file: {hint}")
 
 
 def read_toml(path: Path, what: str = "scene file") -> dict[str, Any]:

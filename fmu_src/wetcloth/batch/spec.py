@@ -47,7 +47,15 @@ from wetcloth.batch.plot_spec import PlotSpec, SeriesPlotSpec, plot_specs
 from wetcloth.batch.sensitivity import SensitivitySpec, check_factors, design, parse_sensitivity
 from wetcloth.batch.series import check_series_names
 from wetcloth.errors import ConfigError, Mistakes, StudyError, check_choice, did_you_mean
-from wetcloth.scene import PARAMETERS, RESERVED_KEYS, read_scene_file, read_toml, resolve_scene_path
+from wetcloth.scene import (
+    PARAMETERS,
+    RESERVED_KEYS,
+    preset_dir,
+    read_scene_file,
+    read_toml,
+    resolve_preset_path,
+    resolve_scene_path,
+)
 
 DEFAULT_SAMPLE_RATE = 10.0  # Hz
 DEFAULT_SINK_DEPTH = 0.05  # m
@@ -388,10 +396,9 @@ def _scene_file(ref, base_dir) -> tuple[Path, dict[str, Any]]:
 
 
 def load_study(path: str | Path) -> "Study":
-    """Read and validate a study TOML file: every mistake at once, naming the file."""
-    path = Path(path)
-    if not path.exists():
-        raise FileNotFoundError(f"study file {str(path)!r} not found")
+    """Read and validate a study TOML file, or a preset study such as 'sink_map' (models/studies/): every
+    mistake at once, naming the file."""
+    path = resolve_preset_path(path, preset_dir() / "studies", "study")
     data = read_toml(path, "study file")
     return Study.from_dict(data, base_dir=path.parent, name=path.stem, source=f"study file {path}")
 

@@ -10,6 +10,7 @@ from pathlib import Path
 from wetcloth.batch.engines import ENGINES
 from wetcloth.batch.results import KEY
 from wetcloth.commands.common import INTERRUPTED, path_argument
+from wetcloth.scene import preset_dir
 
 #: Where results go without --out: <study name>.parquet in this folder.
 DEFAULT_OUT_DIR = Path("out/batch")
@@ -30,7 +31,9 @@ def add_parser(sub) -> None:
             "(<table>_sensitivity.csv) and their bar plot. See docs/batch.md."
         ),
     )
-    p.add_argument("study", type=path_argument, help="study TOML file (see docs/batch.md and models/studies/)")
+    shipped = ", ".join(sorted(f.stem for f in (preset_dir() / "studies").glob("*.toml")))
+    p.add_argument("study", type=path_argument,
+                   help=f"study TOML file, or the name of one shipped with wetcloth ({shipped}); see docs/batch.md")
     p.add_argument("--scheduler", metavar="ADDRESS", help="address of a running Dask scheduler, e.g. tcp://host:8786")
     p.add_argument("--workers", type=int, metavar="N",
                    help="local cluster: number of worker processes (default: one per core); "
