@@ -811,3 +811,10 @@ def test_a_fixed_parameter_is_named_without_a_stray_colon():
     with pytest.raises(wetcloth.ParameterError) as info:
         sim.set_inputs(width=1.0)
     assert str(info.value) == "parameter 'width' is fixed once the simulation starts; only inputs may change"
+
+
+def test_a_misspelled_input_gets_the_nearest_inputs():
+    sim = wetcloth.Simulation(wetcloth.load_scene(nx=5, ny=5))
+    with pytest.raises(wetcloth.ParameterError) as info:
+        sim.set_inputs(water_levl=0.1)
+    assert str(info.value) == "parameter 'water_levl': unknown input; did you mean 'water_level'?"

@@ -13,7 +13,7 @@ from wetcloth._core import (BLOWN_UP, CALM_TIME, CG_ITERATIONS, CLOCK_SIZE, EXCH
                             SLEEPING, SPEED, STEPS, TIME, UNCHECKED_TIME, UNCONVERGED, LARGEST_ERROR)
 from wetcloth.advice import blow_up_advice
 from wetcloth.bundles import Buffers, make_solver
-from wetcloth.errors import BlowUpError, ParameterError
+from wetcloth.errors import BlowUpError, ParameterError, did_you_mean
 from wetcloth.integrators import make_integrator
 from wetcloth.model import Model
 from wetcloth.preconditioner import plane_for
@@ -231,7 +231,8 @@ class Simulation:
         """Change inputs (water level, density, absorption; see ``scene.INPUT``) from now on."""
         for name in values:
             if name not in PARAMETERS:
-                raise ParameterError(name, "unknown parameter")
+                inputs = [n for n, f in PARAMETERS.items() if f.metadata["fmu"] == INPUT]
+                raise ParameterError(name, did_you_mean(name, inputs, what="input"))
             if PARAMETERS[name].metadata["fmu"] != INPUT:
                 raise ParameterError(name, "is fixed once the simulation starts; only inputs may change")
         scene = self.scene.replace(**values)
