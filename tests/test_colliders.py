@@ -138,7 +138,9 @@ def test_collider_fields_are_addressed_by_one_name_each():
     ((dict(shape="sphere", radius=0.0),), "collider1_radius", "0 < collider1_radius <= 10000 m"),
     ((dict(shape="sphere", z=-2.0), dict(shape="cylinder", height=-1.0)), "collider2_height",
      "0 < collider2_height <= 10000 m"),
-    ((dict(shape="sphere", radiuss=0.1),), "collider1_radiuss", "unknown collider field"),
+    ((dict(shape="sphere", radiuss=0.1),), "collider1_radiuss", "unknown collider field; did you mean 'collider1_radius'?"),
+    ((dict(shape="sphere", colour=0.1),), "collider1_colour", "unknown collider field; a collider's fields are "
+     "collider<k>_<field> (k = 1, 2, ...) with <field> one of shape, file, x"),
     ((dict(shape="sphere", z=0.1, radius=0.05),), "collider1", "overlaps the cloth at t = 0"),
     ((dict(shape="plane", normal_z=0.0),), "collider1_normal_z", "normal is zero"),
 ])

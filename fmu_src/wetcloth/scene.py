@@ -374,6 +374,17 @@ def describe_range(f: dataclasses.Field, name: str | None = None) -> str:
     return f"{md['lo']:g} {lo_sign} {name or f.name} <= {md['hi']:g}{unit}"
 
 
+def _unknown_listed_field(name: str, prefix: str, fields: list[str], what: str) -> str:
+    """Why ``name`` (``prefix<k>_<field>``) names no field of a listed table (a collider, a key): the nearest
+    field if one is close, else the layout and every field."""
+    match = re.fullmatch(rf"{prefix}(\d+)_(.+)", name)
+    close = difflib.get_close_matches(match.group(2), fields, n=1) if match else []
+    if close:
+        return f"unknown {what} field; did you mean '{prefix}{match.group(1)}_{close[0]}'?"
+    return (f"unknown {what} field; a {what}'s fields are {prefix}<k>_<field> (k = 1, 2, ...) with <field> one of "
+            f"{', '.join(fields)}")
+
+
 def _field(name: str) -> dataclasses.Field:
     if name in PARAMETERS:
         return PARAMETERS[name]
@@ -386,16 +397,10 @@ def _field(name: str) -> dataclasses.Field:
     moving = collider_key_name(name)
     if moving is not None:
         return COLLIDER_KEY_FIELDS[moving[1]]
-    if name.startswith("collider_key"):
-        raise ParameterError(name, f"unknown collider key field; a collider key's fields are collider_key<k>_<field> "
-                                   f"(k = 1, 2, ...) with <field> one of {', '.join(COLLIDER_KEY_FIELDS)}")
-    if name.startswith("grip_key"):
-        raise ParameterError(name, f"unknown grip key field; a grip key's fields are grip_key<k>_<field> "
-                                   f"(k = 1, 2, ...) with <field> one of {', '.join(GRIP_KEY_FIELDS)}")
-    if name.startswith("collider"):
-        fields = ", ".join(COLLIDER_FIELDS)
-        raise ParameterError(name, f"unknown collider field; a collider's fields are collider<k>_<field> "
-                                   f"(k = 1, 2, ...) with <field> one of {fields}")
+    for prefix, fields, what in (("collider_key", COLLIDER_KEY_FIELDS, "collider key"),
+                                 ("grip_key", GRIP_KEY_FIELDS, "grip key"), ("collider", COLLIDER_FIELDS, "collider")):
+        if name.startswith(prefix):
+            raise ParameterError(name, _unknown_listed_field(name, prefix, list(fields), what))
     raise ParameterError(name, did_you_mean(name, PARAMETERS, listing=PARAMETER_LISTING))
 
 
