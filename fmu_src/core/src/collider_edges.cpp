@@ -544,6 +544,40 @@ void out_of_table_frame(const Physics& phys, Index k, Index n, const double* fra
     }
 }
 
+//: Faces whose unit normals' dot product is at least this lie in one plane (within 4.5e-5 rad).
+inline constexpr double FLAT = 1.0 - 1e-9;
+
+//: Whether the collider feature of the `count` vertices v (a vertex, or an edge's two ends) of mesh `mesh` lies
+//: flat: all the faces that hold it in one plane (a box's face's diagonal, a vertex inside a flat region).
+//: The particles' contact keeps the cloth off that plane by thickness / 2 already, and the feature cannot poke
+//: between them.  found: scratch.
+bool flat_feature(const ColliderMeshes& m, Index mesh, const Index* v, int count, std::vector<Index>& found) {
+    double lo[3], hi[3];
+    for (Index c = 0; c < 3; ++c) {
+        lo[c] = hi[c] = m.vertices[c * m.vertex_count + v[0]];
+        for (int j = 1; j < count; ++j) {
+            const double x = m.vertices[c * m.vertex_count + v[j]];
+            lo[c] = py_min(lo[c], x), hi[c] = py_max(hi[c], x);
+        }
+    }
+    found.clear();
+    mesh_triangles_in(m, mesh, lo, hi, found);
+    const double* first = nullptr;
+    for (const Index t : found) {
+        const Index* corners = m.triangles + 3 * t;
+        bool holds = true;
+        for (int j = 0; j < count; ++j) holds = holds && (corners[0] == v[j] || corners[1] == v[j] || corners[2] == v[j]);
+        if (!holds) continue;
+        const double* normal = m.face_normals + 3 * t;
+        if (first == nullptr) {
+            first = normal;
+        } else if (first[0] * normal[0] + first[1] * normal[1] + first[2] * normal[2] < FLAT) {
+            return false;
+        }
+    }
+    return first != nullptr;
+}
+
 }  // namespace
 
 int collider_edge_contact(const Contact& contact, ContactLists& lists, const Physics& phys, Index n,
@@ -614,6 +648,9 @@ Index gather_supports(const Contact& contact, ContactLists& lists, const Physics
             const Vec3 d = combine(w, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
             const double length = norm(d);
             if (!(length > 0.0 && length < within)) continue;
+            const Index mesh = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_RADIUS]);
+            const Index ends[2] = {-1 - pair[mo.kind == POINT_TRIANGLE ? P_POINTS : P_POINTS + 2], -1 - pair[P_POINTS + 3]};
+            if (flat_feature(phys.meshes, mesh, ends, mo.kind == POINT_TRIANGLE ? 1 : 2, lists.collider_items)) continue;
             const double side[4] = {w.w0, w.w1, w.w2, w.w3};
             Vec3 part{0.0, 0.0, 0.0};  // the collider's points' weighted sum
             Index slots = 0;

@@ -37,7 +37,7 @@ int collider_edge_contact(const Contact& contact, ContactLists& lists, const Phy
 //: elements (a collider vertex and a cloth triangle, a collider edge and a cloth edge) nearer than within (m)
 //: at the step's start, from its kept list in its table frame, as the terms of supports
 //: (collider_supports.hpp): each with its closest-point weights, its contact normal and its collider points'
-//: weighted sum there.  Returns how many.
+//: weighted sum there; features that lie flat (all their faces in one plane) are left out.  Returns how many.
 Index gather_supports(const Contact& contact, ContactLists& lists, const Physics& phys, Index n, const double* pos,
                       double within, Supports& supports);
 

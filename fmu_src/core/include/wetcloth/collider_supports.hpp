@@ -14,9 +14,11 @@
 
 namespace wc {
 
-//: The gap (m) the solve keeps a collider feature from a cloth element, as a fraction of thickness / 2: the
-//: particles' own distance from a collider's surface (the edges' pass keeps them EDGE_GAP of it).
-inline constexpr double SUPPORT_DISTANCE = 1.0;
+//: The gap (m) the solve keeps a collider feature from a cloth element, as a fraction of thickness / 2: below
+//: the particles' own distance from a collider's surface, so that a cloth lying on a flat part of a mesh
+//: (its edges and vertices in the face's plane, the cloth thickness / 2 above) is not pressed by them; above
+//: the edges' pass's (EDGE_GAP of it).
+inline constexpr double SUPPORT_DISTANCE = 0.5;
 
 //: The penalty's stiffness as a multiple of the cloth's stiffest spring (N/m per N/m).
 inline constexpr double SUPPORT_STIFFNESS = 10.0;
