@@ -544,6 +544,40 @@ void out_of_table_frame(const Physics& phys, Index k, Index n, const double* fra
     }
 }
 
+//: Faces whose unit normals' dot product is at least this lie in one plane (within 4.5e-5 rad).
+inline constexpr double FLAT = 1.0 - 1e-9;
+
+//: Whether the collider feature of the `count` vertices v (a vertex, or an edge's two ends) of mesh `mesh` lies
+//: flat: all the faces that hold it in one plane (a box's face's diagonal, a vertex inside a flat region).
+//: The particles' contact keeps the cloth off that plane by thickness / 2 already, and the feature cannot poke
+//: between them.  found: scratch.
+bool flat_feature(const ColliderMeshes& m, Index mesh, const Index* v, int count, std::vector<Index>& found) {
+    double lo[3], hi[3];
+    for (Index c = 0; c < 3; ++c) {
+        lo[c] = hi[c] = m.vertices[c * m.vertex_count + v[0]];
+        for (int j = 1; j < count; ++j) {
+            const double x = m.vertices[c * m.vertex_count + v[j]];
+            lo[c] = py_min(lo[c], x), hi[c] = py_max(hi[c], x);
+        }
+    }
+    found.clear();
+    mesh_triangles_in(m, mesh, lo, hi, found);
+    const double* first = nullptr;
+    for (const Index t : found) {
+        const Index* corners = m.triangles + 3 * t;
+        bool holds = true;
+        for (int j = 0; j < count; ++j) holds = holds && (corners[0] == v[j] || corners[1] == v[j] || corners[2] == v[j]);
+        if (!holds) continue;
+        const double* normal = m.face_normals + 3 * t;
+        if (first == nullptr) {
+            first = normal;
+        } else if (first[0] * normal[0] + first[1] * normal[1] + first[2] * normal[2] < FLAT) {
+            return false;
+        }
+    }
+    return first != nullptr;
+}
+
 }  // namespace
 
 int collider_edge_contact(const Contact& contact, ContactLists& lists, const Physics& phys, Index n,
@@ -568,6 +602,75 @@ int collider_edge_contact(const Contact& contact, ContactLists& lists, const Phy
         out_of_table_frame(phys, k, n, table.data(), table.data() + 9 * n, x1, v1);
     }
     return result;
+}
+
+Index gather_supports(const Contact& contact, ContactLists& lists, const Physics& phys, Index n, const double* pos,
+                      double within, Supports& supports) {
+    supports.points.clear();
+    supports.weights.clear();
+    supports.table_normal.clear();
+    supports.table_part.clear();
+    supports.collider.clear();
+    if (phys.meshes.count == 0 || phys.collider_motion == nullptr || n == 0) return 0;
+    const double reach = 0.5 * phys.thickness;
+    lists.collider_moving_kept.resize(static_cast<std::size_t>(phys.collider_count));
+    for (Index k = 0; k < phys.collider_count; ++k) {
+        const Frame frame{k, collider_shift(phys, k)};
+        if (!collider_moves(phys, k) || !frame.covers(phys, k)) continue;
+        std::vector<double>& table = lists.collider_frame;  // the cloth's start in the table frame
+        table.resize(15 * static_cast<std::size_t>(n));
+        double* q = table.data();
+        const double* centre = phys.colliders + k * COLLIDER_COLUMNS + C_X;
+        for (Index i = 0; i < n; ++i) {
+            const double a[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+            double from[3];
+            table_point(frame.shift, centre, a, true, from);
+            for (Index c = 0; c < 3; ++c) q[c * n + i] = from[c];
+        }
+        ColliderPairList& kept = lists.collider_moving_kept[static_cast<std::size_t>(k)];
+        if (!list_holds(kept, phys, n, q)) keep_list(contact, lists, kept, phys, frame, n, q, q, reach);
+        double moved2 = 0.0;  // the kept pairs' particles' largest move from the list's reference
+        for (const Index i : kept.members) {
+            double a2 = 0.0;
+            for (Index c = 0; c < 3; ++c) {
+                const double a = q[c * n + i] - kept.reference[static_cast<std::size_t>(c * n + i)];
+                a2 += a * a;
+            }
+            moved2 = py_max(moved2, a2);
+        }
+        const double moved = std::sqrt(moved2) + ROUNDING_SLACK * reach;
+        for (const Pair& pair : kept.pairs) {
+            if (pair[P_KIND] == POINT_TRIANGLE && pair[P_POINTS] >= 0) continue;  // a particle: the particles' contact
+            if (gap_of(pair[P_START]) - moved >= within) continue;
+            const Motion mo = motion_of(pair, phys.meshes, n, nullptr, nullptr, q, q);
+            if (box_gap(mo.kind, mo.x) >= within) continue;
+            const Weights w = closest(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
+            const Vec3 d = combine(w, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
+            const double length = norm(d);
+            if (!(length > 0.0 && length < within)) continue;
+            const Index mesh = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_RADIUS]);
+            const Index ends[2] = {-1 - pair[mo.kind == POINT_TRIANGLE ? P_POINTS : P_POINTS + 2], -1 - pair[P_POINTS + 3]};
+            if (flat_feature(phys.meshes, mesh, ends, mo.kind == POINT_TRIANGLE ? 1 : 2, lists.collider_items)) continue;
+            const double side[4] = {w.w0, w.w1, w.w2, w.w3};
+            Vec3 part{0.0, 0.0, 0.0};  // the collider's points' weighted sum
+            Index slots = 0;
+            for (int j = 0; j < 4; ++j) {
+                const Index s = pair[P_POINTS + j];
+                if (s < 0) {
+                    part = {part.x + side[j] * mo.x[j].x, part.y + side[j] * mo.x[j].y, part.z + side[j] * mo.x[j].z};
+                } else {
+                    supports.points.push_back(s);
+                    supports.weights.push_back(side[j]);
+                    slots += 1;
+                }
+            }
+            for (; slots < 3; ++slots) supports.points.push_back(-1), supports.weights.push_back(0.0);
+            supports.table_normal.insert(supports.table_normal.end(), {d.x / length, d.y / length, d.z / length});
+            supports.table_part.insert(supports.table_part.end(), {part.x, part.y, part.z});
+            supports.collider.push_back(k);
+        }
+    }
+    return supports.count();
 }
 
 Index hold_on_collider_edges(const Contact& contact, ContactLists& lists, const Physics& phys, Index n, const double* pos,

@@ -252,6 +252,46 @@ bool held_rate(const Physics& phys, double held, Index n, Index i, const double*
     return true;
 }
 
+namespace {
+
+//: Collider k's rotation (3 x 3 by rows) h s after the step's start: exp(h [omega]) R_start.
+void rotation_after(const double* shift, double h, double* R) {
+    double step[3], turn[9];
+    for (int c = 0; c < 3; ++c) step[c] = h * shift[MOTION_SPIN + c];
+    rotation_of(step, turn);
+    multiply(turn, shift + MOTION_TURN_START, false, R);
+}
+
+}  // namespace
+
+void world_point_after(const Physics& phys, Index k, double h, const double* q, double* p) {
+    const double* shift = collider_shift(phys, k);
+    if (shift == nullptr) {
+        for (int c = 0; c < 3; ++c) p[c] = q[c];
+        return;
+    }
+    double d[3];
+    for (int c = 0; c < 3; ++c) d[c] = shift[MOTION_START + c] + h * shift[MOTION_VELOCITY + c];
+    if (!turns(shift)) {
+        for (int c = 0; c < 3; ++c) p[c] = q[c] + d[c];
+        return;
+    }
+    double R[9];
+    rotation_after(shift, h, R);
+    const double* centre = phys.colliders + k * COLLIDER_COLUMNS + C_X;
+    const double r[3] = {q[0] - centre[0], q[1] - centre[1], q[2] - centre[2]};
+    for (int c = 0; c < 3; ++c) p[c] = centre[c] + d[c] + (R[3 * c] * r[0] + R[3 * c + 1] * r[1] + R[3 * c + 2] * r[2]);
+}
+
+void world_direction_after(const Physics& phys, Index k, double h, double* v) {
+    const double* shift = collider_shift(phys, k);
+    if (!turns(shift)) return;
+    double R[9];
+    rotation_after(shift, h, R);
+    const double w[3] = {v[0], v[1], v[2]};
+    for (int c = 0; c < 3; ++c) v[c] = R[3 * c] * w[0] + R[3 * c + 1] * w[1] + R[3 * c + 2] * w[2];
+}
+
 void start_collider_motion(const Physics& phys, double t) {
     if (phys.collider_motion == nullptr) return;
     for (Index k = 0; k < phys.collider_count; ++k) {

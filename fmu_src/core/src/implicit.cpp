@@ -7,6 +7,7 @@
 #include "wetcloth/assembly.hpp"
 #include "wetcloth/coarse_space.hpp"
 #include "wetcloth/collider_motion.hpp"
+#include "wetcloth/collider_supports.hpp"
 #include "wetcloth/integration.hpp"
 #include "wetcloth/lanes.hpp"
 #include "wetcloth/plane.hpp"
@@ -102,6 +103,7 @@ PlaneSolve plane_pcg(const Cloth& cloth, const Work& work, Solver& solver, Plane
     Index iterations = 0;
     while (rz_z.largest > accuracy && iterations < max_iterations) {
         system_matvec(cloth, work, mass, p, ap, Precision::SINGLE);
+        if (solver.supports != nullptr) add_support_product(*solver.supports, n, cloth.free, p, ap);
         if (solver.sliding != nullptr) project_sliding(*solver.sliding, n, ap);
         const double p_ap = dot(n, p, ap);
         if (!(p_ap > 0.0)) break;
@@ -155,6 +157,7 @@ void newton_residual(const Cloth& cloth, const Physics& phys, Work& work, Solver
                      double slack_slope) {
     const Index n = cloth.n;
     forces_and_blocks(cloth, phys, work, out_pos, out_vel, step_water, bh, slack_slope);
+    if (solver.supports != nullptr) add_support_forces(*solver.supports, n, out_pos, work.force, work.blocks);
     if (solver.sliding != nullptr) add_sliding_friction(*solver.sliding, n, solver.mass, work.force);
     const double* free = cloth.free;
     const double* mass = solver.mass;
@@ -308,6 +311,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
         }
     }
     const double bh = beta * h;
+    if (solver.supports != nullptr) place_supports(*solver.supports, phys, h, bh * bh);
     if (solver.sliding != nullptr) prescribe_normal_speed(*solver.sliding, n, pos, hat_pos, h, bh, out_vel);
     for (Index k = 0; k < 3 * n; ++k) out_pos[k] = hat_pos[k] + bh * out_vel[k];
     const bool adaptive = mode == NewtonMode::ADAPTIVE;
@@ -438,6 +442,10 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
             difference[k] = free[i] * mass[i] * (out_pos[k] - predicted[k]);
         }
     }
+    // A pressing support sets its particles' motion along its normal, which the estimate leaves out (as the
+    // floor's): without, the sweep's mesh ball (advanced a second at a time, the supports at e/2) took 6916
+    // steps and 1895 retaken, with 5522 and 1175.
+    if (solver.supports != nullptr) project_supported(*solver.supports, n, difference);
     apply(plane, n, free, difference, solver.z);
     return {(1.0 + w) / (2.0 + 3.0 * w) * largest_of(n, solver.z) + unsolved, converged};
 }

@@ -12,6 +12,7 @@
 #include "wetcloth/assembly.hpp"
 #include "wetcloth/collider_edges.hpp"
 #include "wetcloth/collider_motion.hpp"
+#include "wetcloth/collider_supports.hpp"
 #include "wetcloth/colliders.hpp"
 #include "wetcloth/floor.hpp"
 #include "wetcloth/grip.hpp"
@@ -249,6 +250,15 @@ Status step(Core& core, double remaining, double span) {
     // Particles sliding on the floor or a collider stay on it through an implicit step, friction a force of it.
     const bool sliding = implicit && gather_sliding(n, phys, buf.pos, buf.vel, cloth.free, core.sliding) > 0;
     core.solver.sliding = sliding ? &core.sliding : nullptr;
+    // A moving mesh's vertices and edges near the cloth's triangles and edges: supports its solve sees.
+    const bool supported = implicit && core.contact.lists != nullptr && phys.collider_motion != nullptr &&
+                           gather_supports(core.contact, *core.contact.lists, phys, n, buf.pos,
+                                           (SUPPORT_DISTANCE + 1.0) * 0.5 * phys.thickness, core.supports) > 0;
+    if (supported) {
+        core.supports.distance = SUPPORT_DISTANCE * 0.5 * phys.thickness;
+        core.supports.stiffness = support_stiffness(cloth);
+    }
+    core.solver.supports = supported ? &core.supports : nullptr;
     double h = 0.0;
     Trial trial{};
     GripMove grip;
@@ -428,6 +438,7 @@ Status step(Core& core, double remaining, double span) {
         collider_history(n, phys, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h);
     }
     if (edged & PUSHED) collider_edge_history(*core.contact.lists, n, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h);
+    if (core.solver.supports != nullptr) support_history(core.supports, n, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h);
     clock[LAST_STEP] = kinked ? 0.0 : h;  // a frozen step, a mesh collider's edges: BDF2 starts afresh
     clock[TIME] += h;
     clock[STEPS] += 1;

@@ -81,6 +81,11 @@ void world_direction(const double* shift, double* v);
 //: The table-frame direction (3) of a world direction v (3) now: R^T v in place (world_direction's inverse).
 void table_direction(const double* shift, double* v);
 
+//: Collider k's place h s after the step's start (its motion row set by start_collider_motion): the world
+//: point p (3) of its table point q (3) and the world direction v (3, in place) of a table-frame direction.
+void world_point_after(const Physics& phys, Index k, double h, const double* q, double* p);
+void world_direction_after(const Physics& phys, Index k, double h, double* v);
+
 //: The velocity (3, m/s) over the step of collider k's surface at world point p (3):
 //: v_k + omega x (p - c - d) (d now); 0 when it does not move.
 void surface_velocity(const Physics& phys, Index k, const double* p, double* u);

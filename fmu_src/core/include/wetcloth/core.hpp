@@ -198,6 +198,24 @@ struct Sliding {
     void move_entry(Index to, Index from);
 };
 
+//: A moving mesh collider's features near the cloth's elements at a step's start, as supports the implicit
+//: step sees (collider_supports.hpp): per term, the pair's cloth particles (3, -1 where unused) and their
+//: weights (3; the pair's closest-point weights, self_contact/geometry.hpp), and in the collider's table
+//: frame the contact normal at the start (3) and the weighted sum of its own points (3, m); its collider.
+//: For the step being tried: each term's world normal (3) and offset (m), so that its gap is
+//: g = offset + sum_k weight_k normal . x_k, and whether it presses (g below `distance`); stiffness (N/m),
+//: distance (m) and scale (bh^2, s^2: the position Jacobian's factor in the step's matrix).
+struct Supports {
+    std::vector<Index> points;
+    std::vector<double> weights;
+    std::vector<double> table_normal, table_part;
+    std::vector<Index> collider;
+    std::vector<double> normal, offset;
+    std::vector<char> pressing;
+    double stiffness = 0.0, distance = 0.0, scale = 0.0;
+    Index count() const { return static_cast<Index>(collider.size()); }
+};
+
 struct Solver {
     double* mass = nullptr;
     double* rhs = nullptr;
@@ -212,6 +230,7 @@ struct Solver {
     double* step_acceleration = nullptr;
     Index* counters = nullptr;
     Sliding* sliding = nullptr;  // the particles sliding on a surface during the step (sliding.hpp), or none
+    Supports* supports = nullptr;  // a moving mesh's features the step's solve sees (collider_supports.hpp), or none
 };
 
 //: Columns of Hierarchy::levels.
@@ -459,6 +478,7 @@ struct Core {
     Contact contact;
     Buffers buf;
     Sliding sliding;
+    Supports supports;
     double* clock = nullptr;  // (CLOCK_SIZE)
 };
 

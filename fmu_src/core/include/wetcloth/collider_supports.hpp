@@ -1,0 +1,58 @@
+// A moving mesh collider's vertices and edges as supports inside the implicit step (docs/model.md section
+// 6.3, "Supports in the solve").  A coarse cloth cannot wrap a mesh finer than its particles: the mesh's
+// vertices poke into its triangles, and the edges' pass (collider_edges.hpp) pushes the poked triangle back
+// after each step, a support the step's solve does not see.  Each pair of a collider feature and a cloth
+// element near at the step's start (Supports, gathered by gather_supports) becomes a one-sided penalty on
+// the pair's gap along its contact normal there, g = n . sum_k w_k x_k (the weights and normal fixed for
+// the step, the collider's points where it is at the step's end):
+//     E = stiffness / 2 (distance - g)^2 where g < distance, else 0 (J),
+// its force F_k = stiffness (distance - g) w_k n on the pair's cloth particle k, and its stiffness
+// stiffness w_k w_l n n^T (rank one over the pair's particles) in Newton's system: the diagonal blocks with
+// the per-particle blocks (so the preconditioner sees them), the rest in the matrix product.
+#pragma once
+#include "wetcloth/core.hpp"
+
+namespace wc {
+
+//: The gap (m) the solve keeps a collider feature from a cloth element, as a fraction of thickness / 2: below
+//: the particles' own distance from a collider's surface, so that a cloth lying on a flat part of a mesh
+//: (its edges and vertices in the face's plane, the cloth thickness / 2 above) is not pressed by them; above
+//: the edges' pass's (EDGE_GAP of it).
+inline constexpr double SUPPORT_DISTANCE = 0.5;
+
+//: The penalty's stiffness as a multiple of the cloth's stiffest spring (N/m per N/m).
+inline constexpr double SUPPORT_STIFFNESS = 10.0;
+
+//: The penalty's stiffness (N/m) for a cloth: SUPPORT_STIFFNESS times its stiffest spring.
+double support_stiffness(const Cloth& cloth);
+
+//: Set each term's world normal and offset for a step of h s from the step's start (the colliders' motion
+//: rows set for it: collider_motion.hpp), the collider's points where it is at the step's end; scale the
+//: step matrix's position factor bh^2 (s^2).
+void place_supports(Supports& supports, const Physics& phys, double h, double scale);
+
+//: Each term's gap at positions pos (3, n, m): offset + sum_k w_k normal . x_k (m).
+double support_gap(const Supports& supports, Index term, Index n, const double* pos);
+
+//: The penalty's energy (J) at positions pos (3, n).
+double support_energy(const Supports& supports, Index n, const double* pos);
+
+//: The pressing terms' forces (N) at positions pos (3, n) into force (3, n), their stiffness's diagonal
+//: blocks times scale into blocks (6, n; xx, yy, zz, xy, xz, yz); marks which press.
+void add_support_forces(Supports& supports, Index n, const double* pos, double* force, double* blocks);
+
+//: out (3, n) += scale times the pressing terms' stiffness off the diagonal blocks times p (3, n), in the
+//: rows of free particles (free (n) 1).
+void add_support_product(const Supports& supports, Index n, const double* free, const double* p, double* out);
+
+//: Remove from a (3, n) the parts along each pressing term's normal at its particles: the support sets their
+//: motion there (the step's error estimate leaves it out, as the floor's and colliders' contact).
+void project_supported(const Supports& supports, Index n, double* a);
+
+//: After the step is taken (pos, vel its end, prev_pos, prev_vel its start, (3, n)): the particles of the
+//: terms that pressed at its end get the history of a straight motion along the term's normal (as the
+//: floor's normal_history), so that BDF2's next step and its error estimate do not carry the support's kick.
+void support_history(const Supports& supports, Index n, const double* pos, const double* vel, double* prev_pos,
+                     double* prev_vel, double h);
+
+}  // namespace wc

@@ -1,0 +1,44 @@
+// Bindings of a moving mesh's supports inside the implicit step (collider_supports.cpp), for the tests.
+#include "convert.hpp"
+#include "wetcloth/collider_supports.hpp"
+
+namespace wc::py {
+
+WETCLOTH_BINDINGS(m) {
+    m.attr("SUPPORT_DISTANCE") = SUPPORT_DISTANCE;
+    m.attr("SUPPORT_STIFFNESS") = SUPPORT_STIFFNESS;
+    m.def(
+        "support_terms",
+        [](nb::handle points, nb::handle weights, nb::handle normals, nb::handle offsets, double stiffness,
+           double distance, double scale, nb::handle pos, nb::handle free, nb::handle p, nb::handle force,
+           nb::handle blocks, nb::handle product) {
+            Supports s;
+            const Index count = size_of(offsets);
+            const Index n = size_of(free);
+            const Index* pt = argument<const Index>(points, "points", 3 * count);
+            const double* w = argument<const double>(weights, "weights", 3 * count);
+            const double* nn = argument<const double>(normals, "normals", 3 * count);
+            const double* off = argument<const double>(offsets, "offsets", count);
+            s.points.assign(pt, pt + 3 * count);
+            s.weights.assign(w, w + 3 * count);
+            s.normal.assign(nn, nn + 3 * count);
+            s.offset.assign(off, off + count);
+            s.collider.assign(static_cast<std::size_t>(count), 0);
+            s.pressing.assign(static_cast<std::size_t>(count), 0);
+            s.stiffness = stiffness, s.distance = distance, s.scale = scale;
+            const double* x = argument<const double>(pos, "pos", 3 * n);
+            add_support_forces(s, n, x, argument<double>(force, "force", 3 * n), argument<double>(blocks, "blocks", 6 * n));
+            add_support_product(s, n, argument<const double>(free, "free", n), argument<const double>(p, "p", 3 * n),
+                                argument<double>(product, "product", 3 * n));
+            return support_energy(s, n, x);
+        },
+        nb::arg("points"), nb::arg("weights"), nb::arg("normals"), nb::arg("offsets"), nb::arg("stiffness"),
+        nb::arg("distance"), nb::arg("scale"), nb::arg("pos"), nb::arg("free"), nb::arg("p"), nb::arg("force"),
+        nb::arg("blocks"), nb::arg("product"),
+        "Supports' terms given in the world (points (m, 3) int64 cloth particles or -1, weights (m, 3), normals "
+        "(m, 3), offsets (m) m; stiffness N/m, distance m, scale s^2) at pos (3, n): adds their forces (N) into "
+        "force (3, n), their stiffness's diagonal blocks times scale into blocks (6, n) and the rest of their "
+        "stiffness times scale times p (3, n) into product (3, n) (rows of free particles); returns the energy (J).");
+}
+
+}  // namespace wc::py
