@@ -1,6 +1,7 @@
 """What colliders cost: those the cloth never touches (issue 26: under 5 %), and a cloth lying on a mesh.
 
     .venv/bin/python bench/collider_cost.py [--repeat 5] [--duration 5] [--part far|lying|both|moving]
+                                            [--frame-steps]
 
 Far (``--part far``): the default towel at 41 x 57 lands on the water for ``--duration`` s: without
 colliders, with a far analytic sphere, with the bucket mesh collider (models/meshes/bucket.ply, 1200
@@ -18,7 +19,8 @@ Moving (``--part moving``, docs/model.md section 6.3 "Moving colliders"): the ``
 sweeping through a hanging towel) for 4 s, with its collider keys and without them (the ball never
 reaches the towel), and with the ball also turning 170 deg about the vertical as it sweeps (a turning
 collider: friction against its surface's velocity), and the same two with the ball a mesh (an icosphere of
-1280 faces: the edges' pass runs in its moving frame), as the lying part prints them.
+1280 faces: the edges' pass runs in its moving frame), as the lying part prints them.  ``--frame-steps``:
+the same cases at fixed frame steps (``implicit_euler``, ``tolerance = 0``, ``max_step = 1/30``).
 """
 from __future__ import annotations
 
@@ -79,10 +81,12 @@ def lying(repeat: int) -> None:
         timed_cases(lying_cases(folder), repeat)
 
 
-def moving(repeat: int) -> None:
+def moving(repeat: int, frame_steps: bool) -> None:
     import trimesh
 
     sweep = wetcloth.load_scene("sweep")
+    if frame_steps:
+        sweep = sweep.replace(integrator="implicit_euler", tolerance=0.0, max_step=1.0 / 30.0)
     spinning = sweep.replace(collider_key2_rz=170.0)  # the ball turns 170 deg about the vertical as it sweeps
     with tempfile.TemporaryDirectory() as folder:
         ball = os.path.join(folder, "ball.stl")  # the ball as a mesh (1280 faces): its edges' pass in its frame
@@ -98,9 +102,10 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--duration", type=float, default=5.0)
     parser.add_argument("--part", choices=("far", "lying", "both", "moving"), default="both")
+    parser.add_argument("--frame-steps", action="store_true", help="moving part: at fixed frame steps")
     args = parser.parse_args()
     if args.part == "moving":
-        moving(args.repeat)
+        moving(args.repeat, args.frame_steps)
         return
     if args.part != "far":
         lying(args.repeat)
