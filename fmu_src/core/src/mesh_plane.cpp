@@ -233,26 +233,29 @@ SCALAR_ROWS void down(Algebraic& h, Index level, const double* free) {
 }
 
 //: Up one level, once x of level + 1 holds its correction: x += P x of level + 1, then a backward
-//: Gauss-Seidel sweep; with `free`, both on the free rows alone.
+//: Gauss-Seidel sweep; with `free`, both on the free rows alone.  P's product is taken by R's rows
+//: (R = P^T, both sorted by column: preconditioner.make_algebraic): each coarse point's correction added
+//: to the fine rows it reaches, coarse points in order, so that each fine row gets the terms of its row
+//: of P in their order (the same sums), over R's long rows rather than P's short ones of 1-5 entries
+//: (each row's end a branch the processor cannot tell).
 template <Index C>
 SCALAR_ROWS void up(Algebraic& h, Index level, const double* free) {
     const Rows<C> m(h, level);
-    const Index coarse_first = level_of(h, level + 1, VECTOR);
-    const Index* p_rows = h.p_start + level_of(h, level, P_ROWS);
-    const Column* p_column = h.p_column;
-    const double* p_value = h.p_value;
+    const Index coarse_first = level_of(h, level + 1, VECTOR), coarse_n = level_of(h, level + 1, SIZE);
+    const Index* r_rows = h.r_start + level_of(h, level, R_ROWS);
+    const Column* r_column = h.r_column;
+    const double* r_value = h.r_value;
     const double* coarse_x = h.x + 2 * coarse_first;
     const double* coarse_normal_x = h.x + NORMAL * h.vectors + coarse_first;
-    for (Index i = 0; i < m.n; ++i) {
-        if (free != nullptr && free[i] == 0.0) continue;  // held rows stay zero
-        Pair s = load_pair(m.x + 2 * i);  // summed in registers (through memory, each term would wait on the last's store)
-        double normal = C == COMPONENTS ? m.normal_x[i] : 0.0;
-        for (Index u = p_rows[i]; u < p_rows[i + 1]; ++u) {
-            s += both(p_value[u]) * load_pair(coarse_x + 2 * p_column[u]);
-            if (C == COMPONENTS) normal += p_value[u] * coarse_normal_x[p_column[u]];
+    for (Index k = 0; k < coarse_n; ++k) {
+        const Pair correction = load_pair(coarse_x + 2 * k);
+        const double normal = C == COMPONENTS ? coarse_normal_x[k] : 0.0;
+        for (Index t = r_rows[k]; t < r_rows[k + 1]; ++t) {
+            const Index i = r_column[t];
+            if (free != nullptr && free[i] == 0.0) continue;  // held rows stay zero
+            store_pair(m.x + 2 * i, load_pair(m.x + 2 * i) + both(r_value[t]) * correction);
+            if (C == COMPONENTS) m.normal_x[i] += r_value[t] * normal;
         }
-        store_pair(m.x + 2 * i, s);
-        if (C == COMPONENTS) m.normal_x[i] = normal;
     }
     for (Index i = m.n - 1; i >= 0; --i) {
         if (free != nullptr && free[i] == 0.0) continue;
