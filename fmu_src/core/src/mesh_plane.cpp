@@ -187,11 +187,58 @@ struct Rows {
     }
 };
 
-//: Down one level: a forward Gauss-Seidel sweep from x = 0 (only the entries left of the diagonal
-//: meet values already set), then the residual b - A x, which that sweep leaves as -U x (U the
-//: entries right of the diagonal), into r, restricted to b of level + 1 (R = P^T, row by row of R: each
-//: coarse sum in a register, its terms in the order of the fine rows).  With `free` (level 0's, else
-//: nullptr) the rows of held particles (free 0) stay zero and their residual is zero.
+//: A coarse level's forward Gauss-Seidel sweep from x = 0 (only the entries left of the diagonal meet
+//: values already set), then the residual b - A x, which that sweep leaves as -U x (U the entries right
+//: of the diagonal), row by row into the pair's residual and the normal's.
+template <Index C>
+SCALAR_ROWS void sweep_forward(const Rows<C>& m, double* residual, double* normal_residual) {
+    for (Index i = 0; i < m.n; ++i) {
+        Pair s = load_pair(m.b + 2 * i);
+        double normal = C == COMPONENTS ? m.normal_b[i] : 0.0;
+        m.subtract(m.start[i], m.diagonal[i], s, normal);
+        store_pair(m.x + 2 * i, s * m.pair_inverse(i));
+        if (C == COMPONENTS) m.normal_x[i] = normal * m.inverse[NORMAL][i];
+    }
+    for (Index i = 0; i < m.n; ++i) {
+        Pair s = both(0.0);
+        double normal = 0.0;
+        m.subtract(m.diagonal[i] + 1, m.start[i + 1], s, normal);
+        store_pair(residual + 2 * i, s);
+        if (C == COMPONENTS) normal_residual[i] = normal;
+    }
+}
+
+//: The same on level 0, whose matrices are symmetric to the bit (every spring adds one value to a_ij
+//: and a_ji): as the sweep sets x_i, it takes a_ij x_i from the residual of each j < i it meets (a_ji x_i
+//: of row j's U x), so that each row's residual gets its terms in their order (the same sums) without a
+//: second pass over the rows, whose few entries each end in a branch the processor cannot tell.  The rows
+//: of held particles (free 0) stay zero and their residual is zero.
+template <Index C>
+SCALAR_ROWS void sweep_forward_finest(const Rows<C>& m, const double* free, double* residual, double* normal_residual) {
+    for (Index i = 0; i < m.n; ++i) {
+        store_pair(residual + 2 * i, both(0.0));
+        if (C == COMPONENTS) normal_residual[i] = 0.0;
+    }
+    for (Index i = 0; i < m.n; ++i) {
+        Pair s = load_pair(m.b + 2 * i);
+        double normal = C == COMPONENTS ? m.normal_b[i] : 0.0;
+        m.subtract(m.start[i], m.diagonal[i], s, normal);
+        const Pair x = both(free[i]) * s * m.pair_inverse(i);
+        const double normal_x = free[i] * normal * m.inverse[NORMAL][i];
+        store_pair(m.x + 2 * i, x);
+        if (C == COMPONENTS) m.normal_x[i] = normal_x;
+        for (Index e = m.start[i]; e < m.diagonal[i]; ++e) {
+            const Index j = m.column[e];
+            if (free[j] == 0.0) continue;  // a held row's residual is zero
+            store_pair(residual + 2 * j, load_pair(residual + 2 * j) - m.pair_entry(e) * x);
+            if (C == COMPONENTS) normal_residual[j] -= m.a[NORMAL][e] * normal_x;
+        }
+    }
+}
+
+//: Down one level: the forward sweep and its residual, restricted to b of level + 1 (R = P^T, row by
+//: row of R: each coarse sum in a register, its terms in the order of the fine rows).  `free`: level 0's
+//: particles' flags, else nullptr.
 template <Index C>
 SCALAR_ROWS void down(Algebraic& h, Index level, const double* free) {
     static_assert(SWEEPS == 1, "the residual is -U x after one sweep from zero");
@@ -203,20 +250,10 @@ SCALAR_ROWS void down(Algebraic& h, Index level, const double* free) {
     double* normal_residual = h.r + NORMAL * h.vectors + first;
     double* coarse_b = h.b + 2 * coarse_first;
     double* coarse_normal_b = h.b + NORMAL * h.vectors + coarse_first;
-    for (Index i = 0; i < m.n; ++i) {
-        Pair s = load_pair(m.b + 2 * i);
-        double normal = C == COMPONENTS ? m.normal_b[i] : 0.0;
-        m.subtract(m.start[i], m.diagonal[i], s, normal);
-        const double keep = free != nullptr ? free[i] : 1.0;
-        store_pair(m.x + 2 * i, both(keep) * s * m.pair_inverse(i));
-        if (C == COMPONENTS) m.normal_x[i] = keep * normal * m.inverse[NORMAL][i];
-    }
-    for (Index i = 0; i < m.n; ++i) {
-        Pair s = both(0.0);
-        double normal = 0.0;
-        if (free == nullptr || free[i] != 0.0) m.subtract(m.diagonal[i] + 1, m.start[i + 1], s, normal);  // a held row's is zero
-        store_pair(residual + 2 * i, s);
-        if (C == COMPONENTS) normal_residual[i] = normal;
+    if (free != nullptr) {
+        sweep_forward_finest(m, free, residual, normal_residual);
+    } else {
+        sweep_forward(m, residual, normal_residual);
     }
     const Column* r_column = h.r_column;
     const double* r_value = h.r_value;
