@@ -13,6 +13,7 @@ import scipy.sparse
 
 import wetcloth
 from wetcloth import _core
+from wetcloth._core import forces_and_blocks
 from wetcloth._core import ALGEBRAIC_SIZE
 from wetcloth.model import Model
 from wetcloth.preconditioner import make_mesh_plane
@@ -200,6 +201,35 @@ def test_held_particles_are_dirichlet_rows_of_the_v_cycle(disc):
             _core.apply(plane, free, y, py)
             assert abs(np.sum(x * py) - np.sum(y * px)) <= 100 * EPS * np.linalg.norm(x) * np.linalg.norm(py)
             assert np.sum(x * px) > 0.0
+
+
+def test_finest_matrices_are_symmetric_to_the_bit(disc):
+    """The cycle's forward sweep takes level 0's residual -U x from each row's entries left of the diagonal
+    (mesh_plane.cpp: a_ji x_i scattered for a_ij x_i), which gives the same bits only if a_ij and a_ji are
+    the same doubles: every spring adds one value to both, at the rest stiffness (refresh) and from the
+    Jacobian in crumpled frames with a third of the particles held (set_systems_from_jacobian)."""
+    model, mass, (_, plane) = disc
+    topology, n = model.topology, model.topology.n
+    rng = np.random.default_rng(11)
+    pos = topology.rest_pos + rng.normal(scale=3e-3, size=(3, n))
+    vel = rng.normal(scale=0.1, size=(3, n))
+    _core.follow_cloth(plane, model.cloth, pos)
+    _core.refresh(plane, model.cloth, mass, SCALE)
+    matrices = [level_matrices(plane, 0)[0][0]]
+    free = model.cloth.free.copy()
+    model.cloth.free[...] = rng.uniform(size=n) > 1 / 3
+    try:
+        forces_and_blocks(model.cloth, model.physics, model.work, pos, vel, mass - model.dry_mass, 1 / 30)
+        assert _core.set_systems_from_jacobian(plane, model.cloth, mass, model.work) == 1
+    finally:
+        model.cloth.free[...] = free
+    matrices += [level_matrices(plane, c)[0][0] for c in range(3)]
+    for matrix in matrices:
+        transpose = matrix.T.tocsr()
+        transpose.sort_indices()
+        assert matrix.nnz > n and np.array_equal(matrix.indices, transpose.indices)
+        assert np.array_equal(matrix.data.view(np.int64), transpose.data.view(np.int64))  # the bits, zeros' signs too
+    _core.refresh(plane, model.cloth, mass, SCALE)  # the fixture's factors again
 
 
 def test_the_hierarchy_is_the_same_every_time_it_is_built(disc):

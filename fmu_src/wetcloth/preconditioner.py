@@ -64,8 +64,8 @@ Plane = namedtuple("Plane", "stiffness slots grid order rank bands rows referenc
 #: positions in ``a_column``, level-local columns (int32), ``a_value`` (COMPONENTS, entries));
 #: ``diagonal`` each row's diagonal position; the prolongators P and their transposes R in CSR (columns
 #: int32); ``spring_entries`` (2, T) the positions of each tension-only spring's (i, j) and (j, i) at level 0;
-#: ``inverse_diagonal``, ``x``, ``b``, ``r`` (COMPONENTS, vectors: r the residuals R restricts); ``marker``
-#: (n) int64 scratch.
+#: ``inverse_diagonal``, ``x``, ``b``, ``r`` (COMPONENTS, vectors: r the residuals R restricts; the cycle
+#: keeps x, b and r's first two rows as t1 and t2 side by side, ``[2 v + c]``); ``marker`` (n) int64 scratch.
 Algebraic = namedtuple("Algebraic", "levels a_start a_column a_value diagonal p_start p_column p_value r_start "
                                     "r_column r_value spring_entries inverse_diagonal x b r marker")
 

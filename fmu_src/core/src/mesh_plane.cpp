@@ -13,6 +13,7 @@
 // round mesh draped on a ball takes 5.1 CG iterations per Newton iteration so, 6.9 with the whole mesh's
 // cycle (docs/benchmarks.md).
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include "wetcloth/band.hpp"
@@ -35,6 +36,9 @@ namespace {
 
 //: Column `column` (AlgebraicColumn) of `level`'s row of the hierarchy's table.
 inline Index level_of(const Algebraic& h, Index level, Index column) { return h.levels[level * ALGEBRAIC_COLUMNS + column]; }
+
+//: Position in x, b or r (Algebraic) of component c's value at index v of the per-level vectors.
+inline Index entry_of(const Algebraic& h, Index c, Index v) { return c == NORMAL ? NORMAL * h.vectors + v : 2 * v + c; }
 
 //: Band storage of component c: row p holds entries (p, p) .. (p, p + kd) of the band order.
 inline double* band_of(Plane& plane, Index c) { return plane.bands + c * plane.coarse_n * (plane.kd + 1); }
@@ -117,39 +121,124 @@ Index factor_component(Plane& plane, Index c) {
     return factor_coarsest(plane, c);
 }
 
+//: The cycle's vectors x, b and r hold t1 and t2 side by side, [2 v + c] over their first two rows
+//: (COMPONENTS, vectors), the normal in the third row as it is: a row's entry reads both components'
+//: values in one load and updates both in one two-lane operation (each lane the operations of its own
+//: component in their order: the same bits as one component at a time).
+#if defined(__GNUC__)
+using Pair = double __attribute__((vector_size(16)));
+#else
+struct Pair {  // the two lanes one at a time
+    double lane[2];
+    Pair(double value = 0.0) : lane{value, value} {}
+    Pair(double first, double second) : lane{first, second} {}
+    friend Pair operator*(Pair p, Pair q) { return {p.lane[0] * q.lane[0], p.lane[1] * q.lane[1]}; }
+    friend Pair operator+(Pair p, Pair q) { return {p.lane[0] + q.lane[0], p.lane[1] + q.lane[1]}; }
+    friend Pair operator-(Pair p, Pair q) { return {p.lane[0] - q.lane[0], p.lane[1] - q.lane[1]}; }
+    Pair& operator+=(Pair q) { return *this = *this + q; }
+    Pair& operator-=(Pair q) { return *this = *this - q; }
+};
+#endif
+inline Pair both(double value) { return Pair{value, value}; }
+inline Pair load_pair(const double* from) {
+    Pair p;
+    std::memcpy(&p, from, sizeof p);
+    return p;
+}
+inline void store_pair(double* to, Pair p) { std::memcpy(to, &p, sizeof p); }
+
 //: The V-cycle's loops over a level's rows do C components side by side (2: t1 and t2, whose systems
 //: at the rest stiffness are one (mesh_factor), so that their loops read component 0's matrix; 3: and the
 //: normal, each its own): one pass over the pattern for all, and independent chains in each row's sums.
 template <Index C>
 struct Rows {
-    //: The system component c's loops read (component 0's for both in-plane components when C is 2).
-    static constexpr Index system(Index c) { return C == NORMAL ? 0 : c; }
     const Index* start;   // the level's rows in a_start
     const Column* column;  // a_column
     const Index* diagonal;
-    const double* a[C];
-    const double* inverse[C];
-    double* x[C];
-    double* b[C];
+    const double* a[COMPONENTS];  // t1's, t2's (t1's when C is 2) and the normal's matrices
+    const double* inverse[COMPONENTS];
+    double* x;  // the pair's (t1, t2) at [2 i + c]
+    double* b;
+    double* normal_x;  // the normal's (C 3)
+    double* normal_b;
     Index n;
     Rows(Algebraic& h, Index level)
         : start(h.a_start + level_of(h, level, A_ROWS)), column(h.a_column),
           diagonal(h.diagonal + level_of(h, level, VECTOR)), n(level_of(h, level, SIZE)) {
         const Index first = level_of(h, level, VECTOR);
-        for (Index c = 0; c < C; ++c) {
-            a[c] = h.a_value + system(c) * h.entries;
-            inverse[c] = h.inverse_diagonal + system(c) * h.vectors + first;
-            x[c] = h.x + c * h.vectors + first;
-            b[c] = h.b + c * h.vectors + first;
+        for (Index c = 0; c < COMPONENTS; ++c) {
+            const Index system = C == NORMAL && c < NORMAL ? 0 : c;
+            a[c] = h.a_value + system * h.entries;
+            inverse[c] = h.inverse_diagonal + system * h.vectors + first;
+        }
+        x = h.x + 2 * first, b = h.b + 2 * first;
+        normal_x = h.x + NORMAL * h.vectors + first, normal_b = h.b + NORMAL * h.vectors + first;
+    }
+    //: Entry e of the pair's matrices (one value for both when C is 2).
+    Pair pair_entry(Index e) const { return C == NORMAL ? both(a[0][e]) : Pair{a[0][e], a[1][e]}; }
+    Pair pair_inverse(Index i) const { return C == NORMAL ? both(inverse[0][i]) : Pair{inverse[0][i], inverse[1][i]}; }
+    //: s -= A's entries e in [from, to) times x: the pair, and the normal when C is 3.
+    void subtract(Index from, Index to, Pair& s, double& normal) const {
+        for (Index e = from; e < to; ++e) {
+            const Index j = column[e];
+            s -= pair_entry(e) * load_pair(x + 2 * j);
+            if (C == COMPONENTS) normal -= a[NORMAL][e] * normal_x[j];
         }
     }
 };
 
-//: Down one level: a forward Gauss-Seidel sweep from x = 0 (only the entries left of the diagonal
-//: meet values already set), then the residual b - A x, which that sweep leaves as -U x (U the
-//: entries right of the diagonal), into r, restricted to b of level + 1 (R = P^T, row by row of R: each
-//: coarse sum in a register, its terms in the order of the fine rows).  With `free` (level 0's, else
-//: nullptr) the rows of held particles (free 0) stay zero and their residual is zero.
+//: A coarse level's forward Gauss-Seidel sweep from x = 0 (only the entries left of the diagonal meet
+//: values already set), then the residual b - A x, which that sweep leaves as -U x (U the entries right
+//: of the diagonal), row by row into the pair's residual and the normal's.
+template <Index C>
+SCALAR_ROWS void sweep_forward(const Rows<C>& m, double* residual, double* normal_residual) {
+    for (Index i = 0; i < m.n; ++i) {
+        Pair s = load_pair(m.b + 2 * i);
+        double normal = C == COMPONENTS ? m.normal_b[i] : 0.0;
+        m.subtract(m.start[i], m.diagonal[i], s, normal);
+        store_pair(m.x + 2 * i, s * m.pair_inverse(i));
+        if (C == COMPONENTS) m.normal_x[i] = normal * m.inverse[NORMAL][i];
+    }
+    for (Index i = 0; i < m.n; ++i) {
+        Pair s = both(0.0);
+        double normal = 0.0;
+        m.subtract(m.diagonal[i] + 1, m.start[i + 1], s, normal);
+        store_pair(residual + 2 * i, s);
+        if (C == COMPONENTS) normal_residual[i] = normal;
+    }
+}
+
+//: The same on level 0, whose matrices are symmetric to the bit (every spring adds one value to a_ij
+//: and a_ji): as the sweep sets x_i, it takes a_ij x_i from the residual of each j < i it meets (a_ji x_i
+//: of row j's U x), so that each row's residual gets its terms in their order (the same sums) without a
+//: second pass over the rows, whose few entries each end in a branch the processor cannot tell.  The rows
+//: of held particles (free 0) stay zero and their residual is zero.
+template <Index C>
+SCALAR_ROWS void sweep_forward_finest(const Rows<C>& m, const double* free, double* residual, double* normal_residual) {
+    for (Index i = 0; i < m.n; ++i) {
+        store_pair(residual + 2 * i, both(0.0));
+        if (C == COMPONENTS) normal_residual[i] = 0.0;
+    }
+    for (Index i = 0; i < m.n; ++i) {
+        Pair s = load_pair(m.b + 2 * i);
+        double normal = C == COMPONENTS ? m.normal_b[i] : 0.0;
+        m.subtract(m.start[i], m.diagonal[i], s, normal);
+        const Pair x = both(free[i]) * s * m.pair_inverse(i);
+        const double normal_x = free[i] * normal * m.inverse[NORMAL][i];
+        store_pair(m.x + 2 * i, x);
+        if (C == COMPONENTS) m.normal_x[i] = normal_x;
+        for (Index e = m.start[i]; e < m.diagonal[i]; ++e) {
+            const Index j = m.column[e];
+            if (free[j] == 0.0) continue;  // a held row's residual is zero
+            store_pair(residual + 2 * j, load_pair(residual + 2 * j) - m.pair_entry(e) * x);
+            if (C == COMPONENTS) normal_residual[j] -= m.a[NORMAL][e] * normal_x;
+        }
+    }
+}
+
+//: Down one level: the forward sweep and its residual, restricted to b of level + 1 (R = P^T, row by
+//: row of R: each coarse sum in a register, its terms in the order of the fine rows).  `free`: level 0's
+//: particles' flags, else nullptr.
 template <Index C>
 SCALAR_ROWS void down(Algebraic& h, Index level, const double* free) {
     static_assert(SWEEPS == 1, "the residual is -U x after one sweep from zero");
@@ -157,63 +246,61 @@ SCALAR_ROWS void down(Algebraic& h, Index level, const double* free) {
     const Index first = level_of(h, level, VECTOR);
     const Index coarse_first = level_of(h, level + 1, VECTOR), coarse_n = level_of(h, level + 1, SIZE);
     const Index* r_rows = h.r_start + level_of(h, level, R_ROWS);
-    double* residual[C];
-    double* coarse_b[C];
-    for (Index c = 0; c < C; ++c) {
-        residual[c] = h.r + c * h.vectors + first;
-        coarse_b[c] = h.b + c * h.vectors + coarse_first;
-    }
-    for (Index i = 0; i < m.n; ++i) {
-        double s[C];
-        for (Index c = 0; c < C; ++c) s[c] = m.b[c][i];
-        for (Index e = m.start[i]; e < m.diagonal[i]; ++e)
-            for (Index c = 0; c < C; ++c) s[c] -= m.a[m.system(c)][e] * m.x[c][m.column[e]];
-        const double keep = free != nullptr ? free[i] : 1.0;
-        for (Index c = 0; c < C; ++c) m.x[c][i] = keep * s[c] * m.inverse[m.system(c)][i];
-    }
-    for (Index i = 0; i < m.n; ++i) {
-        double s[C] = {};
-        if (free == nullptr || free[i] != 0.0)  // a held row's residual is zero
-            for (Index e = m.diagonal[i] + 1; e < m.start[i + 1]; ++e)
-                for (Index c = 0; c < C; ++c) s[c] -= m.a[m.system(c)][e] * m.x[c][m.column[e]];
-        for (Index c = 0; c < C; ++c) residual[c][i] = s[c];
+    double* residual = h.r + 2 * first;
+    double* normal_residual = h.r + NORMAL * h.vectors + first;
+    double* coarse_b = h.b + 2 * coarse_first;
+    double* coarse_normal_b = h.b + NORMAL * h.vectors + coarse_first;
+    if (free != nullptr) {
+        sweep_forward_finest(m, free, residual, normal_residual);
+    } else {
+        sweep_forward(m, residual, normal_residual);
     }
     const Column* r_column = h.r_column;
     const double* r_value = h.r_value;
     for (Index k = 0; k < coarse_n; ++k) {
-        double s[C] = {};
-        for (Index t = r_rows[k]; t < r_rows[k + 1]; ++t)
-            for (Index c = 0; c < C; ++c) s[c] += r_value[t] * residual[c][r_column[t]];
-        for (Index c = 0; c < C; ++c) coarse_b[c][k] = s[c];
+        Pair s = both(0.0);
+        double normal = 0.0;
+        for (Index t = r_rows[k]; t < r_rows[k + 1]; ++t) {
+            s += both(r_value[t]) * load_pair(residual + 2 * r_column[t]);
+            if (C == COMPONENTS) normal += r_value[t] * normal_residual[r_column[t]];
+        }
+        store_pair(coarse_b + 2 * k, s);
+        if (C == COMPONENTS) coarse_normal_b[k] = normal;
     }
 }
 
 //: Up one level, once x of level + 1 holds its correction: x += P x of level + 1, then a backward
-//: Gauss-Seidel sweep; with `free`, both on the free rows alone.
+//: Gauss-Seidel sweep; with `free`, both on the free rows alone.  P's product is taken by R's rows
+//: (R = P^T, both sorted by column: preconditioner.make_algebraic): each coarse point's correction added
+//: to the fine rows it reaches, coarse points in order, so that each fine row gets the terms of its row
+//: of P in their order (the same sums), over R's long rows rather than P's short ones of 1-5 entries
+//: (each row's end a branch the processor cannot tell).
 template <Index C>
 SCALAR_ROWS void up(Algebraic& h, Index level, const double* free) {
     const Rows<C> m(h, level);
-    const Index coarse_first = level_of(h, level + 1, VECTOR);
-    const Index* p_rows = h.p_start + level_of(h, level, P_ROWS);
-    const Column* p_column = h.p_column;
-    const double* p_value = h.p_value;
-    const double* coarse_x[C];
-    for (Index c = 0; c < C; ++c) coarse_x[c] = h.x + c * h.vectors + coarse_first;
-    for (Index i = 0; i < m.n; ++i) {
-        if (free != nullptr && free[i] == 0.0) continue;  // held rows stay zero
-        double s[C];  // x[c][i] summed in a register (through memory, each term would wait on the last's store)
-        for (Index c = 0; c < C; ++c) s[c] = m.x[c][i];
-        for (Index u = p_rows[i]; u < p_rows[i + 1]; ++u)
-            for (Index c = 0; c < C; ++c) s[c] += p_value[u] * coarse_x[c][p_column[u]];
-        for (Index c = 0; c < C; ++c) m.x[c][i] = s[c];
+    const Index coarse_first = level_of(h, level + 1, VECTOR), coarse_n = level_of(h, level + 1, SIZE);
+    const Index* r_rows = h.r_start + level_of(h, level, R_ROWS);
+    const Column* r_column = h.r_column;
+    const double* r_value = h.r_value;
+    const double* coarse_x = h.x + 2 * coarse_first;
+    const double* coarse_normal_x = h.x + NORMAL * h.vectors + coarse_first;
+    for (Index k = 0; k < coarse_n; ++k) {
+        const Pair correction = load_pair(coarse_x + 2 * k);
+        const double normal = C == COMPONENTS ? coarse_normal_x[k] : 0.0;
+        for (Index t = r_rows[k]; t < r_rows[k + 1]; ++t) {
+            const Index i = r_column[t];
+            if (free != nullptr && free[i] == 0.0) continue;  // held rows stay zero
+            store_pair(m.x + 2 * i, load_pair(m.x + 2 * i) + both(r_value[t]) * correction);
+            if (C == COMPONENTS) m.normal_x[i] += r_value[t] * normal;
+        }
     }
     for (Index i = m.n - 1; i >= 0; --i) {
         if (free != nullptr && free[i] == 0.0) continue;
-        double s[C];
-        for (Index c = 0; c < C; ++c) s[c] = m.b[c][i];
-        for (Index e = m.start[i]; e < m.start[i + 1]; ++e)
-            for (Index c = 0; c < C; ++c) s[c] -= m.a[m.system(c)][e] * m.x[c][m.column[e]];
-        for (Index c = 0; c < C; ++c) m.x[c][i] += s[c] * m.inverse[m.system(c)][i];
+        Pair s = load_pair(m.b + 2 * i);
+        double normal = C == COMPONENTS ? m.normal_b[i] : 0.0;
+        m.subtract(m.start[i], m.start[i + 1], s, normal);
+        store_pair(m.x + 2 * i, load_pair(m.x + 2 * i) + s * m.pair_inverse(i));
+        if (C == COMPONENTS) m.normal_x[i] += normal * m.inverse[NORMAL][i];
     }
 }
 
@@ -334,10 +421,11 @@ void mesh_apply(Plane& plane, Index n, const double* free, const double* r, doub
     const double* f = plane.frame;
     Algebraic& h = plane.algebraic;
     const Index components = plane.reference[3] != 0.0 ? COMPONENTS : NORMAL;
-    for (Index c = 0; c < COMPONENTS; ++c) {
-        double* b = h.b + c * h.vectors;
+    for (Index c = 0; c < COMPONENTS; ++c) {  // b of t1 and t2 side by side (Pair), the normal's in its row
+        double* b = c == NORMAL ? h.b + NORMAL * h.vectors : h.b + c;
+        const Index stride = c == NORMAL ? 1 : 2;
         for (Index i = 0; i < n; ++i)
-            b[i] = f[3 * c * n + i] * r[i] + f[(3 * c + 1) * n + i] * r[n + i] + f[(3 * c + 2) * n + i] * r[2 * n + i];
+            b[stride * i] = f[3 * c * n + i] * r[i] + f[(3 * c + 1) * n + i] * r[n + i] + f[(3 * c + 2) * n + i] * r[2 * n + i];
     }
     double* normal = h.x + NORMAL * h.vectors;
     if (components == NORMAL)
@@ -347,22 +435,21 @@ void mesh_apply(Plane& plane, Index n, const double* free, const double* r, doub
     double* local = plane.local;  // (COMPONENTS, n_c) in band order
     for (Index c = 0; c < components; ++c)
         for (Index position = 0; position < coarse_n; ++position)
-            local[c * coarse_n + position] = h.b[c * h.vectors + last + plane.order[position]];
+            local[c * coarse_n + position] = h.b[entry_of(h, c, last + plane.order[position])];
     band_solve_two(plane.bands, plane.rows, local, coarse_n, plane.kd);
     if (components == COMPONENTS)
         band_solve_one(band_of(plane, NORMAL), rows_of(plane, NORMAL), local + NORMAL * coarse_n, coarse_n, plane.kd);
     for (Index c = 0; c < components; ++c)
         for (Index position = 0; position < coarse_n; ++position)
-            h.x[c * h.vectors + last + plane.order[position]] = local[c * coarse_n + position];
+            h.x[entry_of(h, c, last + plane.order[position])] = local[c * coarse_n + position];
     cycle_up(h, components, free);
-    const double* x0 = h.x;
-    const double* x1 = h.x + h.vectors;
-    for (Index c = 0; c < 3; ++c) {  // one row of z at a time: contiguous loops, vectorised
+    const double* x = h.x;  // t1's and t2's side by side
+    for (Index c = 0; c < 3; ++c) {  // one row of z at a time
         const double* t1 = f + c * n;
         const double* t2 = f + (3 + c) * n;
         const double* axis = f + (6 + c) * n;
         double* zc = z + c * n;
-        for (Index i = 0; i < n; ++i) zc[i] = free[i] * (t1[i] * x0[i] + t2[i] * x1[i] + axis[i] * normal[i]);
+        for (Index i = 0; i < n; ++i) zc[i] = free[i] * (t1[i] * x[2 * i] + t2[i] * x[2 * i + 1] + axis[i] * normal[i]);
     }
 }
 
