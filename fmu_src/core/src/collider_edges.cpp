@@ -141,11 +141,12 @@ double box_gap(int kind, const Vec3 x[4]) {
 
 //: The pairs of the cloth's elements of `width` particles (rows of `elements`, nullptr: the particles) with the
 //: features of mesh collider k's triangles whose boxes reach the elements' boxes at positions x grown by
-//: reach + extra (m), that are nearer than their distance (target_of, from reach) plus extra.  stamp:
-//: scratch, the last element that saw each triangle (+ 1).
+//: reach + extra (m), that are nearer than their distance (target_of, from reach) plus extra.  stamp,
+//: vertex_stamp: scratch, the last element that saw each triangle, and that took each vertex (+ 1): a
+//: vertex is paired with a cloth triangle once, though each of its triangles meets the triangle's box.
 void gather(const Index* elements, Index count, int width, Index k, Index mesh, const ColliderMeshes& m, Index n,
             const double* x, double reach, double extra, std::vector<Index>& near, std::vector<Index>& stamp,
-            std::vector<Pair>& pairs) {
+            std::vector<Index>& vertex_stamp, std::vector<Pair>& pairs) {
     auto add = [&](const Pair& pair) {
         const Motion mo = motion_of(pair, m, n, nullptr, nullptr, x, x);
         const double d = distance(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
@@ -155,6 +156,7 @@ void gather(const Index* elements, Index count, int width, Index k, Index mesh, 
         }
     };
     std::fill(stamp.begin(), stamp.end(), 0);
+    if (width == 3) vertex_stamp.assign(static_cast<std::size_t>(m.vertex_count), 0);
     for (Index e = 0; e < count; ++e) {
         const Index* idx = elements ? elements + e * width : &e;
         const Box box = path_box(idx, width, n, x, x, reach + extra);  // the farthest a pair kept can be
@@ -184,7 +186,10 @@ void gather(const Index* elements, Index count, int width, Index k, Index mesh, 
                 }
             } else {  // each of the triangle's corners and the cloth triangle
                 for (int j = 0; j < 3; ++j) {
-                    if (box.holds(p[j])) add({POINT_TRIANGLE, vertex_slot(v[j]), idx[0], idx[1], idx[2], k, 0});
+                    Index& taken = vertex_stamp[static_cast<std::size_t>(v[j])];
+                    if (taken == e + 1 || !box.holds(p[j])) continue;
+                    taken = e + 1;
+                    add({POINT_TRIANGLE, vertex_slot(v[j]), idx[0], idx[1], idx[2], k, 0});
                 }
             }
         }
@@ -368,10 +373,12 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
     for (const Index k : reached) {
         const Index mesh = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_RADIUS]);
         std::vector<Index>& stamp = lists.collider_stamp;
-        gather(nullptr, n, 1, k, mesh, phys.meshes, n, x.data(), reach, extra, found, stamp, pairs);
-        gather(contact.edges, contact.edge_count, 2, k, mesh, phys.meshes, n, x.data(), reach, extra, found, stamp, pairs);
+        std::vector<Index>& taken = lists.collider_vertex_stamp;
+        gather(nullptr, n, 1, k, mesh, phys.meshes, n, x.data(), reach, extra, found, stamp, taken, pairs);
+        gather(contact.edges, contact.edge_count, 2, k, mesh, phys.meshes, n, x.data(), reach, extra, found, stamp, taken,
+               pairs);
         gather(contact.triangles, contact.triangle_count, 3, k, mesh, phys.meshes, n, x.data(), reach, extra, found,
-               stamp, pairs);
+               stamp, taken, pairs);
     }
     std::sort(pairs.begin(), pairs.end());  // (a pair found twice has the same distance: one copy kept)
     pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
