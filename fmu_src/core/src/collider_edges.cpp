@@ -396,6 +396,25 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
     kept.margin = margin;
 }
 
+//: The kept pairs' particles' largest move (m) from the list's reference to x0, and their largest motion
+//: from x0 to x1 (3, n each).
+struct MembersMoves {
+    double moved, motion;
+};
+MembersMoves members_moves(const ColliderPairList& kept, Index n, const double* x0, const double* x1) {
+    double moved2 = 0.0, motion2 = 0.0;
+    for (const Index i : kept.members) {
+        double a2 = 0.0, b2 = 0.0;
+        for (Index c = 0; c < 3; ++c) {
+            const double a = x0[c * n + i] - kept.reference[static_cast<std::size_t>(c * n + i)];
+            const double b = x1[c * n + i] - x0[c * n + i];
+            a2 += a * a, b2 += b * b;
+        }
+        moved2 = py_max(moved2, a2), motion2 = py_max(motion2, b2);
+    }
+    return {std::sqrt(moved2), std::sqrt(motion2)};
+}
+
 //: The pairs near enough to need a look over the step from x0 to x1, in lists.collider_pairs with their
 //: start distances: those of the kept list (gathered again unless it holds at x0 and x1) nearer than their
 //: distance (target_of) plus reach (m) at the start less their motion's bound (pushes that move no particle
@@ -412,17 +431,8 @@ void pairs_for_step(const Contact& contact, ContactLists& lists, ColliderPairLis
     // move from there, and its motion's bound at most 2.5 times their largest motion over the step (a
     // vertex and a cloth triangle's; a cloth edge's 1.5, a particle's 1): a pair farther at the reference
     // than its distance plus reach plus those two (and a nanometre for rounding) is left out without a look.
-    double moved2 = 0.0, motion2 = 0.0;
-    for (const Index i : kept.members) {
-        double a2 = 0.0, b2 = 0.0;
-        for (Index c = 0; c < 3; ++c) {
-            const double a = x0[c * n + i] - kept.reference[static_cast<std::size_t>(c * n + i)];
-            const double b = x1[c * n + i] - x0[c * n + i];
-            a2 += a * a, b2 += b * b;
-        }
-        moved2 = py_max(moved2, a2), motion2 = py_max(motion2, b2);
-    }
-    const double unseen = std::sqrt(moved2) + 2.5 * std::sqrt(motion2) + ROUNDING_SLACK * reach;
+    const MembersMoves moves = members_moves(kept, n, x0, x1);
+    const double unseen = moves.moved + 2.5 * moves.motion + ROUNDING_SLACK * reach;
     for (const Pair& pair : kept.pairs) {
         if (gap_of(pair[P_START]) - unseen >= target_of(pair, reach) + reach) continue;
         const Motion mo = motion_of(pair, phys.meshes, n, nullptr, nullptr, x0, x1);
@@ -636,16 +646,7 @@ Index gather_supports(const Contact& contact, ContactLists& lists, const Physics
         }
         ColliderPairList& kept = lists.collider_moving_kept[static_cast<std::size_t>(k)];
         if (!list_holds(kept, phys, n, q)) keep_list(contact, lists, kept, phys, frame, n, q, q, reach);
-        double moved2 = 0.0;  // the kept pairs' particles' largest move from the list's reference
-        for (const Index i : kept.members) {
-            double a2 = 0.0;
-            for (Index c = 0; c < 3; ++c) {
-                const double a = q[c * n + i] - kept.reference[static_cast<std::size_t>(c * n + i)];
-                a2 += a * a;
-            }
-            moved2 = py_max(moved2, a2);
-        }
-        const double moved = std::sqrt(moved2) + ROUNDING_SLACK * reach;
+        const double moved = members_moves(kept, n, q, q).moved + ROUNDING_SLACK * reach;
         for (const Pair& pair : kept.pairs) {
             if (pair[P_KIND] == POINT_TRIANGLE && pair[P_POINTS] >= 0) continue;  // a particle: the particles' contact
             if (gap_of(pair[P_START]) - moved >= within) continue;
