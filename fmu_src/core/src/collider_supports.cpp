@@ -1,10 +1,75 @@
 // A moving mesh collider's features as supports inside the implicit step (collider_supports.hpp).
 #include "wetcloth/collider_supports.hpp"
 
+#include <cmath>
+
 #include "wetcloth/collider_motion.hpp"
 #include "wetcloth/floor.hpp"
 
 namespace wc {
+
+namespace {
+
+//: f1(y) / y (1/(m/s)) of the smoothed Coulomb law at slip speed y (m/s): 2 / eps - y / eps^2 below eps, else
+//: 1 / y.
+double slip_factor(double y) {
+    constexpr double eps = SUPPORT_SLIP_SPEED;
+    return y < eps ? 2.0 / eps - y / (eps * eps) : 1.0 / y;
+}
+
+//: f0(y) (m/s), the smoothed |u_t|: y^2 / eps - y^3 / (3 eps^2) + eps / 3 below eps, else y (f0' = f1).
+double smoothed_speed(double y) {
+    constexpr double eps = SUPPORT_SLIP_SPEED;
+    return y < eps ? y * y / eps - y * y * y / (3.0 * eps * eps) + eps / 3.0 : y;
+}
+
+//: Term t's relative velocity across its normal, u_t (3, m/s), at velocities vel (3, n); returns |u_t|.
+double slip_velocity(const Supports& supports, Index t, Index n, const double* vel, double* u) {
+    const double* nn = supports.normal.data() + 3 * t;
+    for (int c = 0; c < 3; ++c) u[c] = supports.collider_velocity[3 * t + c];
+    for (int j = 0; j < 3; ++j) {
+        const Index i = supports.points[3 * t + j];
+        if (i < 0) continue;
+        const double w = supports.weights[3 * t + j];
+        for (Index c = 0; c < 3; ++c) u[c] += w * vel[c * n + i];
+    }
+    const double along = nn[0] * u[0] + nn[1] * u[1] + nn[2] * u[2];
+    for (int c = 0; c < 3; ++c) u[c] -= along * nn[c];
+    return std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+}
+
+//: Term t's friction: its forces (N) into force (3, n) at normal force `normal` (N) and velocities vel, its
+//: stiffness in the pair's relative velocity (6, N s/m) into friction_block, and that times velocity_scale
+//: w_j^2 into each particle's diagonal blocks (6, n).
+void add_friction(Supports& supports, Index t, Index n, double normal, const double* vel, double* force,
+                  double* blocks) {
+    double u[3];
+    const double y = slip_velocity(supports, t, n, vel, u);
+    const double mu_n = supports.friction[static_cast<std::size_t>(t)] * normal;
+    const double a = slip_factor(y);
+    // H = mu N (a (I - n n^T) - b t t^T), t = u_t / |u_t|: b = 1 / y at or above eps (the cone's radial part
+    // has no stiffness), y / eps^2 below (f1' = a - b); at y = 0 no direction, b = 0.
+    const double b = y >= SUPPORT_SLIP_SPEED ? 1.0 / y : y / (SUPPORT_SLIP_SPEED * SUPPORT_SLIP_SPEED);
+    const double* nn = supports.normal.data() + 3 * t;
+    double tt[3] = {0.0, 0.0, 0.0};
+    if (y > 0.0) for (int c = 0; c < 3; ++c) tt[c] = u[c] / y;
+    const int row[6] = {0, 1, 2, 0, 0, 1}, column[6] = {0, 1, 2, 1, 2, 2};
+    double* h = supports.friction_block.data() + 6 * t;
+    for (int e = 0; e < 6; ++e) {
+        const int r = row[e], c = column[e];
+        h[e] = mu_n * (a * ((r == c ? 1.0 : 0.0) - nn[r] * nn[c]) - b * tt[r] * tt[c]);
+    }
+    for (int j = 0; j < 3; ++j) {
+        const Index i = supports.points[3 * t + j];
+        if (i < 0) continue;
+        const double w = supports.weights[3 * t + j];
+        for (Index c = 0; c < 3; ++c) force[c * n + i] -= w * mu_n * a * u[c];
+        const double scaled = supports.velocity_scale * w * w;
+        for (int e = 0; e < 6; ++e) blocks[e * n + i] += scaled * h[e];
+    }
+}
+
+}  // namespace
 
 double support_stiffness(const Cloth& cloth) {
     double stiffest = 0.0;
@@ -14,12 +79,17 @@ double support_stiffness(const Cloth& cloth) {
     return SUPPORT_STIFFNESS * stiffest;
 }
 
-void place_supports(Supports& supports, const Physics& phys, double h, double scale) {
+void place_supports(Supports& supports, const Physics& phys, double h, double bh) {
     const Index count = supports.count();
     supports.normal.resize(3 * static_cast<std::size_t>(count));
     supports.offset.resize(static_cast<std::size_t>(count));
     supports.pressing.assign(static_cast<std::size_t>(count), 0);
-    supports.scale = scale;
+    supports.friction.resize(static_cast<std::size_t>(count));
+    supports.collider_velocity.assign(3 * static_cast<std::size_t>(count), 0.0);
+    supports.friction_block.resize(6 * static_cast<std::size_t>(count));
+    supports.scale = bh * bh;
+    supports.velocity_scale = bh;
+    supports.any_friction = false;
     for (Index t = 0; t < count; ++t) {
         const Index k = supports.collider[t];
         double* normal = supports.normal.data() + 3 * t;
@@ -37,6 +107,22 @@ void place_supports(Supports& supports, const Physics& phys, double h, double sc
         world_direction_after(phys, k, h, moved);
         for (int c = 0; c < 3; ++c) moved[c] -= cloth_weight * origin_place[c];
         supports.offset[static_cast<std::size_t>(t)] = normal[0] * moved[0] + normal[1] * moved[1] + normal[2] * moved[2];
+        const double mu = phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
+        supports.friction[static_cast<std::size_t>(t)] = mu;
+        const double* shift = collider_shift(phys, k);
+        if (!(mu > 0.0) || shift == nullptr) continue;
+        supports.any_friction = true;
+        // The collider's points' weighted velocity at the step's end, sum_k w_k (u + omega x (p_k - c - d)) =
+        // W u + omega x (moved - W (c + d)), W = -cloth_weight their weights' sum.
+        double* velocity = supports.collider_velocity.data() + 3 * t;
+        for (int c = 0; c < 3; ++c) velocity[c] = -cloth_weight * shift[MOTION_VELOCITY + c];
+        if (!turns(shift)) continue;
+        double centre_place[3];  // c + d
+        world_point_after(phys, k, h, phys.colliders + k * COLLIDER_COLUMNS + C_X, centre_place);
+        double arm[3], spin[3];
+        for (int c = 0; c < 3; ++c) arm[c] = moved[c] + cloth_weight * centre_place[c];
+        cross(shift + MOTION_SPIN, arm, spin);
+        for (int c = 0; c < 3; ++c) velocity[c] += spin[c];
     }
 }
 
@@ -61,7 +147,20 @@ double support_energy(const Supports& supports, Index n, const double* pos) {
     return energy;
 }
 
-void add_support_forces(Supports& supports, Index n, const double* pos, double* force, double* blocks) {
+double support_dissipation(const Supports& supports, Index n, const double* pos, const double* vel) {
+    double dissipation = 0.0;
+    for (Index t = 0; t < supports.count(); ++t) {
+        const double depth = supports.distance - support_gap(supports, t, n, pos);
+        if (!(depth > 0.0)) continue;
+        double u[3];
+        const double y = slip_velocity(supports, t, n, vel, u);
+        dissipation += supports.friction[static_cast<std::size_t>(t)] * supports.stiffness * depth * smoothed_speed(y);
+    }
+    return dissipation;
+}
+
+void add_support_forces(Supports& supports, Index n, const double* pos, const double* vel, double* force,
+                        double* blocks) {
     const double k = supports.stiffness;
     const double scaled = supports.scale * k;
     for (Index t = 0; t < supports.count(); ++t) {
@@ -69,6 +168,9 @@ void add_support_forces(Supports& supports, Index n, const double* pos, double* 
         const bool presses = depth > 0.0;
         supports.pressing[static_cast<std::size_t>(t)] = presses;
         if (!presses) continue;
+        if (supports.any_friction && supports.friction[static_cast<std::size_t>(t)] > 0.0) {
+            add_friction(supports, t, n, k * depth, vel, force, blocks);
+        }
         const double* nn = supports.normal.data() + 3 * t;
         for (int j = 0; j < 3; ++j) {
             const Index i = supports.points[3 * t + j];
@@ -103,6 +205,24 @@ void add_support_product(const Supports& supports, Index n, const double* free, 
             if (i < 0) continue;
             const double a = scaled * free[i] * supports.weights[3 * t + j] * (sum - along[j]);
             for (Index c = 0; c < 3; ++c) out[c * n + i] += a * nn[c];
+        }
+        if (!supports.any_friction || !(supports.friction[static_cast<std::size_t>(t)] > 0.0)) continue;
+        const double* h = supports.friction_block.data() + 6 * t;  // xx yy zz xy xz yz
+        double total[3] = {0.0, 0.0, 0.0};  // sum_j w_j p_j
+        for (int j = 0; j < 3; ++j) {
+            const Index i = supports.points[3 * t + j];
+            if (i < 0) continue;
+            for (Index c = 0; c < 3; ++c) total[c] += supports.weights[3 * t + j] * p[c * n + i];
+        }
+        for (int j = 0; j < 3; ++j) {
+            const Index i = supports.points[3 * t + j];
+            if (i < 0) continue;
+            const double w = supports.weights[3 * t + j];
+            const double o[3] = {total[0] - w * p[i], total[1] - w * p[n + i], total[2] - w * p[2 * n + i]};
+            const double a = supports.velocity_scale * free[i] * w;
+            out[i] += a * (h[0] * o[0] + h[3] * o[1] + h[4] * o[2]);
+            out[n + i] += a * (h[3] * o[0] + h[1] * o[1] + h[5] * o[2]);
+            out[2 * n + i] += a * (h[4] * o[0] + h[5] * o[1] + h[2] * o[2]);
         }
     }
 }
