@@ -12,11 +12,11 @@
 // Friction (the collider's coefficient mu, off when 0): on the pair's relative velocity at the step's end,
 // u = sum_k w_k v_k (the collider's points at its surface's velocity there), its part across n, u_t, meets
 // the smoothed Coulomb force of IPC (Li et al. 2020), F_k = -w_k mu N f1(|u_t|) u_t / |u_t|, N = stiffness
-// (distance - g) the pair's normal force at the Newton iterate (not differentiated: lagged), f1(y) =
-// 2 y / eps - y^2 / eps^2 below eps = SUPPORT_SLIP_SPEED, else 1: minus the gradient in v_k of the
-// dissipation potential D = mu N f0(|u_t|), f0' = f1.  Its stiffness in velocity, w_k w_l mu N H (H the
+// (distance - g_0) the pair's normal force at the step's start (lagged, as IPC's: fixed for the step), f1(y)
+// = 2 y / eps - y^2 / eps^2 below eps = SUPPORT_SLIP_SPEED, else 1: minus the gradient in v_k of the
+// dissipation potential D = mu N f0(|u_t|), f0' = f1 (W).  Its stiffness in velocity, w_k w_l mu N H (H the
 // Hessian of f0(|u_t|), rank two in the plane across n, positive semidefinite), joins Newton's system times bh
-// as the normal term's does.
+// as the normal term's does: with N fixed Newton's matrix is the step's exact Jacobian.
 #pragma once
 #include "wetcloth/core.hpp"
 
@@ -41,9 +41,9 @@ double support_stiffness(const Cloth& cloth);
 
 //: Set each term's world normal and offset for a step of h s from the step's start (the colliders' motion
 //: rows set for it: collider_motion.hpp), the collider's points where it is at the step's end, and its
-//: collider's friction and its points' weighted velocity there; bh (s) the step matrix's velocity factor
-//: (its position factor bh^2).
-void place_supports(Supports& supports, const Physics& phys, double h, double bh);
+//: collider's friction, its points' weighted velocity there and its normal force at the start, the cloth at
+//: pos (3, n); bh (s) the step matrix's velocity factor (its position factor bh^2).
+void place_supports(Supports& supports, const Physics& phys, Index n, const double* pos, double h, double bh);
 
 //: Each term's gap at positions pos (3, n, m): offset + sum_k w_k normal . x_k (m).
 double support_gap(const Supports& supports, Index term, Index n, const double* pos);
@@ -51,18 +51,18 @@ double support_gap(const Supports& supports, Index term, Index n, const double* 
 //: The penalty's energy (J) at positions pos (3, n).
 double support_energy(const Supports& supports, Index n, const double* pos);
 
-//: The friction's dissipation potential (W) at positions pos and velocities vel (3, n), each term's N taken
-//: at pos: sum mu N f0(|u_t|).
-double support_dissipation(const Supports& supports, Index n, const double* pos, const double* vel);
+//: The friction's dissipation potential (W) at velocities vel (3, n): sum mu N f0(|u_t|).
+double support_dissipation(const Supports& supports, Index n, const double* vel);
 
-//: The pressing terms' forces (N) at positions pos and velocities vel (3, n) into force (3, n), normal and
-//: friction, their stiffness's diagonal blocks times scale (the friction's times velocity_scale) into blocks
-//: (6, n; xx, yy, zz, xy, xz, yz); marks which press and keeps their friction's stiffness for the product.
+//: The pressing terms' forces (N) at positions pos into force (3, n) and their stiffness's diagonal blocks
+//: times scale into blocks (6, n; xx, yy, zz, xy, xz, yz), marking which press; the friction's forces at
+//: velocities vel (3, n) of the terms with a normal force at the step's start and their velocity stiffness's
+//: diagonal blocks times velocity_scale, keeping that stiffness for the product.
 void add_support_forces(Supports& supports, Index n, const double* pos, const double* vel, double* force,
                         double* blocks);
 
-//: out (3, n) += the pressing terms' stiffness off the diagonal blocks (times scale, the friction's times
-//: velocity_scale) times p (3, n), in the rows of free particles (free (n) 1).
+//: out (3, n) += the terms' stiffness off the diagonal blocks (the pressing ones' times scale, the friction's
+//: times velocity_scale) times p (3, n), in the rows of free particles (free (n) 1).
 void add_support_product(const Supports& supports, Index n, const double* free, const double* p, double* out);
 
 //: Remove from a (3, n) the parts along each pressing term's normal at its particles: the support sets their
