@@ -74,18 +74,6 @@ void add_friction(Supports& supports, Index t, Index n, const double* vel, doubl
     }
 }
 
-}  // namespace
-
-double support_stiffness(const Cloth& cloth) {
-    double stiffest = 0.0;
-    const Index springs = is_mesh(cloth) ? cloth.pair_count : cloth.families * cloth.n;
-    const double* k = is_mesh(cloth) ? cloth.pair_stiffness : cloth.stiffness;
-    for (Index s = 0; s < springs; ++s) stiffest = k[s] > stiffest ? k[s] : stiffest;
-    return SUPPORT_STIFFNESS * stiffest;
-}
-
-namespace {
-
 //: n . sum_k w_k p_k over term t's collider points where collider k is h s after the step's start (normal (3)
 //: the term's world normal; cloth_weight the cloth points' weights' sum): sum_k w_k (c + d + R (q_k - c)) = R
 //: part + (sum_k w_k) (c + d - R c), the collider's weights summing to minus the cloth's (the pair's four to 0).
@@ -131,6 +119,14 @@ void place_friction(Supports& supports, const Physics& phys, Index t, Index n, c
 }
 
 }  // namespace
+
+double support_stiffness(const Cloth& cloth) {
+    double stiffest = 0.0;
+    const Index springs = is_mesh(cloth) ? cloth.pair_count : cloth.families * cloth.n;
+    const double* k = is_mesh(cloth) ? cloth.pair_stiffness : cloth.stiffness;
+    for (Index s = 0; s < springs; ++s) stiffest = k[s] > stiffest ? k[s] : stiffest;
+    return SUPPORT_STIFFNESS * stiffest;
+}
 
 void place_supports(Supports& supports, const Physics& phys, Index n, const double* pos, double h, double bh) {
     const std::size_t count = static_cast<std::size_t>(supports.count());
