@@ -158,10 +158,10 @@ def _sliding_and_sticking(pos):
 
 
 def test_the_friction_is_minus_the_velocity_gradient_of_its_dissipation():
-    """Central differences of the dissipation potential D = mu N f0(|u_t|) (N fixed) in each velocity (steps of 1e-8 m/s,
-    f0 a cubic below the slip speed and |u_t| above, both smooth where the terms slip: exact but for rounding
-    and the step's square, about 1e-7 of the force) against the friction forces, one term sliding and one
-    sticking.  On the old code there is no friction (support_friction_terms is missing)."""
+    """Central differences of the dissipation potential D = mu N f0(|u_t|) (N fixed) in each velocity (steps
+    of 1e-8 m/s, f0 a cubic below the slip speed and |u_t| above, both smooth where the terms slip: exact but
+    for rounding and the step's square, about 1e-7 of the force) against the friction forces, one term sliding
+    and one sticking.  On the old code there is no friction (support_friction_terms is missing)."""
     pos = _pressing_place()
     vel, collider_velocities = _sliding_and_sticking(pos)
     dissipation, force, _, _ = _friction_terms(pos, vel, collider_velocities)
@@ -247,8 +247,8 @@ def test_a_spike_moving_sideways_drags_the_triangle_by_coulombs_law(tmp_path):
     eps^2 ln 2 / (mu g) = 1.4e-7 m of slip), within the steps' summed allowed errors (BDF2's estimate; the
     smoothing's lag is within it too); at the end it moves with the tip within eps.  Measured: 8e-9, -2.4e-7
     and -2.5e-7 m off at 5, 20 and 50 ms (after 8, 22 and 27 steps: 4e-7, 1.1e-6 and 1.35e-6 m allowed), its
-    velocity 1e-6 m/s below the tip's.  On the old code the supports had no friction: the
-    triangle stays (x 0 against 6.1e-5 m at 5 ms and 2.2e-3 m at 50 ms)."""
+    velocity 1e-6 m/s below the tip's.  On the old code the supports had no friction: the triangle stays (x 0
+    against 6.1e-5 m at 5 ms and 2.2e-3 m at 50 ms)."""
     times = (0.005, 0.02, 0.05)
     rows, allowed = _slid(tmp_path, MU, times)
     reach = SLIDE_SPEED / (MU * GRAVITY)
@@ -262,8 +262,9 @@ def test_a_spike_moving_sideways_drags_the_triangle_by_coulombs_law(tmp_path):
 def test_a_frictionless_spike_moving_sideways_leaves_the_triangle(tmp_path):
     """At mu = 0 the tip slides under the triangle and nothing pulls it along: its only horizontal force is
     the support's push along the tilted normal, at most M g tan(tilt), so it moves at most g tilt t^2 / 2 (tilt
-    the largest measured; the tip off its centroid tips it slowly), plus the steps' allowed errors: measured
-    3.9e-6 m at 50 ms (in 25 steps of at most 2 ms), against 5.7e-5 m allowed so and 2.2e-3 m with friction.
+    as measured at t: the tip off its centroid tips it slowly, the tilt growing), plus the steps' allowed
+    errors: measured 3.9e-6 m at 50 ms (in 25 steps of at most 2 ms), against 5.7e-5 m allowed so and 2.2e-3 m
+    with friction.
     The same on the old code (a guard: friction 0 leaves the step as it was, to the bit)."""
     times = (0.02, 0.05)
     rows, allowed = _slid(tmp_path, 0.0, times, max_step=2e-3)  # (unaccelerated, it took steps of 25 ms)

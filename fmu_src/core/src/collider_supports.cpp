@@ -50,7 +50,8 @@ bool rubs(const Supports& supports, Index t) {
 void add_friction(Supports& supports, Index t, Index n, const double* vel, double* force, double* blocks) {
     double u[3];
     const double y = slip_velocity(supports, t, n, vel, u);
-    const double mu_n = supports.friction[static_cast<std::size_t>(t)] * supports.normal_force[static_cast<std::size_t>(t)];
+    const std::size_t term = static_cast<std::size_t>(t);
+    const double mu_n = supports.friction[term] * supports.normal_force[term];
     const double a = slip_factor(y);
     // H = mu N (a (I - n n^T) - b t t^T), t = u_t / |u_t|: b = 1 / y at or above eps (the cone's radial part
     // has no stiffness), y / eps^2 below (f1' = a - b); at y = 0 no direction, b = 0.
@@ -184,8 +185,8 @@ double support_dissipation(const Supports& supports, Index n, const double* vel)
         if (!rubs(supports, t)) continue;
         double u[3];
         const double y = slip_velocity(supports, t, n, vel, u);
-        dissipation += supports.friction[static_cast<std::size_t>(t)] * supports.normal_force[static_cast<std::size_t>(t)] *
-                       smoothed_speed(y);
+        const std::size_t term = static_cast<std::size_t>(t);
+        dissipation += supports.friction[term] * supports.normal_force[term] * smoothed_speed(y);
     }
     return dissipation;
 }
