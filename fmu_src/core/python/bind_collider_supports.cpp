@@ -27,7 +27,8 @@ WETCLOTH_BINDINGS(m) {
             s.pressing.assign(static_cast<std::size_t>(count), 0);
             s.stiffness = stiffness, s.distance = distance, s.scale = scale;
             const double* x = argument<const double>(pos, "pos", 3 * n);
-            add_support_forces(s, n, x, argument<double>(force, "force", 3 * n), argument<double>(blocks, "blocks", 6 * n));
+            add_support_forces(s, n, x, nullptr, argument<double>(force, "force", 3 * n),
+                               argument<double>(blocks, "blocks", 6 * n));
             add_support_product(s, n, argument<const double>(free, "free", n), argument<const double>(p, "p", 3 * n),
                                 argument<double>(product, "product", 3 * n));
             return support_energy(s, n, x);
@@ -39,6 +40,54 @@ WETCLOTH_BINDINGS(m) {
         "(m, 3), offsets (m) m; stiffness N/m, distance m, scale s^2) at pos (3, n): adds their forces (N) into "
         "force (3, n), their stiffness's diagonal blocks times scale into blocks (6, n) and the rest of their "
         "stiffness times scale times p (3, n) into product (3, n) (rows of free particles); returns the energy (J).");
+    m.attr("SUPPORT_SLIP_SPEED") = SUPPORT_SLIP_SPEED;
+    m.def(
+        "support_friction_terms",
+        [](nb::handle points, nb::handle weights, nb::handle normals, nb::handle offsets, double stiffness,
+           double distance, nb::handle frictions, nb::handle normal_forces, nb::handle collider_velocities,
+           double velocity_scale,
+           nb::handle pos, nb::handle vel, nb::handle free, nb::handle p, nb::handle force, nb::handle blocks,
+           nb::handle product) {
+            Supports s;
+            const Index count = size_of(offsets);
+            const Index n = size_of(free);
+            const Index* pt = argument<const Index>(points, "points", 3 * count);
+            const double* w = argument<const double>(weights, "weights", 3 * count);
+            const double* nn = argument<const double>(normals, "normals", 3 * count);
+            const double* off = argument<const double>(offsets, "offsets", count);
+            const double* mu = argument<const double>(frictions, "frictions", count);
+            const double* normal_force = argument<const double>(normal_forces, "normal_forces", count);
+            const double* cv = argument<const double>(collider_velocities, "collider_velocities", 3 * count);
+            s.points.assign(pt, pt + 3 * count);
+            s.weights.assign(w, w + 3 * count);
+            s.normal.assign(nn, nn + 3 * count);
+            s.offset.assign(off, off + count);
+            s.friction.assign(mu, mu + count);
+            s.normal_force.assign(normal_force, normal_force + count);
+            s.collider_velocity.assign(cv, cv + 3 * count);
+            s.friction_block.assign(6 * static_cast<std::size_t>(count), 0.0);
+            s.collider.assign(static_cast<std::size_t>(count), 0);
+            s.pressing.assign(static_cast<std::size_t>(count), 0);
+            s.stiffness = stiffness, s.distance = distance, s.scale = 0.0, s.velocity_scale = velocity_scale;
+            for (Index t = 0; t < count; ++t) s.any_friction = s.any_friction || mu[t] > 0.0;
+            const double* x = argument<const double>(pos, "pos", 3 * n);
+            const double* v = argument<const double>(vel, "vel", 3 * n);
+            add_support_forces(s, n, x, v, argument<double>(force, "force", 3 * n),
+                               argument<double>(blocks, "blocks", 6 * n));
+            add_support_product(s, n, argument<const double>(free, "free", n), argument<const double>(p, "p", 3 * n),
+                                argument<double>(product, "product", 3 * n));
+            return support_dissipation(s, n, v);
+        },
+        nb::arg("points"), nb::arg("weights"), nb::arg("normals"), nb::arg("offsets"), nb::arg("stiffness"),
+        nb::arg("distance"), nb::arg("frictions"), nb::arg("normal_forces"), nb::arg("collider_velocities"),
+        nb::arg("velocity_scale"),
+        nb::arg("pos"), nb::arg("vel"), nb::arg("free"), nb::arg("p"), nb::arg("force"), nb::arg("blocks"),
+        nb::arg("product"),
+        "support_terms' terms with friction (frictions (m), normal forces at the step's start (m) N, the "
+        "collider's points' weighted velocities (m, 3) m/s) at pos and vel (3, n), the position stiffness left "
+        "out (scale 0): adds their forces (N, normal and friction) into force (3, n), their friction's stiffness in velocity times velocity_scale (s): the "
+        "diagonal blocks into blocks (6, n), the rest times p (3, n) into product (3, n); returns the friction's "
+        "dissipation potential (W).");
 }
 
 }  // namespace wc::py

@@ -157,7 +157,7 @@ void newton_residual(const Cloth& cloth, const Physics& phys, Work& work, Solver
                      double slack_slope) {
     const Index n = cloth.n;
     forces_and_blocks(cloth, phys, work, out_pos, out_vel, step_water, bh, slack_slope);
-    if (solver.supports != nullptr) add_support_forces(*solver.supports, n, out_pos, work.force, work.blocks);
+    if (solver.supports != nullptr) add_support_forces(*solver.supports, n, out_pos, out_vel, work.force, work.blocks);
     if (solver.sliding != nullptr) add_sliding_friction(*solver.sliding, n, solver.mass, work.force);
     const double* free = cloth.free;
     const double* mass = solver.mass;
@@ -311,7 +311,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
         }
     }
     const double bh = beta * h;
-    if (solver.supports != nullptr) place_supports(*solver.supports, phys, h, bh * bh);
+    if (solver.supports != nullptr) place_supports(*solver.supports, phys, n, pos, h, bh);
     if (solver.sliding != nullptr) prescribe_normal_speed(*solver.sliding, n, pos, hat_pos, h, bh, out_vel);
     for (Index k = 0; k < 3 * n; ++k) out_pos[k] = hat_pos[k] + bh * out_vel[k];
     const bool adaptive = mode == NewtonMode::ADAPTIVE;

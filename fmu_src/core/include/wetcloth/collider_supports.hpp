@@ -9,6 +9,14 @@
 // its force F_k = stiffness (distance - g) w_k n on the pair's cloth particle k, and its stiffness
 // stiffness w_k w_l n n^T (rank one over the pair's particles) in Newton's system: the diagonal blocks with
 // the per-particle blocks (so the preconditioner sees them), the rest in the matrix product.
+// Friction (the collider's coefficient mu, off when 0): on the pair's relative velocity at the step's end,
+// u = sum_k w_k v_k (the collider's points at its surface's velocity there), its part across n, u_t, meets
+// the smoothed Coulomb force of IPC (Li et al. 2020), F_k = -w_k mu N f1(|u_t|) u_t / |u_t|, N = stiffness
+// (distance - g_0) the pair's normal force at the step's start (lagged, as IPC's: fixed for the step), f1(y)
+// = 2 y / eps - y^2 / eps^2 below eps = SUPPORT_SLIP_SPEED, else 1: minus the gradient in v_k of the
+// dissipation potential D = mu N f0(|u_t|), f0' = f1 (W).  Its stiffness in velocity, w_k w_l mu N H (H the
+// Hessian of f0(|u_t|), rank two in the plane across n, positive semidefinite), joins Newton's system times bh
+// as the normal term's does: with N fixed Newton's matrix is the step's exact Jacobian.
 #pragma once
 #include "wetcloth/core.hpp"
 
@@ -23,13 +31,19 @@ inline constexpr double SUPPORT_DISTANCE = 0.5;
 //: The penalty's stiffness as a multiple of the cloth's stiffest spring (N/m per N/m).
 inline constexpr double SUPPORT_STIFFNESS = 10.0;
 
+//: The slip speed (m/s) below which a support's friction acts as a stiff viscous stick (coefficient 2 mu N /
+//: SUPPORT_SLIP_SPEED, N s/m) rather than Coulomb's constant mu N: IPC's default.  A cloth carried by a
+//: support creeps over it at most this fast.
+inline constexpr double SUPPORT_SLIP_SPEED = 1e-3;
+
 //: The penalty's stiffness (N/m) for a cloth: SUPPORT_STIFFNESS times its stiffest spring.
 double support_stiffness(const Cloth& cloth);
 
 //: Set each term's world normal and offset for a step of h s from the step's start (the colliders' motion
-//: rows set for it: collider_motion.hpp), the collider's points where it is at the step's end; scale the
-//: step matrix's position factor bh^2 (s^2).
-void place_supports(Supports& supports, const Physics& phys, double h, double scale);
+//: rows set for it: collider_motion.hpp), the collider's points where it is at the step's end, and its
+//: collider's friction, its points' weighted velocity there and its normal force at the start, the cloth at
+//: pos (3, n); bh (s) the step matrix's velocity factor (its position factor bh^2).
+void place_supports(Supports& supports, const Physics& phys, Index n, const double* pos, double h, double bh);
 
 //: Each term's gap at positions pos (3, n, m): offset + sum_k w_k normal . x_k (m).
 double support_gap(const Supports& supports, Index term, Index n, const double* pos);
@@ -37,12 +51,18 @@ double support_gap(const Supports& supports, Index term, Index n, const double* 
 //: The penalty's energy (J) at positions pos (3, n).
 double support_energy(const Supports& supports, Index n, const double* pos);
 
-//: The pressing terms' forces (N) at positions pos (3, n) into force (3, n), their stiffness's diagonal
-//: blocks times scale into blocks (6, n; xx, yy, zz, xy, xz, yz); marks which press.
-void add_support_forces(Supports& supports, Index n, const double* pos, double* force, double* blocks);
+//: The friction's dissipation potential (W) at velocities vel (3, n): sum mu N f0(|u_t|).
+double support_dissipation(const Supports& supports, Index n, const double* vel);
 
-//: out (3, n) += scale times the pressing terms' stiffness off the diagonal blocks times p (3, n), in the
-//: rows of free particles (free (n) 1).
+//: The pressing terms' forces (N) at positions pos into force (3, n) and their stiffness's diagonal blocks
+//: times scale into blocks (6, n; xx, yy, zz, xy, xz, yz), marking which press; the friction's forces at
+//: velocities vel (3, n) of the terms with a normal force at the step's start and their velocity stiffness's
+//: diagonal blocks times velocity_scale, keeping that stiffness for the product.
+void add_support_forces(Supports& supports, Index n, const double* pos, const double* vel, double* force,
+                        double* blocks);
+
+//: out (3, n) += the terms' stiffness off the diagonal blocks (the pressing ones' times scale, the friction's
+//: times velocity_scale) times p (3, n), in the rows of free particles (free (n) 1).
 void add_support_product(const Supports& supports, Index n, const double* free, const double* p, double* out);
 
 //: Remove from a (3, n) the parts along each pressing term's normal at its particles: the support sets their

@@ -204,7 +204,12 @@ struct Sliding {
 //: frame the contact normal at the start (3) and the weighted sum of its own points (3, m); its collider.
 //: For the step being tried: each term's world normal (3) and offset (m), so that its gap is
 //: g = offset + sum_k weight_k normal . x_k, and whether it presses (g below `distance`); stiffness (N/m),
-//: distance (m) and scale (bh^2, s^2: the position Jacobian's factor in the step's matrix).
+//: distance (m) and scale (bh^2, s^2: the position Jacobian's factor in the step's matrix).  Friction: each
+//: term's collider's coefficient (-), its normal force at the step's start (N, lagged: fixed for the step) and
+//: the collider's points' weighted velocity at the step's end (3, m/s), so that the pair's relative velocity
+//: is that plus sum_k weight_k v_k; at the last force evaluation, its friction's stiffness in that velocity
+//: (6 per term, xx yy zz xy xz yz, N s/m); velocity_scale (bh, s: the velocity Jacobian's factor in the
+//: step's matrix); any_friction whether a term has a coefficient above 0.
 struct Supports {
     std::vector<Index> points;
     std::vector<double> weights;
@@ -212,7 +217,9 @@ struct Supports {
     std::vector<Index> collider;
     std::vector<double> normal, offset;
     std::vector<char> pressing;
-    double stiffness = 0.0, distance = 0.0, scale = 0.0;
+    std::vector<double> friction, normal_force, collider_velocity, friction_block;
+    double stiffness = 0.0, distance = 0.0, scale = 0.0, velocity_scale = 0.0;
+    bool any_friction = false;
     Index count() const { return static_cast<Index>(collider.size()); }
 };
 
