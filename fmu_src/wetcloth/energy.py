@@ -26,7 +26,8 @@ def elastic_energy(stretch: np.ndarray, stiffness: np.ndarray, width: float | No
 
 def mechanical_energy(sim) -> float:
     """Kinetic + gravitational (zero at z = 0) + elastic energy (J) of a Simulation's cloth, each spring
-    with its dry stiffness."""
+    (a grid's families, a mesh's listed springs, the first ``pair_tension_count`` tension-only) with its
+    dry stiffness."""
     cloth, state = sim.model.cloth, sim.state
     mass = np.asarray(cloth.dry_mass) + state.water
     energy = 0.5 * np.sum(mass * state.vel**2) + GRAVITY * np.sum(mass * state.pos[2])
@@ -34,4 +35,9 @@ def mechanical_energy(sim) -> float:
         i = np.flatnonzero(stiffness)
         stretch = np.linalg.norm(state.pos[:, i] - state.pos[:, i + offset], axis=0) - rest
         energy += elastic_energy(stretch, stiffness[i], TENSION_ROUNDING * rest if tension_only else None)
+    first, second = cloth.pairs
+    stretch = np.linalg.norm(state.pos[:, first] - state.pos[:, second], axis=0) - cloth.pair_rest
+    t = int(cloth.pair_tension_count)
+    energy += elastic_energy(stretch[:t], cloth.pair_stiffness[:t], TENSION_ROUNDING * cloth.pair_rest[:t])
+    energy += elastic_energy(stretch[t:], cloth.pair_stiffness[t:], None)
     return float(energy)
