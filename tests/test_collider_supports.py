@@ -13,17 +13,18 @@ from wetcloth.scene import load_scene
 STIFFNESS, DISTANCE, SCALE = 5000.0, 1e-3, 4e-6  # N/m, m, s^2
 
 
+#: Two terms on 5 particles, a vertex-triangle one (weights -u, -v, -w) and an edge-edge one (two cloth
+#: points): their points, weights, normals and offsets (m).
+TWO_TERMS = (np.array([[0, 1, 2], [3, 4, -1]], dtype=np.int64), np.array([[-0.2, -0.3, -0.5], [0.6, 0.4, 0.0]]),
+             np.array([[0.36, 0.48, 0.8], [0.0, 0.6, -0.8]]), np.array([0.11, -0.07]))
+
+
 def _terms(pos, p=None):
-    """Two terms on 5 particles, a vertex-triangle one (weights -u, -v, -w) and an edge-edge one (two cloth
-    points), both pressing at pos: their energy (J), forces (3, n), diagonal blocks (6, n) and the rest of
+    """TWO_TERMS, both pressing at pos: their energy (J), forces (3, n), diagonal blocks (6, n) and the rest of
     their stiffness times p (3, n), the blocks and product times SCALE."""
     n = pos.shape[1]
-    points = np.array([[0, 1, 2], [3, 4, -1]], dtype=np.int64)
-    weights = np.array([[-0.2, -0.3, -0.5], [0.6, 0.4, 0.0]])
-    normals = np.array([[0.36, 0.48, 0.8], [0.0, 0.6, -0.8]])
-    offsets = np.array([0.11, -0.07])
     force, blocks, product = np.zeros((3, n)), np.zeros((6, n)), np.zeros((3, n))
-    energy = _core.support_terms(points, weights, normals, offsets, STIFFNESS, DISTANCE, SCALE, pos, np.ones(n),
+    energy = _core.support_terms(*TWO_TERMS, STIFFNESS, DISTANCE, SCALE, pos, np.ones(n),
                                  np.zeros((3, n)) if p is None else p, force, blocks, product)
     return energy, force, blocks, product
 
@@ -42,20 +43,26 @@ def _pressing_place():
     return pos
 
 
+def _central_differences(function, x, step):
+    """The central differences (function(x + step e) - function(x - step e)) / (2 step) of a scalar function
+    for each entry e of x, shaped as x."""
+    difference = np.zeros_like(x)
+    for index in np.ndindex(x.shape):
+        up, down = x.copy(), x.copy()
+        up[index] += step
+        down[index] -= step
+        difference[index] = (function(up) - function(down)) / (2 * step)
+    return difference
+
+
 def test_the_force_is_minus_the_gradient_of_the_energy():
     """Central differences of the energy (steps of 1e-7 m, the penalty quadratic: exact but for rounding,
     about 1e-9 of the force) against the forces at a place where both terms press."""
     pos = _pressing_place()
     energy, force, _, _ = _terms(pos)
     assert energy > 0.0 and np.abs(force).max() > 0.1
-    step = 1e-7
-    for c in range(3):
-        for i in range(pos.shape[1]):
-            up, down = pos.copy(), pos.copy()
-            up[c, i] += step
-            down[c, i] -= step
-            difference = -(_terms(up)[0] - _terms(down)[0]) / (2 * step)
-            assert abs(difference - force[c, i]) <= 1e-6 * np.abs(force).max(), (c, i)
+    difference = -_central_differences(lambda x: _terms(x)[0], pos, 1e-7)
+    np.testing.assert_allclose(difference, force, rtol=0, atol=1e-6 * np.abs(force).max())
 
 
 def test_the_stiffness_is_the_derivative_of_the_force():
@@ -131,12 +138,8 @@ def _friction_terms(pos, vel, collider_velocities, p=None, scale=3e-3):
     forces (3, n: the penalty's forces taken off), and their friction's velocity stiffness times scale (s):
     diagonal blocks (6, n) and the rest times p (3, n)."""
     n = pos.shape[1]
-    points = np.array([[0, 1, 2], [3, 4, -1]], dtype=np.int64)
-    weights = np.array([[-0.2, -0.3, -0.5], [0.6, 0.4, 0.0]])
-    normals = np.array([[0.36, 0.48, 0.8], [0.0, 0.6, -0.8]])
-    offsets = np.array([0.11, -0.07])
     force, blocks, product = np.zeros((3, n)), np.zeros((6, n)), np.zeros((3, n))
-    dissipation = _core.support_friction_terms(points, weights, normals, offsets, STIFFNESS, DISTANCE, FRICTIONS,
+    dissipation = _core.support_friction_terms(*TWO_TERMS, STIFFNESS, DISTANCE, FRICTIONS,
                                                NORMAL_FORCES, collider_velocities, scale, pos, vel, np.ones(n),
                                                np.zeros((3, n)) if p is None else p, force, blocks, product)
     return dissipation, force - _terms(pos)[1], blocks, product
@@ -166,15 +169,8 @@ def test_the_friction_is_minus_the_velocity_gradient_of_its_dissipation():
     vel, collider_velocities = _sliding_and_sticking(pos)
     dissipation, force, _, _ = _friction_terms(pos, vel, collider_velocities)
     assert dissipation > 0.0 and np.abs(force[:, :3]).max() > 0.05 and np.abs(force[:, 3:]).max() > 0.01
-    step = 1e-8
-    for c in range(3):
-        for i in range(pos.shape[1]):
-            up, down = vel.copy(), vel.copy()
-            up[c, i] += step
-            down[c, i] -= step
-            difference = -(_friction_terms(pos, up, collider_velocities)[0]
-                           - _friction_terms(pos, down, collider_velocities)[0]) / (2 * step)
-            assert abs(difference - force[c, i]) <= 1e-6 * np.abs(force).max(), (c, i)
+    difference = -_central_differences(lambda v: _friction_terms(pos, v, collider_velocities)[0], vel, 1e-8)
+    np.testing.assert_allclose(difference, force, rtol=0, atol=1e-6 * np.abs(force).max())
 
 
 def test_the_friction_force_is_coulombs_across_the_normal():

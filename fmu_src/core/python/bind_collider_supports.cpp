@@ -4,6 +4,36 @@
 
 namespace wc::py {
 
+namespace {
+
+//: Supports given in the world: points (m, 3) cloth particles or -1, weights (m, 3), normals (m, 3), offsets (m) m.
+Supports given_supports(nb::handle points, nb::handle weights, nb::handle normals, nb::handle offsets) {
+    Supports s;
+    const Index count = size_of(offsets);
+    const Index* pt = argument<const Index>(points, "points", 3 * count);
+    const double* w = argument<const double>(weights, "weights", 3 * count);
+    const double* nn = argument<const double>(normals, "normals", 3 * count);
+    const double* off = argument<const double>(offsets, "offsets", count);
+    s.points.assign(pt, pt + 3 * count);
+    s.weights.assign(w, w + 3 * count);
+    s.normal.assign(nn, nn + 3 * count);
+    s.offset.assign(off, off + count);
+    s.collider.assign(static_cast<std::size_t>(count), 0);
+    s.pressing.assign(static_cast<std::size_t>(count), 0);
+    return s;
+}
+
+//: Adds supports s's forces (N) at x and v (3, n; v null: no friction) into force (3, n), their stiffness's
+//: diagonal blocks into blocks (6, n) and the rest of it times p (3, n) into product (3, n), rows of free (n).
+void add_terms(Supports& s, Index n, const double* x, const double* v, nb::handle free, nb::handle p,
+               nb::handle force, nb::handle blocks, nb::handle product) {
+    add_support_forces(s, n, x, v, argument<double>(force, "force", 3 * n), argument<double>(blocks, "blocks", 6 * n));
+    add_support_product(s, n, argument<const double>(free, "free", n), argument<const double>(p, "p", 3 * n),
+                        argument<double>(product, "product", 3 * n));
+}
+
+}  // namespace
+
 WETCLOTH_BINDINGS(m) {
     m.attr("SUPPORT_DISTANCE") = SUPPORT_DISTANCE;
     m.attr("SUPPORT_STIFFNESS") = SUPPORT_STIFFNESS;
@@ -12,25 +42,11 @@ WETCLOTH_BINDINGS(m) {
         [](nb::handle points, nb::handle weights, nb::handle normals, nb::handle offsets, double stiffness,
            double distance, double scale, nb::handle pos, nb::handle free, nb::handle p, nb::handle force,
            nb::handle blocks, nb::handle product) {
-            Supports s;
-            const Index count = size_of(offsets);
+            Supports s = given_supports(points, weights, normals, offsets);
             const Index n = size_of(free);
-            const Index* pt = argument<const Index>(points, "points", 3 * count);
-            const double* w = argument<const double>(weights, "weights", 3 * count);
-            const double* nn = argument<const double>(normals, "normals", 3 * count);
-            const double* off = argument<const double>(offsets, "offsets", count);
-            s.points.assign(pt, pt + 3 * count);
-            s.weights.assign(w, w + 3 * count);
-            s.normal.assign(nn, nn + 3 * count);
-            s.offset.assign(off, off + count);
-            s.collider.assign(static_cast<std::size_t>(count), 0);
-            s.pressing.assign(static_cast<std::size_t>(count), 0);
             s.stiffness = stiffness, s.distance = distance, s.scale = scale;
             const double* x = argument<const double>(pos, "pos", 3 * n);
-            add_support_forces(s, n, x, nullptr, argument<double>(force, "force", 3 * n),
-                               argument<double>(blocks, "blocks", 6 * n));
-            add_support_product(s, n, argument<const double>(free, "free", n), argument<const double>(p, "p", 3 * n),
-                                argument<double>(product, "product", 3 * n));
+            add_terms(s, n, x, nullptr, free, p, force, blocks, product);
             return support_energy(s, n, x);
         },
         nb::arg("points"), nb::arg("weights"), nb::arg("normals"), nb::arg("offsets"), nb::arg("stiffness"),
@@ -48,34 +64,21 @@ WETCLOTH_BINDINGS(m) {
            double velocity_scale,
            nb::handle pos, nb::handle vel, nb::handle free, nb::handle p, nb::handle force, nb::handle blocks,
            nb::handle product) {
-            Supports s;
-            const Index count = size_of(offsets);
+            Supports s = given_supports(points, weights, normals, offsets);
+            const Index count = s.count();
             const Index n = size_of(free);
-            const Index* pt = argument<const Index>(points, "points", 3 * count);
-            const double* w = argument<const double>(weights, "weights", 3 * count);
-            const double* nn = argument<const double>(normals, "normals", 3 * count);
-            const double* off = argument<const double>(offsets, "offsets", count);
             const double* mu = argument<const double>(frictions, "frictions", count);
             const double* normal_force = argument<const double>(normal_forces, "normal_forces", count);
             const double* cv = argument<const double>(collider_velocities, "collider_velocities", 3 * count);
-            s.points.assign(pt, pt + 3 * count);
-            s.weights.assign(w, w + 3 * count);
-            s.normal.assign(nn, nn + 3 * count);
-            s.offset.assign(off, off + count);
             s.friction.assign(mu, mu + count);
             s.normal_force.assign(normal_force, normal_force + count);
             s.collider_velocity.assign(cv, cv + 3 * count);
             s.friction_block.assign(6 * static_cast<std::size_t>(count), 0.0);
-            s.collider.assign(static_cast<std::size_t>(count), 0);
-            s.pressing.assign(static_cast<std::size_t>(count), 0);
             s.stiffness = stiffness, s.distance = distance, s.scale = 0.0, s.velocity_scale = velocity_scale;
             for (Index t = 0; t < count; ++t) s.any_friction = s.any_friction || mu[t] > 0.0;
             const double* x = argument<const double>(pos, "pos", 3 * n);
             const double* v = argument<const double>(vel, "vel", 3 * n);
-            add_support_forces(s, n, x, v, argument<double>(force, "force", 3 * n),
-                               argument<double>(blocks, "blocks", 6 * n));
-            add_support_product(s, n, argument<const double>(free, "free", n), argument<const double>(p, "p", 3 * n),
-                                argument<double>(product, "product", 3 * n));
+            add_terms(s, n, x, v, free, p, force, blocks, product);
             return support_dissipation(s, n, v);
         },
         nb::arg("points"), nb::arg("weights"), nb::arg("normals"), nb::arg("offsets"), nb::arg("stiffness"),
