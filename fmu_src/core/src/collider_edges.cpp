@@ -149,24 +149,24 @@ inline constexpr double ROUNDING_SLACK = 1e-6;
 //: <= 1.5 M; a collider vertex and a cloth triangle |p1 + p2 + p3| / 4 + |3 p1 - p2 - p3| / 4 <= 2 M.
 inline double bound_factor(int width) { return width == 1 ? 1.0 : width == 2 ? 1.5 : 2.0; }
 
-//: The largest allowance (m) of an element's `width` particles idx.
-inline double element_allowance(const Index* idx, int width, const double* allowance) {
-    double a = allowance[idx[0]];
-    for (int k = 1; k < width; ++k) a = py_max(a, allowance[idx[k]]);
+//: The largest of values (n) over an element's `width` particles idx.
+inline double element_largest(const Index* idx, int width, const double* values) {
+    double a = values[idx[0]];
+    for (int k = 1; k < width; ++k) a = py_max(a, values[idx[k]]);
     return a;
 }
 
 //: The pairs of the cloth's elements of `width` particles (rows of `elements`, nullptr: the particles) with the
 //: features of mesh collider k's triangles near them at positions x: those nearer than their distance
-//: (target_of, from reach, m) plus reach plus (1 + bound_factor) times the element's allowance (allowance:
-//: (n) m; and a nanometre for rounding), from the triangles whose boxes reach the element's box grown by
-//: reach more.  stamp, vertex_stamp: scratch, the last element that saw each triangle, and that took each
+//: (target_of, from reach, m) plus reach plus the element's largest allowance and bound_factor times its largest
+//: stride (allowance, stride: (n) m; and a nanometre for rounding), from the triangles whose boxes reach the
+//: element's box grown by reach more.  stamp, vertex_stamp: scratch, the last element that saw each triangle, and that took each
 //: vertex (+ 1): a vertex is paired with a cloth triangle once, though each of its triangles meets the
 //: triangle's box.
 void gather(const Index* elements, Index count, int width, Index k, Index mesh, const ColliderMeshes& m, Index n,
-            const double* x, double reach, const double* allowance, std::vector<Index>& near, std::vector<Index>& stamp,
+            const double* x, double reach, const double* allowance, const double* stride, std::vector<Index>& near, std::vector<Index>& stamp,
             std::vector<Index>& vertex_stamp, std::vector<Pair>& pairs) {
-    double extra = 0.0;  // the element's: reach + (1 + bound_factor) allowances, m
+    double extra = 0.0;  // the element's: reach + its allowance + bound_factor strides, m
     auto add = [&](const Pair& pair) {
         const Motion mo = motion_of(pair, m, n, nullptr, nullptr, x, x);
         const double d = distance(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
@@ -179,7 +179,8 @@ void gather(const Index* elements, Index count, int width, Index k, Index mesh, 
     if (width == 3) vertex_stamp.assign(static_cast<std::size_t>(m.vertex_count), 0);
     for (Index e = 0; e < count; ++e) {
         const Index* idx = elements ? elements + e * width : &e;
-        extra = reach + ((1.0 + bound_factor(width)) * element_allowance(idx, width, allowance) + ROUNDING_SLACK * reach);
+        extra = reach + ((element_largest(idx, width, allowance) + bound_factor(width) * element_largest(idx, width, stride)) +
+                         ROUNDING_SLACK * reach);
         const Box box = path_box(idx, width, n, x, x, reach + extra);  // the farthest a pair kept can be
         near.clear();
         mesh_triangles_in(m, mesh, box.lo, box.hi, near);
@@ -262,24 +263,29 @@ bool settle_pair(const Pair& pair, double start, const Physics& phys, const Fram
     return true;
 }
 
-//: The kept list (ContactLists::collider_list) holds every pair nearer than its distance plus reach plus
-//: (1 + bound_factor) times the largest allowance of its cloth points at the reference positions.  While no
-//: particle starts a step farther than its allowance from its reference nor moves more than it over the
-//: step, a pair's start distance is at most one such allowance less than there and its motion's bound at
-//: most bound_factor of them: the list holds every pair pairs_for_step would keep.  A particle whose
-//: elements' boxes are farther than 2 reach + LIST_MARGINS far margins from every mesh triangle's cell may
-//: have the far margin.
+//: The kept list (ContactLists::collider_list) holds every pair nearer at the reference positions than its
+//: distance plus reach plus the largest allowance of its cloth points and bound_factor times their largest
+//: stride.  While no particle starts a step farther than its allowance from its reference nor moves more
+//: than its stride in it, a pair's start distance is at most that allowance less than there and its motion's
+//: bound at most bound_factor of that stride: the list holds every pair pairs_for_step would keep (and the
+//: supports' pairs, within 1.5 reach at the start: the least stride's bound_factor exceeds 0.4 reach).  A
+//: particle whose elements' boxes are farther than 2 reach + LIST_MARGINS far margins from every mesh
+//: triangle's cell may have the far margin as both.
 inline constexpr double LIST_MARGINS = 3.0;  // 1 + the largest bound_factor
-//: The least allowance, and the far margin, as fractions of thickness / 2: a cloth lying still keeps its list
-//: while its parts away from the mesh swing.
+//: The least allowance and stride, and the far margin, as fractions of thickness / 2: a cloth lying still keeps
+//: its list while its parts away from the mesh swing.
 inline constexpr double LEAST_MARGIN = 1.0;
 inline constexpr double FAR_MARGIN = 4.0;
-//: A moving mesh's least allowance: the cloth moves against it, and its lists were gathered again every 4
+//: A moving mesh's least allowance and stride: the cloth moves against it, and its lists were gathered again every 4
 //: steps at LEAST_MARGIN (the sweep's mesh ball: 2599 lists in 9671 steps; 984 at this margin).
 inline constexpr double MOVING_LEAST_MARGIN = 3.0;
-//: A particle's allowance over its motion in a step: room for a faster next step, and the list holds for
-//: two steps at its pace.
-inline constexpr double MOTION_ROOM = 1.5;
+//: A particle's stride (how far it may move in a step) over its motion: room for a slightly faster step and
+//: the pushes' changes.
+inline constexpr double MOTION_ROOM = 1.1;
+//: How far a particle may start a later step from the reference, as a fraction of its stride (at least the
+//: least or far margin): a list mostly serves the step it was gathered for (at 1 it held two steps at a
+//: steady pace but its reach was 1.6 times as long: the sweep's mesh ball at frame steps 2.3 against 1.5 s).
+inline constexpr double START_ROOM = 0.25;
 
 //: The largest distance (m) of a particle of x (3, n) from its place in y (3, n).
 double largest_move(Index n, const double* x, const double* y) {
@@ -293,18 +299,19 @@ double largest_move(Index n, const double* x, const double* y) {
 }
 
 //: Whether the kept list, gathered from phys's meshes, holds for a step from x0 to x1 (3, n; x1 null: at x0
-//: alone): no particle farther at x0 from its reference than its allowance, nor moving more than it.
+//: alone): no particle farther at x0 from its reference than its allowance, nor moving more than its stride.
 bool list_holds(const ColliderPairList& kept, const Physics& phys, Index n, const double* x0, const double* x1) {
     if (!(kept.margin > 0.0) || kept.key[0] != phys.meshes.vertices || kept.key[1] != phys.colliders) return false;
     const double* ref = kept.reference.data();
     const double* allowance = kept.allowance.data();
+    const double* stride = kept.stride.data();
     for (Index i = 0; i < n; ++i) {
         double d2 = 0.0, p2 = 0.0;
         for (Index c = 0; c < 3; ++c) {
             const double d = x0[c * n + i] - ref[c * n + i], p = x1 ? x1[c * n + i] - x0[c * n + i] : 0.0;
             d2 += d * d, p2 += p * p;
         }
-        if (!(d2 <= allowance[i] * allowance[i] && p2 <= allowance[i] * allowance[i])) return false;
+        if (!(d2 <= allowance[i] * allowance[i] && p2 <= stride[i] * stride[i])) return false;
     }
     return true;
 }
@@ -323,13 +330,13 @@ void mark_near(const Index* elements, Index count, int width, Index mesh, const 
     }
 }
 
-//: Gather the kept list for the step from x0 to x1 (x1 = x0 where no step is in hand): its reference x0; a
-//: particle near a mesh may start a later step its allowance away and move as far in it: MOTION_ROOM times
-//: the larger of its motion from x0 to x1 and over the last step the pass looked at (kept.motion; each
-//: particle's own: one moving fast elsewhere widens no other's reach), at least LEAST_MARGIN of reach
-//: (thickness / 2, m; MOVING_LEAST_MARGIN in a moving mesh's frame), the others at least FAR_MARGIN of reach;
-//: a cloth whose box is far from every mesh's box keeps an empty list while no particle moves more than
-//: what that distance allows.  Each pair keeps the bits of its distance at the reference (P_START), and
+//: Gather the kept list for the step from x0 to x1 (x1 = x0 where no step is in hand): its reference x0; each
+//: particle's stride MOTION_ROOM times the larger of its motion from x0 to x1 and over the last step the pass
+//: looked at (kept.motion; each particle's own: one moving fast elsewhere widens no other's reach), its
+//: allowance START_ROOM of that; both at least LEAST_MARGIN of reach (thickness / 2, m; MOVING_LEAST_MARGIN in
+//: a moving mesh's frame) near a mesh, FAR_MARGIN of reach elsewhere.  A cloth whose box is far from every
+//: mesh's box keeps an empty list while no particle moves more than what that distance allows (if this
+//: step's motion fits in it).  Each pair keeps the bits of its distance at the reference (P_START), and
 //: kept.members lists the particles of its pairs.
 void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& kept, const Physics& phys,
                const Frame& frame, Index n, const double* x0, const double* x1, double reach) {
@@ -344,7 +351,7 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
     kept.key[0] = phys.meshes.vertices;
     kept.key[1] = phys.colliders;
     // Far from every mesh's box (no pair within 2 reach + LIST_MARGINS allowances): no pairs, and every
-    // particle may move that allowance.
+    // particle has that allowance and stride.
     const Box whole = path_box(nullptr, n, n, x.data(), x.data(), 0.0);
     double gap = std::numeric_limits<double>::infinity();
     for (Index k = 0; k < phys.collider_count; ++k) {
@@ -371,6 +378,7 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
     const double clear = (gap - 2.0 * reach) / LIST_MARGINS;
     if (clear >= py_max(LEAST_MARGIN * reach, fastest)) {  // (and it holds for this step)
         near.assign(static_cast<std::size_t>(n), py_min(clear, std::numeric_limits<double>::max()));
+        kept.stride = near;
         kept.margin = near[0];
         return;
     }
@@ -400,21 +408,25 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
     }
     const double least = (frame.shift != nullptr ? MOVING_LEAST_MARGIN : LEAST_MARGIN) * reach;
     double widest = 0.0;
+    std::vector<double>& stride = kept.stride;
+    stride.resize(static_cast<std::size_t>(n));
     for (Index i = 0; i < n; ++i) {
         double& a = near[static_cast<std::size_t>(i)];
-        a = py_max(a != 0.0 ? least : far, MOTION_ROOM * motion[static_cast<std::size_t>(i)]);
-        widest = py_max(widest, a);
+        const double base = a != 0.0 ? least : far;
+        stride[static_cast<std::size_t>(i)] = py_max(base, MOTION_ROOM * motion[static_cast<std::size_t>(i)]);
+        a = py_max(base, START_ROOM * stride[static_cast<std::size_t>(i)]);
+        widest = py_max(widest, a + 2.0 * stride[static_cast<std::size_t>(i)]);
     }
-    // The meshes an element's pairs may reach with the widest allowance (a particle moving fast far away).
-    meshes_met(2.0 * reach + (LIST_MARGINS * widest + ROUNDING_SLACK * reach), reached);
+    // The meshes an element's pairs may reach with the widest allowances (a particle moving fast far away).
+    meshes_met(2.0 * reach + (widest + ROUNDING_SLACK * reach), reached);
     for (const Index k : reached) {
         const Index mesh = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_RADIUS]);
         std::vector<Index>& stamp = lists.collider_stamp;
         std::vector<Index>& taken = lists.collider_vertex_stamp;
-        gather(nullptr, n, 1, k, mesh, phys.meshes, n, x.data(), reach, near.data(), found, stamp, taken, pairs);
-        gather(contact.edges, contact.edge_count, 2, k, mesh, phys.meshes, n, x.data(), reach, near.data(), found, stamp,
+        gather(nullptr, n, 1, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), found, stamp, taken, pairs);
+        gather(contact.edges, contact.edge_count, 2, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), found, stamp,
                taken, pairs);
-        gather(contact.triangles, contact.triangle_count, 3, k, mesh, phys.meshes, n, x.data(), reach, near.data(), found,
+        gather(contact.triangles, contact.triangle_count, 3, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), found,
                stamp, taken, pairs);
     }
     std::sort(pairs.begin(), pairs.end());  // (a pair found twice has the same distance: one copy kept)
