@@ -139,14 +139,34 @@ double box_gap(int kind, const Vec3 x[4]) {
     return std::sqrt(gap2);
 }
 
+//: What pairs_for_step adds to a pair's bounds for the rounding of distances, as a fraction of thickness / 2
+//: (a nanometre for 2 mm cloth; rounding errs by about 1e-15 m).
+inline constexpr double ROUNDING_SLACK = 1e-6;
+
+//: A bound on a pair's motion_bound over its cloth points' largest motion M, for a cloth element of `width`
+//: particles (the collider's points still, motion_bound's mean of the four motions m): a particle and a
+//: collider triangle |p - m| + |m| = M; a cloth edge and a collider edge |3 p0 - p1| / 4 + |p0 + p1| / 4
+//: <= 1.5 M; a collider vertex and a cloth triangle |p1 + p2 + p3| / 4 + |3 p1 - p2 - p3| / 4 <= 2 M.
+inline double bound_factor(int width) { return width == 1 ? 1.0 : width == 2 ? 1.5 : 2.0; }
+
+//: The largest of values (n) over an element's `width` particles idx.
+inline double element_largest(const Index* idx, int width, const double* values) {
+    double a = values[idx[0]];
+    for (int k = 1; k < width; ++k) a = py_max(a, values[idx[k]]);
+    return a;
+}
+
 //: The pairs of the cloth's elements of `width` particles (rows of `elements`, nullptr: the particles) with the
-//: features of mesh collider k's triangles whose boxes reach the elements' boxes at positions x grown by
-//: reach + extra (m), that are nearer than their distance (target_of, from reach) plus extra.  stamp,
-//: vertex_stamp: scratch, the last element that saw each triangle, and that took each vertex (+ 1): a
-//: vertex is paired with a cloth triangle once, though each of its triangles meets the triangle's box.
+//: features of mesh collider k's triangles near them at positions x: those nearer than their distance
+//: (target_of, from reach, m) plus reach plus the element's largest allowance and bound_factor times its largest
+//: stride (allowance, stride: (n) m; and a nanometre for rounding), from the triangles whose boxes reach the
+//: element's box grown by reach more.  stamp, vertex_stamp: scratch, the last element that saw each triangle, and that took each
+//: vertex (+ 1): a vertex is paired with a cloth triangle once, though each of its triangles meets the
+//: triangle's box.
 void gather(const Index* elements, Index count, int width, Index k, Index mesh, const ColliderMeshes& m, Index n,
-            const double* x, double reach, double extra, std::vector<Index>& near, std::vector<Index>& stamp,
+            const double* x, double reach, const double* allowance, const double* stride, std::vector<Index>& near, std::vector<Index>& stamp,
             std::vector<Index>& vertex_stamp, std::vector<Pair>& pairs) {
+    double extra = 0.0;  // the element's: reach + its allowance + bound_factor strides, m
     auto add = [&](const Pair& pair) {
         const Motion mo = motion_of(pair, m, n, nullptr, nullptr, x, x);
         const double d = distance(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
@@ -159,6 +179,8 @@ void gather(const Index* elements, Index count, int width, Index k, Index mesh, 
     if (width == 3) vertex_stamp.assign(static_cast<std::size_t>(m.vertex_count), 0);
     for (Index e = 0; e < count; ++e) {
         const Index* idx = elements ? elements + e * width : &e;
+        extra = reach + ((element_largest(idx, width, allowance) + bound_factor(width) * element_largest(idx, width, stride)) +
+                         ROUNDING_SLACK * reach);
         const Box box = path_box(idx, width, n, x, x, reach + extra);  // the farthest a pair kept can be
         near.clear();
         mesh_triangles_in(m, mesh, box.lo, box.hi, near);
@@ -241,24 +263,29 @@ bool settle_pair(const Pair& pair, double start, const Physics& phys, const Fram
     return true;
 }
 
-//: The kept list (ContactLists::collider_list) holds every pair nearer than its distance plus reach +
-//: LIST_MARGINS margins at the reference positions.  While no particle is farther than the margin from its
-//: reference at a step's start and end, a pair's start distance is at most a margin less than there and
-//: its motion's bound (motion_bound: at most 2.5 times the largest motion of its cloth points, each at most
-//: 2 margins) at most 5 margins: the list holds every pair pairs_for_step would keep.  A particle whose
-//: elements' boxes are farther than 2 reach + LIST_MARGINS far margins from every mesh triangle's cell
-//: may move by the far margin.
-inline constexpr double LIST_MARGINS = 6.0;
-//: The least margin of a list, and the far margin, as fractions of thickness / 2: a cloth lying still keeps
+//: The kept list (ContactLists::collider_list) holds every pair nearer at the reference positions than its
+//: distance plus reach plus the largest allowance of its cloth points and bound_factor times their largest
+//: stride.  While no particle starts a step farther than its allowance from its reference nor moves more
+//: than its stride in it, a pair's start distance is at most that allowance less than there and its motion's
+//: bound at most bound_factor of that stride: the list holds every pair pairs_for_step would keep (and the
+//: supports' pairs, within 1.5 reach at the start: the least stride's bound_factor exceeds 0.4 reach).  A
+//: particle whose elements' boxes are farther than 2 reach + LIST_MARGINS far margins from every mesh
+//: triangle's cell may have the far margin as both.
+inline constexpr double LIST_MARGINS = 3.0;  // 1 + the largest bound_factor
+//: The least allowance and stride, and the far margin, as fractions of thickness / 2: a cloth lying still keeps
 //: its list while its parts away from the mesh swing.
 inline constexpr double LEAST_MARGIN = 1.0;
 inline constexpr double FAR_MARGIN = 4.0;
-//: A moving mesh's least margin: the cloth moves against it, and its lists were gathered again every 4
+//: A moving mesh's least allowance and stride: the cloth moves against it, and its lists were gathered again every 4
 //: steps at LEAST_MARGIN (the sweep's mesh ball: 2599 lists in 9671 steps; 984 at this margin).
 inline constexpr double MOVING_LEAST_MARGIN = 3.0;
-//: What pairs_for_step adds to a pair's bounds for the rounding of distances, as a fraction of thickness / 2
-//: (a nanometre for 2 mm cloth; rounding errs by about 1e-15 m).
-inline constexpr double ROUNDING_SLACK = 1e-6;
+//: A particle's stride (how far it may move in a step) over its motion: room for a slightly faster step and
+//: the pushes' changes.
+inline constexpr double MOTION_ROOM = 1.1;
+//: How far a particle may start a later step from the reference, as a fraction of its stride (at least the
+//: least or far margin): a list mostly serves the step it was gathered for (at 1 it held two steps at a
+//: steady pace but its reach was 1.6 times as long: the sweep's mesh ball at frame steps 2.3 against 1.5 s).
+inline constexpr double START_ROOM = 0.25;
 
 //: The largest distance (m) of a particle of x (3, n) from its place in y (3, n).
 double largest_move(Index n, const double* x, const double* y) {
@@ -271,16 +298,20 @@ double largest_move(Index n, const double* x, const double* y) {
     return std::sqrt(most2);
 }
 
-//: Whether the kept list, gathered from phys's meshes, holds at positions x (3, n): no particle farther from
-//: its reference than its allowance.
-bool list_holds(const ColliderPairList& kept, const Physics& phys, Index n, const double* x) {
+//: Whether the kept list, gathered from phys's meshes, holds for a step from x0 to x1 (3, n; x1 null: at x0
+//: alone): no particle farther at x0 from its reference than its allowance, nor moving more than its stride.
+bool list_holds(const ColliderPairList& kept, const Physics& phys, Index n, const double* x0, const double* x1) {
     if (!(kept.margin > 0.0) || kept.key[0] != phys.meshes.vertices || kept.key[1] != phys.colliders) return false;
     const double* ref = kept.reference.data();
     const double* allowance = kept.allowance.data();
+    const double* stride = kept.stride.data();
     for (Index i = 0; i < n; ++i) {
-        double d2 = 0.0;
-        for (Index c = 0; c < 3; ++c) d2 += (x[c * n + i] - ref[c * n + i]) * (x[c * n + i] - ref[c * n + i]);
-        if (!(d2 <= allowance[i] * allowance[i])) return false;
+        double d2 = 0.0, p2 = 0.0;
+        for (Index c = 0; c < 3; ++c) {
+            const double d = x0[c * n + i] - ref[c * n + i], p = x1 ? x1[c * n + i] - x0[c * n + i] : 0.0;
+            d2 += d * d, p2 += p * p;
+        }
+        if (!(d2 <= allowance[i] * allowance[i] && p2 <= stride[i] * stride[i])) return false;
     }
     return true;
 }
@@ -299,19 +330,18 @@ void mark_near(const Index* elements, Index count, int width, Index mesh, const 
     }
 }
 
-//: Gather the kept list for the step from x0 to x1: its reference their midpoint; a particle near a mesh
-//: may move the step's largest motion of those particles (twice what the step takes it from the midpoint; a
-//: wider margin keeps a list longer but makes it larger: against a moving mesh, whose relative motion is
-//: large, twice that margin cost 3x the time when every kept pair was looked at in each step), at least
-//: LEAST_MARGIN of reach (thickness / 2, m; MOVING_LEAST_MARGIN in a moving mesh's frame), the others
-//: FAR_MARGIN of reach (or the near ones' margin if more); a cloth whose box is far from every mesh's box
-//: keeps an empty list while no particle moves more than what that distance allows.  Each pair keeps the
-//: bits of its distance at the reference (P_START), and kept.members lists the particles of its pairs.
+//: Gather the kept list for the step from x0 to x1 (x1 = x0 where no step is in hand): its reference x0; each
+//: particle's stride MOTION_ROOM times the larger of its motion from x0 to x1 and over the last step the pass
+//: looked at (kept.motion; each particle's own: one moving fast elsewhere widens no other's reach), its
+//: allowance START_ROOM of that; both at least LEAST_MARGIN of reach (thickness / 2, m; MOVING_LEAST_MARGIN in
+//: a moving mesh's frame) near a mesh, FAR_MARGIN of reach elsewhere.  A cloth whose box is far from every
+//: mesh's box keeps an empty list while no particle moves more than what that distance allows (if this
+//: step's motion fits in it).  Each pair keeps the bits of its distance at the reference (P_START), and
+//: kept.members lists the particles of its pairs.
 void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& kept, const Physics& phys,
                const Frame& frame, Index n, const double* x0, const double* x1, double reach) {
     std::vector<double>& x = kept.reference;
-    x.resize(3 * static_cast<std::size_t>(n));
-    for (Index k = 0; k < 3 * n; ++k) x[static_cast<std::size_t>(k)] = 0.5 * (x0[k] + x1[k]);
+    x.assign(x0, x0 + 3 * n);
     std::vector<double>& near = kept.allowance;  // first 1 for the particles near a mesh
     near.assign(static_cast<std::size_t>(n), 0.0);
     std::vector<Index>& found = lists.collider_items;
@@ -321,7 +351,7 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
     kept.key[0] = phys.meshes.vertices;
     kept.key[1] = phys.colliders;
     // Far from every mesh's box (no pair within 2 reach + LIST_MARGINS allowances): no pairs, and every
-    // particle may move that allowance.
+    // particle has that allowance and stride.
     const Box whole = path_box(nullptr, n, n, x.data(), x.data(), 0.0);
     double gap = std::numeric_limits<double>::infinity();
     for (Index k = 0; k < phys.collider_count; ++k) {
@@ -335,49 +365,68 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
         }
         gap = py_min(gap, std::sqrt(gap2));
     }
+    // Each particle's motion: over this step, and over the last one the pass looked at.
+    std::vector<double> motion(static_cast<std::size_t>(n), 0.0);
+    const bool seen = kept.motion.size() == static_cast<std::size_t>(n);
+    double fastest = 0.0;
+    for (Index i = 0; i < n; ++i) {
+        double d2 = 0.0;
+        for (Index c = 0; c < 3; ++c) d2 += (x1[c * n + i] - x0[c * n + i]) * (x1[c * n + i] - x0[c * n + i]);
+        motion[static_cast<std::size_t>(i)] = py_max(std::sqrt(d2), seen ? kept.motion[static_cast<std::size_t>(i)] : 0.0);
+        fastest = py_max(fastest, motion[static_cast<std::size_t>(i)]);
+    }
     const double clear = (gap - 2.0 * reach) / LIST_MARGINS;
-    if (clear >= LEAST_MARGIN * reach) {
+    if (clear >= py_max(LEAST_MARGIN * reach, fastest)) {  // (and it holds for this step)
         near.assign(static_cast<std::size_t>(n), py_min(clear, std::numeric_limits<double>::max()));
+        kept.stride = near;
         kept.margin = near[0];
         return;
     }
-    std::vector<Index> reached;  // the meshes the cloth's box, grown by the far pad, reaches
-    double far = FAR_MARGIN * reach;
+    // The particles near a mesh: of an element whose box, grown by the far pad, meets a cell of it that lists
+    // a triangle.
+    const double far = FAR_MARGIN * reach;
     const double far_pad = 2.0 * reach + LIST_MARGINS * far;
-    const Box cloth = path_box(nullptr, n, n, x.data(), x.data(), far_pad);  // a mesh it does not reach costs this
-    for (Index k = 0; k < phys.collider_count; ++k) {
-        const double* row = phys.colliders + k * COLLIDER_COLUMNS;
-        if (!frame.covers(phys, k)) continue;
-        const Index mesh = static_cast<Index>(row[C_RADIUS]);
-        const double* header = phys.meshes.headers + mesh * MESH_COLUMNS;
-        bool meets = true;
-        for (Index c = 0; c < 3; ++c) meets = meets && cloth.hi[c] >= header[M_LO_X + c] && cloth.lo[c] <= header[M_HI_X + c];
-        if (!meets) continue;
-        reached.push_back(k);
+    auto meshes_met = [&](double pad, std::vector<Index>& met) {  // the meshes the cloth's box grown by pad meets
+        const Box cloth = path_box(nullptr, n, n, x.data(), x.data(), pad);
+        met.clear();
+        for (Index k = 0; k < phys.collider_count; ++k) {
+            const double* row = phys.colliders + k * COLLIDER_COLUMNS;
+            if (!frame.covers(phys, k)) continue;
+            const double* header = phys.meshes.headers + static_cast<Index>(row[C_RADIUS]) * MESH_COLUMNS;
+            bool meets = true;
+            for (Index c = 0; c < 3; ++c) meets = meets && cloth.hi[c] >= header[M_LO_X + c] && cloth.lo[c] <= header[M_HI_X + c];
+            if (meets) met.push_back(k);
+        }
+    };
+    std::vector<Index> reached;
+    meshes_met(far_pad, reached);
+    for (const Index k : reached) {
+        const Index mesh = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_RADIUS]);
         mark_near(nullptr, n, 1, mesh, phys.meshes, n, x.data(), far_pad, found, near);
         mark_near(contact.edges, contact.edge_count, 2, mesh, phys.meshes, n, x.data(), far_pad, found, near);
         mark_near(contact.triangles, contact.triangle_count, 3, mesh, phys.meshes, n, x.data(), far_pad, found, near);
     }
-    double motion2 = 0.0;
+    const double least = (frame.shift != nullptr ? MOVING_LEAST_MARGIN : LEAST_MARGIN) * reach;
+    double widest = 0.0;
+    std::vector<double>& stride = kept.stride;
+    stride.resize(static_cast<std::size_t>(n));
     for (Index i = 0; i < n; ++i) {
-        if (near[static_cast<std::size_t>(i)] == 0.0) continue;
-        double d2 = 0.0;
-        for (Index c = 0; c < 3; ++c) d2 += (x1[c * n + i] - x0[c * n + i]) * (x1[c * n + i] - x0[c * n + i]);
-        motion2 = py_max(motion2, d2);
+        double& a = near[static_cast<std::size_t>(i)];
+        const double base = a != 0.0 ? least : far;
+        stride[static_cast<std::size_t>(i)] = py_max(base, MOTION_ROOM * motion[static_cast<std::size_t>(i)]);
+        a = py_max(base, START_ROOM * stride[static_cast<std::size_t>(i)]);
+        widest = py_max(widest, a + 2.0 * stride[static_cast<std::size_t>(i)]);
     }
-    const double least = frame.shift != nullptr ? MOVING_LEAST_MARGIN : LEAST_MARGIN;
-    const double margin = py_max(least * reach, std::sqrt(motion2));
-    far = py_max(far, margin);  // (a far pad too small for it: every particle near)
-    for (double& a : near) a = a != 0.0 || far == margin ? margin : far;
-    const double extra = reach + LIST_MARGINS * margin;
+    // The meshes an element's pairs may reach with the widest allowances (a particle moving fast far away).
+    meshes_met(2.0 * reach + (widest + ROUNDING_SLACK * reach), reached);
     for (const Index k : reached) {
         const Index mesh = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_RADIUS]);
         std::vector<Index>& stamp = lists.collider_stamp;
         std::vector<Index>& taken = lists.collider_vertex_stamp;
-        gather(nullptr, n, 1, k, mesh, phys.meshes, n, x.data(), reach, extra, found, stamp, taken, pairs);
-        gather(contact.edges, contact.edge_count, 2, k, mesh, phys.meshes, n, x.data(), reach, extra, found, stamp, taken,
-               pairs);
-        gather(contact.triangles, contact.triangle_count, 3, k, mesh, phys.meshes, n, x.data(), reach, extra, found,
+        gather(nullptr, n, 1, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), found, stamp, taken, pairs);
+        gather(contact.edges, contact.edge_count, 2, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), found, stamp,
+               taken, pairs);
+        gather(contact.triangles, contact.triangle_count, 3, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), found,
                stamp, taken, pairs);
     }
     std::sort(pairs.begin(), pairs.end());  // (a pair found twice has the same distance: one copy kept)
@@ -393,7 +442,7 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
     for (Index i = 0; i < n; ++i) {
         if (stamp[static_cast<std::size_t>(i)] != 0) kept.members.push_back(i);
     }
-    kept.margin = margin;
+    kept.margin = *std::min_element(near.begin(), near.end());
 }
 
 //: The kept pairs' particles' largest move (m) from the list's reference to x0, and their largest motion
@@ -422,8 +471,12 @@ MembersMoves members_moves(const ColliderPairList& kept, Index n, const double* 
 //: kept beyond them is never treated.
 void pairs_for_step(const Contact& contact, ContactLists& lists, ColliderPairList& kept, const Physics& phys,
                     const Frame& frame, Index n, const double* x0, const double* x1, double reach) {
-    if (!list_holds(kept, phys, n, x0) || !list_holds(kept, phys, n, x1)) {
-        keep_list(contact, lists, kept, phys, frame, n, x0, x1, reach);
+    if (!list_holds(kept, phys, n, x0, x1)) keep_list(contact, lists, kept, phys, frame, n, x0, x1, reach);
+    kept.motion.resize(static_cast<std::size_t>(n));
+    for (Index i = 0; i < n; ++i) {
+        double d2 = 0.0;
+        for (Index c = 0; c < 3; ++c) d2 += (x1[c * n + i] - x0[c * n + i]) * (x1[c * n + i] - x0[c * n + i]);
+        kept.motion[static_cast<std::size_t>(i)] = std::sqrt(d2);
     }
     std::vector<Pair>& pairs = lists.collider_pairs;
     pairs.clear();
@@ -645,7 +698,7 @@ Index gather_supports(const Contact& contact, ContactLists& lists, const Physics
             for (Index c = 0; c < 3; ++c) q[c * n + i] = from[c];
         }
         ColliderPairList& kept = lists.collider_moving_kept[static_cast<std::size_t>(k)];
-        if (!list_holds(kept, phys, n, q)) keep_list(contact, lists, kept, phys, frame, n, q, q, reach);
+        if (!list_holds(kept, phys, n, q, nullptr)) keep_list(contact, lists, kept, phys, frame, n, q, q, reach);
         const double moved = members_moves(kept, n, q, q).moved + ROUNDING_SLACK * reach;
         for (const Pair& pair : kept.pairs) {
             if (pair[P_KIND] == POINT_TRIANGLE && pair[P_POINTS] >= 0) continue;  // a particle: the particles' contact
@@ -686,7 +739,7 @@ Index hold_on_collider_edges(const Contact& contact, ContactLists& lists, const 
     if (phys.meshes.count == 0 || n == 0) return 0;
     const double reach = 0.5 * phys.thickness;
     ColliderPairList& kept = lists.collider_kept;  // (a moving mesh's edges hold no particle: its pushes keep them off)
-    if (!list_holds(kept, phys, n, pos)) keep_list(contact, lists, kept, phys, Frame{-1, nullptr}, n, pos, pos, reach);
+    if (!list_holds(kept, phys, n, pos, nullptr)) keep_list(contact, lists, kept, phys, Frame{-1, nullptr}, n, pos, pos, reach);
     lists.collider_rest.resize(4 * static_cast<std::size_t>(n));
     Index count = 0;
     for (const Pair& pair : kept.pairs) {

@@ -364,8 +364,10 @@ struct ColliderPairList {
     std::vector<std::array<Index, 7>> pairs;  // with the bits of their distances at the reference (m)
     std::vector<Index> members;     // the particles of its pairs
     std::vector<double> reference;  // (3, n) the positions the pairs were gathered at, m
-    std::vector<double> allowance;  // (n) m: how far each particle may move from them
-    double margin = 0.0;            // m: the allowance of those near a mesh (0: no list)
+    std::vector<double> allowance;  // (n) m: how far each particle may be from them at a step's start
+    std::vector<double> stride;     // (n) m: how far each particle may move in a step
+    std::vector<double> motion;     // (n) m: each particle's motion over the last step the edges' pass looked at
+    double margin = 0.0;            // m: the least allowance (0: no list)
     const void* key[2] = {nullptr, nullptr};  // the meshes and collider rows it was gathered from
 };
 
