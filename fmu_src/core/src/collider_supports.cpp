@@ -1,4 +1,4 @@
-// A moving mesh collider's features as supports inside the implicit step (collider_supports.hpp).
+// A mesh collider's features as supports inside the implicit step (collider_supports.hpp).
 #include "wetcloth/collider_supports.hpp"
 
 #include <cmath>
