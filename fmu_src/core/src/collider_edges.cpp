@@ -677,7 +677,8 @@ int collider_edge_contact(const Contact& contact, ContactLists& lists, const Phy
 namespace {
 
 //: Append to supports the pairs of kept (gathered from frame's colliders, the cloth's start q (3, n) in that
-//: frame) nearer than within (m) at q, as gather_supports's terms (reach: thickness / 2, m).
+//: frame) nearer at q than within (m) plus ahead (s) times the fastest speed (vel (3, n), m/s) of the pair's
+//: cloth particles, as gather_supports's terms (reach: thickness / 2, m).
 void add_support_terms(const Contact& contact, ContactLists& lists, ColliderPairList& kept, const Physics& phys,
                        const Frame& frame, Index n, const double* q, const double* vel, double ahead, double reach,
                        double within, Supports& supports) {
@@ -688,7 +689,8 @@ void add_support_terms(const Contact& contact, ContactLists& lists, ColliderPair
         double fastest = 0.0;  // m/s
         for (int j = 0; ahead > 0.0 && j < 4; ++j) {
             const Index s = pair[P_POINTS + j];
-            if (s >= 0) fastest = py_max(fastest, std::sqrt(vel[s] * vel[s] + vel[n + s] * vel[n + s] + vel[2 * n + s] * vel[2 * n + s]));
+            if (s < 0) continue;
+            fastest = py_max(fastest, std::sqrt(vel[s] * vel[s] + vel[n + s] * vel[n + s] + vel[2 * n + s] * vel[2 * n + s]));
         }
         const double near = within + ahead * fastest;
         if (gap_of(pair[P_START]) - moved >= near) continue;
@@ -734,8 +736,8 @@ Index gather_supports(const Contact& contact, ContactLists& lists, const Physics
     if (phys.meshes.count == 0 || n == 0) return 0;
     const double reach = 0.5 * phys.thickness;
     if (ahead > 0.0) {  // the still meshes' features, in the world (their kept list the edges' pass's)
-        add_support_terms(contact, lists, lists.collider_kept, phys, Frame{-1, nullptr}, n, pos, vel, ahead, reach, within,
-                          supports);
+        add_support_terms(contact, lists, lists.collider_kept, phys, Frame{-1, nullptr}, n, pos, vel, ahead, reach,
+                          within, supports);
     }
     if (phys.collider_motion == nullptr) return supports.count();
     lists.collider_moving_kept.resize(static_cast<std::size_t>(phys.collider_count));
