@@ -674,15 +674,72 @@ int collider_edge_contact(const Contact& contact, ContactLists& lists, const Phy
     return result;
 }
 
+namespace {
+
+//: Append to supports the pairs of kept (gathered from frame's colliders, the cloth's start q (3, n) in that
+//: frame) nearer at q than within (m) plus ahead (s) times the fastest speed (vel (3, n), m/s) of the pair's
+//: cloth particles, as gather_supports's terms (reach: thickness / 2, m).
+void add_support_terms(const Contact& contact, ContactLists& lists, ColliderPairList& kept, const Physics& phys,
+                       const Frame& frame, Index n, const double* q, const double* vel, double ahead, double reach,
+                       double within, Supports& supports) {
+    if (!list_holds(kept, phys, n, q, nullptr)) keep_list(contact, lists, kept, phys, frame, n, q, q, reach);
+    const double moved = members_moves(kept, n, q, q).moved + ROUNDING_SLACK * reach;
+    for (const Pair& pair : kept.pairs) {
+        if (pair[P_KIND] == POINT_TRIANGLE && pair[P_POINTS] >= 0) continue;  // a particle: the particles' contact
+        double fastest = 0.0;  // m/s
+        for (int j = 0; ahead > 0.0 && j < 4; ++j) {
+            const Index s = pair[P_POINTS + j];
+            if (s < 0) continue;
+            fastest = py_max(fastest, std::sqrt(vel[s] * vel[s] + vel[n + s] * vel[n + s] + vel[2 * n + s] * vel[2 * n + s]));
+        }
+        const double near = within + ahead * fastest;
+        if (gap_of(pair[P_START]) - moved >= near) continue;
+        const Motion mo = motion_of(pair, phys.meshes, n, nullptr, nullptr, q, q);
+        if (box_gap(mo.kind, mo.x) >= near) continue;
+        const Weights w = closest(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
+        const Vec3 d = combine(w, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
+        const double length = norm(d);
+        if (!(length > 0.0 && length < near)) continue;
+        const Index k = pair[P_COLLIDER];
+        const Index mesh = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_RADIUS]);
+        const Index ends[2] = {-1 - pair[mo.kind == POINT_TRIANGLE ? P_POINTS : P_POINTS + 2], -1 - pair[P_POINTS + 3]};
+        if (flat_feature(phys.meshes, mesh, ends, mo.kind == POINT_TRIANGLE ? 1 : 2, lists.collider_items)) continue;
+        const double side[4] = {w.w0, w.w1, w.w2, w.w3};
+        Vec3 part{0.0, 0.0, 0.0};  // the collider's points' weighted sum
+        Index slots = 0;
+        for (int j = 0; j < 4; ++j) {
+            const Index s = pair[P_POINTS + j];
+            if (s < 0) {
+                part = {part.x + side[j] * mo.x[j].x, part.y + side[j] * mo.x[j].y, part.z + side[j] * mo.x[j].z};
+            } else {
+                supports.points.push_back(s);
+                supports.weights.push_back(side[j]);
+                slots += 1;
+            }
+        }
+        for (; slots < 3; ++slots) supports.points.push_back(-1), supports.weights.push_back(0.0);
+        supports.table_normal.insert(supports.table_normal.end(), {d.x / length, d.y / length, d.z / length});
+        supports.table_part.insert(supports.table_part.end(), {part.x, part.y, part.z});
+        supports.collider.push_back(k);
+    }
+}
+
+}  // namespace
+
 Index gather_supports(const Contact& contact, ContactLists& lists, const Physics& phys, Index n, const double* pos,
-                      double within, Supports& supports) {
+                      const double* vel, double within, double ahead, Supports& supports) {
     supports.points.clear();
     supports.weights.clear();
     supports.table_normal.clear();
     supports.table_part.clear();
     supports.collider.clear();
-    if (phys.meshes.count == 0 || phys.collider_motion == nullptr || n == 0) return 0;
+    if (phys.meshes.count == 0 || n == 0) return 0;
     const double reach = 0.5 * phys.thickness;
+    if (ahead > 0.0) {  // the still meshes' features, in the world (their kept list the edges' pass's)
+        add_support_terms(contact, lists, lists.collider_kept, phys, Frame{-1, nullptr}, n, pos, vel, ahead, reach,
+                          within, supports);
+    }
+    if (phys.collider_motion == nullptr) return supports.count();
     lists.collider_moving_kept.resize(static_cast<std::size_t>(phys.collider_count));
     for (Index k = 0; k < phys.collider_count; ++k) {
         const Frame frame{k, collider_shift(phys, k)};
@@ -697,39 +754,8 @@ Index gather_supports(const Contact& contact, ContactLists& lists, const Physics
             table_point(frame.shift, centre, a, true, from);
             for (Index c = 0; c < 3; ++c) q[c * n + i] = from[c];
         }
-        ColliderPairList& kept = lists.collider_moving_kept[static_cast<std::size_t>(k)];
-        if (!list_holds(kept, phys, n, q, nullptr)) keep_list(contact, lists, kept, phys, frame, n, q, q, reach);
-        const double moved = members_moves(kept, n, q, q).moved + ROUNDING_SLACK * reach;
-        for (const Pair& pair : kept.pairs) {
-            if (pair[P_KIND] == POINT_TRIANGLE && pair[P_POINTS] >= 0) continue;  // a particle: the particles' contact
-            if (gap_of(pair[P_START]) - moved >= within) continue;
-            const Motion mo = motion_of(pair, phys.meshes, n, nullptr, nullptr, q, q);
-            if (box_gap(mo.kind, mo.x) >= within) continue;
-            const Weights w = closest(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
-            const Vec3 d = combine(w, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
-            const double length = norm(d);
-            if (!(length > 0.0 && length < within)) continue;
-            const Index mesh = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_RADIUS]);
-            const Index ends[2] = {-1 - pair[mo.kind == POINT_TRIANGLE ? P_POINTS : P_POINTS + 2], -1 - pair[P_POINTS + 3]};
-            if (flat_feature(phys.meshes, mesh, ends, mo.kind == POINT_TRIANGLE ? 1 : 2, lists.collider_items)) continue;
-            const double side[4] = {w.w0, w.w1, w.w2, w.w3};
-            Vec3 part{0.0, 0.0, 0.0};  // the collider's points' weighted sum
-            Index slots = 0;
-            for (int j = 0; j < 4; ++j) {
-                const Index s = pair[P_POINTS + j];
-                if (s < 0) {
-                    part = {part.x + side[j] * mo.x[j].x, part.y + side[j] * mo.x[j].y, part.z + side[j] * mo.x[j].z};
-                } else {
-                    supports.points.push_back(s);
-                    supports.weights.push_back(side[j]);
-                    slots += 1;
-                }
-            }
-            for (; slots < 3; ++slots) supports.points.push_back(-1), supports.weights.push_back(0.0);
-            supports.table_normal.insert(supports.table_normal.end(), {d.x / length, d.y / length, d.z / length});
-            supports.table_part.insert(supports.table_part.end(), {part.x, part.y, part.z});
-            supports.collider.push_back(k);
-        }
+        add_support_terms(contact, lists, lists.collider_moving_kept[static_cast<std::size_t>(k)], phys, frame, n, q,
+                          vel, 0.0, reach, within, supports);
     }
     return supports.count();
 }

@@ -1,4 +1,4 @@
-// A moving mesh collider's features as supports inside the implicit step (collider_supports.hpp).
+// A mesh collider's features as supports inside the implicit step (collider_supports.hpp).
 #include "wetcloth/collider_supports.hpp"
 
 #include <cmath>
@@ -109,7 +109,7 @@ void place_friction(Supports& supports, const Physics& phys, Index t, Index n, c
     supports.normal_force[static_cast<std::size_t>(t)] = depth > 0.0 ? supports.stiffness * depth : 0.0;
     // sum_k w_k (u + omega x (p_k - c - d)) = W u + omega x (part - W (c + d)), W = -cloth_weight
     double* velocity = supports.collider_velocity.data() + 3 * t;
-    for (int c = 0; c < 3; ++c) velocity[c] = -cloth_weight * shift[MOTION_VELOCITY + c];
+    for (int c = 0; c < 3; ++c) velocity[c] = shift != nullptr ? -cloth_weight * shift[MOTION_VELOCITY + c] : 0.0;
     if (!turns(shift)) return;
     double centre_place[3];  // c + d
     world_point_after(phys, k, h, phys.colliders + k * COLLIDER_COLUMNS + C_X, centre_place);
@@ -152,7 +152,7 @@ void place_supports(Supports& supports, const Physics& phys, Index n, const doub
         supports.offset[static_cast<std::size_t>(t)] = collider_along(supports, phys, t, h, normal, cloth_weight, part);
         const double mu = phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
         supports.friction[static_cast<std::size_t>(t)] = mu;
-        if (!(mu > 0.0) || collider_shift(phys, k) == nullptr) continue;
+        if (!(mu > 0.0)) continue;
         place_friction(supports, phys, t, n, pos, h, cloth_weight, part);
         supports.any_friction = true;
     }

@@ -250,10 +250,13 @@ Status step(Core& core, double remaining, double span) {
     // Particles sliding on the floor or a collider stay on it through an implicit step, friction a force of it.
     const bool sliding = implicit && gather_sliding(n, phys, buf.pos, buf.vel, cloth.free, core.sliding) > 0;
     core.solver.sliding = sliding ? &core.sliding : nullptr;
-    // A moving mesh's vertices and edges near the cloth's triangles and edges: supports its solve sees.
-    const bool supported = implicit && core.contact.lists != nullptr && phys.collider_motion != nullptr &&
-                           gather_supports(core.contact, *core.contact.lists, phys, n, buf.pos,
-                                           (SUPPORT_DISTANCE + 1.0) * 0.5 * phys.thickness, core.supports) > 0;
+    // A moving mesh's vertices and edges near the cloth's triangles and edges: supports its solve sees; at
+    // fixed steps a still mesh's too (its frame-long moves at a bucket's rim the edges' pass cannot show safe).
+    const bool supported = implicit && core.contact.lists != nullptr &&
+                           (phys.collider_motion != nullptr || !adaptive) &&
+                           gather_supports(core.contact, *core.contact.lists, phys, n, buf.pos, buf.vel,
+                                           (SUPPORT_DISTANCE + 1.0) * 0.5 * phys.thickness,
+                                           adaptive ? 0.0 : control.max_step, core.supports) > 0;
     if (supported) {
         core.supports.distance = SUPPORT_DISTANCE * 0.5 * phys.thickness;
         core.supports.stiffness = support_stiffness(cloth);

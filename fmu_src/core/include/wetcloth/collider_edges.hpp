@@ -35,11 +35,13 @@ int collider_edge_contact(const Contact& contact, ContactLists& lists, const Phy
 
 //: Before a step from pos (3, n, m): the pairs of each moving mesh collider's features and the cloth's
 //: elements (a collider vertex and a cloth triangle, a collider edge and a cloth edge) nearer than within (m)
-//: at the step's start, from its kept list in its table frame, as the terms of supports
-//: (collider_supports.hpp): each with its closest-point weights, its contact normal and its collider points'
-//: weighted sum there; features that lie flat (all their faces in one plane) are left out.  Returns how many.
+//: at the step's start, from its kept list in its table frame, and with ahead > 0 (s: fixed steps' max_step)
+//: the still meshes' from their kept list in the world, nearer than within plus ahead times the fastest start
+//: speed (vel (3, n), m/s) of the pair's cloth particles, as the terms of supports (collider_supports.hpp):
+//: each with its closest-point weights, its contact normal and its collider points' weighted sum there;
+//: features that lie flat (all their faces in one plane) are left out.  Returns how many.
 Index gather_supports(const Contact& contact, ContactLists& lists, const Physics& phys, Index n, const double* pos,
-                      double within, Supports& supports);
+                      const double* vel, double within, double ahead, Supports& supports);
 
 //: The value of Buffers::held for a particle resting on a mesh collider's edge or vertex (the floor's is 1,
 //: a layer's 2, an analytic or mesh collider k's surface 3 + k).

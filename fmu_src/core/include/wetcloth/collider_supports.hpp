@@ -1,6 +1,6 @@
-// A moving mesh collider's vertices and edges as supports inside the implicit step (docs/model.md section
-// 6.3, "Supports in the solve").  A coarse cloth cannot wrap a mesh finer than its particles: the mesh's
-// vertices poke into its triangles, and the edges' pass (collider_edges.hpp) pushes the poked triangle back
+// A moving mesh collider's vertices and edges (a still one's at fixed steps) as supports inside the implicit step
+// (docs/model.md section 6.3, "Supports in the solve").  A coarse cloth cannot wrap a mesh finer than its particles:
+// the mesh's vertices poke into its triangles, and the edges' pass (collider_edges.hpp) pushes the poked triangle back
 // after each step, a support the step's solve does not see.  Each pair of a collider feature and a cloth
 // element near at the step's start (Supports, gathered by gather_supports) becomes a one-sided penalty on
 // the pair's gap along its contact normal there, g = n . sum_k w_k x_k (the weights and normal fixed for
