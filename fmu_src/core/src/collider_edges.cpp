@@ -287,14 +287,17 @@ inline constexpr double MOTION_ROOM = 1.1;
 //: steady pace but its reach was 1.6 times as long: the sweep's mesh ball at frame steps 2.3 against 1.5 s).
 inline constexpr double START_ROOM = 0.25;
 
+//: The squared distance (m^2) of particle i of x (3, n) from its place in y (3, n).
+inline double moved2(Index n, Index i, const double* x, const double* y) {
+    double d2 = 0.0;
+    for (Index c = 0; c < 3; ++c) d2 += (x[c * n + i] - y[c * n + i]) * (x[c * n + i] - y[c * n + i]);
+    return d2;
+}
+
 //: The largest distance (m) of a particle of x (3, n) from its place in y (3, n).
 double largest_move(Index n, const double* x, const double* y) {
     double most2 = 0.0;
-    for (Index i = 0; i < n; ++i) {
-        double d2 = 0.0;
-        for (Index c = 0; c < 3; ++c) d2 += (x[c * n + i] - y[c * n + i]) * (x[c * n + i] - y[c * n + i]);
-        most2 = py_max(most2, d2);
-    }
+    for (Index i = 0; i < n; ++i) most2 = py_max(most2, moved2(n, i, x, y));
     return std::sqrt(most2);
 }
 
@@ -306,11 +309,7 @@ bool list_holds(const ColliderPairList& kept, const Physics& phys, Index n, cons
     const double* allowance = kept.allowance.data();
     const double* stride = kept.stride.data();
     for (Index i = 0; i < n; ++i) {
-        double d2 = 0.0, p2 = 0.0;
-        for (Index c = 0; c < 3; ++c) {
-            const double d = x0[c * n + i] - ref[c * n + i], p = x1 ? x1[c * n + i] - x0[c * n + i] : 0.0;
-            d2 += d * d, p2 += p * p;
-        }
+        const double d2 = moved2(n, i, x0, ref), p2 = x1 ? moved2(n, i, x1, x0) : 0.0;
         if (!(d2 <= allowance[i] * allowance[i] && p2 <= stride[i] * stride[i])) return false;
     }
     return true;
@@ -370,9 +369,8 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
     const bool seen = kept.motion.size() == static_cast<std::size_t>(n);
     double fastest = 0.0;
     for (Index i = 0; i < n; ++i) {
-        double d2 = 0.0;
-        for (Index c = 0; c < 3; ++c) d2 += (x1[c * n + i] - x0[c * n + i]) * (x1[c * n + i] - x0[c * n + i]);
-        motion[static_cast<std::size_t>(i)] = py_max(std::sqrt(d2), seen ? kept.motion[static_cast<std::size_t>(i)] : 0.0);
+        motion[static_cast<std::size_t>(i)] =
+            py_max(std::sqrt(moved2(n, i, x1, x0)), seen ? kept.motion[static_cast<std::size_t>(i)] : 0.0);
         fastest = py_max(fastest, motion[static_cast<std::size_t>(i)]);
     }
     const double clear = (gap - 2.0 * reach) / LIST_MARGINS;
@@ -451,17 +449,11 @@ struct MembersMoves {
     double moved, motion;
 };
 MembersMoves members_moves(const ColliderPairList& kept, Index n, const double* x0, const double* x1) {
-    double moved2 = 0.0, motion2 = 0.0;
+    double most2 = 0.0, motion2 = 0.0;
     for (const Index i : kept.members) {
-        double a2 = 0.0, b2 = 0.0;
-        for (Index c = 0; c < 3; ++c) {
-            const double a = x0[c * n + i] - kept.reference[static_cast<std::size_t>(c * n + i)];
-            const double b = x1[c * n + i] - x0[c * n + i];
-            a2 += a * a, b2 += b * b;
-        }
-        moved2 = py_max(moved2, a2), motion2 = py_max(motion2, b2);
+        most2 = py_max(most2, moved2(n, i, x0, kept.reference.data())), motion2 = py_max(motion2, moved2(n, i, x1, x0));
     }
-    return {std::sqrt(moved2), std::sqrt(motion2)};
+    return {std::sqrt(most2), std::sqrt(motion2)};
 }
 
 //: The pairs near enough to need a look over the step from x0 to x1, in lists.collider_pairs with their
@@ -473,11 +465,7 @@ void pairs_for_step(const Contact& contact, ContactLists& lists, ColliderPairLis
                     const Frame& frame, Index n, const double* x0, const double* x1, double reach) {
     if (!list_holds(kept, phys, n, x0, x1)) keep_list(contact, lists, kept, phys, frame, n, x0, x1, reach);
     kept.motion.resize(static_cast<std::size_t>(n));
-    for (Index i = 0; i < n; ++i) {
-        double d2 = 0.0;
-        for (Index c = 0; c < 3; ++c) d2 += (x1[c * n + i] - x0[c * n + i]) * (x1[c * n + i] - x0[c * n + i]);
-        kept.motion[static_cast<std::size_t>(i)] = std::sqrt(d2);
-    }
+    for (Index i = 0; i < n; ++i) kept.motion[static_cast<std::size_t>(i)] = std::sqrt(moved2(n, i, x1, x0));
     std::vector<Pair>& pairs = lists.collider_pairs;
     pairs.clear();
     // A pair's start distance is at least its distance at the reference less its cloth points' largest

@@ -38,6 +38,18 @@ double slip_velocity(const Supports& supports, Index t, Index n, const double* v
     return std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
 }
 
+//: start + sum_k w_k normal . x_k over term t's cloth points at pos (3, n), normal (3) its world normal.
+double cloth_along(const Supports& supports, Index t, Index n, const double* pos, const double* normal, double start) {
+    double g = start;
+    for (int j = 0; j < 3; ++j) {
+        const Index i = supports.points[3 * t + j];
+        if (i < 0) continue;
+        const double w = supports.weights[3 * t + j];
+        g += w * (normal[0] * pos[i] + normal[1] * pos[n + i] + normal[2] * pos[2 * n + i]);
+    }
+    return g;
+}
+
 //: Whether term t has friction in the step (a coefficient above 0 and a normal force at the step's start).
 bool rubs(const Supports& supports, Index t) {
     const std::size_t u = static_cast<std::size_t>(t);
@@ -99,12 +111,8 @@ void place_friction(Supports& supports, const Physics& phys, Index t, Index n, c
     const double* shift = collider_shift(phys, k);
     const double* normal = supports.normal.data() + 3 * t;
     double start_part[3];
-    double gap = collider_along(supports, phys, t, 0.0, normal, cloth_weight, start_part);
-    for (int j = 0; j < 3; ++j) {
-        const Index i = supports.points[3 * t + j];
-        if (i < 0) continue;
-        gap += supports.weights[3 * t + j] * (normal[0] * pos[i] + normal[1] * pos[n + i] + normal[2] * pos[2 * n + i]);
-    }
+    const double gap = cloth_along(supports, t, n, pos, normal,
+                                   collider_along(supports, phys, t, 0.0, normal, cloth_weight, start_part));
     const double depth = supports.distance - gap;
     supports.normal_force[static_cast<std::size_t>(t)] = depth > 0.0 ? supports.stiffness * depth : 0.0;
     // sum_k w_k (u + omega x (p_k - c - d)) = W u + omega x (part - W (c + d)), W = -cloth_weight
@@ -159,15 +167,8 @@ void place_supports(Supports& supports, const Physics& phys, Index n, const doub
 }
 
 double support_gap(const Supports& supports, Index term, Index n, const double* pos) {
-    const double* normal = supports.normal.data() + 3 * term;
-    double g = supports.offset[static_cast<std::size_t>(term)];
-    for (int j = 0; j < 3; ++j) {
-        const Index i = supports.points[3 * term + j];
-        if (i < 0) continue;
-        const double w = supports.weights[3 * term + j];
-        g += w * (normal[0] * pos[i] + normal[1] * pos[n + i] + normal[2] * pos[2 * n + i]);
-    }
-    return g;
+    return cloth_along(supports, term, n, pos, supports.normal.data() + 3 * term,
+                       supports.offset[static_cast<std::size_t>(term)]);
 }
 
 double support_energy(const Supports& supports, Index n, const double* pos) {

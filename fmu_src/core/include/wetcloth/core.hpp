@@ -198,8 +198,8 @@ struct Sliding {
     void move_entry(Index to, Index from);
 };
 
-//: A moving mesh collider's features near the cloth's elements at a step's start, as supports the implicit
-//: step sees (collider_supports.hpp): per term, the pair's cloth particles (3, -1 where unused) and their
+//: A mesh collider's features near the cloth's elements at a step's start (a moving mesh's; at fixed steps a
+//: still mesh's too), as supports the implicit step sees (collider_supports.hpp): per term, the pair's cloth particles (3, -1 where unused) and their
 //: weights (3; the pair's closest-point weights, self_contact/geometry.hpp), and in the collider's table
 //: frame the contact normal at the start (3) and the weighted sum of its own points (3, m); its collider.
 //: For the step being tried: each term's world normal (3) and offset (m), so that its gap is
@@ -237,7 +237,7 @@ struct Solver {
     double* step_acceleration = nullptr;
     Index* counters = nullptr;
     Sliding* sliding = nullptr;  // the particles sliding on a surface during the step (sliding.hpp), or none
-    Supports* supports = nullptr;  // a moving mesh's features the step's solve sees (collider_supports.hpp), or none
+    Supports* supports = nullptr;  // mesh colliders' features the step's solve sees (collider_supports.hpp), or none
 };
 
 //: Columns of Hierarchy::levels.
