@@ -43,6 +43,27 @@ def test_a_sheet_dropped_onto_a_collider_drapes_over_it_and_never_enters_it(shap
     assert sim.state.pos[2].min() < top - 0.02  # it drapes: the edges hang down over the sides
 
 
+@pytest.mark.parametrize("shape", ["cylinder", "box"])
+def test_a_frame_long_step_into_the_top_near_its_edge_ends_on_the_top(shape):
+    """One fixed implicit step of 1/24 s takes the sheet, 1 cm above the top, 7 mm into it (g h^2 = 17 mm).
+    A column of particles lies 3 mm inside the top's edge: nearer the side than the top at the step's end,
+    the nearest face would push them out through the side, below the top, across the cloth.  Every particle
+    whose path came in through the top ends on it, at top + thickness/2 (to rounding)."""
+    collider, top = SHAPES[shape]
+    shift = 0.147 - 12 * 0.4 / 14 + 0.2  # the sheet's column 12 (x = 0.1429 m) 3 mm inside the edge at 0.15
+    moved = dict(collider, x=-shift)
+    scene = load_scene(**SHEET, initial_height=top + 0.01, colliders=(moved,), integrator="implicit_euler",
+                       tolerance=0.0, max_step=1.0 / 24.0)
+    sim = wetcloth.Simulation(scene)
+    start = sim.state.pos.copy()
+    sim.advance(1.0 / 24.0)
+    x0, y0 = start[0] + shift, start[1]
+    over = np.hypot(x0, y0) < 0.15 if shape == "cylinder" else (np.abs(x0) < 0.15) & (np.abs(y0) < 0.15)
+    assert np.count_nonzero(np.abs(x0 - 0.147) < 1e-9) == 15  # the column is there
+    gap = 0.5 * scene.thickness
+    np.testing.assert_allclose(sim.state.pos[2, over], top + gap, rtol=0, atol=1e-12)
+
+
 @pytest.mark.parametrize("far", [dict(shape="sphere", x=10.0, radius=0.5),
                                  dict(shape="box", z=-0.9, size_x=5.0, size_y=5.0, size_z=0.1),
                                  dict(shape="plane", z=-0.95, normal_z=1.0),

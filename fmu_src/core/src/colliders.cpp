@@ -242,38 +242,65 @@ bool undo_crossing(const Physics& phys, const double* row, const double* shift, 
     return true;
 }
 
-//: Where particle i's path crossed a moving box (shift: its row of Physics::collider_motion), in the box's
-//: frame (from a (3) less the box's displacement at the step's start to p (3) less its displacement now), as
-//: a mesh's crossing (undo_crossing): p goes back gap off the face it entered through, where the box is now
-//: (normal: that face's).  Returns whether the path entered the box from outside.  (The nearest face at the
-//: step's end would let a particle whose support the box's top carried away in the step fall past its
-//: edge, or push one that the top swept over near the edge out through the side face, across the cloth.)
-bool undo_box_crossing(const double* row, const double* shift, const double* a, double gap, double* p,
-                       double* normal) {
+//: Where particle i's path entered a box or a cylinder (shift: its row of Physics::collider_motion, or null for
+//: a still one), in the collider's frame (from a (3) less its displacement at the step's start to p (3) less its
+//: displacement now), as a mesh's crossing (undo_crossing): p goes back gap off the face it entered through,
+//: where the collider is now (normal: that face's).  Returns whether the path entered the solid from outside.
+//: (The nearest face at the step's end would let a particle whose support the box's top carried away in the
+//: step fall past its edge, or push one that a frame-long step took in through the top near the edge out
+//: through the side face, across the cloth.)
+bool undo_solid_crossing(const double* row, const double* shift, const double* a, double gap, double* p,
+                         double* normal) {
+    const bool cylinder = static_cast<Index>(row[C_SHAPE]) == CYLINDER;
     const double half[3] = {0.5 * row[C_SIZE_X], 0.5 * row[C_SIZE_Y], 0.5 * row[C_SIZE_Z]};
     double s[3], e[3];
     double enter = -std::numeric_limits<double>::infinity(), leave = std::numeric_limits<double>::infinity();
-    Index axis = -1;
+    Index axis = -1;  // the face entered through: an axis's slab, or 3 for a cylinder's side
     double from[3], to[3];
     table_point(shift, row + C_X, a, true, from);
     table_point(shift, row + C_X, p, false, to);
     for (Index c = 0; c < 3; ++c) {
         s[c] = from[c] - row[C_X + c];
         e[c] = to[c] - row[C_X + c];
+    }
+    // The slabs |x_c| <= half_c: a box's three, a cylinder's axial one.
+    for (Index c = cylinder ? 2 : 0; c < 3; ++c) {
+        const double extent = cylinder ? 0.5 * row[C_HEIGHT] : half[c];
         if (s[c] == e[c]) {
-            if (std::abs(s[c]) > half[c]) return false;  // beside the slab all along
+            if (std::abs(s[c]) > extent) return false;  // beside the slab all along
             continue;
         }
-        const double t0 = (-half[c] - s[c]) / (e[c] - s[c]), t1 = (half[c] - s[c]) / (e[c] - s[c]);
+        const double t0 = (-extent - s[c]) / (e[c] - s[c]), t1 = (extent - s[c]) / (e[c] - s[c]);
         const double lo = std::min(t0, t1), hi = std::max(t0, t1);
         if (lo > enter) enter = lo, axis = c;
         leave = std::min(leave, hi);
     }
+    if (cylinder) {  // and within its radius: |s + t (e - s)| <= r across the axis
+        const double dx = e[0] - s[0], dy = e[1] - s[1], r = row[C_RADIUS];
+        const double qa = dx * dx + dy * dy, qb = s[0] * dx + s[1] * dy, qc = s[0] * s[0] + s[1] * s[1] - r * r;
+        if (qa == 0.0) {
+            if (qc > 0.0) return false;  // beside the side all along
+        } else {
+            const double disc = qb * qb - qa * qc;
+            if (!(disc >= 0.0)) return false;  // the line misses the side
+            const double root = std::sqrt(disc);
+            const double lo = (-qb - root) / qa, hi = (-qb + root) / qa;
+            if (lo > enter) enter = lo, axis = 3;
+            leave = std::min(leave, hi);
+        }
+    }
     if (axis < 0 || !(enter > 0.0 && enter <= 1.0 && enter <= leave)) return false;  // inside at the start, or missed
-    for (Index c = 0; c < 3; ++c) normal[c] = 0.0;
-    normal[axis] = s[axis] > 0.0 ? 1.0 : -1.0;
     double q[3];
-    for (Index c = 0; c < 3; ++c) q[c] = s[c] + enter * (e[c] - s[c]) + gap * normal[c] + row[C_X + c];
+    for (Index c = 0; c < 3; ++c) q[c] = s[c] + enter * (e[c] - s[c]);
+    for (Index c = 0; c < 3; ++c) normal[c] = 0.0;
+    if (axis < 3) {
+        normal[axis] = s[axis] > 0.0 ? 1.0 : -1.0;
+    } else {
+        const double rho = std::hypot(q[0], q[1]);
+        normal[0] = q[0] / rho;
+        normal[1] = q[1] / rho;
+    }
+    for (Index c = 0; c < 3; ++c) q[c] += gap * normal[c] + row[C_X + c];
     world_point(shift, row + C_X, q, p);
     world_direction(shift, normal);
     return true;
@@ -292,17 +319,14 @@ Index collider_contact(Index n, const Physics& phys, const double* start, double
         const double* shift = collider_shift(phys, k);
         if (!reachable(phys, row, shift, lo, hi, gap)) continue;
         const bool mesh = static_cast<Index>(row[C_SHAPE]) == MESH;
-        const bool box = static_cast<Index>(row[C_SHAPE]) == BOX;
-        const bool moved = shift != nullptr && (shift[MOTION_NOW] != shift[MOTION_START] ||
-                                                shift[MOTION_NOW + 1] != shift[MOTION_START + 1] ||
-                                                shift[MOTION_NOW + 2] != shift[MOTION_START + 2] || turns(shift));
+        const bool solid = static_cast<Index>(row[C_SHAPE]) == BOX || static_cast<Index>(row[C_SHAPE]) == CYLINDER;
         const double friction = row[C_FRICTION];
         for (Index i = 0; i < n; ++i) {
             double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
             const double a[3] = {start[i], start[n + i], start[2 * n + i]};
             double nrm[3];
             const bool crossed = mesh ? undo_crossing(phys, row, shift, a, gap, p, nrm)
-                                 : box && moved && undo_box_crossing(row, shift, a, gap, p, nrm);
+                                 : solid && undo_solid_crossing(row, shift, a, gap, p, nrm);
             if (!crossed) {
                 const double dist = collider_distance(phys, k, p, gap, nrm);
                 if (!(dist < gap)) continue;

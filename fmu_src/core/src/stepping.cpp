@@ -399,7 +399,7 @@ Status step(Core& core, double remaining, double span) {
     const bool on_floor = floor_contact(n, phys.floor_z, phys.floor_friction, buf.trial_pos, buf.trial_vel) > 0 ||
                           held > 0 || core.solver.sliding != nullptr;
     double kick = 0.0;  // m/s: the largest change of a velocity along a moving collider's surface
-    const bool on_collider = (phys.collider_count > 0 &&
+    bool on_collider = (phys.collider_count > 0 &&
                               collider_contact(n, phys, buf.pos, buf.trial_pos, buf.trial_vel, &kick) > 0) ||
                              held_on_colliders > 0 || (core.solver.sliding != nullptr && phys.collider_count > 0);
     // The cloth's edges and triangles against mesh colliders' edges and vertices, before self-collision and
@@ -420,7 +420,12 @@ Status step(Core& core, double remaining, double span) {
                           cloth.free, buf.pos, buf.trial_pos, buf.trial_vel, h);
     const bool carried = kinked && carries && core.contact.counters[FREEZES] == freezes &&
                          mark_pushed(n, unpushed_pos, unpushed_vel, buf.trial_pos, buf.trial_vel, pushed) > 0;
-    if (kinked) edged |= collider_edges(core, buf.pos, buf.trial_pos, buf.trial_vel);
+    if (kinked) {  // self-collision's pushes do not see the colliders: those it pushed into one go back out
+        edged |= collider_edges(core, buf.pos, buf.trial_pos, buf.trial_vel);
+        if (phys.collider_count > 0 && collider_contact(n, phys, buf.pos, buf.trial_pos, buf.trial_vel, &kick) > 0) {
+            on_collider = true;
+        }
+    }
     // A moving collider's friction that changed a velocity along it by more than the step's allowed error
     // in a step breaks the history BDF2 extrapolates: BDF2 starts afresh (a sheet on a box accelerating at
     // 2 mu g under it then slides mu g t^2 / 2 within 0.0003 %, 0.2 % without).
