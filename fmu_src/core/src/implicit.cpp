@@ -158,7 +158,9 @@ void newton_residual(const Cloth& cloth, const Physics& phys, Work& work, Solver
     const Index n = cloth.n;
     forces_and_blocks(cloth, phys, work, out_pos, out_vel, step_water, bh, slack_slope);
     if (solver.supports != nullptr) add_support_forces(*solver.supports, n, out_pos, out_vel, work.force, work.blocks);
-    if (solver.sliding != nullptr) add_sliding_friction(*solver.sliding, n, solver.mass, work.force);
+    if (solver.sliding != nullptr) {
+        add_sliding_friction(*solver.sliding, n, solver.mass, out_vel, bh, work.force, work.blocks);
+    }
     const double* free = cloth.free;
     const double* mass = solver.mass;
     for (Index c = 0; c < 3; ++c) {

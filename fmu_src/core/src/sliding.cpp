@@ -18,6 +18,7 @@
 #include "wetcloth/collider_motion.hpp"
 #include "wetcloth/colliders.hpp"
 #include "wetcloth/floor.hpp"
+#include "wetcloth/smoothed_friction.hpp"
 
 namespace wc {
 
@@ -76,6 +77,18 @@ void add_particle(Sliding& sliding, Index i, const double nrm[3], const double t
     sliding.centripetal.push_back(centripetal);
     sliding.normal_speed.push_back(0.0);
     sliding.curving.push_back(0.0);
+}
+
+//: Sliding particle s's slip u (3, m/s: its velocity (3, n) relative to its surface, along it); returns |u|.
+double slip_speed(const Sliding& sliding, Index s, Index n, const double* vel, double* u = nullptr) {
+    const Index i = sliding.index[s];
+    const double* nrm = &sliding.normal[3 * s];
+    const double* w = &sliding.surface_velocity[3 * s];
+    double slip[3] = {vel[i] - w[0], vel[n + i] - w[1], vel[2 * n + i] - w[2]};
+    const double across = slip[0] * nrm[0] + slip[1] * nrm[1] + slip[2] * nrm[2];
+    for (int c = 0; c < 3; ++c) slip[c] -= across * nrm[c];
+    if (u != nullptr) std::copy(slip, slip + 3, u);
+    return std::sqrt(slip[0] * slip[0] + slip[1] * slip[1] + slip[2] * slip[2]);
 }
 
 //: The force (N) particle s of the set presses onto its surface with: the force (3, n) into it less what
@@ -230,13 +243,24 @@ void prescribe_normal_speed(Sliding& sliding, Index n, const double* pos, const 
     }
 }
 
-void add_sliding_friction(const Sliding& sliding, Index n, const double* mass, double* force) {
+void add_sliding_friction(const Sliding& sliding, Index n, const double* mass, const double* vel, double bh,
+                          double* force, double* blocks) {
     for (Index s = 0; s < sliding.count(); ++s) {
         const Index i = sliding.index[s];
         const double onto = pressing(sliding, s, n, mass, force);
         if (!(onto > 0.0)) continue;
         const double kinetic = sliding.friction[s] * onto;
-        for (int c = 0; c < 3; ++c) force[c * n + i] -= kinetic * sliding.direction[3 * s + c];
+        if (!sliding.smoothed) {
+            for (int c = 0; c < 3; ++c) force[c * n + i] -= kinetic * sliding.direction[3 * s + c];
+            continue;
+        }
+        double u[3];
+        const double y = slip_speed(sliding, s, n, vel, u);
+        const double a = slip_factor(y);
+        double stiffness[6];
+        slip_stiffness(kinetic, y, u, &sliding.normal[3 * s], stiffness);
+        for (int c = 0; c < 3; ++c) force[c * n + i] -= kinetic * a * u[c];
+        for (int e = 0; e < 6; ++e) blocks[e * n + i] += bh * stiffness[e];
     }
 }
 
@@ -247,6 +271,12 @@ Index stop_reversed(const Sliding& sliding, Index n, const double* hat_pos, doub
         const double* nrm = &sliding.normal[3 * s];
         const double* t = &sliding.direction[3 * s];
         const double* u = &sliding.surface_velocity[3 * s];
+        if (sliding.smoothed) {  // held by the smoothed law's stick: at rest where the solve put it
+            if (!(slip_speed(sliding, s, n, vel) < SLIP_SPEED)) continue;
+            stopped += 1;
+            for (int c = 0; c < 3; ++c) vel[c * n + i] = u[c];
+            continue;
+        }
         const double onward = (vel[i] - u[0]) * t[0] + (vel[n + i] - u[1]) * t[1] + (vel[2 * n + i] - u[2]) * t[2];
         if (onward > 0.0) continue;
         stopped += 1;

@@ -249,6 +249,7 @@ Status step(Core& core, double remaining, double span) {
     }
     // Particles sliding on the floor or a collider stay on it through an implicit step, friction a force of it.
     const bool sliding = implicit && gather_sliding(n, phys, buf.pos, buf.vel, cloth.free, core.sliding) > 0;
+    core.sliding.smoothed = !adaptive;
     core.solver.sliding = sliding ? &core.sliding : nullptr;
     // A moving mesh's vertices and edges near the cloth's triangles and edges: supports its solve sees; at
     // fixed steps a still mesh's too (its frame-long moves at a bucket's rim the edges' pass cannot show safe).

@@ -190,6 +190,10 @@ struct Sliding {
     std::vector<double> start_normal, start_direction, turning;  // (3 each)
     std::vector<double> centripetal;
     std::vector<double> curving;
+    //: Friction by IPC's smoothed law on the velocity at the step's end (fixed steps: a frame-long step's
+    //: friction held to its start's direction reversed particles' motion and stop_reversed took back cm),
+    //: else Coulomb's against the start's direction, stopped particles put at rest (adaptive steps).
+    bool smoothed = false;
     Index count() const { return static_cast<Index>(index.size()); }
     //: Keep the first `count` particles of the set (0: none); their per-step values (normal_speed, curving:
     //: prescribe_normal_speed's) zero.  (sliding.cpp)

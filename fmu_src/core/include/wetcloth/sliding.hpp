@@ -35,13 +35,18 @@ void prescribe_normal_speed(Sliding& sliding, Index n, const double* pos, const 
 
 //: Kinetic friction on the sliding particles into force (3, n, N): friction times the force pressing each
 //: onto its surface (zero if none: the force into it less its mass (n, kg) times its path's centripetal
-//: acceleration), against its direction of sliding at the step's start.
-void add_sliding_friction(const Sliding& sliding, Index n, const double* mass, double* force);
+//: acceleration), against its direction of sliding at the step's start; or, where sliding.smoothed (fixed
+//: steps), IPC's smoothed Coulomb law on its velocity (3, n) relative to the surface at the step's end
+//: (smoothed_friction.hpp), its stiffness times bh (s) into the diagonal blocks (6, n).
+void add_sliding_friction(const Sliding& sliding, Index n, const double* mass, const double* vel, double bh,
+                          double* force, double* blocks);
 
 //: After the step's solve: a sliding particle whose velocity (3, n, m/s) along its direction of sliding is
 //: (relative to its surface's) no longer positive has stopped within the step: its velocity is set to its
 //: surface's (zero but on a moving collider) and its position (3, n) to x^ + bh v+ with v+ that velocity
-//: along the surface and its prescribed velocity across it.  Returns how many stopped.
+//: along the surface and its prescribed velocity across it.  With the smoothed law (sliding.smoothed), one whose
+//: slip at the step's end is within its stick (below SLIP_SPEED) is at rest where the solve put it: its
+//: velocity set to its surface's (held in the next step).  Returns how many stopped.
 Index stop_reversed(const Sliding& sliding, Index n, const double* hat_pos, double bh, double* pos, double* vel);
 
 //: After the step: the particles whose force (3, n) lifts them off their surface (their normal was held in the
