@@ -417,7 +417,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
         }
         previous = largest;
     }
-    if (solver.sliding != nullptr) stop_reversed(*solver.sliding, n, hat_pos, bh, out_pos, out_vel);
+    if (solver.sliding != nullptr) stop_reversed(*solver.sliding, n, hat_pos, bh, !adaptive, out_pos, out_vel);
     for (Index k = 0; k < 3 * n; ++k) solver.step_acceleration[k] = (out_vel[k] - hat_vel[k]) / bh;
     // Descent never fails: a solve still short of its tolerance after DESCENT_NEWTON_ITERATIONS is taken,
     // its last correction (as a position error) added to the estimate, so the user sees what it cost.

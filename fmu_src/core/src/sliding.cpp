@@ -240,7 +240,8 @@ void add_sliding_friction(const Sliding& sliding, Index n, const double* mass, d
     }
 }
 
-Index stop_reversed(const Sliding& sliding, Index n, const double* hat_pos, double bh, double* pos, double* vel) {
+Index stop_reversed(const Sliding& sliding, Index n, const double* hat_pos, double bh, bool in_place, double* pos,
+                    double* vel) {
     Index stopped = 0;
     for (Index s = 0; s < sliding.count(); ++s) {
         const Index i = sliding.index[s];
@@ -250,6 +251,10 @@ Index stop_reversed(const Sliding& sliding, Index n, const double* hat_pos, doub
         const double onward = (vel[i] - u[0]) * t[0] + (vel[n + i] - u[1]) * t[1] + (vel[2 * n + i] - u[2]) * t[2];
         if (onward > 0.0) continue;
         stopped += 1;
+        if (in_place) {  // where the solve put it, with its springs
+            for (int c = 0; c < 3; ++c) vel[c * n + i] = u[c];
+            continue;
+        }
         const double un = u[0] * nrm[0] + u[1] * nrm[1] + u[2] * nrm[2];
         for (int c = 0; c < 3; ++c) {  // at rest on the surface (exactly: held in the next step), where it is across it
             const Index k = c * n + i;
