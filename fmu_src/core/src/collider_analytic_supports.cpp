@@ -34,16 +34,14 @@ Index gather_analytic_supports(const Physics& phys, Index n, const double* pos, 
     const double fall = ahead * ahead * GRAVITY;  // m: how far gravity alone carries a particle in the step
     for (Index k = 0; k < phys.collider_count; ++k) {
         const double* row = phys.colliders + k * COLLIDER_COLUMNS;
-        if (static_cast<Index>(row[C_SHAPE]) == MESH) continue;  // its features are gather_supports's
-        const double* shift = collider_shift(phys, k);
+        if (static_cast<Index>(row[C_SHAPE]) == MESH || collider_moves(phys, k)) continue;
         for (Index i = 0; i < n; ++i) {
             if (free[i] == 0.0 || slides[static_cast<std::size_t>(i)]) continue;
             const double a[3] = {pos[i], pos[n + i], pos[2 * n + i]};
-            double q[3], normal[3], u[3] = {0.0, 0.0, 0.0};
-            table_point(shift, row + C_X, a, true, q);  // where it is in the collider's table frame
+            double q[3], normal[3];
+            table_point(collider_shift(phys, k), row + C_X, a, true, q);  // (a collider keyed to stand still)
             const double dist = table_distance(phys, row, q, 0.0, normal);
-            if (shift != nullptr) surface_velocity(phys, k, a, u);
-            const double speed = std::hypot(vel[i] - u[0], vel[n + i] - u[1], vel[2 * n + i] - u[2]);
+            const double speed = std::hypot(vel[i], vel[n + i], vel[2 * n + i]);
             if (!(dist < 2.0 * contact + ahead * speed + fall)) continue;
             const double gap = dist - contact + distance;  // the term's gap at the start
             const Index points[3] = {i, -1, -1};
