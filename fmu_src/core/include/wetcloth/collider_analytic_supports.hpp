@@ -3,9 +3,11 @@
 // touch at the step's start; the particles' contact (colliders.hpp) then pushes it out after the step, a push
 // the step's solve never saw, which stretches its springs (the tablecloth_sphere gained up to 0.08 J in a
 // frame).  Each free particle that may reach a collider within the step becomes a term of the mesh supports
-// (collider_supports.hpp, the same penalty, stiffness and friction): the particle alone (weight 1) against
-// the collider's tangent plane at its nearest point at the step's start, which a convex shape lies wholly
-// behind, so that the plane keeps it out of the shape too.
+// (collider_supports.hpp, the same penalty and stiffness): the particle alone (weight 1) against the
+// collider's tangent plane at its nearest point at the step's start, which a convex shape lies wholly behind,
+// so that the plane keeps it out of the shape too.  It starts off the plane, never pressed (a term that did
+// would give its stored energy to the step), so its friction's lagged normal force is zero: one that
+// arrives slides on the collider in the next step (sliding.hpp).
 #pragma once
 #include "wetcloth/core.hpp"
 
