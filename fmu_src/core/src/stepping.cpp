@@ -10,6 +10,7 @@
 
 #include "wetcloth/absorption.hpp"
 #include "wetcloth/assembly.hpp"
+#include "wetcloth/collider_analytic_supports.hpp"
 #include "wetcloth/collider_edges.hpp"
 #include "wetcloth/collider_motion.hpp"
 #include "wetcloth/collider_supports.hpp"
@@ -253,11 +254,17 @@ Status step(Core& core, double remaining, double span) {
     core.solver.sliding = sliding ? &core.sliding : nullptr;
     // A moving mesh's vertices and edges near the cloth's triangles and edges: supports its solve sees; at
     // fixed steps a still mesh's too (its frame-long moves at a bucket's rim the edges' pass cannot show safe).
-    const bool supported = implicit && core.contact.lists != nullptr &&
-                           (phys.collider_motion != nullptr || !adaptive) &&
-                           gather_supports(core.contact, *core.contact.lists, phys, n, buf.pos, buf.vel,
-                                           (SUPPORT_DISTANCE + 1.0) * 0.5 * phys.thickness,
-                                           adaptive ? 0.0 : control.max_step, core.supports) > 0;
+    bool supported = implicit && core.contact.lists != nullptr &&
+                     (phys.collider_motion != nullptr || !adaptive) &&
+                     gather_supports(core.contact, *core.contact.lists, phys, n, buf.pos, buf.vel,
+                                     (SUPPORT_DISTANCE + 1.0) * 0.5 * phys.thickness,
+                                     adaptive ? 0.0 : control.max_step, core.supports) > 0;
+    // At fixed steps the analytic colliders too: the free particles a frame-long step may carry onto one.
+    if (implicit && !adaptive && phys.collider_count > 0) {
+        supported = gather_analytic_supports(phys, n, buf.pos, buf.vel, cloth.free, core.solver.sliding,
+                                             SUPPORT_DISTANCE * 0.5 * phys.thickness, control.max_step,
+                                             supported ? core.supports.count() : 0, core.supports) > 0;
+    }
     if (supported) {
         core.supports.distance = SUPPORT_DISTANCE * 0.5 * phys.thickness;
         core.supports.stiffness = support_stiffness(cloth);

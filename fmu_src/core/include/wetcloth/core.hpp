@@ -203,7 +203,8 @@ struct Sliding {
 };
 
 //: A mesh collider's features near the cloth's elements at a step's start (a moving mesh's; at fixed steps a
-//: still mesh's too), as supports the implicit step sees (collider_supports.hpp): per term, the pair's cloth particles (3, -1 where unused) and their
+//: still mesh's too, and a free particle against a still analytic collider's tangent plane:
+//: collider_analytic_supports.hpp), as supports the implicit step sees (collider_supports.hpp): per term, the pair's cloth particles (3, -1 where unused) and their
 //: weights (3; the pair's closest-point weights, self_contact/geometry.hpp), and in the collider's table
 //: frame the contact normal at the start (3) and the weighted sum of its own points (3, m); its collider.
 //: For the step being tried: each term's world normal (3) and offset (m), so that its gap is

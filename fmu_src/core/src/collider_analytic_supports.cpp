@@ -1,0 +1,61 @@
+// The analytic colliders as supports inside fixed implicit steps (collider_analytic_supports.hpp).
+#include "wetcloth/collider_analytic_supports.hpp"
+
+#include <cmath>
+#include <vector>
+
+#include "wetcloth/collider_motion.hpp"
+#include "wetcloth/colliders.hpp"
+
+namespace wc {
+
+namespace {
+
+//: Keep the first `kept` terms of supports.
+void keep_terms(Supports& supports, Index kept) {
+    const std::size_t k = static_cast<std::size_t>(kept);
+    supports.points.resize(3 * k);
+    supports.weights.resize(3 * k);
+    supports.table_normal.resize(3 * k);
+    supports.table_part.resize(3 * k);
+    supports.collider.resize(k);
+}
+
+}  // namespace
+
+Index gather_analytic_supports(const Physics& phys, Index n, const double* pos, const double* vel, const double* free,
+                               const Sliding* sliding, double distance, double ahead, Index kept, Supports& supports) {
+    keep_terms(supports, kept);
+    const double contact = 0.5 * phys.thickness;
+    std::vector<char> slides(static_cast<std::size_t>(n), 0);
+    if (sliding != nullptr) {
+        for (const Index i : sliding->index) slides[static_cast<std::size_t>(i)] = 1;
+    }
+    const double fall = ahead * ahead * GRAVITY;  // m: how far gravity alone carries a particle in the step
+    for (Index k = 0; k < phys.collider_count; ++k) {
+        const double* row = phys.colliders + k * COLLIDER_COLUMNS;
+        if (static_cast<Index>(row[C_SHAPE]) == MESH || collider_moves(phys, k)) continue;
+        for (Index i = 0; i < n; ++i) {
+            if (free[i] == 0.0 || slides[static_cast<std::size_t>(i)]) continue;
+            const double a[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+            double q[3], normal[3];
+            table_point(collider_shift(phys, k), row + C_X, a, true, q);  // (a collider keyed to stand still)
+            const double dist = table_distance(phys, row, q, 0.0, normal);
+            const double speed = std::hypot(vel[i], vel[n + i], vel[2 * n + i]);
+            if (!(dist < 2.0 * contact + ahead * speed + fall)) continue;
+            const double gap = dist - contact + distance;  // the term's gap at the start
+            const Index points[3] = {i, -1, -1};
+            const double weights[3] = {1.0, 0.0, 0.0};
+            for (int c = 0; c < 3; ++c) {
+                supports.points.push_back(points[c]);
+                supports.weights.push_back(weights[c]);
+                supports.table_normal.push_back(normal[c]);
+                supports.table_part.push_back(gap * normal[c] - q[c]);  // minus the plane's point (weight -1)
+            }
+            supports.collider.push_back(k);
+        }
+    }
+    return supports.count();
+}
+
+}  // namespace wc
