@@ -202,6 +202,9 @@ double line_search(const Cloth& cloth, const Physics& phys, Work& work, Solver& 
     int side = 0;  // which end the last two guesses moved (Illinois halves the other end's slope)
     for (Index evaluation = 1; evaluation < LINE_SEARCH_EVALUATIONS; ++evaluation) {
         a = high - high_slope * (high - low) / (high_slope - low_slope);
+        // A first guess at the bracket's very end (the full step's slope far steeper: a support's penalty met
+        // within the step) would move it by a sliver: bisect instead.
+        if (evaluation == 1 && !(a > LINE_SEARCH_GUARD && a < 1.0 - LINE_SEARCH_GUARD)) a = 0.5;
         const double slope = slope_at(a);
         if (std::fabs(slope) <= LINE_SEARCH_SLOPE * first) break;
         if (slope > 0.0) {

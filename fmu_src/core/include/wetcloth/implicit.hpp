@@ -69,6 +69,9 @@ enum class NewtonMode : int { ADAPTIVE = 0, FIXED = 1 };
 inline constexpr double DESCENT_SLACK_SLOPE = 1.0;
 inline constexpr Index LINE_SEARCH_EVALUATIONS = 4;
 inline constexpr double LINE_SEARCH_SLOPE = 0.1;
+//: A false-position guess within this fraction of the bracket's width from either end is replaced by the
+//: bracket's middle (line_search).
+inline constexpr double LINE_SEARCH_GUARD = 0.1;
 inline constexpr Index DESCENT_NEWTON_ITERATIONS = 4;
 //: With fixed steps, descent stops before DESCENT_NEWTON_ITERATIONS once the step's energy has settled:
 //: backward Euler's kinetic energy changes by v+ . M (v+ - v^) - 1/2 |v+ - v^|_M^2, of which the first
