@@ -32,3 +32,16 @@ def test_a_cloth_draping_over_a_ball_at_frame_steps_never_gains_energy():
     assert np.diff(energy).max() <= ENERGY_ROUNDING
     assert energy[-1] < 0.7 * energy[0]  # (it drapes: the sides fell over the ball)
     assert closest >= 0.5 * scene.thickness - 1e-12
+
+
+def test_a_sheet_falls_onto_a_collider_within_one_frame_long_step():
+    """A flat sheet 1 cm above a box's top, one fixed step of 1/24 s (free fall: 17 mm): it ends on the top,
+    its centre within 1 mm beyond thickness / 2 (the descent's line search, met by the penalty's steep slope
+    at the full step, once left it hovering 0.01 mm below its start)."""
+    scene = load_scene(nx=15, ny=15, width=0.4, length=0.4, initial_tilt=0.0, water_level=-0.5, initial_height=0.06,
+                       colliders=(dict(shape="box", size_x=0.3, size_y=0.3, size_z=0.2, z=-0.05),),
+                       integrator="implicit_euler", tolerance=0.0, max_step=1.0 / 24.0)
+    sim = wetcloth.Simulation(scene)
+    sim.advance(1.0 / 24.0)
+    centre = sim.state.pos[2, 7 * 15 + 7] - 0.05  # m above the top
+    assert 0.5 * scene.thickness - 1e-12 <= centre <= 0.5 * scene.thickness + 1e-3
