@@ -218,13 +218,17 @@ void gather(const Index* elements, Index count, int width, Index k, Index mesh, 
     }
 }
 
-//: Treat one pair if it needs it (as self-collision's settle_pair, at distance gap); returns whether it did.
-bool settle_pair(const Pair& pair, double start, const Physics& phys, const Frame& frame, double gap, Index n,
+//: What settle_pair did with a pair: nothing, its motion shown safe (the last resort would pass it too, while
+//: its particles' ends stay); pushed it apart; nothing, left to the last resort.
+enum Settled : int { SAFE = 0, TREATED = 1, LEFT = 2 };
+
+//: Treat one pair if it needs it (as self-collision's settle_pair, at distance gap).
+Settled settle_pair(const Pair& pair, double start, const Physics& phys, const Frame& frame, double gap, Index n,
                  const double* mass, const double* free, const double* x0, double* x1, double* v1, ContactLists& lists) {
     const Motion mo = motion_of(pair, phys.meshes, n, mass, free, x0, x1);
-    if (mo.inverse.sum() == 0.0) return false;
+    if (mo.inverse.sum() == 0.0) return LEFT;
     const ContactTime ct = contact_time(mo.kind, mo.x, mo.p, start, gap, frame.within_step());
-    if (!ct.near) return false;
+    if (!ct.near) return SAFE;
     const double when = ct.when;
     const double t = when == CLEAR ? 1.0 : when;
     Vec3 q[4];
@@ -232,8 +236,8 @@ bool settle_pair(const Pair& pair, double start, const Physics& phys, const Fram
     const Weights w = closest(mo.kind, q[0], q[1], q[2], q[3]);
     const Vec3 d = combine(w, q[0], q[1], q[2], q[3]);
     const double length = norm(d);
-    if (when == CLEAR && length >= (1.0 - SLACK) * gap) return false;
-    if (!(length > 0.0)) return false;  // no side to push to: left to the last resort
+    if (when == CLEAR && length >= (1.0 - SLACK) * gap) return SAFE;
+    if (!(length > 0.0)) return LEFT;  // no side to push to: left to the last resort
     const Vec3 normal = {d.x / length, d.y / length, d.z / length};
     double world[3] = {normal.x, normal.y, normal.z};  // the push's direction in the world
     if (frame.shift != nullptr) world_direction(frame.shift, world);
@@ -260,7 +264,7 @@ bool settle_pair(const Pair& pair, double start, const Physics& phys, const Fram
         lists.collider_normals[static_cast<std::size_t>(n + s)] = sign * world[1];
         lists.collider_normals[static_cast<std::size_t>(2 * n + s)] = sign * world[2];
     }
-    return true;
+    return TREATED;
 }
 
 //: The kept list (ContactLists::collider_list) holds every pair nearer at the reference positions than its
@@ -500,10 +504,33 @@ int edge_pass(const Contact& contact, ContactLists& lists, ColliderPairList& kep
     std::vector<Pair>& pairs = lists.collider_pairs;
     const std::vector<double>& start = lists.collider_start;
     int result = UNTOUCHED;
+    // A pair found SAFE whose particles' ends no push or stop has changed since is SAFE again (settle_pair's
+    // and the last resort's tests read only its points' starts and ends): it is not looked at again.  changes
+    // counts the pushes and stops, changed (n) holds the count at each particle's last, safe_at (pairs) the
+    // count when each pair was last found SAFE (-1: not).
+    Index changes = 0;
+    std::vector<Index> changed(size, 0);
+    std::vector<Index> safe_at;
+    auto still_safe = [&](const Pair& pair, Index at) {
+        if (at < 0) return false;
+        for (int k = 0; k < 4; ++k) {
+            const Index s = pair[P_POINTS + k];
+            if (s >= 0 && changed[static_cast<std::size_t>(s)] > at) return false;
+        }
+        return true;
+    };
+    auto mark_changed = [&](const Pair& pair) {
+        changes += 1;
+        for (int k = 0; k < 4; ++k) {
+            const Index s = pair[P_POINTS + k];
+            if (s >= 0) changed[static_cast<std::size_t>(s)] = changes;
+        }
+    };
     // The pairs that may need a push; gathered again if the pushes moved a particle farther than reach / 4
     // from where it was when they were (the pairs left out stay out of reach then).
     for (int attempt = 0; attempt < ATTEMPTS; ++attempt) {
         pairs_for_step(contact, lists, kept, phys, frame, n, x0, x1, reach);
+        safe_at.assign(pairs.size(), -1);
         if (pairs.empty()) break;
         if (fresh) {
             lists.collider_pushed.assign(size, 0);
@@ -513,15 +540,22 @@ int edge_pass(const Contact& contact, ContactLists& lists, ColliderPairList& kep
         gathered.assign(x1, x1 + 3 * n);
         for (int pass = 0; pass < PASSES_MAX; ++pass) {
             Index treated = 0;
-            for (std::size_t j = 0; j < pairs.size(); ++j)
-                treated += settle_pair(pairs[j], start[j], phys, frame, target_of(pairs[j], reach), n, mass, free, x0,
-                                       x1, v1, lists);
+            for (std::size_t j = 0; j < pairs.size(); ++j) {
+                if (still_safe(pairs[j], safe_at[j])) continue;
+                const Settled settled = settle_pair(pairs[j], start[j], phys, frame, target_of(pairs[j], reach), n,
+                                                    mass, free, x0, x1, v1, lists);
+                safe_at[j] = settled == SAFE ? changes : -1;
+                if (settled != TREATED) continue;
+                treated += 1;
+                mark_changed(pairs[j]);
+            }
             if (treated == 0) break;
             result |= PUSHED;
         }
         if (largest_move(n, x1, gathered.data()) <= 0.25 * reach) break;  // a pair's motion bound grows by at most 4 times the move
         if (attempt + 1 < ATTEMPTS) continue;
         pairs_for_step(contact, lists, kept, phys, frame, n, x0, x1, reach);  // for the last resort
+        safe_at.assign(pairs.size(), -1);
     }
     if (pairs.empty()) return result;
     // The last resort: the particles of a pair whose motion is still not shown safe stay where they started.
@@ -536,9 +570,10 @@ int edge_pass(const Contact& contact, ContactLists& lists, ColliderPairList& kep
                 const Index s = pair[P_POINTS + k];
                 movable = movable || (s >= 0 && free[s] != 0.0 && stopped[static_cast<std::size_t>(s)] == 0);
             }
-            if (!movable) continue;
+            if (!movable || still_safe(pair, safe_at[j])) continue;
             const Motion mo = motion_of(pair, phys.meshes, n, mass, free, x0, x1);
             if (contact_time(mo.kind, mo.x, mo.p, start[j], target_of(pair, reach), frame.within_step()).when == CLEAR) {
+                safe_at[j] = changes;
                 continue;
             }
             unsafe += 1;
@@ -549,6 +584,7 @@ int edge_pass(const Contact& contact, ContactLists& lists, ColliderPairList& kep
                 lists.collider_pushed[static_cast<std::size_t>(s)] = 0;
                 for (Index c = 0; c < 3; ++c) x1[c * n + s] = x0[c * n + s], v1[c * n + s] = 0.0;
             }
+            mark_changed(pair);
         }
         if (unsafe == 0) break;
         result |= STOPPED;
