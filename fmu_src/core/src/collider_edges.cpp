@@ -162,10 +162,11 @@ inline double element_largest(const Index* idx, int width, const double* values)
 //: stride (allowance, stride: (n) m; and a nanometre for rounding), from the triangles whose boxes reach the
 //: element's box grown by reach more.  stamp, vertex_stamp: scratch, the last element that saw each triangle, and that took each
 //: vertex (+ 1): a vertex is paired with a cloth triangle once, though each of its triangles meets the
-//: triangle's box.
+//: triangle's box; a collider edge is paired with a cloth edge once, though both its triangles meet it
+//: (edge_list: scratch, the cloth edge's collider edges from each lower end, found through vertex_stamp).
 void gather(const Index* elements, Index count, int width, Index k, Index mesh, const ColliderMeshes& m, Index n,
             const double* x, double reach, const double* allowance, const double* stride, std::vector<Index>& near, std::vector<Index>& stamp,
-            std::vector<Index>& vertex_stamp, std::vector<Pair>& pairs) {
+            std::vector<Index>& vertex_stamp, std::vector<Index>& edge_list, std::vector<Pair>& pairs) {
     double extra = 0.0;  // the element's: reach + its allowance + bound_factor strides, m
     auto add = [&](const Pair& pair) {
         const Motion mo = motion_of(pair, m, n, nullptr, nullptr, x, x);
@@ -176,7 +177,23 @@ void gather(const Index* elements, Index count, int width, Index k, Index mesh, 
         }
     };
     std::fill(stamp.begin(), stamp.end(), 0);
-    if (width == 3) vertex_stamp.assign(static_cast<std::size_t>(m.vertex_count), 0);
+    if (width >= 2) vertex_stamp.assign(static_cast<std::size_t>(m.vertex_count), 0);
+    // A cloth edge's collider edges: edge_list's first vertex_count slots hold each lower end's latest entry
+    // (valid where vertex_stamp holds the element), its entries (upper end, the entry before) follow.
+    auto first_sight = [&](Index e, Index a, Index b) {  // whether edge (a, b) (a < b) is new to element e
+        const std::size_t end = static_cast<std::size_t>(a);
+        if (vertex_stamp[end] != e + 1) {
+            vertex_stamp[end] = e + 1;
+            edge_list[end] = -1;
+        }
+        for (Index k = edge_list[end]; k >= 0; k = edge_list[static_cast<std::size_t>(k + 1)]) {
+            if (edge_list[static_cast<std::size_t>(k)] == b) return false;
+        }
+        edge_list.push_back(b);
+        edge_list.push_back(edge_list[end]);
+        edge_list[end] = static_cast<Index>(edge_list.size()) - 2;
+        return true;
+    };
     for (Index e = 0; e < count; ++e) {
         const Index* idx = elements ? elements + e * width : &e;
         extra = reach + ((element_largest(idx, width, allowance) + bound_factor(width) * element_largest(idx, width, stride)) +
@@ -184,6 +201,7 @@ void gather(const Index* elements, Index count, int width, Index k, Index mesh, 
         const Box box = path_box(idx, width, n, x, x, reach + extra);  // the farthest a pair kept can be
         near.clear();
         mesh_triangles_in(m, mesh, box.lo, box.hi, near);
+        if (width == 2) edge_list.resize(static_cast<std::size_t>(m.vertex_count));
         for (const Index t : near) {
             if (static_cast<Index>(stamp.size()) <= t) stamp.resize(static_cast<std::size_t>(t + 1), 0);
             if (stamp[static_cast<std::size_t>(t)] == e + 1) continue;  // seen through another cell
@@ -204,6 +222,7 @@ void gather(const Index* elements, Index count, int width, Index k, Index mesh, 
                 for (int j = 0; j < 3; ++j) {
                     if (!box.meets(p[j], p[(j + 1) % 3])) continue;
                     const Index a = std::min(v[j], v[(j + 1) % 3]), b = std::max(v[j], v[(j + 1) % 3]);
+                    if (!first_sight(e, a, b)) continue;
                     add({EDGE_EDGE, idx[0], idx[1], vertex_slot(a), vertex_slot(b), k, 0});
                 }
             } else {  // each of the triangle's corners and the cloth triangle
@@ -333,6 +352,27 @@ void mark_near(const Index* elements, Index count, int width, Index mesh, const 
     }
 }
 
+//: Sort pairs (with vertex_count collider vertices, n particles) into their rows' lexicographic order, as
+//: std::sort would: by kind and first point (a counting sort), then each run of a kind and first point (a
+//: few pairs) by its whole rows.
+void sort_pairs(std::vector<Pair>& pairs, Index vertex_count, Index n) {
+    static_assert(POINT_TRIANGLE == 0 && EDGE_EDGE == 1, "the kinds' buckets");
+    const Index span = vertex_count + n;  // first points -vertex_count .. n - 1
+    auto bucket = [&](const Pair& pair) {
+        return static_cast<std::size_t>(pair[P_KIND] * span + pair[P_POINTS] + vertex_count);
+    };
+    std::vector<std::size_t> start(2 * static_cast<std::size_t>(span) + 1, 0);
+    for (const Pair& pair : pairs) start[bucket(pair) + 1] += 1;
+    for (std::size_t b = 1; b < start.size(); ++b) start[b] += start[b - 1];
+    std::vector<Pair> sorted(pairs.size());
+    std::vector<std::size_t> next(start.begin(), start.end() - 1);
+    for (const Pair& pair : pairs) sorted[next[bucket(pair)]++] = pair;
+    for (std::size_t b = 0; b + 1 < start.size(); ++b) {
+        if (start[b + 1] - start[b] > 1) std::sort(sorted.begin() + start[b], sorted.begin() + start[b + 1]);
+    }
+    pairs.swap(sorted);
+}
+
 //: Gather the kept list for the step from x0 to x1 (x1 = x0 where no step is in hand): its reference x0; each
 //: particle's stride MOTION_ROOM times the larger of its motion from x0 to x1 and over the last step the pass
 //: looked at (kept.motion; each particle's own: one moving fast elsewhere widens no other's reach), its
@@ -400,7 +440,7 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
             if (meets) met.push_back(k);
         }
     };
-    std::vector<Index> reached;
+    std::vector<Index> reached, edge_list;
     meshes_met(far_pad, reached);
     for (const Index k : reached) {
         const Index mesh = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_RADIUS]);
@@ -425,13 +465,14 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
         const Index mesh = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_RADIUS]);
         std::vector<Index>& stamp = lists.collider_stamp;
         std::vector<Index>& taken = lists.collider_vertex_stamp;
-        gather(nullptr, n, 1, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), found, stamp, taken, pairs);
+        gather(nullptr, n, 1, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), found, stamp, taken,
+               edge_list, pairs);
         gather(contact.edges, contact.edge_count, 2, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), found, stamp,
-               taken, pairs);
+               taken, edge_list, pairs);
         gather(contact.triangles, contact.triangle_count, 3, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), found,
-               stamp, taken, pairs);
+               stamp, taken, edge_list, pairs);
     }
-    std::sort(pairs.begin(), pairs.end());  // (a pair found twice has the same distance: one copy kept)
+    sort_pairs(pairs, phys.meshes.vertex_count, n);  // (a pair found twice has the same distance: one copy kept)
     pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
     std::vector<Index>& stamp = lists.collider_stamp;
     stamp.assign(static_cast<std::size_t>(n), 0);
