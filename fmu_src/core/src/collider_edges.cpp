@@ -160,12 +160,13 @@ inline double element_largest(const Index* idx, int width, const double* values)
 //: features of mesh collider k's triangles near them at positions x: those nearer than their distance
 //: (target_of, from reach, m) plus reach plus the element's largest allowance and bound_factor times its largest
 //: stride (allowance, stride: (n) m; and a nanometre for rounding), from the triangles whose boxes reach the
-//: element's box grown by reach more.  stamp, vertex_stamp: scratch, the last element that saw each triangle, and that took each
-//: vertex (+ 1): a vertex is paired with a cloth triangle once, though each of its triangles meets the
-//: triangle's box; a collider edge is paired with a cloth edge once, though both its triangles meet it
-//: (edge_list: scratch, the cloth edge's collider edges from each lower end, found through vertex_stamp).
+//: element's box grown by reach more (a cloth triangle's: the vertices in it, from vertex_cells,
+//: mesh_vertex_cells's).  stamp, vertex_stamp: scratch, the last element that saw each triangle, and each
+//: vertex as a cloth edge's lower end (+ 1): a collider edge is paired with a cloth edge once, though both its
+//: triangles meet it (edge_list: scratch, the cloth edge's collider edges from each lower end).
 void gather(const Index* elements, Index count, int width, Index k, Index mesh, const ColliderMeshes& m, Index n,
-            const double* x, double reach, const double* allowance, const double* stride, std::vector<Index>& near, std::vector<Index>& stamp,
+            const double* x, double reach, const double* allowance, const double* stride,
+            const std::vector<std::pair<Index, Index>>& vertex_cells, std::vector<Index>& near, std::vector<Index>& stamp,
             std::vector<Index>& vertex_stamp, std::vector<Index>& edge_list, std::vector<Pair>& pairs) {
     double extra = 0.0;  // the element's: reach + its allowance + bound_factor strides, m
     auto add = [&](const Pair& pair) {
@@ -177,7 +178,7 @@ void gather(const Index* elements, Index count, int width, Index k, Index mesh, 
         }
     };
     std::fill(stamp.begin(), stamp.end(), 0);
-    if (width >= 2) vertex_stamp.assign(static_cast<std::size_t>(m.vertex_count), 0);
+    if (width == 2) vertex_stamp.assign(static_cast<std::size_t>(m.vertex_count), 0);
     // A cloth edge's collider edges: edge_list's first vertex_count slots hold each lower end's latest entry
     // (valid where vertex_stamp holds the element), its entries (upper end, the entry before) follow.
     auto first_sight = [&](Index e, Index a, Index b) {  // whether edge (a, b) (a < b) is new to element e
@@ -200,6 +201,13 @@ void gather(const Index* elements, Index count, int width, Index k, Index mesh, 
                          ROUNDING_SLACK * reach);
         const Box box = path_box(idx, width, n, x, x, reach + extra);  // the farthest a pair kept can be
         near.clear();
+        if (width == 3) {  // each collider vertex in the box and the cloth triangle
+            mesh_vertices_in(m, mesh, vertex_cells, box.lo, box.hi, near);
+            for (const Index v : near) {
+                if (box.holds(at(m, nullptr, 0, vertex_slot(v)))) add({POINT_TRIANGLE, vertex_slot(v), idx[0], idx[1], idx[2], k, 0});
+            }
+            continue;
+        }
         mesh_triangles_in(m, mesh, box.lo, box.hi, near);
         if (width == 2) edge_list.resize(static_cast<std::size_t>(m.vertex_count));
         for (const Index t : near) {
@@ -218,19 +226,12 @@ void gather(const Index* elements, Index count, int width, Index k, Index mesh, 
                 const bool overlap = tb.lo[0] <= box.hi[0] && tb.hi[0] >= box.lo[0] && tb.lo[1] <= box.hi[1] &&
                                      tb.hi[1] >= box.lo[1] && tb.lo[2] <= box.hi[2] && tb.hi[2] >= box.lo[2];
                 if (overlap) add({POINT_TRIANGLE, idx[0], vertex_slot(v[0]), vertex_slot(v[1]), vertex_slot(v[2]), k, 0});
-            } else if (width == 2) {  // the edge and each of the triangle's edges
+            } else {  // the edge and each of the triangle's edges
                 for (int j = 0; j < 3; ++j) {
                     if (!box.meets(p[j], p[(j + 1) % 3])) continue;
                     const Index a = std::min(v[j], v[(j + 1) % 3]), b = std::max(v[j], v[(j + 1) % 3]);
                     if (!first_sight(e, a, b)) continue;
                     add({EDGE_EDGE, idx[0], idx[1], vertex_slot(a), vertex_slot(b), k, 0});
-                }
-            } else {  // each of the triangle's corners and the cloth triangle
-                for (int j = 0; j < 3; ++j) {
-                    Index& taken = vertex_stamp[static_cast<std::size_t>(v[j])];
-                    if (taken == e + 1 || !box.holds(p[j])) continue;
-                    taken = e + 1;
-                    add({POINT_TRIANGLE, vertex_slot(v[j]), idx[0], idx[1], idx[2], k, 0});
                 }
             }
         }
@@ -441,6 +442,7 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
         }
     };
     std::vector<Index> reached, edge_list;
+    std::vector<std::pair<Index, Index>> vertex_cells;
     meshes_met(far_pad, reached);
     for (const Index k : reached) {
         const Index mesh = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_RADIUS]);
@@ -465,12 +467,13 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
         const Index mesh = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_RADIUS]);
         std::vector<Index>& stamp = lists.collider_stamp;
         std::vector<Index>& taken = lists.collider_vertex_stamp;
-        gather(nullptr, n, 1, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), found, stamp, taken,
-               edge_list, pairs);
-        gather(contact.edges, contact.edge_count, 2, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), found, stamp,
-               taken, edge_list, pairs);
-        gather(contact.triangles, contact.triangle_count, 3, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), found,
+        mesh_vertex_cells(phys.meshes, mesh, vertex_cells);
+        gather(nullptr, n, 1, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), vertex_cells, found,
                stamp, taken, edge_list, pairs);
+        gather(contact.edges, contact.edge_count, 2, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(),
+               vertex_cells, found, stamp, taken, edge_list, pairs);
+        gather(contact.triangles, contact.triangle_count, 3, k, mesh, phys.meshes, n, x.data(), reach, near.data(),
+               stride.data(), vertex_cells, found, stamp, taken, edge_list, pairs);
     }
     sort_pairs(pairs, phys.meshes.vertex_count, n);  // (a pair found twice has the same distance: one copy kept)
     pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
