@@ -187,8 +187,8 @@ void gather(const Index* elements, Index count, int width, Index k, Index mesh, 
             vertex_stamp[end] = e + 1;
             edge_list[end] = -1;
         }
-        for (Index k = edge_list[end]; k >= 0; k = edge_list[static_cast<std::size_t>(k + 1)]) {
-            if (edge_list[static_cast<std::size_t>(k)] == b) return false;
+        for (Index entry = edge_list[end]; entry >= 0; entry = edge_list[static_cast<std::size_t>(entry + 1)]) {
+            if (edge_list[static_cast<std::size_t>(entry)] == b) return false;
         }
         edge_list.push_back(b);
         edge_list.push_back(edge_list[end]);
