@@ -160,12 +160,14 @@ inline double element_largest(const Index* idx, int width, const double* values)
 //: features of mesh collider k's triangles near them at positions x: those nearer than their distance
 //: (target_of, from reach, m) plus reach plus the element's largest allowance and bound_factor times its largest
 //: stride (allowance, stride: (n) m; and a nanometre for rounding), from the triangles whose boxes reach the
-//: element's box grown by reach more.  stamp, vertex_stamp: scratch, the last element that saw each triangle, and that took each
-//: vertex (+ 1): a vertex is paired with a cloth triangle once, though each of its triangles meets the
-//: triangle's box.
+//: element's box grown by reach more (a cloth triangle's: the vertices in it, from vertex_cells,
+//: mesh_vertex_cells's).  stamp, vertex_stamp: scratch, the last element that saw each triangle, and each
+//: vertex as a cloth edge's lower end (+ 1): a collider edge is paired with a cloth edge once, though both its
+//: triangles meet it (edge_list: scratch, the cloth edge's collider edges from each lower end).
 void gather(const Index* elements, Index count, int width, Index k, Index mesh, const ColliderMeshes& m, Index n,
-            const double* x, double reach, const double* allowance, const double* stride, std::vector<Index>& near, std::vector<Index>& stamp,
-            std::vector<Index>& vertex_stamp, std::vector<Pair>& pairs) {
+            const double* x, double reach, const double* allowance, const double* stride,
+            const std::vector<std::pair<Index, Index>>& vertex_cells, std::vector<Index>& near, std::vector<Index>& stamp,
+            std::vector<Index>& vertex_stamp, std::vector<Index>& edge_list, std::vector<Pair>& pairs) {
     double extra = 0.0;  // the element's: reach + its allowance + bound_factor strides, m
     auto add = [&](const Pair& pair) {
         const Motion mo = motion_of(pair, m, n, nullptr, nullptr, x, x);
@@ -176,14 +178,38 @@ void gather(const Index* elements, Index count, int width, Index k, Index mesh, 
         }
     };
     std::fill(stamp.begin(), stamp.end(), 0);
-    if (width == 3) vertex_stamp.assign(static_cast<std::size_t>(m.vertex_count), 0);
+    if (width == 2) vertex_stamp.assign(static_cast<std::size_t>(m.vertex_count), 0);
+    // A cloth edge's collider edges: edge_list's first vertex_count slots hold each lower end's latest entry
+    // (valid where vertex_stamp holds the element), its entries (upper end, the entry before) follow.
+    auto first_sight = [&](Index e, Index a, Index b) {  // whether edge (a, b) (a < b) is new to element e
+        const std::size_t end = static_cast<std::size_t>(a);
+        if (vertex_stamp[end] != e + 1) {
+            vertex_stamp[end] = e + 1;
+            edge_list[end] = -1;
+        }
+        for (Index entry = edge_list[end]; entry >= 0; entry = edge_list[static_cast<std::size_t>(entry + 1)]) {
+            if (edge_list[static_cast<std::size_t>(entry)] == b) return false;
+        }
+        edge_list.push_back(b);
+        edge_list.push_back(edge_list[end]);
+        edge_list[end] = static_cast<Index>(edge_list.size()) - 2;
+        return true;
+    };
     for (Index e = 0; e < count; ++e) {
         const Index* idx = elements ? elements + e * width : &e;
         extra = reach + ((element_largest(idx, width, allowance) + bound_factor(width) * element_largest(idx, width, stride)) +
                          ROUNDING_SLACK * reach);
         const Box box = path_box(idx, width, n, x, x, reach + extra);  // the farthest a pair kept can be
         near.clear();
+        if (width == 3) {  // each collider vertex in the box and the cloth triangle
+            mesh_vertices_in(m, mesh, vertex_cells, box.lo, box.hi, near);
+            for (const Index v : near) {
+                if (box.holds(at(m, nullptr, 0, vertex_slot(v)))) add({POINT_TRIANGLE, vertex_slot(v), idx[0], idx[1], idx[2], k, 0});
+            }
+            continue;
+        }
         mesh_triangles_in(m, mesh, box.lo, box.hi, near);
+        if (width == 2) edge_list.resize(static_cast<std::size_t>(m.vertex_count));
         for (const Index t : near) {
             if (static_cast<Index>(stamp.size()) <= t) stamp.resize(static_cast<std::size_t>(t + 1), 0);
             if (stamp[static_cast<std::size_t>(t)] == e + 1) continue;  // seen through another cell
@@ -200,31 +226,29 @@ void gather(const Index* elements, Index count, int width, Index k, Index mesh, 
                 const bool overlap = tb.lo[0] <= box.hi[0] && tb.hi[0] >= box.lo[0] && tb.lo[1] <= box.hi[1] &&
                                      tb.hi[1] >= box.lo[1] && tb.lo[2] <= box.hi[2] && tb.hi[2] >= box.lo[2];
                 if (overlap) add({POINT_TRIANGLE, idx[0], vertex_slot(v[0]), vertex_slot(v[1]), vertex_slot(v[2]), k, 0});
-            } else if (width == 2) {  // the edge and each of the triangle's edges
+            } else {  // the edge and each of the triangle's edges
                 for (int j = 0; j < 3; ++j) {
                     if (!box.meets(p[j], p[(j + 1) % 3])) continue;
                     const Index a = std::min(v[j], v[(j + 1) % 3]), b = std::max(v[j], v[(j + 1) % 3]);
+                    if (!first_sight(e, a, b)) continue;
                     add({EDGE_EDGE, idx[0], idx[1], vertex_slot(a), vertex_slot(b), k, 0});
-                }
-            } else {  // each of the triangle's corners and the cloth triangle
-                for (int j = 0; j < 3; ++j) {
-                    Index& taken = vertex_stamp[static_cast<std::size_t>(v[j])];
-                    if (taken == e + 1 || !box.holds(p[j])) continue;
-                    taken = e + 1;
-                    add({POINT_TRIANGLE, vertex_slot(v[j]), idx[0], idx[1], idx[2], k, 0});
                 }
             }
         }
     }
 }
 
-//: Treat one pair if it needs it (as self-collision's settle_pair, at distance gap); returns whether it did.
-bool settle_pair(const Pair& pair, double start, const Physics& phys, const Frame& frame, double gap, Index n,
+//: What settle_pair did with a pair: nothing, its motion shown safe (the last resort would pass it too, while
+//: its particles' ends stay); pushed it apart; nothing, left to the last resort.
+enum Settled : int { SAFE = 0, TREATED = 1, LEFT = 2 };
+
+//: Treat one pair if it needs it (as self-collision's settle_pair, at distance gap).
+Settled settle_pair(const Pair& pair, double start, const Physics& phys, const Frame& frame, double gap, Index n,
                  const double* mass, const double* free, const double* x0, double* x1, double* v1, ContactLists& lists) {
     const Motion mo = motion_of(pair, phys.meshes, n, mass, free, x0, x1);
-    if (mo.inverse.sum() == 0.0) return false;
+    if (mo.inverse.sum() == 0.0) return LEFT;
     const ContactTime ct = contact_time(mo.kind, mo.x, mo.p, start, gap, frame.within_step());
-    if (!ct.near) return false;
+    if (!ct.near) return SAFE;
     const double when = ct.when;
     const double t = when == CLEAR ? 1.0 : when;
     Vec3 q[4];
@@ -232,8 +256,8 @@ bool settle_pair(const Pair& pair, double start, const Physics& phys, const Fram
     const Weights w = closest(mo.kind, q[0], q[1], q[2], q[3]);
     const Vec3 d = combine(w, q[0], q[1], q[2], q[3]);
     const double length = norm(d);
-    if (when == CLEAR && length >= (1.0 - SLACK) * gap) return false;
-    if (!(length > 0.0)) return false;  // no side to push to: left to the last resort
+    if (when == CLEAR && length >= (1.0 - SLACK) * gap) return SAFE;
+    if (!(length > 0.0)) return LEFT;  // no side to push to: left to the last resort
     const Vec3 normal = {d.x / length, d.y / length, d.z / length};
     double world[3] = {normal.x, normal.y, normal.z};  // the push's direction in the world
     if (frame.shift != nullptr) world_direction(frame.shift, world);
@@ -260,7 +284,7 @@ bool settle_pair(const Pair& pair, double start, const Physics& phys, const Fram
         lists.collider_normals[static_cast<std::size_t>(n + s)] = sign * world[1];
         lists.collider_normals[static_cast<std::size_t>(2 * n + s)] = sign * world[2];
     }
-    return true;
+    return TREATED;
 }
 
 //: The kept list (ContactLists::collider_list) holds every pair nearer at the reference positions than its
@@ -327,6 +351,27 @@ void mark_near(const Index* elements, Index count, int width, Index mesh, const 
         if (found.empty()) continue;
         for (int k = 0; k < width; ++k) near[static_cast<std::size_t>(idx[k])] = 1.0;
     }
+}
+
+//: Sort pairs (with vertex_count collider vertices, n particles) into their rows' lexicographic order, as
+//: std::sort would: by kind and first point (a counting sort), then each run of a kind and first point (a
+//: few pairs) by its whole rows.
+void sort_pairs(std::vector<Pair>& pairs, Index vertex_count, Index n) {
+    static_assert(POINT_TRIANGLE == 0 && EDGE_EDGE == 1, "the kinds' buckets");
+    const Index span = vertex_count + n;  // first points -vertex_count .. n - 1
+    auto bucket = [&](const Pair& pair) {
+        return static_cast<std::size_t>(pair[P_KIND] * span + pair[P_POINTS] + vertex_count);
+    };
+    std::vector<std::size_t> start(2 * static_cast<std::size_t>(span) + 1, 0);
+    for (const Pair& pair : pairs) start[bucket(pair) + 1] += 1;
+    for (std::size_t b = 1; b < start.size(); ++b) start[b] += start[b - 1];
+    std::vector<Pair> sorted(pairs.size());
+    std::vector<std::size_t> next(start.begin(), start.end() - 1);
+    for (const Pair& pair : pairs) sorted[next[bucket(pair)]++] = pair;
+    for (std::size_t b = 0; b + 1 < start.size(); ++b) {
+        if (start[b + 1] - start[b] > 1) std::sort(sorted.begin() + start[b], sorted.begin() + start[b + 1]);
+    }
+    pairs.swap(sorted);
 }
 
 //: Gather the kept list for the step from x0 to x1 (x1 = x0 where no step is in hand): its reference x0; each
@@ -396,7 +441,8 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
             if (meets) met.push_back(k);
         }
     };
-    std::vector<Index> reached;
+    std::vector<Index> reached, edge_list;
+    std::vector<std::pair<Index, Index>> vertex_cells;
     meshes_met(far_pad, reached);
     for (const Index k : reached) {
         const Index mesh = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_RADIUS]);
@@ -421,13 +467,15 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
         const Index mesh = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_RADIUS]);
         std::vector<Index>& stamp = lists.collider_stamp;
         std::vector<Index>& taken = lists.collider_vertex_stamp;
-        gather(nullptr, n, 1, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), found, stamp, taken, pairs);
-        gather(contact.edges, contact.edge_count, 2, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), found, stamp,
-               taken, pairs);
-        gather(contact.triangles, contact.triangle_count, 3, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), found,
-               stamp, taken, pairs);
+        mesh_vertex_cells(phys.meshes, mesh, vertex_cells);
+        gather(nullptr, n, 1, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(), vertex_cells, found,
+               stamp, taken, edge_list, pairs);
+        gather(contact.edges, contact.edge_count, 2, k, mesh, phys.meshes, n, x.data(), reach, near.data(), stride.data(),
+               vertex_cells, found, stamp, taken, edge_list, pairs);
+        gather(contact.triangles, contact.triangle_count, 3, k, mesh, phys.meshes, n, x.data(), reach, near.data(),
+               stride.data(), vertex_cells, found, stamp, taken, edge_list, pairs);
     }
-    std::sort(pairs.begin(), pairs.end());  // (a pair found twice has the same distance: one copy kept)
+    sort_pairs(pairs, phys.meshes.vertex_count, n);  // (a pair found twice has the same distance: one copy kept)
     pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
     std::vector<Index>& stamp = lists.collider_stamp;
     stamp.assign(static_cast<std::size_t>(n), 0);
@@ -500,10 +548,33 @@ int edge_pass(const Contact& contact, ContactLists& lists, ColliderPairList& kep
     std::vector<Pair>& pairs = lists.collider_pairs;
     const std::vector<double>& start = lists.collider_start;
     int result = UNTOUCHED;
+    // A pair found SAFE whose particles' ends no push or stop has changed since is SAFE again (settle_pair's
+    // and the last resort's tests read only its points' starts and ends): it is not looked at again.  changes
+    // counts the pushes and stops, changed (n) holds the count at each particle's last, safe_at (pairs) the
+    // count when each pair was last found SAFE (-1: not).
+    Index changes = 0;
+    std::vector<Index> changed(size, 0);
+    std::vector<Index> safe_at;
+    auto still_safe = [&](const Pair& pair, Index at) {
+        if (at < 0) return false;
+        for (int k = 0; k < 4; ++k) {
+            const Index s = pair[P_POINTS + k];
+            if (s >= 0 && changed[static_cast<std::size_t>(s)] > at) return false;
+        }
+        return true;
+    };
+    auto mark_changed = [&](const Pair& pair) {
+        changes += 1;
+        for (int k = 0; k < 4; ++k) {
+            const Index s = pair[P_POINTS + k];
+            if (s >= 0) changed[static_cast<std::size_t>(s)] = changes;
+        }
+    };
     // The pairs that may need a push; gathered again if the pushes moved a particle farther than reach / 4
     // from where it was when they were (the pairs left out stay out of reach then).
     for (int attempt = 0; attempt < ATTEMPTS; ++attempt) {
         pairs_for_step(contact, lists, kept, phys, frame, n, x0, x1, reach);
+        safe_at.assign(pairs.size(), -1);
         if (pairs.empty()) break;
         if (fresh) {
             lists.collider_pushed.assign(size, 0);
@@ -513,15 +584,22 @@ int edge_pass(const Contact& contact, ContactLists& lists, ColliderPairList& kep
         gathered.assign(x1, x1 + 3 * n);
         for (int pass = 0; pass < PASSES_MAX; ++pass) {
             Index treated = 0;
-            for (std::size_t j = 0; j < pairs.size(); ++j)
-                treated += settle_pair(pairs[j], start[j], phys, frame, target_of(pairs[j], reach), n, mass, free, x0,
-                                       x1, v1, lists);
+            for (std::size_t j = 0; j < pairs.size(); ++j) {
+                if (still_safe(pairs[j], safe_at[j])) continue;
+                const Settled settled = settle_pair(pairs[j], start[j], phys, frame, target_of(pairs[j], reach), n,
+                                                    mass, free, x0, x1, v1, lists);
+                safe_at[j] = settled == SAFE ? changes : -1;
+                if (settled != TREATED) continue;
+                treated += 1;
+                mark_changed(pairs[j]);
+            }
             if (treated == 0) break;
             result |= PUSHED;
         }
         if (largest_move(n, x1, gathered.data()) <= 0.25 * reach) break;  // a pair's motion bound grows by at most 4 times the move
         if (attempt + 1 < ATTEMPTS) continue;
         pairs_for_step(contact, lists, kept, phys, frame, n, x0, x1, reach);  // for the last resort
+        safe_at.assign(pairs.size(), -1);
     }
     if (pairs.empty()) return result;
     // The last resort: the particles of a pair whose motion is still not shown safe stay where they started.
@@ -536,9 +614,10 @@ int edge_pass(const Contact& contact, ContactLists& lists, ColliderPairList& kep
                 const Index s = pair[P_POINTS + k];
                 movable = movable || (s >= 0 && free[s] != 0.0 && stopped[static_cast<std::size_t>(s)] == 0);
             }
-            if (!movable) continue;
+            if (!movable || still_safe(pair, safe_at[j])) continue;
             const Motion mo = motion_of(pair, phys.meshes, n, mass, free, x0, x1);
             if (contact_time(mo.kind, mo.x, mo.p, start[j], target_of(pair, reach), frame.within_step()).when == CLEAR) {
+                safe_at[j] = changes;
                 continue;
             }
             unsafe += 1;
@@ -549,6 +628,7 @@ int edge_pass(const Contact& contact, ContactLists& lists, ColliderPairList& kep
                 lists.collider_pushed[static_cast<std::size_t>(s)] = 0;
                 for (Index c = 0; c < 3; ++c) x1[c * n + s] = x0[c * n + s], v1[c * n + s] = 0.0;
             }
+            mark_changed(pair);
         }
         if (unsafe == 0) break;
         result |= STOPPED;

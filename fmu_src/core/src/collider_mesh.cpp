@@ -163,4 +163,41 @@ void mesh_triangles_in(const ColliderMeshes& m, Index mesh, const double* lo, co
     if (cells_of(header, lo, hi, r)) for_each_triangle(m, header, r, [&](Index t) { out.push_back(t); });
 }
 
+void mesh_vertex_cells(const ColliderMeshes& m, Index mesh, std::vector<std::pair<Index, Index>>& out) {
+    const double* header = m.headers + mesh * MESH_COLUMNS;
+    const Index nx = static_cast<Index>(header[M_CELLS_X]), ny = static_cast<Index>(header[M_CELLS_Y]);
+    const Index first = static_cast<Index>(header[M_FIRST_CELL]);
+    const Index cells = nx * ny * static_cast<Index>(header[M_CELLS_Z]);
+    std::vector<char> seen(static_cast<std::size_t>(m.vertex_count), 0);
+    out.clear();
+    for (Index k = m.cell_start[first]; k < m.cell_start[first + cells]; ++k) {  // the mesh's triangles
+        const Index* corners = m.triangles + 3 * m.cell_items[k];
+        for (int j = 0; j < 3; ++j) {
+            const Index v = corners[j];
+            if (seen[static_cast<std::size_t>(v)] != 0) continue;
+            seen[static_cast<std::size_t>(v)] = 1;
+            const double p[3] = {m.vertices[v], m.vertices[m.vertex_count + v], m.vertices[2 * m.vertex_count + v]};
+            CellRange r{};
+            cells_of(header, p, p, r);  // (inside the mesh's box: a vertex is)
+            out.emplace_back(first + (r.lo[2] * ny + r.lo[1]) * nx + r.lo[0], v);
+        }
+    }
+    std::sort(out.begin(), out.end());
+}
+
+void mesh_vertices_in(const ColliderMeshes& m, Index mesh, const std::vector<std::pair<Index, Index>>& cells,
+                      const double* lo, const double* hi, std::vector<Index>& out) {
+    const double* header = m.headers + mesh * MESH_COLUMNS;
+    CellRange r;
+    if (!cells_of(header, lo, hi, r)) return;
+    const Index nx = static_cast<Index>(header[M_CELLS_X]), ny = static_cast<Index>(header[M_CELLS_Y]);
+    const Index first = static_cast<Index>(header[M_FIRST_CELL]);
+    for (Index z = r.lo[2]; z <= r.hi[2]; ++z)
+        for (Index y = r.lo[1]; y <= r.hi[1]; ++y) {  // a row of cells, consecutive in number
+            const Index row = first + (z * ny + y) * nx;
+            auto k = std::lower_bound(cells.begin(), cells.end(), std::pair<Index, Index>{row + r.lo[0], -1});
+            for (; k != cells.end() && k->first <= row + r.hi[0]; ++k) out.push_back(k->second);
+        }
+}
+
 }  // namespace wc

@@ -3,6 +3,7 @@
 // within reach, found through a uniform grid of cells over the mesh (built with the scene, Python's
 // wetcloth.collider_meshes), so a far collider costs a box test.
 #pragma once
+#include <utility>
 #include <vector>
 
 #include "wetcloth/core.hpp"
@@ -30,5 +31,14 @@ bool mesh_crossing(const ColliderMeshes& meshes, Index mesh, const double* a, co
 //: overlaps (a triangle in several cells more than once).
 void mesh_triangles_in(const ColliderMeshes& meshes, Index mesh, const double* lo, const double* hi,
                        std::vector<Index>& out);
+
+//: Mesh `mesh`'s vertices (those of its triangles) as (cell, vertex) in `out`, by cell: the cell of its grid
+//: that holds each (the nearest, for rounding at the grid's edge).
+void mesh_vertex_cells(const ColliderMeshes& meshes, Index mesh, std::vector<std::pair<Index, Index>>& out);
+
+//: Appends to `out` the vertices of mesh `mesh` in the cells that the box [lo, hi] (3 each, m) overlaps, each
+//: once, from `cells` (mesh_vertex_cells's): every one of its vertices inside the box, and some near it.
+void mesh_vertices_in(const ColliderMeshes& meshes, Index mesh, const std::vector<std::pair<Index, Index>>& cells,
+                      const double* lo, const double* hi, std::vector<Index>& out);
 
 }  // namespace wc

@@ -415,7 +415,7 @@ struct ContactLists {
     std::vector<double> collider_rest;   // (4, n) a particle resting on a mesh's edge or vertex: its normal (3), friction
     std::vector<Index> collider_items;   // their search's scratch
     std::vector<Index> collider_stamp;  // (mesh triangles) scratch: the last element that saw each
-    std::vector<Index> collider_vertex_stamp;  // (mesh vertices) scratch: the last cloth triangle that took each
+    std::vector<Index> collider_vertex_stamp;  // (mesh vertices) scratch: the last cloth edge that took each as an end
     std::vector<double> collider_start;  // (count) their distances at the step's start, m
     std::vector<double> collider_end;    // (3, n) the end positions when they were gathered, m
     std::vector<Index> collider_pushed;  // (n) 1 for the particles they pushed
