@@ -29,6 +29,9 @@ inline constexpr Index OUTPUT_COUNT = 6;
 //: A step the controller rejects more often than this (smaller steps, or a solve that did not converge)
 //: is a blow-up: from max_step to SMALLEST_STEP takes about 15 rejections; the floor's releases do not count.
 inline constexpr int MAX_REJECTIONS = 100;
+
+//: Fixed steps whose self-collision needs rigid impact zones are halved down to this fraction of max_step.
+inline constexpr double SUBSTEP_LEAST = 0.25;
 //: Wall-clock seconds after which advance returns PAUSED (checked between steps), so that its caller
 //: sees signals (Ctrl-C) in time.  Where a call returns never changes what is computed.
 inline constexpr double PAUSE_AFTER = 0.1;
