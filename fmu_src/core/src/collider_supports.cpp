@@ -5,23 +5,11 @@
 
 #include "wetcloth/collider_motion.hpp"
 #include "wetcloth/floor.hpp"
+#include "wetcloth/smoothed_friction.hpp"
 
 namespace wc {
 
 namespace {
-
-//: f1(y) / y (1/(m/s)) of the smoothed Coulomb law at slip speed y (m/s): 2 / eps - y / eps^2 below eps, else
-//: 1 / y.
-double slip_factor(double y) {
-    constexpr double eps = SUPPORT_SLIP_SPEED;
-    return y < eps ? 2.0 / eps - y / (eps * eps) : 1.0 / y;
-}
-
-//: f0(y) (m/s), the smoothed |u_t|: y^2 / eps - y^3 / (3 eps^2) + eps / 3 below eps, else y (f0' = f1).
-double smoothed_speed(double y) {
-    constexpr double eps = SUPPORT_SLIP_SPEED;
-    return y < eps ? y * y / eps - y * y * y / (3.0 * eps * eps) + eps / 3.0 : y;
-}
 
 //: Term t's relative velocity across its normal, u_t (3, m/s), at velocities vel (3, n); returns |u_t|.
 double slip_velocity(const Supports& supports, Index t, Index n, const double* vel, double* u) {
@@ -65,18 +53,8 @@ void add_friction(Supports& supports, Index t, Index n, const double* vel, doubl
     const std::size_t term = static_cast<std::size_t>(t);
     const double mu_n = supports.friction[term] * supports.normal_force[term];
     const double a = slip_factor(y);
-    // H = mu N (a (I - n n^T) - b t t^T), t = u_t / |u_t|: b = 1 / y at or above eps (the cone's radial part
-    // has no stiffness), y / eps^2 below (f1' = a - b); at y = 0 no direction, b = 0.
-    const double b = y >= SUPPORT_SLIP_SPEED ? 1.0 / y : y / (SUPPORT_SLIP_SPEED * SUPPORT_SLIP_SPEED);
-    const double* nn = supports.normal.data() + 3 * t;
-    double tt[3] = {0.0, 0.0, 0.0};
-    if (y > 0.0) for (int c = 0; c < 3; ++c) tt[c] = u[c] / y;
-    const int row[6] = {0, 1, 2, 0, 0, 1}, column[6] = {0, 1, 2, 1, 2, 2};
     double* h = supports.friction_block.data() + 6 * t;
-    for (int e = 0; e < 6; ++e) {
-        const int r = row[e], c = column[e];
-        h[e] = mu_n * (a * ((r == c ? 1.0 : 0.0) - nn[r] * nn[c]) - b * tt[r] * tt[c]);
-    }
+    slip_stiffness(mu_n, y, u, supports.normal.data() + 3 * t, h);
     for (int j = 0; j < 3; ++j) {
         const Index i = supports.points[3 * t + j];
         if (i < 0) continue;

@@ -19,6 +19,7 @@
 // as the normal term's does: with N fixed Newton's matrix is the step's exact Jacobian.
 #pragma once
 #include "wetcloth/core.hpp"
+#include "wetcloth/smoothed_friction.hpp"
 
 namespace wc {
 
@@ -31,10 +32,9 @@ inline constexpr double SUPPORT_DISTANCE = 0.5;
 //: The penalty's stiffness as a multiple of the cloth's stiffest spring (N/m per N/m).
 inline constexpr double SUPPORT_STIFFNESS = 10.0;
 
-//: The slip speed (m/s) below which a support's friction acts as a stiff viscous stick (coefficient 2 mu N /
-//: SUPPORT_SLIP_SPEED, N s/m) rather than Coulomb's constant mu N: IPC's default.  A cloth carried by a
-//: support creeps over it at most this fast.
-inline constexpr double SUPPORT_SLIP_SPEED = 1e-3;
+//: The slip speed (m/s) below which a support's friction acts as a stiff viscous stick: the smoothed law's
+//: (smoothed_friction.hpp).
+inline constexpr double SUPPORT_SLIP_SPEED = SLIP_SPEED;
 
 //: The penalty's stiffness (N/m) for a cloth: SUPPORT_STIFFNESS times its stiffest spring.
 double support_stiffness(const Cloth& cloth);
