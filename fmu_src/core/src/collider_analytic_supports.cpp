@@ -5,23 +5,10 @@
 #include <vector>
 
 #include "wetcloth/collider_motion.hpp"
+#include "wetcloth/collider_supports.hpp"
 #include "wetcloth/colliders.hpp"
 
 namespace wc {
-
-namespace {
-
-//: Keep the first `kept` terms of supports.
-void keep_terms(Supports& supports, Index kept) {
-    const std::size_t k = static_cast<std::size_t>(kept);
-    supports.points.resize(3 * k);
-    supports.weights.resize(3 * k);
-    supports.table_normal.resize(3 * k);
-    supports.table_part.resize(3 * k);
-    supports.collider.resize(k);
-}
-
-}  // namespace
 
 Index gather_analytic_supports(const Physics& phys, Index n, const double* pos, const double* vel, const double* free,
                                const Sliding* sliding, double distance, double ahead, Index kept, Supports& supports) {

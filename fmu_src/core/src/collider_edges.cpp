@@ -14,6 +14,7 @@
 #include <limits>
 
 #include "wetcloth/collider_mesh.hpp"
+#include "wetcloth/collider_supports.hpp"
 #include "wetcloth/collider_motion.hpp"
 #include "wetcloth/colliders.hpp"
 #include "wetcloth/floor.hpp"
@@ -796,11 +797,7 @@ void add_support_terms(const Contact& contact, ContactLists& lists, ColliderPair
 
 Index gather_supports(const Contact& contact, ContactLists& lists, const Physics& phys, Index n, const double* pos,
                       const double* vel, double within, double ahead, Supports& supports) {
-    supports.points.clear();
-    supports.weights.clear();
-    supports.table_normal.clear();
-    supports.table_part.clear();
-    supports.collider.clear();
+    keep_terms(supports, 0);
     if (phys.meshes.count == 0 || n == 0) return 0;
     const double reach = 0.5 * phys.thickness;
     if (ahead > 0.0) {  // the still meshes' features, in the world (their kept list the edges' pass's)

@@ -5,7 +5,6 @@
 
 #include "wetcloth/collider_motion.hpp"
 #include "wetcloth/floor.hpp"
-#include "wetcloth/smoothed_friction.hpp"
 
 namespace wc {
 
@@ -106,6 +105,15 @@ void place_friction(Supports& supports, const Physics& phys, Index t, Index n, c
 }
 
 }  // namespace
+
+void keep_terms(Supports& supports, Index kept) {
+    const std::size_t k = static_cast<std::size_t>(kept);
+    supports.points.resize(3 * k);
+    supports.weights.resize(3 * k);
+    supports.table_normal.resize(3 * k);
+    supports.table_part.resize(3 * k);
+    supports.collider.resize(k);
+}
 
 double support_stiffness(const Cloth& cloth) {
     double stiffest = 0.0;

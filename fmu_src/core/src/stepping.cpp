@@ -254,16 +254,16 @@ Status step(Core& core, double remaining, double span) {
     core.solver.sliding = sliding ? &core.sliding : nullptr;
     // A moving mesh's vertices and edges near the cloth's triangles and edges: supports its solve sees; at
     // fixed steps a still mesh's too (its frame-long moves at a bucket's rim the edges' pass cannot show safe).
-    bool supported = implicit && core.contact.lists != nullptr &&
-                     (phys.collider_motion != nullptr || !adaptive) &&
-                     gather_supports(core.contact, *core.contact.lists, phys, n, buf.pos, buf.vel,
-                                     (SUPPORT_DISTANCE + 1.0) * 0.5 * phys.thickness,
-                                     adaptive ? 0.0 : control.max_step, core.supports) > 0;
+    const bool meshes_support = implicit && core.contact.lists != nullptr &&
+                                (phys.collider_motion != nullptr || !adaptive) &&
+                                gather_supports(core.contact, *core.contact.lists, phys, n, buf.pos, buf.vel,
+                                                (SUPPORT_DISTANCE + 1.0) * 0.5 * phys.thickness,
+                                                adaptive ? 0.0 : control.max_step, core.supports) > 0;
     // At fixed steps the analytic colliders too: the free particles a frame-long step may carry onto one (again
     // whenever particles leave the sliding set: those that lift off their surface fell through it unsupported,
     // and the tablecloth's springs were stretched by 38 % at 1/24 s steps).
     const bool analytic = implicit && !adaptive && phys.collider_count > 0;
-    const Index mesh_terms = supported ? core.supports.count() : 0;
+    const Index mesh_terms = meshes_support ? core.supports.count() : 0;
     const auto support = [&]() {
         bool any = mesh_terms > 0;
         if (analytic) {
@@ -417,8 +417,8 @@ Status step(Core& core, double remaining, double span) {
                           held > 0 || core.solver.sliding != nullptr;
     double kick = 0.0;  // m/s: the largest change of a velocity along a moving collider's surface
     bool on_collider = (phys.collider_count > 0 &&
-                              collider_contact(n, phys, buf.pos, buf.trial_pos, buf.trial_vel, &kick) > 0) ||
-                             held_on_colliders > 0 || (core.solver.sliding != nullptr && phys.collider_count > 0);
+                        collider_contact(n, phys, buf.pos, buf.trial_pos, buf.trial_vel, &kick) > 0) ||
+                       held_on_colliders > 0 || (core.solver.sliding != nullptr && phys.collider_count > 0);
     // The cloth's edges and triangles against mesh colliders' edges and vertices, before self-collision and
     // again after it if it moved the cloth.
     int edged = collider_edges(core, buf.pos, buf.trial_pos, buf.trial_vel);

@@ -36,6 +36,9 @@ inline constexpr double SUPPORT_STIFFNESS = 10.0;
 //: (smoothed_friction.hpp).
 inline constexpr double SUPPORT_SLIP_SPEED = SLIP_SPEED;
 
+//: Keep the first `kept` gathered terms of supports (0: none), dropping the rest.
+void keep_terms(Supports& supports, Index kept);
+
 //: The penalty's stiffness (N/m) for a cloth: SUPPORT_STIFFNESS times its stiffest spring.
 double support_stiffness(const Cloth& cloth);
 
