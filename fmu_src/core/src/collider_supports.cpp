@@ -144,7 +144,7 @@ void place_supports(Supports& supports, const Physics& phys, Index n, const doub
         for (int j = 0; j < 3; ++j) cloth_weight += supports.points[3 * t + j] >= 0 ? supports.weights[3 * t + j] : 0.0;
         double part[3];  // the collider's points' weighted sum at the step's end
         supports.offset[static_cast<std::size_t>(t)] = collider_along(supports, phys, t, h, normal, cloth_weight, part);
-        const double mu = phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
+        const double mu = k == FLOOR_SUPPORT ? phys.floor_friction : phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
         supports.friction[static_cast<std::size_t>(t)] = mu;
         if (!(mu > 0.0)) continue;
         place_friction(supports, phys, t, n, pos, h, cloth_weight, part);

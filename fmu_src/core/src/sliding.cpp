@@ -247,7 +247,8 @@ void add_sliding_friction(const Sliding& sliding, Index n, const double* mass, c
                           double* force, double* blocks) {
     for (Index s = 0; s < sliding.count(); ++s) {
         const Index i = sliding.index[s];
-        const double onto = pressing(sliding, s, n, mass, force);
+        const double onto = sliding.smoothed ? sliding.lagged_onto[static_cast<std::size_t>(s)]
+                                             : pressing(sliding, s, n, mass, force);
         if (!(onto > 0.0)) continue;
         const double kinetic = sliding.friction[s] * onto;
         if (!sliding.smoothed) {
@@ -261,6 +262,13 @@ void add_sliding_friction(const Sliding& sliding, Index n, const double* mass, c
         slip_stiffness(kinetic, y, u, &sliding.normal[3 * s], stiffness);
         for (int c = 0; c < 3; ++c) force[c * n + i] -= kinetic * a * u[c];
         for (int e = 0; e < 6; ++e) blocks[e * n + i] += bh * stiffness[e];
+    }
+}
+
+void lag_normal_force(Sliding& sliding, Index n, const double* mass, const double* force) {
+    sliding.lagged_onto.resize(static_cast<std::size_t>(sliding.count()));
+    for (Index s = 0; s < sliding.count(); ++s) {
+        sliding.lagged_onto[static_cast<std::size_t>(s)] = std::max(pressing(sliding, s, n, mass, force), 0.0);
     }
 }
 

@@ -259,10 +259,10 @@ Status step(Core& core, double remaining, double span) {
                                 gather_supports(core.contact, *core.contact.lists, phys, n, buf.pos, buf.vel,
                                                 (SUPPORT_DISTANCE + 1.0) * 0.5 * phys.thickness,
                                                 adaptive ? 0.0 : control.max_step, core.supports) > 0;
-    // At fixed steps the analytic colliders too: the free particles a frame-long step may carry onto one (again
-    // whenever particles leave the sliding set: those that lift off their surface fell through it unsupported,
-    // and the tablecloth's springs were stretched by 38 % at 1/24 s steps).
-    const bool analytic = implicit && !adaptive && phys.collider_count > 0;
+    // At fixed steps the analytic colliders and the floor too: the free particles a frame-long step may carry
+    // onto one (again whenever particles leave the sliding set: those that lift off their surface fell through it
+    // unsupported, and the tablecloth's springs were stretched by 38 % at 1/24 s steps).
+    const bool analytic = implicit && !adaptive;
     const Index mesh_terms = meshes_support ? core.supports.count() : 0;
     const auto support = [&]() {
         bool any = mesh_terms > 0;

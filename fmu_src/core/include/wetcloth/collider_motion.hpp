@@ -41,9 +41,10 @@ void start_collider_motion(const Physics& phys, double t);
 //: Move every collider to its displacement at t (s), the step's end (velocity and start kept).
 void end_collider_motion(const Physics& phys, double t);
 
-//: Collider k's displacement now (3) and velocity over the step (3), or null when nothing moves.
+//: Collider k's displacement now (3) and velocity over the step (3), or null when nothing moves (or k < 0:
+//: the floor).
 inline const double* collider_shift(const Physics& phys, Index k) {
-    return phys.collider_motion != nullptr ? phys.collider_motion + k * MOTION_COLUMNS : nullptr;
+    return phys.collider_motion != nullptr && k >= 0 ? phys.collider_motion + k * MOTION_COLUMNS : nullptr;
 }
 
 //: The first key time after t (s) (beyond key_slack) at which a collider's velocity changes, or infinity

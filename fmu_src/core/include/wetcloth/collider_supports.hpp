@@ -36,6 +36,10 @@ inline constexpr double SUPPORT_STIFFNESS = 10.0;
 //: (smoothed_friction.hpp).
 inline constexpr double SUPPORT_SLIP_SPEED = SLIP_SPEED;
 
+//: A term's collider index for the floor (a horizontal plane at the floor's level that never moves, with the
+//: floor's friction): the analytic supports' (collider_analytic_supports.hpp) at fixed steps.
+inline constexpr Index FLOOR_SUPPORT = -1;
+
 //: Keep the first `kept` gathered terms of supports (0: none), dropping the rest.
 void keep_terms(Supports& supports, Index kept);
 

@@ -194,6 +194,8 @@ struct Sliding {
     //: friction held to its start's direction reversed particles' motion and stop_reversed took back cm),
     //: else Coulomb's against the start's direction, stopped particles put at rest (adaptive steps).
     bool smoothed = false;
+    //: With it, each particle's normal force (N) for the step: lag_normal_force's.
+    std::vector<double> lagged_onto;
     Index count() const { return static_cast<Index>(index.size()); }
     //: Keep the first `count` particles of the set (0: none); their per-step values (normal_speed, curving:
     //: prescribe_normal_speed's) zero.  (sliding.cpp)
