@@ -336,3 +336,13 @@ def test_the_plotted_cloth_shapes_are_evenly_spread_frames_including_both_ends()
     result = run(Scene(nx=4, ny=4), 1.0, 10.0, shapes=3, progress=False, warn=None)
     assert [shape.time for shape in result.shapes] == [0.0, 0.5, 1.0]
     assert all(shape.positions.shape == (16, 3) and shape.wetness.shape == (16,) for shape in result.shapes)
+
+
+@pytest.mark.parametrize("command", ["run", "params", "build-fmu", "demo", "batch", "fit", "blender-extension"])
+def test_every_commands_help_prints_its_text_as_written(capsys, command):
+    """argparse formats an option's help with %, not a description: b60f040's fit description showed '95 %%'."""
+    with pytest.raises(SystemExit) as stop:
+        main([command, "--help"])
+    out = capsys.readouterr().out
+    assert stop.value.code == 0 and f"usage: wetcloth {command}" in out
+    assert "%%" not in out
