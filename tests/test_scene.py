@@ -106,6 +106,15 @@ def test_broken_toml_names_the_file(tmp_path):
         load_scene(path)
 
 
+def test_a_scene_file_that_starts_with_a_byte_order_mark_is_read(tmp_path):
+    """Notepad (before Windows 10's 1903) starts a UTF-8 file with a byte-order mark; b60f040 refused it as
+    "not valid TOML: Invalid statement (at line 1, column 1)"."""
+    path = tmp_path / "notepad.toml"
+    path.write_bytes("nx = 9\nwidth = 0.3\n".encode("utf-8-sig"))
+    scene = load_scene(path)
+    assert (scene.nx, scene.width) == (9, 0.3)
+
+
 def test_binary_or_unreadable_scene_file_is_named(tmp_path):
     binary = tmp_path / "towel.png"
     binary.write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00")

@@ -747,8 +747,8 @@ def read_toml(path: Path, what: str = "scene file") -> dict[str, Any]:
     """A TOML file's contents; a ConfigError naming the file (``what``: 'scene file', 'study file')
     if it cannot be read or parsed."""
     try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
+        with open(path, "rb") as fh:  # utf-8-sig: the byte-order mark some editors write (Notepad) is no text
+            return tomllib.loads(fh.read().decode("utf-8-sig"))
     except tomllib.TOMLDecodeError as exc:
         message = f"not valid TOML: {exc}"
     except UnicodeDecodeError as exc:
