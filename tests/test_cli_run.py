@@ -109,6 +109,21 @@ def test_unwritable_outputs_are_refused_before_simulating(tmp_path, capsys, monk
     assert not (tmp_path / "p.png").exists()
 
 
+def test_a_plot_of_an_unknown_image_format_is_refused_before_simulating(tmp_path, capsys, monkeypatch):
+    """b60f040 simulated first, then stopped at the plot with matplotlib's "Format 'txt' is not supported"
+    (no option named) and without the run's summary."""
+    import wetcloth.commands.run as run_command
+
+    def no_simulating(*args, **kwargs):
+        raise AssertionError("simulated before checking the outputs")
+
+    monkeypatch.setattr(run_command, "run", no_simulating)
+    code = main(["run", "--csv", str(tmp_path / "o.csv"), "--plot", str(tmp_path / "p.txt")])
+    err = capsys.readouterr().err
+    assert code == 2 and "--plot" in err and "'.txt' is not an image format; allowed: " in err and ".png" in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
 def _frames_on_disk(frames: Path) -> int:
     return len(list(frames.glob("cloth_*.ply")))
 

@@ -74,6 +74,7 @@ def main(args) -> int:
     # Every output is checked before any simulating: a run is not thrown away at its end.
     _check_writable(args.csv, "--csv")
     _check_writable(args.plot, "--plot")
+    _check_image_format(args.plot)
     sequence = None
     if args.export is not None:
         from wetcloth.exporter import open_sequence  # only needed when exporting
@@ -144,6 +145,16 @@ def _below_water(depth: float) -> str:
     side = "below" if depth >= 0.0 else "above"
     size = abs(depth)
     return f"{size * 100:.2f} cm {side} the water" if size < 1.0 else f"{size:.2f} m {side} the water"
+
+
+def _check_image_format(path: Path) -> None:
+    """Refuse a ``--plot`` file of a format matplotlib does not write (ValueError naming the option)."""
+    from wetcloth.plotting import image_format
+
+    try:
+        image_format(path)
+    except ValueError as exc:
+        raise ValueError(f"--plot {exc}") from None
 
 
 def _check_writable(path: Path, option: str) -> None:
