@@ -124,6 +124,23 @@ def test_a_plot_of_an_unknown_image_format_is_refused_before_simulating(tmp_path
     assert list(tmp_path.iterdir()) == []
 
 
+def test_frames_beyond_blenders_last_frame_are_refused_before_simulating(tmp_path, capsys, monkeypatch):
+    """31 frames from --first-frame 1048570 would end at 1048600, past Blender's last frame 1048574 (MAXFRAME),
+    where no scene frame can show them: b60f040 simulated and wrote them."""
+    import wetcloth.commands.run as run_command
+
+    def no_simulating(*args, **kwargs):
+        raise AssertionError("simulated before checking the outputs")
+
+    monkeypatch.setattr(run_command, "run", no_simulating)
+    code = main(["run", "--duration", "1", "--fps", "30", "--first-frame", "1048570", "--export", str(tmp_path / "f"),
+                 "--csv", str(tmp_path / "o.csv"), "--plot", str(tmp_path / "p.png")])
+    err = capsys.readouterr().err
+    assert code == 2 and ("first_frame 1048570 with 31 frames ends at frame 1048600, beyond Blender's last frame "
+                          "1048574; allowed: a first_frame up to 1048544") in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
 def _frames_on_disk(frames: Path) -> int:
     return len(list(frames.glob("cloth_*.ply")))
 

@@ -15,7 +15,7 @@ from tqdm.auto import tqdm
 from wetcloth import run_settings
 from wetcloth.commands.common import FAILED, INTERRUPTED, path_argument, scene_with_overrides
 from wetcloth.errors import BlowUpError
-from wetcloth.runner import run
+from wetcloth.runner import frame_times, run
 from wetcloth.scene import read_scene_file
 
 
@@ -80,7 +80,8 @@ def main(args) -> int:
         from wetcloth.exporter import open_sequence  # only needed when exporting
 
         sequence = open_sequence(args.export, fmt=args.format, writer=args.writer, fps=settings.fps, scene=scene,
-                                 faces=args.faces, first_frame=args.first_frame, overwrite=args.overwrite)
+                                 faces=args.faces, first_frame=args.first_frame, overwrite=args.overwrite,
+                                 frame_count=len(frame_times(settings.duration, settings.fps)))
     stop = None
     try:
         result = run(scene, settings.duration, settings.fps, on_frame=sequence.on_frame if sequence else None,
