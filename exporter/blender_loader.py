@@ -134,12 +134,21 @@ def script_directory():
 
 
 def read_manifest(directory):
-    """``frames.json`` of the sequence, or {} if it is missing (a run that did not finish)."""
+    """``frames.json`` of the sequence, or {} if it is missing (a run that did not finish); a RuntimeError
+    naming it if it is not a JSON object (edited by hand, or cut short)."""
     path = os.path.join(directory, SETTINGS["manifest"])
     if not os.path.isfile(path):
         return {}
-    with open(path) as fh:
-        return json.load(fh)
+    try:
+        with open(path, encoding="utf-8") as fh:
+            manifest = json.load(fh)
+    except ValueError as exc:  # JSONDecodeError, UnicodeDecodeError
+        raise RuntimeError(f"wetcloth: {path} is not valid JSON ({exc}): mend it, or delete it to load the "
+                           "frames with the default options") from None
+    if not isinstance(manifest, dict):
+        raise RuntimeError(f"wetcloth: {path} is not a JSON object of the sequence's settings: mend it, or "
+                           "delete it to load the frames with the default options")
+    return manifest
 
 
 def frame_files(directory, prefix, fmt):

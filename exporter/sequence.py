@@ -430,7 +430,7 @@ def _checked_polygons(polygons, fmt: str) -> tuple[np.ndarray, np.ndarray]:
 def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: float = 30.0, scene=None, *,
                   triangles=None, uv=None, prefix: str = "cloth", digits: int = MIN_DIGITS,
                   overwrite: bool = False, exclusive: bool = False, faces: str = "quads", first_frame: int = 1,
-                  blender: dict | None = None, polygons=None) -> FrameSequence:
+                  blender: dict | None = None, polygons=None, frame_count: int | None = None) -> FrameSequence:
     """Start a frame sequence in ``directory``, checked now: ExportError if it cannot be used.
 
     fmt: ``ply`` (binary, default), ``obj`` or ``usd``; writer: ``trimesh`` or ``meshio`` (ply and
@@ -448,6 +448,8 @@ def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: flo
     subdivision, smooth, material, first_frame, timeline), recorded in frames.json;
     polygons: ``usd`` only, (corner counts (k,), vertex indices) of faces of any corner count to write
     instead of ``faces`` (a Blender object's own, so that its Mesh Sequence Cache keeps them).
+    frame_count: how many frames will come, when known: the last one's number must stay within Blender's
+    frames (at most ``MAX_FRAME``) too.
 
     The directory is created if missing.  Refused up front (see ``check_directory``): a path that
     is a file, a directory that cannot be created or written, and one that already holds frames
@@ -473,6 +475,10 @@ def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: flo
         raise ExportError(f"unknown faces {faces!r}; choose one of {', '.join(FACES)}")
     if not (isinstance(first_frame, int) and not isinstance(first_frame, bool) and 0 <= first_frame <= MAX_FRAME):
         raise ExportError(f"first_frame must be a whole number from 0 to {MAX_FRAME}, got {first_frame!r}")
+    if frame_count is not None and first_frame + frame_count - 1 > MAX_FRAME:
+        raise ExportError(f"first_frame {first_frame} with {frame_count} frames ends at frame "
+                          f"{first_frame + frame_count - 1}, beyond Blender's last frame {MAX_FRAME}; allowed: a "
+                          f"first_frame up to {MAX_FRAME - frame_count + 1}")
     blender_options(blender, first_frame)  # checked before the directory is touched
     if polygons is not None:
         polygons = _checked_polygons(polygons, fmt)

@@ -439,3 +439,24 @@ def test_every_study_snippet_of_the_docs_is_a_valid_study():
     for block in blocks:
         study = Study.from_dict(tomllib.loads(block), name="docs")
         assert study.runs()
+
+
+def test_a_studys_mesh_files_are_found_from_its_folder_wherever_it_runs(tmp_path, monkeypatch):
+    """``cloth_mesh`` in [base] and on an axis is relative to the study file, as its ``scene`` is and as a scene
+    file's mesh is: on b60f040 it was looked for from the working folder, and every run of a study started
+    elsewhere failed ("'square.obj' cannot be read: No such file or directory")."""
+    folder = tmp_path / "study"
+    folder.mkdir()
+    square = "v -0.1 -0.1 0.2\nv 0.1 -0.1 0.2\nv 0.1 0.1 0.2\nv -0.1 0.1 0.2\n"
+    (folder / "square.obj").write_text(square + "f 1 2 3 4\n")
+    (folder / "split.obj").write_text(square + "f 1 2 3\nf 1 3 4\n")
+    (folder / "mesh.toml").write_text('scene = "thesis_fast"\nduration = 1.0\n[base]\ncloth_mesh = "square.obj"\n'
+                                      '[axes]\nabsorption_rate = [0.1, 0.2]\n')
+    (folder / "meshes.toml").write_text('scene = "thesis_fast"\nduration = 1.0\n'
+                                        '[axes]\ncloth_mesh = ["square.obj", "split.obj"]\n')
+    monkeypatch.chdir(tmp_path)
+    for name, files in (("mesh", ["square.obj", "square.obj"]), ("meshes", ["square.obj", "split.obj"])):
+        runs = load_study(folder / f"{name}.toml").runs()
+        assert [r.params["cloth_mesh"] for r in runs] == [str((folder / f).resolve()) for f in files]
+        for run in runs:
+            assert wetcloth.scene.from_dict(run.params).cloth_mesh == run.params["cloth_mesh"]

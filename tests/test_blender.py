@@ -285,3 +285,20 @@ def test_loading_ply_frames_prints_no_line_per_frame(tmp_path):
     imports = [line for line in lines if line.startswith("PLY import of")]
     assert len(imports) == 1 and imports[0].startswith("PLY import of 'cloth_0001.ply'")  # the direct import's
     assert any(line.startswith(f"wetcloth: {FRAMES} frames of {NX * NY} vertices") for line in lines)
+
+
+@pytest.mark.parametrize("damage", ['{"fps": 30,', "[1, 2]"])
+def test_a_damaged_frames_json_is_named_when_loading(tmp_path, damage):
+    """frames.json cut short or edited into something else: the loader names the file and what to do (b60f040
+    stopped with json's bare "Expecting property name enclosed in double quotes: line 1 column 2")."""
+    python = require_blender_python()
+    scene = wetcloth.load_scene("thesis_fast", nx=NX, ny=NY)
+    with open_sequence(tmp_path / "frames", fps=FPS, scene=scene) as sequence:
+        run(scene, 0.1, FPS, on_frame=sequence.on_frame, progress=False)
+    manifest = tmp_path / "frames" / "frames.json"
+    manifest.write_text(damage)
+    done = subprocess.run([str(python), str(tmp_path / "frames" / "load_in_blender.py")], capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode != 0
+    assert f"wetcloth: {manifest} is not " in done.stderr and "delete it to load the frames" in done.stderr, \
+        done.stderr[-2000:]

@@ -233,6 +233,17 @@ def test_a_wheel_blender_cannot_load_is_refused(tmp_path, capsys, name, message)
     assert not (tmp_path / "out" / "wetcloth-0.1.0.zip").exists()
 
 
+def test_an_interpreter_that_cannot_be_run_is_named(tmp_path, capsys):
+    """``--python`` of a missing file or of one that is no program: b60f040 said only "[Errno 2] No such file or
+    directory" (and "[Errno 13] Permission denied")."""
+    text = tmp_path / "python.txt"
+    text.write_text("not a program")
+    for python, why in ((tmp_path / "no-python", "No such file or directory"), (text, "Permission denied")):
+        assert cli_main(["blender-extension", "--out", str(tmp_path / "out"), "--python", str(python)]) == 2
+        assert f"Python interpreter {python} cannot be run: {why}; give the path of a Python" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
 def test_given_wheels_are_bundled_as_they_are_one_per_python_with_dependencies_for_each(tmp_path, capsys):
     """The wetcloth wheels given, and a scipy and a pyamg wheel (the versions this Python runs) for each
     one's Python (from the wheel cache, downloaded there by pip the first time)."""

@@ -109,6 +109,38 @@ def test_unwritable_outputs_are_refused_before_simulating(tmp_path, capsys, monk
     assert not (tmp_path / "p.png").exists()
 
 
+def test_a_plot_of_an_unknown_image_format_is_refused_before_simulating(tmp_path, capsys, monkeypatch):
+    """b60f040 simulated first, then stopped at the plot with matplotlib's "Format 'txt' is not supported"
+    (no option named) and without the run's summary."""
+    import wetcloth.commands.run as run_command
+
+    def no_simulating(*args, **kwargs):
+        raise AssertionError("simulated before checking the outputs")
+
+    monkeypatch.setattr(run_command, "run", no_simulating)
+    code = main(["run", "--csv", str(tmp_path / "o.csv"), "--plot", str(tmp_path / "p.txt")])
+    err = capsys.readouterr().err
+    assert code == 2 and "--plot" in err and "'.txt' is not an image format; allowed: " in err and ".png" in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_frames_beyond_blenders_last_frame_are_refused_before_simulating(tmp_path, capsys, monkeypatch):
+    """31 frames from --first-frame 1048570 would end at 1048600, past Blender's last frame 1048574 (MAXFRAME),
+    where no scene frame can show them: b60f040 simulated and wrote them."""
+    import wetcloth.commands.run as run_command
+
+    def no_simulating(*args, **kwargs):
+        raise AssertionError("simulated before checking the outputs")
+
+    monkeypatch.setattr(run_command, "run", no_simulating)
+    code = main(["run", "--duration", "1", "--fps", "30", "--first-frame", "1048570", "--export", str(tmp_path / "f"),
+                 "--csv", str(tmp_path / "o.csv"), "--plot", str(tmp_path / "p.png")])
+    err = capsys.readouterr().err
+    assert code == 2 and ("first_frame 1048570 with 31 frames ends at frame 1048600, beyond Blender's last frame "
+                          "1048574; allowed: a first_frame up to 1048544") in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
 def _frames_on_disk(frames: Path) -> int:
     return len(list(frames.glob("cloth_*.ply")))
 
@@ -336,3 +368,13 @@ def test_the_plotted_cloth_shapes_are_evenly_spread_frames_including_both_ends()
     result = run(Scene(nx=4, ny=4), 1.0, 10.0, shapes=3, progress=False, warn=None)
     assert [shape.time for shape in result.shapes] == [0.0, 0.5, 1.0]
     assert all(shape.positions.shape == (16, 3) and shape.wetness.shape == (16,) for shape in result.shapes)
+
+
+@pytest.mark.parametrize("command", ["run", "params", "build-fmu", "demo", "batch", "fit", "blender-extension"])
+def test_every_commands_help_prints_its_text_as_written(capsys, command):
+    """argparse formats an option's help with %, not a description: b60f040's fit description showed '95 %%'."""
+    with pytest.raises(SystemExit) as stop:
+        main([command, "--help"])
+    out = capsys.readouterr().out
+    assert stop.value.code == 0 and f"usage: wetcloth {command}" in out
+    assert "%%" not in out

@@ -256,6 +256,7 @@ BAD_DATA = [
     ("", "empty: the first line names the columns"),
     ("time,time_to_sink\n0,40\n", "sink times are fitted alone"),
     ("time_to_sink\n-3\n", "column 'time_to_sink': -3 s; a sink time is > 0"),
+    ("time;depth\n0;0,1\n", "the header 'time;depth' separates its columns with ';'"),
 ]
 
 
@@ -267,6 +268,16 @@ def test_bad_data_is_one_clear_error_with_status_2(tmp_path, capsys, text, messa
     assert status == 2
     assert err.startswith(f"wetcloth fit: error: data file {data}: ") and message in err, err
     assert not (tmp_path / "o" / "fit.json").exists()
+
+
+def test_a_spreadsheets_byte_order_mark_is_not_part_of_the_first_column(tmp_path):
+    """A CSV saved by a spreadsheet as 'CSV UTF-8' starts with a byte-order mark; on b60f040 it was read into the
+    first column's name ("column '\ufefftime': unknown column; did you mean 'time'?")."""
+    data = tmp_path / "excel.csv"
+    data.write_bytes("time,depth\n0,-0.1\n1,0.0\n".encode("utf-8-sig"))
+    curves = read_measurements(data)
+    assert curves.names == ("depth",)
+    np.testing.assert_array_equal(curves.times, [0.0, 1.0])
 
 
 BAD_OPTIONS = [

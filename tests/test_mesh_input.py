@@ -13,7 +13,7 @@ import trimesh
 
 import wetcloth
 from wetcloth.exporter import open_sequence
-from wetcloth.mesh_file import make_mesh
+from wetcloth.mesh_file import make_mesh, read_mesh_file
 from wetcloth.scene import PARAMETERS, Scene, describe_range, load_scene
 from wetcloth._core import GRAVITY
 from wetcloth.energy import mechanical_energy
@@ -88,6 +88,8 @@ BAD_FILES = {
     "pentagon": ("obj", r"'cloth_mesh'.*faces of 5 corners \(polygon\): split them into triangles or quads"),
     "nan": ("ply", r"'cloth_mesh'.*vertex 2 has a coordinate that is not a finite number"),
     "loose_vertex": ("obj", r"'cloth_mesh'.*vertex 3 belongs to no face"),
+    "seam": ("obj", r"'cloth_mesh'.*vertices 0 and 4 are at the same place .*2 such vertices.*fall apart"),
+    "flat_shaded": ("glb", r"'cloth_mesh'.*vertices 0 and 3 are at the same place .*2 such vertices"),
     "unknown_format": ("xyz", r"'cloth_mesh'.*unknown mesh format '\.xyz'"),
 }
 
@@ -113,6 +115,10 @@ def _bad_file(kind: str, folder: Path) -> Path:
         meshio.write(path, meshio.Mesh(points, [("triangle", np.array([[0, 1, 2], [0, 2, 3]], np.int32))]))
     elif kind == "loose_vertex":
         meshio.write(path, meshio.Mesh(square, [("triangle", np.array([[0, 1, 2]]))]))
+    elif kind == "seam":  # two triangles with their diagonal's two vertices each (an OBJ keeps them apart)
+        meshio.write(path, meshio.Mesh(np.vstack([square, square[[0, 2]]]), [("triangle", np.array([[0, 1, 2], [4, 5, 3]]))]))
+    elif kind == "flat_shaded":  # each triangle its own corners, as a glTF writer gives a face of split normals
+        trimesh.Trimesh(square[[0, 1, 2, 0, 2, 3]], np.arange(6).reshape(2, 3), process=False).export(path)
     elif kind == "unknown_format":
         path.write_text("0 0 0\n")
     return path
@@ -125,6 +131,25 @@ def test_a_bad_mesh_file_is_refused_naming_cloth_mesh(tmp_path, kind):
         Scene(cloth_mesh=str(path))
     assert err.value.name == "cloth_mesh"
     assert str(err.value).endswith(f"; allowed: {describe_range(PARAMETERS['cloth_mesh'])}")
+
+
+def test_an_obj_with_normals_and_uv_seams_is_read_as_its_vertices(tmp_path):
+    """An OBJ as modellers write it (Blender's default: ``vn`` and ``vt`` rows counted apart from the ``v`` rows,
+    corners ``v/vt/vn``) is read by its vertices and faces, its per-corner UVs and normals left out; UVs that
+    are per vertex are kept.  On b60f040 both files were refused ("len(points) = 4, but
+    len(point_data["obj:vt"]) = 6")."""
+    vertices = "v 0 0 0.2\nv 1 0 0.2\nv 1 1 0.2\nv 0 1 0.2\n"
+    seam = tmp_path / "seam_uvs.obj"
+    seam.write_text(vertices + "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 0.5 0.5\nvt 0.2 0.2\nvn 0 0 1\n"
+                    "f 1/1/1 2/2/1 3/3/1\nf 1/6/1 3/5/1 4/4/1\n")
+    per_vertex = tmp_path / "vertex_uvs.obj"
+    per_vertex.write_text(vertices + "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n")
+    for path, uv in ((seam, None), (per_vertex, [[0, 0], [1, 0], [1, 1], [0, 1]])):
+        Scene(cloth_mesh=str(path))
+        mesh = read_mesh_file(str(path))
+        np.testing.assert_array_equal(mesh.points, [[0, 0, 0.2], [1, 0, 0.2], [1, 1, 0.2], [0, 1, 0.2]])
+        np.testing.assert_array_equal(mesh.triangles, [[0, 1, 2], [0, 2, 3]])
+        assert (mesh.uv is None) if uv is None else np.array_equal(mesh.uv, uv)
 
 
 def test_a_relative_mesh_path_is_relative_to_the_scene_file(tmp_path, disc):

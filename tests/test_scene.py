@@ -5,9 +5,12 @@ import math
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import wetcloth
+from wetcloth.batch import load_study
+from wetcloth.errors import ConfigError, ParameterError
 from wetcloth.scene import PARAMETERS, Scene, describe_range, from_dict, load_scene, preset_dir
 
 PRESETS = ["towel", "thesis_fast", "thesis_slow", "thesis_float", "thesis_sink"]
@@ -104,6 +107,51 @@ def test_broken_toml_names_the_file(tmp_path):
     path.write_text("nx = = 3")
     with pytest.raises(ValueError, match="scene file '.*bad.toml': not valid TOML"):
         load_scene(path)
+
+
+def test_a_scene_file_that_starts_with_a_byte_order_mark_is_read(tmp_path):
+    """Notepad (before Windows 10's 1903) starts a UTF-8 file with a byte-order mark; b60f040 refused it as
+    "not valid TOML: Invalid statement (at line 1, column 1)"."""
+    path = tmp_path / "notepad.toml"
+    path.write_bytes("nx = 9\nwidth = 0.3\n".encode("utf-8-sig"))
+    scene = load_scene(path)
+    assert (scene.nx, scene.width) == (9, 0.3)
+
+
+def test_a_whole_number_beyond_every_float_is_named_not_a_crash(tmp_path):
+    """A TOML integer too large for a float (309 digits and more): b60f040 crashed with a traceback
+    (OverflowError: int too large to convert to float) in the scene's and the study's number checks."""
+    huge = "1" + "0" * 400
+    scene = tmp_path / "huge.toml"
+    scene.write_text(f"width = {huge}\n[run]\nduration = {huge}\n")
+    with pytest.raises(ConfigError, match=r"huge.toml': 'width' is a whole number beyond 1.8e308, outside every "
+                                          r"range \(2 such numbers\)"):
+        load_scene(scene)
+    study = tmp_path / "study.toml"
+    study.write_text(f'scene = "thesis_fast"\n[axes]\nabsorption_rate = {{ start = 0, stop = {huge}, num = 3 }}\n')
+    with pytest.raises(ConfigError, match=r"'axes.absorption_rate.stop' is a whole number beyond 1.8e308"):
+        load_study(study)
+    digits = tmp_path / "digits.toml"
+    digits.write_text("nx = " + "9" * 5000 + "\n")
+    with pytest.raises(ConfigError, match=r"digits.toml': not valid TOML: Exceeds the limit"):
+        load_scene(digits)
+    with pytest.raises(ParameterError, match=r"'width': a whole number beyond 1.8e308 is out of range"):
+        Scene(width=int(huge))
+
+
+def test_numpy_numbers_are_numbers(tmp_path):
+    """``Scene(nx=n) for n in np.arange(...)``: NumPy's integers and floats are taken as Python's (b60f040 refused
+    them: "expected a number, got np.int64(7)"); a fraction is still no whole number, a NumPy bool no number."""
+    scene = Scene(nx=np.int64(7), ny=np.int32(5), width=np.float32(0.25), thickness=np.int64(1))
+    assert (scene.nx, scene.ny, scene.width, scene.thickness) == (7, 5, 0.25, 1.0)
+    assert type(scene.nx) is int and type(scene.width) is float
+    sim = wetcloth.Simulation(Scene(nx=5, ny=5))
+    sim.set_inputs(water_level=np.float32(0.5))
+    assert sim.scene.water_level == 0.5
+    with pytest.raises(ParameterError, match=r"'nx': expected a whole number, got np.float32\(3.5\)"):
+        Scene(nx=np.float32(3.5))
+    with pytest.raises(ParameterError, match=r"'nx': expected a number, got np.True_"):
+        Scene(nx=np.bool_(True))
 
 
 def test_binary_or_unreadable_scene_file_is_named(tmp_path):

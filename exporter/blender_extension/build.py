@@ -104,8 +104,12 @@ def source_tree() -> Path:
 def build_wheel(directory: Path, python: str | Path = sys.executable) -> Path:
     """``pip wheel --no-deps`` of the source tree by interpreter ``python`` into ``directory``; the wheel."""
     before = set(directory.glob("wetcloth-*.whl"))
-    done = subprocess.run([str(python), "-m", "pip", "wheel", "--no-deps", "--quiet", str(source_tree()),
-                           "-w", str(directory)], capture_output=True, text=True)
+    try:
+        done = subprocess.run([str(python), "-m", "pip", "wheel", "--no-deps", "--quiet", str(source_tree()),
+                               "-w", str(directory)], capture_output=True, text=True)
+    except OSError as exc:  # no such file, not executable
+        raise ValueError(f"Python interpreter {python} cannot be run: {exc.strerror or exc}; give the path of "
+                         "a Python (Blender 4.2 to 5.0 run 3.11, 5.1 and later 3.13)") from None
     wheels = sorted(set(directory.glob("wetcloth-*.whl")) - before)
     if done.returncode != 0 or len(wheels) != 1:
         raise ValueError(f"pip wheel of {source_tree()} by {python} failed (exit {done.returncode}):\n"

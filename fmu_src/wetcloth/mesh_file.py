@@ -8,14 +8,18 @@ bakes its objects so, as Blender ships neither meshio nor trimesh.
 OBJ, PLY, OFF and VTK/VTU are read with meshio, which keeps the file's vertex order, its quads and
 its point data; glTF/GLB (which meshio does not read) and STL with trimesh.  An STL file stores each
 triangle's own corners: its exactly equal vertices are merged, numbered in order of first appearance.
-Triangles and quads may be mixed; a face of more corners, a mesh without faces, a non-finite
-coordinate, a zero-area face, a vertex in no face and an edge in more than two faces are refused
-with a ParameterError naming ``cloth_mesh`` (the springs need each edge in at most two faces).
+An OBJ file's normals (``vn``) are not read, nor its UVs (``vt``) unless each face corner's ``vt``
+index is its ``v`` index (UVs per vertex; at a UV seam they are per corner, which a particle cannot
+have).  Triangles and quads may be mixed; a face of more corners, a mesh without faces, a non-finite
+coordinate, a zero-area face, a vertex in no face, two vertices at the same place (a seam: the cloth
+would fall apart along it) and an edge in more than two faces are refused with a ParameterError
+naming ``cloth_mesh`` (the springs need each edge in at most two faces).
 """
 
 from __future__ import annotations
 
 import functools
+import io
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,7 +35,8 @@ TRIMESH_SUFFIXES = (".stl", ".gltf", ".glb")
 SUFFIXES = MESHIO_SUFFIXES + TRIMESH_SUFFIXES
 #: What ``cloth_mesh`` allows, as its messages say (the scene parameter's range text).
 ALLOWED = ("'' (the nx x ny rectangle) or the path of a mesh file (" + ", ".join(SUFFIXES) + ") of triangles "
-           "and quads with an area each, every vertex in a face and every edge in at most two faces (from Python "
+           "and quads with an area each, every vertex in a face, no two vertices at the same place and every edge in "
+           "at most two faces (from Python "
            "also such a mesh as arrays: wetcloth.mesh_file.make_mesh)")
 #: A face is degenerate when a triangle of it has area below this fraction of the median edge length squared.
 DEGENERATE_AREA = 1e-10
@@ -119,7 +124,7 @@ def read_faces(path: str, shown: str, name: str, allowed: str, polygons: bool = 
 def _read_meshio(path: str, polygons: bool):
     import meshio
 
-    mesh = meshio.read(path)
+    mesh = meshio.read(_obj_buffer(path), file_format="obj") if path.lower().endswith(".obj") else meshio.read(path)
     blocks = []
     for block in mesh.cells:
         if block.type in ("triangle", "quad") or (polygons and block.type.startswith("polygon")):
@@ -130,6 +135,22 @@ def _read_meshio(path: str, polygons: bool):
     points = np.asarray(mesh.points, dtype=np.float64)
     attributes = {name: np.asarray(values) for name, values in mesh.point_data.items()}
     return points, blocks, attributes, _uv_of(attributes, len(points))
+
+
+def _obj_buffer(path: str) -> io.StringIO:
+    """An OBJ file's text without its normals, and without its UVs unless they are per vertex (each face
+    corner's ``vt`` index its ``v`` index): meshio takes ``vn`` and ``vt`` rows as point data, and refuses
+    a file (most that modellers write) with another count of them than of vertices."""
+    with open(path, encoding="utf-8") as fh:
+        lines = fh.read().splitlines()
+    per_vertex = True
+    for line in lines:
+        words = line.split()
+        if words[:1] == ["f"]:
+            corners = [item.split("/") for item in words[1:]]
+            per_vertex = per_vertex and all(len(c) > 1 and c[1] in ("", c[0]) for c in corners)
+    dropped = ("vn",) if per_vertex else ("vn", "vt")
+    return io.StringIO("\n".join(line for line in lines if (line.split(maxsplit=1) or [""])[0] not in dropped))
 
 
 def _uv_of(attributes: dict, n: int) -> np.ndarray | None:
@@ -196,6 +217,7 @@ def make_mesh(points, blocks, attributes=None, uv=None, shown: str = "<arrays>")
         raise _error(f"{shown!r}: vertex {int(unused[0])} belongs to no face ({len(unused)} such vertices); "
                      "remove loose vertices (a particle needs a face for its mass)")
     _check_areas(shown, points, triangles, face_of)
+    _check_coincident(shown, points)
     _check_manifold(shown, blocks)
     triangles = _oriented(triangles)
     mixed = len({b.shape[1] for b in blocks}) > 1
@@ -237,6 +259,19 @@ def _check_areas(shown: str, points: np.ndarray, triangles: np.ndarray, face_of:
         raise _error(f"{shown!r}: face {face} has zero area (a triangle of corners "
                      f"{triangles[flat[0]].tolist()} of area {areas[flat[0]]:.3g} m2; "
                      f"{len(np.unique(face_of[flat]))} such faces); remove degenerate faces (Blender: Merge by Distance)")
+
+
+def _check_coincident(shown: str, points: np.ndarray) -> None:
+    """Refuse two vertices at exactly the same place: the faces on either side of them would not be joined
+    (a seam: glTF and PLY writers split a vertex where its UVs or normals differ)."""
+    _, first, inverse = np.unique(points, axis=0, return_index=True, return_inverse=True)
+    again = np.flatnonzero(first[inverse.ravel()] != np.arange(len(points)))
+    if len(again):
+        vertex = int(again[0])
+        raise _error(f"{shown!r}: vertices {int(first[inverse.ravel()[vertex]])} and {vertex} are at the same place "
+                     f"({points[vertex].tolist()} m; {len(again)} such vertices): the cloth would fall apart along "
+                     "that seam; weld them (Blender: Merge by Distance), and write the file without split normals "
+                     "or UV seams (glTF and PLY writers split vertices there; OBJ does not)")
 
 
 def face_edges(blocks) -> tuple[np.ndarray, np.ndarray]:

@@ -10,11 +10,23 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.backend_bases import FigureCanvasBase  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
 from wetcloth.files import whole_file  # noqa: E402
 
 WETNESS_CMAP = "YlGnBu"
+
+
+def image_format(path: str | Path) -> str:
+    """The image format of a plot written to ``path``: its suffix (PNG without one); a ValueError naming
+    the formats matplotlib writes for a suffix it does not."""
+    suffix = Path(path).suffix.lstrip(".").lower()
+    formats = FigureCanvasBase.get_supported_filetypes()
+    if suffix and suffix not in formats:
+        raise ValueError(f"{path}: '.{suffix}' is not an image format; allowed: a file name ending in "
+                         f"{', '.join('.' + f for f in sorted(formats))}, or no suffix (PNG)")
+    return suffix or "png"
 
 
 @contextlib.contextmanager
@@ -27,7 +39,7 @@ def figure_file(path: str | Path, dpi: int, **options):
     try:
         yield fig
         with whole_file(path) as tmp:
-            fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".") or "png")
+            fig.savefig(tmp, dpi=dpi, format=image_format(path))
     finally:
         plt.close(fig)
 

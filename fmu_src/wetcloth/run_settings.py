@@ -9,6 +9,7 @@ may ask for (``duration * fps`` frames are recorded and kept in memory).
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 from typing import Any, Mapping
 
@@ -52,7 +53,7 @@ def check_setting(name: str, value) -> float:
     if name not in SETTINGS:
         raise RunSettingError(name, did_you_mean(name, SETTINGS, "run setting"))
     s = SETTINGS[name]
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):  # Real: NumPy's scalars too
         raise RunSettingError(name, f"expected a number, got {value!r}; allowed: {describe(s)}")
     if not (math.isfinite(value) and s.lo < value <= s.hi):
         raise RunSettingError(name, f"{value!r} is out of range; allowed: {describe(s)}")

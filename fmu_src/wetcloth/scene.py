@@ -10,7 +10,9 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
+import numbers
 import re
+import sys
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
@@ -419,7 +421,8 @@ def is_parameter(name: str) -> bool:
 def normalise(name: str, value):
     """``value`` in the type of parameter ``name``, by the one rule of every source (scene files,
     ``--set``, Python, studies, the FMU): a string parameter takes a string; a number parameter a
-    number (never text or a boolean), a whole-number one also a float that is whole (3.0 -> 3)."""
+    number (Python's or NumPy's; never text or a boolean), a whole-number one also a float that is whole
+    (3.0 -> 3)."""
     f = _field(name)
     if f.type == "str":
         if f.metadata.get("mesh") and isinstance(value, MeshFile):
@@ -427,14 +430,18 @@ def normalise(name: str, value):
         if not isinstance(value, str):
             raise ParameterError(name, f"expected a string, got {value!r}; allowed: {describe_range(f, name)}")
         return value
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):  # Real: NumPy's scalars too
         hint = " (text: write the number without quotes)" if isinstance(value, str) else ""
         raise ParameterError(name, f"expected a number, got {value!r}{hint}; allowed: {describe_range(f, name)}")
     if f.type == "int":
-        if isinstance(value, float) and not value.is_integer():
+        if not isinstance(value, numbers.Integral) and not float(value).is_integer():
             raise ParameterError(name, f"expected a whole number, got {value!r}; allowed: {describe_range(f, name)}")
         return int(value)
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:  # a whole number beyond any float (a TOML integer of 309 digits)
+        raise ParameterError(name, f"a whole number beyond 1.8e308 is out of range; allowed: "
+                                   f"{describe_range(f, name)}") from None
 
 
 def check_value(name: str, value):
@@ -747,15 +754,32 @@ def read_toml(path: Path, what: str = "scene file") -> dict[str, Any]:
     """A TOML file's contents; a ConfigError naming the file (``what``: 'scene file', 'study file')
     if it cannot be read or parsed."""
     try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
-    except tomllib.TOMLDecodeError as exc:
-        message = f"not valid TOML: {exc}"
+        with open(path, "rb") as fh:  # utf-8-sig: the byte-order mark some editors write (Notepad) is no text
+            data = tomllib.loads(fh.read().decode("utf-8-sig"))
+        huge = list(_beyond_floats(data))
+        if not huge:
+            return data
+        message = f"'{huge[0]}' is a whole number beyond 1.8e308, outside every range ({len(huge)} such numbers)"
     except UnicodeDecodeError as exc:
         message = f"not a text (TOML) file: byte {exc.object[exc.start]:#04x} at position {exc.start} is not UTF-8"
+    except ValueError as exc:  # TOMLDecodeError, and an integer of more digits than Python converts
+        message = f"not valid TOML: {exc}"
     except OSError as exc:
         message = f"cannot be read: {exc.strerror or exc}"
     raise ConfigError(str(path), message, label=what)
+
+
+def _beyond_floats(value, key: str = ""):
+    """The keys (dotted; a list's items as key[i]) of whole numbers in TOML ``value`` too large for a
+    float, which every check of a number would fail on."""
+    if isinstance(value, dict):
+        for name, item in value.items():
+            yield from _beyond_floats(item, f"{key}.{name}" if key else name)
+    elif isinstance(value, list):
+        for i, item in enumerate(value):
+            yield from _beyond_floats(item, f"{key}[{i}]")
+    elif isinstance(value, int) and abs(value) > sys.float_info.max:
+        yield key
 
 
 #: The arrays of tables of a scene file ([[collider]], [[grip_key]]), read into flattened names

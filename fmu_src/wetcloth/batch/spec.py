@@ -47,9 +47,11 @@ from wetcloth.batch.plot_spec import PlotSpec, SeriesPlotSpec, plot_specs
 from wetcloth.batch.sensitivity import SensitivitySpec, check_factors, design, parse_sensitivity
 from wetcloth.batch.series import check_series_names
 from wetcloth.errors import ConfigError, Mistakes, StudyError, check_choice, did_you_mean
+from wetcloth.mesh_file import is_mesh
 from wetcloth.scene import (
     PARAMETERS,
     RESERVED_KEYS,
+    parameter_field,
     preset_dir,
     read_scene_file,
     read_toml,
@@ -178,7 +180,7 @@ class Study:
             scene_path, scene_file = _scene_file(data.get("scene"), base_dir)
         base = {}
         with mistakes.collect():
-            base = _base(data.get("base", {}), mistakes)
+            base = _base(data.get("base", {}), mistakes, base_dir)
         axes = []
         with mistakes.collect():
             table = data.get("axes", {})
@@ -186,7 +188,7 @@ class Study:
                 raise StudyError("axes", "must be a table of parameter = values")
             for key, spec in table.items():
                 with mistakes.collect():
-                    axes.append(parse_axis(key, spec))
+                    axes.append(_located_axis(parse_axis(key, spec), base_dir))
         plots = ()
         with mistakes.collect():
             plots = plot_specs(data.get("plot", []))
@@ -365,16 +367,38 @@ class Study:
         return list({r.key: r for r in self._point_runs()}.values())  # in order of first occurrence
 
 
-def _base(table, mistakes: Mistakes) -> dict[str, Any]:
-    """The [base] table: parameter = value, each typed (ranges are checked per run)."""
+def _base(table, mistakes: Mistakes, base_dir) -> dict[str, Any]:
+    """The [base] table: parameter = value, each typed (ranges are checked per run), a mesh file's path
+    found from the study file's folder ``base_dir``."""
     if not isinstance(table, dict):
         raise StudyError("base", "must be a table of parameter = value")
     base = {}
     for key, value in table.items():
         with mistakes.collect():
             check_name(key, f"base.{key}")
-            base[key] = typed(key, value, f"base.{key}")
+            base[key] = _located(key, typed(key, value, f"base.{key}"), base_dir)
     return base
+
+
+def _located(name: str, value, base_dir):
+    """A mesh file's path in a study (``cloth_mesh``, ``collider<k>_file``) from the study file's folder
+    ``base_dir`` when it is there, made absolute (every worker then finds it), as the base scene's path
+    is; else as given (from the working folder)."""
+    if base_dir is None or not isinstance(value, str) or not is_mesh(value):
+        return value
+    if not parameter_field(name).metadata.get("mesh"):
+        return value
+    path = _resolve_relative(value, base_dir)
+    return str(path.resolve()) if path.exists() else value
+
+
+def _located_axis(axis: Axis, base_dir) -> Axis:
+    """``axis`` with its mesh files' paths found as ``_located`` finds them."""
+    distribution = axis.distribution
+    if distribution is not None and "values" in distribution:
+        distribution = distribution | {"values": [_located(axis.name, v, base_dir) for v in distribution["values"]]}
+    return dataclasses.replace(axis, values=tuple(_located(axis.name, v, base_dir) for v in axis.values),
+                               distribution=distribution)
 
 
 def _resolve_relative(ref: str, base_dir) -> Path:

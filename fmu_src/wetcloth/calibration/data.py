@@ -119,7 +119,7 @@ def read_measurements(path: str | Path) -> Curves | SinkTimes:
     path = Path(path)
     source = f"data file {path}"
     try:
-        with open(path, newline="", encoding="utf-8") as fh:
+        with open(path, newline="", encoding="utf-8-sig") as fh:  # -sig: a spreadsheet's byte-order mark is no text
             lines = [(i, line) for i, line in enumerate(fh, 1) if line.strip() and not line.lstrip().startswith("#")]
     except UnicodeDecodeError as exc:
         raise _file_error(source, f"not a text (CSV) file: byte {exc.object[exc.start]:#04x} at position "
@@ -134,6 +134,9 @@ def read_measurements(path: str | Path) -> Curves | SinkTimes:
     rows = list(csv.reader(line for _, line in lines))
     numbers = [n for n, _ in lines]
     header = [h.strip() for h in rows[0]]
+    if len(header) == 1 and ";" in header[0]:
+        raise _file_error(source, f"the header {header[0]!r} separates its columns with ';' (a spreadsheet's CSV in "
+                                  "some languages): separate them with commas, and write decimal points")
     mistakes = Mistakes(source)
     columns = _check_header(header, mistakes)
     mistakes.raise_if_any()

@@ -22,7 +22,7 @@ def add_parser(sub) -> None:
             "Fit number parameters of a scene to measurements: curves (a CSV with 'time' in s and any of depth, "
             "wet_mass, water_mass, centroid_x/y/z, each with an optional sigma_NAME column of its noise) by "
             "nonlinear least squares, or sink times (a CSV with 'time_to_sink' in s alone, one row per timed drop) "
-            "by a root search for one parameter. Prints the estimates with standard errors, 95 %% intervals and "
+            "by a root search for one parameter. Prints the estimates with standard errors, 95 % intervals and "
             "correlations, and writes fit.json, fitted_scene.toml and fit.png. See docs/fit.md."),
     )
     p.add_argument("scene", help="scene TOML file or preset name: the cloth measured; the fitted parameters "

@@ -15,7 +15,7 @@ from tqdm.auto import tqdm
 from wetcloth import run_settings
 from wetcloth.commands.common import FAILED, INTERRUPTED, path_argument, scene_with_overrides
 from wetcloth.errors import BlowUpError
-from wetcloth.runner import run
+from wetcloth.runner import frame_times, run
 from wetcloth.scene import read_scene_file
 
 
@@ -74,12 +74,14 @@ def main(args) -> int:
     # Every output is checked before any simulating: a run is not thrown away at its end.
     _check_writable(args.csv, "--csv")
     _check_writable(args.plot, "--plot")
+    _check_image_format(args.plot)
     sequence = None
     if args.export is not None:
         from wetcloth.exporter import open_sequence  # only needed when exporting
 
         sequence = open_sequence(args.export, fmt=args.format, writer=args.writer, fps=settings.fps, scene=scene,
-                                 faces=args.faces, first_frame=args.first_frame, overwrite=args.overwrite)
+                                 faces=args.faces, first_frame=args.first_frame, overwrite=args.overwrite,
+                                 frame_count=len(frame_times(settings.duration, settings.fps)))
     stop = None
     try:
         result = run(scene, settings.duration, settings.fps, on_frame=sequence.on_frame if sequence else None,
@@ -144,6 +146,16 @@ def _below_water(depth: float) -> str:
     side = "below" if depth >= 0.0 else "above"
     size = abs(depth)
     return f"{size * 100:.2f} cm {side} the water" if size < 1.0 else f"{size:.2f} m {side} the water"
+
+
+def _check_image_format(path: Path) -> None:
+    """Refuse a ``--plot`` file of a format matplotlib does not write (ValueError naming the option)."""
+    from wetcloth.plotting import image_format
+
+    try:
+        image_format(path)
+    except ValueError as exc:
+        raise ValueError(f"--plot {exc}") from None
 
 
 def _check_writable(path: Path, option: str) -> None:
