@@ -90,6 +90,7 @@ BAD_FILES = {
     "loose_vertex": ("obj", r"'cloth_mesh'.*vertex 3 belongs to no face"),
     "seam": ("obj", r"'cloth_mesh'.*vertices 0 and 4 are at the same place .*2 such vertices.*fall apart"),
     "flat_shaded": ("glb", r"'cloth_mesh'.*vertices 0 and 3 are at the same place .*2 such vertices"),
+    "millimetres": ("obj", r"'cloth_mesh'.*is 1000 m across \(coordinates are metres, up to 100 m\).*scaled"),
     "unknown_format": ("xyz", r"'cloth_mesh'.*unknown mesh format '\.xyz'"),
 }
 
@@ -119,6 +120,8 @@ def _bad_file(kind: str, folder: Path) -> Path:
         meshio.write(path, meshio.Mesh(np.vstack([square, square[[0, 2]]]), [("triangle", np.array([[0, 1, 2], [4, 5, 3]]))]))
     elif kind == "flat_shaded":  # each triangle its own corners, as a glTF writer gives a face of split normals
         trimesh.Trimesh(square[[0, 1, 2, 0, 2, 3]], np.arange(6).reshape(2, 3), process=False).export(path)
+    elif kind == "millimetres":  # a 1 m square written in millimetres
+        meshio.write(path, meshio.Mesh(1000.0 * square, [("triangle", np.array([[0, 1, 2], [0, 2, 3]]))]))
     elif kind == "unknown_format":
         path.write_text("0 0 0\n")
     return path

@@ -10,8 +10,8 @@ its point data; glTF/GLB (which meshio does not read) and STL with trimesh.  An 
 triangle's own corners: its exactly equal vertices are merged, numbered in order of first appearance.
 An OBJ file's normals (``vn``) are not read, nor its UVs (``vt``) unless each face corner's ``vt``
 index is its ``v`` index (UVs per vertex; at a UV seam they are per corner, which a particle cannot
-have).  Triangles and quads may be mixed; a face of more corners, a mesh without faces, a non-finite
-coordinate, a zero-area face, a vertex in no face, two vertices at the same place (a seam: the cloth
+have).  Triangles and quads may be mixed; a face of more corners, a mesh without faces, a mesh more than
+LARGEST_SIZE across (a file in millimetres read as metres), a non-finite coordinate, a zero-area face, a vertex in no face, two vertices at the same place (a seam: the cloth
 would fall apart along it) and an edge in more than two faces are refused with a ParameterError
 naming ``cloth_mesh`` (the springs need each edge in at most two faces).
 """
@@ -38,6 +38,8 @@ ALLOWED = ("'' (the nx x ny rectangle) or the path of a mesh file (" + ", ".join
            "and quads with an area each, every vertex in a face, no two vertices at the same place and every edge in "
            "at most two faces (from Python "
            "also such a mesh as arrays: wetcloth.mesh_file.make_mesh)")
+#: m: the largest extent of a cloth along any axis (a mesh's, and the rectangle's width and length: scene.py).
+LARGEST_SIZE = 100.0
 #: A face is degenerate when a triangle of it has area below this fraction of the median edge length squared.
 DEGENERATE_AREA = 1e-10
 #: Folders where a relative mesh path is looked for after the working directory (a unit's resources).
@@ -216,6 +218,7 @@ def make_mesh(points, blocks, attributes=None, uv=None, shown: str = "<arrays>")
     if len(unused):
         raise _error(f"{shown!r}: vertex {int(unused[0])} belongs to no face ({len(unused)} such vertices); "
                      "remove loose vertices (a particle needs a face for its mass)")
+    _check_size(shown, points)
     _check_areas(shown, points, triangles, face_of)
     _check_coincident(shown, points)
     _check_manifold(shown, blocks)
@@ -259,6 +262,15 @@ def _check_areas(shown: str, points: np.ndarray, triangles: np.ndarray, face_of:
         raise _error(f"{shown!r}: face {face} has zero area (a triangle of corners "
                      f"{triangles[flat[0]].tolist()} of area {areas[flat[0]]:.3g} m2; "
                      f"{len(np.unique(face_of[flat]))} such faces); remove degenerate faces (Blender: Merge by Distance)")
+
+
+def _check_size(shown: str, points: np.ndarray) -> None:
+    """Refuse a mesh larger than LARGEST_SIZE along an axis: a file in millimetres or centimetres read as metres."""
+    extent = points.max(axis=0) - points.min(axis=0)
+    if extent.max() > LARGEST_SIZE:
+        raise _error(f"{shown!r} is {extent.max():g} m across (coordinates are metres, up to {LARGEST_SIZE:g} m): "
+                     "a file in millimetres or centimetres must be scaled to metres (Blender: the exporter's Scale "
+                     "0.001 or 0.01, or Apply Scale)")
 
 
 def _check_coincident(shown: str, points: np.ndarray) -> None:

@@ -23,7 +23,7 @@ import numpy as np
 
 from wetcloth.errors import ConfigError, Mistakes, ParameterError, did_you_mean
 from wetcloth.mesh_file import ALLOWED as MESH_ALLOWED
-from wetcloth.mesh_file import MeshFile, is_mesh, resolve
+from wetcloth.mesh_file import LARGEST_SIZE, MeshFile, is_mesh, resolve
 from wetcloth.run_settings import SETTINGS as RUN_SETTINGS
 from wetcloth.run_settings import check_run_table
 
@@ -240,8 +240,8 @@ class Scene:
     # --- cloth geometry and grid
     nx: int = _param(21, "-", "particles along the width (x)", 2, 1024)
     ny: int = _param(29, "-", "particles along the length (y)", 2, 1024)
-    width: float = _param(0.5, "m", "cloth size along x", 0.0, 100.0, lo_open=True)
-    length: float = _param(0.7, "m", "cloth size along y", 0.0, 100.0, lo_open=True)
+    width: float = _param(0.5, "m", "cloth size along x", 0.0, LARGEST_SIZE, lo_open=True)
+    length: float = _param(0.7, "m", "cloth size along y", 0.0, LARGEST_SIZE, lo_open=True)
     cloth_mesh: str = _param(
         "", "-", "the cloth's mesh file (OBJ, PLY, STL, OFF, VTK/VTU, glTF/GLB; triangles and quads), one particle "
         "per vertex; '' = the nx x ny rectangle (then nx, ny, width, length make the cloth); a relative path is "
