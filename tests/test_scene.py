@@ -176,13 +176,14 @@ def test_a_scene_file_with_several_mistakes_reports_all_of_them_at_once(tmp_path
         "  parameter 'nx': expected a whole number, got 3.5; allowed: 2 <= nx <= 1024",
         "  parameter 'thickness': -1.0 is out of range; allowed: 0 < thickness <= 1 m",
         "  [run] 'duraton': unknown run setting; did you mean 'duration'?",
-        "  [run] 'fps': expected a number, got 'fast'; allowed: 0 < fps <= 10000 1/s",
+        "  [run] 'fps': expected a number, got 'fast' (text: write the number without quotes); allowed: 0 < fps <= 10000 1/s",
     ]
 
 
 @pytest.mark.parametrize("text, message", [
     ("run = 5\n", "setting 'run': must be the table [run]"),
-    ('[run]\nduration = "abc"\n', "[run] 'duration': expected a number, got 'abc'; allowed: 0 < duration <= 1e+06 s"),
+    ('[run]\nduration = "abc"\n', "[run] 'duration': expected a number, got 'abc' (text: write the number without quotes); "
+                                "allowed: 0 < duration <= 1e+06 s"),
     ("duration = 3.0\n", "parameter 'duration' is a run setting: put it in the [run] table"),
     ("description = 3\n", "parameter 'description': must be text"),
 ])
@@ -195,15 +196,17 @@ def test_run_table_and_other_keys_are_checked(tmp_path, text, message):
 
 
 def test_one_type_rule_for_every_source(tmp_path):
-    """Scene files, Python overrides, --set and studies: text is no number (one message everywhere),
-    and nx = 3.0 is the whole number 3."""
+    """Scene files, Python overrides, --set, studies and a scene file's [run] table: text is no number (one
+    message everywhere; [run]'s had no hint before), and nx = 3.0 is the whole number 3."""
     from wetcloth.batch import Study
     from wetcloth.scene import parse_text
 
     refused = "expected a number, got '0.5' (text: write the number without quotes)"
     path = tmp_path / "text.toml"
     path.write_text('width = "0.5"\n')
-    for attempt in (lambda: load_scene(path), lambda: load_scene(width="0.5"),
+    run_path = tmp_path / "run_text.toml"
+    run_path.write_text('[run]\nduration = "0.5"\n')
+    for attempt in (lambda: load_scene(path), lambda: load_scene(width="0.5"), lambda: load_scene(run_path),
                     lambda: Study.from_dict({"duration": 1.0, "base": {"width": "0.5"}}),
                     lambda: Study.from_dict({"duration": 1.0, "axes": {"width": ["0.5"]}})):
         with pytest.raises(ValueError, match=re.escape(refused)):

@@ -51,6 +51,13 @@ def line(label: str, name: str, message: str) -> str:
     return f"{label} '{name}'{' ' if message.startswith('is ') else ': '}{message}"
 
 
+def not_a_number(value) -> str:
+    """"expected a number, got '0.5' (text: write the number without quotes)": what a number setting says of
+    ``value`` (the hint for text only)."""
+    hint = " (text: write the number without quotes)" if isinstance(value, str) else ""
+    return f"expected a number, got {value!r}{hint}"
+
+
 def _made(cls, problems: list[tuple[str, str, str]], source: str | None) -> ConfigError:
     error = cls.__new__(cls)
     ValueError.__init__(error)

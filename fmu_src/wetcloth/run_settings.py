@@ -13,7 +13,7 @@ import numbers
 from dataclasses import dataclass
 from typing import Any, Mapping
 
-from wetcloth.errors import ConfigError, Mistakes, did_you_mean
+from wetcloth.errors import ConfigError, Mistakes, did_you_mean, not_a_number
 
 
 class RunSettingError(ConfigError):
@@ -54,7 +54,7 @@ def check_setting(name: str, value) -> float:
         raise RunSettingError(name, did_you_mean(name, SETTINGS, "run setting"))
     s = SETTINGS[name]
     if isinstance(value, bool) or not isinstance(value, numbers.Real):  # Real: NumPy's scalars too
-        raise RunSettingError(name, f"expected a number, got {value!r}; allowed: {describe(s)}")
+        raise RunSettingError(name, f"{not_a_number(value)}; allowed: {describe(s)}")
     if not (math.isfinite(value) and s.lo < value <= s.hi):
         raise RunSettingError(name, f"{value!r} is out of range; allowed: {describe(s)}")
     return float(value)

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from wetcloth.errors import ConfigError, Mistakes, ParameterError, did_you_mean
+from wetcloth.errors import ConfigError, Mistakes, ParameterError, did_you_mean, not_a_number
 from wetcloth.mesh_file import ALLOWED as MESH_ALLOWED
 from wetcloth.mesh_file import LARGEST_SIZE, MeshFile, is_mesh, resolve
 from wetcloth.run_settings import SETTINGS as RUN_SETTINGS
@@ -431,8 +431,7 @@ def normalise(name: str, value):
             raise ParameterError(name, f"expected a string, got {value!r}; allowed: {describe_range(f, name)}")
         return value
     if isinstance(value, bool) or not isinstance(value, numbers.Real):  # Real: NumPy's scalars too
-        hint = " (text: write the number without quotes)" if isinstance(value, str) else ""
-        raise ParameterError(name, f"expected a number, got {value!r}{hint}; allowed: {describe_range(f, name)}")
+        raise ParameterError(name, f"{not_a_number(value)}; allowed: {describe_range(f, name)}")
     if f.type == "int":
         if not isinstance(value, numbers.Integral) and not float(value).is_integer():
             raise ParameterError(name, f"expected a whole number, got {value!r}; allowed: {describe_range(f, name)}")
