@@ -257,3 +257,19 @@ def test_cli_overwrite_leaves_frames_that_no_frames_json_describes(tmp_path, cap
     assert cli_run(tmp_path, "--export", str(out), "--overwrite") == 2
     assert (out / "cloth_0001.ply").read_bytes() == b"someone else's frame"
     assert str(out) in capsys.readouterr().err
+
+
+def test_a_run_of_part_of_a_frame_more_exports_whole_frames_only(tmp_path):
+    """0.35 s at 10 fps: four frames at t = k / fps (USD time codes 1..4, the first frame t = 0; frames.json's
+    last time 0.3 s), the CSV's last row at 0.35 s.  Before, the sample at 0.35 s was written as a fifth frame,
+    which a frame sequence plays at 0.4 s (the hostile trial's finding)."""
+    from pxr import Usd, UsdGeom
+
+    scene = wetcloth.load_scene(nx=3, ny=3)
+    with open_sequence(tmp_path / "usd", fmt="usd", fps=10, scene=scene) as usd:
+        result = run(scene, 0.35, 10, on_frame=usd.on_frame, progress=False, warn=None)
+    manifest = json.loads((tmp_path / "usd" / "frames.json").read_text())
+    assert (manifest["frame_count"], manifest["last_time"]) == (4, pytest.approx(0.3))
+    stage = Usd.Stage.Open(str(tmp_path / "usd" / "cloth.usd"))
+    assert UsdGeom.Mesh(stage.GetPrimAtPath("/wetcloth/cloth")).GetPointsAttr().GetTimeSamples() == [1.0, 2.0, 3.0, 4.0]
+    assert [row["time"] for row in result.rows] == pytest.approx([0.0, 0.1, 0.2, 0.3, 0.35])

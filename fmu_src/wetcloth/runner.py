@@ -68,15 +68,20 @@ def warn_cost(message: str) -> None:
     warnings.warn(message, CostWarning, stacklevel=2)
 
 
+def whole_frames(duration: float, fps: float) -> int:
+    """How many frames at 0, 1/fps, ... lie within ``duration`` (s): the frames an export writes."""
+    return int(math.floor(duration * fps + 1e-9)) + 1
+
+
 def frame_times(duration: float, fps: float) -> np.ndarray:
-    """Frame times 0, 1/fps, ... up to ``duration`` (s); the last frame lands on ``duration``."""
+    """Frame times 0, 1/fps, ... up to ``duration`` (s); the last sample lands on ``duration`` (a sample
+    short of a whole frame after the last whole frame when ``duration`` is not a whole number of frames)."""
     if not (fps > 0 and math.isfinite(fps)):
         raise ValueError(f"fps must be a finite number > 0, got {fps!r}")
     if not (duration >= 0 and math.isfinite(duration)):
         raise ValueError(f"duration must be a finite number >= 0 s, got {duration!r}")
     check_frames(duration, fps)
-    count = int(math.floor(duration * fps + 1e-9))
-    times = np.arange(count + 1) / fps
+    times = np.arange(whole_frames(duration, fps)) / fps
     if duration - times[-1] > 1e-9:
         times = np.append(times, duration)
     return times
@@ -101,8 +106,10 @@ def run(
     """Simulate ``scene`` for ``duration`` s; record outputs at ``fps`` and ``shapes`` cloth shapes
     (evenly spread frames, ``shape_frames``).
 
-    ``on_frame(index, sim)`` is called at every frame (index 0 at t = 0), for exporters; a frame's
-    row of outputs is recorded once ``on_frame`` has returned, so the rows are the frames written.
+    ``on_frame(index, sim)`` is called at every whole frame (index 0 at t = 0), for exporters; a frame's
+    row of outputs is recorded once ``on_frame`` has returned, so the rows are the frames written.  A last
+    sample short of a whole frame (``duration`` not a whole number of frames) gets its row but no frame: a
+    frame sequence plays frame k at k / fps.
     Whatever stops the run early (a ``BlowUpError``, Ctrl-C's ``KeyboardInterrupt``, a failed
     ``on_frame``) is raised with the frames recorded so far as its ``partial_result``.
     ``progress``: a bar of simulated seconds, moving by wall-clock time, once the run has taken
@@ -110,6 +117,7 @@ def run(
     more than ``wetcloth.advice.WARN_AFTER`` (None: no estimate).
     """
     times = frame_times(duration, fps)
+    frames = whole_frames(duration, fps)
     sim = Simulation(scene)
     plotted = shape_frames(len(times), shapes)
     result = RunResult(scene=scene, fps=fps, triangles=sim.triangles)
@@ -134,7 +142,8 @@ def run(
                         result.shapes.append(ClothShape(float(times[index]), sim.positions, sim.wetness))
                     if on_frame is not None:
                         with deferred():  # the frame, then its row: the outputs never count a frame not on disk
-                            on_frame(index, sim)
+                            if index < frames:
+                                on_frame(index, sim)
                             _add_rows(result, times[start:index + 1], outputs, sim.sample_errors)
                     start = index + 1
             except BaseException as exc:

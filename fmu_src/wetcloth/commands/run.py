@@ -15,7 +15,7 @@ from tqdm.auto import tqdm
 from wetcloth import run_settings
 from wetcloth.commands.common import FAILED, INTERRUPTED, path_argument, scene_with_overrides
 from wetcloth.errors import BlowUpError
-from wetcloth.runner import frame_times, run
+from wetcloth.runner import run, whole_frames
 from wetcloth.scene import read_scene_file
 
 
@@ -81,7 +81,7 @@ def main(args) -> int:
 
         sequence = open_sequence(args.export, fmt=args.format, writer=args.writer, fps=settings.fps, scene=scene,
                                  faces=args.faces, first_frame=args.first_frame, overwrite=args.overwrite,
-                                 frame_count=len(frame_times(settings.duration, settings.fps)))
+                                 frame_count=whole_frames(settings.duration, settings.fps))
     stop = None
     try:
         result = run(scene, settings.duration, settings.fps, on_frame=sequence.on_frame if sequence else None,
