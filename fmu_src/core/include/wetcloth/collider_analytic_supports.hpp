@@ -1,5 +1,5 @@
-// The analytic colliders (plane, box, sphere, cylinder) as supports inside fixed implicit steps (docs/model.md
-// section 6.3, "Supports in the solve").  A frame-long step carries a free particle into a collider it did not
+// The analytic colliders (plane, box, sphere, cylinder) and the floor as supports inside fixed implicit steps
+// (docs/model.md section 6.3, "Supports in the solve").  A frame-long step carries a free particle into a collider it did not
 // touch at the step's start; the particles' contact (colliders.hpp) then pushes it out after the step, a push
 // the step's solve never saw, which stretches its springs (the tablecloth_sphere gained up to 0.08 J in a
 // frame).  Each free particle that may reach a collider within the step becomes a term of the mesh supports
@@ -14,9 +14,9 @@
 namespace wc {
 
 //: Keep the first `kept` terms of supports (a mesh's, gather_supports's) and add a term for each free particle
-//: (free (n) not 0) sliding on no surface (sliding, or null) and each still analytic collider whose surface it
-//: is nearer than thickness + ahead |v| + ahead^2 GRAVITY at the step's start (pos, vel (3, n); ahead s, the
-//: longest step): as far as the step may carry it.  (A moving one's, tried, had no friction for a particle it
+//: (free (n) not 0) sliding on no surface (sliding, or null) and each still analytic collider, and the floor
+//: (collider FLOOR_SUPPORT), whose surface it is nearer than thickness + ahead |v| + ahead^2 GRAVITY at the
+//: step's start (pos, vel (3, n); ahead s, the longest step): as far as the step may carry it.  (A moving one's, tried, had no friction for a particle it
 //: meets within the step, whose lagged normal force is zero: the sweep's ball no longer dragged its towel,
 //: which ended 67 mm from its adaptive run's place, against 12 mm with the pushes after the step.)  The term's
 //: plane stands thickness / 2 - distance (m, the supports' gap) out from the collider's tangent plane, so
