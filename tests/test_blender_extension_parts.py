@@ -244,6 +244,37 @@ def test_an_interpreter_that_cannot_be_run_is_named(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
 
 
+def fake_python(folder, name: str, version: str):
+    """An executable standing for a Python of ``version`` (``3.11``): it prints that version's wheel tag,
+    which is all ``python_tag`` asks of an interpreter."""
+    path = folder / name
+    path.write_text(f"#!/bin/sh\necho cp{version.replace('.', '')}\n")
+    path.chmod(0o755)
+    return path
+
+
+def test_two_pythons_of_one_version_are_refused_before_building(tmp_path, capsys, monkeypatch):
+    """``--python`` twice with one version: bb80f15 built the first wheel (a minute), then pip's second build
+    of the same file name failed with "pip wheel ... failed (exit 0)". A Python no Blender ships is refused
+    as early, named with its version."""
+    from wetcloth.exporter.blender_extension import build
+
+    def no_building(*args):
+        raise AssertionError("built a wheel before checking the Pythons")
+
+    monkeypatch.setattr(build, "build_wheel", no_building)
+    first, second, other = (fake_python(tmp_path, name, version)
+                            for name, version in (("python3.11", "3.11"), ("py311", "3.11"), ("python3.12", "3.12")))
+    out = tmp_path / "out"
+    assert cli_main(["blender-extension", "--out", str(out), "--python", str(first), "--python", str(second)]) == 2
+    assert (f"two wheels for one Python (--python {first}: cp311, --python {second}: cp311); give one per Python"
+            in capsys.readouterr().err)
+    assert cli_main(["blender-extension", "--out", str(out), "--python", str(first), "--python", str(other)]) == 2
+    assert (f"--python {other}: Python 3.12; Blender ships Python 3.11 (4.2 to 5.0) or 3.13 (5.1 and later)"
+            in capsys.readouterr().err)
+    assert not out.exists()
+
+
 def test_given_wheels_are_bundled_as_they_are_one_per_python_with_dependencies_for_each(tmp_path, capsys):
     """The wetcloth wheels given, and a scipy and a pyamg wheel (the versions this Python runs) for each
     one's Python (from the wheel cache, downloaded there by pip the first time)."""

@@ -102,11 +102,23 @@ def test_unwritable_outputs_are_refused_before_simulating(tmp_path, capsys, monk
         raise AssertionError("simulated before checking the outputs")
 
     monkeypatch.setattr(run_command, "run", no_simulating)
-    code = main(["run", "--csv", str(tmp_path), "--plot", str(tmp_path / "p.png")])
+    folder = tmp_path / "o.csv"
+    folder.mkdir()
+    code = main(["run", "--csv", str(folder), "--plot", str(tmp_path / "p.png")])
     assert code == 2
     err = capsys.readouterr().err
-    assert "--csv" in err and str(tmp_path) in err
+    assert "--csv" in err and str(folder) in err and "cannot write there" in err, err
     assert not (tmp_path / "p.png").exists()
+
+
+@pytest.mark.parametrize("command", [["run"], ["batch", "models/studies/sink_map.toml"]])
+def test_a_csv_output_not_named_csv_is_refused(tmp_path, capsys, command):
+    """``--csv x.parquet`` wrote CSV text under a Parquet name (bb80f15): refused by the option's own check."""
+    with pytest.raises(SystemExit) as stop:
+        main([*command, "--csv", str(tmp_path / "x.parquet")])
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and "argument --csv" in err and "x.parquet: a CSV file's name ends in .csv" in err, err
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_a_plot_of_an_unknown_image_format_is_refused_before_simulating(tmp_path, capsys, monkeypatch):

@@ -101,15 +101,29 @@ def source_tree() -> Path:
     return root
 
 
-def build_wheel(directory: Path, python: str | Path = sys.executable) -> Path:
-    """``pip wheel --no-deps`` of the source tree by interpreter ``python`` into ``directory``; the wheel."""
-    before = set(directory.glob("wetcloth-*.whl"))
+def run_python(python: str | Path, *arguments: str) -> subprocess.CompletedProcess:
+    """Interpreter ``python`` run with ``arguments``, its output captured; a ValueError where it cannot run."""
     try:
-        done = subprocess.run([str(python), "-m", "pip", "wheel", "--no-deps", "--quiet", str(source_tree()),
-                               "-w", str(directory)], capture_output=True, text=True)
+        return subprocess.run([str(python), *arguments], capture_output=True, text=True)
     except OSError as exc:  # no such file, not executable
         raise ValueError(f"Python interpreter {python} cannot be run: {exc.strerror or exc}; give the path of "
                          "a Python (Blender 4.2 to 5.0 run 3.11, 5.1 and later 3.13)") from None
+
+
+def python_tag(python: str | Path) -> str:
+    """The wheel tag (``cp311``) of interpreter ``python``; a ValueError for one no Blender ships."""
+    done = run_python(python, "-c", "import sys; print(f'cp{sys.version_info[0]}{sys.version_info[1]}')")
+    tag = done.stdout.strip()
+    if done.returncode != 0 or tag not in BLENDER_VERSIONS:
+        raise ValueError(f"--python {python}: {'Python ' + tag[2] + '.' + tag[3:] if tag else 'not a Python'}; "
+                         "Blender ships Python 3.11 (4.2 to 5.0) or 3.13 (5.1 and later)")
+    return tag
+
+
+def build_wheel(directory: Path, python: str | Path = sys.executable) -> Path:
+    """``pip wheel --no-deps`` of the source tree by interpreter ``python`` into ``directory``; the wheel."""
+    before = set(directory.glob("wetcloth-*.whl"))
+    done = run_python(python, "-m", "pip", "wheel", "--no-deps", "--quiet", str(source_tree()), "-w", str(directory))
     wheels = sorted(set(directory.glob("wetcloth-*.whl")) - before)
     if done.returncode != 0 or len(wheels) != 1:
         raise ValueError(f"pip wheel of {source_tree()} by {python} failed (exit {done.returncode}):\n"
@@ -150,17 +164,20 @@ def build_extension(out: Path | None = None, wheels=(), pythons=()) -> Path:
     ``wheels``: wetcloth wheels to bundle as they are; ``pythons``: interpreters to build one with
     each.  With neither, the wheel is built now from the source tree by this Python."""
     out = Path(out or ".")
+    wheels = [Path(w) for w in wheels]
+    for wheel in wheels:
+        check_wheel(wheel)
+    pythons = list(pythons or ([] if wheels else [sys.executable]))
+    sources = [*(w.name for w in wheels), *(f"--python {p}" for p in pythons)]
+    tags = [w.name.split("-")[2] for w in wheels] + [python_tag(p) for p in pythons]  # before any building
+    if len(set(tags)) != len(tags):
+        raise ValueError(f"two wheels for one Python ({', '.join(f'{s}: {t}' for s, t in zip(sources, tags))}); "
+                         "give one per Python")
     with tempfile.TemporaryDirectory() as tmp:
-        wheels = [Path(w) for w in wheels]
-        for wheel in wheels:
-            check_wheel(wheel)
-        for python in (pythons or ([] if wheels else [sys.executable])):
+        for python in pythons:
             wheels.append(build_wheel(Path(tmp), python))
             check_wheel(wheels[-1])
         names = [w.name for w in wheels]
-        tags = [name.split("-")[2] for name in names]
-        if len(set(tags)) != len(names):
-            raise ValueError(f"two wheels for one Python: {', '.join(names)}")
         wheels += [dependency_wheel(name, tag) for tag in tags for name in DEPENDENCIES]
         text = manifest(wetcloth.__version__, names, blender_platform(), [w.name for w in wheels[len(names):]])
         out.mkdir(parents=True, exist_ok=True)

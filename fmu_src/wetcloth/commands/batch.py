@@ -9,7 +9,7 @@ from pathlib import Path
 
 from wetcloth.batch.engines import ENGINES
 from wetcloth.batch.results import KEY
-from wetcloth.commands.common import INTERRUPTED, path_argument
+from wetcloth.commands.common import INTERRUPTED, csv_path, path_argument
 from wetcloth.scene import preset_dir
 
 #: Where results go without --out: <study name>.parquet in this folder.
@@ -40,7 +40,7 @@ def add_parser(sub) -> None:
                         "with --scheduler: wait until N workers are connected")
     p.add_argument("--out", type=path_argument, metavar="FILE",
                    help="results table, Parquet (default: out/batch/<study name>.parquet)")
-    p.add_argument("--csv", type=path_argument, metavar="FILE", help="also write the results as CSV")
+    p.add_argument("--csv", type=csv_path, metavar="FILE", help="also write the results as CSV")
     p.add_argument("--engine", choices=ENGINES, help="simulate with the Python simulator (default) or the FMU through fmpy")
     p.add_argument("--fmu", type=path_argument, metavar="PATH", help="FMU for --engine fmu (default: models/WetCloth.fmu)")
     p.add_argument("--plot", action="append", default=[], metavar="METRIC:AXIS[,AXIS2]",

@@ -19,6 +19,15 @@ def path_argument(text: str) -> Path:
     return Path(text)
 
 
+def csv_path(text: str) -> Path:
+    """An output CSV file's path: one ending in ``.csv`` (any case), so that ``--csv x.parquet`` is
+    refused rather than written as CSV under a name that says otherwise."""
+    path = path_argument(text)
+    if path.suffix.lower() != ".csv":
+        raise argparse.ArgumentTypeError(f"{text}: a CSV file's name ends in .csv")
+    return path
+
+
 def scene_with_overrides(scene: str | Path | None, overrides: list[tuple[str, str]]):
     """The scene of a file or preset with the command line's ``--set NAME=VALUE`` texts applied;
     every mistake of the ``--set`` options reported at once."""

@@ -13,7 +13,7 @@ from pathlib import Path
 from tqdm.auto import tqdm
 
 from wetcloth import run_settings
-from wetcloth.commands.common import FAILED, INTERRUPTED, path_argument, scene_with_overrides
+from wetcloth.commands.common import FAILED, INTERRUPTED, csv_path, path_argument, scene_with_overrides
 from wetcloth.errors import BlowUpError
 from wetcloth.runner import run, whole_frames
 from wetcloth.scene import read_scene_file
@@ -49,7 +49,7 @@ def add_parser(sub) -> None:
                    help="number of the first frame: file <prefix>_N, USD time code N, Blender frame N (default 1)")
     p.add_argument("--overwrite", action="store_true",
                    help="replace an earlier export in DIR (one described by its own frames.json)")
-    p.add_argument("--csv", type=path_argument, default=Path("out/run/outputs.csv"),
+    p.add_argument("--csv", type=csv_path, default=Path("out/run/outputs.csv"),
                    help="outputs CSV (default out/run/outputs.csv)")
     p.add_argument("--plot", type=path_argument, default=Path("out/run/plot.png"),
                    help="plot PNG (default out/run/plot.png)")
