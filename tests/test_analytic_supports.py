@@ -45,3 +45,19 @@ def test_a_sheet_falls_onto_a_collider_within_one_frame_long_step():
     sim.advance(1.0 / 24.0)
     centre = sim.state.pos[2, 7 * 15 + 7] - 0.05  # m above the top
     assert 0.5 * scene.thickness - 1e-12 <= centre <= 0.5 * scene.thickness + 1e-3
+
+
+def test_the_tablecloth_at_frame_steps_of_1_24_s_never_gains_energy():
+    """The tablecloth preset (a round mesh cloth falling onto a round table, passive in still air) at fixed
+    steps of 1/24 s for 2 s: its mechanical energy does not rise from one frame to the next beyond rounding.
+    A frame-long step in contact can converge to a worse local minimum of its incremental potential, one
+    above the energy the step started with (implicit.cpp, DESCENT_RESTARTS): the solve then starts again
+    from the lowest point between rest and there.  Without, a frame gained 0.073 J (90deede)."""
+    scene = load_scene("tablecloth").replace(integrator="implicit_euler", tolerance=0.0, max_step=1.0 / 24.0)
+    sim = wetcloth.Simulation(scene)
+    energy = [mechanical_energy(sim)]
+    for _ in range(48):
+        sim.advance(1.0 / 24.0)
+        energy.append(mechanical_energy(sim))
+    assert np.diff(energy).max() <= ENERGY_ROUNDING, np.diff(energy).max()
+    assert sim.rejected_steps == 0

@@ -241,6 +241,46 @@ bool energy_settled(Index n, const double* mass, const double* free, const doubl
     return std::fabs(work) <= DESCENT_ENERGY_FRACTION * damped;
 }
 
+//: The velocities v+ at which a backward Euler step would leave its free particles where they start
+//: (x+ = x): 0 for them, out_vel's prescribed ones for the pinned, gripped and held, and the sliding
+//: particles' speed across their surface as the step prescribes it.  The step's incremental potential
+//: there is the energy (kinetic, potential) the step started with.
+void velocities_at_rest(const Cloth& cloth, Solver& solver, Index n, const double* pos, const double* hat_pos,
+                        double h, double bh, const double* out_vel, double* rest) {
+    for (Index c = 0; c < 3; ++c) {
+        for (Index i = 0; i < n; ++i) rest[c * n + i] = cloth.free[i] != 0.0 ? 0.0 : out_vel[c * n + i];
+    }
+    if (solver.sliding != nullptr) prescribe_normal_speed(*solver.sliding, n, pos, hat_pos, h, bh, rest);
+}
+
+//: How far (J) the step's incremental potential at out_vel lies above its value at the velocities rest:
+//: Simpson's rule over its slope along the segment between them, at five points, the last at out_vel,
+//: so that the residual (solver.rhs) and the supports' state are left as they are there.  toward (3, n)
+//: receives out_vel - rest; solver.z and solver.ap are scratch.
+double potential_rise(const Cloth& cloth, const Physics& phys, Work& work, Solver& solver, const double* hat_pos,
+                      const double* hat_vel, const double* step_water, double bh, double slack_slope,
+                      const double* rest, const double* out_pos, const double* out_vel, double* toward) {
+    const Index n = cloth.n;
+    for (Index k = 0; k < 3 * n; ++k) toward[k] = out_vel[k] - rest[k];
+    constexpr double simpson[5] = {1.0, 4.0, 2.0, 4.0, 1.0};  // times a quarter of the segment / 3
+    double rise = 0.0;
+    for (int j = 0; j < 5; ++j) {
+        const double* at_vel = out_vel;
+        const double* at_pos = out_pos;
+        if (j < 4) {
+            for (Index k = 0; k < 3 * n; ++k) {
+                solver.z[k] = rest[k] + 0.25 * j * toward[k];
+                solver.ap[k] = hat_pos[k] + bh * solver.z[k];
+            }
+            at_vel = solver.z;
+            at_pos = solver.ap;
+        }
+        newton_residual(cloth, phys, work, solver, hat_vel, step_water, at_pos, at_vel, bh, slack_slope);
+        rise -= simpson[j] / 12.0 * dot(n, toward, solver.rhs);  // the residual is minus the potential's slope
+    }
+    return rise;
+}
+
 }  // namespace
 
 //: With w = h / h_prev, y+ = y^ + b h f(y+) for y = (x, p), where y^ = ((1 + w)^2 y - w^2 y_prev) / (1 + 2w)
@@ -347,84 +387,114 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
     bool residual_ready = false;  // the line search leaves the residual at its end in rhs
     double previous = 0.0;
     double correction = 0.0;  // m/s, the last iteration's
-    for (Index iteration = 0; iteration < iterations; ++iteration) {
-        if (!residual_ready) {
-            newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh, slack_slope);
-        }
-        if (!adaptive) {  // the frame where the step ends (a frame-long step turns the cloth)
-            follow_cloth(plane, cloth, out_pos);
-            set_systems_from_jacobian(plane, cloth, mass, work);
-            if (coarse != nullptr && iteration < COARSE_BUILDS) {  // (turns about the centres there)
-                build_coarse_space(*coarse, cloth, mass, work, out_pos);
+    const auto iterate = [&]() {
+        for (Index iteration = 0; iteration < iterations; ++iteration) {
+            if (!residual_ready) {
+                newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh, slack_slope);
             }
-            solver.counters[FACTORISATIONS] += 1;
-        } else {
-            if (jacobian_refresh_pays(plane, memory[3])) {
-                factored = refresh_from_jacobian(plane, cloth, mass, is_mesh(cloth) ? work.pair_along : work.along);
-                if (factored < 0) factored = refresh(plane, cloth, mass, bh * bh);  // back to the rest stiffness
-                solver.counters[FACTORISATIONS] += factored > 0;
-            }
-            set_normal_diagonal(plane, n, mass, work.diagonal_blocks, work.blocks);
-            if (reused != nullptr) {
-                if (reuse_expired(*reused, bh * bh, memory[3])) {
-                    if (long_solve(memory[3])) {
-                        build_reused(*reused, cloth, mass, work, out_pos, bh * bh);
-                        solver.counters[FACTORISATIONS] += 1;
-                    } else {
-                        drop_reused(*reused);
-                    }
+            if (!adaptive) {  // the frame where the step ends (a frame-long step turns the cloth)
+                follow_cloth(plane, cloth, out_pos);
+                set_systems_from_jacobian(plane, cloth, mass, work);
+                if (coarse != nullptr && iteration < COARSE_BUILDS) {  // (turns about the centres there)
+                    build_coarse_space(*coarse, cloth, mass, work, out_pos);
                 }
-                solving = in_use(*reused) ? &reused->plane : &plane;
+                solver.counters[FACTORISATIONS] += 1;
+            } else {
+                if (jacobian_refresh_pays(plane, memory[3])) {
+                    factored = refresh_from_jacobian(plane, cloth, mass, is_mesh(cloth) ? work.pair_along : work.along);
+                    if (factored < 0) factored = refresh(plane, cloth, mass, bh * bh);  // back to the rest stiffness
+                    solver.counters[FACTORISATIONS] += factored > 0;
+                }
+                set_normal_diagonal(plane, n, mass, work.diagonal_blocks, work.blocks);
+                if (reused != nullptr) {
+                    if (reuse_expired(*reused, bh * bh, memory[3])) {
+                        if (long_solve(memory[3])) {
+                            build_reused(*reused, cloth, mass, work, out_pos, bh * bh);
+                            solver.counters[FACTORISATIONS] += 1;
+                        } else {
+                            drop_reused(*reused);
+                        }
+                    }
+                    solving = in_use(*reused) ? &reused->plane : &plane;
+                }
             }
+            const double floor = CG_FLOOR * py_min(newton_tolerance / bh, newton_tolerance / NEWTON_VELOCITY_TIME);
+            const PlaneSolve solve = plane_pcg(cloth, work, solver, *solving, rhs, dv, cg_tolerance, floor,
+                                               NEWTON_CG_ITERATIONS, coarse);
+            memory[3] = static_cast<double>(solve.iterations);
+            if (reused != nullptr && in_use(*reused)) count_reused_solve(*reused, solve.iterations);
+            solver.counters[NEWTON_ITERATIONS] += 1;
+            solver.counters[CG_ITERATIONS] += solve.iterations;
+            solver.counters[UNCONVERGED] += !solve.solved;
+            double length = 1.0;  // of the step along dv
+            if (descent) {
+                length = line_search(cloth, phys, work, solver, hat_pos, hat_vel, step_water, bh,
+                                     slack_slope, dv, solver.step_acceleration, out_pos, out_vel);
+                residual_ready = true;
+            } else {
+                for (Index k = 0; k < 3 * n; ++k) {
+                    out_vel[k] += dv[k];
+                    out_pos[k] = hat_pos[k] + bh * out_vel[k];
+                }
+            }
+            const Corrections measured = corrections(n, length, dv, out_vel, vel);
+            const double largest = measured.largest;
+            const double increment = measured.increment;
+            correction = largest;
+            if (!std::isfinite(largest)) break;
+            if (descent && !adaptive && energy_settled(n, mass, free, out_vel, hat_vel, rhs)) break;
+            // The velocity's tolerance: an error left in every step's velocity is not random and adds up, so
+            // it is held to a fraction of the velocity and of its change over the step, or to what moves a
+            // particle by the position tolerance in NEWTON_VELOCITY_TIME.
+            const double velocity_tolerance =
+                py_max(NEWTON_RELATIVE * increment, newton_tolerance / NEWTON_VELOCITY_TIME);
+            const double tolerance = py_min(newton_tolerance / bh, velocity_tolerance);
+            // Converged when the correction, or the corrections still to come at the observed rate (a
+            // geometric series), are within the tolerance.
+            double rate, trust;
+            if (previous > 0.0) {
+                rate = largest / previous;
+                trust = 1.0;
+                memory[0] = rate;
+                memory[1] = previous;
+            } else {  // first iteration: the rate last observed, scaled to this correction, with a margin
+                rate = memory[1] > 0.0 ? memory[0] * py_max(1.0, largest / memory[1]) : 0.0;
+                trust = banded(plane) ? FIRST_ITERATION_TRUST : 0.0;
+            }
+            if (largest <= tolerance || (0.0 < rate && rate < 1.0 && rate / (1.0 - rate) * largest <= trust * tolerance)) {
+                converged = true;
+                break;
+            }
+            previous = largest;
         }
-        const double floor = CG_FLOOR * py_min(newton_tolerance / bh, newton_tolerance / NEWTON_VELOCITY_TIME);
-        const PlaneSolve solve = plane_pcg(cloth, work, solver, *solving, rhs, dv, cg_tolerance, floor,
-                                           NEWTON_CG_ITERATIONS, coarse);
-        memory[3] = static_cast<double>(solve.iterations);
-        if (reused != nullptr && in_use(*reused)) count_reused_solve(*reused, solve.iterations);
-        solver.counters[NEWTON_ITERATIONS] += 1;
-        solver.counters[CG_ITERATIONS] += solve.iterations;
-        solver.counters[UNCONVERGED] += !solve.solved;
-        double length = 1.0;  // of the step along dv
-        if (descent) {
-            length = line_search(cloth, phys, work, solver, hat_pos, hat_vel, step_water, bh,
-                                 slack_slope, dv, solver.step_acceleration, out_pos, out_vel);
-            residual_ready = true;
-        } else {
+    };
+    iterate();
+    // A frame-long step in contact may converge to a worse local minimum of its (non-convex) incremental
+    // potential, one above the energy the step started with: a sheet landing on a box within a 1/24 s step
+    // ended with its overhang in free fall and the corners' springs stretched, 0.078 J gained.  Where the
+    // potential at the solve's end lies above its value at rest (x+ = x), the solve starts again from the
+    // lowest point on the segment between them.
+    if (descent && !adaptive && solver.supports != nullptr && solver.supports->count() > 0) {
+        double* rest = solver.p;
+        double* toward = solver.r;
+        for (Index restart = 0; restart < DESCENT_RESTARTS && std::isfinite(correction); ++restart) {
+            velocities_at_rest(cloth, solver, n, pos, hat_pos, h, bh, out_vel, rest);
+            if (potential_rise(cloth, phys, work, solver, hat_pos, hat_vel, step_water, bh, slack_slope, rest, out_pos,
+                               out_vel, toward) <= 0.0) {
+                break;
+            }
             for (Index k = 0; k < 3 * n; ++k) {
-                out_vel[k] += dv[k];
+                out_vel[k] = rest[k];
                 out_pos[k] = hat_pos[k] + bh * out_vel[k];
             }
+            newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh, slack_slope);
+            line_search(cloth, phys, work, solver, hat_pos, hat_vel, step_water, bh, slack_slope, toward,
+                        solver.step_acceleration, out_pos, out_vel);
+            residual_ready = true;
+            converged = false;
+            previous = 0.0;
+            iterate();
         }
-        const Corrections measured = corrections(n, length, dv, out_vel, vel);
-        const double largest = measured.largest;
-        const double increment = measured.increment;
-        correction = largest;
-        if (!std::isfinite(largest)) break;
-        if (descent && !adaptive && energy_settled(n, mass, free, out_vel, hat_vel, rhs)) break;
-        // The velocity's tolerance: an error left in every step's velocity is not random and adds up, so
-        // it is held to a fraction of the velocity and of its change over the step, or to what moves a
-        // particle by the position tolerance in NEWTON_VELOCITY_TIME.
-        const double velocity_tolerance =
-            py_max(NEWTON_RELATIVE * increment, newton_tolerance / NEWTON_VELOCITY_TIME);
-        const double tolerance = py_min(newton_tolerance / bh, velocity_tolerance);
-        // Converged when the correction, or the corrections still to come at the observed rate (a
-        // geometric series), are within the tolerance.
-        double rate, trust;
-        if (previous > 0.0) {
-            rate = largest / previous;
-            trust = 1.0;
-            memory[0] = rate;
-            memory[1] = previous;
-        } else {  // first iteration: the rate last observed, scaled to this correction, with a margin
-            rate = memory[1] > 0.0 ? memory[0] * py_max(1.0, largest / memory[1]) : 0.0;
-            trust = banded(plane) ? FIRST_ITERATION_TRUST : 0.0;
-        }
-        if (largest <= tolerance || (0.0 < rate && rate < 1.0 && rate / (1.0 - rate) * largest <= trust * tolerance)) {
-            converged = true;
-            break;
-        }
-        previous = largest;
     }
     if (solver.sliding != nullptr) stop_reversed(*solver.sliding, n, hat_pos, bh, out_pos, out_vel);
     for (Index k = 0; k < 3 * n; ++k) solver.step_acceleration[k] = (out_vel[k] - hat_vel[k]) / bh;

@@ -83,6 +83,9 @@ inline constexpr Index DESCENT_NEWTON_ITERATIONS = 4;
 //: still falling in every frame and the centroid 0.6 mm from where 4 iterations leave it.  (0.05: 2.6
 //: iterations; 0.2: no fewer than at 0.1.)
 inline constexpr double DESCENT_ENERGY_FRACTION = 0.1;
+//: With fixed steps in contact (supports in the solve), at most this many fresh starts of descent from the
+//: lowest point between rest and a solve that ended above the energy its step started with (bdf2_step).
+inline constexpr Index DESCENT_RESTARTS = 3;
 //: Descent's linear solves go to this tolerance (relative, as CG_TOLERANCE): with BDF2's 1e-1 a towel at
 //: 1e6 N/m floating at 1/30 s steps gained energy from its unconverged steps and climbed 9 cm out of the
 //: water in 2 s (8 Newton iterations did not help); at 3e-2 it floats (1.8 mm from its depth, 0.04 m/s
