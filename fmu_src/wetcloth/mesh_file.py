@@ -114,12 +114,12 @@ def read_faces(path: str, shown: str, name: str, allowed: str, polygons: bool = 
     ``polygons``, faces of more corners too, as runs (j, k)), its point attributes and UVs (or None),
     unchecked: the one reader of cloth and collider files (meshio or trimesh by the suffix, see the
     module).  A file no reader understands raises a ParameterError naming ``name``, ``allowed`` its range."""
-    suffix = "".join(Path(path).suffixes[-1:]).lower()
-    reader = reader_of(path)
+    suffix, reader = Path(path).suffix.lower(), reader_of(path)
     if reader is None:
         raise ParameterError(name, f"{shown!r}: unknown mesh format {suffix!r}: neither meshio nor trimesh reads "
                                    f"it; allowed: {allowed}")
-    tried = reader if reader == "meshio" or suffix in TRIMESH_SUFFIXES else f"trimesh (meshio has no reader for {suffix!r})"
+    tried = reader if reader == "meshio" or suffix in TRIMESH_SUFFIXES else \
+        f"trimesh (meshio has no reader for {suffix!r})"
     try:
         return _read_meshio(path, polygons) if reader == "meshio" else _read_trimesh(path)
     except ParameterError:
