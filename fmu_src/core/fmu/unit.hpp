@@ -27,9 +27,9 @@ enum class Outcome : int { OK = 0, WARNING = 1, DISCARD = 2, ERROR = 3, FATAL = 
 
 enum class Type : int { REAL, INTEGER, STRING };
 enum class Causality : int { PARAMETER, STRUCTURAL_PARAMETER, INPUT, OUTPUT, INDEPENDENT };
-//: What a variable reads and writes: a Scene field, an FMU-only parameter, an output slot of
-//: record_outputs, a mesh array output or the time.
-enum class Role : int { SCENE, MESH_OUTPUT_DIR, MESH_FORMAT, OUTPUT, STEP_ERROR, POSITIONS, WETNESS, TIME };
+//: What a variable reads and writes: a Scene field, a number field of a collider built in (--scene), an
+//: FMU-only parameter, an output slot of record_outputs, a mesh array output or the time.
+enum class Role : int { SCENE, COLLIDER, MESH_OUTPUT_DIR, MESH_FORMAT, OUTPUT, STEP_ERROR, POSITIONS, WETNESS, TIME };
 
 //: One variable of the generated table (its index is its value reference).
 struct Variable {
@@ -39,7 +39,7 @@ struct Variable {
     Role role;
     double Scene::*real;  // Scene field (Real), else null
     Index Scene::*integer;  // Scene field (Integer, or a string choice's code), else null
-    Index slot;             // OUTPUT: slot of the outputs' row
+    Index slot;             // OUTPUT: slot of the outputs' row; COLLIDER: place in the colliders' rows
     double start;           // Real and Integer start value
     const char* start_text; // String start value
     bool ranged;            // min and max apply
@@ -137,6 +137,7 @@ private:
     std::string name_;
     Log log_;
     Scene values_;
+    std::vector<double> colliders_;  // the colliders' fields as the variables hold them, in the rows' layout
     std::string mesh_output_dir_, mesh_format_;
     std::vector<std::pair<std::uint64_t, std::string>> refused_;  // value reference -> message, in order
     bool initialized_ = false, terminated_ = false, clock_set_ = false;

@@ -199,6 +199,24 @@ def fixtures_header(scene=None, cloth: dict | None = None) -> str:
     return "\n".join(lines)
 
 
+#: Why a native unit takes only the scene's position for a mesh collider.
+PLACED_MESH_REASON = ("the native unit's mesh colliders are built in where the scene puts them: build it with "
+                      "--scene from a scene that puts it elsewhere, or use WetCloth.fmu")
+
+
+def placed_meshes(scene) -> dict:
+    """The ranges of the native unit's mesh colliders' x, y, z (its compiled arrays hold their vertices where the
+    scene puts them): the scene's value alone, as ``native_mesh.fixed_ranges`` gives them (low, high, low open,
+    text); none without a ``scene``."""
+    ranges = {}
+    for k, collider in enumerate(scene.colliders if scene is not None else (), 1):
+        if collider.shape == "mesh":
+            for c in "xyz":
+                value = getattr(collider, c)
+                ranges[f"collider{k}_{c}"] = (value, value, False, f"{value!r} ({PLACED_MESH_REASON})")
+    return ranges
+
+
 def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "", fixtures: str = "",
                      fixed: dict | None = None) -> str:
     """The generated C++ table of the unit's variables (value reference = index), with compile-time
@@ -206,7 +224,7 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
     scene's ``fixtures`` (``fixtures_header``).  A free-text parameter takes its start value alone;
     ``fixed``: the ranges a built-in mesh allows instead of Python's (``native_mesh.fixed_ranges``)."""
     from wetcloth.fmu.description3 import dimension_sources
-    from wetcloth.scene import INPUT, PARAMETERS, describe_range
+    from wetcloth.scene import COLLIDER_FIELDS, INPUT, PARAMETERS, describe_range
     from wetcloth.simulation import OUTPUT_NAMES
 
     if tuple(OUTPUT_NAMES) != CORE_OUTPUTS:
@@ -225,7 +243,17 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
         if spec.name in structural:
             causality = "STRUCTURAL_PARAMETER"
         kind = {"Real": "REAL", "Integer": "INTEGER", "String": "STRING"}[spec.type]
-        if spec.scene:
+        if spec.collider:  # a collider's number field: its place in the colliders' rows (colliders.hpp)
+            role, field_name = "COLLIDER", spec.name.split("_", 1)[1]
+            slot = f"{spec.collider - 1} * COLLIDER_COLUMNS + C_{field_name.upper()}"
+            md = COLLIDER_FIELDS[field_name].metadata
+            ranged, lo, hi = "true", _c_double(md["lo"]), _c_double(md["hi"])
+            lo_open, range_text = str(bool(md["lo_open"])).lower(), _c_string(describe_range(COLLIDER_FIELDS[field_name], spec.name))
+            if spec.name in fixed:
+                low, high, low_open, text = fixed[spec.name]
+                lo, hi, lo_open, range_text = _c_double(low), _c_double(high), str(low_open).lower(), _c_string(text)
+            start = _c_double(spec.start)
+        elif spec.scene:
             role = "SCENE"
             field = PARAMETERS[spec.name]
             md = field.metadata
@@ -619,7 +647,7 @@ def build_native_fmu(out: str | Path | None = None, fmi_version: int = 2, build_
     loaded = None if scene is None else load_scene(scene)
     cloth = None if loaded is None else native_mesh.cloth_arrays(loaded)
     fixtures = fixtures_header(loaded, cloth)
-    fixed = native_mesh.fixed_ranges(cloth)
+    fixed = {**native_mesh.fixed_ranges(cloth), **placed_meshes(loaded)}
     body = variables_header(specs, fmi_version, fixtures=fixtures, fixed=fixed).encode()
     token = "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, "wetcloth-native:" + _digest(
         body, " ".join(CXX_FLAGS).encode(), *(p.read_bytes() for p, _ in files)))) + "}"

@@ -1,6 +1,7 @@
 """A scene built into a unit (``wetcloth build-fmu --scene SCENE``): its parameter values become the
-variables' start values, its colliders and grip keys are built in (fixed: they are not variables), and
-its mesh files (``cloth_mesh``, mesh colliders' ``file``) go into the unit's resources.
+variables' start values, its colliders are built in (their number, shapes and files; their number fields are
+parameters, ``vocabulary.collider_specs``, starting as the scene has them), its grip keys and collider keys
+too (fixed: they are not variables), and its mesh files (``cloth_mesh``, mesh colliders' ``file``) go into the unit's resources.
 
 The builder writes ``resources/wetcloth_scene.json``: ``{"starts": {name: value}, "vertices": n or null,
 "colliders": [{field: value}], "grip_keys": [{"time": s, "x": m, "y": m, "z": m}], "collider_keys":
@@ -78,21 +79,29 @@ def collider_keys_of(scene) -> tuple:
     return tuple(dataclasses.asdict(key) for key in scene.collider_keys)
 
 
+def _built(colliders) -> tuple:
+    """What of colliders (their fields) is built into a unit: each one's shape and file (its number fields
+    are the unit's parameters, ``vocabulary.COLLIDER_VARIABLES``)."""
+    return tuple((c["shape"], c["file"]) for c in colliders)
+
+
 def check_carries(fmu: str | Path, resources: str | Path, scene) -> None:
     """ValueError unless the unit ``fmu`` (its extracted ``resources`` folder) carries ``scene``'s colliders
-    and grip keys (built in by ``build-fmu --scene``: they are not variables)."""
+    (their number, shapes and files), grip keys and collider keys (built in by ``build-fmu --scene``: they are
+    not variables)."""
     packed = load(resources) or PackedScene({})
     colliders, grip_keys, _ = fixtures_of(scene)
     moves = collider_keys_of(scene)
-    if (packed.colliders, packed.grip_keys, packed.collider_keys) != (colliders, grip_keys, moves):
+    if (_built(packed.colliders), packed.grip_keys, packed.collider_keys) != (_built(colliders), grip_keys, moves):
         have = f"{len(packed.colliders)} colliders and {len(packed.grip_keys)} grip keys"
         want = f"{len(colliders)} and {len(grip_keys)}"
         if packed.collider_keys or moves:
             have += f" ({len(packed.collider_keys)} collider keys)"
             want += f" ({len(moves)} collider keys)"
-        raise ValueError(f"the FMU {fmu} carries {have}, not this scene's ({want}, or other fields): colliders "
-                         f"and grip keys are built into a unit, not variables; build one from the scene "
-                         f"('wetcloth build-fmu --scene SCENE'), and vary them with engine 'python'")
+        raise ValueError(f"the FMU {fmu} carries {have}, not this scene's ({want}, or other shapes, files or key "
+                         f"fields): colliders' shapes and files and the keys are built into a unit, not variables; "
+                         f"build one from the scene ('wetcloth build-fmu --scene SCENE'), and vary them with engine "
+                         f"'python'")
 
 
 def pack(scene_path: str | Path) -> PackedScene:

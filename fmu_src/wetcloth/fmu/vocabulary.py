@@ -6,7 +6,9 @@ others fixed parameters.  Unit, description, start value and range come from the
 so parameters added to the Scene later appear in the FMU without touching this package.
 Two FMU-only parameters (``mesh_output_dir``, ``mesh_format``) and the six outputs of
 ``wetcloth.simulation.OUTPUTS`` with ``step_error`` (``STEP_OUTPUTS``) complete the interface; the FMI 3.0 unit adds the mesh of every
-step as array outputs (``MESH_OUTPUTS``), dimensioned by the grid parameters ``ny`` and ``nx``.
+step as array outputs (``MESH_OUTPUTS``), dimensioned by the grid parameters ``ny`` and ``nx``.  A unit built
+with a scene's colliders (``build-fmu --scene``) has, last, each collider's number fields as fixed Real
+parameters under their flattened names (``collider1_radius``: ``COLLIDER_VARIABLES``).
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ from typing import Any, Iterable
 
 from wetcloth.errors import ParameterError
 from wetcloth.fmu import MODEL_NAME
-from wetcloth.scene import INPUT, PARAMETERS, check_value, describe_range
+from wetcloth.scene import COLLIDER_FIELDS, INPUT, PARAMETERS, check_value, describe_range
 from wetcloth.simulation import OUTPUTS
 
 #: Mesh formats the unit can write at every communication point, and how messages name them.
@@ -60,6 +62,7 @@ class VariableSpec:
     dimensions: tuple[str | int, ...] = ()  # array outputs: sizes, or names of the parameters holding them
     min_open: bool = False  # the value must be above ``min`` (FMI's min is inclusive: see ``declared_min``)
     nominal: float | None = None  # Reals: the magnitude of a typical value (FMI ``nominal``, > 0)
+    collider: int = 0  # a collider's field (``collider<k>_<field>``): its collider k (1, 2, ...); else 0
 
     @property
     def declared_min(self) -> float | int | None:
@@ -105,6 +108,27 @@ def scene_spec(f: dataclasses.Field) -> VariableSpec:
     )
 
 
+#: The collider fields that are FMU parameters (Reals): every number field; the shape and a mesh collider's
+#: file stay as the unit was built.
+COLLIDER_VARIABLES = tuple(name for name, f in COLLIDER_FIELDS.items() if f.type == "float")
+
+
+def collider_specs(colliders: Iterable[dict]) -> list[VariableSpec]:
+    """The parameters of the colliders built into a unit (``PackedScene.colliders``: their fields), collider
+    after collider: each of ``COLLIDER_VARIABLES`` as ``collider<k>_<field>``, its start value the collider's."""
+    specs = []
+    for k, fields in enumerate(colliders, 1):
+        for name in COLLIDER_VARIABLES:
+            f, flat = COLLIDER_FIELDS[name], f"collider{k}_{name}"
+            md, start = f.metadata, float(fields[name])
+            specs.append(VariableSpec(
+                name=flat, type="Real", causality="parameter", variability="fixed",
+                description=f"collider {k} ({fields['shape']}): {md['doc']} (allowed: {describe_range(f, flat)})",
+                unit=md["unit"], start=start, min=md["lo"], max=md["hi"], min_open=bool(md["lo_open"]),
+                nominal=abs(start) or 1.0, collider=k))
+    return specs
+
+
 #: Inputs whose change shows in an output at once, without a step (direct feedthrough).
 FEEDTHROUGH = {"depth": ("water_level",)}
 
@@ -119,9 +143,11 @@ FMU_PARAMETERS = {
 def variable_specs(fields: Iterable[dataclasses.Field] | None = None, fmi_version: int = 2,
                    packed=None) -> list[VariableSpec]:
     """All FMU variables in value-reference order: Scene fields, mesh parameters, outputs (and, for
-    FMI 3.0, the mesh array outputs).  ``packed``: the scene built into the unit
-    (``packed_scene.PackedScene``), whose values are the start values; a mesh cloth's arrays have
-    its vertex count as their first dimension instead of the grid's ny, nx."""
+    FMI 3.0, the mesh array outputs and the time), then the colliders' parameters.  ``packed``: the scene
+    built into the unit (``packed_scene.PackedScene``), whose values are the start values; a mesh cloth's
+    arrays have its vertex count as their first dimension instead of the grid's ny, nx; its colliders'
+    number fields are parameters (``collider_specs``), last, so that the other variables keep their value
+    references."""
     fields = PARAMETERS.values() if fields is None else fields
     specs = [scene_spec(f) for f in fields]
     if packed is not None:
@@ -138,6 +164,8 @@ def variable_specs(fields: Iterable[dataclasses.Field] | None = None, fmi_versio
                   for n, (u, doc, dims) in MESH_OUTPUTS.items()]
         specs.append(VariableSpec("time", "Real", "independent", "continuous", "simulation time (the FMI 3.0 "
                                   "independent variable)", unit="s", scene=False, nominal=1.0))
+    if packed is not None:
+        specs += collider_specs(packed.colliders)
     return specs
 
 
