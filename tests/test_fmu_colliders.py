@@ -41,6 +41,40 @@ except Exception as exc:
 """
 
 
+#: A child process: the FMI 2.0 unit at argv[1] with collider1_radius argv[2] stepped 0.3 s, its state
+#: serialized, stepped 0.3 s more; a second instance restores the state and steps the same 0.3 s.  Prints
+#: both instances' outputs and the radius the second reads before and after the restore.
+STATE = r"""
+import json, sys
+import fmpy
+from fmpy.fmi2 import FMU2Slave
+from wetcloth.simulation import OUTPUT_NAMES
+directory = fmpy.extract(sys.argv[1])
+md = fmpy.read_model_description(directory)
+vr = {v.name: v.valueReference for v in md.modelVariables}
+def instance(name):
+    unit = FMU2Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier=md.coSimulation.modelIdentifier,
+                     instanceName=name)
+    unit.instantiate(loggingOn=False)
+    return unit
+first = instance("first")
+first.setReal([vr["collider1_radius"]], [float(sys.argv[2])])
+first.setupExperiment(startTime=0.0)
+first.enterInitializationMode()
+first.exitInitializationMode()
+first.doStep(0.0, 0.3)
+state = first.serializeFMUstate(first.getFMUstate())
+first.doStep(0.3, 0.3)
+second = instance("second")
+radius = second.getReal([vr["collider1_radius"]])
+second.setFMUstate(second.deSerializeFMUstate(state))
+radius += second.getReal([vr["collider1_radius"]])
+second.doStep(0.3, 0.3)
+outputs = [vr[n] for n in OUTPUT_NAMES]
+print(json.dumps({"first": first.getReal(outputs), "second": second.getReal(outputs), "radius": radius}))
+"""
+
+
 def python_rows(scene) -> np.ndarray:
     """The Python API's outputs at the communication points k * STEP (k = 0 ... STOP / STEP), reached as fmpy's
     units reach them: from the previous point by the step."""
@@ -63,8 +97,10 @@ def test_the_pythonfmu_units_take_the_colliders_fields_as_parameters(tmp_path, e
     """FMI 2.0 and 3.0: collider1_radius is a fixed Real parameter starting at the scene's 0.3 m; set to 0.26 m
     (FMI 2.0: by a study's run on the FMU engine) it gives the Python run of the scene with that radius
     (1e-12 m, as the other unit-against-Python tests: the same core), which lands 4 cm lower than the scene as
-    built; -0.1 m is refused at initialization naming the parameter and its range.  (bb80f15: no such
-    variable; the study's run fails as the unit carries "other fields".)"""
+    built; -0.1 m is refused at initialization naming the parameter and its range.  An FMU state of the run
+    holds the radius: restored in a fresh instance, whose radius is the scene's, the run goes on as the
+    uninterrupted one, bit for bit.  (bb80f15: no such variable; the study's run fails as the unit carries
+    "other fields"; and a state of a unit with colliders could not be serialized: scene_id's KeyError.)"""
     import fmpy
 
     from wetcloth.fmu.builder import build_fmu
@@ -80,6 +116,8 @@ def test_the_pythonfmu_units_take_the_colliders_fields_as_parameters(tmp_path, e
         assert expected["as built"][-1, 2] - expected["smaller"][-1, 2] > 0.03
         (refused,), _ = run_child(RUN, fmu, '{"collider1_radius": -0.1}', "unit", cwd=tmp_path)
         assert "collider1_radius" in refused["error"] and "0 < collider1_radius <= 10000 m" in refused["error"]
+    (resumed,), _ = run_child(STATE, tmp_path / "Sphere2.fmu", RADIUS, cwd=tmp_path)
+    assert resumed["radius"] == [0.3, RADIUS] and resumed["second"] == resumed["first"]
 
 
 def test_the_native_unit_takes_the_colliders_fields_as_parameters(tmp_path, tmp_path_factory, expected):
@@ -88,7 +126,9 @@ def test_the_native_unit_takes_the_colliders_fields_as_parameters(tmp_path, tmp_
     FMU state of the run holds the radius: restored in a fresh instance, whose radius is the scene's, the run
     goes on as the uninterrupted one, bit for bit.  (bb80f15: no such variable.)"""
     import fmpy
-    from fmpy.fmi2 import FMU2Slave
+    from fmpy import calloc, free
+    from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                           fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
     objects = tmp_path_factory.getbasetemp().parent / "wetcloth-native-objects"
     fmu = native.build_native_fmu(tmp_path / "sphere.fmu", 2, build_dir=objects, scene="tablecloth_sphere")
@@ -99,16 +139,24 @@ def test_the_native_unit_takes_the_colliders_fields_as_parameters(tmp_path, tmp_
     md = fmpy.read_model_description(str(fmu))
     vr = {v.name: v.valueReference for v in md.modelVariables}
     directory = fmpy.extract(str(fmu), unzipdir=str(tmp_path / "unzipped"))
+    messages = []
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, category, message:
+                                              messages.append((int(status), message.decode())))
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
 
     def instance(name):
         unit = FMU2Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier=md.coSimulation.modelIdentifier,
                          instanceName=name)
-        unit.instantiate(loggingOn=False)
+        unit.instantiate(callbacks=callbacks, loggingOn=False)  # errors are logged with logging off too
         return unit
 
     first = instance("first")
     with pytest.raises(fmpy.fmi1.FMICallException):
         first.setReal([vr["collider1_radius"]], [-0.1])
+    assert messages == [(3, "parameter 'collider1_radius': -0.1 is out of range; allowed: 0 < collider1_radius "
+                            "<= 10000 m (value refused: collider1_radius stays 0.3)")]
     first.setReal([vr["collider1_radius"]], [RADIUS])
     first.setupExperiment(startTime=0.0)
     first.enterInitializationMode()
