@@ -86,6 +86,7 @@ const char* type_name(Type type) {
     switch (type) {
         case Type::REAL: return fmi_version() == 2 ? "Real" : "Float64";
         case Type::INTEGER: return fmi_version() == 2 ? "Integer" : "UInt64";
+        case Type::UINT64: return "UInt64";
         default: return "String";
     }
 }
@@ -606,7 +607,7 @@ Outcome Unit::get_real(const std::uint32_t* vrs, std::size_t nvr, double* values
             error(std::string(function) + ": variable '" + var->name + "' is a " + type_name(var->type));
             return Outcome::ERROR;
         }
-        std::size_t size = 1;
+        std::size_t size = var->role == Role::UV ? CONSTANT_UV_SIZE : 1;
         if (var->role == Role::POSITIONS || var->role == Role::WETNESS) {
             const Index n = sim_ ? sim_->n() : built_in_cloth() ? built_in_cloth()->n : values_.nx * values_.ny;
             size = static_cast<std::size_t>(var->role == Role::POSITIONS ? 3 * n : n);
@@ -628,6 +629,7 @@ Outcome Unit::get_real(const std::uint32_t* vrs, std::size_t nvr, double* values
                 values[at] = outputs_[var->slot];
                 break;
             case Role::STEP_ERROR: values[at] = simulation().error_estimate(); break;
+            case Role::UV: std::copy(CONSTANT_UV, CONSTANT_UV + CONSTANT_UV_SIZE, values + at); break;
             case Role::POSITIONS:
                 if (static_cast<std::size_t>(3 * simulation().n()) != size) {
                     error(std::string(function) + ": 'positions' holds 3 nx ny = " +
@@ -664,6 +666,39 @@ Outcome Unit::get_integer(std::uint64_t vr, std::int64_t& value, const char* fun
         return Outcome::ERROR;
     }
     value = values_.*var->integer;
+    return Outcome::OK;
+}
+
+Outcome Unit::get_uint64(const std::uint32_t* vrs, std::size_t nvr, std::uint64_t* values, std::size_t n_values,
+                         const char* function) {
+    std::size_t at = 0;
+    for (std::size_t k = 0; k < nvr; ++k) {
+        const Variable* var = variable(vrs[k], function);
+        if (!var) return Outcome::ERROR;
+        const bool structural = var->type == Type::INTEGER && var->causality == Causality::STRUCTURAL_PARAMETER;
+        if (var->type != Type::UINT64 && !structural) {
+            error(std::string(function) + ": variable '" + var->name + "' is " +
+                  (var->type == Type::INTEGER ? "an Int32" : std::string("a ") + type_name(var->type)));
+            return Outcome::ERROR;
+        }
+        const std::size_t size = var->role == Role::FACES ? CONSTANT_FACES_SIZE : 1;
+        if (at + size > n_values) {
+            error(std::string(function) + ": " + std::to_string(n_values) + " values asked for, but the variables hold more"
+                  " (" + var->name + " alone " + std::to_string(size) + ")");
+            return Outcome::ERROR;
+        }
+        if (var->role == Role::FACES) {
+            std::copy(CONSTANT_FACES, CONSTANT_FACES + CONSTANT_FACES_SIZE, values + at);
+        } else {
+            values[at] = static_cast<std::uint64_t>(values_.*var->integer);
+        }
+        at += size;
+    }
+    if (at != n_values) {
+        error(std::string(function) + ": " + std::to_string(n_values) + " values asked for, the variables hold " +
+              std::to_string(at));
+        return Outcome::ERROR;
+    }
     return Outcome::OK;
 }
 

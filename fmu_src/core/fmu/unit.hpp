@@ -25,11 +25,14 @@ namespace wc::fmu {
 //: FMI statuses, in the order of fmi2Status and fmi3Status.
 enum class Outcome : int { OK = 0, WARNING = 1, DISCARD = 2, ERROR = 3, FATAL = 4 };
 
-enum class Type : int { REAL, INTEGER, STRING };
+enum class Type : int { REAL, INTEGER, STRING, UINT64 };  // UINT64: FMI 3.0's constant array of faces
 enum class Causality : int { PARAMETER, STRUCTURAL_PARAMETER, INPUT, OUTPUT, INDEPENDENT };
 //: What a variable reads and writes: a Scene field, a number field of a collider built in (--scene), an
-//: FMU-only parameter, an output slot of record_outputs, a mesh array output or the time.
-enum class Role : int { SCENE, COLLIDER, MESH_OUTPUT_DIR, MESH_FORMAT, OUTPUT, STEP_ERROR, POSITIONS, WETNESS, TIME };
+//: FMU-only parameter, an output slot of record_outputs, a mesh array output, a constant array output (a mesh
+//: cloth's faces and UVs, built in: CONSTANT_FACES, CONSTANT_UV) or the time.
+enum class Role : int {
+    SCENE, COLLIDER, MESH_OUTPUT_DIR, MESH_FORMAT, OUTPUT, STEP_ERROR, POSITIONS, WETNESS, FACES, UV, TIME
+};
 
 //: One variable of the generated table (its index is its value reference).
 struct Variable {
@@ -92,6 +95,9 @@ public:
     Outcome get_real(const std::uint32_t* vrs, std::size_t nvr, double* values, std::size_t n_values,
                      const char* function);
     Outcome get_integer(std::uint64_t vr, std::int64_t& value, const char* function);
+    //: FMI 3.0's UInt64 variables: the structural parameters and the faces (values[n_values] in order).
+    Outcome get_uint64(const std::uint32_t* vrs, std::size_t nvr, std::uint64_t* values, std::size_t n_values,
+                       const char* function);
     Outcome get_string(std::uint64_t vr, const char*& value, const char* function);
     //: The table's entry of vr, or null (logged) if there is none.
     const Variable* variable(std::uint64_t vr, const char* function);

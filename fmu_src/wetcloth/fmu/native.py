@@ -52,8 +52,8 @@ from tqdm.auto import tqdm
 import wetcloth
 from wetcloth.files import new_temporary, whole_file
 from wetcloth.fmu import MODEL_NAME, native_mesh, packed_scene
-from wetcloth.fmu.vocabulary import (MESH_FORMAT_RANGE, MESH_FORMATS, MESH_OUTPUTS, STEP_OUTPUTS, VariableSpec,
-                                     fmi_unit_name, variable_specs)
+from wetcloth.fmu.vocabulary import (MESH_CONSTANTS, MESH_FORMAT_RANGE, MESH_FORMATS, MESH_OUTPUTS, STEP_OUTPUTS,
+                                     VariableSpec, fmi_unit_name, variable_specs)
 from wetcloth.progress import SHOW_AFTER
 
 #: The order of the outputs in the core's ``record_outputs`` row (``stepping.hpp``).
@@ -233,6 +233,7 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
     structural = dimension_sources(specs) if fmi_version == 3 else set()
     fixed = fixed or {}
     rows, checks, texts = [], [], []
+    constants = {"faces": _c_array("CONSTANT_FACES", "Index", []), "uv": _c_array("CONSTANT_UV", "double", [])}
     for vr, spec in enumerate(specs):
         real = integer = "nullptr"
         choices, count, start_text = "nullptr", "0", "nullptr"
@@ -242,7 +243,7 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
                      "independent": "INDEPENDENT"}[spec.causality]
         if spec.name in structural:
             causality = "STRUCTURAL_PARAMETER"
-        kind = {"Real": "REAL", "Integer": "INTEGER", "String": "STRING"}[spec.type]
+        kind = {"Real": "REAL", "Integer": "INTEGER", "String": "STRING", "UInt64": "UINT64"}[spec.type]
         if spec.collider:  # a collider's number field: its place in the colliders' rows (colliders.hpp)
             role, field_name = "COLLIDER", spec.name.split("_", 1)[1]
             slot = f"{spec.collider - 1} * COLLIDER_COLUMNS + C_{field_name.upper()}"
@@ -299,6 +300,9 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
             role, slot = "OUTPUT", str(CORE_OUTPUTS.index(spec.name))
         elif spec.name in MESH_OUTPUTS and spec.name in ("positions", "wetness"):
             role = spec.name.upper()
+        elif spec.name in MESH_CONSTANTS and spec.name in constants:
+            role = spec.name.upper()
+            constants[spec.name] = _c_array(f"CONSTANT_{role}", "double" if spec.type == "Real" else "Index", spec.start)
         elif spec.causality == "independent":
             role = "TIME"
         else:
@@ -332,6 +336,9 @@ inline constexpr Variable VARIABLES[] = {{
 // The scene's colliders and grip keys (none unless built with --scene).
 {fixtures or fixtures_header()}
 
+// The FMI 3.0 constant array outputs: a mesh cloth's faces and UVs (none unless built with --scene of one).
+{chr(10).join(constants.values())}
+
 // model.hpp's Scene, its inputs and choices are wetcloth.scene's (a parameter added in Python must be ported).
 static_assert(SCENE_FIELD_COUNT == {len(scene_names)}, "model.hpp's Scene does not have the {len(scene_names)} fields of wetcloth.scene");
 {field_checks}
@@ -344,7 +351,7 @@ static_assert(OUTPUT_COUNT == {len(CORE_OUTPUTS)}, "the core's outputs are not t
 
 # ----------------------------------------------------------------------------------------- descriptions
 def _start_getter(spec: VariableSpec):
-    return functools.partial(lambda value: value, spec.start)
+    return functools.partial(lambda value: value, spec.values if spec.variability == "constant" else spec.start)
 
 
 def model_description(specs: list[VariableSpec], fmi_version: int, token: str, sources: list[str]) -> bytes:
@@ -492,7 +499,8 @@ def documentation_html(specs: list[VariableSpec], fmi_version: int) -> str:
     rows = []
     for s in specs:
         unit = fmi_unit_name(s.unit) or ""
-        start = "" if s.start is None else repr(s.start) if s.type == "String" else f"{s.start:g}"
+        start = ("" if s.start is None else "(in the model description)" if s.variability == "constant"
+                 else repr(s.start) if s.type == "String" else f"{s.start:g}")
         shape = f" [{', '.join(map(str, s.dimensions))}]" if s.dimensions else ""
         meaning = s.description
         if s.name == "mesh_output_dir":

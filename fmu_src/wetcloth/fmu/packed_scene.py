@@ -5,11 +5,12 @@ too (fixed: they are not variables), and its mesh files (``cloth_mesh``, mesh co
 
 The builder writes ``resources/wetcloth_scene.json``: ``{"starts": {name: value}, "vertices": n or null,
 "colliders": [{field: value}], "grip_keys": [{"time": s, "x": m, "y": m, "z": m}], "collider_keys":
-[{"collider": k, "time": s, "x": m, "y": m, "z": m, "rx": deg, "ry": deg, "rz": deg}]}``.  A mesh file is packed as ``resources/meshes/<digest>/<file name>``
+[{"collider": k, "time": s, "x": m, "y": m, "z": m, "rx": deg, "ry": deg, "rz": deg}], "faces": [[vertex, ...]],
+"uv": [[u, v]]}``.  A mesh file is packed as ``resources/meshes/<digest>/<file name>``
 and named by that relative path, which the unit finds in its resources (``mesh_file.SEARCH_FOLDERS``);
 the digest in the path means that two units holding the same relative path hold the same file.
 ``vertices`` (a mesh cloth's vertex count) sizes the FMI 3.0 unit's array outputs instead of the
-grid's ``ny`` and ``nx``.
+grid's ``ny`` and ``nx``; ``faces`` and ``uv`` (a mesh cloth's, else empty) are its constant array outputs.
 """
 
 from __future__ import annotations
@@ -31,8 +32,9 @@ MESH_FOLDER = "meshes"
 @dataclass(frozen=True)
 class PackedScene:
     """Start values by scene parameter, a mesh cloth's vertex count (else None), the colliders (their fields,
-    mesh files by their packed paths), the grip keys and the collider keys (their fields) and, when building,
-    the mesh files to pack (packed path -> file)."""
+    mesh files by their packed paths), the grip keys and the collider keys (their fields), when building, the
+    mesh files to pack (packed path -> file), and a mesh cloth's ``faces`` (k rows of 3 or 4 vertex indices)
+    and ``uv`` (n rows of 2) as its exported frames have them (``exporter.cloth_faces``; else empty)."""
 
     starts: dict[str, Any]
     vertices: int | None = None
@@ -40,6 +42,8 @@ class PackedScene:
     grip_keys: tuple = ()
     files: dict = field(default_factory=dict)
     collider_keys: tuple = ()
+    faces: tuple = ()
+    uv: tuple = ()
 
     def fixtures(self) -> dict:
         """What of the scene is built in beside the variables: ``colliders``, ``grip_keys`` and
@@ -115,19 +119,25 @@ def pack(scene_path: str | Path) -> PackedScene:
     scene = from_dict({k: v for k, v in data.items() if k not in RESERVED_KEYS})
     starts = {name: getattr(scene, name) for name in PARAMETERS}
     colliders, grip_keys, files = fixtures_of(scene)
-    vertices = None
+    vertices, faces, uv = None, (), ()
     if is_mesh(scene.cloth_mesh):
+        from wetcloth.exporter import cloth_faces
+
         mesh = locate(scene.cloth_mesh)
         starts["cloth_mesh"] = _packed_path(mesh)
         files[starts["cloth_mesh"]] = mesh
-        vertices = build_topology(scene).n
+        topology = build_topology(scene)
+        vertices = topology.n
+        _, uvs, file_faces = cloth_faces(topology)
+        faces, uv = tuple(map(tuple, file_faces.tolist())), tuple(map(tuple, uvs.astype(float).tolist()))
     return PackedScene(starts, vertices=vertices, colliders=tuple(colliders), grip_keys=grip_keys, files=files,
-                       collider_keys=collider_keys_of(scene))
+                       collider_keys=collider_keys_of(scene), faces=faces, uv=uv)
 
 
 def text(packed: PackedScene) -> str:
     """The contents of ``SCENE_NAME``."""
-    return json.dumps({"starts": packed.starts, "vertices": packed.vertices, **packed.fixtures()}, indent=1)
+    return json.dumps({"starts": packed.starts, "vertices": packed.vertices, **packed.fixtures(),
+                       "faces": packed.faces, "uv": packed.uv}, indent=1)
 
 
 def write(packed: PackedScene, resources: Path) -> list[Path]:
@@ -158,4 +168,5 @@ def load(resources: str | Path | None) -> PackedScene | None:
     if folder not in mesh_file.SEARCH_FOLDERS:
         mesh_file.SEARCH_FOLDERS.append(folder)
     return PackedScene(dict(data["starts"]), data.get("vertices"), tuple(data.get("colliders", ())),
-                       tuple(data.get("grip_keys", ())), collider_keys=tuple(data.get("collider_keys", ())))
+                       tuple(data.get("grip_keys", ())), collider_keys=tuple(data.get("collider_keys", ())),
+                       faces=tuple(map(tuple, data.get("faces", ()))), uv=tuple(map(tuple, data.get("uv", ()))))

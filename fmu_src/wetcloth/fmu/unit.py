@@ -127,7 +127,10 @@ class WetClothUnit:
 
     def output(self, name: str):
         """An output: a scalar of ``Simulation.outputs()``, ``step_error`` (``Simulation.error_estimate``),
-        an array output as a flat list, or the time (s)."""
+        an array output as a flat list (a constant one, a mesh cloth's faces and UVs, as built), or the time (s)."""
+        spec = self.specs[name]
+        if spec.variability == "constant":
+            return spec.values
         if not self._read:
             sim = self._simulation()
             self._read.update(sim.outputs(), step_error=sim.error_estimate, time=self.start_time + sim.time)

@@ -6,7 +6,8 @@ others fixed parameters.  Unit, description, start value and range come from the
 so parameters added to the Scene later appear in the FMU without touching this package.
 Two FMU-only parameters (``mesh_output_dir``, ``mesh_format``) and the six outputs of
 ``wetcloth.simulation.OUTPUTS`` with ``step_error`` (``STEP_OUTPUTS``) complete the interface; the FMI 3.0 unit adds the mesh of every
-step as array outputs (``MESH_OUTPUTS``), dimensioned by the grid parameters ``ny`` and ``nx``.  A unit built
+step as array outputs (``MESH_OUTPUTS``), dimensioned by the grid parameters ``ny`` and ``nx``, and a cloth from a
+mesh file's faces and UVs as constant array outputs (``MESH_CONSTANTS``).  A unit built
 with a scene's colliders (``build-fmu --scene``) has, last, each collider's number fields as fixed Real
 parameters under their flattened names (``collider1_radius``: ``COLLIDER_VARIABLES``).
 """
@@ -37,6 +38,15 @@ MESH_OUTPUTS = {
     "wetness": ("-", "saturation of each vertex, absorbed water over capacity (0 to 1)", ("ny", "nx")),
 }
 
+#: The FMI 3.0 unit's constant array outputs of a cloth from a mesh file (built with --scene), as its exported
+#: frames have them (``packed_scene.PackedScene``): name -> (FMI type, unit, meaning); sized by the mesh.
+MESH_CONSTANTS = {
+    "faces": ("UInt64", "-", "the mesh file's faces: each face's vertex indices (from 0, the file's vertex order), "
+                             "as in the file (one that mixes triangles and quads: the triangles of their split)"),
+    "uv": ("Real", "-", "texture coordinates (u, v) of each vertex: the mesh file's, else those of the flat rest "
+                        "sheet (0 to 1)"),
+}
+
 #: Outputs beyond ``Simulation.outputs()``: name -> (unit, meaning).  ``step_error`` is
 #: ``Simulation.error_estimate`` after the communication step.
 STEP_OUTPUTS = {
@@ -47,7 +57,8 @@ STEP_OUTPUTS = {
 
 @dataclass(frozen=True)
 class VariableSpec:
-    """One FMU variable: FMI type ('Real', 'Integer', 'String'), causality, variability, start and range."""
+    """One FMU variable: FMI type ('Real', 'Integer', 'String'; FMI 3.0 also 'UInt64'), causality, variability
+    ('constant': an array output whose values, ``start``, are in the model description), start and range."""
 
     name: str
     type: str
@@ -73,7 +84,14 @@ class VariableSpec:
         return sys.float_info.min if self.min == 0 else math.nextafter(float(self.min), math.inf)
 
     @property
+    def values(self) -> list:
+        """A constant array output's values in order (``start`` holds its rows)."""
+        return [value for row in self.start for value in row]
+
+    @property
     def initial(self) -> str | None:
+        if self.variability == "constant":
+            return "exact"
         return {"parameter": "exact", "output": "calculated"}.get(self.causality)
 
 
@@ -164,6 +182,12 @@ def variable_specs(fields: Iterable[dataclasses.Field] | None = None, fmi_versio
                   for n, (u, doc, dims) in MESH_OUTPUTS.items()]
         specs.append(VariableSpec("time", "Real", "independent", "continuous", "simulation time (the FMI 3.0 "
                                   "independent variable)", unit="s", scene=False, nominal=1.0))
+        if packed is not None and packed.faces:
+            for name, (kind, unit, doc) in MESH_CONSTANTS.items():
+                values = [list(row) for row in getattr(packed, name)]
+                specs.append(VariableSpec(name, kind, "output", "constant", doc, unit=unit, start=values, scene=False,
+                                          dimensions=(len(values), len(values[0])),
+                                          nominal=1.0 if kind == "Real" else None))
     if packed is not None:
         specs += collider_specs(packed.colliders)
     return specs
@@ -222,7 +246,7 @@ class Unit:
 
 
 def _number_text(value) -> str:
-    """A range bound as model-description text: an int as is, a float exactly (repr)."""
+    """A number as model-description text (a range bound, a start value): an int as is, a float exactly (repr)."""
     return str(int(value)) if isinstance(value, int) else repr(float(value))
 
 
@@ -239,6 +263,8 @@ def xml_attributes(spec: VariableSpec) -> dict[str, str]:
         attributes["max"] = _number_text(spec.max)
     if spec.type == "Real" and spec.nominal is not None:
         attributes["nominal"] = _number_text(float(spec.nominal))
+    if spec.variability == "constant":  # whole (pythonfmu3 cuts a start of over 1000 characters to one)
+        attributes["start"] = " ".join(_number_text(v) for v in spec.values)
     return attributes
 
 
