@@ -2,10 +2,11 @@
 
 The FMI 2.0 types map to FMI 3.0 ones: Real -> Float64, String -> String, Integer -> Int32, except
 that an Integer parameter that sizes an array output (``nx``, ``ny``) is a UInt64 structural
-parameter, as FMI 3.0 requires of a ``Dimension``'s variable; a mesh cloth's faces are a constant UInt64
-array output (pythonfmu3's binary aborts the host's process on any ``fmi3GetUInt32``: no UInt32 variable).  pythonfmu3 writes causality,
-variability, start, units and the model structure; here each variable also gets ``min``/``max``
-and the outputs their direct-feedthrough dependencies.
+parameter, as FMI 3.0 requires of a ``Dimension``'s variable; a mesh cloth's faces are a constant
+UInt64 array output (pythonfmu3's binary aborts the host's process on any ``fmi3GetUInt32``: no UInt32
+variable).  pythonfmu3 writes causality, variability, start, units and the model structure; here each
+variable also gets ``min``/``max`` (a constant its whole ``start``) and the outputs their
+direct-feedthrough dependencies.
 """
 
 from __future__ import annotations

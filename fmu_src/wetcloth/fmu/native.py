@@ -2,16 +2,17 @@
 
     wetcloth build-fmu --native              # models/WetClothNative.fmu  (FMI 2.0)
     wetcloth build-fmu --native --fmi 3      # models/WetClothNative3.fmu (FMI 3.0, the mesh as array outputs)
-    wetcloth build-fmu --native --scene bucket   # a scene's start values, colliders and grip keys built in
+    wetcloth build-fmu --native --scene bucket   # a scene's start values, colliders and keys built in
 
 The unit has the model name, variables, value references, units, ranges and model structure of the
 pythonfmu units (``WetCloth.fmu``, ``WetCloth3.fmu``): its ``modelDescription.xml`` is made by the same
 code (``description.py``, ``description3.py`` on pythonfmu's and pythonfmu3's model-description writers),
 and the C++ side reads the same vocabulary through a generated header
 (``wetcloth_fmu_variables.hpp``: every variable in value-reference order with its Scene field, range,
-start value and the texts of its messages; with ``--scene``, the scene's colliders and grip keys as the
-arrays the Python model hands the core, and a cloth from a mesh file as the arrays of its structure,
-``native_mesh.py``).  What it packs:
+start value and the texts of its messages (a collider's number field: its place in the colliders' rows,
+which the unit makes from the values set); with ``--scene``, the scene's colliders and keys as the arrays
+the Python model hands the core, and a cloth from a mesh file as the arrays of its structure,
+``native_mesh.py``, with its faces and UVs for the FMI 3.0 unit's constant outputs).  What it packs:
 
 * ``binaries/linux64/WetCloth.so`` (FMI 3.0: ``binaries/x86_64-linux/``): ``fmu_src/core/src/**/*.cpp``,
   ``fmu_src/core/fmu/unit.cpp`` and ``fmi2.cpp`` (``fmi3.cpp``) compiled by the system C++ compiler
@@ -247,9 +248,10 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
         if spec.collider:  # a collider's number field: its place in the colliders' rows (colliders.hpp)
             role, field_name = "COLLIDER", spec.name.split("_", 1)[1]
             slot = f"{spec.collider - 1} * COLLIDER_COLUMNS + C_{field_name.upper()}"
-            md = COLLIDER_FIELDS[field_name].metadata
+            field = COLLIDER_FIELDS[field_name]
+            md = field.metadata
             ranged, lo, hi = "true", _c_double(md["lo"]), _c_double(md["hi"])
-            lo_open, range_text = str(bool(md["lo_open"])).lower(), _c_string(describe_range(COLLIDER_FIELDS[field_name], spec.name))
+            lo_open, range_text = str(bool(md["lo_open"])).lower(), _c_string(describe_range(field, spec.name))
             if spec.name in fixed:
                 low, high, low_open, text = fixed[spec.name]
                 lo, hi, lo_open, range_text = _c_double(low), _c_double(high), str(low_open).lower(), _c_string(text)
@@ -300,7 +302,7 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
             role, slot = "OUTPUT", str(CORE_OUTPUTS.index(spec.name))
         elif spec.name in MESH_OUTPUTS and spec.name in ("positions", "wetness"):
             role = spec.name.upper()
-        elif spec.name in MESH_CONSTANTS and spec.name in constants:
+        elif spec.name in MESH_CONSTANTS:
             role = spec.name.upper()
             constants[spec.name] = _c_array(f"CONSTANT_{role}", "double" if spec.type == "Real" else "Index", spec.start)
         elif spec.causality == "independent":

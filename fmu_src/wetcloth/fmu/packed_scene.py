@@ -1,7 +1,8 @@
 """A scene built into a unit (``wetcloth build-fmu --scene SCENE``): its parameter values become the
 variables' start values, its colliders are built in (their number, shapes and files; their number fields are
 parameters, ``vocabulary.collider_specs``, starting as the scene has them), its grip keys and collider keys
-too (fixed: they are not variables), and its mesh files (``cloth_mesh``, mesh colliders' ``file``) go into the unit's resources.
+too (fixed: they are not variables), and its mesh files (``cloth_mesh``, mesh colliders' ``file``) go into the
+unit's resources.
 
 The builder writes ``resources/wetcloth_scene.json``: ``{"starts": {name: value}, "vertices": n or null,
 "colliders": [{field: value}], "grip_keys": [{"time": s, "x": m, "y": m, "z": m}], "collider_keys":

@@ -161,7 +161,8 @@ FMU_PARAMETERS = {
 def variable_specs(fields: Iterable[dataclasses.Field] | None = None, fmi_version: int = 2,
                    packed=None) -> list[VariableSpec]:
     """All FMU variables in value-reference order: Scene fields, mesh parameters, outputs (and, for
-    FMI 3.0, the mesh array outputs and the time), then the colliders' parameters.  ``packed``: the scene
+    FMI 3.0, the mesh array outputs, the time and a mesh cloth's faces and UVs), then the colliders'
+    parameters.  ``packed``: the scene
     built into the unit (``packed_scene.PackedScene``), whose values are the start values; a mesh cloth's
     arrays have its vertex count as their first dimension instead of the grid's ny, nx; its colliders'
     number fields are parameters (``collider_specs``), last, so that the other variables keep their value
