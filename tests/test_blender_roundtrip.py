@@ -34,7 +34,8 @@ def test_a_blender_mesh_with_a_pin_group_simulates_and_its_frames_play_back_on_i
     """The plane (9 x 9 vertices, its top edge pinned by the vertex group) goes out as PLY with the group as
     the point attribute 'pinned'; wetcloth runs it (cloth_mesh, pinned_vertices = 'pinned') as the particles in
     Blender's vertex order, at Blender's coordinates; its USD frames played on the same object by a
-    MeshSequenceCache modifier put every vertex where wetcloth has it (float32), the pinned edge still."""
+    MeshSequenceCache modifier put every vertex where wetcloth has it (float32), the pinned edge still, and
+    leave the object's UV map as it was exported (the PLY carries none: the object keeps its own)."""
     python = require_blender_python()
     spec = {"size": 0.5, "height": 1.0, "cuts": 7, "ply": str(tmp_path / "cloth.ply"), "blend": str(tmp_path / "shot.blend"),
             "usd": str(tmp_path / "frames" / "cloth.usd"), "frames": [1, 7, FRAMES]}
@@ -56,6 +57,9 @@ def test_a_blender_mesh_with_a_pin_group_simulates_and_its_frames_play_back_on_i
         np.testing.assert_allclose(played["frames"][str(frame)], expected[frame - 1], rtol=0, atol=POSITION_TOL)
     moved = np.abs(expected[-1] - expected[0]).max(axis=1)
     assert moved[exported["pinned"]].max() == 0.0 and moved.max() > 0.05
+    assert list(exported["uv"]) == ["UVMap"] and np.ptp(exported["uv"]["UVMap"]) == 1.0  # the plane's 0..1 map
+    for frame in spec["frames"]:  # the evaluated mesh's, as played: Blender's own values, exactly
+        assert played["uv"][str(frame)] == exported["uv"], frame
 
 
 def test_the_docs_show_the_snippets_the_probe_runs():

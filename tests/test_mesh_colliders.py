@@ -1,6 +1,7 @@
 """Mesh colliders (docs/model.md section 6.3): a closed triangle mesh is a solid, an open one a shell kept
 off on both sides; distances to the nearest triangle through a grid of cells (collider_mesh.cpp)."""
 
+import meshio
 import numpy as np
 import pytest
 import trimesh
@@ -335,6 +336,27 @@ def test_bad_mesh_colliders_are_refused_naming_the_field(tmp_path):
     bad.write_text("solid nothing\nendsolid nothing\n")
     with pytest.raises(ParameterError, match="collider1_file"):
         load_scene(colliders=({"shape": "mesh", "file": str(bad)},))
+
+
+def test_a_collider_file_of_a_format_beyond_the_listed_ones_is_read_as_the_cloths_are(tmp_path):
+    """A ball written by meshio as OBJ and as gmsh .msh gives the same collider surface; a suffix neither
+    meshio nor trimesh knows is refused naming the collider's field."""
+    from wetcloth.collider_meshes import mesh_of
+
+    ball = trimesh.creation.icosphere(subdivisions=1, radius=0.2)
+    surfaces = {}
+    for suffix in ("obj", "msh"):
+        path = tmp_path / f"ball.{suffix}"
+        meshio.write(path, meshio.Mesh(ball.vertices, [("triangle", ball.faces)]))
+        surfaces[suffix] = mesh_of(load_scene(water_level=-0.5, colliders=({"shape": "mesh", "file": str(path),
+                                                                              "z": -1.0},)).colliders[0])
+    assert len(surfaces["obj"][1]) == len(ball.faces)
+    for obj, msh in zip(surfaces["obj"], surfaces["msh"]):
+        np.testing.assert_allclose(msh, obj, rtol=0, atol=1e-15)  # OBJ keeps 17 digits: the same doubles
+    path = tmp_path / "ball.foo"
+    path.write_text("0 0 0\n")
+    with pytest.raises(ParameterError, match=r"collider1_file.*unknown mesh format '\.foo': neither meshio nor"):
+        load_scene(colliders=({"shape": "mesh", "file": str(path)},))
 
 
 def test_a_mesh_collider_that_overlaps_the_cloth_at_the_start_is_refused(tmp_path):

@@ -67,6 +67,28 @@ def test_every_format_of_the_same_mesh_gives_the_same_topology(tmp_path, disc):
         np.testing.assert_allclose(topo.area, reference.area, rtol=1e-5, err_msg=suffix)
 
 
+def test_a_gmsh_file_of_a_format_beyond_the_listed_ones_reads_as_the_same_obj(tmp_path):
+    """A suffix outside mesh_file.SUFFIXES goes to meshio's reader of that suffix: a square of 2 x 2 quads
+    written by meshio as OBJ and as gmsh .msh gives the same mesh (its coordinates 0, 0.5, 1 are exact in both)."""
+    grid = np.array([[x, y, 0.0] for y in (0.0, 0.5, 1.0) for x in (0.0, 0.5, 1.0)])
+    quads = np.array([[0, 1, 4, 3], [1, 2, 5, 4], [3, 4, 7, 6], [4, 5, 8, 7]])
+    meshes, topologies = {}, {}
+    for suffix in ("obj", "msh"):
+        path = tmp_path / f"square.{suffix}"
+        meshio.write(path, meshio.Mesh(grid, [("quad", quads)]))
+        meshes[suffix] = read_mesh_file(path)
+        topologies[suffix] = build_topology(Scene(cloth_mesh=str(path)))
+    np.testing.assert_array_equal(meshes["obj"].points, grid)
+    np.testing.assert_array_equal(meshes["obj"].faces, quads)
+    np.testing.assert_array_equal(meshes["msh"].points, meshes["obj"].points)
+    np.testing.assert_array_equal(meshes["msh"].faces, meshes["obj"].faces)
+    obj, msh = topologies["obj"], topologies["msh"]
+    np.testing.assert_array_equal(msh.mesh.faces, obj.mesh.faces)
+    np.testing.assert_array_equal(msh.triangles, obj.triangles)
+    np.testing.assert_array_equal(msh.pairs, obj.pairs)
+    np.testing.assert_array_equal(msh.rest_pos, obj.rest_pos)
+
+
 def test_quads_and_mixed_faces_are_read_and_split(tmp_path):
     points = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0]], dtype=float)
     path = tmp_path / "mixed.obj"
@@ -91,7 +113,8 @@ BAD_FILES = {
     "seam": ("obj", r"'cloth_mesh'.*vertices 0 and 4 are at the same place .*2 such vertices.*fall apart"),
     "flat_shaded": ("glb", r"'cloth_mesh'.*vertices 0 and 3 are at the same place .*2 such vertices"),
     "millimetres": ("obj", r"'cloth_mesh'.*is 1000 m across \(coordinates are metres, up to 100 m\).*scaled"),
-    "unknown_format": ("xyz", r"'cloth_mesh'.*unknown mesh format '\.xyz'"),
+    "unreadable": ("xyz", r"'cloth_mesh'.*cannot be read as a mesh by trimesh \(meshio has no reader for '\.xyz'\)"),
+    "unknown_format": ("foo", r"'cloth_mesh'.*unknown mesh format '\.foo': neither meshio nor trimesh reads it"),
 }
 
 
@@ -122,7 +145,7 @@ def _bad_file(kind: str, folder: Path) -> Path:
         trimesh.Trimesh(square[[0, 1, 2, 0, 2, 3]], np.arange(6).reshape(2, 3), process=False).export(path)
     elif kind == "millimetres":  # a 1 m square written in millimetres
         meshio.write(path, meshio.Mesh(1000.0 * square, [("triangle", np.array([[0, 1, 2], [0, 2, 3]]))]))
-    elif kind == "unknown_format":
+    elif kind in ("unreadable", "unknown_format"):  # a point of an XYZ point cloud, too few to read as one
         path.write_text("0 0 0\n")
     return path
 

@@ -12,13 +12,12 @@ from __future__ import annotations
 
 import functools
 from collections import namedtuple
-from pathlib import Path
 
 import numpy as np
 
 from wetcloth._core import COLLIDER_COLUMNS, MESH_COLUMNS
 from wetcloth.errors import ParameterError
-from wetcloth.mesh_file import SUFFIXES, MeshFile, fan_triangles, locate, merged, read_faces, triangle_areas
+from wetcloth.mesh_file import FORMATS, MeshFile, fan_triangles, locate, merged, read_faces, triangle_areas
 
 #: All mesh colliders' arrays, as the core's ColliderMeshes: ``headers`` (k, MESH_COLUMNS) each mesh's
 #: first cell, grid origin (m), cell side (m), cells along x, y, z, solid flag and bounding box;
@@ -154,16 +153,14 @@ def mesh_of(collider, name: str = "collider_file") -> tuple[np.ndarray, np.ndarr
     path = locate(collider.file) if collider.file else None
     if path is None or not path.is_file():
         raise ParameterError(name, f"a mesh collider needs its mesh file; {str(collider.file)!r} is not a file; "
-                                   f"allowed: the path of a mesh file ({', '.join(SUFFIXES)})")
+                                   f"allowed: the path of a mesh file ({FORMATS})")
     points, triangles = _read(str(path.resolve()), path.stat().st_mtime_ns, name)
     return points + np.array([collider.x, collider.y, collider.z]), triangles
 
 
 @functools.lru_cache(maxsize=8)
 def _read(path: str, mtime_ns: int, name: str) -> tuple[np.ndarray, np.ndarray]:
-    allowed = "a mesh file (" + ", ".join(SUFFIXES) + ") of faces"
-    if Path(path).suffix.lower() not in SUFFIXES:
-        raise ParameterError(name, f"{path!r}: unknown mesh format {Path(path).suffix!r}; allowed: {allowed}")
+    allowed = "a mesh file (" + FORMATS + ") of faces"
     points, blocks, _, _ = read_faces(path, path, name, allowed, polygons=True)
     blocks = [b for b in blocks if len(b)]
     faces = fan_triangles(blocks)[0] if blocks else np.zeros((0, 3), dtype=np.int64)

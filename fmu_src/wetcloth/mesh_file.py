@@ -6,7 +6,9 @@ From Python a mesh may also be given as arrays, with no file: ``cloth_mesh`` tak
 bakes its objects so, as Blender ships neither meshio nor trimesh.
 
 OBJ, PLY, OFF and VTK/VTU are read with meshio, which keeps the file's vertex order, its quads and
-its point data; glTF/GLB (which meshio does not read) and STL with trimesh.  An STL file stores each
+its point data; glTF/GLB (which meshio does not read) and STL with trimesh.  A file of another suffix is
+read with meshio if meshio knows the suffix (gmsh .msh, Medit .mesh, Abaqus .inp, ...), else with trimesh
+if trimesh does (a suffix neither knows is refused).  An STL file stores each
 triangle's own corners: its exactly equal vertices are merged, numbered in order of first appearance.
 An OBJ file's normals (``vn``) are not read, nor its UVs (``vt``) unless each face corner's ``vt``
 index is its ``v`` index (UVs per vertex; at a UV seam they are per corner, which a particle cannot
@@ -33,8 +35,10 @@ NAME = "cloth_mesh"
 MESHIO_SUFFIXES = (".obj", ".ply", ".off", ".vtk", ".vtu")
 TRIMESH_SUFFIXES = (".stl", ".gltf", ".glb")
 SUFFIXES = MESHIO_SUFFIXES + TRIMESH_SUFFIXES
+#: The formats a mesh file may have, as messages say.
+FORMATS = ", ".join(SUFFIXES) + " or another that meshio or trimesh reads, e.g. gmsh .msh"
 #: What ``cloth_mesh`` allows, as its messages say (the scene parameter's range text).
-ALLOWED = ("'' (the nx x ny rectangle) or the path of a mesh file (" + ", ".join(SUFFIXES) + ") of triangles "
+ALLOWED = ("'' (the nx x ny rectangle) or the path of a mesh file (" + FORMATS + ") of triangles "
            "and quads with an area each, every vertex in a face, no two vertices at the same place and every edge in "
            "at most two faces (from Python "
            "also such a mesh as arrays: wetcloth.mesh_file.make_mesh)")
@@ -92,8 +96,6 @@ def read_mesh_file(path: "str | Path | MeshFile") -> MeshFile:
     if isinstance(path, MeshFile):
         return path
     path = locate(path)
-    if path.suffix.lower() not in SUFFIXES:
-        raise _error(f"{str(path)!r}: unknown mesh format {path.suffix!r}")
     try:
         stat = path.stat()
     except OSError as exc:
@@ -112,15 +114,38 @@ def read_faces(path: str, shown: str, name: str, allowed: str, polygons: bool = 
     ``polygons``, faces of more corners too, as runs (j, k)), its point attributes and UVs (or None),
     unchecked: the one reader of cloth and collider files (meshio or trimesh by the suffix, see the
     module).  A file no reader understands raises a ParameterError naming ``name``, ``allowed`` its range."""
+    suffix, reader = Path(path).suffix.lower(), reader_of(path)
+    if reader is None:
+        raise ParameterError(name, f"{shown!r}: unknown mesh format {suffix!r}: neither meshio nor trimesh reads "
+                                   f"it; allowed: {allowed}")
+    tried = reader if reader == "meshio" or suffix in TRIMESH_SUFFIXES else \
+        f"trimesh (meshio has no reader for {suffix!r})"
     try:
-        if Path(path).suffix.lower() in MESHIO_SUFFIXES:
-            return _read_meshio(path, polygons)
-        return _read_trimesh(path)
+        return _read_meshio(path, polygons) if reader == "meshio" else _read_trimesh(path)
     except ParameterError:
         raise
     except Exception as exc:  # the readers raise many kinds of errors for a damaged file
-        raise ParameterError(name, f"{shown!r} cannot be read as a mesh: {type(exc).__name__}: {exc}; "
+        raise ParameterError(name, f"{shown!r} cannot be read as a mesh by {tried}: {type(exc).__name__}: {exc}; "
                                    f"allowed: {allowed}") from None
+
+
+def reader_of(path: str) -> str | None:
+    """'meshio' or 'trimesh', the reader of a mesh file by its suffix (see the module), or None if neither
+    knows the suffix.  Compound suffixes count (meshio's '.vol.gz')."""
+    suffix = Path(path).suffix.lower()
+    if suffix in MESHIO_SUFFIXES:
+        return "meshio"
+    if suffix in TRIMESH_SUFFIXES:
+        return "trimesh"
+    import meshio
+    import trimesh
+
+    tails = ["".join(Path(path).suffixes[-k:]).lower() for k in range(1, len(Path(path).suffixes) + 1)]
+    if any(tail in meshio.extension_to_filetypes for tail in tails):
+        return "meshio"
+    if any(tail.lstrip(".") in trimesh.available_formats() for tail in tails):
+        return "trimesh"
+    return None
 
 
 def _read_meshio(path: str, polygons: bool):

@@ -88,9 +88,12 @@ class Collider:
     friction: float = _param(0.5, "-", "Coulomb friction coefficient of the collider", 0.0, 10.0)
 
     def row(self) -> list[float]:
-        """The core's row (colliders.hpp: shape code, centre, radius, height, sizes, unit normal, friction)."""
-        normal = np.array([self.normal_x, self.normal_y, self.normal_z])
-        normal = normal / np.linalg.norm(normal)
+        """The core's row (colliders.hpp: shape code, centre, radius, height, sizes, unit normal, friction).  The
+        normal's length is summed in a fixed order, as the native unit sums it (``fmu/unit.cpp``'s
+        collider_rows): the same bits (a BLAS dot product's order and fused multiply-adds vary by CPU)."""
+        norm = np.sqrt(np.float64(self.normal_x * self.normal_x + self.normal_y * self.normal_y
+                                  + self.normal_z * self.normal_z))
+        normal = np.array([self.normal_x, self.normal_y, self.normal_z]) / norm
         return [float(COLLIDER_SHAPES.index(self.shape)), self.x, self.y, self.z, self.radius, self.height,
                 self.size_x, self.size_y, self.size_z, *map(float, normal), self.friction]
 

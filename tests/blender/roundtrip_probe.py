@@ -6,8 +6,8 @@ with a pin vertex group out to wetcloth and its frames back onto the same object
 
 export: a subdivided plane 1 m above the origin, its top edge in the vertex group "pin"; the group as a
 point attribute and the mesh as PLY (EXPORT_SNIPPET, the docs' code), the .blend saved.  play: the
-saved .blend opened, the USD cache on the same object (PLAY_SNIPPET), the evaluated positions at the
-spec's frames reported.
+saved .blend opened, the USD cache on the same object (PLAY_SNIPPET), the evaluated positions and UV
+maps at the spec's frames reported (export reports the object's UV maps as exported).
 """
 
 import json
@@ -40,11 +40,25 @@ modifier.read_data = {"VERT"}                       # positions only: the object
 '''
 
 
-def positions(obj) -> list:
-    mesh = obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).to_mesh()
+def uv_maps(mesh) -> dict:
+    """A mesh's UV maps: name -> the (u, v) of each face corner in Blender's order, as a flat list."""
+    maps = {}
+    for layer in mesh.uv_layers:
+        values = np.empty(len(layer.data) * 2)
+        layer.data.foreach_get("uv", values)
+        maps[layer.name] = values.tolist()
+    return maps
+
+
+def evaluated(obj) -> tuple[list, dict]:
+    """The object's evaluated (modifiers applied) vertex positions (n, 3) in its own coordinates, and UV maps."""
+    owner = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    mesh = owner.to_mesh()
     out = np.empty(len(mesh.vertices) * 3)
     mesh.vertices.foreach_get("co", out)
-    return out.reshape(-1, 3).tolist()
+    result = out.reshape(-1, 3).tolist(), uv_maps(mesh)
+    owner.to_mesh_clear()
+    return result
 
 
 def export(spec: dict) -> dict:
@@ -61,18 +75,18 @@ def export(spec: dict) -> dict:
     exec(EXPORT_SNIPPET, {"bpy": bpy, "PLY": spec["ply"]})
     bpy.ops.wm.save_as_mainfile(filepath=spec["blend"])
     world = [list(obj.matrix_world @ v.co) for v in obj.data.vertices]
-    return {"vertices": len(obj.data.vertices), "pinned": top, "world": world}
+    return {"vertices": len(obj.data.vertices), "pinned": top, "world": world, "uv": uv_maps(obj.data)}
 
 
 def play(spec: dict) -> dict:
     bpy.ops.wm.open_mainfile(filepath=spec["blend"])
     exec(PLAY_SNIPPET, {"bpy": bpy, "USD": spec["usd"]})
     obj = bpy.data.objects["Cloth"]
-    frames = {}
+    frames, uv = {}, {}
     for frame in spec["frames"]:
         bpy.context.scene.frame_set(frame)
-        frames[str(frame)] = positions(obj)
-    return {"frames": frames, "uv_layers": [uv.name for uv in obj.data.uv_layers]}
+        frames[str(frame)], uv[str(frame)] = evaluated(obj)
+    return {"frames": frames, "uv": uv}
 
 
 def main() -> None:

@@ -1,7 +1,8 @@
 // The FMI 3.0 co-simulation interface of the native WetCloth unit: every fmi3 function over wc::fmu::Unit
 // (unit.hpp), with the cloth mesh as the array outputs `positions` [ny, nx, 3] and `wetness` [ny, nx], sized by
-// the structural parameters nx and ny (UInt64).  Nothing escapes as a crash: each call catches what the unit
-// throws and returns fmi3Error with the reason logged; errors and warnings always go to the master's logger.
+// the structural parameters nx and ny (UInt64), and a mesh cloth's faces (UInt64) and UVs as constant arrays.
+// Nothing escapes as a crash: each call catches what the unit throws and returns fmi3Error with the reason
+// logged; errors and warnings always go to the master's logger.
 // Model exchange, scheduled execution, event mode, clocks and derivatives return fmi3Error.
 #include <cstdint>
 #include <cstring>
@@ -204,7 +205,10 @@ fmi3Status fmi3GetFloat64(fmi3Instance c, const fmi3ValueReference valueReferenc
 
 fmi3Status fmi3GetUInt64(fmi3Instance c, const fmi3ValueReference valueReferences[], size_t nValueReferences,
                          fmi3UInt64 values[], size_t nValues) {
-    return get_integers(c, "fmi3GetUInt64", true, valueReferences, nValueReferences, values, nValues);
+    return Fmi::guarded(c, "fmi3GetUInt64", [&](Instance& instance) {
+        if (nValueReferences == 0 && nValues == 0) return fmi3OK;
+        return Fmi::status_of(instance.unit->get_uint64(valueReferences, nValueReferences, values, nValues, "fmi3GetUInt64"));
+    });
 }
 
 fmi3Status fmi3GetInt32(fmi3Instance c, const fmi3ValueReference valueReferences[], size_t nValueReferences,

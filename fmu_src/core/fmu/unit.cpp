@@ -86,6 +86,7 @@ const char* type_name(Type type) {
     switch (type) {
         case Type::REAL: return fmi_version() == 2 ? "Real" : "Float64";
         case Type::INTEGER: return fmi_version() == 2 ? "Integer" : "UInt64";
+        case Type::UINT64: return "UInt64";
         default: return "String";
     }
 }
@@ -102,6 +103,44 @@ Scene start_scene() {
         }
     }
     return scene;
+}
+
+//: The colliders' fields as the unit starts with them (the collider variables' start values), in the rows'
+//: layout: the rows built in (shape codes) with every number field at its start value.
+std::vector<double> start_colliders() {
+    std::vector<double> fields(SCENE_COLLIDERS, SCENE_COLLIDERS + SCENE_COLLIDERS_SIZE);
+    for (std::size_t vr = 0; vr < variable_count(); ++vr) {
+        const Variable& var = variables()[vr];
+        if (var.role == Role::COLLIDER) fields[static_cast<std::size_t>(var.slot)] = var.start;
+    }
+    return fields;
+}
+
+//: The core's collider rows of the colliders' fields (Collider.row(): the normal made unit; a mesh collider's
+//: radius column keeps its mesh's index, built in).
+std::vector<double> collider_rows(const std::vector<double>& fields) {
+    std::vector<double> rows(fields);
+    for (std::size_t at = 0; at < rows.size(); at += COLLIDER_COLUMNS) {
+        double* row = rows.data() + at;
+        if (row[C_SHAPE] == MESH) row[C_RADIUS] = SCENE_COLLIDERS[at + C_RADIUS];
+        const double norm = std::sqrt(row[C_NORMAL_X] * row[C_NORMAL_X] + row[C_NORMAL_Y] * row[C_NORMAL_Y] +
+                                      row[C_NORMAL_Z] * row[C_NORMAL_Z]);
+        for (Index c = C_NORMAL_X; c <= C_NORMAL_Z; ++c) row[c] = row[c] / norm;
+    }
+    return rows;
+}
+
+//: What is wrong with the colliders' fields as a whole (scene._checked_colliders: a plane's normal that is
+//: zero), or "".
+std::string collider_problem(const std::vector<double>& fields) {
+    for (std::size_t at = 0; at < fields.size(); at += COLLIDER_COLUMNS) {
+        const double* row = fields.data() + at;
+        if (row[C_SHAPE] == PLANE && row[C_NORMAL_X] == 0.0 && row[C_NORMAL_Y] == 0.0 && row[C_NORMAL_Z] == 0.0) {
+            return "parameter 'collider" + std::to_string(at / COLLIDER_COLUMNS + 1) +
+                   "_normal_z': a plane's normal is zero; allowed: a nonzero (normal_x, normal_y, normal_z)";
+        }
+    }
+    return "";
 }
 
 template <class T, std::size_t N>
@@ -177,10 +216,11 @@ std::string unit_scene_problem(const Scene& scene) {
     return scene_problem(scene, built_in_cloth().get(), built_in_pins().get());
 }
 
-//: The scene's colliders, grip keys and cloth built into the unit (build-fmu --native --scene; none without).
-Fixtures scene_fixtures() {
+//: The scene's colliders (with their fields `colliders`), grip keys and cloth built into the unit
+//: (build-fmu --native --scene; none without).
+Fixtures scene_fixtures(const std::vector<double>& colliders) {
     Fixtures f;
-    f.colliders.assign(SCENE_COLLIDERS, SCENE_COLLIDERS + SCENE_COLLIDERS_SIZE);
+    f.colliders = collider_rows(colliders);
     f.mesh_headers.assign(SCENE_MESH_HEADERS, SCENE_MESH_HEADERS + SCENE_MESH_HEADERS_SIZE);
     f.mesh_vertices.assign(SCENE_MESH_VERTICES, SCENE_MESH_VERTICES + SCENE_MESH_VERTICES_SIZE);
     f.face_normals.assign(SCENE_FACE_NORMALS, SCENE_FACE_NORMALS + SCENE_FACE_NORMALS_SIZE);
@@ -196,9 +236,10 @@ Fixtures scene_fixtures() {
     return f;
 }
 
-//: The simulation of `scene` with the unit's fixtures (std::invalid_argument as Simulation's).
-std::unique_ptr<Simulation> new_simulation(const Scene& scene) {
-    return std::make_unique<Simulation>(scene, scene_fixtures());
+//: The simulation of `scene` with the unit's fixtures, its colliders' fields `colliders` (std::invalid_argument
+//: as Simulation's).
+std::unique_ptr<Simulation> new_simulation(const Scene& scene, const std::vector<double>& colliders) {
+    return std::make_unique<Simulation>(scene, scene_fixtures(colliders));
 }
 
 // ------------------------------------------------------------------------------ state bytes
@@ -217,6 +258,7 @@ bool same_scene(const Scene& a, const Scene& b) {
 //: A parsed unit state (checkpoint.Checkpoint).
 struct Parsed {
     Scene values;
+    std::vector<double> colliders;
     std::string mesh_output_dir, mesh_format;
     std::vector<std::pair<std::uint64_t, std::string>> refused;
     bool initialized = false, clock_set = false;
@@ -246,6 +288,8 @@ Parsed parse(const std::vector<unsigned char>& bytes) {
                          std::to_string(variable_count()) + ")");
     }
     for_each_field(p.values, [&](const char*, auto& v) { v = in.get<std::remove_reference_t<decltype(v)>>(); });
+    p.colliders = start_colliders();
+    for (double& v : p.colliders) v = in.get<double>();
     p.mesh_output_dir = in.text();
     p.mesh_format = in.text();
     const auto refusals = in.get<std::uint64_t>();
@@ -277,6 +321,10 @@ Parsed parse(const std::vector<unsigned char>& bytes) {
         const Variable& var = variables()[vr];
         try {
             if (var.role == Role::SCENE && var.real) check_number(var, p.values.*var.real, py_repr(p.values.*var.real));
+            if (var.role == Role::COLLIDER) {
+                const double v = p.colliders[static_cast<std::size_t>(var.slot)];
+                check_number(var, v, py_repr(v));
+            }
             if (var.role == Role::SCENE && var.integer && var.type == Type::INTEGER) {
                 const Index v = p.values.*var.integer;
                 check_number(var, static_cast<double>(v), std::to_string(v));
@@ -293,6 +341,12 @@ Parsed parse(const std::vector<unsigned char>& bytes) {
             throw StateError(std::string("the state holds an invalid value: ") + exc.what());
         }
     }
+    const std::vector<double> built = start_colliders();
+    for (std::size_t at = 0; at < built.size(); at += COLLIDER_COLUMNS) {
+        if (p.colliders[at + C_SHAPE] != built[at + C_SHAPE]) throw StateError("the state's colliders are not this unit's");
+    }
+    const std::string colliders = collider_problem(p.colliders);
+    if (!colliders.empty()) throw StateError("the state holds an invalid value: " + colliders);
     if (p.initialized && !same_scene(p.values, p.simulation.scene)) {
         throw StateError("the state's variable values differ from its simulation's scene");
     }
@@ -359,6 +413,7 @@ Unit::Unit(std::string instance_name, Log log) : name_(std::move(instance_name))
 
 void Unit::apply_starts() {
     values_ = start_scene();
+    colliders_ = start_colliders();
     for (std::size_t vr = 0; vr < variable_count(); ++vr) {
         const Variable& var = variables()[vr];
         if (var.role == Role::MESH_OUTPUT_DIR) mesh_output_dir_ = var.start_text;
@@ -382,13 +437,13 @@ Simulation& Unit::simulation() {
     if (sim_) return *sim_;
     if (!preview_) {
         // The initial state of the current values, or of the defaults while they do not form a scene.
-        if (unit_scene_problem(values_).empty()) {
+        if (unit_scene_problem(values_).empty() && collider_problem(colliders_).empty()) {
             try {
-                preview_ = new_simulation(values_);
+                preview_ = new_simulation(values_, colliders_);
             } catch (const std::invalid_argument&) {  // a collider in the cloth at t = 0
             }
         }
-        if (!preview_) preview_ = new_simulation(start_scene());
+        if (!preview_) preview_ = new_simulation(start_scene(), start_colliders());
     }
     return *preview_;
 }
@@ -423,6 +478,7 @@ std::string Unit::current_text(const Variable& var) const {
     switch (var.role) {
         case Role::MESH_OUTPUT_DIR: return py_repr(std::string_view(mesh_output_dir_));
         case Role::MESH_FORMAT: return py_repr(std::string_view(mesh_format_));
+        case Role::COLLIDER: return py_repr(colliders_[static_cast<std::size_t>(var.slot)]);
         default: break;
     }
     if (var.real) return py_repr(values_.*var.real);
@@ -445,8 +501,9 @@ Outcome Unit::accept(std::uint64_t vr) {
 //: The message of a value set after initialization that must not change (unit.py's set_value and
 //: Simulation.set_inputs).
 static std::string fixed_after_start(const Variable& var) {
-    return parameter_error(var.name, var.role == Role::SCENE ? "is fixed once the simulation starts; only inputs may change"
-                                                             : "is fixed once the unit is initialized");
+    return parameter_error(var.name, var.role == Role::SCENE || var.role == Role::COLLIDER
+                                         ? "is fixed once the simulation starts; only inputs may change"
+                                         : "is fixed once the unit is initialized");
 }
 
 const Variable* Unit::settable(std::uint64_t vr, Type type, const char* function) {
@@ -469,6 +526,17 @@ Outcome Unit::set_real(std::uint64_t vr, double value, const char* function) {
     if (!var) return Outcome::ERROR;
     try {
         const std::string text = py_repr(value);
+        if (var->role == Role::COLLIDER) {
+            double& field = colliders_[static_cast<std::size_t>(var->slot)];
+            if (!initialized_) {
+                check_number(*var, value, text);
+                field = value;
+                preview_.reset();
+            } else if (value != field) {
+                throw std::invalid_argument(fixed_after_start(*var));
+            }
+            return accept(vr);
+        }
         if (!initialized_) {
             check_number(*var, value, text);
             values_.*var->real = value;
@@ -539,7 +607,7 @@ Outcome Unit::get_real(const std::uint32_t* vrs, std::size_t nvr, double* values
             error(std::string(function) + ": variable '" + var->name + "' is a " + type_name(var->type));
             return Outcome::ERROR;
         }
-        std::size_t size = 1;
+        std::size_t size = var->role == Role::UV ? CONSTANT_UV_SIZE : 1;
         if (var->role == Role::POSITIONS || var->role == Role::WETNESS) {
             const Index n = sim_ ? sim_->n() : built_in_cloth() ? built_in_cloth()->n : values_.nx * values_.ny;
             size = static_cast<std::size_t>(var->role == Role::POSITIONS ? 3 * n : n);
@@ -551,6 +619,7 @@ Outcome Unit::get_real(const std::uint32_t* vrs, std::size_t nvr, double* values
         }
         switch (var->role) {
             case Role::SCENE: values[at] = values_.*var->real; break;
+            case Role::COLLIDER: values[at] = colliders_[static_cast<std::size_t>(var->slot)]; break;
             case Role::TIME: values[at] = time(); break;
             case Role::OUTPUT:
                 if (!outputs_valid_) {
@@ -560,6 +629,7 @@ Outcome Unit::get_real(const std::uint32_t* vrs, std::size_t nvr, double* values
                 values[at] = outputs_[var->slot];
                 break;
             case Role::STEP_ERROR: values[at] = simulation().error_estimate(); break;
+            case Role::UV: std::copy(CONSTANT_UV, CONSTANT_UV + CONSTANT_UV_SIZE, values + at); break;
             case Role::POSITIONS:
                 if (static_cast<std::size_t>(3 * simulation().n()) != size) {
                     error(std::string(function) + ": 'positions' holds 3 nx ny = " +
@@ -596,6 +666,39 @@ Outcome Unit::get_integer(std::uint64_t vr, std::int64_t& value, const char* fun
         return Outcome::ERROR;
     }
     value = values_.*var->integer;
+    return Outcome::OK;
+}
+
+Outcome Unit::get_uint64(const std::uint32_t* vrs, std::size_t nvr, std::uint64_t* values, std::size_t n_values,
+                         const char* function) {
+    std::size_t at = 0;
+    for (std::size_t k = 0; k < nvr; ++k) {
+        const Variable* var = variable(vrs[k], function);
+        if (!var) return Outcome::ERROR;
+        const bool structural = var->type == Type::INTEGER && var->causality == Causality::STRUCTURAL_PARAMETER;
+        if (var->type != Type::UINT64 && !structural) {
+            error(std::string(function) + ": variable '" + var->name + "' is " +
+                  (var->type == Type::INTEGER ? "an Int32" : std::string("a ") + type_name(var->type)));
+            return Outcome::ERROR;
+        }
+        const std::size_t size = var->role == Role::FACES ? CONSTANT_FACES_SIZE : 1;
+        if (at + size > n_values) {
+            error(std::string(function) + ": " + std::to_string(n_values) + " values asked for, but the variables hold more"
+                  " (" + var->name + " alone " + std::to_string(size) + ")");
+            return Outcome::ERROR;
+        }
+        if (var->role == Role::FACES) {
+            std::copy(CONSTANT_FACES, CONSTANT_FACES + CONSTANT_FACES_SIZE, values + at);
+        } else {
+            values[at] = static_cast<std::uint64_t>(values_.*var->integer);
+        }
+        at += size;
+    }
+    if (at != n_values) {
+        error(std::string(function) + ": " + std::to_string(n_values) + " values asked for, the variables hold " +
+              std::to_string(at));
+        return Outcome::ERROR;
+    }
     return Outcome::OK;
 }
 
@@ -639,9 +742,11 @@ Outcome Unit::exit_initialization() {
     for (const auto& entry : refused_) problems.push_back(entry.second);
     const std::string whole = unit_scene_problem(values_);
     if (!whole.empty()) problems.push_back(whole);
+    const std::string colliders = collider_problem(colliders_);
+    if (!colliders.empty()) problems.push_back(colliders);
     if (problems.empty()) {
         try {
-            sim_ = new_simulation(values_);
+            sim_ = new_simulation(values_, colliders_);
         } catch (const std::bad_alloc&) {
             problems.push_back("not enough memory for a cloth of nx x ny = " + std::to_string(values_.nx) + " x " +
                                std::to_string(values_.ny) + " particles");
@@ -778,6 +883,7 @@ std::vector<unsigned char> Unit::state() const {
     out.begin(STATE_MAGIC, MAGIC_SIZE, STATE_VERSION);
     out.put(static_cast<std::uint64_t>(variable_count()));
     for_each_field(values_, [&](const char*, const auto& v) { out.put(v); });
+    for (const double v : colliders_) out.put(v);
     out.text(mesh_output_dir_);
     out.text(mesh_format_);
     out.put(static_cast<std::uint64_t>(refused_.size()));
@@ -814,10 +920,11 @@ Outcome Unit::set_state(const std::vector<unsigned char>& bytes) {
                                  " (fixed once it is initialized)");
             }
             try {
-                if (sim_ && fixed_differences(sim_->scene(), scene).empty()) {
+                if (sim_ && fixed_differences(sim_->scene(), scene).empty() &&
+                    sim_->fixtures().colliders == collider_rows(p.colliders)) {
                     sim_->restore(p.simulation);  // checks everything before it changes anything
                 } else {
-                    fresh = new_simulation(scene);
+                    fresh = new_simulation(scene, p.colliders);
                     fresh->restore(p.simulation);
                 }
             } catch (const SnapshotError& exc) {
@@ -830,6 +937,7 @@ Outcome Unit::set_state(const std::vector<unsigned char>& bytes) {
             sim_.reset();
         }
         values_ = p.values;
+        colliders_ = p.colliders;
         mesh_output_dir_ = p.mesh_output_dir;
         mesh_format_ = p.mesh_format;
         refused_ = p.refused;

@@ -25,11 +25,14 @@ namespace wc::fmu {
 //: FMI statuses, in the order of fmi2Status and fmi3Status.
 enum class Outcome : int { OK = 0, WARNING = 1, DISCARD = 2, ERROR = 3, FATAL = 4 };
 
-enum class Type : int { REAL, INTEGER, STRING };
+enum class Type : int { REAL, INTEGER, STRING, UINT64 };  // UINT64: FMI 3.0's constant array of faces
 enum class Causality : int { PARAMETER, STRUCTURAL_PARAMETER, INPUT, OUTPUT, INDEPENDENT };
-//: What a variable reads and writes: a Scene field, an FMU-only parameter, an output slot of
-//: record_outputs, a mesh array output or the time.
-enum class Role : int { SCENE, MESH_OUTPUT_DIR, MESH_FORMAT, OUTPUT, STEP_ERROR, POSITIONS, WETNESS, TIME };
+//: What a variable reads and writes: a Scene field, a number field of a collider built in (--scene), an
+//: FMU-only parameter, an output slot of record_outputs, a mesh array output, a constant array output (a mesh
+//: cloth's faces and UVs, built in: CONSTANT_FACES, CONSTANT_UV) or the time.
+enum class Role : int {
+    SCENE, COLLIDER, MESH_OUTPUT_DIR, MESH_FORMAT, OUTPUT, STEP_ERROR, POSITIONS, WETNESS, FACES, UV, TIME
+};
 
 //: One variable of the generated table (its index is its value reference).
 struct Variable {
@@ -39,7 +42,7 @@ struct Variable {
     Role role;
     double Scene::*real;  // Scene field (Real), else null
     Index Scene::*integer;  // Scene field (Integer, or a string choice's code), else null
-    Index slot;             // OUTPUT: slot of the outputs' row
+    Index slot;             // OUTPUT: slot of the outputs' row; COLLIDER: place in the colliders' rows
     double start;           // Real and Integer start value
     const char* start_text; // String start value
     bool ranged;            // min and max apply
@@ -92,6 +95,9 @@ public:
     Outcome get_real(const std::uint32_t* vrs, std::size_t nvr, double* values, std::size_t n_values,
                      const char* function);
     Outcome get_integer(std::uint64_t vr, std::int64_t& value, const char* function);
+    //: FMI 3.0's UInt64 variables: the structural parameters and the faces (values[n_values] in order).
+    Outcome get_uint64(const std::uint32_t* vrs, std::size_t nvr, std::uint64_t* values, std::size_t n_values,
+                       const char* function);
     Outcome get_string(std::uint64_t vr, const char*& value, const char* function);
     //: The table's entry of vr, or null (logged) if there is none.
     const Variable* variable(std::uint64_t vr, const char* function);
@@ -137,6 +143,7 @@ private:
     std::string name_;
     Log log_;
     Scene values_;
+    std::vector<double> colliders_;  // the colliders' fields as the variables hold them, in the rows' layout
     std::string mesh_output_dir_, mesh_format_;
     std::vector<std::pair<std::uint64_t, std::string>> refused_;  // value reference -> message, in order
     bool initialized_ = false, terminated_ = false, clock_set_ = false;

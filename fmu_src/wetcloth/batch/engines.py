@@ -41,18 +41,28 @@ def python_series(params: dict[str, Any], duration: float, sample_rate: float) -
     return {"time": times, **{name: outputs[:, k].copy() for k, name in enumerate(OUTPUT_NAMES)}}
 
 
+def is_fmu_variable(name: str) -> bool:
+    """Whether study parameter ``name`` is a variable of a unit built from the study's scene: a scene parameter,
+    or a number field of one of its colliders (collider1_radius; ``vocabulary.COLLIDER_VARIABLES``)."""
+    from wetcloth.fmu.vocabulary import COLLIDER_VARIABLES
+    from wetcloth.scene import PARAMETERS, collider_name
+
+    where = collider_name(name)
+    return name in PARAMETERS or (where is not None and where[1] in COLLIDER_VARIABLES)
+
+
 def fmu_series(params: dict[str, Any], duration: float, sample_rate: float, fmu: str) -> dict[str, np.ndarray]:
     """Outputs of the FMU (fmpy co-simulation, communication step 1/``sample_rate`` s); a run the unit
-    stops early raises (a blow-up as BlowUpError), as the Python engine does.  The scene's colliders and
-    grip keys must be those built into the unit (ValueError otherwise); the other parameters are its
-    start values."""
+    stops early raises (a blow-up as BlowUpError), as the Python engine does.  The scene's colliders (their
+    number, shapes and files), grip keys and collider keys must be those built into the unit (ValueError
+    otherwise); the other parameters, the colliders' number fields among them, are its start values."""
     from wetcloth.fmu.cosim import simulate, unpacked
     from wetcloth.fmu.packed_scene import check_carries
-    from wetcloth.scene import PARAMETERS, from_dict
+    from wetcloth.scene import from_dict
 
     folder, _ = unpacked(fmu)
     check_carries(fmu, Path(folder) / "resources", from_dict(params))
-    variables = {name: value for name, value in params.items() if name in PARAMETERS}
+    variables = {name: value for name, value in params.items() if is_fmu_variable(name)}
     result = simulate(fmu, duration, sample_rate, variables, output=OUTPUT_NAMES)
     return {name: np.asarray(result[name], float) for name in RUN_SERIES}
 

@@ -41,7 +41,7 @@ import numpy as np
 from wetcloth import run_settings
 from wetcloth.batch.axes import (SAMPLINGS, Axis, check_count, check_name, from_unit, parse_axis, point_count,
                                  points, typed)
-from wetcloth.batch.engines import ENGINES
+from wetcloth.batch.engines import ENGINES, is_fmu_variable
 from wetcloth.batch.metrics import DEFAULT_METRICS, check_metric_names
 from wetcloth.batch.plot_spec import PlotSpec, SeriesPlotSpec, plot_specs
 from wetcloth.batch.sensitivity import SensitivitySpec, check_factors, design, parse_sensitivity
@@ -239,10 +239,10 @@ class Study:
         for both in (n for n in names if n in self.base):
             mistakes.add(StudyError(f"axes.{both}", "is also set in [base]: set it in one place"))
         if self.engine == "fmu":
-            for fixed in (n for n in names if n not in PARAMETERS):
-                mistakes.add(StudyError(f"axes.{fixed}", "is built into an FMU, not one of its variables (colliders "
-                                                         "and grip keys): engine 'fmu' cannot vary it; use engine "
-                                                         "'python'"))
+            for fixed in (n for n in names if not is_fmu_variable(n)):
+                mistakes.add(StudyError(f"axes.{fixed}", "is built into an FMU, not one of its variables (colliders' "
+                                                         "shapes and files, grip keys and collider keys): engine "
+                                                         "'fmu' cannot vary it; use engine 'python'"))
         if self.sensitivity is not None:
             self._check_sensitivity(mistakes)
         else:

@@ -21,8 +21,9 @@ def add_parser(sub) -> None:
                                             f"{native_fmu_path(2)}, {native_fmu_path(3)})")
     p.add_argument("--fmi", type=int, choices=(2, 3), default=2, help="FMI version (default 2)")
     p.add_argument("--scene", help="a scene file (or preset name) whose values become the unit's start values, "
-                                   "its colliders and grip keys built in; its mesh files go into the unit's "
-                                   "resources (the native unit compiles the cloth's mesh into its binary)")
+                                   "its colliders' number fields parameters (collider1_radius), their shapes and "
+                                   "the keys built in; its mesh files go into the unit's resources (the native "
+                                   "unit compiles the cloth's mesh into its binary)")
     p.add_argument("--native", action="store_true",
                    help="compile the unit from the C++ core (no Python in it) instead of packing the Python one")
     p.set_defaults(func=main)

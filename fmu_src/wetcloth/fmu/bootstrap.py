@@ -176,16 +176,19 @@ def load_wetcloth(resources: Path):
             raise
         raise missing_dependency(exc, manifest["requires"] if manifest else []) from None
     if manifest is not None:
-        _check_variables(module, manifest)
+        _check_variables(module, manifest, resources)
     _LOADED[str(resources)] = module
     return module
 
 
-def _check_variables(module, manifest: dict) -> None:
-    """Refuse a wetcloth whose FMU variables differ from those the model description lists."""
+def _check_variables(module, manifest: dict, resources: Path) -> None:
+    """Refuse a wetcloth whose FMU variables differ from those the model description lists (with the
+    parameters of the colliders of a scene built into the unit, in ``resources``)."""
+    from wetcloth.fmu import packed_scene
     from wetcloth.fmu.vocabulary import variable_specs
 
-    names = [s.name for s in variable_specs(fmi_version=manifest["fmi_version"])]
+    packed = packed_scene.load(resources)
+    names = [s.name for s in variable_specs(fmi_version=manifest["fmi_version"], packed=packed)]
     if names != manifest["variables"]:
         message = (f"this WetCloth FMU was built for the variables {manifest['variables']}, but the wetcloth imported "
                    f"from {Path(module.__file__).parent} defines {names}; rebuild it with `wetcloth build-fmu`")

@@ -140,7 +140,8 @@ def documentation_html(specs: list[VariableSpec], fmi_version: int = 2) -> str:
     rows = []
     for s in specs:
         unit = fmi_unit_name(s.unit) or ""
-        start = "" if s.start is None else repr(s.start) if s.type == "String" else f"{s.start:g}"
+        start = ("" if s.start is None else "(in the model description)" if s.variability == "constant"
+                 else repr(s.start) if s.type == "String" else f"{s.start:g}")
         shape = f" [{', '.join(map(str, s.dimensions))}]" if s.dimensions else ""
         cells = (s.name + shape, s.causality, s.type, unit, start, _range(s), s.description)
         rows.append("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in cells) + "</tr>")

@@ -70,8 +70,10 @@ class Checkpoint:
 
 
 def scene_id(scene: Scene) -> str:
-    """Identity of a scene: SHA-256 of its fixed parameters (inputs may change during a run)."""
-    fixed = {name: value for name, value in scene.to_dict().items() if PARAMETERS[name].metadata["fmu"] != INPUT}
+    """Identity of a scene: SHA-256 of its fixed parameters, its colliders' and keys' fields among them (inputs
+    may change during a run)."""
+    fixed = {name: value for name, value in scene.to_dict().items()
+             if name not in PARAMETERS or PARAMETERS[name].metadata["fmu"] != INPUT}
     return hashlib.sha256(json.dumps(fixed, sort_keys=True).encode()).hexdigest()
 
 

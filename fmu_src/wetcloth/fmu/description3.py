@@ -2,9 +2,11 @@
 
 The FMI 2.0 types map to FMI 3.0 ones: Real -> Float64, String -> String, Integer -> Int32, except
 that an Integer parameter that sizes an array output (``nx``, ``ny``) is a UInt64 structural
-parameter, as FMI 3.0 requires of a ``Dimension``'s variable.  pythonfmu3 writes causality,
-variability, start, units and the model structure; here each variable also gets ``min``/``max``
-and the outputs their direct-feedthrough dependencies.
+parameter, as FMI 3.0 requires of a ``Dimension``'s variable; a mesh cloth's faces are a constant
+UInt64 array output (pythonfmu3's binary aborts the host's process on any ``fmi3GetUInt32``: no UInt32
+variable).  pythonfmu3 writes causality, variability, start, units and the model structure; here each
+variable also gets ``min``/``max`` (a constant its whole ``start``) and the outputs their
+direct-feedthrough dependencies.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ class Int32Variable(WithAttributes, Int32):
 
 
 class UInt64Variable(WithAttributes, UInt64):
-    """A pythonfmu3 ``UInt64`` with range (a structural parameter)."""
+    """A pythonfmu3 ``UInt64`` with range (a structural parameter), or a constant array (a mesh's faces)."""
 
 
 class StringVariable(WithAttributes, String):
@@ -49,15 +51,18 @@ def make_variable(spec: VariableSpec, getter: Callable, setter: Callable | None,
     kwargs = dict(variability=Fmi3Variability[spec.variability], description=spec.description,
                   initial={"exact": Fmi3Initial.exact, "calculated": Fmi3Initial.calculated}.get(spec.initial),
                   getter=getter, setter=setter)
+    start = None if spec.variability == "constant" else spec.start  # a constant's: in ``attributes``
     if spec.type == "String":
         return StringVariable(spec.name, attributes, causality=Fmi3Causality[causality], start=spec.start, **kwargs)
+    dimensions = [Dimension(start=str(d)) if isinstance(d, int) else Dimension(valueReference=str(value_references[d]))
+                  for d in spec.dimensions]
+    if spec.type == "UInt64":
+        return UInt64Variable(spec.name, attributes, causality=Fmi3Causality[causality], dimensions=dimensions, **kwargs)
     if spec.type == "Integer":
         cls = UInt64Variable if spec.name in structural else Int32Variable
         causality = "structuralParameter" if spec.name in structural else causality
         return cls(spec.name, attributes, causality=Fmi3Causality[causality], start=spec.start, **kwargs)
-    dimensions = [Dimension(start=str(d)) if isinstance(d, int) else Dimension(valueReference=str(value_references[d]))
-                  for d in spec.dimensions]
-    return Float64Variable(spec.name, attributes, causality=Fmi3Causality[causality], start=spec.start, unit=unit,
+    return Float64Variable(spec.name, attributes, causality=Fmi3Causality[causality], start=start, unit=unit,
                            dimensions=dimensions, **kwargs)
 
 

@@ -2,16 +2,17 @@
 
     wetcloth build-fmu --native              # models/WetClothNative.fmu  (FMI 2.0)
     wetcloth build-fmu --native --fmi 3      # models/WetClothNative3.fmu (FMI 3.0, the mesh as array outputs)
-    wetcloth build-fmu --native --scene bucket   # a scene's start values, colliders and grip keys built in
+    wetcloth build-fmu --native --scene bucket   # a scene's start values, colliders and keys built in
 
 The unit has the model name, variables, value references, units, ranges and model structure of the
 pythonfmu units (``WetCloth.fmu``, ``WetCloth3.fmu``): its ``modelDescription.xml`` is made by the same
 code (``description.py``, ``description3.py`` on pythonfmu's and pythonfmu3's model-description writers),
 and the C++ side reads the same vocabulary through a generated header
 (``wetcloth_fmu_variables.hpp``: every variable in value-reference order with its Scene field, range,
-start value and the texts of its messages; with ``--scene``, the scene's colliders and grip keys as the
-arrays the Python model hands the core, and a cloth from a mesh file as the arrays of its structure,
-``native_mesh.py``).  What it packs:
+start value and the texts of its messages (a collider's number field: its place in the colliders' rows,
+which the unit makes from the values set); with ``--scene``, the scene's colliders and keys as the arrays
+the Python model hands the core, and a cloth from a mesh file as the arrays of its structure,
+``native_mesh.py``, with its faces and UVs for the FMI 3.0 unit's constant outputs).  What it packs:
 
 * ``binaries/linux64/WetCloth.so`` (FMI 3.0: ``binaries/x86_64-linux/``): ``fmu_src/core/src/**/*.cpp``,
   ``fmu_src/core/fmu/unit.cpp`` and ``fmi2.cpp`` (``fmi3.cpp``) compiled by the system C++ compiler
@@ -52,8 +53,8 @@ from tqdm.auto import tqdm
 import wetcloth
 from wetcloth.files import new_temporary, whole_file
 from wetcloth.fmu import MODEL_NAME, native_mesh, packed_scene
-from wetcloth.fmu.vocabulary import (MESH_FORMAT_RANGE, MESH_FORMATS, MESH_OUTPUTS, STEP_OUTPUTS, VariableSpec,
-                                     fmi_unit_name, variable_specs)
+from wetcloth.fmu.vocabulary import (MESH_CONSTANTS, MESH_FORMAT_RANGE, MESH_FORMATS, MESH_OUTPUTS, STEP_OUTPUTS,
+                                     VariableSpec, fmi_unit_name, variable_specs)
 from wetcloth.progress import SHOW_AFTER
 
 #: The order of the outputs in the core's ``record_outputs`` row (``stepping.hpp``).
@@ -199,6 +200,24 @@ def fixtures_header(scene=None, cloth: dict | None = None) -> str:
     return "\n".join(lines)
 
 
+#: Why a native unit takes only the scene's position for a mesh collider.
+PLACED_MESH_REASON = ("the native unit's mesh colliders are built in where the scene puts them: build it with "
+                      "--scene from a scene that puts it elsewhere, or use WetCloth.fmu")
+
+
+def placed_meshes(scene) -> dict:
+    """The ranges of the native unit's mesh colliders' x, y, z (its compiled arrays hold their vertices where the
+    scene puts them): the scene's value alone, as ``native_mesh.fixed_ranges`` gives them (low, high, low open,
+    text); none without a ``scene``."""
+    ranges = {}
+    for k, collider in enumerate(scene.colliders if scene is not None else (), 1):
+        if collider.shape == "mesh":
+            for c in "xyz":
+                value = getattr(collider, c)
+                ranges[f"collider{k}_{c}"] = (value, value, False, f"{value!r} ({PLACED_MESH_REASON})")
+    return ranges
+
+
 def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "", fixtures: str = "",
                      fixed: dict | None = None) -> str:
     """The generated C++ table of the unit's variables (value reference = index), with compile-time
@@ -206,7 +225,7 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
     scene's ``fixtures`` (``fixtures_header``).  A free-text parameter takes its start value alone;
     ``fixed``: the ranges a built-in mesh allows instead of Python's (``native_mesh.fixed_ranges``)."""
     from wetcloth.fmu.description3 import dimension_sources
-    from wetcloth.scene import INPUT, PARAMETERS, describe_range
+    from wetcloth.scene import COLLIDER_FIELDS, INPUT, PARAMETERS, describe_range
     from wetcloth.simulation import OUTPUT_NAMES
 
     if tuple(OUTPUT_NAMES) != CORE_OUTPUTS:
@@ -215,6 +234,7 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
     structural = dimension_sources(specs) if fmi_version == 3 else set()
     fixed = fixed or {}
     rows, checks, texts = [], [], []
+    constants = {"faces": _c_array("CONSTANT_FACES", "Index", []), "uv": _c_array("CONSTANT_UV", "double", [])}
     for vr, spec in enumerate(specs):
         real = integer = "nullptr"
         choices, count, start_text = "nullptr", "0", "nullptr"
@@ -224,8 +244,19 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
                      "independent": "INDEPENDENT"}[spec.causality]
         if spec.name in structural:
             causality = "STRUCTURAL_PARAMETER"
-        kind = {"Real": "REAL", "Integer": "INTEGER", "String": "STRING"}[spec.type]
-        if spec.scene:
+        kind = {"Real": "REAL", "Integer": "INTEGER", "String": "STRING", "UInt64": "UINT64"}[spec.type]
+        if spec.collider:  # a collider's number field: its place in the colliders' rows (colliders.hpp)
+            role, field_name = "COLLIDER", spec.name.split("_", 1)[1]
+            slot = f"{spec.collider - 1} * COLLIDER_COLUMNS + C_{field_name.upper()}"
+            field = COLLIDER_FIELDS[field_name]
+            md = field.metadata
+            ranged, lo, hi = "true", _c_double(md["lo"]), _c_double(md["hi"])
+            lo_open, range_text = str(bool(md["lo_open"])).lower(), _c_string(describe_range(field, spec.name))
+            if spec.name in fixed:
+                low, high, low_open, text = fixed[spec.name]
+                lo, hi, lo_open, range_text = _c_double(low), _c_double(high), str(low_open).lower(), _c_string(text)
+            start = _c_double(spec.start)
+        elif spec.scene:
             role = "SCENE"
             field = PARAMETERS[spec.name]
             md = field.metadata
@@ -271,6 +302,9 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
             role, slot = "OUTPUT", str(CORE_OUTPUTS.index(spec.name))
         elif spec.name in MESH_OUTPUTS and spec.name in ("positions", "wetness"):
             role = spec.name.upper()
+        elif spec.name in MESH_CONSTANTS:
+            role = spec.name.upper()
+            constants[spec.name] = _c_array(f"CONSTANT_{role}", "double" if spec.type == "Real" else "Index", spec.start)
         elif spec.causality == "independent":
             role = "TIME"
         else:
@@ -304,6 +338,9 @@ inline constexpr Variable VARIABLES[] = {{
 // The scene's colliders and grip keys (none unless built with --scene).
 {fixtures or fixtures_header()}
 
+// The FMI 3.0 constant array outputs: a mesh cloth's faces and UVs (none unless built with --scene of one).
+{chr(10).join(constants.values())}
+
 // model.hpp's Scene, its inputs and choices are wetcloth.scene's (a parameter added in Python must be ported).
 static_assert(SCENE_FIELD_COUNT == {len(scene_names)}, "model.hpp's Scene does not have the {len(scene_names)} fields of wetcloth.scene");
 {field_checks}
@@ -316,7 +353,7 @@ static_assert(OUTPUT_COUNT == {len(CORE_OUTPUTS)}, "the core's outputs are not t
 
 # ----------------------------------------------------------------------------------------- descriptions
 def _start_getter(spec: VariableSpec):
-    return functools.partial(lambda value: value, spec.start)
+    return functools.partial(lambda value: value, spec.values if spec.variability == "constant" else spec.start)
 
 
 def model_description(specs: list[VariableSpec], fmi_version: int, token: str, sources: list[str]) -> bytes:
@@ -464,7 +501,8 @@ def documentation_html(specs: list[VariableSpec], fmi_version: int) -> str:
     rows = []
     for s in specs:
         unit = fmi_unit_name(s.unit) or ""
-        start = "" if s.start is None else repr(s.start) if s.type == "String" else f"{s.start:g}"
+        start = ("" if s.start is None else "(in the model description)" if s.variability == "constant"
+                 else repr(s.start) if s.type == "String" else f"{s.start:g}")
         shape = f" [{', '.join(map(str, s.dimensions))}]" if s.dimensions else ""
         meaning = s.description
         if s.name == "mesh_output_dir":
@@ -619,7 +657,7 @@ def build_native_fmu(out: str | Path | None = None, fmi_version: int = 2, build_
     loaded = None if scene is None else load_scene(scene)
     cloth = None if loaded is None else native_mesh.cloth_arrays(loaded)
     fixtures = fixtures_header(loaded, cloth)
-    fixed = native_mesh.fixed_ranges(cloth)
+    fixed = {**native_mesh.fixed_ranges(cloth), **placed_meshes(loaded)}
     body = variables_header(specs, fmi_version, fixtures=fixtures, fixed=fixed).encode()
     token = "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, "wetcloth-native:" + _digest(
         body, " ".join(CXX_FLAGS).encode(), *(p.read_bytes() for p, _ in files)))) + "}"

@@ -26,7 +26,7 @@ from wetcloth.errors import ParameterError
 from wetcloth.fmu import bootstrap, checkpoint, packed_scene
 from wetcloth.fmu.checkpoint import Checkpoint, StateError
 from wetcloth.fmu.vocabulary import check_variable, variable_specs
-from wetcloth.scene import from_dict, read_scene_file
+from wetcloth.scene import collider_name, from_dict, read_scene_file
 from wetcloth.simulation import Simulation
 
 #: Errors also go to Python's logging (stderr unless the host configures logging): pythonfmu
@@ -102,6 +102,8 @@ class WetClothUnit:
             elif value != self.values[name]:  # an unchanged value changes nothing (and clears a refusal)
                 if not self.specs[name].scene:
                     raise ParameterError(name, "is fixed once the unit is initialized")
+                if self.specs[name].collider:
+                    raise ParameterError(name, "is fixed once the simulation starts; only inputs may change")
                 self.sim.set_inputs(**{name: value})  # the simulation owns which parameters may change
         except ParameterError as exc:
             self.refused[name] = str(exc)
@@ -120,12 +122,15 @@ class WetClothUnit:
             try:
                 self._preview = Simulation(from_dict(self._scene_values()))
             except ParameterError:
-                self._preview = Simulation(from_dict({n: s.start for n, s in self.specs.items() if s.scene}))
+                self._preview = Simulation(from_dict(self._scene_values({n: s.start for n, s in self.specs.items()})))
         return self._preview
 
     def output(self, name: str):
         """An output: a scalar of ``Simulation.outputs()``, ``step_error`` (``Simulation.error_estimate``),
-        an array output as a flat list, or the time (s)."""
+        an array output as a flat list (a constant one, a mesh cloth's faces and UVs, as built), or the time (s)."""
+        spec = self.specs[name]
+        if spec.variability == "constant":
+            return spec.values
         if not self._read:
             sim = self._simulation()
             self._read.update(sim.outputs(), step_error=sim.error_estimate, time=self.start_time + sim.time)
@@ -133,10 +138,11 @@ class WetClothUnit:
             self._read[name] = getattr(self._simulation(), name).ravel().tolist()
         return self._read[name]
 
-    def _scene_values(self) -> dict:
-        """The scene's parameters as the variables hold them, with the colliders and grip keys built in
-        (--scene)."""
-        values = {name: value for name, value in self.values.items() if self.specs[name].scene}
+    def _scene_values(self, values: dict | None = None) -> dict:
+        """The scene's parameters as the variables hold them (or as ``values`` holds them), with the colliders
+        and keys built in (--scene): the collider parameters (collider1_radius) change the listed colliders."""
+        values = {name: value for name, value in (self.values if values is None else values).items()
+                  if self.specs[name].scene}
         if self.packed is not None:
             values.update(self.packed.fixtures())
         return values
@@ -305,11 +311,13 @@ class WetClothUnit:
     @classmethod
     def _fmu_state_from_bytes(cls, data: bytes) -> Checkpoint:
         """A state read from bytes, refused at once (StateError, logged) unless this unit wrote it
-        and it fits a simulation of its scene."""
+        and it fits a simulation of its scene.  (The class cannot know the instance's colliders: their
+        parameters in the state are checked here one by one, and against the unit's at SetFMUstate.)"""
         try:
             state = checkpoint.from_bytes(data)
-            checkpoint.fitting_simulation(state, {s.name for s in variable_specs(fmi_version=cls.FMI_VERSION)
-                                                  if s.causality in ("parameter", "input")})
+            names = {s.name for s in variable_specs(fmi_version=cls.FMI_VERSION) if s.causality in ("parameter", "input")}
+            values = state.values if isinstance(state, Checkpoint) and isinstance(state.values, dict) else {}
+            checkpoint.fitting_simulation(state, names | {name for name in values if collider_name(name)})
             return state
         except Exception as exc:  # whatever it is, the reason is logged on wetcloth.fmu
             reason = str(exc) if isinstance(exc, StateError) else f"{type(exc).__name__}: {exc}"

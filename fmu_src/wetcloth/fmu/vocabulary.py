@@ -6,7 +6,10 @@ others fixed parameters.  Unit, description, start value and range come from the
 so parameters added to the Scene later appear in the FMU without touching this package.
 Two FMU-only parameters (``mesh_output_dir``, ``mesh_format``) and the six outputs of
 ``wetcloth.simulation.OUTPUTS`` with ``step_error`` (``STEP_OUTPUTS``) complete the interface; the FMI 3.0 unit adds the mesh of every
-step as array outputs (``MESH_OUTPUTS``), dimensioned by the grid parameters ``ny`` and ``nx``.
+step as array outputs (``MESH_OUTPUTS``), dimensioned by the grid parameters ``ny`` and ``nx``, and a cloth from a
+mesh file's faces and UVs as constant array outputs (``MESH_CONSTANTS``).  A unit built
+with a scene's colliders (``build-fmu --scene``) has, last, each collider's number fields as fixed Real
+parameters under their flattened names (``collider1_radius``: ``COLLIDER_VARIABLES``).
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ from typing import Any, Iterable
 
 from wetcloth.errors import ParameterError
 from wetcloth.fmu import MODEL_NAME
-from wetcloth.scene import INPUT, PARAMETERS, check_value, describe_range
+from wetcloth.scene import COLLIDER_FIELDS, INPUT, PARAMETERS, check_value, describe_range
 from wetcloth.simulation import OUTPUTS
 
 #: Mesh formats the unit can write at every communication point, and how messages name them.
@@ -35,6 +38,15 @@ MESH_OUTPUTS = {
     "wetness": ("-", "saturation of each vertex, absorbed water over capacity (0 to 1)", ("ny", "nx")),
 }
 
+#: The FMI 3.0 unit's constant array outputs of a cloth from a mesh file (built with --scene), as its exported
+#: frames have them (``packed_scene.PackedScene``): name -> (FMI type, unit, meaning); sized by the mesh.
+MESH_CONSTANTS = {
+    "faces": ("UInt64", "-", "the mesh file's faces: each face's vertex indices (from 0, the file's vertex order), "
+                             "as in the file (one that mixes triangles and quads: the triangles of their split)"),
+    "uv": ("Real", "-", "texture coordinates (u, v) of each vertex: the mesh file's, else those of the flat rest "
+                        "sheet (0 to 1)"),
+}
+
 #: Outputs beyond ``Simulation.outputs()``: name -> (unit, meaning).  ``step_error`` is
 #: ``Simulation.error_estimate`` after the communication step.
 STEP_OUTPUTS = {
@@ -45,7 +57,8 @@ STEP_OUTPUTS = {
 
 @dataclass(frozen=True)
 class VariableSpec:
-    """One FMU variable: FMI type ('Real', 'Integer', 'String'), causality, variability, start and range."""
+    """One FMU variable: FMI type ('Real', 'Integer', 'String'; FMI 3.0 also 'UInt64'), causality, variability
+    ('constant': an array output whose values, ``start``, are in the model description), start and range."""
 
     name: str
     type: str
@@ -60,6 +73,7 @@ class VariableSpec:
     dimensions: tuple[str | int, ...] = ()  # array outputs: sizes, or names of the parameters holding them
     min_open: bool = False  # the value must be above ``min`` (FMI's min is inclusive: see ``declared_min``)
     nominal: float | None = None  # Reals: the magnitude of a typical value (FMI ``nominal``, > 0)
+    collider: int = 0  # a collider's field (``collider<k>_<field>``): its collider k (1, 2, ...); else 0
 
     @property
     def declared_min(self) -> float | int | None:
@@ -70,7 +84,14 @@ class VariableSpec:
         return sys.float_info.min if self.min == 0 else math.nextafter(float(self.min), math.inf)
 
     @property
+    def values(self) -> list:
+        """A constant array output's values in order (``start`` holds its rows)."""
+        return [value for row in self.start for value in row]
+
+    @property
     def initial(self) -> str | None:
+        if self.variability == "constant":
+            return "exact"
         return {"parameter": "exact", "output": "calculated"}.get(self.causality)
 
 
@@ -105,6 +126,27 @@ def scene_spec(f: dataclasses.Field) -> VariableSpec:
     )
 
 
+#: The collider fields that are FMU parameters (Reals): every number field; the shape and a mesh collider's
+#: file stay as the unit was built.
+COLLIDER_VARIABLES = tuple(name for name, f in COLLIDER_FIELDS.items() if f.type == "float")
+
+
+def collider_specs(colliders: Iterable[dict]) -> list[VariableSpec]:
+    """The parameters of the colliders built into a unit (``PackedScene.colliders``: their fields), collider
+    after collider: each of ``COLLIDER_VARIABLES`` as ``collider<k>_<field>``, its start value the collider's."""
+    specs = []
+    for k, fields in enumerate(colliders, 1):
+        for name in COLLIDER_VARIABLES:
+            f, flat = COLLIDER_FIELDS[name], f"collider{k}_{name}"
+            md, start = f.metadata, float(fields[name])
+            specs.append(VariableSpec(
+                name=flat, type="Real", causality="parameter", variability="fixed",
+                description=f"collider {k} ({fields['shape']}): {md['doc']} (allowed: {describe_range(f, flat)})",
+                unit=md["unit"], start=start, min=md["lo"], max=md["hi"], min_open=bool(md["lo_open"]),
+                nominal=abs(start) or 1.0, collider=k))
+    return specs
+
+
 #: Inputs whose change shows in an output at once, without a step (direct feedthrough).
 FEEDTHROUGH = {"depth": ("water_level",)}
 
@@ -119,9 +161,12 @@ FMU_PARAMETERS = {
 def variable_specs(fields: Iterable[dataclasses.Field] | None = None, fmi_version: int = 2,
                    packed=None) -> list[VariableSpec]:
     """All FMU variables in value-reference order: Scene fields, mesh parameters, outputs (and, for
-    FMI 3.0, the mesh array outputs).  ``packed``: the scene built into the unit
-    (``packed_scene.PackedScene``), whose values are the start values; a mesh cloth's arrays have
-    its vertex count as their first dimension instead of the grid's ny, nx."""
+    FMI 3.0, the mesh array outputs, the time and a mesh cloth's faces and UVs), then the colliders'
+    parameters.  ``packed``: the scene
+    built into the unit (``packed_scene.PackedScene``), whose values are the start values; a mesh cloth's
+    arrays have its vertex count as their first dimension instead of the grid's ny, nx; its colliders'
+    number fields are parameters (``collider_specs``), last, so that the other variables keep their value
+    references."""
     fields = PARAMETERS.values() if fields is None else fields
     specs = [scene_spec(f) for f in fields]
     if packed is not None:
@@ -138,6 +183,14 @@ def variable_specs(fields: Iterable[dataclasses.Field] | None = None, fmi_versio
                   for n, (u, doc, dims) in MESH_OUTPUTS.items()]
         specs.append(VariableSpec("time", "Real", "independent", "continuous", "simulation time (the FMI 3.0 "
                                   "independent variable)", unit="s", scene=False, nominal=1.0))
+        if packed is not None and packed.faces:
+            for name, (kind, unit, doc) in MESH_CONSTANTS.items():
+                values = [list(row) for row in getattr(packed, name)]
+                specs.append(VariableSpec(name, kind, "output", "constant", doc, unit=unit, start=values, scene=False,
+                                          dimensions=(len(values), len(values[0])),
+                                          nominal=1.0 if kind == "Real" else None))
+    if packed is not None:
+        specs += collider_specs(packed.colliders)
     return specs
 
 
@@ -194,7 +247,7 @@ class Unit:
 
 
 def _number_text(value) -> str:
-    """A range bound as model-description text: an int as is, a float exactly (repr)."""
+    """A number as model-description text (a range bound, a start value): an int as is, a float exactly (repr)."""
     return str(int(value)) if isinstance(value, int) else repr(float(value))
 
 
@@ -211,6 +264,8 @@ def xml_attributes(spec: VariableSpec) -> dict[str, str]:
         attributes["max"] = _number_text(spec.max)
     if spec.type == "Real" and spec.nominal is not None:
         attributes["nominal"] = _number_text(float(spec.nominal))
+    if spec.variability == "constant":  # whole (pythonfmu3 cuts a start of over 1000 characters to one)
+        attributes["start"] = " ".join(_number_text(v) for v in spec.values)
     return attributes
 
 
