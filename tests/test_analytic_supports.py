@@ -61,3 +61,4 @@ def test_the_tablecloth_at_frame_steps_of_1_24_s_never_gains_energy():
         energy.append(mechanical_energy(sim))
     assert np.diff(energy).max() <= ENERGY_ROUNDING, np.diff(energy).max()
     assert sim.rejected_steps == 0
+    assert sim.solver_counts["descent_restarts"] > 0  # (the restarts are what keeps it: 11 over the 48 steps here)

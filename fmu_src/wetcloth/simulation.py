@@ -10,7 +10,8 @@ from wetcloth import _core, self_collision
 from wetcloth._core import (BLOWN_UP, CALM_TIME, CG_ITERATIONS, CLOCK_SIZE, EXCHANGING, FACTORISATIONS, FAILED_STEP,
                             FIRST_GUESS, LAST_SOLVE, LAST_STEP, MAX_REJECTIONS, NEWTON_ITERATIONS, NEWTON_RATE,
                             NEXT_STEP, OUTPUT_COUNT, PAUSE_AFTER, PAUSED, RATE_CORRECTION, REJECTED, REUSE_RULE_SIZE,
-                            SLEEPING, SPEED, STEPS, TIME, UNCHECKED_TIME, UNCONVERGED, LARGEST_ERROR)
+                            RESTARTS, SLEEPING, SPEED, STEPS, TIME, UNCHECKED_TIME, UNCONVERGED,
+                            LARGEST_ERROR)
 from wetcloth.advice import blow_up_advice
 from wetcloth.bundles import Buffers, make_solver
 from wetcloth.errors import BlowUpError, ParameterError, did_you_mean
@@ -300,10 +301,12 @@ class Simulation:
     @property
     def solver_counts(self) -> dict[str, int]:
         """Work of the implicit solves so far: Newton iterations, conjugate-gradient iterations,
-        preconditioner factorisations, and linear solves stopped at their iteration limit."""
+        preconditioner factorisations, linear solves stopped at their iteration limit, and fixed steps
+        in contact whose descent started again (it had ended above the energy the step started with)."""
         c = self._solver.counters
         return {"newton_iterations": int(c[NEWTON_ITERATIONS]), "cg_iterations": int(c[CG_ITERATIONS]),
-                "factorisations": int(c[FACTORISATIONS]), "unconverged_solves": int(c[UNCONVERGED])}
+                "factorisations": int(c[FACTORISATIONS]), "unconverged_solves": int(c[UNCONVERGED]),
+                "descent_restarts": int(c[RESTARTS])}
 
     @property
     def contact_counts(self) -> dict[str, int]:

@@ -20,6 +20,7 @@ WETCLOTH_BINDINGS(m) {
     m.attr("CG_ITERATIONS") = static_cast<Index>(CG_ITERATIONS);
     m.attr("FACTORISATIONS") = static_cast<Index>(FACTORISATIONS);
     m.attr("UNCONVERGED") = static_cast<Index>(UNCONVERGED);
+    m.attr("RESTARTS") = static_cast<Index>(RESTARTS);
     m.attr("SOLVER_COUNTERS") = static_cast<Index>(SOLVER_COUNTERS);
     m.def(
         "bdf2_step",

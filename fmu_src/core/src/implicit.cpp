@@ -483,6 +483,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
                                out_vel, toward) <= 0.0) {
                 break;
             }
+            solver.counters[RESTARTS] += 1;
             for (Index k = 0; k < 3 * n; ++k) {
                 out_vel[k] = rest[k];
                 out_pos[k] = hat_pos[k] + bh * out_vel[k];

@@ -164,7 +164,9 @@ struct Control {
 };
 
 //: Slots of Solver::counters.
-enum SolverCounter : Index { NEWTON_ITERATIONS = 0, CG_ITERATIONS = 1, FACTORISATIONS = 2, UNCONVERGED = 3, SOLVER_COUNTERS };
+enum SolverCounter : Index {
+    NEWTON_ITERATIONS = 0, CG_ITERATIONS = 1, FACTORISATIONS = 2, UNCONVERGED = 3, RESTARTS = 4, SOLVER_COUNTERS
+};
 
 //: Scratch of the implicit steps, each (3, n) unless noted: mass (n) kg; rhs, dv, r, z, p, ap of the
 //: linear solves; hat_pos, hat_vel the BDF2 history terms; predicted the extrapolated positions;
