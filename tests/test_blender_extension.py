@@ -4,8 +4,9 @@ install it, bake a towel over a ball in a pool, and check what Blender plays aga
 ``wetcloth blender-extension`` builds the zip; one Blender process (tests/blender/extension_probe.py,
 with its own user folder) installs it, builds the scene (a subdivided plane as the cloth, a UV
 sphere collider, a water plane), bakes 48 frames, saves and reopens, bakes again cancelled after
-20 frames, moves the cache away, frees the bake, bakes with the water keyed to rise, tries two
-scenes it must refuse, and bakes a round mesh cloth over a cup (a mesh collider).  The reference is
+20 frames, moves the cache away, frees the bake, bakes with the water keyed to rise, with the grip
+keyed to rise, tries scenes it must refuse, and bakes a round mesh
+cloth over a cup (a mesh collider).  The reference is
 wetcloth itself, run here on the scene the bake recorded (frames.json; for the mesh cloth, with the
 arrays Blender held): the same compiled core on the same machine.
 
@@ -38,7 +39,7 @@ CANCEL_AFTER = 20
 SPEC = {"frames": FRAMES, "fps": FPS, "cuts": CUTS, "sphere": {"radius": 0.2, "z": 0.0},
         "cloth": {"size": 0.6, "z": 0.215}, "water_z": 0.06, "rise": 0.1, "ball_rise": 0.05, "cancel_after": CANCEL_AFTER,
         "mesh_frames": 24, "round_cloth": {"segments": 24, "radius": 0.3, "z": 0.12, "inset": 0.05, "insets": 3},
-        "cup": {"radius": 0.22, "depth": 0.16, "z": 0.0}}
+        "cup": {"radius": 0.22, "depth": 0.16, "z": 0.0}, "grip_rise": 0.1}
 #: Blender plays float32 positions (USD points): within 6e-8 m of wetcloth's below 1 m; the cloth
 #: plane's centre, read from float32 vertices, is within 1e-7 m of the origin.
 POSITION_TOL = 1e-6
@@ -267,6 +268,30 @@ def test_a_ball_keyed_to_rise_and_turn_turns_by_its_keys(baked):
     for frame, centre in zip(turned["frames"], centres):
         distance = np.linalg.norm(np.array(frame["positions"]) - centre, axis=1) - radius
         assert distance.min() >= gap - CONTACT_TOL, frame["frame"]
+
+
+def test_a_grip_keyed_to_rise_lifts_the_pinned_hem_by_its_keys(baked):
+    """scene.wetcloth.grip_z keyed from 0 to 0.1 m with the towel pinned by a vertex group: the bake samples
+    Blender's grip_z at every frame into grip keys (the scene's grip_z input 0), the pinned hem is at its
+    start raised by the grip at every frame (within the float32 of the USD points) and ends 0.1 m higher,
+    and what Blender plays is wetcloth's run of the scene with those keys.  A wind or a fabric setting keyed
+    to change is refused, naming it: the bake would read it at the first frame only."""
+    grip = baked.report["grip"]
+    manifest = grip["manifest"]
+    assert grip["result"] == ["FINISHED"] and manifest["complete"], grip["error"]
+    scene = from_dict(manifest["scene"])
+    grips = grip["grips"]
+    assert scene.pinned_edge == "y_max" and scene.grip_z == 0.0 and len(scene.grip_keys) == FRAMES - 1
+    for k, key in enumerate(scene.grip_keys, 1):
+        assert (key.time, key.x, key.y, key.z) == (k / FPS, 0.0, 0.0, as_float32_decimal(grips[k]))
+    assert grips[0] == 0.0 and grips[-1] == np.float32(SPEC["grip_rise"])
+    hem = grip["pinned"]
+    start = np.array(grip["frames"][0]["positions"])[hem]
+    for frame, lift in zip(grip["frames"], grips):
+        assert np.abs(np.array(frame["positions"])[hem] - start - [0.0, 0.0, lift]).max() <= POSITION_TOL, frame["frame"]
+    check_against_reference(grip["frames"], manifest)
+    assert "scene setting 'wind_x' changes at frame 2" in grip["wind"]
+    assert "cloth 'Towel''s setting 'damping' changes at frame 2" in grip["damping"]
 
 
 def test_pin_group_preset_and_the_cloths_own_modifiers(baked):
