@@ -5,7 +5,7 @@ install it, bake a towel over a ball in a pool, and check what Blender plays aga
 with its own user folder) installs it, builds the scene (a subdivided plane as the cloth, a UV
 sphere collider, a water plane), bakes 48 frames, saves and reopens, bakes again cancelled after
 20 frames, moves the cache away, frees the bake, bakes with the water keyed to rise, with the grip
-keyed to rise, tries scenes it must refuse, and bakes a round mesh
+keyed to rise and over frames 11-40 at 29.97 fps, tries scenes it must refuse, and bakes a round mesh
 cloth over a cup (a mesh collider).  The reference is
 wetcloth itself, run here on the scene the bake recorded (frames.json; for the mesh cloth, with the
 arrays Blender held): the same compiled core on the same machine.
@@ -39,7 +39,8 @@ CANCEL_AFTER = 20
 SPEC = {"frames": FRAMES, "fps": FPS, "cuts": CUTS, "sphere": {"radius": 0.2, "z": 0.0},
         "cloth": {"size": 0.6, "z": 0.215}, "water_z": 0.06, "rise": 0.1, "ball_rise": 0.05, "cancel_after": CANCEL_AFTER,
         "mesh_frames": 24, "round_cloth": {"segments": 24, "radius": 0.3, "z": 0.12, "inset": 0.05, "insets": 3},
-        "cup": {"radius": 0.22, "depth": 0.16, "z": 0.0}, "grip_rise": 0.1}
+        "cup": {"radius": 0.22, "depth": 0.16, "z": 0.0}, "grip_rise": 0.1,
+        "range": [11, 40], "range_fps": 30, "range_fps_base": 1.001}
 #: Blender plays float32 positions (USD points): within 6e-8 m of wetcloth's below 1 m; the cloth
 #: plane's centre, read from float32 vertices, is within 1e-7 m of the origin.
 POSITION_TOL = 1e-6
@@ -143,11 +144,12 @@ def test_it_installs_and_registers_its_scripting_names(baked):
 
 
 def test_the_towel_drapes_over_the_ball_without_entering_it(baked):
-    """48 frames: what Blender plays is wetcloth's run of the same scene; no particle enters the
-    ball; the middle lies on its top and the edges hang down to the water."""
+    """48 frames from frame 1 at 24 fps (frames.json says so): what Blender plays is wetcloth's run of the
+    same scene; no particle enters the ball; the middle lies on its top and the edges hang down to the water."""
     bake = baked.report["bake"]
     manifest = bake["manifest"]
     assert bake["result"] == ["FINISHED"] and manifest["frame_count"] == FRAMES and manifest["complete"]
+    assert manifest["fps"] == FPS and manifest["first_frame"] == 1
     assert manifest["scene"]["collider1_shape"] == "sphere"
     check_against_reference(bake["frames"], manifest)
     gap = 0.5 * manifest["scene"]["thickness"]
@@ -292,6 +294,24 @@ def test_a_grip_keyed_to_rise_lifts_the_pinned_hem_by_its_keys(baked):
     check_against_reference(grip["frames"], manifest)
     assert "scene setting 'wind_x' changes at frame 2" in grip["wind"]
     assert "cloth 'Towel''s setting 'damping' changes at frame 2" in grip["damping"]
+
+
+def test_a_bake_over_another_range_and_fps_starts_at_its_first_frame(baked):
+    """Frames 11-40 at 30 / 1.001 fps (NTSC): frames.json says fps 30 / fps_base (Blender's float32 1.001),
+    first frame 11 and 30 frames; the cloth Blender plays at frame 11 is wetcloth's t = 0 state, and at every
+    frame its run of the scene frame by frame at that fps."""
+    ranged = baked.report["range"]
+    manifest = ranged["manifest"]
+    first, last = SPEC["range"]
+    assert ranged["result"] == ["FINISHED"] and manifest["complete"], ranged["error"]
+    assert ranged["fps_base"] == np.float32(SPEC["range_fps_base"])
+    assert manifest["fps"] == SPEC["range_fps"] / ranged["fps_base"]
+    assert manifest["first_frame"] == first and manifest["frame_count"] == last - first + 1
+    assert ranged["frames"][0]["frame"] == first
+    start = Simulation(from_dict(manifest["scene"])).positions
+    order = blender_order(np.array(ranged["frames"][0]["positions"]), start)
+    assert np.abs(np.array(ranged["frames"][0]["positions"]) - start[order]).max() <= POSITION_TOL
+    check_against_reference(ranged["frames"], manifest)
 
 
 def test_pin_group_preset_and_the_cloths_own_modifiers(baked):

@@ -3,7 +3,8 @@
     BLENDER_USER_RESOURCES=DIR .venv-blender/bin/python tests/blender/extension_probe.py SPEC.json RESULT.json
 
 SPEC: {"zip": the extension, "work": a folder, "frames": frame count, "fps": .., "cuts": plane cuts,
-       "sphere": {"radius", "z"}, "cloth": {"size", "z"}, "water_z": .., "cancel_after": .., "grip_rise": ..}.
+       "sphere": {"radius", "z"}, "cloth": {"size", "z"}, "water_z": .., "cancel_after": .., "grip_rise": ..,
+       "range": [first, last], "range_fps": .., "range_fps_base": ..}.
 The scene: a plane subdivided into a grid (role Cloth) above a UV sphere (Collider) standing in a
 water plane (Water surface), saved as WORK/scene.blend.  RESULT (the assertions are in
 tests/test_blender_extension.py):
@@ -21,6 +22,7 @@ tests/test_blender_extension.py):
   "grip": a bake of the towel pinned by a vertex group with the grip keyed to rise by "grip_rise" m:
           the grip at every frame, the cloth, the pins; the errors of bakes with the wind or the
           towel's damping keyed;
+  "range": a bake over the frames "range" at "range_fps" / "range_fps_base": frames.json, the cloth;
   "refusals": the errors of scenes it cannot bake;
   "mesh": a round cloth of quads and an n-gon (a filled circle inset a few times), two vertices pinned, over a
           cup (a cylinder without its top face: a mesh collider), baked for "mesh_frames" frames: the
@@ -212,6 +214,21 @@ def keyed_grip(spec, blend, frames):
     return out
 
 
+def another_range(spec, blend):
+    """The towel baked over frames spec["range"] at spec["range_fps"] / spec["range_fps_base"]: the bake,
+    frames.json and the cloth at every frame of the range."""
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = spec["range"]
+    scene.render.fps, scene.render.fps_base = spec["range_fps"], spec["range_fps_base"]
+    towel = bpy.data.objects["Towel"]
+    out = operator(bpy.ops.wetcloth.bake)
+    out |= cache_report(towel)
+    out["fps_base"] = scene.render.fps_base
+    out["frames"] = [evaluated_cloth(towel, f) for f in range(spec["range"][0], spec["range"][1] + 1)]
+    return out
+
+
 def pinned_with_modifiers(blend):
     """The towel pinned by a vertex group (the vertices of its largest y), of the denim preset, with a
     Solidify modifier of its own: a short bake (cancel_after=3)."""
@@ -368,6 +385,7 @@ def main(spec_path, result_path):
         result["moving"] = moving_ball(spec, blend, frames)
         result["pinned"] = pinned_with_modifiers(blend)
         result["grip"] = keyed_grip(spec, blend, frames)
+        result["range"] = another_range(spec, blend)
         result["refusals"] = refusals(spec)
         result["mesh"] = mesh_cloth_over_a_cup(spec)
     except Exception:
