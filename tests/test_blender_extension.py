@@ -337,7 +337,7 @@ def test_scenes_it_cannot_bake_are_refused_naming_the_object(baked):
 
 def test_the_blender_python_is_the_makefiles(baked):
     """The probe ran in the bpy this suite pins, or in the one WETCLOTH_BLENDER_PYTHON names (the newest on
-    PyPI, 5.3.0 on Python 3.13, passed this file on 2026-12-03: docs/blender.md section 8)."""
+    PyPI, 5.3.0 on Python 3.13, passed this file on 2026-12-05: docs/blender.md section 8)."""
     assert BLENDER_PYTHON.exists()
     if BLENDER_PYTHON == DEFAULT_BLENDER_PYTHON:
         assert baked.report["blender"].startswith("5.0")

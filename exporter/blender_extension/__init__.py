@@ -1,4 +1,4 @@
-"""The Blender extension "Wet Cloth": bake a wetcloth simulation in the scene (docs/blender.md section 7).
+"""The Blender extension "Wet Cloth": bake a wetcloth simulation in the scene (docs/blender.md section 8).
 
 Objects get a role (``obj.wetcloth.role``: a cloth, a collider, the water surface); the cloth a
 fabric preset; ``scene.wetcloth`` holds the settings of the whole scene, one property per scene

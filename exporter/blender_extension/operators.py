@@ -1,8 +1,8 @@
 """``bpy.ops.wetcloth.bake()`` and ``bpy.ops.wetcloth.free_bake()``.
 
 The bake simulates every Cloth object over the scene's frame range at its fps.  From the interface
-it runs as a modal operator: a frame per timer tick, progress in the status bar, Esc cancels and
-keeps the frames baked so far.  From scripts and in background mode it runs to the end at once
+it runs as a modal operator: frames for TICK s per timer tick (frame_loop.tick), progress in the
+status bar, Esc cancels and keeps the frames baked so far.  From scripts and in background mode it runs to the end at once
 (``cancel_after=N`` stops it after N frames as Esc would, for scripts and tests).
 """
 
