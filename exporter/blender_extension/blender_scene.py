@@ -27,6 +27,7 @@ from wetcloth.scene import MAX_KEY_TURN, Scene, from_dict, rotation_matrix, rota
 #: The scene settings the bake follows when they change over the frame range (as grip keys at every frame).
 GRIP = ("grip_x", "grip_y", "grip_z")
 
+
 @dataclass
 class ClothJob:
     """One cloth to bake: its object, scene, cloth (grid or mesh) and where its USD file goes."""
