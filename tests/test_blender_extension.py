@@ -4,8 +4,9 @@ install it, bake a towel over a ball in a pool, and check what Blender plays aga
 ``wetcloth blender-extension`` builds the zip; one Blender process (tests/blender/extension_probe.py,
 with its own user folder) installs it, builds the scene (a subdivided plane as the cloth, a UV
 sphere collider, a water plane), bakes 48 frames, saves and reopens, bakes again cancelled after
-20 frames, moves the cache away, frees the bake, bakes with the water keyed to rise, tries two
-scenes it must refuse, and bakes a round mesh cloth over a cup (a mesh collider).  The reference is
+20 frames, moves the cache away, frees the bake, bakes with the water keyed to rise, with the grip
+keyed to rise and over frames 11-40 at 29.97 fps, tries scenes it must refuse, and bakes a round mesh
+cloth over a cup (a mesh collider).  The reference is
 wetcloth itself, run here on the scene the bake recorded (frames.json; for the mesh cloth, with the
 arrays Blender held): the same compiled core on the same machine.
 
@@ -38,7 +39,8 @@ CANCEL_AFTER = 20
 SPEC = {"frames": FRAMES, "fps": FPS, "cuts": CUTS, "sphere": {"radius": 0.2, "z": 0.0},
         "cloth": {"size": 0.6, "z": 0.215}, "water_z": 0.06, "rise": 0.1, "ball_rise": 0.05, "cancel_after": CANCEL_AFTER,
         "mesh_frames": 24, "round_cloth": {"segments": 24, "radius": 0.3, "z": 0.12, "inset": 0.05, "insets": 3},
-        "cup": {"radius": 0.22, "depth": 0.16, "z": 0.0}}
+        "cup": {"radius": 0.22, "depth": 0.16, "z": 0.0}, "grip_rise": 0.1,
+        "range": [11, 40], "range_fps": 30, "range_fps_base": 1.001}
 #: Blender plays float32 positions (USD points): within 6e-8 m of wetcloth's below 1 m; the cloth
 #: plane's centre, read from float32 vertices, is within 1e-7 m of the origin.
 POSITION_TOL = 1e-6
@@ -142,11 +144,12 @@ def test_it_installs_and_registers_its_scripting_names(baked):
 
 
 def test_the_towel_drapes_over_the_ball_without_entering_it(baked):
-    """48 frames: what Blender plays is wetcloth's run of the same scene; no particle enters the
-    ball; the middle lies on its top and the edges hang down to the water."""
+    """48 frames from frame 1 at 24 fps (frames.json says so): what Blender plays is wetcloth's run of the
+    same scene; no particle enters the ball; the middle lies on its top and the edges hang down to the water."""
     bake = baked.report["bake"]
     manifest = bake["manifest"]
     assert bake["result"] == ["FINISHED"] and manifest["frame_count"] == FRAMES and manifest["complete"]
+    assert manifest["fps"] == FPS and manifest["first_frame"] == 1
     assert manifest["scene"]["collider1_shape"] == "sphere"
     check_against_reference(bake["frames"], manifest)
     gap = 0.5 * manifest["scene"]["thickness"]
@@ -269,6 +272,48 @@ def test_a_ball_keyed_to_rise_and_turn_turns_by_its_keys(baked):
         assert distance.min() >= gap - CONTACT_TOL, frame["frame"]
 
 
+def test_a_grip_keyed_to_rise_lifts_the_pinned_hem_by_its_keys(baked):
+    """scene.wetcloth.grip_z keyed from 0 to 0.1 m with the towel pinned by a vertex group: the bake samples
+    Blender's grip_z at every frame into grip keys (the scene's grip_z input 0), the pinned hem is at its
+    start raised by the grip at every frame (within the float32 of the USD points) and ends 0.1 m higher,
+    and what Blender plays is wetcloth's run of the scene with those keys.  A wind or a fabric setting keyed
+    to change is refused, naming it: the bake would read it at the first frame only."""
+    grip = baked.report["grip"]
+    manifest = grip["manifest"]
+    assert grip["result"] == ["FINISHED"] and manifest["complete"], grip["error"]
+    scene = from_dict(manifest["scene"])
+    grips = grip["grips"]
+    assert scene.pinned_edge == "y_max" and scene.grip_z == 0.0 and len(scene.grip_keys) == FRAMES - 1
+    for k, key in enumerate(scene.grip_keys, 1):
+        assert (key.time, key.x, key.y, key.z) == (k / FPS, 0.0, 0.0, as_float32_decimal(grips[k]))
+    assert grips[0] == 0.0 and grips[-1] == np.float32(SPEC["grip_rise"])
+    hem = grip["pinned"]
+    start = np.array(grip["frames"][0]["positions"])[hem]
+    for frame, lift in zip(grip["frames"], grips):
+        assert np.abs(np.array(frame["positions"])[hem] - start - [0.0, 0.0, lift]).max() <= POSITION_TOL, frame["frame"]
+    check_against_reference(grip["frames"], manifest)
+    assert "scene setting 'wind_x' changes at frame 2" in grip["wind"]
+    assert "cloth 'Towel''s setting 'damping' changes at frame 2" in grip["damping"]
+
+
+def test_a_bake_over_another_range_and_fps_starts_at_its_first_frame(baked):
+    """Frames 11-40 at 30 / 1.001 fps (NTSC): frames.json says fps 30 / fps_base (Blender's float32 1.001),
+    first frame 11 and 30 frames; the cloth Blender plays at frame 11 is wetcloth's t = 0 state, and at every
+    frame its run of the scene frame by frame at that fps."""
+    ranged = baked.report["range"]
+    manifest = ranged["manifest"]
+    first, last = SPEC["range"]
+    assert ranged["result"] == ["FINISHED"] and manifest["complete"], ranged["error"]
+    assert ranged["fps_base"] == np.float32(SPEC["range_fps_base"])
+    assert manifest["fps"] == SPEC["range_fps"] / ranged["fps_base"]
+    assert manifest["first_frame"] == first and manifest["frame_count"] == last - first + 1
+    assert ranged["frames"][0]["frame"] == first
+    start = Simulation(from_dict(manifest["scene"])).positions
+    order = blender_order(np.array(ranged["frames"][0]["positions"]), start)
+    assert np.abs(np.array(ranged["frames"][0]["positions"]) - start[order]).max() <= POSITION_TOL
+    check_against_reference(ranged["frames"], manifest)
+
+
 def test_pin_group_preset_and_the_cloths_own_modifiers(baked):
     """A vertex group holding the vertices of the largest y is pinned_edge y_max; the denim preset
     sets the areal density and thickness; the plane is baked from the mesh as stored, so a Solidify
@@ -292,7 +337,7 @@ def test_scenes_it_cannot_bake_are_refused_naming_the_object(baked):
 
 def test_the_blender_python_is_the_makefiles(baked):
     """The probe ran in the bpy this suite pins, or in the one WETCLOTH_BLENDER_PYTHON names (the newest on
-    PyPI, 5.3.0 on Python 3.13, passed this file on 2026-12-03: docs/blender.md section 8)."""
+    PyPI, 5.3.0 on Python 3.13, passed this file on 2026-12-05: docs/blender.md section 8)."""
     assert BLENDER_PYTHON.exists()
     if BLENDER_PYTHON == DEFAULT_BLENDER_PYTHON:
         assert baked.report["blender"].startswith("5.0")

@@ -1,7 +1,9 @@
 """The Blender extension's parts that need no Blender: reading a grid or a mesh cloth, pins and colliders
-from vertices and faces, the fabric presets, where each scene parameter lives, and the zip's build checks."""
+from vertices and faces, the fabric presets, where each scene parameter lives, the zip's build checks, and
+the bake's ticks (Esc, progress)."""
 
 import itertools
+import json
 import math
 import zipfile
 
@@ -12,6 +14,7 @@ import wetcloth
 from wetcloth.cli import main as cli_main
 from wetcloth.exporter.blender_extension import build
 from wetcloth.exporter.blender_extension.fabrics import FABRICS, fabric_parameters
+from wetcloth.exporter.blender_extension.frame_loop import BAKE_EVENTS, tick
 from wetcloth.exporter.blender_extension.geometry import (PIN_ATTRIBUTE, GridCloth, MeshCloth, analytic_collider,
                                                           cloth_of, collider_of, face_blocks, grid_cloth, pinned_edge)
 from wetcloth.exporter.blender_extension.parameters import FABRIC, FROM_CLOTH, SCENE
@@ -320,3 +323,64 @@ def test_a_bake_reports_the_largest_error_its_steps_estimated(tmp_path):
         sim.advance(0.125)
         errors.append(sim.error_estimate)
     assert bake.largest_error == max(errors) > 0.0
+
+
+class OneClothBaking:
+    """The operator's Baking for one ClothBake without Blender, each frame taking 0.04 s of ``clock``."""
+
+    def __init__(self, bake):
+        self.bake, self.total, self.now = bake, bake.frame_count, 0.0
+
+    done = property(lambda self: self.bake.done)
+    finished = property(lambda self: self.bake.finished)
+
+    def step(self):
+        self.bake.step()
+        self.now += 0.04
+
+    def clock(self) -> float:
+        return self.now
+
+
+def hanging_sheet_baking(folder, frame_count: int) -> OneClothBaking:
+    """A 5 x 5 sheet hanging from its y_max edge, baked into ``folder`` at 24 fps."""
+    from wetcloth.exporter.blender_extension.baking import ClothBake
+
+    points, edges, _ = plane(5, 5, 0.4, 0.4, centre=(0.0, 0.0, 1.0))
+    grid = grid_cloth(points, edges)
+    scene = from_dict(grid.scene_values() | dict(pinned_edge="y_max", floor_level=-1.0))
+    return OneClothBaking(ClothBake(scene, grid, folder, "cloth", fps=24.0, frame_start=1, frame_count=frame_count))
+
+
+def test_a_tick_bakes_for_its_budget_and_esc_keeps_the_frames_baked(tmp_path):
+    """The modal bake's ticks (frame_loop.tick, as the operator calls it with its 0.1 s budget): three
+    frames of 0.04 s per timer tick (0.00, 0.04, 0.08 s are under 0.1 s), the status bar counting them;
+    other events pass without a frame; Esc stops at once, the status cleared: the cache holds the frames
+    baked, frames.json marked incomplete."""
+    baking = hanging_sheet_baking(tmp_path, 20)
+    assert "MOUSEMOVE" not in BAKE_EVENTS
+    progress = []
+    for _ in range(3):
+        stopped, status = tick(baking, "TIMER", 0.1, clock=baking.clock)
+        assert stopped is None and status == f"Wet Cloth: frame {baking.done} of 20 (Esc cancels, keeping the frames baked)"
+        progress.append(baking.done)
+    assert progress == [3, 6, 9]
+    assert tick(baking, "ESC", 0.1, clock=baking.clock) == ("cancelled", None) and baking.done == 9
+    baking.bake.close()
+    manifest = json.loads((tmp_path / "frames.json").read_text())
+    assert manifest["frame_count"] == 9 and not manifest["complete"]
+
+
+def test_ticks_finish_the_bake_or_stop_it_after_cancel_after_frames(tmp_path):
+    """Ticks until the last frame: the bake finishes (stopped None), the status cleared on that tick and
+    frames.json complete; with cancel_after=5 the tick that bakes the fifth frame stops it as Esc does."""
+    results = []
+    for cancel_after, folder in ((0, tmp_path / "whole"), (5, tmp_path / "cut")):
+        baking = hanging_sheet_baking(folder, 8)
+        ticks = []
+        while not ticks or ticks[-1][1] is not None:
+            ticks.append(tick(baking, "TIMER", 0.1, cancel_after, clock=baking.clock))
+        baking.bake.close()
+        manifest = json.loads((folder / "frames.json").read_text())
+        results.append((ticks[-1], len(ticks), manifest["frame_count"], manifest["complete"]))
+    assert results == [((None, None), 3, 8, True), (("cancelled", None), 2, 5, False)]

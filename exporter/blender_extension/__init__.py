@@ -1,4 +1,4 @@
-"""The Blender extension "Wet Cloth": bake a wetcloth simulation in the scene (docs/blender.md section 7).
+"""The Blender extension "Wet Cloth": bake a wetcloth simulation in the scene (docs/blender.md section 8).
 
 Objects get a role (``obj.wetcloth.role``: a cloth, a collider, the water surface); the cloth a
 fabric preset; ``scene.wetcloth`` holds the settings of the whole scene, one property per scene
@@ -7,7 +7,8 @@ frame range at its fps into one USD file per cloth, played by a Mesh Sequence Ca
 ``bpy.ops.wetcloth.free_bake()`` removes it.
 
 Modules: ``fabrics`` and ``geometry`` (no bpy: presets, and reading a grid, colliders and pins from
-vertices), ``baking`` (no bpy: the simulation loop that writes the cache), ``blender_scene`` (the
+vertices), ``baking`` (no bpy: the simulation loop that writes the cache), ``frame_loop`` (no bpy:
+one frame and one timer tick of the bake, Esc and the progress), ``blender_scene`` (the
 Blender scene as a wetcloth Scene), ``properties``, ``operators``, ``caches`` (the modifier, the
 wet material, the check for missing caches when a file loads) and ``panel``.  Blender imports
 only ``register`` and ``unregister``; ``build`` makes the extension's zip.

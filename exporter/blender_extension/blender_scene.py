@@ -24,6 +24,10 @@ from wetcloth.exporter.blender_extension.geometry import GridCloth, MeshCloth, c
 from wetcloth.exporter.blender_extension.parameters import FABRIC, SCENE
 from wetcloth.scene import MAX_KEY_TURN, Scene, from_dict, rotation_matrix, rotation_vector
 
+#: The scene settings the bake follows when they change over the frame range (as grip keys at every frame).
+GRIP = ("grip_x", "grip_y", "grip_z")
+
+
 @dataclass
 class ClothJob:
     """One cloth to bake: its object, scene, cloth (grid or mesh) and where its USD file goes."""
@@ -187,6 +191,45 @@ def _collider_keys(scene, obj, number: int, centre) -> list[dict]:
     return keys if any(k[f] for k in keys for f in fields) else []
 
 
+def _settings(scene, cloths, colliders) -> dict:
+    """Every setting the bake reads (scene.wetcloth's scene parameters, each cloth's fabric and each
+    collider's friction) as it is now, by a name that says where it lives."""
+    values = {f"scene setting {name!r}": getattr(scene.wetcloth, name) for name in SCENE}
+    for obj in cloths:
+        values |= {f"cloth {obj.name!r}'s setting {name!r}": getattr(obj.wetcloth, name) for name in FABRIC}
+    for obj in colliders:
+        values[f"collider {obj.name!r}'s setting 'friction'"] = obj.wetcloth.friction
+    return values
+
+
+def _grip_keys(scene, cloths, colliders) -> list[dict]:
+    """The grip keys (docs/interface.md, grip keys) if the grip (GRIP) changes over the frame range (keys or
+    drivers): at every later frame, at (frame - frame_start) / fps s, the grip's x, y, z there (m); none if
+    it does not change.  ValueError naming any other setting (_settings) that changes: the bake reads those
+    at the first frame only."""
+    if scene.animation_data is None and not any(o.animation_data for o in cloths + colliders):
+        return []
+    fps = scene.render.fps / scene.render.fps_base
+    scene.frame_set(scene.frame_start)
+    first = _settings(scene, cloths, colliders)
+    grips = [f"scene setting {name!r}" for name in GRIP]
+    keys, moves = [], False
+    for frame in range(scene.frame_start + 1, scene.frame_end + 1):
+        scene.frame_set(frame)
+        now = _settings(scene, cloths, colliders)
+        moves = moves or any(now[name] != first[name] for name in grips)
+        changed = [name for name, value in now.items() if value != first[name] and name not in grips]
+        if changed:
+            scene.frame_set(scene.frame_start)
+            raise ValueError(f"{changed[0]} changes at frame {frame} (keys or a driver): the bake reads it at the "
+                             f"first frame only; of the settings only {', '.join(GRIP)} may change (a water level "
+                             "that changes: key a Water surface object)")
+        x, y, z = (clean(now[name]) for name in grips)
+        keys.append({"time": (frame - scene.frame_start) / fps, "x": x, "y": y, "z": z})
+    scene.frame_set(scene.frame_start)
+    return keys if moves else []
+
+
 def _unwrapped(vector, previous) -> np.ndarray:
     """Of the rotation vectors of one rotation, vector + 2 pi k axis (k whole), the nearest to previous (3, rad)."""
     angle = float(np.linalg.norm(vector))
@@ -214,25 +257,31 @@ def cloth_jobs(context) -> list[ClothJob]:
     depsgraph.update()
     water_level, water_levels = _water(scene, [o for o in objects if o.wetcloth.role == "WATER"], depsgraph)
     colliders, collider_keys = [], []
-    for obj in (o for o in objects if o.wetcloth.role == "COLLIDER"):
+    collider_objects = [o for o in objects if o.wetcloth.role == "COLLIDER"]
+    for obj in collider_objects:
         if obj.type != "MESH":
             raise ValueError(f"collider {obj.name!r} is not a mesh")
         collider = collider_of(*world_vertices(obj, depsgraph, triangles=True), obj.name)
         colliders.append({key: clean(value) for key, value in collider.items()} | {"friction": clean(obj.wetcloth.friction)})
         collider_keys += _collider_keys(scene, obj, len(colliders), (collider["x"], collider["y"], collider["z"]))
+    grip_keys = _grip_keys(scene, cloths, collider_objects)
     settings = {name: clean(getattr(scene.wetcloth, name)) for name in SCENE} | {"water_level": water_level}
+    if grip_keys:  # the keys hold the whole grip
+        settings |= {name: 0.0 for name in GRIP}
     directory = cache_directory(scene)
     jobs = []
     for obj in cloths:
-        cloth, pins = cloth_of(*cloth_mesh(obj), pin_members(obj), obj.name)
+        members = pin_members(obj)
+        cloth, pins = cloth_of(*cloth_mesh(obj), members, obj.name)
         if isinstance(cloth, GridCloth):
             cloth = replace(cloth, width=clean(cloth.width), length=clean(cloth.length),
                             centre=tuple(clean(c) for c in cloth.centre), tilt=clean(cloth.tilt))
         fabric = {name: clean(getattr(obj.wetcloth, name)) for name in FABRIC}
         shift = cloth.shift
         moved = [c | {"x": clean(c["x"] - shift[0]), "y": clean(c["y"] - shift[1])} for c in colliders]
+        gripped = grip_keys if members else []  # the grip moves pins: a cloth without any takes no keys
         values = settings | fabric | cloth.scene_values() | {"pinned_edge": pins, "colliders": moved,
-                                                             "collider_keys": collider_keys}
+                                                             "collider_keys": collider_keys, "grip_keys": gripped}
         prefix = prefix_of(obj)
         jobs.append(ClothJob(obj=obj, scene=from_dict(values), cloth=cloth, directory=os.path.join(directory, prefix),
                              prefix=prefix, to_local=np.array(obj.matrix_world.inverted()),

@@ -1,6 +1,6 @@
 """Fabric presets of the Wet Cloth panel (``obj.wetcloth.preset``): scene parameters per fabric.
 
-Only the areal density has a source per fabric (docs/blender.md section 7.3 lists them).  The
+Only the areal density has a source per fabric (docs/blender.md section 8.3 lists them).  The
 thickness follows from it at the towel's bulk density (0.45 kg/m2 over 2 mm = 225 kg/m3), an
 assumption, not a measurement; every other fabric parameter (stiffness, damping, absorption) is
 the towel's, for want of sources.

@@ -1,8 +1,8 @@
 """``bpy.ops.wetcloth.bake()`` and ``bpy.ops.wetcloth.free_bake()``.
 
 The bake simulates every Cloth object over the scene's frame range at its fps.  From the interface
-it runs as a modal operator: a frame per timer tick, progress in the status bar, Esc cancels and
-keeps the frames baked so far.  From scripts and in background mode it runs to the end at once
+it runs as a modal operator: frames for TICK s per timer tick (frame_loop.tick), progress in the
+status bar, Esc cancels and keeps the frames baked so far.  From scripts and in background mode it runs to the end at once
 (``cancel_after=N`` stops it after N frames as Esc would, for scripts and tests).
 """
 
@@ -14,10 +14,10 @@ import time
 import bpy
 from bpy.props import IntProperty
 
-from wetcloth.errors import BlowUpError
 from wetcloth.exporter.blender_extension import caches
 from wetcloth.exporter.blender_extension.baking import ClothBake
 from wetcloth.exporter.blender_extension.blender_scene import cloth_jobs
+from wetcloth.exporter.blender_extension.frame_loop import BAKE_EVENTS, advance, tick
 
 #: Wall-clock seconds of simulating per timer tick of the modal bake (the interface stays responsive).
 TICK = 0.1
@@ -81,16 +81,6 @@ class WETCLOTH_OT_bake(bpy.types.Operator):
             return False
         return True
 
-    def _step(self) -> str | None:
-        """One frame; None, or why the bake stopped ('cancelled' or an error)."""
-        try:
-            self.baking.step()
-        except (BlowUpError, ValueError, OSError) as exc:
-            return f"error: {exc}"
-        if self.cancel_after and self.baking.done >= self.cancel_after and not self.baking.finished:
-            return "cancelled"
-        return None
-
     def _finish(self, context, stopped: str | None) -> set:
         baking, self.baking = self.baking, None  # (Blender keeps the last operator: not its simulations)
         summary = baking.close()
@@ -113,7 +103,7 @@ class WETCLOTH_OT_bake(bpy.types.Operator):
         stopped = None
         try:
             while not self.baking.finished and stopped is None:
-                stopped = self._step()
+                stopped = advance(self.baking, self.cancel_after)
                 wm.progress_update(self.baking.done)
         finally:
             wm.progress_end()
@@ -131,21 +121,16 @@ class WETCLOTH_OT_bake(bpy.types.Operator):
         return {"RUNNING_MODAL"}
 
     def modal(self, context, event):
-        stopped = "cancelled" if event.type == "ESC" else None
-        if stopped is None and event.type != "TIMER":
+        if event.type not in BAKE_EVENTS:
             return {"PASS_THROUGH"}
-        until = time.perf_counter() + TICK
-        while stopped is None and not self.baking.finished and time.perf_counter() < until:
-            stopped = self._step()
+        stopped, status = tick(self.baking, event.type, TICK, self.cancel_after)
         wm = context.window_manager
         wm.progress_update(self.baking.done)
-        context.workspace.status_text_set(f"Wet Cloth: frame {self.baking.done} of {self.baking.total} "
-                                          "(Esc cancels, keeping the frames baked)")
-        if stopped is None and not self.baking.finished:
+        context.workspace.status_text_set(status)
+        if status is not None:
             return {"RUNNING_MODAL"}
         wm.event_timer_remove(self._timer)
         wm.progress_end()
-        context.workspace.status_text_set(None)
         return self._finish(context, stopped)
 
 

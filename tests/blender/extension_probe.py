@@ -3,7 +3,8 @@
     BLENDER_USER_RESOURCES=DIR .venv-blender/bin/python tests/blender/extension_probe.py SPEC.json RESULT.json
 
 SPEC: {"zip": the extension, "work": a folder, "frames": frame count, "fps": .., "cuts": plane cuts,
-       "sphere": {"radius", "z"}, "cloth": {"size", "z"}, "water_z": .., "cancel_after": ..}.
+       "sphere": {"radius", "z"}, "cloth": {"size", "z"}, "water_z": .., "cancel_after": .., "grip_rise": ..,
+       "range": [first, last], "range_fps": .., "range_fps_base": ..}.
 The scene: a plane subdivided into a grid (role Cloth) above a UV sphere (Collider) standing in a
 water plane (Water surface), saved as WORK/scene.blend.  RESULT (the assertions are in
 tests/test_blender_extension.py):
@@ -18,6 +19,10 @@ tests/test_blender_extension.py):
   "freed": free_bake's result and the files left;
   "pinned": a short bake of the towel pinned by a vertex group, of denim, with a Solidify modifier of its own;
   "rising": a bake with the water keyed to rise by "rise" m: the levels at every frame, the cloth;
+  "grip": a bake of the towel pinned by a vertex group with the grip keyed to rise by "grip_rise" m:
+          the grip at every frame, the cloth, the pins; the errors of bakes with the wind or the
+          towel's damping keyed;
+  "range": a bake over the frames "range" at "range_fps" / "range_fps_base": frames.json, the cloth;
   "refusals": the errors of scenes it cannot bake;
   "mesh": a round cloth of quads and an n-gon (a filled circle inset a few times), two vertices pinned, over a
           cup (a cylinder without its top face: a mesh collider), baked for "mesh_frames" frames: the
@@ -170,15 +175,66 @@ def moving_ball(spec, blend, frames):
     return out
 
 
+def pin_hem(towel) -> list[int]:
+    """Pin the towel by a vertex group "Hem" of its vertices of the largest y; their indices."""
+    top = max(v.co.y for v in towel.data.vertices)
+    hem = [v.index for v in towel.data.vertices if abs(v.co.y - top) < 1e-6]
+    towel.vertex_groups.new(name="Hem").add(hem, 1.0, "REPLACE")
+    towel.wetcloth.pin_group = "Hem"
+    return hem
+
+
+def keyed_grip(spec, blend, frames):
+    """The towel pinned by its hem with scene.wetcloth.grip_z keyed from 0 to spec["grip_rise"] m: the bake,
+    Blender's grip_z and the cloth at every frame, the pinned vertices; then with the wind keyed too, and
+    with only the towel's damping keyed: the bakes' errors."""
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    towel = bpy.data.objects["Towel"]
+    settings = bpy.context.scene.wetcloth
+    out = {"pinned": pin_hem(towel)}
+    for frame, z in ((frames[0], 0.0), (frames[-1], spec["grip_rise"])):
+        settings.grip_z = z
+        settings.keyframe_insert("grip_z", frame=frame)
+    out |= operator(bpy.ops.wetcloth.bake)
+    out |= cache_report(towel)
+    out["grips"] = []
+    for frame in frames:
+        bpy.context.scene.frame_set(frame)
+        out["grips"].append(settings.grip_z)
+    out["frames"] = [evaluated_cloth(towel, f) for f in frames]
+    for frame, wind in ((frames[0], 0.0), (frames[-1], 2.0)):
+        settings.wind_x = wind
+        settings.keyframe_insert("wind_x", frame=frame)
+    out["wind"] = operator(bpy.ops.wetcloth.bake)["error"]
+    bpy.context.scene.animation_data_clear()
+    for frame, damping in ((frames[0], towel.wetcloth.damping), (frames[-1], 2 * towel.wetcloth.damping)):
+        towel.wetcloth.damping = damping
+        towel.wetcloth.keyframe_insert("damping", frame=frame)
+    out["damping"] = operator(bpy.ops.wetcloth.bake)["error"]
+    return out
+
+
+def another_range(spec, blend):
+    """The towel baked over frames spec["range"] at spec["range_fps"] / spec["range_fps_base"]: the bake,
+    frames.json and the cloth at every frame of the range."""
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = spec["range"]
+    scene.render.fps, scene.render.fps_base = spec["range_fps"], spec["range_fps_base"]
+    towel = bpy.data.objects["Towel"]
+    out = operator(bpy.ops.wetcloth.bake)
+    out |= cache_report(towel)
+    out["fps_base"] = scene.render.fps_base
+    out["frames"] = [evaluated_cloth(towel, f) for f in range(spec["range"][0], spec["range"][1] + 1)]
+    return out
+
+
 def pinned_with_modifiers(blend):
     """The towel pinned by a vertex group (the vertices of its largest y), of the denim preset, with a
     Solidify modifier of its own: a short bake (cancel_after=3)."""
     bpy.ops.wm.open_mainfile(filepath=blend)
     towel = bpy.data.objects["Towel"]
-    top = max(v.co.y for v in towel.data.vertices)
-    group = towel.vertex_groups.new(name="Hem")
-    group.add([v.index for v in towel.data.vertices if abs(v.co.y - top) < 1e-6], 1.0, "REPLACE")
-    towel.wetcloth.pin_group = "Hem"
+    pin_hem(towel)
     towel.wetcloth.preset = "DENIM"
     towel.modifiers.new("Solidify", "SOLIDIFY")
     out = operator(bpy.ops.wetcloth.bake, cancel_after=3)
@@ -328,6 +384,8 @@ def main(spec_path, result_path):
         result["rising"] = rising_water(spec, blend, frames)
         result["moving"] = moving_ball(spec, blend, frames)
         result["pinned"] = pinned_with_modifiers(blend)
+        result["grip"] = keyed_grip(spec, blend, frames)
+        result["range"] = another_range(spec, blend)
         result["refusals"] = refusals(spec)
         result["mesh"] = mesh_cloth_over_a_cup(spec)
     except Exception:

@@ -1,4 +1,4 @@
-"""``wetcloth blender-extension``: build the Blender extension ``wetcloth-VERSION.zip`` (docs/blender.md section 7)."""
+"""``wetcloth blender-extension``: build the Blender extension ``wetcloth-VERSION.zip`` (docs/blender.md section 8)."""
 
 from __future__ import annotations
 
