@@ -208,6 +208,24 @@ def test_a_moved_cache_is_reported_when_the_file_opens(baked):
     assert "Wet Cloth: the cache of 'Towel' is missing" in moved["stderr"] and path in moved["stderr"]
 
 
+def test_the_panel_shows_every_setting_under_its_name_and_a_missing_cache_in_red(baked):
+    """The Wet Cloth panel, drawn for the towel into a recording layout: its role, preset, every fabric
+    setting and the pin group, Bake and Free Bake; the Scene subpanel: the cache folder and every scene
+    setting.  With the cache moved away, an ERROR line names the missing file (once as the towel's
+    cache, once among the file's missing caches); with it back, a line names it, relative to the .blend."""
+    from wetcloth.exporter.blender_extension.parameters import FABRIC, SCENE
+
+    path = str(baked.root / "work" / "wetcloth_cache" / "Towel" / "Towel.usd")
+    moved, restored = baked.report["moved"]["panel"], baked.report["restored"]["panel"]
+    settings = [item[1] for item in moved if item[0] in ("prop", "prop_search")]
+    assert settings == ["role", "preset", *FABRIC, "pin_group", "cache_directory", *SCENE]
+    assert ["operator", "wetcloth.bake", "PHYSICS"] in moved and ["operator", "wetcloth.free_bake", "TRASH"] in moved
+    assert [item for item in moved if item[0] == "label"] == [
+        ["label", f"Cache missing: {path}", "ERROR"], ["label", f"Towel: cache missing ({path})", "ERROR"]]
+    assert [item for item in restored if item[0] == "label"] == [
+        ["label", "Cache: //wetcloth_cache/Towel/Towel.usd", "FILE"]]
+
+
 def test_free_bake_removes_the_modifier_and_the_cache_files(baked):
     freed = baked.report["freed"]
     assert freed["result"] == ["FINISHED"] and freed["modifiers"] == [] and freed["left"] == []

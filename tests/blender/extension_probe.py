@@ -15,7 +15,9 @@ tests/test_blender_extension.py):
   "reopened": the same frames after saving and opening the .blend again;
   "cancelled": a bake with cancel_after: result, frames.json, the evaluated cloth at a frame baked
                and at the last frame;
-  "moved": after moving the cache folder and opening the .blend: what the load check said;
+  "moved": after moving the cache folder and opening the .blend: what the load check said, and what the
+           panels draw for the towel (as [kind, name or text, icon]); "restored": the panels' drawing with
+           the cache back;
   "freed": free_bake's result and the files left;
   "pinned": a short bake of the towel pinned by a vertex group, of denim, with a Solidify modifier of its own;
   "rising": a bake with the water keyed to rise by "rise" m: the levels at every frame, the cloth;
@@ -39,6 +41,7 @@ import shutil
 import sys
 import time
 import traceback
+from types import SimpleNamespace
 
 import bpy  # first: bpy makes bmesh importable
 import bmesh  # noqa: E402
@@ -105,6 +108,40 @@ def operator(call, **kwargs):
         return {"result": sorted(call(**kwargs)), "error": None}
     except RuntimeError as exc:
         return {"result": ["ERROR"], "error": str(exc)}
+
+
+class RecordingLayout:
+    """Stands for a panel's layout (bpy.types.UILayout): records what its draw() puts in it."""
+
+    def __init__(self, items: list):
+        self.items = items
+
+    def prop(self, data, name, **options):
+        self.items.append(["prop", name, options.get("icon", "NONE")])
+
+    def prop_search(self, data, name, search_data, search_name, **options):
+        self.items.append(["prop_search", name, search_name])
+
+    def label(self, text="", icon="NONE"):
+        self.items.append(["label", text, icon])
+
+    def operator(self, idname, icon="NONE", **options):
+        self.items.append(["operator", idname, icon])
+
+    def column(self, **options):
+        return self
+
+    def row(self, **options):
+        return self
+
+
+def drawn_panels(obj) -> list:
+    """What the Wet Cloth panel and its Scene subpanel draw for obj, in order."""
+    items = []
+    context = SimpleNamespace(object=obj, scene=bpy.context.scene)
+    for panel in (bpy.types.WETCLOTH_PT_physics, bpy.types.WETCLOTH_PT_scene):
+        panel.draw(SimpleNamespace(layout=RecordingLayout(items)), context)
+    return items
 
 
 def cache_report(obj):
@@ -375,9 +412,10 @@ def main(spec_path, result_path):
         with contextlib.redirect_stderr(stderr):
             bpy.ops.wm.open_mainfile(filepath=blend)
         result["moved"] = {"missing": bpy.app.driver_namespace.get("wetcloth_missing_caches"),
-                           "stderr": stderr.getvalue()}
+                           "stderr": stderr.getvalue(), "panel": drawn_panels(bpy.data.objects["Towel"])}
         shutil.move(cache + "_moved", cache)
         bpy.ops.wm.open_mainfile(filepath=blend)
+        result["restored"] = {"panel": drawn_panels(bpy.data.objects["Towel"])}
         result["freed"] = operator(bpy.ops.wetcloth.free_bake)
         result["freed"] |= {"modifiers": [m.type for m in bpy.data.objects["Towel"].modifiers],
                             "left": sorted(os.listdir(os.path.dirname(cache))) if os.path.isdir(os.path.dirname(cache)) else None}
