@@ -650,12 +650,14 @@ Outcome Unit::get_real(const std::uint32_t* vrs, std::size_t nvr, double* values
         }
         at += size;
     }
-    if (at != n_values) {
-        error(std::string(function) + ": " + std::to_string(n_values) + " values asked for, the variables hold " +
-              std::to_string(at));
-        return Outcome::ERROR;
-    }
-    return Outcome::OK;
+    return all_values_filled(at, n_values, function);
+}
+
+Outcome Unit::all_values_filled(std::size_t at, std::size_t n_values, const char* function) const {
+    if (at == n_values) return Outcome::OK;
+    error(std::string(function) + ": " + std::to_string(n_values) + " values asked for, the variables hold " +
+          std::to_string(at));
+    return Outcome::ERROR;
 }
 
 Outcome Unit::get_integer(std::uint64_t vr, std::int64_t& value, const char* function) {
@@ -694,12 +696,7 @@ Outcome Unit::get_uint64(const std::uint32_t* vrs, std::size_t nvr, std::uint64_
         }
         at += size;
     }
-    if (at != n_values) {
-        error(std::string(function) + ": " + std::to_string(n_values) + " values asked for, the variables hold " +
-              std::to_string(at));
-        return Outcome::ERROR;
-    }
-    return Outcome::OK;
+    return all_values_filled(at, n_values, function);
 }
 
 Outcome Unit::get_string(std::uint64_t vr, const char*& value, const char* function) {

@@ -125,6 +125,8 @@ public:
 
     //: Log an error (also used by the FMI layers for their own refusals).
     void error(const std::string& message) const { log_(Outcome::ERROR, "logStatusError", message); }
+    //: OK where the variables asked for filled exactly the n_values values (at of them); else ERROR, logged.
+    Outcome all_values_filled(std::size_t at, std::size_t n_values, const char* function) const;
     void warning(const std::string& message) const { log_(Outcome::WARNING, "logStatusWarning", message); }
 
 private:
