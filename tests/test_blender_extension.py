@@ -133,6 +133,31 @@ def test_the_zip_is_a_blender_extension_with_the_core_as_a_wheel(baked):
     assert wheels and sorted(manifest["wheels"]) == sorted(f"./{w}" for w in wheels) and "__init__.py" in names
 
 
+#: Runs in Blender's Python with a fresh user folder: installs the zip argv[1] as
+#: `blender --command extension install-file -r user_default -e ZIP` does (the command's own handler);
+#: prints its exit code, the add-ons enabled and whether the bake operator is there.
+COMMAND_LINE_INSTALL = r"""
+import json, sys
+import bpy
+from bl_pkg.bl_extension_cli import cli_extension_handler
+code = cli_extension_handler(["install-file", "-r", "user_default", "-e", sys.argv[1]])
+print(json.dumps({"code": code, "addons": [a for a in bpy.context.preferences.addons.keys() if "wetcloth" in a],
+                  "bake": hasattr(bpy.types, "WETCLOTH_OT_bake")}))
+"""
+
+
+def test_it_installs_from_the_command_line(baked, tmp_path):
+    """`blender --command extension install-file -r user_default -e wetcloth-VERSION.zip` (docs/blender.md):
+    exit code 0, the add-on enabled and its bake operator registered, in a user folder of its own."""
+    python = require_blender_python()
+    env = os.environ | {"BLENDER_USER_RESOURCES": str(tmp_path)}
+    done = subprocess.run([str(python), "-c", COMMAND_LINE_INSTALL, str(baked.zip)], capture_output=True, text=True,
+                          timeout=300, env=env, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr[-3000:]
+    report = json.loads(done.stdout.strip().splitlines()[-1])
+    assert report == {"code": 0, "addons": ["bl_ext.user_default.wetcloth"], "bake": True}, done.stdout[-3000:]
+
+
 def test_it_installs_and_registers_its_scripting_names(baked):
     """package_install_files (what Preferences > Install from Disk runs) enables it; the operators,
     the four roles and one scene property per scene parameter exist."""
