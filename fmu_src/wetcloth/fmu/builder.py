@@ -135,16 +135,20 @@ def _range(spec: VariableSpec) -> str:
     return f"{'> ' if spec.min_open else ''}{spec.min:g} .. {spec.max:g}"
 
 
+def documentation_row(s: VariableSpec, meaning: str | None = None) -> str:
+    """A variable's row of the documentation's table (HTML): name and shape, causality, type, unit, start value,
+    range and ``meaning`` (default: its description)."""
+    unit = fmi_unit_name(s.unit) or ""
+    start = ("" if s.start is None else "(in the model description)" if s.variability == "constant"
+             else repr(s.start) if s.type == "String" else f"{s.start:g}")
+    shape = f" [{', '.join(map(str, s.dimensions))}]" if s.dimensions else ""
+    cells = (s.name + shape, s.causality, s.type, unit, start, _range(s), s.description if meaning is None else meaning)
+    return "<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in cells) + "</tr>"
+
+
 def documentation_html(specs: list[VariableSpec], fmi_version: int = 2) -> str:
     """``documentation/index.html``: what the unit models, its variables and what it needs to run."""
-    rows = []
-    for s in specs:
-        unit = fmi_unit_name(s.unit) or ""
-        start = ("" if s.start is None else "(in the model description)" if s.variability == "constant"
-                 else repr(s.start) if s.type == "String" else f"{s.start:g}")
-        shape = f" [{', '.join(map(str, s.dimensions))}]" if s.dimensions else ""
-        cells = (s.name + shape, s.causality, s.type, unit, start, _range(s), s.description)
-        rows.append("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in cells) + "</tr>")
+    rows = [documentation_row(s) for s in specs]
     template = Template((DOCS / "index.html.in").read_text(encoding="utf-8"))
     inputs = ", ".join(f"<code>{s.name}</code>" for s in specs if s.causality == "input")
     arrays = ", ".join(f"<code>{s.name}</code> [{', '.join(map(str, s.dimensions))}]" for s in specs if s.dimensions)

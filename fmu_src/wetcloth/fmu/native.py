@@ -54,7 +54,7 @@ import wetcloth
 from wetcloth.files import new_temporary, whole_file
 from wetcloth.fmu import MODEL_NAME, native_mesh, packed_scene
 from wetcloth.fmu.vocabulary import (MESH_CONSTANTS, MESH_FORMAT_RANGE, MESH_FORMATS, MESH_OUTPUTS, STEP_OUTPUTS,
-                                     VariableSpec, fmi_unit_name, variable_specs)
+                                     VariableSpec, variable_specs)
 from wetcloth.progress import SHOW_AFTER
 
 #: The order of the outputs in the core's ``record_outputs`` row (``stepping.hpp``).
@@ -218,6 +218,15 @@ def placed_meshes(scene) -> dict:
     return ranges
 
 
+def _c_range(md: dict, name: str, text: str, fixed: dict) -> tuple[str, str, str, str, str]:
+    """The C texts of a number variable's range (ranged, lo, hi, lo open, its text): from its field's metadata
+    ``md`` and range ``text``, or ``fixed[name]`` (low, high, low open, text) where the unit allows less."""
+    if name in fixed:
+        low, high, low_open, text = fixed[name]
+        return "true", _c_double(low), _c_double(high), str(bool(low_open)).lower(), _c_string(text)
+    return "true", _c_double(md["lo"]), _c_double(md["hi"]), str(bool(md["lo_open"])).lower(), _c_string(text)
+
+
 def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "", fixtures: str = "",
                      fixed: dict | None = None) -> str:
     """The generated C++ table of the unit's variables (value reference = index), with compile-time
@@ -249,12 +258,8 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
             role, field_name = "COLLIDER", spec.name.split("_", 1)[1]
             slot = f"{spec.collider - 1} * COLLIDER_COLUMNS + C_{field_name.upper()}"
             field = COLLIDER_FIELDS[field_name]
-            md = field.metadata
-            ranged, lo, hi = "true", _c_double(md["lo"]), _c_double(md["hi"])
-            lo_open, range_text = str(bool(md["lo_open"])).lower(), _c_string(describe_range(field, spec.name))
-            if spec.name in fixed:
-                low, high, low_open, text = fixed[spec.name]
-                lo, hi, lo_open, range_text = _c_double(low), _c_double(high), str(low_open).lower(), _c_string(text)
+            ranged, lo, hi, lo_open, range_text = _c_range(field.metadata, spec.name,
+                                                           describe_range(field, spec.name), fixed)
             start = _c_double(spec.start)
         elif spec.scene:
             role = "SCENE"
@@ -279,11 +284,7 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
                 checks.append(f'static_assert(scene_choices("{spec.name}").count == {len(allowed)} && {names},\n'
                               f'              "model.hpp: the choices of {spec.name} are not those of wetcloth.scene");')
             else:
-                ranged, lo, hi = "true", _c_double(md["lo"]), _c_double(md["hi"])
-                lo_open = "true" if md["lo_open"] else "false"
-                if spec.name in fixed:
-                    low, high, low_open, text = fixed[spec.name]
-                    lo, hi, lo_open, range_text = _c_double(low), _c_double(high), str(low_open).lower(), _c_string(text)
+                ranged, lo, hi, lo_open, range_text = _c_range(md, spec.name, describe_range(field), fixed)
                 start = _c_double(spec.start)
             is_input = md["fmu"] == INPUT
             checks.append(f'static_assert({"" if is_input else "!"}scene_input("{spec.name}"), '
@@ -496,21 +497,16 @@ $rows
 def documentation_html(specs: list[VariableSpec], fmi_version: int) -> str:
     """``documentation/index.html`` of the native unit (the variables as ``builder.documentation_html``
     lists them; what the unit needs and does not do)."""
-    from wetcloth.fmu.builder import _range
+    from wetcloth.fmu.builder import documentation_row
 
     rows = []
     for s in specs:
-        unit = fmi_unit_name(s.unit) or ""
-        start = ("" if s.start is None else "(in the model description)" if s.variability == "constant"
-                 else repr(s.start) if s.type == "String" else f"{s.start:g}")
-        shape = f" [{', '.join(map(str, s.dimensions))}]" if s.dimensions else ""
         meaning = s.description
         if s.name == "mesh_output_dir":
             meaning = "must stay empty: this unit writes no mesh frames (the Python unit does)"
         elif s.name == "mesh_format":
             meaning += "; no effect in this unit, which writes no frames"
-        cells = (s.name + shape, s.causality, s.type, unit, start, _range(s), meaning)
-        rows.append("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in cells) + "</tr>")
+        rows.append(documentation_row(s, meaning))
     inputs = ", ".join(f"<code>{s.name}</code>" for s in specs if s.causality == "input")
     arrays = ", ".join(f"<code>{s.name}</code> [{', '.join(map(str, s.dimensions))}]" for s in specs if s.dimensions)
     return _DOCUMENTATION.substitute(
