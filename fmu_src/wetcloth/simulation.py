@@ -301,8 +301,8 @@ class Simulation:
     @property
     def solver_counts(self) -> dict[str, int]:
         """Work of the implicit solves so far: Newton iterations, conjugate-gradient iterations,
-        preconditioner factorisations, linear solves stopped at their iteration limit, and fixed steps
-        in contact whose descent started again (it had ended above the energy the step started with)."""
+        preconditioner factorisations, linear solves stopped at their iteration limit, and how often a
+        fixed step in contact started its descent again (it had ended above the energy the step started with)."""
         c = self._solver.counters
         return {"newton_iterations": int(c[NEWTON_ITERATIONS]), "cg_iterations": int(c[CG_ITERATIONS]),
                 "factorisations": int(c[FACTORISATIONS]), "unconverged_solves": int(c[UNCONVERGED]),

@@ -63,16 +63,17 @@ bool integer_of_kind(Instance& instance, fmi3ValueReference vr, bool structural,
     return false;
 }
 
+//: The Int32 variables' values (the UInt64 ones: Unit::get_uint64).
 template <class T>
-fmi3Status get_integers(fmi3Instance c, const char* function, bool structural, const fmi3ValueReference vrs[],
-                        size_t nvr, T values[], size_t nValues) {
+fmi3Status get_integers(fmi3Instance c, const char* function, const fmi3ValueReference vrs[], size_t nvr, T values[],
+                        size_t nValues) {
     return Fmi::guarded(c, function, [&](Instance& instance) {
         if (nValues != nvr) {
             Fmi::log(&instance, fmi3Error, "logStatusError", std::string(function) + ": nValues must equal nValueReferences");
             return fmi3Error;
         }
         for (size_t k = 0; k < nvr; ++k) {
-            if (!integer_of_kind(instance, vrs[k], structural, function)) return fmi3Error;
+            if (!integer_of_kind(instance, vrs[k], false, function)) return fmi3Error;
             std::int64_t v = 0;
             const Outcome outcome = instance.unit->get_integer(vrs[k], v, function);
             if (outcome != Outcome::OK) return Fmi::status_of(outcome);
@@ -213,7 +214,7 @@ fmi3Status fmi3GetUInt64(fmi3Instance c, const fmi3ValueReference valueReference
 
 fmi3Status fmi3GetInt32(fmi3Instance c, const fmi3ValueReference valueReferences[], size_t nValueReferences,
                         fmi3Int32 values[], size_t nValues) {
-    return get_integers(c, "fmi3GetInt32", false, valueReferences, nValueReferences, values, nValues);
+    return get_integers(c, "fmi3GetInt32", valueReferences, nValueReferences, values, nValues);
 }
 
 fmi3Status fmi3GetString(fmi3Instance c, const fmi3ValueReference valueReferences[], size_t nValueReferences,
