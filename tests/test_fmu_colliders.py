@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_fmu_support import run_child
+from test_fmu_support import message_callbacks, run_child
 
 import wetcloth
 from wetcloth.fmu import native
@@ -126,9 +126,7 @@ def test_the_native_unit_takes_the_colliders_fields_as_parameters(tmp_path, tmp_
     FMU state of the run holds the radius: restored in a fresh instance, whose radius is the scene's, the run
     goes on as the uninterrupted one, bit for bit.  (bb80f15: no such variable.)"""
     import fmpy
-    from fmpy import calloc, free
-    from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                           fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+    from fmpy.fmi2 import FMU2Slave
 
     objects = tmp_path_factory.getbasetemp().parent / "wetcloth-native-objects"
     fmu = native.build_native_fmu(tmp_path / "sphere.fmu", 2, build_dir=objects, scene="tablecloth_sphere")
@@ -140,19 +138,10 @@ def test_the_native_unit_takes_the_colliders_fields_as_parameters(tmp_path, tmp_
     vr = {v.name: v.valueReference for v in md.modelVariables}
     directory = fmpy.extract(str(fmu), unzipdir=str(tmp_path / "unzipped"))
     messages = []
-    callbacks = fmi2CallbackFunctions()
-    callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, category, message:
-                                              messages.append((int(status), message.decode())))
-    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-
-    def instance(name):
-        unit = FMU2Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier=md.coSimulation.modelIdentifier,
-                         instanceName=name)
-        unit.instantiate(callbacks=callbacks, loggingOn=False)  # errors are logged with logging off too
-        return unit
-
-    first = instance("first")
+    callbacks = message_callbacks(messages)
+    first = FMU2Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier=md.coSimulation.modelIdentifier,
+                      instanceName="first")
+    first.instantiate(callbacks=callbacks, loggingOn=False)  # errors are logged with logging off too
     with pytest.raises(fmpy.fmi1.FMICallException):
         first.setReal([vr["collider1_radius"]], [-0.1])
     assert messages == [(3, "parameter 'collider1_radius': -0.1 is out of range; allowed: 0 < collider1_radius "

@@ -84,6 +84,23 @@ def run_child(code: str, *args, cwd=None, env=None, timeout: float = 300, stdin:
     return records, done
 
 
+def message_callbacks(messages: list):
+    """fmpy's FMI 2.0 callbacks (fmi2CallbackFunctions) whose logger appends (status, text) to ``messages``; keep
+    them alive as long as the instance given them."""
+    from fmpy import calloc, free
+    from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
+                           fmi2CallbackLoggerTYPE)
+
+    def logger(env, instance, status, category, message):
+        messages.append((int(status), message.decode("utf-8")))
+
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(logger)
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    return callbacks
+
+
 class Unit:
     """One WetCloth instance driven through fmpy's FMU2Slave, with its log messages collected.
 
@@ -92,22 +109,13 @@ class Unit:
     """
 
     def __init__(self, values: dict | None = None, name: str = "unit", initialize: bool = True):
-        from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-        from fmpy import calloc, free
+        from fmpy.fmi2 import FMU2Slave
 
         directory, md = extracted_fmu()
         self.md = md
         self.vars = {v.name: v for v in md.modelVariables}
         self.messages: list[tuple[int, str]] = []
-
-        def logger(env, instance, status, category, message):
-            self.messages.append((int(status), message.decode("utf-8")))
-
-        self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = fmi2CallbackLoggerTYPE(logger)
-        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        self._callbacks = message_callbacks(self.messages)
         self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=str(directory),
                              modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
         self.fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
