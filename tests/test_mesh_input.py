@@ -89,6 +89,23 @@ def test_a_gmsh_file_of_a_format_beyond_the_listed_ones_reads_as_the_same_obj(tm
     np.testing.assert_array_equal(msh.rest_pos, obj.rest_pos)
 
 
+def test_a_file_meshio_fails_to_parse_is_read_with_trimesh(tmp_path, disc):
+    """A binary PLY with face colours (as trimesh writes one), which meshio's PLY reader fails on, is read by
+    trimesh and gives the same cloth as the plain PLY: vertex order, faces and coordinates (trimesh writes
+    float32: the points are float32 values, so both files hold them exactly)."""
+    points, triangles = disc[0].astype(np.float32).astype(np.float64), disc[1]
+    coloured = trimesh.Trimesh(points, triangles, process=False)
+    coloured.visual.face_colors = np.tile([200, 30, 30, 255], (len(triangles), 1))
+    coloured.export(tmp_path / "coloured.ply")
+    with pytest.raises(ValueError):  # the case the fallback exists for
+        meshio.read(tmp_path / "coloured.ply")
+    meshio.write(tmp_path / "plain.ply", meshio.Mesh(points, [("triangle", triangles)]))
+    fallback, plain = (build_topology(Scene(cloth_mesh=str(tmp_path / f"{name}.ply"))) for name in ("coloured", "plain"))
+    np.testing.assert_array_equal(fallback.triangles, plain.triangles)
+    np.testing.assert_array_equal(fallback.pairs, plain.pairs)
+    np.testing.assert_array_equal(fallback.rest_pos, plain.rest_pos)
+
+
 def test_quads_and_mixed_faces_are_read_and_split(tmp_path):
     points = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0]], dtype=float)
     path = tmp_path / "mixed.obj"
@@ -114,6 +131,7 @@ BAD_FILES = {
     "flat_shaded": ("glb", r"'cloth_mesh'.*vertices 0 and 3 are at the same place .*2 such vertices"),
     "millimetres": ("obj", r"'cloth_mesh'.*is 1000 m across \(coordinates are metres, up to 100 m\).*scaled"),
     "unreadable": ("xyz", r"'cloth_mesh'.*cannot be read as a mesh by trimesh \(meshio has no reader for '\.xyz'\)"),
+    "unreadable_by_both": ("ply", r"'cloth_mesh'.*cannot be read as a mesh by meshio: .*; nor by trimesh: "),
     "unknown_format": ("foo", r"'cloth_mesh'.*unknown mesh format '\.foo': neither meshio nor trimesh reads it"),
 }
 
@@ -145,6 +163,8 @@ def _bad_file(kind: str, folder: Path) -> Path:
         trimesh.Trimesh(square[[0, 1, 2, 0, 2, 3]], np.arange(6).reshape(2, 3), process=False).export(path)
     elif kind == "millimetres":  # a 1 m square written in millimetres
         meshio.write(path, meshio.Mesh(1000.0 * square, [("triangle", np.array([[0, 1, 2], [0, 2, 3]]))]))
+    elif kind == "unreadable_by_both":  # a binary PLY cut short after its header
+        path.write_bytes(b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nend_header\n\x00")
     elif kind in ("unreadable", "unknown_format"):  # a point of an XYZ point cloud, too few to read as one
         path.write_text("0 0 0\n")
     return path

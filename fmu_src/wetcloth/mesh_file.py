@@ -8,7 +8,8 @@ bakes its objects so, as Blender ships neither meshio nor trimesh.
 OBJ, PLY, OFF and VTK/VTU are read with meshio, which keeps the file's vertex order, its quads and
 its point data; glTF/GLB (which meshio does not read) and STL with trimesh.  A file of another suffix is
 read with meshio if meshio knows the suffix (gmsh .msh, Medit .mesh, Abaqus .inp, ...), else with trimesh
-if trimesh does (a suffix neither knows is refused).  An STL file stores each
+if trimesh does (a suffix neither knows is refused).  A file meshio fails to parse is read with trimesh
+where trimesh knows its suffix too (a binary PLY with face colours, for one).  An STL file stores each
 triangle's own corners: its exactly equal vertices are merged, numbered in order of first appearance.
 An OBJ file's normals (``vn``) are not read, nor its UVs (``vt``) unless each face corner's ``vt``
 index is its ``v`` index (UVs per vertex; at a UV seam they are per corner, which a particle cannot
@@ -112,40 +113,41 @@ def _read_cached(resolved: str, mtime_ns: int, size: int, shown: str) -> MeshFil
 def read_faces(path: str, shown: str, name: str, allowed: str, polygons: bool = False):
     """A mesh file's vertices (n, 3) m, its faces as runs (j, 3) and (j, 4) in file order (with
     ``polygons``, faces of more corners too, as runs (j, k)), its point attributes and UVs (or None),
-    unchecked: the one reader of cloth and collider files (meshio or trimesh by the suffix, see the
+    unchecked: the one reader of cloth and collider files (meshio, then trimesh, by the suffix, see the
     module).  A file no reader understands raises a ParameterError naming ``name``, ``allowed`` its range."""
-    suffix, reader = Path(path).suffix.lower(), reader_of(path)
-    if reader is None:
+    suffix, readers = Path(path).suffix.lower(), readers_of(path)
+    if not readers:
         raise ParameterError(name, f"{shown!r}: unknown mesh format {suffix!r}: neither meshio nor trimesh reads "
                                    f"it; allowed: {allowed}")
-    tried = reader if reader == "meshio" or suffix in TRIMESH_SUFFIXES else \
-        f"trimesh (meshio has no reader for {suffix!r})"
-    try:
-        return _read_meshio(path, polygons) if reader == "meshio" else _read_trimesh(path)
-    except ParameterError:
-        raise
-    except Exception as exc:  # the readers raise many kinds of errors for a damaged file
-        raise ParameterError(name, f"{shown!r} cannot be read as a mesh by {tried}: {type(exc).__name__}: {exc}; "
-                                   f"allowed: {allowed}") from None
+    failures = []
+    for reader in readers:
+        try:
+            return _read_meshio(path, polygons) if reader == "meshio" else _read_trimesh(path)
+        except ParameterError:
+            raise
+        except Exception as exc:  # the readers raise many kinds of errors for a damaged file
+            failures.append(f"{reader}: {type(exc).__name__}: {exc}")
+    if readers == ["trimesh"] and suffix not in TRIMESH_SUFFIXES:
+        failures[0] = f"trimesh (meshio has no reader for {suffix!r}){failures[0][len('trimesh'):]}"
+    raise ParameterError(name, f"{shown!r} cannot be read as a mesh by {'; nor by '.join(failures)}; "
+                               f"allowed: {allowed}") from None
 
 
-def reader_of(path: str) -> str | None:
-    """'meshio' or 'trimesh', the reader of a mesh file by its suffix (see the module), or None if neither
-    knows the suffix.  Compound suffixes count (meshio's '.vol.gz')."""
+def readers_of(path: str) -> list[str]:
+    """The readers of a mesh file by its suffix, in the order tried: 'meshio' where meshio knows the suffix,
+    then 'trimesh' where trimesh does (see the module); empty if neither does.  Compound suffixes count
+    (meshio's '.vol.gz')."""
     suffix = Path(path).suffix.lower()
-    if suffix in MESHIO_SUFFIXES:
-        return "meshio"
     if suffix in TRIMESH_SUFFIXES:
-        return "trimesh"
+        return ["trimesh"]
     import meshio
     import trimesh
 
     tails = ["".join(Path(path).suffixes[-k:]).lower() for k in range(1, len(Path(path).suffixes) + 1)]
-    if any(tail in meshio.extension_to_filetypes for tail in tails):
-        return "meshio"
+    readers = ["meshio"] if suffix in MESHIO_SUFFIXES or any(t in meshio.extension_to_filetypes for t in tails) else []
     if any(tail.lstrip(".") in trimesh.available_formats() for tail in tails):
-        return "trimesh"
-    return None
+        readers.append("trimesh")
+    return readers
 
 
 def _read_meshio(path: str, polygons: bool):
