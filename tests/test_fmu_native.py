@@ -620,6 +620,11 @@ def test_a_unit_built_with_a_scene_runs_its_colliders_and_grip_keys_as_the_pytho
                 rows[label].append([sim.outputs()[n] for n in OUTPUT_NAMES])
         assert_agree([[row[n] for n in OUTPUT_NAMES] for row in result], rows["as built"], preset)
         assert np.abs(np.subtract(rows["as built"], rows["without"])).max() > 1e-3, preset
+        declared = {v.name: v for v in fmpy.read_model_description(str(fmu)).modelVariables}
+        for k, collider in enumerate(scene.colliders, 1):  # a mesh collider is built in where the scene puts it
+            for c in "xyz":
+                variable = declared[f"collider{k}_{c}"]
+                assert (float(variable.min) == float(variable.max) == getattr(collider, c)) is (collider.shape == "mesh")
     fmu = native.build_native_fmu(tmp_path / "sphere.fmu", 2, build_dir=build["objects"], scene="tablecloth_sphere")
     records, _ = run_child(OVERLAP, fmu, "initial_height", "0.05")
     with pytest.raises(ParameterError) as exc:

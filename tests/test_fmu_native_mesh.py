@@ -200,6 +200,13 @@ def test_what_the_built_in_mesh_fixes_is_refused_with_its_name(units):
     assert small[-1]["refused"] == [["stretch_stiffness", 0], ["bend_stiffness", 3]]  # small: band factors alone
     large, _ = run_child(STATES, units["large2"])
     assert large[-1]["refused"] == [["stretch_stiffness", 3], ["bend_stiffness", 3]]
+    import fmpy  # and each unit's model description declares the range it takes
+
+    for unit, stiffness_fixed in ((units[2], False), (units["large2"], True)):
+        declared = {v.name: v for v in fmpy.read_model_description(str(unit)).modelVariables}
+        stretch, bend = declared["stretch_stiffness"], declared["bend_stiffness"]
+        assert (float(stretch.min) == float(stretch.max) == float(stretch.start)) is stiffness_fixed
+        assert 0.0 < float(bend.min) < 1e-300 and float(bend.max) == 1e8  # above 0: the bending springs stay
 
 
 def test_a_mesh_file_that_forms_the_grid_runs_as_the_python_api(units, tmp_path):

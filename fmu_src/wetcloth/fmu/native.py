@@ -33,6 +33,7 @@ not carry them, and the build is refused there.
 from __future__ import annotations
 
 import concurrent.futures
+import dataclasses
 import functools
 import hashlib
 import html
@@ -654,6 +655,8 @@ def build_native_fmu(out: str | Path | None = None, fmi_version: int = 2, build_
     cloth = None if loaded is None else native_mesh.cloth_arrays(loaded)
     fixtures = fixtures_header(loaded, cloth)
     fixed = {**native_mesh.fixed_ranges(cloth), **placed_meshes(loaded)}
+    specs = [dataclasses.replace(spec, min=fixed[spec.name][0], max=fixed[spec.name][1], min_open=fixed[spec.name][2])
+             if spec.name in fixed else spec for spec in specs]  # the model description declares what the unit takes
     body = variables_header(specs, fmi_version, fixtures=fixtures, fixed=fixed).encode()
     token = "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, "wetcloth-native:" + _digest(
         body, " ".join(CXX_FLAGS).encode(), *(p.read_bytes() for p, _ in files)))) + "}"
