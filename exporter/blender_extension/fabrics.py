@@ -57,8 +57,9 @@ DENIM_STRAIN_PERCENT = (5.735, 4.695, 5.135, 5.455)
 
 @dataclass(frozen=True)
 class Fabric:
-    """One preset: its label, fibre, areal density (kg/m2) and, where measured, thickness (m) and
-    stretch stiffness (N/m); ``None``: the thickness at the towel's bulk density, the towel's stiffness."""
+    """One preset: its label and tooltip, its fibre (a key of FIBRE_DENSITY), areal density (kg/m2) and,
+    where measured, thickness (m) and stretch stiffness (N/m); ``None``: the thickness at the towel's
+    bulk density, the towel's stiffness."""
 
     label: str
     description: str
