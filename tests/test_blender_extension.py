@@ -359,15 +359,15 @@ def test_a_bake_over_another_range_and_fps_starts_at_its_first_frame(baked):
 
 def test_pin_group_preset_and_the_cloths_own_modifiers(baked):
     """A vertex group holding the vertices of the largest y is pinned_edge y_max; the denim preset
-    sets the areal density and thickness; the plane is baked from the mesh as stored, so a Solidify
-    modifier of the towel's own stays, after the cache."""
-    from wetcloth.exporter.blender_extension.fabrics import fabric_parameters
+    sets the fabric's parameters; the plane is baked from the mesh as stored, so a Solidify modifier of
+    the towel's own stays, after the cache."""
+    from wetcloth.exporter.blender_extension.fabrics import FABRIC_PARAMETERS, fabric_parameters
 
     pinned = baked.report["pinned"]
     assert pinned["result"] == ["CANCELLED"] and pinned["manifest"]["frame_count"] == 3
     scene = pinned["manifest"]["scene"]
     assert scene["pinned_edge"] == "y_max"
-    assert {name: scene[name] for name in ("areal_density", "thickness")} == fabric_parameters("DENIM")
+    assert {name: scene[name] for name in FABRIC_PARAMETERS} == fabric_parameters("DENIM")
     assert pinned["modifiers"] == ["MESH_SEQUENCE_CACHE", "SOLIDIFY"]
 
 

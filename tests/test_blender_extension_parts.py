@@ -1,5 +1,5 @@
 """The Blender extension's parts that need no Blender: reading a grid or a mesh cloth, pins and colliders
-from vertices and faces, the fabric presets, where each scene parameter lives, the zip's build checks, and
+from vertices and faces, where each scene parameter lives, the zip's build checks, and
 the bake's ticks (Esc, progress)."""
 
 import itertools
@@ -13,7 +13,6 @@ import pytest
 import wetcloth
 from wetcloth.cli import main as cli_main
 from wetcloth.exporter.blender_extension import build
-from wetcloth.exporter.blender_extension.fabrics import FABRICS, fabric_parameters
 from wetcloth.exporter.blender_extension.frame_loop import BAKE_EVENTS, tick
 from wetcloth.exporter.blender_extension.geometry import (PIN_ATTRIBUTE, GridCloth, MeshCloth, analytic_collider,
                                                           cloth_of, collider_of, face_blocks, grid_cloth, pinned_edge)
@@ -194,17 +193,6 @@ def test_each_scene_parameter_has_one_place():
     """Every scene parameter is set by the cloth object, its fabric or the scene, and by one only."""
     places = FROM_CLOTH + FABRIC + SCENE
     assert sorted(places) == sorted(PARAMETERS) and len(set(places)) == len(places)
-
-
-def test_fabric_presets_are_valid_scenes_and_the_towel_is_the_default():
-    assert list(FABRICS) == ["COTTON_TERRY_TOWEL", "COTTON_JERSEY", "DENIM", "POLYESTER", "SILK"]
-    defaults = wetcloth.Scene()
-    towel = fabric_parameters("COTTON_TERRY_TOWEL")
-    assert towel == {"areal_density": defaults.areal_density, "thickness": defaults.thickness}
-    for key in FABRICS:
-        wetcloth.Scene(**fabric_parameters(key))  # within every range
-    with pytest.raises(ValueError, match="unknown fabric preset 'WOOL'"):
-        fabric_parameters("WOOL")
 
 
 @pytest.mark.parametrize("pythons, first, last", [

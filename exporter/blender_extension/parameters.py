@@ -9,7 +9,7 @@ from wetcloth.scene import PARAMETERS
 #: mesh's (geometry.cloth_of).
 FROM_CLOTH = ("nx", "ny", "width", "length", "initial_height", "initial_tilt", "pinned_edge", "cloth_mesh",
               "place_mesh", "pinned_vertices")
-#: Parameters of the fabric, set on each Cloth object (its preset fills some of them).
+#: Parameters of the fabric, set on each Cloth object (its preset fills all but initial_saturation).
 FABRIC = ("areal_density", "thickness", "stretch_stiffness", "bend_stiffness", "damping", "absorption_capacity",
           "absorption_rate", "initial_saturation")
 #: The rest: settings of the whole scene (``water_level`` is the Water object's height if there is one).

@@ -51,8 +51,9 @@ def _object_annotations() -> dict:
     annotations = {
         "role": EnumProperty(name="Role", items=ROLES, default="NONE",
                              description="What the object is in the wet cloth simulation"),
-        "preset": EnumProperty(name="Fabric", description="Fabric preset: sets the areal density and thickness",
-                               items=[(key, label, source) for key, (label, _, source) in FABRICS.items()],
+        "preset": EnumProperty(name="Fabric", description="Fabric preset: sets the fabric's parameters (their "
+                                                          "sources: docs/blender.md section 8.3)",
+                               items=[(key, f.label, f.description) for key, f in FABRICS.items()],
                                default="COTTON_TERRY_TOWEL", update=_apply_preset),
         "pin_group": StringProperty(name="Pin group", description="Vertex group of the vertices held fixed"),
         "friction": parameter_property("friction", COLLIDER_FIELDS["friction"]),
