@@ -332,6 +332,17 @@ double lift_off(const Sliding& sliding, Index n, const Physics& phys, const doub
     return farthest;
 }
 
+Index mark_curved_paths(const Sliding& sliding, Index n, std::vector<char>& on_path) {
+    on_path.assign(static_cast<std::size_t>(n), 0);
+    Index marked = 0;
+    for (Index s = 0; s < sliding.count(); ++s) {
+        if (sliding.centripetal[s] == 0.0) continue;
+        on_path[static_cast<std::size_t>(sliding.index[s])] = 1;
+        marked += 1;
+    }
+    return marked;
+}
+
 Index drop_lifting(Sliding& sliding, Index n, const double* mass, const double* force) {
     Index kept = 0;
     const Index count = sliding.count();

@@ -2,6 +2,8 @@
 // section 6.1): their velocity across the surface is prescribed (they stay on it) and kinetic friction acts
 // on them as a force of the step, not as an impulse after it.  (The set itself, Sliding, is in core.hpp.)
 #pragma once
+#include <vector>
+
 #include "wetcloth/core.hpp"
 
 namespace wc {
@@ -67,6 +69,13 @@ Index stop_reversed(const Sliding& sliding, Index n, const double* hat_pos, doub
 //: moving anything if a lift is beyond `limit` (m): the step is then taken again without them (drop_lifting).
 double lift_off(const Sliding& sliding, Index n, const Physics& phys, const double* force, const double* mass,
                 const double* diagonal_blocks, const double* blocks, double h, double limit, double* pos, double* vel);
+
+//: Mark in on_path (n, resized and cleared) the particles of the set that slid along a curved collider through
+//: the step (their normal turning), returns how many.  Their history, the step's start on the surface moving
+//: along it, lies on their curved path, and they keep it (collider_history): a straight motion's history along
+//: the normal drops the path's centripetal part, h kappa s^2 of the previous velocity, and BDF2's next step
+//: then loses h^2 kappa^2 s^3 / 3 of its speed along the path (first order: docs/model.md 6.3).
+Index mark_curved_paths(const Sliding& sliding, Index n, std::vector<char>& on_path);
 
 //: Leave out of the sliding set the particles that the force (3, n) lifts off (as lift_off judges them, mass
 //: (n) kg); returns how many.
