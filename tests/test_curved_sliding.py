@@ -91,10 +91,10 @@ def test_a_bead_slides_off_a_frictionless_ball_as_the_analytic_bead_does(departu
     assert tight < loose / 2.5
 
 
-def bead_path(step, start=0.05, until=0.35):
+def bead_path(step, friction=0.0, start=0.05, until=0.35):
     """The bead's centroid (m, one row a sample) every 25 ms after `start` up to `until` s (on the ball) at fixed
-    BDF2 steps of `step` s, set on the ball at `start` (its corners on the contact's sphere) where and as fast as
-    the analytic bead is then: no landing."""
+    BDF2 steps of `step` s, the ball's friction `friction`, set on the ball at `start` (its corners on the
+    contact's sphere) where and as fast as the frictionless analytic bead is then: no landing."""
     from wetcloth.state import State
 
     scene = load_scene(nx=2, ny=2, width=WIDTH, length=WIDTH, initial_tilt=START * 180 / math.pi,
@@ -102,7 +102,7 @@ def bead_path(step, start=0.05, until=0.35):
                        air_density=0.0, stretch_stiffness=1e4, self_collision="off", integrator="bdf2",
                        tolerance=0.0, max_step=step,
                        colliders=({"shape": "sphere", "x": 0.0, "y": BALL[1], "z": BALL[2], "radius": RADIUS,
-                                   "friction": 0.0},))
+                                   "friction": friction},))
     sim = wetcloth.Simulation(scene)
     theta, omega = solve_ivp(swing, [0.0, start], [START, 0.0], rtol=1e-12, atol=1e-14).y[:, -1]
     turn = theta - START
@@ -119,15 +119,19 @@ def bead_path(step, start=0.05, until=0.35):
     return np.array(path)
 
 
-def test_fixed_bdf2_steps_slide_the_bead_to_second_order():
-    """Sliding on the ball at fixed BDF2 steps of 2, 1 and 0.5 ms, the bead's largest distance from a run of
-    the same model at 1/16 ms steps falls by more than 3 per halving: second order gives 4, first 2 (measured
-    3.7 and 4.0; the reference's own error, 1/64 of the finest run's, is negligible).  Before, the sliding
-    particles got a straight motion's history along the normal after every step, which dropped the path's
-    centripetal acceleration from BDF2's history and slowed the bead by h^2 kappa^2 s^3 / 3 a step: 1.3 and
-    1.85 (17, 13 and 7 um; now 18, 4.9 and 1.2 um)."""
-    fine = bead_path(6.25e-5)
-    errors = [np.linalg.norm(bead_path(h) - fine, axis=1).max() for h in (0.002, 0.001, 0.0005)]
+@pytest.mark.parametrize("friction", [0.0, 0.1])
+def test_fixed_bdf2_steps_slide_the_bead_to_second_order(friction):
+    """Sliding on the ball at fixed BDF2 steps of 2, 1 and 0.5 ms, frictionless or with friction 0.1 (below
+    tan 10 deg: it slides from the start), the bead's largest distance from a run of the same model at 1/16 ms
+    steps falls by more than 3 per halving: second order gives 4, first 2 (measured 3.7 and 4.0 both; the
+    reference's own error, 1/64 of the finest run's, is negligible).  Before, the sliding particles got a
+    straight motion's history along the normal after every step, which dropped the path's centripetal
+    acceleration from BDF2's history and slowed the bead by h^2 kappa^2 s^3 / 3 a step; and friction's normal
+    force, held through the step, was the step's start's, not its end's.  Frictionless, ratios 1.3 and 1.85
+    (17, 13 and 7 um; now 18, 4.9 and 1.2 um); with friction 0.1, 1.7 and 1.9 (29, 17 and 8.7 um; now 12, 3.3
+    and 0.83 um; 1.6 and 1.9 with the history kept alone)."""
+    fine = bead_path(6.25e-5, friction)
+    errors = [np.linalg.norm(bead_path(h, friction) - fine, axis=1).max() for h in (0.002, 0.001, 0.0005)]
     assert errors[0] / errors[1] > 3.0
     assert errors[1] / errors[2] > 3.0
 

@@ -44,13 +44,17 @@ void prescribe_normal_speed(Sliding& sliding, Index n, const double* pos, const 
 void add_sliding_friction(const Sliding& sliding, Index n, const double* mass, const double* vel, double bh,
                           double* force, double* blocks);
 
-//: For the smoothed law: each sliding particle's normal force for the step, the force (3, n, N) at the step's
-//: start pressing it onto its surface (pressing's, 0 if it lifts), held through the step's Newton iterations
-//: (lagged, as IPC's: the friction is then the gradient of a dissipation potential, and Newton's matrix its
-//: exact Jacobian).  Taken at each Newton iterate (before), it left the normal force's dependence on the
-//: positions out of the matrix: a sheet swinging onto the floor at 1/30 s steps got 8 m/s corrections, and a
-//: frame ended with springs stretched by 43 %.
-void lag_normal_force(Sliding& sliding, Index n, const double* mass, const double* force);
+//: For the smoothed law: each sliding particle's normal force for the step, the force (3, n, N) pressing it
+//: onto its surface (pressing's, 0 if it lifts), held through the step's Newton iterations (lagged, as IPC's:
+//: the friction is then the gradient of a dissipation potential, and Newton's matrix its exact Jacobian).
+//: Taken at each Newton iterate (before), it left the normal force's dependence on the positions out of the
+//: matrix: a sheet swinging onto the floor at 1/30 s steps got 8 m/s corrections, and a frame ended with
+//: springs stretched by 43 %.  Without `ahead` the force is the step's start's; with it (BDF2 with history)
+//: the force where the history predicts the step's end (h s) and ahead (3, n, m/s) the velocities predicted
+//: there, which give a curved path's centripetal part along the end's normal: the start's lags the step's
+//: end by h, and a bead sliding on a ball of friction 0.1 erred at first order in the step.
+void lag_normal_force(Sliding& sliding, Index n, const Physics& phys, const double* mass, const double* force,
+                      const double* ahead, double h);
 
 //: After the step's solve: a sliding particle whose velocity (3, n, m/s) along its direction of sliding is
 //: (relative to its surface's) no longer positive has stopped within the step: its velocity is set to its
