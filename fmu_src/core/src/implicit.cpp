@@ -358,14 +358,13 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
     const double bh = beta * h;
     if (solver.supports != nullptr) place_supports(*solver.supports, phys, n, pos, h, bh);
     if (solver.sliding != nullptr && solver.sliding->smoothed) {  // friction's normal force, held for the step
-        if (history) {  // the one the history predicts at the step's end (the start's lags it by h: first order)
+        forces(cloth, phys, work, pos, vel, water);
+        lag_normal_force(*solver.sliding, n, mass, work.force);  // the start's
+        if (history) {  // the one the history predicts at the step's end, where that is near the start's
             double* ahead = solver.p;  // scratch: the velocities extrapolated to the step's end
             for (Index k = 0; k < 3 * n; ++k) ahead[k] = vel[k] + w * (vel[k] - prev_vel[k]);
             forces(cloth, phys, work, predicted, ahead, step_water);
-            lag_normal_force(*solver.sliding, n, phys, mass, work.force, ahead, h);
-        } else {
-            forces(cloth, phys, work, pos, vel, water);
-            lag_normal_force(*solver.sliding, n, phys, mass, work.force, nullptr, h);
+            lag_predicted_normal_force(*solver.sliding, n, phys, mass, work.force, ahead, h);
         }
     }
     if (solver.sliding != nullptr) prescribe_normal_speed(*solver.sliding, n, pos, hat_pos, h, bh, out_vel);

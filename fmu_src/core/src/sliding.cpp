@@ -283,13 +283,19 @@ void add_sliding_friction(const Sliding& sliding, Index n, const double* mass, c
     }
 }
 
-void lag_normal_force(Sliding& sliding, Index n, const Physics& phys, const double* mass, const double* force,
-                      const double* ahead, double h) {
+void lag_normal_force(Sliding& sliding, Index n, const double* mass, const double* force) {
     sliding.lagged_onto.resize(static_cast<std::size_t>(sliding.count()));
     for (Index s = 0; s < sliding.count(); ++s) {
-        const double onto = ahead != nullptr ? pressing_ahead(sliding, s, n, phys, mass, force, ahead, h)
-                                             : pressing(sliding, s, n, mass, force);
-        sliding.lagged_onto[static_cast<std::size_t>(s)] = std::max(onto, 0.0);
+        sliding.lagged_onto[static_cast<std::size_t>(s)] = std::max(pressing(sliding, s, n, mass, force), 0.0);
+    }
+}
+
+void lag_predicted_normal_force(Sliding& sliding, Index n, const Physics& phys, const double* mass,
+                                const double* force, const double* vel, double h) {
+    for (Index s = 0; s < sliding.count(); ++s) {
+        double& onto = sliding.lagged_onto[static_cast<std::size_t>(s)];
+        const double predicted = std::max(pressing_ahead(sliding, s, n, phys, mass, force, vel, h), 0.0);
+        if (std::abs(predicted - onto) <= PREDICTION_TRUST * onto) onto = predicted;
     }
 }
 
