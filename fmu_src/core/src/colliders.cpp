@@ -516,10 +516,11 @@ double slip_on_supports(Index n, const Physics& phys, const double* force, const
     return farthest;
 }
 
-Index collider_history(Index n, const Physics& phys, const double* pos, const double* vel, double* prev_pos,
-                       double* prev_vel, double h) {
+Index collider_history(Index n, const Physics& phys, const char* on_path, const double* pos, const double* vel,
+                       double* prev_pos, double* prev_vel, double h) {
     Index agreed = 0;
     for (Index i = 0; i < n; ++i) {
+        if (on_path != nullptr && on_path[i] != 0) continue;
         double nrm[3];
         if (touched_collider(phys, n, i, pos, nrm) < 0) continue;
         agreed += 1;

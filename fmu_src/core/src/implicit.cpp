@@ -357,9 +357,15 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
     }
     const double bh = beta * h;
     if (solver.supports != nullptr) place_supports(*solver.supports, phys, n, pos, h, bh);
-    if (solver.sliding != nullptr && solver.sliding->smoothed) {  // friction's normal force: the start's
+    if (solver.sliding != nullptr && solver.sliding->smoothed) {  // friction's normal force, held for the step
         forces(cloth, phys, work, pos, vel, water);
-        lag_normal_force(*solver.sliding, n, mass, work.force);
+        lag_normal_force(*solver.sliding, n, mass, work.force);  // the start's
+        if (history) {  // the one the history predicts at the step's end, where that is near the start's
+            double* ahead = solver.p;  // scratch: the velocities extrapolated to the step's end
+            for (Index k = 0; k < 3 * n; ++k) ahead[k] = vel[k] + w * (vel[k] - prev_vel[k]);
+            forces(cloth, phys, work, predicted, ahead, step_water);
+            lag_predicted_normal_force(*solver.sliding, n, phys, mass, work.force, ahead, h);
+        }
     }
     if (solver.sliding != nullptr) prescribe_normal_speed(*solver.sliding, n, pos, hat_pos, h, bh, out_vel);
     for (Index k = 0; k < 3 * n; ++k) out_pos[k] = hat_pos[k] + bh * out_vel[k];

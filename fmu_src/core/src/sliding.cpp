@@ -130,6 +130,24 @@ void to_end(Sliding& sliding, Index s, double h) {
     sliding.curving[s] = 0.5 * h * h * sliding.centripetal[s];
 }
 
+//: The force (N) sliding particle s will press onto its surface with at the end of a step of h s, from the
+//: force (3, n) and velocity (3, n, m/s) predicted there: along the end's normal (to_end's), less its mass (n,
+//: kg) times the centripetal acceleration of its predicted slip along a curved collider.
+double pressing_ahead(Sliding& sliding, Index s, Index n, const Physics& phys, const double* mass,
+                      const double* force, const double* vel, double h) {
+    const Index i = sliding.index[s];
+    if (sliding.centripetal[s] == 0.0) return pressing(sliding, s, n, mass, force);
+    to_end(sliding, s, h);
+    const double* nrm = &sliding.normal[3 * s];
+    const double* u = &sliding.surface_velocity[3 * s];
+    const double v[3] = {vel[i] - u[0], vel[n + i] - u[1], vel[2 * n + i] - u[2]};
+    double slip[3], turning[3];
+    along_surface(v, nrm, slip);
+    normal_turning(phys, sliding.collider[s], nrm, slip, turning);
+    const double into = -(force[i] * nrm[0] + force[n + i] * nrm[1] + force[2 * n + i] * nrm[2]);
+    return into - mass[i] * (slip[0] * turning[0] + slip[1] * turning[1] + slip[2] * turning[2]);
+}
+
 }  // namespace
 
 void Sliding::resize(Index count) {
@@ -272,6 +290,15 @@ void lag_normal_force(Sliding& sliding, Index n, const double* mass, const doubl
     }
 }
 
+void lag_predicted_normal_force(Sliding& sliding, Index n, const Physics& phys, const double* mass,
+                                const double* force, const double* vel, double h) {
+    for (Index s = 0; s < sliding.count(); ++s) {
+        double& onto = sliding.lagged_onto[static_cast<std::size_t>(s)];
+        const double predicted = std::max(pressing_ahead(sliding, s, n, phys, mass, force, vel, h), 0.0);
+        if (std::abs(predicted - onto) <= PREDICTION_TRUST * onto) onto = predicted;
+    }
+}
+
 Index stop_reversed(const Sliding& sliding, Index n, const double* hat_pos, double bh, double* pos, double* vel) {
     Index stopped = 0;
     for (Index s = 0; s < sliding.count(); ++s) {
@@ -330,6 +357,17 @@ double lift_off(const Sliding& sliding, Index n, const Physics& phys, const doub
         }
     }
     return farthest;
+}
+
+Index mark_curved_paths(const Sliding& sliding, Index n, std::vector<char>& on_path) {
+    on_path.assign(static_cast<std::size_t>(n), 0);
+    Index marked = 0;
+    for (Index s = 0; s < sliding.count(); ++s) {
+        if (sliding.centripetal[s] == 0.0) continue;
+        on_path[static_cast<std::size_t>(sliding.index[s])] = 1;
+        marked += 1;
+    }
+    return marked;
 }
 
 Index drop_lifting(Sliding& sliding, Index n, const double* mass, const double* force) {

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "wetcloth/absorption.hpp"
 #include "wetcloth/assembly.hpp"
@@ -475,8 +476,10 @@ Status step(Core& core, double remaining, double span) {
     if (control.integrator == BDF2) copy(3 * n, core.solver.step_acceleration, buf.acceleration);
     if (carried) carry_pushed_history(n, pushed, buf.pos, buf.vel, buf.acceleration, h, buf.prev_pos, buf.prev_vel);
     if (on_floor) agree_history(n, phys.floor_z, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h);
-    if (on_collider) {
-        collider_history(n, phys, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h);
+    if (on_collider) {  // (those that slid along a curved collider keep their own history)
+        std::vector<char> on_path;
+        const bool curved = core.solver.sliding != nullptr && mark_curved_paths(core.sliding, n, on_path) > 0;
+        collider_history(n, phys, curved ? on_path.data() : nullptr, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h);
     }
     if (edged & PUSHED) collider_edge_history(*core.contact.lists, n, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h);
     if (core.solver.supports != nullptr) support_history(core.supports, n, buf.pos, buf.vel, buf.prev_pos, buf.prev_vel, h);

@@ -90,8 +90,9 @@ double slip_on_supports(Index n, const Physics& phys, const double* force, const
                         const double* held, const double* start, double* pos, double* vel);
 
 //: The particles on a collider (within gap m, where collider_contact left them) get the history of a
-//: straight motion along its normal (as the floor's agree_history).  Returns how many.
-Index collider_history(Index n, const Physics& phys, const double* pos, const double* vel, double* prev_pos,
-                       double* prev_vel, double h);
+//: straight motion along its normal (as the floor's agree_history), but for those marked in on_path (n, or
+//: null: none), which keep their own (mark_curved_paths).  Returns how many got it.
+Index collider_history(Index n, const Physics& phys, const char* on_path, const double* pos, const double* vel,
+                       double* prev_pos, double* prev_vel, double h);
 
 }  // namespace wc
