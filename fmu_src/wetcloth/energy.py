@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wetcloth._core import GRAVITY, TENSION_ROUNDING
+from wetcloth._core import BUCKLING_STRAIN, GRAVITY, TENSION_ROUNDING
 
 
 def elastic_energy(stretch: np.ndarray, stiffness: np.ndarray, width: float | None) -> float:
@@ -24,9 +24,22 @@ def elastic_energy(stretch: np.ndarray, stiffness: np.ndarray, width: float | No
     return float(np.sum(np.where(s < width, rounded, beyond)))
 
 
+def buckling_energy(stretch: np.ndarray, stiffness: np.ndarray, width: np.ndarray) -> float:
+    """Energy (J) of buckling springs (spring_law.hpp's buckled_stretch) of ``stiffness`` (N/m) stretched by
+    ``stretch`` (m), their push rounded off over ``width`` (m, BUCKLING_STRAIN times the rest length):
+    ``k s^2 / 2`` while pulling; compressed by x, ``k (x^2 / 2 - x^3 / (12 w))`` up to x = 2 w, then
+    ``k (4 w^2 / 3 + w (x - 2 w))``."""
+    x = np.maximum(-stretch, 0.0)
+    pulling = 0.5 * np.maximum(stretch, 0.0) ** 2
+    rounded = x**2 / 2 - x**3 / (12 * width)
+    beyond = 4 / 3 * width**2 + width * (x - 2 * width)
+    return float(np.sum(stiffness * (pulling + np.where(x < 2 * width, rounded, beyond))))
+
+
 def mechanical_energy(sim) -> float:
     """Kinetic + gravitational (zero at z = 0) + elastic energy (J) of a Simulation's cloth, each spring
-    (a grid's families, a mesh's listed springs, the first ``pair_tension_count`` tension-only) with its
+    (a grid's families, a mesh's listed springs: the first ``pair_tension_count`` tension-only, the next
+    ``pair_buckling_count`` buckling) with its
     dry stiffness."""
     cloth, state = sim.model.cloth, sim.state
     mass = np.asarray(cloth.dry_mass) + state.water
@@ -38,6 +51,8 @@ def mechanical_energy(sim) -> float:
     first, second = cloth.pairs
     stretch = np.linalg.norm(state.pos[:, first] - state.pos[:, second], axis=0) - cloth.pair_rest
     t = int(cloth.pair_tension_count)
+    b = t + int(cloth.pair_buckling_count)
     energy += elastic_energy(stretch[:t], cloth.pair_stiffness[:t], TENSION_ROUNDING * cloth.pair_rest[:t])
-    energy += elastic_energy(stretch[t:], cloth.pair_stiffness[t:], None)
+    energy += buckling_energy(stretch[t:b], cloth.pair_stiffness[t:b], BUCKLING_STRAIN * cloth.pair_rest[t:b])
+    energy += elastic_energy(stretch[b:], cloth.pair_stiffness[b:], None)
     return float(energy)

@@ -57,7 +57,7 @@ inline void add_diagonal(Plane& plane, Index c, Index i, double value) {
 }
 
 //: Add value to the entries (i, j) and (j, i) of component c's level-0 matrix, i, j the ends of
-//: tension-only spring k of T.
+//: in-plane spring k of T (in_plane_count).
 inline void add_between(Plane& plane, Index c, Index k, Index tension_count, double value) {
     Algebraic& h = plane.algebraic;
     double* a = h.a_value + c * h.entries;
@@ -332,7 +332,7 @@ void cycle_up(Algebraic& h, Index components, const double* free) {
 }  // namespace
 
 Index mesh_factor(Plane& plane, const Cloth& cloth, const double* mass, double scale, const double* weights) {
-    const Index n = cloth.n, count = cloth.pair_count, tension = cloth.pair_tension_count;
+    const Index n = cloth.n, count = cloth.pair_count, tension = in_plane_count(cloth);
     diagonal_matrix(plane, n, 0, mass);
     for (Index k = 0; k < tension; ++k) {
         const double w = 0.5 * scale * weights[k];
@@ -387,7 +387,7 @@ void mesh_follow_cloth(Plane& plane, const Cloth& cloth, const double* pos) {
 }
 
 Index mesh_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const Work& work) {
-    const Index n = cloth.n, count = cloth.pair_count, tension = cloth.pair_tension_count;
+    const Index n = cloth.n, count = cloth.pair_count, tension = in_plane_count(cloth);
     plane.reference[1] = plane.reference[2] = 0.0;  // the rest-stiffness factors are overwritten
     plane.reference[3] = 1.0;
     Index result = 1;

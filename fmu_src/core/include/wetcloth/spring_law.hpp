@@ -28,8 +28,8 @@ inline double inverse_length(double length) {
 }
 
 //: How a spring pulls: both ways; tension only, through pulling_stretch_clamped (rest length > 0 and
-//: finite) or through pulling_stretch itself (any other rest length).
-enum class Law { BOTH_WAYS, CLAMPED, EXACT };
+//: finite) or through pulling_stretch itself (any other rest length); buckling (buckled_stretch).
+enum class Law { BOTH_WAYS, CLAMPED, EXACT, BUCKLING };
 
 //: pulling_stretch for 0 < width < inf without branches, bit for bit (NaN and inf included): r = s / w
 //: clamped to [0, 1] (by comparisons on r itself), then the cubic, which gives s and 1 at r = 1, and
@@ -44,8 +44,25 @@ inline Stretch pulling_stretch_clamped(double stretch, double width) {
     return {stretch * r * (2.0 - r) + 0.0, r * (4.0 - 3.0 * r) + 0.0};
 }
 
+//: A buckling spring's stretch and slope for a stretch s (m), width w = BUCKLING_STRAIN l0 (0 < w < inf):
+//: s itself while pulling; compressed, with r = -s / (2 w) clamped to [0, 1], -w r (2 - r) (slope 1 - r),
+//: so that it pushes as a both-ways spring at first, then ever less harder, and from s = -2 w on with
+//: k w.  Without branches, the bounds as in pulling_stretch_clamped.
+inline Stretch buckled_stretch(double stretch, double width) {
+    const double zero = width - width, one = width / width;
+    const double r = py_min(py_max(-stretch / (2.0 * width), zero), one);
+    return {py_max(stretch, -2.0 * width) + width * r * r, one - r};
+}
+
+//: The width of law L's rounding for rest length l0 (m).
+template <Law L>
+inline double law_width(double l0) {
+    return (L == Law::BUCKLING ? BUCKLING_STRAIN : TENSION_ROUNDING) * l0;
+}
+
 template <Law L>
 inline Stretch pulled(double stretch, double width) {
+    if (L == Law::BUCKLING) return buckled_stretch(stretch, width);
     if (L == Law::CLAMPED) return pulling_stretch_clamped(stretch, width);
     if (L == Law::EXACT) return pulling_stretch(stretch, width);
     return {stretch, 1.0};
@@ -89,8 +106,8 @@ struct Coefficients {
     double t, ux, uy, uz, along, across;
 };
 
-//: Geometric stiffness k s / L only while pulling, so every block stays positive; a tension-only
-//: spring's slope along itself no less than slack_slope.  dv = v_i - v_j (m/s).
+//: Geometric stiffness k s / L only while pulling, so every block stays positive; a tension-only or
+//: buckling spring's slope along itself no less than slack_slope.  dv = v_i - v_j (m/s).
 template <Law L>
 inline Coefficients coefficients(const Geometry& g, double l0, double width, bool projected, double h,
                                  double slack_slope, double cf, double dvx, double dvy, double dvz) {
