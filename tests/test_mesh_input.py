@@ -467,6 +467,28 @@ def test_an_irregular_triangle_mesh_hanging_stretches_as_the_sheet(points):
     assert bottom - sim.positions[:, 2].min() == pytest.approx(analytic, rel=0.05)
 
 
+def test_a_compressed_triangle_meshs_energy_is_the_potential_of_its_forces():
+    """wetcloth.energy's buckling springs' energy is the integral of their law (spring_law.hpp): a disc in air
+    squeezed along x by 0.3 % (its edges along x past the push's bound, the others on its rounding or
+    stretched) and shaken at random, at rest: the energy's central difference along a random direction is
+    minus the forces' work along it (gravity's and the springs'), to 1e-7 of it (measured 3e-9)."""
+    points, triangles = round_cloth(rings=6)
+    sim = wetcloth.Simulation(Scene(cloth_mesh=make_mesh(points, [triangles]), place_mesh="on", initial_tilt=0.0,
+                                    initial_height=0.1, water_level=-10.0, floor_level=-20.0, damping=0.0))
+    assert sim.model.topology.pair_buckling_count > 0
+    rng = np.random.default_rng(4)
+    pos = sim.state.pos * np.array([[0.997], [1.0], [1.0]]) + rng.uniform(-1e-5, 1e-5, sim.state.pos.shape)
+    sim.state.vel[:] = 0.0
+    direction = rng.normal(size=pos.shape)
+    work = float(np.sum(sim.model.forces(pos, sim.state.vel, sim.state.water) * direction))
+    step = 1e-8  # m: the difference's own error falls as its square (3e-5 of the work at 1e-6 m)
+    energies = []
+    for sign in (1.0, -1.0):
+        sim.state.pos[:] = pos + sign * step * direction
+        energies.append(mechanical_energy(sim))
+    assert (energies[0] - energies[1]) / (2 * step) == pytest.approx(-work, rel=1e-7)
+
+
 @pytest.mark.parametrize("tilt", [0.0, 30.0])
 def test_an_irregular_mesh_placed_as_it_was_made_is_at_rest(tilt):
     """Every listed spring (stretch along the edges, bending across them) has the file's distance as its rest
