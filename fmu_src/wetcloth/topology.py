@@ -305,8 +305,7 @@ def listed_springs(mesh: MeshFile, scene: Scene) -> dict:
     quads only, share no face and make an angle above BEND_ANGLE (strip a_s(v, a) + a_s(v, b)), and the
     opposite corners of two triangles that share an edge (strip: their areas).  A quad spreads three times
     its area evenly over its 4 edges and 2 diagonals, a triangle its stiffness over its edges as
-    ``triangle_edge_shapes`` says (its area each in the strips of bending springs); an edge's strip area
-    a_s sums its faces'.  k = modulus * a_s / l^2, c = damping * a_s / l^2 (a_s / l^2: the shape)."""
+    ``triangle_edge_shapes`` says; an edge's strip area a_s sums its faces'.  k = modulus * a_s / l^2, c = damping * a_s / l^2 (a_s / l^2: the shape)."""
     p = mesh.points
     area = face_areas(mesh)
     rows, owner = face_edges(mesh.blocks)

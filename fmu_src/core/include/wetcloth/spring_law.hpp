@@ -46,8 +46,8 @@ inline Stretch pulling_stretch_clamped(double stretch, double width) {
 
 //: A buckling spring's stretch and slope for a stretch s (m), width w = BUCKLING_STRAIN l0 (0 < w < inf):
 //: s itself while pulling; compressed, with r = -s / (2 w) clamped to [0, 1], -w r (2 - r) (slope 1 - r),
-//: so that it pushes as a both-ways spring at first, then ever less harder, and from s = -2 w on with
-//: k w.  Without branches, the bounds as in pulling_stretch_clamped.
+//: so that it pushes as a both-ways spring at first, its push then growing ever more slowly, and from
+//: s = -2 w on a constant k w.  Without branches, the bounds as in pulling_stretch_clamped.
 inline Stretch buckled_stretch(double stretch, double width) {
     const double zero = width - width, one = width / width;
     const double r = py_min(py_max(-stretch / (2.0 * width), zero), one);
