@@ -109,7 +109,7 @@ void forces_of(const Cloth& cloth, const Physics& phys, const MeshRecords& recor
             const double rate = (c.v[0][k] - c.v[3][k]) * g.dx + (c.v[1][k] - c.v[4][k]) * g.dy +
                                 (c.v[2][k] - c.v[5][k]) * g.dz;
             const double l0 = rest[k];
-            chunk_force(c, k, g, tension<L>(g, l0, law_width<L>(l0), damp, damping[k], rate));
+            chunk_force(c, k, g, tension<L>(g, l0, TENSION_ROUNDING * l0, damp, damping[k], rate));
         }
         scatter_forces(cloth, phys, c, start, count, records);
     }
@@ -127,7 +127,7 @@ void coefficients_loop(Index count, double wet_factor, bool projected, double h,
     for (Index k = 0; k < count; ++k) {
         const Geometry g = chunk_geometry(*c, k, stiffness[k], wet_factor);
         const double l0 = rest[k], cf = damping[k];
-        const Coefficients co = spring_law::coefficients<L>(g, l0, law_width<L>(l0), projected, h, slack_slope, cf,
+        const Coefficients co = spring_law::coefficients<L>(g, l0, TENSION_ROUNDING * l0, projected, h, slack_slope, cf,
                                                             c->v[0][k] - c->v[3][k], c->v[1][k] - c->v[4][k],
                                                             c->v[2][k] - c->v[5][k]);
         ux[k] = co.ux;

@@ -44,20 +44,19 @@ inline Stretch pulling_stretch_clamped(double stretch, double width) {
     return {stretch * r * (2.0 - r) + 0.0, r * (4.0 - 3.0 * r) + 0.0};
 }
 
-//: A buckling spring's stretch and slope for a stretch s (m), width w = BUCKLING_STRAIN l0 (0 < w < inf):
-//: s itself while pulling; compressed, with r = -s / (2 w) clamped to [0, 1], -w r (2 - r) (slope 1 - r),
-//: so that it pushes as a both-ways spring at first, its push then growing ever more slowly, and from
-//: s = -2 w on a constant k w.  Without branches, the bounds as in pulling_stretch_clamped.
+//: A buckling spring's stretch and slope for a stretch s (m), width w = TENSION_ROUNDING l0 (0 < w < inf):
+//: with c = (BUCKLING_ROUNDING / TENSION_ROUNDING) w, pulling, pulling_stretch_clamped(s, c); compressed, that
+//: onset y = pulling_stretch_clamped(-s, c) and, with b = (BUCKLING_STRAIN / TENSION_ROUNDING) w and
+//: r = y / (2 b) clamped to [0, 1], the push -b r (2 - r): as a both-ways spring at first, its growth then
+//: slowing, from y = 2 b on a constant k b.  Without branches, the bounds as in pulling_stretch_clamped.
 inline Stretch buckled_stretch(double stretch, double width) {
     const double zero = width - width, one = width / width;
-    const double r = py_min(py_max(-stretch / (2.0 * width), zero), one);
-    return {py_max(stretch, -2.0 * width) + width * r * r, one - r};
-}
-
-//: The width of law L's rounding for rest length l0 (m).
-template <Law L>
-inline double law_width(double l0) {
-    return (L == Law::BUCKLING ? BUCKLING_STRAIN : TENSION_ROUNDING) * l0;
+    const double onset = (BUCKLING_ROUNDING / TENSION_ROUNDING) * width;
+    const double bound = (BUCKLING_STRAIN / TENSION_ROUNDING) * width;
+    const Stretch pull = pulling_stretch_clamped(py_max(stretch, zero), onset);
+    const Stretch push = pulling_stretch_clamped(py_max(-stretch, zero), onset);
+    const double r = py_min(push.value / (2.0 * bound), one);
+    return {pull.value + py_max(-push.value, -2.0 * bound) + bound * r * r, pull.slope + (one - r) * push.slope};
 }
 
 template <Law L>
