@@ -127,7 +127,7 @@ def strain_residual(sim: wetcloth.Simulation, strain: float = 1e-3) -> float:
     topo = sim.model.topology
     if not topo.listed:
         return 0.0
-    count = topo.pair_tension_count
+    count = topo.in_plane_count
     x = topo.rest_xy.T * np.array([1.0, 1.0 + strain])
     first, second = topo.pairs[:, :count]
     d = x[second] - x[first]
@@ -142,11 +142,11 @@ def strain_residual(sim: wetcloth.Simulation, strain: float = 1e-3) -> float:
 
 
 def compression(sim: wetcloth.Simulation) -> float:
-    """5th percentile of the tension-only springs' strain now (negative: shortened)."""
+    """5th percentile of the in-plane (tension-only and buckling) springs' strain now (negative: shortened)."""
     topo = sim.model.topology
     if topo.listed:
-        first, second = topo.pairs[:, :topo.pair_tension_count]
-        rest = topo.pair_rest[:topo.pair_tension_count]
+        first, second = topo.pairs[:, :topo.in_plane_count]
+        rest = topo.pair_rest[:topo.in_plane_count]
     else:  # the grid's families: particle j joined to j + offset where the family's stiffness is nonzero
         families = np.flatnonzero(topo.spring_tension_only)
         ends = [np.flatnonzero(topo.spring_stiffness[f]) for f in families]

@@ -4,7 +4,7 @@ in-plane rest-stiffness system of a flat cloth, preconditioned by exact solves o
     .venv/bin/python bench/mesh_in_plane.py [--rings 25]
 
 The system is ``M + s K`` on the (x, y) displacements of a flat cloth at rest, K the stiffness of its
-tension-only springs (each k u u^T between its ends, u its direction); s = (beta h)^2 for BDF2 steps of
+in-plane springs (tension-only and buckling; each k u u^T between its ends, u its direction); s = (beta h)^2 for BDF2 steps of
 1/600 and 1/30 s.  Its preconditioners solve two scalar systems exactly (scipy's splu): half of every
 spring in each (the core's rest-stiffness systems, mesh_plane.cpp) or each spring's own share u_x^2,
 u_y^2.  CG iterations to a 1e-6 relative preconditioned residual (a random right-hand side), on
@@ -37,7 +37,7 @@ from wetcloth.topology import build_topology  # noqa: E402
 
 def in_plane(topology, mass: np.ndarray, scale: float):
     """(M + s K (2n x 2n), half-and-half components, own-direction components), scipy."""
-    n, t = topology.n, topology.pair_tension_count
+    n, t = topology.n, topology.in_plane_count
     i, j = topology.pairs[:, :t]
     k = topology.pair_stiffness[:t]
     d = topology.rest_pos[:2, j] - topology.rest_pos[:2, i]

@@ -40,16 +40,16 @@ def disc(tmp_path_factory):
     mass = model.dry_mass * np.random.default_rng(7).uniform(1.0, 4.0, topology.n)
     planes = []
     for size in (topology.n, ALGEBRAIC_SIZE):
-        planes.append(make_mesh_plane(topology.n, topology.pairs, topology.pair_tension_count, topology.pair_stiffness,
+        planes.append(make_mesh_plane(topology.n, topology.pairs, topology.in_plane_count, topology.pair_stiffness,
                                       algebraic_size=size))
         assert _core.refresh(planes[-1], model.cloth, mass, SCALE) == 1
     return model, mass, planes
 
 
 def system(topology, mass):
-    """``M + s L / 2``, L the Laplacian of the tension-only springs weighted by their stiffness: each
+    """``M + s L / 2``, L the Laplacian of the in-plane springs weighted by their stiffness: each
     in-plane component's matrix (half of every spring in each), assembled here with scipy."""
-    t = topology.pair_tension_count
+    t = topology.in_plane_count
     i, j = topology.pairs[:, :t]
     w = 0.5 * SCALE * topology.pair_stiffness[:t]
     laplacian = scipy.sparse.coo_matrix((np.concatenate([w, w, -w, -w]), (np.concatenate([i, j, i, j]),
@@ -174,7 +174,7 @@ def test_held_particles_are_dirichlet_rows_of_the_v_cycle(disc):
     _core.refresh(plane, model.cloth, mass, SCALE)
     matrix = system(topology, mass)
     rng = np.random.default_rng(5)
-    t = topology.pair_tension_count
+    t = topology.in_plane_count
     neighbours = [[] for _ in range(n)]
     for i, j in topology.pairs[:, :t].T:
         neighbours[i].append(j)
@@ -239,7 +239,7 @@ def test_the_hierarchy_is_the_same_every_time_it_is_built(disc):
     model, _, (_, plane) = disc
     topology = model.topology
     np.random.seed(1)  # whatever the global random state
-    again = make_mesh_plane(topology.n, topology.pairs, topology.pair_tension_count, topology.pair_stiffness)
+    again = make_mesh_plane(topology.n, topology.pairs, topology.in_plane_count, topology.pair_stiffness)
     for name in ("levels", "a_start", "a_column", "p_start", "p_column", "p_value", "r_value", "spring_entries"):
         assert np.array_equal(getattr(again.algebraic, name), getattr(plane.algebraic, name)), name
 

@@ -15,7 +15,7 @@ from wetcloth.scene import Scene
 from wetcloth.self_collision import make_contact
 from wetcloth.state import initial_state
 from wetcloth.topology import (BEND, SHEAR, STRETCH, build_topology, file_grid, flat_coordinates, listed_springs,
-                               vertex_areas)
+                               triangle_edge_shapes, vertex_areas)
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "docs"))
 from make_meshes import round_cloth  # noqa: E402
@@ -74,16 +74,40 @@ def test_listed_springs_put_the_tension_only_ones_first():
     assert (springs["pairs"][0] < springs["pairs"][1]).all()
 
 
-def test_each_face_spreads_three_times_its_area_over_its_tension_springs():
+def test_a_quad_spreads_three_times_its_area_over_its_tension_springs():
     points, triangles = round_cloth(rings=6)
     mixed = make_mesh(np.vstack([points, [[0.9, 0.0, 0.0], [0.9, 0.2, 0.0]]]),
                       [triangles, [[len(points) - 1, len(points), len(points) + 1, _rim_neighbour(points)]]])
-    scene = Scene()
-    for mesh in (make_mesh(points, [triangles]), mixed):
-        springs = listed_springs(mesh, scene)
-        tension = springs["pair_kind"] != BEND
-        strips = springs["pair_shape"] * springs["pair_rest"] ** 2
-        assert strips[tension].sum() == pytest.approx(3.0 * mesh_area(mesh), rel=1e-12)
+    springs = listed_springs(mixed, Scene())
+    tension = np.arange(springs["pair_tension_count"])  # the quad's 3 edges not on a triangle and 2 diagonals
+    strips = springs["pair_shape"] * springs["pair_rest"] ** 2
+    quad_area = mesh_area(mixed) - mesh_area(make_mesh(points, [triangles]))
+    shared = np.flatnonzero((np.sort(springs["pairs"], axis=0).T == sorted((len(points) - 1, _rim_neighbour(points))))
+                            .all(axis=1))
+    assert len(tension) == 5 and len(shared) == 1 and shared[0] >= len(tension)  # its edge on a triangle buckles
+    assert strips[tension].sum() + 0.5 * quad_area == pytest.approx(3.0 * quad_area, rel=1e-12)
+
+
+def test_a_triangles_edge_springs_stand_for_an_isotropic_membrane():
+    """A triangle's three springs give, under a uniform strain e of it, the energy A sum_e x_e (n_e . e . n_e)^2 / 2
+    (x_e = k_e l_e^2 / A): a fully symmetric stiffness tensor, which is isotropic for an equilateral triangle
+    with equal springs, k = E A / l^2 (Poisson's ratio 1/3), the fit's exact answer there; any other triangle
+    gets the nearest such tensor with k >= 0, whatever its size and place (the shape is scale-free)."""
+    rng = np.random.default_rng(3)
+    turn = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    equilateral = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, math.sqrt(3) / 2, 0.0]])
+    np.testing.assert_allclose(triangle_edge_shapes(0.03 * equilateral @ turn + 1.0, np.array([[0, 1, 2]])),
+                               np.full((1, 3), math.sqrt(3) / 4), rtol=1e-12)
+    triangle = rng.uniform(size=(3, 3))
+    shapes = triangle_edge_shapes(triangle, np.array([[0, 1, 2]]))
+    assert (shapes >= 0.0).all()
+    np.testing.assert_allclose(triangle_edge_shapes(0.1 * triangle @ turn - 2.0, np.array([[0, 1, 2]])), shapes,
+                               rtol=1e-10)
+    # a mesh of triangles lists its edges after the tension-only springs (none here), then its bending springs
+    points, triangles = round_cloth(rings=6)
+    springs = listed_springs(make_mesh(points, [triangles]), Scene())
+    kind, buckling = springs["pair_kind"], springs["pair_buckling_count"]
+    assert springs["pair_tension_count"] == 0 and (kind[:buckling] == STRETCH).all() and (kind[buckling:] == BEND).all()
 
 
 def _rim_neighbour(points: np.ndarray) -> int:

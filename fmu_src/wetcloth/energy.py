@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wetcloth._core import GRAVITY, TENSION_ROUNDING
+from wetcloth._core import BUCKLING_ROUNDING, BUCKLING_STRAIN, GRAVITY, TENSION_ROUNDING
 
 
 def elastic_energy(stretch: np.ndarray, stiffness: np.ndarray, width: float | None) -> float:
@@ -24,9 +24,26 @@ def elastic_energy(stretch: np.ndarray, stiffness: np.ndarray, width: float | No
     return float(np.sum(np.where(s < width, rounded, beyond)))
 
 
+def buckling_energy(stretch: np.ndarray, stiffness: np.ndarray, rest: np.ndarray) -> float:
+    """Energy (J) of buckling springs (spring_law.hpp's buckled_stretch) of ``stiffness`` (N/m) and ``rest``
+    length (m) stretched by ``stretch`` (m): pulling, the tension-only law's rounded over c =
+    BUCKLING_ROUNDING l; compressed by x, the integral of the push b r (2 - r), r = min(R(x) / (2 b), 1),
+    b = BUCKLING_STRAIN l, R(x) the same onset: 2 x^2 / c - x^3 / c^2 below c, there the push R - R^2 / (4 b)
+    (c < 2 b); then R(x) = x up to x = 2 b, and the push b beyond."""
+    c, b = BUCKLING_ROUNDING * rest, BUCKLING_STRAIN * rest
+    x = np.maximum(-stretch, 0.0)
+    onset = np.minimum(x, c)
+    ramp = np.clip(x, c, 2 * b)
+    pushing = (2 * onset**3 / (3 * c) - onset**4 / (4 * c**2)
+               - (4 * onset**5 / (5 * c**2) - 2 * onset**6 / (3 * c**3) + onset**7 / (7 * c**4)) / (4 * b)
+               + (ramp**2 - c**2) / 2 - (ramp**3 - c**3) / (12 * b) + b * np.maximum(x - 2 * b, 0.0))
+    return elastic_energy(stretch, stiffness, c) + float(np.sum(stiffness * pushing))
+
+
 def mechanical_energy(sim) -> float:
     """Kinetic + gravitational (zero at z = 0) + elastic energy (J) of a Simulation's cloth, each spring
-    (a grid's families, a mesh's listed springs, the first ``pair_tension_count`` tension-only) with its
+    (a grid's families, a mesh's listed springs: the first ``pair_tension_count`` tension-only, the next
+    ``pair_buckling_count`` buckling) with its
     dry stiffness."""
     cloth, state = sim.model.cloth, sim.state
     mass = np.asarray(cloth.dry_mass) + state.water
@@ -38,6 +55,8 @@ def mechanical_energy(sim) -> float:
     first, second = cloth.pairs
     stretch = np.linalg.norm(state.pos[:, first] - state.pos[:, second], axis=0) - cloth.pair_rest
     t = int(cloth.pair_tension_count)
+    b = t + int(cloth.pair_buckling_count)
     energy += elastic_energy(stretch[:t], cloth.pair_stiffness[:t], TENSION_ROUNDING * cloth.pair_rest[:t])
-    energy += elastic_energy(stretch[t:], cloth.pair_stiffness[t:], None)
+    energy += buckling_energy(stretch[t:b], cloth.pair_stiffness[t:b], cloth.pair_rest[t:b])
+    energy += elastic_energy(stretch[b:], cloth.pair_stiffness[b:], None)
     return float(energy)

@@ -222,12 +222,13 @@ def aggregation(laplacian, coarsest_size: int = COARSEST_SIZE) -> list:
     return [level.P.tocsr() for level in hierarchy.levels[:-1]]
 
 
-def make_mesh_plane(n: int, pairs: np.ndarray, tension_count: int, stiffness: np.ndarray,
+def make_mesh_plane(n: int, pairs: np.ndarray, in_plane_count: int, stiffness: np.ndarray,
                     algebraic_size: int = ALGEBRAIC_SIZE) -> Plane:
     """The preconditioner's arrays for a mesh of n particles whose listed springs join ``pairs`` (2, S),
-    the first ``tension_count`` tension-only with rest ``stiffness`` (S,) N/m (the core's mesh_plane.cpp).
+    the first ``in_plane_count`` in the cloth's plane (tension-only and buckling: Topology.in_plane_count)
+    with rest ``stiffness`` (S,) N/m (the core's mesh_plane.cpp).
 
-    Its systems are sparse matrices over the tension-only springs; on more than ``algebraic_size``
+    Its systems are sparse matrices over the in-plane springs; on more than ``algebraic_size``
     particles (default ALGEBRAIC_SIZE) a smoothed aggregation of their graph (``aggregation``) gives
     the coarser levels.  The coarsest level's matrices are band matrices in the reverse Cuthill-McKee
     order of its graph (scipy), which keeps the band narrow: ``order`` lists its points in band order,
@@ -235,12 +236,12 @@ def make_mesh_plane(n: int, pairs: np.ndarray, tension_count: int, stiffness: np
     """
     from scipy.sparse import coo_matrix, identity
 
-    first, second = pairs[:, :tension_count]
-    k = stiffness[:tension_count]
+    first, second = pairs[:, :in_plane_count]
+    k = stiffness[:in_plane_count]
     laplacian = coo_matrix((np.concatenate([k, k, -k, -k]), (np.concatenate([first, second, first, second]),
                                                               np.concatenate([first, second, second, first]))),
                            shape=(n, n)).tocsr()
-    ones = coo_matrix((np.ones(2 * tension_count), (np.concatenate([first, second]), np.concatenate([second, first]))),
+    ones = coo_matrix((np.ones(2 * in_plane_count), (np.concatenate([first, second]), np.concatenate([second, first]))),
                       shape=(n, n)) + identity(n)
     patterns = [ones.tocsr()]
     prolongators = aggregation(laplacian) if n > algebraic_size else []
@@ -251,7 +252,7 @@ def make_mesh_plane(n: int, pairs: np.ndarray, tension_count: int, stiffness: np
     indptr, indices, _ = _csr_parts(patterns[0])
     coarsest = patterns[-1]
     n_c = coarsest.shape[0]
-    graph = coo_matrix((np.ones(tension_count), (first, second)), shape=(n, n)) if not prolongators else coarsest
+    graph = coo_matrix((np.ones(in_plane_count), (first, second)), shape=(n, n)) if not prolongators else coarsest
     order = reverse_cuthill_mckee(graph)
     rank = np.empty(n_c, dtype=np.int64)
     rank[order] = np.arange(n_c)
@@ -280,4 +281,4 @@ def plane_for(topology) -> Plane:
     """The preconditioner's arrays for a cloth ``topology`` (``wetcloth.topology.Topology``): a grid's or a mesh's."""
     if not topology.listed:
         return make_plane(topology.nx, topology.ny, topology.spring_family_names, topology.spring_stiffness)
-    return make_mesh_plane(topology.n, topology.pairs, topology.pair_tension_count, topology.pair_stiffness)
+    return make_mesh_plane(topology.n, topology.pairs, topology.in_plane_count, topology.pair_stiffness)

@@ -8,11 +8,13 @@ index lists.
 
 A cloth from a mesh file (``cloth_mesh``, docs/model.md section 2.4) has one particle per vertex of
 the file, in the file's order, and *listed springs*: explicit index pairs (``pairs``), tension-only
-ones first.  A file whose vertices form the built-in grid exactly gets the grid's topology.
+ones first, then the edges of its triangles, which also push back a little when compressed (docs/model.md
+section 2.4).  A file whose vertices form the built-in grid exactly gets the grid's topology.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, replace
 
@@ -73,6 +75,12 @@ class Topology:
     pair_tension_count: int  # the first this many listed springs are tension-only
     mesh: MeshFaces | None  # None for the built-in grid
     size: float  # m, the cloth's larger side (grid: max(width, length); mesh: of rest_xy's bounding box)
+    pair_buckling_count: int = 0  # the listed springs after the tension-only ones that buckle (a triangle's edges)
+
+    @property
+    def in_plane_count(self) -> int:
+        """The listed springs in the cloth's plane (tension-only and buckling): the first this many."""
+        return self.pair_tension_count + self.pair_buckling_count
 
     @property
     def n(self) -> int:
@@ -291,12 +299,13 @@ def _mesh(scene: Scene, mesh: MeshFile, faces: MeshFaces) -> Topology:
 def listed_springs(mesh: MeshFile, scene: Scene) -> dict:
     """The listed springs of a mesh (docs/model.md section 2.4), as Topology's ``pair_*`` fields.
 
-    Each face spreads three times its area evenly over its springs: a triangle over its 3 edges, a
-    quad over its 4 edges and 2 diagonals; an edge's strip area a_s sums its faces'.  Stretch springs
-    along every edge and shear springs along each quad's diagonals are tension-only; bending springs
-    join a and b across a vertex v whose edges (v, a), (v, b) lie on quads only, share no face and make
-    an angle above BEND_ANGLE (strip a_s(v, a) + a_s(v, b)), and the opposite corners of two triangles
-    that share an edge (strip: their areas).  k = modulus * a_s / l^2, c = damping * a_s / l^2."""
+    Stretch springs along every edge, tension-only along the edges of quads only, buckling (both ways,
+    the push bounded: spring_law.hpp) along those of a triangle; shear springs along each quad's diagonals,
+    tension-only; then bending springs join a and b across a vertex v whose edges (v, a), (v, b) lie on
+    quads only, share no face and make an angle above BEND_ANGLE (strip a_s(v, a) + a_s(v, b)), and the
+    opposite corners of two triangles that share an edge (strip: their areas).  A quad spreads three times
+    its area evenly over its 4 edges and 2 diagonals, a triangle its stiffness over its edges as
+    ``triangle_edge_shapes`` says; an edge's strip area a_s sums its faces'.  k = modulus * a_s / l^2, c = damping * a_s / l^2 (a_s / l^2: the shape)."""
     p = mesh.points
     area = face_areas(mesh)
     rows, owner = face_edges(mesh.blocks)
@@ -304,22 +313,33 @@ def listed_springs(mesh: MeshFile, scene: Scene) -> dict:
     edges, first, inverse = np.unique(rows, axis=0, return_index=True, return_inverse=True)
     inverse = inverse.ravel()
     strip = np.bincount(inverse, np.where(quad, 0.5, 1.0) * area[owner], minlength=len(edges))
+    edge_length = np.linalg.norm(p[edges[:, 1]] - p[edges[:, 0]], axis=1)
+    on_triangle = np.bincount(inverse, ~quad, minlength=len(edges)) > 0
     # the second row of each edge shared by two faces
     second = np.full(len(edges), -1)
     others = np.flatnonzero(np.arange(len(rows)) != first[inverse])
     second[inverse[others]] = others
     face1, face2 = owner[first], np.where(second >= 0, owner[np.maximum(second, 0)], -1)
 
-    groups = [(edges, strip, STRETCH)]
+    # a stretch spring's strip (k l^2 / modulus): its quads' as the strips, its triangles' shares of their membrane
+    row_strip = np.where(quad, 0.5 * area[owner], 0.0)
+    start = 0
+    for block in mesh.blocks:
+        if block.shape[1] == 3:  # its rows: edge j (corner j to j + 1) of each triangle in turn
+            here = slice(start, start + block.size)
+            row_strip[here] = (triangle_edge_shapes(p, block) * edge_length[inverse[here]].reshape(-1, 3) ** 2).ravel()
+        start += block.size
+    stretch = np.bincount(inverse, row_strip, minlength=len(edges))
+    groups = [(edges[~on_triangle], stretch[~on_triangle], STRETCH)]
     quads = [b for b in mesh.blocks if b.shape[1] == 4]
     if quads:
         q = np.concatenate(quads)
         quad_area = area[mesh.corners == 4]
         diagonals = np.concatenate([q[:, [0, 2]], q[:, [1, 3]]])
         groups.append((np.sort(diagonals, axis=1), np.tile(0.5 * quad_area, 2), SHEAR))
+    groups.append((edges[on_triangle], stretch[on_triangle], STRETCH))
     if scene.bend_stiffness != 0.0:
-        quad_only = np.bincount(inverse, ~quad, minlength=len(edges)) == 0
-        groups.append(_vertex_bends(p, edges, strip, face1, face2, quad_only))
+        groups.append(_vertex_bends(p, edges, strip, face1, face2, ~on_triangle))
         groups.append(_edge_bends(mesh, rows, first, second, face1, face2, area))
 
     pairs = np.concatenate([g[0] for g in groups]).T.astype(np.int64)
@@ -328,8 +348,48 @@ def listed_springs(mesh: MeshFile, scene: Scene) -> dict:
     rest = np.linalg.norm(p[pairs[1]] - p[pairs[0]], axis=1)
     shape = strips / rest**2
     modulus = np.where(kind == BEND, scene.bend_stiffness, scene.stretch_stiffness)
+    buckling = int(np.count_nonzero(on_triangle))
     return dict(pairs=pairs, pair_rest=rest, pair_stiffness=modulus * shape, pair_damping=scene.damping * shape,
-                pair_shape=shape, pair_kind=kind, pair_tension_count=int(np.count_nonzero(kind != BEND)))
+                pair_shape=shape, pair_kind=kind, pair_tension_count=int(np.count_nonzero(kind != BEND)) - buckling,
+                pair_buckling_count=buckling)
+
+
+#: The isotropic membrane a triangle's three edge springs stand for, per unit Young's modulus: Poisson's
+#: ratio 1/3, the one that three springs can give (their stiffness tensor is fully symmetric), so
+#: C_1111 = C_2222 = 9/8, C_1122 = C_1212 = 3/8 (C_1112 = C_1222 = 0), as (C_1111, C_1112, C_1122, C_1222,
+#: C_2222) weighted by the square roots of their multiplicities (1, 4, 6, 4, 1) in the tensor's norm.
+_MULTIPLICITY = np.sqrt([1.0, 4.0, 6.0, 4.0, 1.0])
+_ISOTROPIC = np.array([9 / 8, 0.0, 3 / 8, 0.0, 9 / 8]) * _MULTIPLICITY
+#: Subsets of a triangle's three springs, to fit the membrane with non-negative stiffnesses.
+_SUBSETS = [s for size in (3, 2, 1) for s in itertools.combinations(range(3), size)]
+
+
+def triangle_edge_shapes(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Each triangle's (m, 3) stiffness per unit modulus of its edges j (corner j to corner j + 1), as shape
+    k / modulus (-): the springs whose stiffness tensor under a uniform strain, sum_e (k_e l_e^2 / A) n_e^4,
+    comes nearest (least squares over its components, non-negative k; van Gelder 1998) to the isotropic
+    membrane's (_ISOTROPIC), so that a mesh of any triangles stretches as the sheet it stands for."""
+    p = points[triangles]
+    d = np.roll(p, -1, axis=1) - p  # (m, 3 edges, 3)
+    length = np.linalg.norm(d, axis=2)
+    cross = np.cross(d[:, 0], -d[:, 2])
+    double_area = np.linalg.norm(cross, axis=1)
+    e1 = d[:, 0] / length[:, :1]
+    e2 = np.cross(cross / double_area[:, None], e1)
+    c = np.einsum("mjk,mk->mj", d, e1) / length
+    s = np.einsum("mjk,mk->mj", d, e2) / length
+    basis = np.stack([c**4, c**3 * s, c**2 * s**2, c * s**3, s**4], axis=1) * _MULTIPLICITY[:, None]  # (m, 5, 3)
+    best = np.zeros((len(p), 3))
+    best_misfit = np.full(len(p), np.inf)
+    for subset in _SUBSETS:
+        b = basis[:, :, subset]
+        x = np.linalg.solve(np.einsum("mri,mrj->mij", b, b), np.einsum("mri,r->mi", b, _ISOTROPIC)[:, :, None])[:, :, 0]
+        misfit = np.sum((np.einsum("mri,mi->mr", b, x) - _ISOTROPIC) ** 2, axis=1)
+        better = (x >= 0.0).all(axis=1) & (misfit < best_misfit)
+        best[better] = 0.0
+        best[np.ix_(better, subset)] = x[better]
+        best_misfit[better] = misfit[better]
+    return best * (0.5 * double_area)[:, None] / length**2
 
 
 def _vertex_bends(p, edges, strip, face1, face2, quad_only):

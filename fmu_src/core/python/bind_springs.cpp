@@ -28,6 +28,8 @@ Cloth spring_cloth(Index n, nb::handle offsets, nb::handle rest, nb::handle tens
 
 WETCLOTH_BINDINGS(m) {
     m.attr("TENSION_ROUNDING") = TENSION_ROUNDING;
+    m.attr("BUCKLING_ROUNDING") = BUCKLING_ROUNDING;
+    m.attr("BUCKLING_STRAIN") = BUCKLING_STRAIN;
 
     m.def(
         "pulling_stretch",

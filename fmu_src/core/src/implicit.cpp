@@ -495,8 +495,12 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
                 out_pos[k] = hat_pos[k] + bh * out_vel[k];
             }
             newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh, slack_slope);
-            line_search(cloth, phys, work, solver, hat_pos, hat_vel, step_water, bh, slack_slope, toward,
-                        solver.step_acceleration, out_pos, out_vel);
+            // Rising from rest toward the solve's end, rest is that lowest point (the line search, which takes
+            // the full step where its first slope does not fall, would go back to the end).
+            if (dot(n, toward, solver.rhs) > 0.0) {
+                line_search(cloth, phys, work, solver, hat_pos, hat_vel, step_water, bh, slack_slope, toward,
+                            solver.step_acceleration, out_pos, out_vel);
+            }
             residual_ready = true;
             converged = false;
             previous = 0.0;

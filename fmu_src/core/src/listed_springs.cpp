@@ -174,14 +174,18 @@ void blocks_of(const Cloth& cloth, const Physics& phys, const MeshRecords& recor
 }  // namespace
 
 void listed_spring_forces(const Cloth& cloth, const Physics& phys, const MeshRecords& records) {
-    forces_of<Law::CLAMPED>(cloth, phys, records, 0, cloth.pair_tension_count);
-    forces_of<Law::BOTH_WAYS>(cloth, phys, records, cloth.pair_tension_count, cloth.pair_count);
+    const Index t = cloth.pair_tension_count, b = in_plane_count(cloth);
+    forces_of<Law::CLAMPED>(cloth, phys, records, 0, t);
+    forces_of<Law::BUCKLING>(cloth, phys, records, t, b);
+    forces_of<Law::BOTH_WAYS>(cloth, phys, records, b, cloth.pair_count);
 }
 
 void listed_spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const MeshRecords& records, double h,
                                      double slack_slope, Work& work) {
-    blocks_of<Law::CLAMPED>(cloth, phys, records, h, slack_slope, 0, cloth.pair_tension_count, work);
-    blocks_of<Law::BOTH_WAYS>(cloth, phys, records, h, slack_slope, cloth.pair_tension_count, cloth.pair_count, work);
+    const Index t = cloth.pair_tension_count, b = in_plane_count(cloth);
+    blocks_of<Law::CLAMPED>(cloth, phys, records, h, slack_slope, 0, t, work);
+    blocks_of<Law::BUCKLING>(cloth, phys, records, h, slack_slope, t, b, work);
+    blocks_of<Law::BOTH_WAYS>(cloth, phys, records, h, slack_slope, b, cloth.pair_count, work);
 }
 
 void listed_spring_matvec(const Cloth& cloth, const Work& work, const double* p, double* out) {

@@ -1,5 +1,5 @@
 // The plane preconditioner on a mesh (wetcloth/plane_parts.hpp): the same three components in each
-// particle's frame as on a grid (plane.cpp), each a scalar system over the mesh's tension-only springs,
+// particle's frame as on a grid (plane.cpp), each a scalar system over the mesh's in-plane springs,
 // approximately inverted by one algebraic multigrid V-cycle: the prolongators of a smoothed aggregation
 // of the spring graph (built once with the cloth, preconditioner.py), Galerkin coarse matrices R A P
 // computed here at every rebuild, Gauss-Seidel sweeps as on the grid (multigrid.hpp's SWEEPS, forward
@@ -57,12 +57,12 @@ inline void add_diagonal(Plane& plane, Index c, Index i, double value) {
 }
 
 //: Add value to the entries (i, j) and (j, i) of component c's level-0 matrix, i, j the ends of
-//: tension-only spring k of T.
-inline void add_between(Plane& plane, Index c, Index k, Index tension_count, double value) {
+//: in-plane spring k of T (in_plane_count).
+inline void add_between(Plane& plane, Index c, Index k, Index in_plane_springs, double value) {
     Algebraic& h = plane.algebraic;
     double* a = h.a_value + c * h.entries;
     a[h.spring_entries[k]] += value;
-    a[h.spring_entries[tension_count + k]] += value;
+    a[h.spring_entries[in_plane_springs + k]] += value;
 }
 
 //: Component c's matrix of level + 1, R A P of `level`'s, and the inverse diagonal of `level`.  Row
@@ -332,14 +332,14 @@ void cycle_up(Algebraic& h, Index components, const double* free) {
 }  // namespace
 
 Index mesh_factor(Plane& plane, const Cloth& cloth, const double* mass, double scale, const double* weights) {
-    const Index n = cloth.n, count = cloth.pair_count, tension = cloth.pair_tension_count;
+    const Index n = cloth.n, count = cloth.pair_count, in_plane_springs = in_plane_count(cloth);
     diagonal_matrix(plane, n, 0, mass);
-    for (Index k = 0; k < tension; ++k) {
+    for (Index k = 0; k < in_plane_springs; ++k) {
         const double w = 0.5 * scale * weights[k];
         const Index i = cloth.pairs[k], j = cloth.pairs[count + k];
         add_diagonal(plane, 0, i, w);
         add_diagonal(plane, 0, j, w);
-        add_between(plane, 0, k, tension, -w);
+        add_between(plane, 0, k, in_plane_springs, -w);
     }
     const Index info = factor_component(plane, 0);
     if (info != 0) return info;
@@ -387,7 +387,7 @@ void mesh_follow_cloth(Plane& plane, const Cloth& cloth, const double* pos) {
 }
 
 Index mesh_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const Work& work) {
-    const Index n = cloth.n, count = cloth.pair_count, tension = cloth.pair_tension_count;
+    const Index n = cloth.n, count = cloth.pair_count, in_plane_springs = in_plane_count(cloth);
     plane.reference[1] = plane.reference[2] = 0.0;  // the rest-stiffness factors are overwritten
     plane.reference[3] = 1.0;
     Index result = 1;
@@ -398,7 +398,7 @@ Index mesh_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double*
         axis_diagonal<false>(plane, n, c, mass, nullptr, work.blocks, diagonal);
         diagonal_matrix(plane, n, c, diagonal);
         const double* t = plane.frame + 3 * c * n;
-        for (Index k = 0; k < tension; ++k) {  // bending left out whole, as on a grid
+        for (Index k = 0; k < in_plane_springs; ++k) {  // bending left out whole, as on a grid
             const Index i = cloth.pairs[k], j = cloth.pairs[count + k];
             const double along = work.pair_along[k], across = work.pair_across[k];
             if (along == 0.0 && across == 0.0) continue;
@@ -406,7 +406,7 @@ Index mesh_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double*
                                                u[count + k], u[2 * count + k], along, across);
             add_diagonal(plane, c, i, s.at_i);
             add_diagonal(plane, c, j, s.at_j);
-            if (cloth.free[i] != 0.0 && cloth.free[j] != 0.0) add_between(plane, c, k, tension, s.between);
+            if (cloth.free[i] != 0.0 && cloth.free[j] != 0.0) add_between(plane, c, k, in_plane_springs, s.between);
         }
         if (factor_component(plane, c) == 0) continue;
         diagonal_matrix(plane, n, c, diagonal);  // not positive definite (round-off on a crumpled cloth)

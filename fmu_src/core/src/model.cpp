@@ -464,6 +464,7 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
         cloth.grid_x = cloth.grid_y = 0;
         cloth.pair_count = static_cast<Index>(mesh->pair_rest.size());
         cloth.pair_tension_count = mesh->pair_tension_count;
+        cloth.pair_buckling_count = mesh->pair_buckling_count;
         cloth.pairs = mesh->pairs.data();
         cloth.pair_rest = mesh->pair_rest.data();
         cloth.pair_stiffness = topo_.pair_stiffness.data();

@@ -40,7 +40,7 @@ CLOTH_ARRAYS = (
 #: The ClothMesh numbers, in the order of the header's CLOTH_SCALARS and CLOTH_COUNTS (unit.cpp reads them so).
 CLOTH_SCALARS = ("centre_x", "centre_y", "centre_z", "size", "rest_gap", "typical_gap", "least_margin",
                  "hierarchy_stretch_stiffness", "grid_width", "grid_length")
-CLOTH_COUNTS = ("n", "pair_tension_count", "kd", "marker_size", "bends", "grid_nx", "grid_ny")
+CLOTH_COUNTS = ("n", "pair_tension_count", "kd", "marker_size", "bends", "grid_nx", "grid_ny", "pair_buckling_count")
 
 
 def cloth_arrays(scene) -> dict | None:
@@ -73,7 +73,8 @@ def cloth_arrays(scene) -> dict | None:
     arrays.update(centre_x=centre[0], centre_y=centre[1], centre_z=centre[2], size=topo.size,
                   rest_gap=contact.rest_gap, typical_gap=contact.typical_gap, least_margin=contact.least_margin,
                   hierarchy_stretch_stiffness=scene.stretch_stiffness)
-    arrays.update(n=topo.n, pair_tension_count=topo.pair_tension_count, kd=plane.bands.shape[2] - 1,
+    arrays.update(n=topo.n, pair_tension_count=topo.pair_tension_count, pair_buckling_count=topo.pair_buckling_count,
+                  kd=plane.bands.shape[2] - 1,
                   marker_size=len(h.marker), bends=int(scene.bend_stiffness != 0.0), source=str(topo.mesh.source),
                   grid_width=0.0, grid_length=0.0, grid_nx=0, grid_ny=0)
     return arrays
@@ -91,7 +92,7 @@ def _grid_file_arrays(scene, topo) -> dict:
     centre = topo.rest_pos @ topo.area / topo.area.sum()  # topology.placed's
     arrays.update(rest_pos=topo.rest_pos, centre_x=centre[0], centre_y=centre[1], centre_z=centre[2], size=topo.size,
                   rest_gap=0.0, typical_gap=0.0, least_margin=0.0, hierarchy_stretch_stiffness=0.0,
-                  grid_width=width, grid_length=length, n=topo.n, pair_tension_count=0, kd=0, marker_size=0, bends=0,
+                  grid_width=width, grid_length=length, n=topo.n, pair_tension_count=0, pair_buckling_count=0, kd=0, marker_size=0, bends=0,
                   grid_nx=nx, grid_ny=ny, source=str(topo.mesh.source))
     return arrays
 

@@ -46,6 +46,7 @@ struct Cloth {
     const Index* wick_offsets = nullptr;  // (W)
     const double* wick_conductance = nullptr;  // (W, n) kg/s
     Index pair_count = 0, pair_tension_count = 0;  // listed springs S, the first T of them tension-only
+    Index pair_buckling_count = 0;                 // the B after them buckling (spring_law.hpp), the rest both ways
     const Index* pairs = nullptr;                  // (2, S) first ends, then second ends
     const double* pair_rest = nullptr;             // (S) m
     const double* pair_stiffness = nullptr;        // (S) N/m
@@ -60,6 +61,9 @@ struct Cloth {
 
 //: Whether the cloth is a mesh (listed springs, drag over its triangle list) rather than a grid.
 inline bool is_mesh(const Cloth& cloth) { return cloth.grid_x == 0; }
+
+//: The listed springs in the cloth's plane, tension-only and buckling: the first this many.
+inline Index in_plane_count(const Cloth& cloth) { return cloth.pair_tension_count + cloth.pair_buckling_count; }
 
 //: Doubles a mesh's Work::cells holds per particle: its records (mesh_records.hpp), and room to align them.
 inline constexpr Index MESH_RECORD_SLOTS = 32;

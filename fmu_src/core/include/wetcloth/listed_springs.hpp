@@ -1,6 +1,7 @@
 // A mesh's springs, listed (docs/model.md section 3.3): spring k joins particles pairs[k] and
-// pairs[S + k], with its own rest length, stiffness and damping; the first T are tension-only.  The
-// same law as the grid's families (spring_law.hpp), gathered and scattered through the index lists.
+// pairs[S + k], with its own rest length, stiffness and damping; the first T are tension-only, the next
+// B buckling (a triangle's edges), the rest both ways.  The same laws as the grid's families
+// (spring_law.hpp), gathered and scattered through the index lists.
 #pragma once
 #include "wetcloth/core.hpp"
 #include "wetcloth/mesh_records.hpp"

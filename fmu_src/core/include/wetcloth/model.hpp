@@ -214,7 +214,7 @@ struct ClothMesh {
     std::vector<double> pair_rest;   // (S) m
     std::vector<double> pair_shape;  // (S) strip area / rest length^2 (-)
     std::vector<Index> pair_kind;    // (S) PairKind
-    Index pair_tension_count = 0;
+    Index pair_tension_count = 0, pair_buckling_count = 0;  // then the next pair_buckling_count buckling
     std::vector<Index> triangles;    // (m, 3)
     std::vector<double> corner_shares;  // (m, 3)
     // The preconditioner (make_mesh_plane): the coarsest level's band order, its rank and half-bandwidth,

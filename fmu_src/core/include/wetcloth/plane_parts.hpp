@@ -44,7 +44,7 @@ inline Coupling spring_coupling(double tix, double tiy, double tiz, double tjx, 
             -(across * ti_tj + stiff * ti_u * tj_u)};
 }
 
-//: A mesh's M + scale L / 2 (L the Laplacian of its tension-only springs weighted by `weights` (S),
+//: A mesh's M + scale L / 2 (L the Laplacian of its in-plane springs weighted by `weights` (S),
 //: bending left out as on the grid), its coarse levels and coarsest band factors, for both in-plane
 //: components: half of every spring's stiffness in each, whatever its direction.  Returns 0, or
 //: band_factor's info.

@@ -28,8 +28,8 @@ inline double inverse_length(double length) {
 }
 
 //: How a spring pulls: both ways; tension only, through pulling_stretch_clamped (rest length > 0 and
-//: finite) or through pulling_stretch itself (any other rest length).
-enum class Law { BOTH_WAYS, CLAMPED, EXACT };
+//: finite) or through pulling_stretch itself (any other rest length); buckling (buckled_stretch).
+enum class Law { BOTH_WAYS, CLAMPED, EXACT, BUCKLING };
 
 //: pulling_stretch for 0 < width < inf without branches, bit for bit (NaN and inf included): r = s / w
 //: clamped to [0, 1] (by comparisons on r itself), then the cubic, which gives s and 1 at r = 1, and
@@ -44,8 +44,24 @@ inline Stretch pulling_stretch_clamped(double stretch, double width) {
     return {stretch * r * (2.0 - r) + 0.0, r * (4.0 - 3.0 * r) + 0.0};
 }
 
+//: A buckling spring's stretch and slope for a stretch s (m), width w = TENSION_ROUNDING l0 (0 < w < inf):
+//: with c = (BUCKLING_ROUNDING / TENSION_ROUNDING) w, pulling, pulling_stretch_clamped(s, c); compressed, that
+//: onset y = pulling_stretch_clamped(-s, c) and, with b = (BUCKLING_STRAIN / TENSION_ROUNDING) w and
+//: r = y / (2 b) clamped to [0, 1], the push -b r (2 - r): as a both-ways spring at first, its growth then
+//: slowing, from y = 2 b on a constant k b.  Without branches, the bounds as in pulling_stretch_clamped.
+inline Stretch buckled_stretch(double stretch, double width) {
+    const double zero = width - width, one = width / width;
+    const double onset = (BUCKLING_ROUNDING / TENSION_ROUNDING) * width;
+    const double bound = (BUCKLING_STRAIN / TENSION_ROUNDING) * width;
+    const Stretch pull = pulling_stretch_clamped(py_max(stretch, zero), onset);
+    const Stretch push = pulling_stretch_clamped(py_max(-stretch, zero), onset);
+    const double r = py_min(push.value / (2.0 * bound), one);
+    return {pull.value + py_max(-push.value, -2.0 * bound) + bound * r * r, pull.slope + (one - r) * push.slope};
+}
+
 template <Law L>
 inline Stretch pulled(double stretch, double width) {
+    if (L == Law::BUCKLING) return buckled_stretch(stretch, width);
     if (L == Law::CLAMPED) return pulling_stretch_clamped(stretch, width);
     if (L == Law::EXACT) return pulling_stretch(stretch, width);
     return {stretch, 1.0};
@@ -89,8 +105,8 @@ struct Coefficients {
     double t, ux, uy, uz, along, across;
 };
 
-//: Geometric stiffness k s / L only while pulling, so every block stays positive; a tension-only
-//: spring's slope along itself no less than slack_slope.  dv = v_i - v_j (m/s).
+//: Geometric stiffness k s / L only while pulling, so every block stays positive; a tension-only or
+//: buckling spring's slope along itself no less than slack_slope.  dv = v_i - v_j (m/s).
 template <Law L>
 inline Coefficients coefficients(const Geometry& g, double l0, double width, bool projected, double h,
                                  double slack_slope, double cf, double dvx, double dvy, double dvz) {

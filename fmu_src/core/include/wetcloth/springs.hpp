@@ -7,6 +7,12 @@ namespace wc {
 //: Tension-only springs pull with the stretch rounded over their first TENSION_ROUNDING of strain.
 inline constexpr double TENSION_ROUNDING = 6e-4;
 
+//: A mesh's triangles' edges (buckling springs) pull, and push back while slightly compressed, as both-ways
+//: springs past an onset rounded over BUCKLING_ROUNDING of strain each way, their push rounding off to at most
+//: k BUCKLING_STRAIN l0 (spring_law.hpp).
+inline constexpr double BUCKLING_ROUNDING = 1e-4;
+inline constexpr double BUCKLING_STRAIN = 1e-3;
+
 struct Stretch {
     double value;  // m
     double slope;  // -
