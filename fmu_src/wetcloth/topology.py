@@ -368,28 +368,65 @@ def triangle_edge_shapes(points: np.ndarray, triangles: np.ndarray) -> np.ndarra
     """Each triangle's (m, 3) stiffness per unit modulus of its edges j (corner j to corner j + 1), as shape
     k / modulus (-): the springs whose stiffness tensor under a uniform strain, sum_e (k_e l_e^2 / A) n_e^4,
     comes nearest (least squares over its components, non-negative k; van Gelder 1998) to the isotropic
-    membrane's (_ISOTROPIC), so that a mesh of any triangles stretches as the sheet it stands for."""
+    membrane's (_ISOTROPIC), so that a mesh of any triangles stretches as the sheet it stands for.  Element-wise
+    arithmetic in a fixed order only (no LAPACK, no einsum), so that every numpy (Blender's too) gives the same
+    bits for the same mesh."""
     p = points[triangles]
     d = np.roll(p, -1, axis=1) - p  # (m, 3 edges, 3)
-    length = np.linalg.norm(d, axis=2)
+    length = np.sqrt(_dot(d, d))
     cross = np.cross(d[:, 0], -d[:, 2])
-    double_area = np.linalg.norm(cross, axis=1)
+    double_area = np.sqrt(_dot(cross, cross))
     e1 = d[:, 0] / length[:, :1]
     e2 = np.cross(cross / double_area[:, None], e1)
-    c = np.einsum("mjk,mk->mj", d, e1) / length
-    s = np.einsum("mjk,mk->mj", d, e2) / length
-    basis = np.stack([c**4, c**3 * s, c**2 * s**2, c * s**3, s**4], axis=1) * _MULTIPLICITY[:, None]  # (m, 5, 3)
+    c = _dot(d, e1[:, None, :]) / length
+    s = _dot(d, e2[:, None, :]) / length
+    cc, ss = c * c, s * s  # products, not powers: numpy's pow differs between versions
+    basis = np.stack([cc * cc, cc * c * s, cc * ss, c * ss * s, ss * ss], axis=1) * _MULTIPLICITY[:, None]  # (m, 5, 3)
     best = np.zeros((len(p), 3))
     best_misfit = np.full(len(p), np.inf)
     for subset in _SUBSETS:
-        b = basis[:, :, subset]
-        x = np.linalg.solve(np.einsum("mri,mrj->mij", b, b), np.einsum("mri,r->mi", b, _ISOTROPIC)[:, :, None])[:, :, 0]
-        misfit = np.sum((np.einsum("mri,mi->mr", b, x) - _ISOTROPIC) ** 2, axis=1)
-        better = (x >= 0.0).all(axis=1) & (misfit < best_misfit)
+        b = [basis[:, :, i] for i in subset]  # each (m, 5)
+        normal = [[_dot(bi, bj) for bj in b] for bi in b]
+        right = [_dot(bi, _ISOTROPIC) for bi in b]
+        with np.errstate(divide="ignore", invalid="ignore"):  # a singular fit gives nan: never the best
+            x = _cramer(normal, right)
+        fitted = b[0] * x[0][:, None]
+        for bi, xi in zip(b[1:], x[1:]):
+            fitted = fitted + bi * xi[:, None]
+        residual = fitted - _ISOTROPIC
+        misfit = _dot(residual, residual)
+        better = np.logical_and.reduce([xi >= 0.0 for xi in x]) & (misfit < best_misfit)
         best[better] = 0.0
-        best[np.ix_(better, subset)] = x[better]
+        for i, xi in zip(subset, x):
+            best[better, i] = xi[better]
         best_misfit[better] = misfit[better]
-    return best * (0.5 * double_area)[:, None] / length**2
+    return best * (0.5 * double_area)[:, None] / (length * length)
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Sum over the last axis of a * b, term by term in order (the same bits on every numpy and CPU)."""
+    a, b = np.broadcast_arrays(a, b)
+    total = a[..., 0] * b[..., 0]
+    for k in range(1, a.shape[-1]):
+        total = total + a[..., k] * b[..., k]
+    return total
+
+
+def _determinant(m: list) -> np.ndarray:
+    """The determinant of a 1 x 1, 2 x 2 or 3 x 3 matrix of arrays (rows of columns), written out."""
+    if len(m) == 1:
+        return m[0][0]
+    if len(m) == 2:
+        return m[0][0] * m[1][1] - m[0][1] * m[1][0]
+    return (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]))
+
+
+def _cramer(m: list, right: list) -> list:
+    """The solution of m x = right for up to 3 unknowns (arrays), by Cramer's rule."""
+    det = _determinant(m)
+    return [_determinant([[right[r] if c == i else m[r][c] for c in range(len(m))] for r in range(len(m))]) / det
+            for i in range(len(m))]
 
 
 def _vertex_bends(p, edges, strip, face1, face2, quad_only):
