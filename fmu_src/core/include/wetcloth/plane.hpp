@@ -44,8 +44,10 @@ bool jacobian_refresh_pays(const Plane& plane, double iterations);
 //: and the last solve took more than MESH_REFRESH_AFTER CG iterations: their slopes near rest vary from
 //: 0 to 4k/3 within a strain of BUCKLING_ROUNDING, so the rest-stiffness systems match a floating mesh's
 //: Newton matrix poorly (tension-only springs all lie slack there).  The 10k-vertex disc of
-//: bench/mesh_cost.py landing on water (0.5 s): CG 906, Newton 451 without; CG 507, Newton 436 with 8;
-//: CG 498 with 4, but hanging in air 315 factorisations instead of 23 (CG 6231 against 6511; 6329 without).
+//: bench/mesh_cost.py landing on water (0.5 s): CG 906, Newton 451 without, 1.8 s CPU; CG 507, Newton 436
+//: with 8, 1.5 s.  Hanging in air by its cap: CG 6511, Newton 1713 with 8 (6329, 1698 without; the time
+//: the same within noise); with 4 the landing took CG 498, but the hanging disc refactored 315 times
+//: instead of 23 with 8 (8 without; 14.1 s against 13.6 s, one run each).
 inline constexpr double MESH_REFRESH_AFTER = 8.0;
 
 //: Whether factoring a mesh with buckling springs (algebraic hierarchy) from the Jacobian pays after a solve
