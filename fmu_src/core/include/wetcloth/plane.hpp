@@ -45,8 +45,8 @@ bool jacobian_refresh_pays(const Plane& plane, double iterations);
 //: 0 to 4k/3 within a strain of BUCKLING_ROUNDING, so the rest-stiffness systems match a floating mesh's
 //: Newton matrix poorly (tension-only springs all lie slack there).  The 10k-vertex disc of
 //: bench/mesh_cost.py landing on water (0.5 s): CG 906, Newton 451 without, 1.8 s CPU; CG 507, Newton 436
-//: with 8, 1.5 s.  Hanging in air by its cap: CG 6511, Newton 1713 with 8 (6329, 1698 without; the time
-//: the same within noise); with 4 the landing took CG 498, but the hanging disc refactored 315 times
+//: with 8, 1.5 s.  Hanging in air by its cap: CG 6511, Newton 1713 with 8 (6329, 1698 without), 2-4 %
+//: more time (in turn); with 4 the landing took CG 498, but the hanging disc refactored 315 times
 //: instead of 23 with 8 (8 without; 14.1 s against 13.6 s, one run each).
 inline constexpr double MESH_REFRESH_AFTER = 8.0;
 
