@@ -17,6 +17,7 @@ from wetcloth._core import forces_and_blocks
 from wetcloth._core import ALGEBRAIC_SIZE
 from wetcloth.model import Model
 from wetcloth.preconditioner import make_mesh_plane
+from support.rollback import assert_restored_run_repeats
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs"))
 import make_meshes  # noqa: E402
@@ -267,3 +268,24 @@ def test_the_band_order_of_a_shuffled_chain_and_grid_is_narrow_and_a_permutation
         rows_, columns = graph.nonzero()
         assert np.abs(rank[rows_] - rank[columns]).max() <= widest
         assert np.array_equal(reverse_cuthill_mckee(graph), order)
+
+
+def test_a_mesh_run_restored_after_refactoring_from_the_jacobian_repeats_bit_for_bit(tmp_path):
+    """A disc of more than ALGEBRAIC_SIZE vertices floating after it landed on water refactors its hierarchy
+    from the Jacobian (its buckling springs: a solve of more than MESH_REFRESH_AFTER CG iterations).  A
+    snapshot taken while those factors are in use, after a solve too short to refactor again at once,
+    restores those very factors: the run repeats exactly."""
+    points, triangles = make_meshes.round_cloth(rings=RINGS)
+    path = tmp_path / "disc.ply"
+    make_meshes.write(path, points, triangles)
+    sim = wetcloth.Simulation(wetcloth.load_scene(cloth_mesh=str(path), place_mesh="on", initial_tilt=0.0,
+                                                  initial_height=0.05))
+    assert sim.model.topology.n > ALGEBRAIC_SIZE and sim.model.topology.pair_buckling_count > 0
+    for _ in range(200):
+        sim.advance(sim.time + 0.01)
+        snapshot = sim.snapshot()
+        if snapshot["preconditioner_from_jacobian"] and snapshot["last_solve_iterations"] <= _core.MESH_REFRESH_AFTER:
+            break
+    else:
+        pytest.fail("no snapshot with factors from the Jacobian in use")
+    assert_restored_run_repeats(sim, snapshot, 0.2)

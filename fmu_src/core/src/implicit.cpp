@@ -406,7 +406,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
                 }
                 solver.counters[FACTORISATIONS] += 1;
             } else {
-                if (jacobian_refresh_pays(plane, memory[3])) {
+                if (jacobian_refresh_pays(plane, memory[3]) || buckling_mesh_refresh_pays(plane, cloth, memory[3])) {
                     factored = refresh_from_jacobian(plane, cloth, mass, is_mesh(cloth) ? work.pair_along : work.along);
                     if (factored < 0) factored = refresh(plane, cloth, mass, bh * bh);  // back to the rest stiffness
                     solver.counters[FACTORISATIONS] += factored > 0;

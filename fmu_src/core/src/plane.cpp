@@ -137,6 +137,10 @@ bool jacobian_refresh_pays(const Plane& plane, double iterations) {
     return banded(plane) && iterations > JACOBIAN_REFRESH_AFTER * 0.25 * static_cast<double>(plane.kd);
 }
 
+bool buckling_mesh_refresh_pays(const Plane& plane, const Cloth& cloth, double iterations) {
+    return mesh_plane(plane) && !banded(plane) && cloth.pair_buckling_count > 0 && iterations > MESH_REFRESH_AFTER;
+}
+
 Index refresh_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const double* along) {
     const Index n = cloth.n;
     const Index count = mesh_plane(plane) ? cloth.pair_count : cloth.families * n;

@@ -40,6 +40,20 @@ inline bool banded(const Plane& plane) { return plane.grid.level_count <= 1 && p
 //: Whether factoring from the Jacobian pays after a solve of `iterations` CG iterations.
 bool jacobian_refresh_pays(const Plane& plane, double iterations);
 
+//: A mesh's algebraic hierarchy is rebuilt from the Jacobian in hand when its cloth has buckling springs
+//: and the last solve took more than MESH_REFRESH_AFTER CG iterations: their slopes near rest vary from
+//: 0 to 4k/3 within a strain of BUCKLING_ROUNDING, so the rest-stiffness systems match a floating mesh's
+//: Newton matrix poorly (tension-only springs all lie slack there).  The 10k-vertex disc of
+//: bench/mesh_cost.py landing on water (0.5 s): CG 906, Newton 451 without, 1.8 s CPU; CG 507, Newton 436
+//: with 8, 1.5 s.  Hanging in air by its cap: CG 6511, Newton 1713 with 8 (6329, 1698 without), 2-4 %
+//: more time (in turn); with 4 the landing took CG 498, but the hanging disc refactored 315 times
+//: instead of 23 with 8 (8 without; 14.1 s against 13.6 s, one run each).
+inline constexpr double MESH_REFRESH_AFTER = 8.0;
+
+//: Whether factoring a mesh with buckling springs (algebraic hierarchy) from the Jacobian pays after a solve
+//: of `iterations` CG iterations.
+bool buckling_mesh_refresh_pays(const Plane& plane, const Cloth& cloth, double iterations);
+
 //: Factor M + L(along) (along (F, n) kg; a mesh's (S)); returns 1, or -1 if a matrix was not positive definite.
 Index refresh_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const double* along);
 
