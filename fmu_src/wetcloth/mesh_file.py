@@ -115,39 +115,52 @@ def read_faces(path: str, shown: str, name: str, allowed: str, polygons: bool = 
     ``polygons``, faces of more corners too, as runs (j, k)), its point attributes and UVs (or None),
     unchecked: the one reader of cloth and collider files (meshio, then trimesh, by the suffix, see the
     module).  A file no reader understands raises a ParameterError naming ``name``, ``allowed`` its range."""
-    suffix, readers = Path(path).suffix.lower(), readers_of(path)
-    if not readers:
+    suffix, reader = Path(path).suffix.lower(), reader_of(path)
+    if reader is None:
         raise ParameterError(name, f"{shown!r}: unknown mesh format {suffix!r}: neither meshio nor trimesh reads "
                                    f"it; allowed: {allowed}")
     failures = []
-    for reader in readers:
+    for attempt in (reader, "trimesh") if reader == "meshio" else (reader,):
+        if attempt != reader and not _trimesh_reads(path):  # trimesh is imported only once meshio has failed
+            break
         try:
-            return _read_meshio(path, polygons) if reader == "meshio" else _read_trimesh(path)
+            return _read_meshio(path, polygons) if attempt == "meshio" else _read_trimesh(path)
         except ParameterError:
             raise
         except Exception as exc:  # the readers raise many kinds of errors for a damaged file
-            failures.append(f"{reader}: {type(exc).__name__}: {exc}")
-    if readers == ["trimesh"] and suffix not in TRIMESH_SUFFIXES:
-        failures[0] = f"trimesh (meshio has no reader for {suffix!r}){failures[0][len('trimesh'):]}"
+            label = attempt if attempt != reader or reader == "meshio" or suffix in TRIMESH_SUFFIXES else \
+                f"trimesh (meshio has no reader for {suffix!r})"
+            failures.append(f"{label}: {type(exc).__name__}: {exc}")
     raise ParameterError(name, f"{shown!r} cannot be read as a mesh by {'; nor by '.join(failures)}; "
                                f"allowed: {allowed}") from None
 
 
-def readers_of(path: str) -> list[str]:
-    """The readers of a mesh file by its suffix, in the order tried: 'meshio' where meshio knows the suffix,
-    then 'trimesh' where trimesh does (see the module); empty if neither does.  Compound suffixes count
-    (meshio's '.vol.gz')."""
+def reader_of(path: str) -> str | None:
+    """'meshio' or 'trimesh', the first reader of a mesh file by its suffix (see the module), or None if
+    neither knows the suffix.  Compound suffixes count (meshio's '.vol.gz')."""
     suffix = Path(path).suffix.lower()
+    if suffix in MESHIO_SUFFIXES:
+        return "meshio"
     if suffix in TRIMESH_SUFFIXES:
-        return ["trimesh"]
+        return "trimesh"
     import meshio
+
+    if any(tail in meshio.extension_to_filetypes for tail in _suffix_tails(path)):
+        return "meshio"
+    return "trimesh" if _trimesh_reads(path) else None
+
+
+def _suffix_tails(path: str) -> list[str]:
+    """A path's suffixes from the last one on: '.gz', '.vol.gz', ... (lower case)."""
+    suffixes = Path(path).suffixes
+    return ["".join(suffixes[-k:]).lower() for k in range(1, len(suffixes) + 1)]
+
+
+def _trimesh_reads(path: str) -> bool:
+    """Whether trimesh knows a suffix of the path."""
     import trimesh
 
-    tails = ["".join(Path(path).suffixes[-k:]).lower() for k in range(1, len(Path(path).suffixes) + 1)]
-    readers = ["meshio"] if suffix in MESHIO_SUFFIXES or any(t in meshio.extension_to_filetypes for t in tails) else []
-    if any(tail.lstrip(".") in trimesh.available_formats() for tail in tails):
-        readers.append("trimesh")
-    return readers
+    return any(tail.lstrip(".") in trimesh.available_formats() for tail in _suffix_tails(path))
 
 
 def _read_meshio(path: str, polygons: bool):
