@@ -22,43 +22,9 @@ from pathlib import Path
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # idle BLAS threads would spin on the CPU clock
 
 import numpy as np  # noqa: E402
-from scipy.integrate import solve_ivp  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 import test_curved_sliding as bead  # noqa: E402  (the analytic bead and its scene)
-
-import wetcloth  # noqa: E402
-from wetcloth.scene import load_scene  # noqa: E402
-
-
-def departure():
-    """The analytic departure from the ball: time (s), angle and angular speed (rad/s)."""
-    sol = solve_ivp(bead.swing, [0.0, 5.0], [bead.START, 0.0], events=bead.push, rtol=1e-12, atol=1e-14)
-    (t,), ((theta, omega),) = sol.t_events[0], sol.y_events[0]
-    return t, theta, omega
-
-
-def bead_path(step: float, integrator: str, until: float, on_ball: float | None) -> tuple[np.ndarray, int]:
-    """The bead's centroid (m, one row a sample) every 25 ms up to `until` s (after `on_ball` s, set on the ball
-    then, if given); its steps."""
-    if on_ball is not None:
-        return bead.bead_path(step, start=on_ball, until=until, integrator=integrator)
-    scene = load_scene(nx=2, ny=2, width=bead.WIDTH, length=bead.WIDTH, initial_tilt=np.degrees(bead.START),
-                       initial_height=bead.HEIGHT, thickness=bead.THICKNESS, water_level=-5.0, floor_level=-6.0,
-                       air_density=0.0, stretch_stiffness=1e4, self_collision="off", integrator=integrator,
-                       tolerance=0.0, max_step=step,
-                       colliders=({"shape": "sphere", "x": 0.0, "y": bead.BALL[1], "z": bead.BALL[2],
-                                   "radius": bead.RADIUS, "friction": 0.0},))
-    sim = wetcloth.Simulation(scene)
-    path = []
-    for t in sample_times(0.0, until):
-        sim.advance(t - sim.time)
-        path.append(sim.state.pos.mean(axis=1))
-    return np.array(path), sim.steps
-
-
-def sample_times(start: float, until: float) -> np.ndarray:
-    return np.arange(start + 0.025, until + 1e-9, 0.025)
 
 
 def largest(distances: np.ndarray) -> float:
@@ -72,18 +38,18 @@ def main() -> None:
     parser.add_argument("--fine", type=float, default=0.125, help="the reference's step over the shortest (0.125)")
     parser.add_argument("--on-ball", type=float, default=None, help="start on the ball at this time (s)")
     args = parser.parse_args()
-    leaves = departure()
-    exact = np.array([bead.analytic(t, leaves) for t in sample_times(args.on_ball or 0.0, args.until)])
+    leaves = bead.analytic_departure()
+    exact = np.array([bead.analytic(t, leaves) for t in bead.sample_times(args.on_ball or 0.0, args.until)])
     fine_step = args.fine * min(args.steps)
     print(f"bead on a frictionless ball, until {args.until:g} s (it leaves the ball at {leaves[0]:.3f} s); "
           f"reference: the same scheme at {1e3 * fine_step:g} ms")
     print("| integrator | step | from the analytic bead | ratio | from the reference | ratio | steps |\n"
           "|---|---|---|---|---|---|---|")
     for integrator in ("bdf2", "implicit_euler"):
-        reference, _ = bead_path(fine_step, integrator, args.until, args.on_ball)
+        reference, _ = bead.bead_path(fine_step, start=args.on_ball, until=args.until, integrator=integrator)
         rows = []
         for h in args.steps:
-            path, steps = bead_path(h, integrator, args.until, args.on_ball)
+            path, steps = bead.bead_path(h, start=args.on_ball, until=args.until, integrator=integrator)
             rows.append((h, largest(path - exact), largest(path - reference), steps))
         for k, (h, analytic, fine, steps) in enumerate(rows):
             ratios = [f"{row / rows[k + 1][c]:.2f}" if k + 1 < len(rows) else "" for c, row in ((1, analytic), (2, fine))]

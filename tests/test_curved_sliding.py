@@ -35,12 +35,16 @@ def push(t, y):  # the ball's push on the bead per unit mass (m/s2), positive wh
 push.terminal = True
 
 
-@pytest.fixture(scope="module")
-def departure():
+def analytic_departure():
     """The analytic departure: time (s), angle and angular speed (rad/s)."""
     sol = solve_ivp(swing, [0.0, 5.0], [START, 0.0], events=push, rtol=1e-12, atol=1e-14)
     (t,), ((theta, omega),) = sol.t_events[0], sol.y_events[0]
     return t, theta, omega
+
+
+@pytest.fixture(scope="module")
+def departure():
+    return analytic_departure()
 
 
 def analytic(t, departure):
@@ -55,17 +59,22 @@ def analytic(t, departure):
     return at + speed * dt + np.array([0.0, 0.0, -0.5 * GRAVITY * dt * dt])
 
 
+def bead_scene(friction=0.0, **settings):
+    """The bead: a 2 x 2 sheet of WIDTH released at START, HEIGHT above the ball of friction `friction`, in no
+    air, with `settings` (integrator, tolerance, max_step)."""
+    return load_scene(nx=2, ny=2, width=WIDTH, length=WIDTH, initial_tilt=START * 180 / math.pi,
+                      initial_height=HEIGHT, thickness=THICKNESS, water_level=-5.0, floor_level=-6.0,
+                      air_density=0.0, stretch_stiffness=1e4, self_collision="off", **settings,
+                      colliders=({"shape": "sphere", "x": 0.0, "y": BALL[1], "z": BALL[2], "radius": RADIUS,
+                                  "friction": friction},))
+
+
 def largest_error(tolerance, departure, until=0.5):
     """The largest distance (m) of the simulated bead from the analytic one every 25 ms up to `until` s, and
     the simulation."""
-    scene = load_scene(nx=2, ny=2, width=WIDTH, length=WIDTH, initial_tilt=START * 180 / math.pi,
-                       initial_height=HEIGHT, thickness=THICKNESS, water_level=-5.0, floor_level=-6.0,
-                       air_density=0.0, stretch_stiffness=1e4, tolerance=tolerance, self_collision="off",
-                       colliders=({"shape": "sphere", "x": 0.0, "y": BALL[1], "z": BALL[2], "radius": RADIUS,
-                                   "friction": 0.0},))
-    sim = wetcloth.Simulation(scene)
+    sim = wetcloth.Simulation(bead_scene(tolerance=tolerance))
     worst = 0.0
-    for t in np.arange(0.025, until + 1e-9, 0.025):
+    for t in sample_times(0.0, until):
         sim.advance(t - sim.state.time)
         worst = max(worst, float(np.linalg.norm(sim.state.pos.mean(axis=1) - analytic(t, departure))))
     return worst, sim
@@ -92,31 +101,32 @@ def test_a_bead_slides_off_a_frictionless_ball_as_the_analytic_bead_does(departu
 
 
 def bead_path(step, friction=0.0, start=0.05, until=0.35, integrator="bdf2"):
-    """The bead's centroid (m, one row a sample) every 25 ms after `start` up to `until` s (on the ball) at fixed
-    steps of `step` s (of `integrator`), the ball's friction `friction`, set on the ball at `start` (its corners on the
-    contact's sphere) where and as fast as the frictionless analytic bead is then: no landing; and its steps."""
+    """The bead's centroid (m, one row a sample) every 25 ms after `start` up to `until` s at fixed steps of
+    `step` s (of `integrator`), the ball's friction `friction`, set on the ball at `start` (its corners on the
+    contact's sphere) where and as fast as the frictionless analytic bead is then: no landing (`start` None:
+    released above the ball at 0 s, as the scene places it); and its steps."""
     from wetcloth.state import State
 
-    scene = load_scene(nx=2, ny=2, width=WIDTH, length=WIDTH, initial_tilt=START * 180 / math.pi,
-                       initial_height=HEIGHT, thickness=THICKNESS, water_level=-5.0, floor_level=-6.0,
-                       air_density=0.0, stretch_stiffness=1e4, self_collision="off", integrator=integrator,
-                       tolerance=0.0, max_step=step,
-                       colliders=({"shape": "sphere", "x": 0.0, "y": BALL[1], "z": BALL[2], "radius": RADIUS,
-                                   "friction": friction},))
-    sim = wetcloth.Simulation(scene)
-    theta, omega = solve_ivp(swing, [0.0, start], [START, 0.0], rtol=1e-12, atol=1e-14).y[:, -1]
-    turn = theta - START
-    about_x = np.array([[1.0, 0.0, 0.0], [0.0, math.cos(turn), -math.sin(turn)],
-                        [0.0, math.sin(turn), math.cos(turn)]])
-    offset = sim.state.pos - BALL[:, None]
-    offset = about_x @ (offset * PATH_RADIUS / np.linalg.norm(offset, axis=0))
-    velocity = omega * np.array([np.zeros(offset.shape[1]), -offset[2], offset[1]])  # turning about x at omega
-    sim.state = State(start, BALL[:, None] + offset, velocity, sim.state.water.copy())
+    sim = wetcloth.Simulation(bead_scene(friction, integrator=integrator, tolerance=0.0, max_step=step))
+    if start is not None:
+        theta, omega = solve_ivp(swing, [0.0, start], [START, 0.0], rtol=1e-12, atol=1e-14).y[:, -1]
+        turn = theta - START
+        about_x = np.array([[1.0, 0.0, 0.0], [0.0, math.cos(turn), -math.sin(turn)],
+                            [0.0, math.sin(turn), math.cos(turn)]])
+        offset = sim.state.pos - BALL[:, None]
+        offset = about_x @ (offset * PATH_RADIUS / np.linalg.norm(offset, axis=0))
+        velocity = omega * np.array([np.zeros(offset.shape[1]), -offset[2], offset[1]])  # turning about x at omega
+        sim.state = State(start, BALL[:, None] + offset, velocity, sim.state.water.copy())
     path = []
-    for t in np.arange(start + 0.025, until + 1e-9, 0.025):
+    for t in sample_times(start or 0.0, until):
         sim.advance(t - sim.time)
         path.append(sim.state.pos.mean(axis=1))
     return np.array(path), sim.steps
+
+
+def sample_times(start, until):
+    """Every 25 ms after `start` s up to `until` s."""
+    return np.arange(start + 0.025, until + 1e-9, 0.025)
 
 
 @pytest.mark.parametrize("friction", [0.0, 0.1])
