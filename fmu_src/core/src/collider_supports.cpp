@@ -157,6 +157,19 @@ double support_gap(const Supports& supports, Index term, Index n, const double* 
                        supports.offset[static_cast<std::size_t>(term)]);
 }
 
+Index lag_arriving_normal_force(Supports& supports, Index n, const double* pos) {
+    Index arrived = 0;
+    for (Index t = 0; t < supports.count(); ++t) {
+        const std::size_t u = static_cast<std::size_t>(t);
+        if (!(supports.friction[u] > 0.0) || supports.normal_force[u] > 0.0) continue;
+        const double depth = supports.distance - support_gap(supports, t, n, pos);
+        if (!(depth > 0.0)) continue;
+        supports.normal_force[u] = supports.stiffness * depth;
+        arrived += 1;
+    }
+    return arrived;
+}
+
 double support_energy(const Supports& supports, Index n, const double* pos) {
     double energy = 0.0;
     for (Index t = 0; t < supports.count(); ++t) {
