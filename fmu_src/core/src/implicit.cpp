@@ -515,7 +515,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
     // particle landed frictionless (a sheet released onto an incline kept the whole step's slide along it).
     // Its normal force at the solve's end is held for the step, and the step solved again from there.
     if (!adaptive && solver.supports != nullptr && solver.supports->any_friction && std::isfinite(correction) &&
-        lag_arriving_normal_force(*solver.supports, n, out_pos) > 0) {
+        lag_arriving_normal_force(*solver.supports, n, mass, vel, out_pos, out_vel, h) > 0) {
         residual_ready = false;
         converged = false;
         previous = 0.0;
