@@ -393,8 +393,23 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
     bool residual_ready = false;  // the line search leaves the residual at its end in rhs
     double previous = 0.0;
     double correction = 0.0;  // m/s, the last iteration's
+    // A support met within a fixed step has no normal force at its start, so no friction: its particle landed
+    // frictionless (a sheet released onto an incline kept the whole step's slide along it).  Its normal force
+    // is lagged from the first Newton iterate at which it presses instead (IPC's lag), held from then on.
+    const bool lags_arrivals = !adaptive && solver.supports != nullptr && solver.supports->any_friction;
+    //: Whether supports met at the iterate got their normal force (the potential changed: a line search's
+    //: residual is no longer its own, and the solve goes on).
+    const auto lagged = [&]() {
+        if (!(lags_arrivals && lag_arriving_normal_force(*solver.supports, n, mass, vel, out_pos, out_vel, h) > 0)) {
+            return false;
+        }
+        residual_ready = false;
+        previous = 0.0;
+        return true;
+    };
     const auto iterate = [&]() {
         for (Index iteration = 0; iteration < iterations; ++iteration) {
+            lagged();
             if (!residual_ready) {
                 newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh, slack_slope);
             }
@@ -448,7 +463,10 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
             const double increment = measured.increment;
             correction = largest;
             if (!std::isfinite(largest)) break;
-            if (descent && !adaptive && energy_settled(n, mass, free, out_vel, hat_vel, rhs)) break;
+            if (descent && !adaptive && energy_settled(n, mass, free, out_vel, hat_vel, rhs) &&
+                !(iteration + 1 < iterations && lagged())) {
+                break;
+            }
             // The velocity's tolerance: an error left in every step's velocity is not random and adds up, so
             // it is held to a fraction of the velocity and of its change over the step, or to what moves a
             // particle by the position tolerance in NEWTON_VELOCITY_TIME.
@@ -468,58 +486,45 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
                 trust = banded(plane) ? FIRST_ITERATION_TRUST : 0.0;
             }
             if (largest <= tolerance || (0.0 < rate && rate < 1.0 && rate / (1.0 - rate) * largest <= trust * tolerance)) {
+                if (iteration + 1 < iterations && lagged()) continue;
                 converged = true;
                 break;
             }
             previous = largest;
         }
     };
+    iterate();
     // A frame-long step in contact may converge to a worse local minimum of its (non-convex) incremental
     // potential, one above the energy the step started with: a sheet landing on a box within a 1/24 s step
     // ended with its overhang in free fall and the corners' springs stretched, 0.078 J gained.  Where the
     // potential at the solve's end lies above its value at rest (x+ = x), the solve starts again from the
     // lowest point on the segment between them.
-    const auto solve = [&]() {
-        iterate();
-        if (descent && !adaptive && solver.supports != nullptr && solver.supports->count() > 0) {
-            double* rest = solver.p;
-            double* toward = solver.r;
-            for (Index restart = 0; restart < DESCENT_RESTARTS && std::isfinite(correction); ++restart) {
-                velocities_at_rest(cloth, solver, n, pos, hat_pos, h, bh, out_vel, rest);
-                if (potential_rise(cloth, phys, work, solver, hat_pos, hat_vel, step_water, bh, slack_slope, rest,
-                                   out_pos, out_vel, toward) <= 0.0) {
-                    break;
-                }
-                solver.counters[RESTARTS] += 1;
-                for (Index k = 0; k < 3 * n; ++k) {
-                    out_vel[k] = rest[k];
-                    out_pos[k] = hat_pos[k] + bh * out_vel[k];
-                }
-                newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh,
-                                slack_slope);
-                // Rising from rest toward the solve's end, rest is that lowest point (the line search, which takes
-                // the full step where its first slope does not fall, would go back to the end).
-                if (dot(n, toward, solver.rhs) > 0.0) {
-                    line_search(cloth, phys, work, solver, hat_pos, hat_vel, step_water, bh, slack_slope, toward,
-                                solver.step_acceleration, out_pos, out_vel);
-                }
-                residual_ready = true;
-                converged = false;
-                previous = 0.0;
-                iterate();
+    if (descent && !adaptive && solver.supports != nullptr && solver.supports->count() > 0) {
+        double* rest = solver.p;
+        double* toward = solver.r;
+        for (Index restart = 0; restart < DESCENT_RESTARTS && std::isfinite(correction); ++restart) {
+            velocities_at_rest(cloth, solver, n, pos, hat_pos, h, bh, out_vel, rest);
+            if (potential_rise(cloth, phys, work, solver, hat_pos, hat_vel, step_water, bh, slack_slope, rest, out_pos,
+                               out_vel, toward) <= 0.0) {
+                break;
             }
+            solver.counters[RESTARTS] += 1;
+            for (Index k = 0; k < 3 * n; ++k) {
+                out_vel[k] = rest[k];
+                out_pos[k] = hat_pos[k] + bh * out_vel[k];
+            }
+            newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh, slack_slope);
+            // Rising from rest toward the solve's end, rest is that lowest point (the line search, which takes
+            // the full step where its first slope does not fall, would go back to the end).
+            if (dot(n, toward, solver.rhs) > 0.0) {
+                line_search(cloth, phys, work, solver, hat_pos, hat_vel, step_water, bh, slack_slope, toward,
+                            solver.step_acceleration, out_pos, out_vel);
+            }
+            residual_ready = true;
+            converged = false;
+            previous = 0.0;
+            iterate();
         }
-    };
-    solve();
-    // A support met within a fixed step had no normal force at its start, so no friction in that solve: its
-    // particle landed frictionless (a sheet released onto an incline kept the whole step's slide along it).
-    // Its normal force at the solve's end is held for the step, and the step solved again from there.
-    if (!adaptive && solver.supports != nullptr && solver.supports->any_friction && std::isfinite(correction) &&
-        lag_arriving_normal_force(*solver.supports, n, mass, vel, out_pos, out_vel, h) > 0) {
-        residual_ready = false;
-        converged = false;
-        previous = 0.0;
-        solve();
     }
     if (solver.sliding != nullptr) stop_reversed(*solver.sliding, n, hat_pos, bh, out_pos, out_vel);
     for (Index k = 0; k < 3 * n; ++k) solver.step_acceleration[k] = (out_vel[k] - hat_vel[k]) / bh;

@@ -53,11 +53,11 @@ double support_stiffness(const Cloth& cloth);
 void place_supports(Supports& supports, const Physics& phys, Index n, const double* pos, double h, double bh);
 
 //: The terms with friction but no normal force at the step's start (met within it) that press at positions
-//: pos (3, n) and slip faster than SUPPORT_SLIP_SPEED at velocities vel (3, n), a first solve's end: their
-//: normal force there, stiffness (distance - g) (N), held for the step's solve taken again from there (IPC's
-//: friction lagged from a solve), so that a particle arriving within a step of h s has friction in it.  At
-//: most what lands the pair (mass (n) kg) within the step: its approach at start_vel (3, n, m/s) stopped
-//: and its weight held (an unconverged first solve can end deep in the penalty).  Returns how many.
+//: pos (3, n) and slip faster than SUPPORT_SLIP_SPEED at velocities vel (3, n), a Newton iterate: their normal
+//: force there, stiffness (distance - g) (N), held for the rest of the step (IPC's friction lagged from an
+//: iterate), so that a particle arriving within a step of h s has friction in it.  At most what lands the
+//: pair (mass (n) kg) within the step: its approach at start_vel (3, n, m/s) stopped and its weight held (an
+//: iterate far from the solution can lie deep in the penalty).  Returns how many.
 Index lag_arriving_normal_force(Supports& supports, Index n, const double* mass, const double* start_vel,
                                 const double* pos, const double* vel, double h);
 
