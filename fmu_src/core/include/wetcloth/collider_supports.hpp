@@ -12,7 +12,8 @@
 // Friction (the collider's coefficient mu, off when 0): on the pair's relative velocity at the step's end,
 // u = sum_k w_k v_k (the collider's points at its surface's velocity there), its part across n, u_t, meets
 // the smoothed Coulomb force of IPC (Li et al. 2020), F_k = -w_k mu N f1(|u_t|) u_t / |u_t|, N = stiffness
-// (distance - g_0) the pair's normal force at the step's start (lagged, as IPC's: fixed for the step), f1(y)
+// (distance - g_0) the pair's normal force at the step's start (lagged, as IPC's: fixed for the step; at fixed
+// steps a pair met within the step takes it from an iterate: lag_arriving_normal_force), f1(y)
 // = 2 y / eps - y^2 / eps^2 below eps = SUPPORT_SLIP_SPEED, else 1: minus the gradient in v_k of the
 // dissipation potential D = mu N f0(|u_t|), f0' = f1 (W).  Its stiffness in velocity, w_k w_l mu N H (H the
 // Hessian of f0(|u_t|), rank two in the plane across n, positive semidefinite), joins Newton's system times bh
