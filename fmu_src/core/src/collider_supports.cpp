@@ -159,7 +159,7 @@ double support_gap(const Supports& supports, Index term, Index n, const double* 
 }
 
 Index lag_arriving_normal_force(Supports& supports, Index n, const double* mass, const double* start_vel,
-                                const double* pos, const double* vel, double h) {
+                                const double* pos, const double* vel, double h, double* force, double* blocks) {
     Index arrived = 0;
     for (Index t = 0; t < supports.count(); ++t) {
         const std::size_t term = static_cast<std::size_t>(t);
@@ -181,6 +181,7 @@ Index lag_arriving_normal_force(Supports& supports, Index n, const double* mass,
         }
         const double landing = inertia * (std::max(approach, 0.0) / h + GRAVITY * std::max(nn[2], 0.0));
         supports.normal_force[term] = std::min(supports.stiffness * depth, landing);
+        add_friction(supports, t, n, vel, force, blocks);
         arrived += 1;
     }
     return arrived;

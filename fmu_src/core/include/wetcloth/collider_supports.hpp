@@ -58,9 +58,10 @@ void place_supports(Supports& supports, const Physics& phys, Index n, const doub
 //: force there, stiffness (distance - g) (N), held for the rest of the step (IPC's friction lagged from an
 //: iterate), so that a particle arriving within a step of h s has friction in it.  At most what lands the
 //: pair (mass (n) kg) within the step: its approach at start_vel (3, n, m/s) stopped and its weight held (an
-//: iterate far from the solution can lie deep in the penalty).  Returns how many.
+//: iterate far from the solution can lie deep in the penalty).  Their friction at vel joins force (3, n) and
+//: blocks (6, n) as add_support_forces adds it.  Returns how many.
 Index lag_arriving_normal_force(Supports& supports, Index n, const double* mass, const double* start_vel,
-                                const double* pos, const double* vel, double h);
+                                const double* pos, const double* vel, double h, double* force, double* blocks);
 
 //: Each term's gap at positions pos (3, n, m): offset + sum_k w_k normal . x_k (m).
 double support_gap(const Supports& supports, Index term, Index n, const double* pos);
