@@ -1,6 +1,7 @@
 // A mesh collider's features as supports inside the implicit step (collider_supports.hpp).
 #include "wetcloth/collider_supports.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "wetcloth/collider_motion.hpp"
@@ -155,6 +156,35 @@ void place_supports(Supports& supports, const Physics& phys, Index n, const doub
 double support_gap(const Supports& supports, Index term, Index n, const double* pos) {
     return cloth_along(supports, term, n, pos, supports.normal.data() + 3 * term,
                        supports.offset[static_cast<std::size_t>(term)]);
+}
+
+Index lag_arriving_normal_force(Supports& supports, Index n, const double* mass, const double* start_vel,
+                                const double* pos, const double* vel, double h, double* force, double* blocks) {
+    Index arrived = 0;
+    for (Index t = 0; t < supports.count(); ++t) {
+        const std::size_t term = static_cast<std::size_t>(t);
+        if (!(supports.friction[term] > 0.0) || supports.normal_force[term] > 0.0) continue;
+        const double depth = supports.distance - support_gap(supports, t, n, pos);
+        double u[3];
+        if (!(depth > 0.0) || !(slip_velocity(supports, t, n, vel, u) > SUPPORT_SLIP_SPEED)) continue;
+        // The pair's mass (kg) and its approach at the start (m/s) against its surface's velocity.
+        const double* nn = supports.normal.data() + 3 * t;
+        double inertia = 0.0;
+        double approach = 0.0;
+        for (int c = 0; c < 3; ++c) approach += nn[c] * supports.collider_velocity[3 * t + c];
+        for (int j = 0; j < 3; ++j) {
+            const Index i = supports.points[3 * t + j];
+            if (i < 0) continue;
+            const double w = supports.weights[3 * t + j];
+            inertia += w * mass[i];
+            approach -= w * (nn[0] * start_vel[i] + nn[1] * start_vel[n + i] + nn[2] * start_vel[2 * n + i]);
+        }
+        const double landing = inertia * (std::max(approach, 0.0) / h + GRAVITY * std::max(nn[2], 0.0));
+        supports.normal_force[term] = std::min(supports.stiffness * depth, landing);
+        add_friction(supports, t, n, vel, force, blocks);
+        arrived += 1;
+    }
+    return arrived;
 }
 
 double support_energy(const Supports& supports, Index n, const double* pos) {

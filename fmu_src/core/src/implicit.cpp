@@ -148,6 +148,22 @@ double better_guess(Index n, const double* vel, const double* prev_vel, const do
     return parabola < line ? PARABOLA : LINE;
 }
 
+//: Newton's residual into solver.rhs from the force (3, n) in work.force at velocities out_vel (3, n).
+void residual_of_force(const Cloth& cloth, const Work& work, Solver& solver, const double* hat_vel,
+                       const double* out_vel, double bh) {
+    const Index n = cloth.n;
+    const double* free = cloth.free;
+    const double* mass = solver.mass;
+    for (Index c = 0; c < 3; ++c) {
+        const double* __restrict f = work.force + c * n;
+        const double* __restrict ov = out_vel + c * n;
+        const double* __restrict hv = hat_vel + c * n;
+        double* __restrict rc = solver.rhs + c * n;
+        for (Index i = 0; i < n; ++i) rc[i] = free[i] * (bh * f[i] - mass[i] * (ov[i] - hv[i]));
+    }
+    if (solver.sliding != nullptr) project_sliding(*solver.sliding, n, solver.rhs);
+}
+
 //: Forces and Jacobian pieces at (out_pos, out_vel), and Newton's residual into solver.rhs:
 //: free (b h F - M (v - v^)), minus the gradient of the step's incremental potential in v.  The particles
 //: sliding on a surface (solver.sliding) feel kinetic friction in F, and their residual has no part along
@@ -161,16 +177,7 @@ void newton_residual(const Cloth& cloth, const Physics& phys, Work& work, Solver
     if (solver.sliding != nullptr) {
         add_sliding_friction(*solver.sliding, n, solver.mass, out_vel, bh, work.force, work.blocks);
     }
-    const double* free = cloth.free;
-    const double* mass = solver.mass;
-    for (Index c = 0; c < 3; ++c) {
-        const double* __restrict f = work.force + c * n;
-        const double* __restrict ov = out_vel + c * n;
-        const double* __restrict hv = hat_vel + c * n;
-        double* __restrict rc = solver.rhs + c * n;
-        for (Index i = 0; i < n; ++i) rc[i] = free[i] * (bh * f[i] - mass[i] * (ov[i] - hv[i]));
-    }
-    if (solver.sliding != nullptr) project_sliding(*solver.sliding, n, solver.rhs);
+    residual_of_force(cloth, work, solver, hat_vel, out_vel, bh);
 }
 
 //: Descent's line search along the correction dv from the velocities out_vel, whose residual (minus
@@ -393,8 +400,24 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
     bool residual_ready = false;  // the line search leaves the residual at its end in rhs
     double previous = 0.0;
     double correction = 0.0;  // m/s, the last iteration's
+    // A support met within a fixed step has no normal force at its start, so no friction: its particle landed
+    // frictionless (a sheet released onto an incline kept the whole step's slide along it).  Its normal force
+    // is lagged from the first Newton iterate at which it presses instead (IPC's lag), held from then on.
+    const bool lags_arrivals = !adaptive && solver.supports != nullptr && solver.supports->any_friction;
+    //: Whether supports met at the iterate got their normal force (the potential changed, and the solve goes on;
+    //: a residual in hand, the line search's, takes their friction).
+    const auto lagged = [&]() {
+        if (!(lags_arrivals && lag_arriving_normal_force(*solver.supports, n, mass, vel, out_pos, out_vel, h,
+                                                         work.force, work.blocks) > 0)) {
+            return false;
+        }
+        if (residual_ready) residual_of_force(cloth, work, solver, hat_vel, out_vel, bh);
+        previous = 0.0;
+        return true;
+    };
     const auto iterate = [&]() {
         for (Index iteration = 0; iteration < iterations; ++iteration) {
+            lagged();
             if (!residual_ready) {
                 newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh, slack_slope);
             }
@@ -448,7 +471,10 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
             const double increment = measured.increment;
             correction = largest;
             if (!std::isfinite(largest)) break;
-            if (descent && !adaptive && energy_settled(n, mass, free, out_vel, hat_vel, rhs)) break;
+            if (descent && !adaptive && energy_settled(n, mass, free, out_vel, hat_vel, rhs) &&
+                !(iteration + 1 < iterations && lagged())) {
+                break;
+            }
             // The velocity's tolerance: an error left in every step's velocity is not random and adds up, so
             // it is held to a fraction of the velocity and of its change over the step, or to what moves a
             // particle by the position tolerance in NEWTON_VELOCITY_TIME.
@@ -468,6 +494,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
                 trust = banded(plane) ? FIRST_ITERATION_TRUST : 0.0;
             }
             if (largest <= tolerance || (0.0 < rate && rate < 1.0 && rate / (1.0 - rate) * largest <= trust * tolerance)) {
+                if (iteration + 1 < iterations && lagged()) continue;
                 converged = true;
                 break;
             }

@@ -12,7 +12,8 @@
 // Friction (the collider's coefficient mu, off when 0): on the pair's relative velocity at the step's end,
 // u = sum_k w_k v_k (the collider's points at its surface's velocity there), its part across n, u_t, meets
 // the smoothed Coulomb force of IPC (Li et al. 2020), F_k = -w_k mu N f1(|u_t|) u_t / |u_t|, N = stiffness
-// (distance - g_0) the pair's normal force at the step's start (lagged, as IPC's: fixed for the step), f1(y)
+// (distance - g_0) the pair's normal force at the step's start (lagged, as IPC's: fixed for the step; at fixed
+// steps a pair met within the step takes it from an iterate: lag_arriving_normal_force), f1(y)
 // = 2 y / eps - y^2 / eps^2 below eps = SUPPORT_SLIP_SPEED, else 1: minus the gradient in v_k of the
 // dissipation potential D = mu N f0(|u_t|), f0' = f1 (W).  Its stiffness in velocity, w_k w_l mu N H (H the
 // Hessian of f0(|u_t|), rank two in the plane across n, positive semidefinite), joins Newton's system times bh
@@ -51,6 +52,16 @@ double support_stiffness(const Cloth& cloth);
 //: collider's friction, its points' weighted velocity there and its normal force at the start, the cloth at
 //: pos (3, n); bh (s) the step matrix's velocity factor (its position factor bh^2).
 void place_supports(Supports& supports, const Physics& phys, Index n, const double* pos, double h, double bh);
+
+//: The terms with friction but no normal force at the step's start (met within it) that press at positions
+//: pos (3, n) and slip faster than SUPPORT_SLIP_SPEED at velocities vel (3, n), a Newton iterate: their normal
+//: force there, stiffness (distance - g) (N), held for the rest of the step (IPC's friction lagged from an
+//: iterate), so that a particle arriving within a step of h s has friction in it.  At most what lands the
+//: pair (mass (n) kg) within the step: its approach at start_vel (3, n, m/s) stopped and its weight held (an
+//: iterate far from the solution can lie deep in the penalty).  Their friction at vel joins force (3, n) and
+//: blocks (6, n) as add_support_forces adds it.  Returns how many.
+Index lag_arriving_normal_force(Supports& supports, Index n, const double* mass, const double* start_vel,
+                                const double* pos, const double* vel, double h, double* force, double* blocks);
 
 //: Each term's gap at positions pos (3, n, m): offset + sum_k w_k normal . x_k (m).
 double support_gap(const Supports& supports, Index term, Index n, const double* pos);
