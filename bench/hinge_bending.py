@@ -6,10 +6,12 @@ the springs across two triangles' opposite corners, whose energy grows as the fo
 Per edge e shared by triangles (i, j, k) and (i, j, l), flat at rest: with w_m = n . (grad b_m(2) - grad b_m(1))
 (b_m the corners' linear shape functions, n the edge's normal in the plane from k's side to l's: sum_m w_m f_m
 is the jump in the gradient of a linear field f across the edge, the fold angle for f the height), the energy
-D |e|^2 / (A1 + A2) |sum_m w_m x_m|^2 (J; D the rigidity, N m), zero for any flat or rigidly moved hinge, and
-for a sheet bent to a curvature kappa a constant times D kappa^2 / 2 per area on every mesh.  Quadratic in the
+D |e|^2 / (2 (A1 + A2)) |sum_m w_m x_m|^2 (J; D the rigidity, N m), zero for any flat or rigidly moved hinge;
+a sheet bent to a curvature kappa stores D kappa^2 / 2 per area on equilateral triangles (whatever the bend's
+direction), 1.12-1.16 times that on docs/make_meshes.py's jittered discs at every resolution
+(bench/mesh_bending.py --hinge).  Quadratic in the
 positions, it is a sum over the hinge's six pairs of both-ways springs of rest length 0 and stiffness
--2 D |e|^2 / (A1 + A2) w_a w_b (N/m, some negative; the hinge's sum is positive semidefinite), which the core's
+-D |e|^2 / (A1 + A2) w_a w_b (N/m, some negative; the hinge's sum is positive semidefinite), which the core's
 listed springs run as they are.
 """
 
@@ -24,7 +26,7 @@ from wetcloth import topology
 
 def hinges(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Each interior edge's corners (m, 4: i, j, then k and l opposite), weights w (m, 4, 1/m) and
-    |e|^2 / (A1 + A2) (m,) of a flat mesh (points (n, 3) m)."""
+    |e|^2 / (2 (A1 + A2)) (m,) of a flat mesh (points (n, 3) m)."""
     rows = np.concatenate([triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]], triangles[:, [2, 0, 1]]])
     key = np.sort(rows[:, :2], axis=1)
     order = np.lexsort((key[:, 1], key[:, 0]))
@@ -49,7 +51,7 @@ def hinges(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.nd
     g1, area1 = normal_gradients(q[0], q[1], q[2])
     g2, area2 = normal_gradients(q[0], q[1], q[3])
     w = np.column_stack([g2[0] - g1[0], g2[1] - g1[1], -g1[2], g2[2]])
-    return corners, w, length**2 / (area1 + area2)
+    return corners, w, length**2 / (2.0 * (area1 + area2))
 
 
 def hinge_springs(points: np.ndarray, triangles: np.ndarray, rigidity: float) -> tuple[np.ndarray, np.ndarray]:

@@ -13,7 +13,7 @@ opposite corners shorten by the square of the fold angle, so theirs grows as rad
 edge length h as h^4 (the ratios printed: each mesh's energy against the first's, and the energy's growth
 from the largest radius to the smallest against the quadratic law's).  ``--hinge``: the same of
 bench/hinge_bending.py's quadratic hinges (summed over the whole disc, their springs' energies cancelling
-within each hinge), as a multiple of D / (2 radius^2).
+within each hinge), as a multiple of D / (2 radius^2) (1 on equilateral triangles).
 """
 
 from __future__ import annotations
