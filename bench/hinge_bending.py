@@ -9,10 +9,10 @@ is the jump in the gradient of a linear field f across the edge, the fold angle 
 D |e|^2 / (2 (A1 + A2)) |sum_m w_m x_m|^2 (J; D the rigidity, N m), zero for any flat or rigidly moved hinge;
 a sheet bent to a curvature kappa stores D kappa^2 / 2 per area on equilateral triangles (whatever the bend's
 direction), 1.12-1.16 times that on docs/make_meshes.py's jittered discs at every resolution
-(bench/mesh_bending.py --hinge).  Quadratic in the
-positions, it is a sum over the hinge's six pairs of both-ways springs of rest length 0 and stiffness
--D |e|^2 / (A1 + A2) w_a w_b (N/m, some negative; the hinge's sum is positive semidefinite), which the core's
-listed springs run as they are.
+(bench/mesh_bending.py --hinge).  Quadratic in the positions, it is a sum over the hinge's six pairs of
+both-ways springs of rest length 0 and stiffness -D |e|^2 / (A1 + A2) w_a w_b (N/m, some negative; the hinge's
+sum is positive semidefinite), which the core's listed springs run as they are.  For meshes of triangles only
+(every bending spring is replaced).
 """
 
 from __future__ import annotations
@@ -69,7 +69,9 @@ def hinge_springs(points: np.ndarray, triangles: np.ndarray, rigidity: float) ->
 @contextlib.contextmanager
 def hinge_bending(rigidity: float):
     """Within it, a triangle mesh's cloth bends by hinge_springs of ``rigidity`` (N m) instead of its bending
-    springs (damped as they were: c / k = damping / bend_stiffness)."""
+    springs, undamped: damped along each spring (damping_model 'projected') with c / k = damping / bend_stiffness
+    as the springs were, the pairs' dampers of mixed signs along differing directions sum to no positive form,
+    and the tablecloth at 1/30 s frame steps gained 2.8e-5 J in a frame (bench/frame_steps.py tablecloth)."""
     listed = topology.listed_springs
 
     def with_hinges(mesh, scene):
@@ -77,7 +79,7 @@ def hinge_bending(rigidity: float):
         keep = springs["pair_kind"] != topology.BEND
         pairs, k = hinge_springs(mesh.points, mesh.triangles, rigidity)
         added = dict(pairs=pairs, pair_rest=np.zeros(len(k)), pair_stiffness=k,
-                     pair_damping=k * (scene.damping / scene.bend_stiffness), pair_shape=k / scene.bend_stiffness,
+                     pair_damping=np.zeros(len(k)), pair_shape=k / scene.bend_stiffness,
                      pair_kind=np.full(len(k), topology.BEND, dtype=np.int8))
         for name, value in added.items():
             springs[name] = np.concatenate([springs[name][..., keep], value], axis=-1)

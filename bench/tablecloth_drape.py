@@ -54,8 +54,8 @@ def drape(rings: int, seed: int, duration: float) -> float:
     pos = sim.state.pos
     hem = float(pos[2, rim].mean())
     solves = sim.solver_counts
-    print(f"{len(points):6d} vertices, seed {seed}: {spent:7.1f} s CPU  steps {sim.steps:6d}  rejected {sim.rejected_steps:6d}  "
-          f"Newton {solves['newton_iterations']}  CG a Newton iteration "
+    print(f"{len(points):6d} vertices, seed {seed}: {spent:7.1f} s CPU  steps {sim.steps:6d}  "
+          f"rejected {sim.rejected_steps:6d}  Newton {solves['newton_iterations']}  CG a Newton iteration "
           f"{solves['cg_iterations'] / solves['newton_iterations']:.2f}  "
           f"deepest into the table {1e3 * deepest:+.4f} mm  centre {1e3 * (pos[2, centre] - TABLE_TOP - gap):+.4f} mm "
           f"above top + thickness/2  hem at z = {hem:.4f} m (sd {1e3 * pos[2, rim].std():.1f} mm), "
