@@ -47,8 +47,9 @@ $(BLENDER_STAMP):
 demo: $(STAMP)
 	$(BIN)/wetcloth demo
 
+# Two workers (pytest-xdist): the machines CI runs on have two cores.
 test: $(STAMP) $(BLENDER_STAMP)
-	WETCLOTH_REQUIRE_BLENDER=1 $(BIN)/python -m pytest -q
+	WETCLOTH_REQUIRE_BLENDER=1 $(BIN)/python -m pytest -q -n 2
 
 $(BLENDER_NEWEST_VENV)/.installed:
 	test -x $(BLENDER_NEWEST_VENV)/bin/python || $(BLENDER_NEWEST_PYTHON) -m venv $(BLENDER_NEWEST_VENV)
