@@ -12,7 +12,7 @@ mesh-independent rigidity D would give D / (2 radius^2) on every mesh; the sprin
 opposite corners shorten by the square of the fold angle, so theirs grows as radius^-4 and falls with the
 edge length h as h^4 (the ratios printed: each mesh's energy against the first's, and the energy's growth
 from the largest radius to the smallest against the quadratic law's).  ``--hinge``: the same of
-bench/hinge_bending.py's quadratic hinges (summed over the whole disc, their springs' energies cancelling
+the hinges of ``bend_rigidity`` (summed over the whole disc, their springs' energies cancelling
 within each hinge), as a multiple of D / (2 radius^2) (1 on equilateral triangles).
 """
 
@@ -32,8 +32,7 @@ import make_meshes  # noqa: E402
 import numpy as np  # noqa: E402
 
 import wetcloth  # noqa: E402
-from hinge_bending import hinge_springs  # noqa: E402
-from wetcloth.topology import BEND, STRETCH, build_topology  # noqa: E402
+from wetcloth.topology import BEND, HINGE, STRETCH, build_topology  # noqa: E402
 
 INNER = 0.5  # m: the disc's part whose springs are summed
 
@@ -43,7 +42,7 @@ def bending_energies(rings: int, radii: list[float]) -> tuple[int, float, list[f
     points, triangles = make_meshes.round_cloth(rings=rings)
     path = Path(tempfile.mkdtemp()) / "disc.ply"
     make_meshes.write(path, points, triangles)
-    topo = build_topology(wetcloth.load_scene("tablecloth", cloth_mesh=str(path)))
+    topo = build_topology(wetcloth.load_scene("tablecloth", cloth_mesh=str(path), bend_rigidity=0.0))
     bend = topo.pair_kind == BEND
     i, j = topo.pairs[:, bend]
     k, rest = topo.pair_stiffness[bend], topo.pair_rest[bend]
@@ -60,7 +59,11 @@ def bending_energies(rings: int, radii: list[float]) -> tuple[int, float, list[f
 def hinge_energies(rings: int, radii: list[float]) -> list[float]:
     """The quadratic hinges' bending energy per area of the disc at each radius, over D / (2 radius^2)."""
     points, triangles = make_meshes.round_cloth(rings=rings)
-    (i, j), k = hinge_springs(points, triangles, 1.0)
+    path = Path(tempfile.mkdtemp()) / "disc.ply"
+    make_meshes.write(path, points, triangles)
+    topo = build_topology(wetcloth.load_scene("tablecloth", cloth_mesh=str(path), bend_rigidity=1.0))
+    hinge = topo.pair_kind == HINGE
+    (i, j), k = topo.pairs[:, hinge], topo.pair_stiffness[hinge]
     x, y = points[:, 0], points[:, 1]
     ratios = []
     for radius in radii:

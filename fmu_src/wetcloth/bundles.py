@@ -20,13 +20,14 @@ from wetcloth._core import SOLVER_COUNTERS
 #: mesh (grid_x = grid_y = 0, no families) lists its springs instead: ``pairs`` (2, S) int64 their
 #: ends, ``pair_rest`` m, ``pair_stiffness`` N/m, ``pair_damping`` N s/m (S), the first
 #: ``pair_tension_count`` tension-only, the next ``pair_buckling_count`` buckling (a triangle's edges: they push
-#: back a little, spring_law.hpp), the rest both ways; its wicking links ``wick_pairs`` (2, L) with
+#: back a little, spring_law.hpp), the rest both ways, of them the last ``pair_hinge_count`` hinges' terms (rest
+#: length 0, damped by c (v_i - v_j) under either damping model); its wicking links ``wick_pairs`` (2, L) with
 #: ``wick_pair_conductance`` (L) kg/s; ``triangles`` (m, 3) int64 for its face drag, shared among their
 #: corners as ``corner_shares`` (m, 3) say.
 Cloth = namedtuple("Cloth", "grid_x grid_y offsets rest tension_only stiffness damping free dry_mass volume "
                             "stokes_coefficient capacity wick_offsets wick_conductance pairs pair_rest pair_stiffness "
                             "pair_damping pair_tension_count wick_pairs wick_pair_conductance triangles corner_shares "
-                            "pair_buckling_count", defaults=(0,))
+                            "pair_buckling_count pair_hinge_count", defaults=(0, 0))
 #: Scene parameters as the core uses them (SI units; flags as bools).  ``wet_factor`` is 0 unless
 #: wetness-dependent stiffness is active; ``air_density`` 0 switches the drag in air off; ``floor_z``
 #: is the lowest particle centre; ``colliders`` (k, 13) the colliders' rows (colliders.hpp), ``meshes`` the

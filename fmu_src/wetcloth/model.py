@@ -66,6 +66,7 @@ class Model:
             pairs=np.ascontiguousarray(topo.pairs, dtype=np.int64), pair_rest=topo.pair_rest,
             pair_stiffness=topo.pair_stiffness, pair_damping=topo.pair_damping,
             pair_tension_count=topo.pair_tension_count, pair_buckling_count=topo.pair_buckling_count,
+            pair_hinge_count=topo.hinge_count,
             wick_pairs=self.wick_pairs, wick_pair_conductance=self.wick_pair_conductance,
             triangles=np.ascontiguousarray(topo.triangles[self.cloth_order], dtype=np.int64),
             corner_shares=self.corner_shares,

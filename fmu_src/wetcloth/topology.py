@@ -22,10 +22,11 @@ import numpy as np
 
 from wetcloth.errors import ParameterError
 from wetcloth.mesh_file import MeshFile, face_edges, is_mesh, read_mesh_file, triangle_areas
-from wetcloth.scene import PINS_ALLOWED, Scene
+from wetcloth.scene import GRID_RIGIDITY, PINS_ALLOWED, Scene
 
-#: Kinds of listed springs (``pair_kind``): along a face's edge, across a quad, bending.
-STRETCH, SHEAR, BEND = 0, 1, 2
+#: Kinds of listed springs (``pair_kind``): along a face's edge, across a quad, bending, a hinge's term
+#: (rest length 0, linear, last: ``hinges``).
+STRETCH, SHEAR, BEND, HINGE = 0, 1, 2, 3
 #: A vertex's two edges carry a quad mesh's bending spring when they make an angle above this (deg).
 BEND_ANGLE = 120.0
 #: Relative tolerance of the test that a file's vertices form the built-in grid.
@@ -71,7 +72,7 @@ class Topology:
     pair_stiffness: np.ndarray  # (S,) N/m
     pair_damping: np.ndarray  # (S,) N s/m
     pair_shape: np.ndarray  # (S,) strip area / rest length^2 (-)
-    pair_kind: np.ndarray  # (S,) int8: STRETCH, SHEAR or BEND
+    pair_kind: np.ndarray  # (S,) int8: STRETCH, SHEAR, BEND or HINGE (the hinges' terms last)
     pair_tension_count: int  # the first this many listed springs are tension-only
     mesh: MeshFaces | None  # None for the built-in grid
     size: float  # m, the cloth's larger side (grid: max(width, length); mesh: of rest_xy's bounding box)
@@ -81,6 +82,11 @@ class Topology:
     def in_plane_count(self) -> int:
         """The listed springs in the cloth's plane (tension-only and buckling): the first this many."""
         return self.pair_tension_count + self.pair_buckling_count
+
+    @property
+    def hinge_count(self) -> int:
+        """The listed springs that are the hinges' terms (``bend_rigidity``): the last this many."""
+        return int(np.count_nonzero(self.pair_kind == HINGE))
 
     @property
     def n(self) -> int:
@@ -139,6 +145,8 @@ def build_topology(scene: Scene) -> Topology:
         faces = MeshFaces(faces=mesh.faces, uv=mesh.uv, source=mesh.source)
         grid = file_grid(mesh)
         if grid is not None:  # the grid's own springs and preconditioner, the file's faces for export
+            if scene.bend_rigidity != 0.0:
+                raise ParameterError("bend_rigidity", GRID_RIGIDITY.format(value=scene.bend_rigidity))
             topo = replace(_grid(scene, *grid), rest_pos=mesh.points.T.copy(), mesh=faces)
         else:
             topo = _mesh(scene, mesh, faces)
@@ -302,10 +310,12 @@ def listed_springs(mesh: MeshFile, scene: Scene) -> dict:
     Stretch springs along every edge, tension-only along the edges of quads only, buckling (both ways,
     the push bounded: spring_law.hpp) along those of a triangle; shear springs along each quad's diagonals,
     tension-only; then bending springs join a and b across a vertex v whose edges (v, a), (v, b) lie on
-    quads only, share no face and make an angle above BEND_ANGLE (strip a_s(v, a) + a_s(v, b)), and the
-    opposite corners of two triangles that share an edge (strip: their areas).  A quad spreads three times
-    its area evenly over its 4 edges and 2 diagonals, a triangle its stiffness over its edges as
-    ``triangle_edge_shapes`` says; an edge's strip area a_s sums its faces'.  k = modulus * a_s / l^2, c = damping * a_s / l^2 (a_s / l^2: the shape)."""
+    quads only, share no face and make an angle above BEND_ANGLE (strip a_s(v, a) + a_s(v, b)), and, unless
+    ``bend_rigidity`` is set, the opposite corners of two triangles that share an edge (strip: their areas).
+    A quad spreads three times its area evenly over its 4 edges and 2 diagonals, a triangle its stiffness
+    over its edges as ``triangle_edge_shapes`` says; an edge's strip area a_s sums its faces'.
+    k = modulus * a_s / l^2, c = damping * a_s / l^2 (a_s / l^2: the shape).  With ``bend_rigidity`` D > 0
+    the hinges' terms come last (``hinge_terms``): k = D * shape, c = (damping / stretch_stiffness) * k."""
     p = mesh.points
     area = face_areas(mesh)
     rows, owner = face_edges(mesh.blocks)
@@ -338,20 +348,85 @@ def listed_springs(mesh: MeshFile, scene: Scene) -> dict:
         diagonals = np.concatenate([q[:, [0, 2]], q[:, [1, 3]]])
         groups.append((np.sort(diagonals, axis=1), np.tile(0.5 * quad_area, 2), SHEAR))
     groups.append((edges[on_triangle], stretch[on_triangle], STRETCH))
+    hinged = _triangle_hinges(mesh, rows, first, second, face1, face2)
     if scene.bend_stiffness != 0.0:
         groups.append(_vertex_bends(p, edges, strip, face1, face2, ~on_triangle))
-        groups.append(_edge_bends(mesh, rows, first, second, face1, face2, area))
+        if scene.bend_rigidity == 0.0:
+            groups.append((np.sort(hinged[:, 2:4], axis=1), area[face1[hinged[:, 4]]] + area[face2[hinged[:, 4]]], BEND))
 
     pairs = np.concatenate([g[0] for g in groups]).T.astype(np.int64)
-    strips = np.concatenate([g[1] for g in groups])
     kind = np.concatenate([np.full(len(g[0]), g[2], dtype=np.int8) for g in groups])
     rest = np.linalg.norm(p[pairs[1]] - p[pairs[0]], axis=1)
-    shape = strips / rest**2
-    modulus = np.where(kind == BEND, scene.bend_stiffness, scene.stretch_stiffness)
+    shape = np.concatenate([g[1] for g in groups]) / rest**2
+    if scene.bend_rigidity != 0.0:
+        if len(hinged) == 0:
+            raise ParameterError("bend_rigidity", f"{scene.bend_rigidity!r} N m bends a cloth across the edges that two "
+                                                  f"triangles share, and {mesh.source} has none; allowed: 0 N m (its "
+                                                  "bending springs: bend_stiffness)")
+        hinge_pairs, hinge_shape = hinge_terms(p, hinged[:, :4])
+        pairs = np.concatenate([pairs, hinge_pairs], axis=1)
+        kind = np.concatenate([kind, np.full(len(hinge_shape), HINGE, dtype=np.int8)])
+        rest = np.concatenate([rest, np.zeros(len(hinge_shape))])
+        shape = np.concatenate([shape, hinge_shape])
+    modulus = np.select([kind == BEND, kind == HINGE], [scene.bend_stiffness, scene.bend_rigidity], scene.stretch_stiffness)
+    damping = np.where(kind == HINGE, scene.damping / scene.stretch_stiffness * scene.bend_rigidity, scene.damping)
     buckling = int(np.count_nonzero(on_triangle))
-    return dict(pairs=pairs, pair_rest=rest, pair_stiffness=modulus * shape, pair_damping=scene.damping * shape,
-                pair_shape=shape, pair_kind=kind, pair_tension_count=int(np.count_nonzero(kind != BEND)) - buckling,
+    return dict(pairs=pairs, pair_rest=rest, pair_stiffness=modulus * shape, pair_damping=damping * shape,
+                pair_shape=shape, pair_kind=kind, pair_tension_count=int(np.count_nonzero(kind < BEND)) - buckling,
                 pair_buckling_count=buckling)
+
+
+def _triangle_hinges(mesh: MeshFile, rows, first, second, face1, face2) -> np.ndarray:
+    """The edges that two triangles share (h, 5): the edge's ends i, j, the corner k of its first triangle and
+    l of its second opposite it, and the edge's index (among the unique edges of listed_springs)."""
+    opposite = np.full(len(rows), -1)
+    start = 0
+    for b in mesh.blocks:
+        if b.shape[1] == 3:  # edge j (corner j to j + 1) faces corner j + 2
+            opposite[start:start + 3 * len(b)] = np.roll(b, -2, axis=1).ravel()
+        start += b.size
+    corners = mesh.corners
+    shared = np.flatnonzero((second >= 0) & (corners[face1] == 3) & (corners[np.maximum(face2, 0)] == 3))
+    return np.column_stack([rows[first[shared]], opposite[first[shared]], opposite[second[shared]], shared]).astype(np.int64)
+
+
+def hinge_terms(points: np.ndarray, hinges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The quadratic bending of hinges (h, 4: an edge's ends i, j and the corners k, l opposite it) as springs
+    of rest length 0: their pairs (2, P) int64 and shapes k / D (P,) 1/m^2 (a pair that hinges share once).
+
+    Each hinge, unfolded flat from its rest triangles (points (n, 3) m), stores (Bergou et al. 2006, the
+    discrete shells' hinge linearised about the flat sheet) D |e|^2 / (2 (A1 + A2)) |sum_m w_m x_m|^2 (J; D
+    the rigidity, N m), with w_m = n . (grad b_m(2) - grad b_m(1)) the jump across the edge of the corners'
+    linear shape functions' gradients along the edge's normal n in the unfolded plane: a flat or rigidly
+    moved hinge stores nothing, a sheet bent to a curvature kappa D kappa^2 / 2 per area.  As sum_m w_m = 0,
+    that is the sum over the hinge's six pairs of -D |e|^2 / (A1 + A2) w_a w_b |x_a - x_b|^2 / 2: springs of
+    rest length 0 and stiffness -D |e|^2 / (A1 + A2) w_a w_b (N/m, some negative; their sum positive
+    semidefinite)."""
+    p = [points[hinges[:, m]] for m in range(4)]
+    edge = p[1] - p[0]
+    length = np.linalg.norm(edge, axis=1)
+    u = edge / length[:, None]
+
+    def unfolded(x, side):
+        """x's coordinates (along the edge from i, across it on ``side``) in the hinge unfolded flat (m)."""
+        a = x - p[0]
+        along = np.einsum("ij,ij->i", a, u)
+        return along, side * np.linalg.norm(a - along[:, None] * u, axis=1)
+
+    (ku, kv), (lu, lv) = unfolded(p[2], -1.0), unfolded(p[3], 1.0)
+    # the across-edge components of the shape functions' gradients in triangles (i, j, k) and (i, j, l): for
+    # corners (a, b, c) of signed double area t, grad b_a . n = (c_u - b_u) / t
+    t1, t2 = length * kv, length * lv  # (i, j, k) runs clockwise in the unfolded plane (t1 < 0), (i, j, l) not
+    g1 = ((ku - length) / t1, -ku / t1, length / t1)  # corners i, j, k
+    g2 = ((lu - length) / t2, -lu / t2, length / t2)  # corners i, j, l
+    w = np.column_stack([g2[0] - g1[0], g2[1] - g1[1], -g1[2], g2[2]])
+    scale = length**2 / (0.5 * (np.abs(t1) + np.abs(t2)))  # |e|^2 / (A1 + A2)
+    pairs, shapes = [], []
+    for a, b in itertools.combinations(range(4), 2):
+        pairs.append(np.sort(hinges[:, [a, b]], axis=1))
+        shapes.append(-scale * w[:, a] * w[:, b])
+    unique, inverse = np.unique(np.concatenate(pairs), axis=0, return_inverse=True)
+    return unique.T.astype(np.int64), np.bincount(inverse.ravel(), np.concatenate(shapes), minlength=len(unique))
 
 
 #: The isotropic membrane a triangle's three edge springs stand for, per unit Young's modulus: Poisson's
@@ -453,20 +528,6 @@ def _vertex_bends(p, edges, strip, face1, face2, quad_only):
     a = np.concatenate(found_a) if found_a else np.zeros(0, dtype=np.int64)
     b = np.concatenate(found_b) if found_b else np.zeros(0, dtype=np.int64)
     return np.sort(np.stack([end[a], end[b]], axis=1), axis=1).reshape(-1, 2), strip[edge[a]] + strip[edge[b]], BEND
-
-
-def _edge_bends(mesh: MeshFile, rows, first, second, face1, face2, area):
-    """Bending springs across the edges that two triangles share (see listed_springs)."""
-    corners = mesh.corners
-    opposite = np.full(len(rows), -1)
-    start = 0
-    for b in mesh.blocks:
-        if b.shape[1] == 3:  # edge j (corner j to j + 1) faces corner j + 2
-            opposite[start:start + 3 * len(b)] = np.roll(b, -2, axis=1).ravel()
-        start += b.size
-    shared = np.flatnonzero((second >= 0) & (corners[face1] == 3) & (corners[np.maximum(face2, 0)] == 3))
-    ends = np.stack([opposite[first[shared]], opposite[second[shared]]], axis=1)
-    return np.sort(ends, axis=1).reshape(-1, 2), area[face1[shared]] + area[face2[shared]], BEND
 
 
 # ----------------------------------------------------------------------------------------- placement, pins

@@ -38,6 +38,7 @@ Cloth cloth_from(nb::handle h) {
     c.pair_count = size_of(h.attr("pair_rest"));
     c.pair_tension_count = number<Index>(h, "pair_tension_count");
     c.pair_buckling_count = number<Index>(h, "pair_buckling_count");
+    c.pair_hinge_count = number<Index>(h, "pair_hinge_count");
     c.pairs = array<const Index>(h, "pairs", 2 * c.pair_count);
     c.pair_rest = array<const double>(h, "pair_rest", c.pair_count);
     c.pair_stiffness = array<const double>(h, "pair_stiffness", c.pair_count);
@@ -49,9 +50,9 @@ Cloth cloth_from(nb::handle h) {
     c.triangles = array<const Index>(h, "triangles", 3 * c.triangle_count);
     c.corner_shares = array<const double>(h, "corner_shares", 3 * c.triangle_count);
     if (c.grid_x * c.grid_y != (is_mesh(c) ? 0 : n) || c.pair_tension_count < 0 || c.pair_buckling_count < 0 ||
-        in_plane_count(c) > c.pair_count)
+        c.pair_hinge_count < 0 || in_plane_count(c) + c.pair_hinge_count > c.pair_count)
         throw std::invalid_argument("cloth: grid_x * grid_y must be the particle count (0 for a mesh) and "
-                                    "pair_tension_count + pair_buckling_count within the listed springs");
+                                    "pair_tension_count + pair_buckling_count + pair_hinge_count within the listed springs");
     return c;
 }
 

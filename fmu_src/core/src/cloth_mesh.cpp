@@ -31,8 +31,20 @@ Scene ClothMesh::on_grid(const Scene& scene) const {
     return grid;
 }
 
+Index ClothMesh::hinge_count() const {
+    Index count = 0;
+    for (const Index kind : pair_kind) count += kind == PAIR_HINGE ? 1 : 0;
+    return count;
+}
+
 std::string ClothMesh::fixed_problem(const Scene& scene) const {
-    if (forms_grid()) return "";  // the grid's families: any bend and stretch stiffness
+    if (forms_grid()) return grid_rigidity_problem(scene);  // the grid's families: any bend and stretch stiffness
+    if ((scene.bend_rigidity != 0.0) != (hinge_count() > 0)) {
+        return parameter_error("bend_rigidity", py_repr(scene.bend_rigidity) + " is not allowed in this unit: its mesh "
+                               "was built " + (hinge_count() > 0 ? "with" : "without") + " hinges; allowed: " +
+                               (hinge_count() > 0 ? "0 < bend_rigidity <= 100 N m" : "0 N m") +
+                               " (rebuild the unit with wetcloth build-fmu --native --scene for another)");
+    }
     if ((scene.bend_stiffness != 0.0) != bends) {
         return parameter_error("bend_stiffness", py_repr(scene.bend_stiffness) + " is not allowed in this unit: its mesh's "
                                "springs were built " + (bends ? "with" : "without") + " bending springs; allowed: " +
@@ -152,9 +164,14 @@ Topology listed_topology(const Scene& scene, const ClothMesh& mesh) {
     t.pair_stiffness.resize(count);
     t.pair_damping.resize(count);
     for (Index k = 0; k < count; ++k) {  // listed_springs: modulus * shape, damping * shape
-        const double modulus = mesh.pair_kind[k] == PAIR_BEND ? scene.bend_stiffness : scene.stretch_stiffness;
+        const Index kind = mesh.pair_kind[k];
+        const double modulus = kind == PAIR_BEND    ? scene.bend_stiffness
+                               : kind == PAIR_HINGE ? scene.bend_rigidity
+                                                    : scene.stretch_stiffness;
+        const double damping = kind == PAIR_HINGE ? scene.damping / scene.stretch_stiffness * scene.bend_rigidity
+                                                  : scene.damping;
         t.pair_stiffness[k] = modulus * mesh.pair_shape[k];
-        t.pair_damping[k] = scene.damping * mesh.pair_shape[k];
+        t.pair_damping[k] = damping * mesh.pair_shape[k];
     }
     t.free.assign(n, 1.0);
     return t;

@@ -72,12 +72,12 @@ inline Geometry chunk_geometry(const Chunk& c, Index k, double kf, double wet_fa
 
 //: Add the chunk's forces of its count springs, from spring first on, to their ends' sums, less the
 //: thesis damping c (v_i - v_j) unless the damping is projected.
-void scatter_forces(const Cloth& cloth, const Physics& phys, const Chunk& c, Index first, Index count,
+void scatter_forces(const Cloth& cloth, bool projected, const Chunk& c, Index first, Index count,
                     const MeshRecords& records) {
     for (Index k = 0; k < count; ++k) {
         const Ends e = ends(cloth, first + k);
         double fx = c.force[0][k], fy = c.force[1][k], fz = c.force[2][k];
-        if (!phys.projected) {
+        if (!projected) {
             const double cf = cloth.pair_damping[first + k];
             fx -= cf * (c.v[0][k] - c.v[3][k]);
             fy -= cf * (c.v[1][k] - c.v[4][k]);
@@ -95,8 +95,9 @@ void scatter_forces(const Cloth& cloth, const Physics& phys, const Chunk& c, Ind
 }
 
 template <Law L>
-void forces_of(const Cloth& cloth, const Physics& phys, const MeshRecords& records, Index first, Index last) {
-    const double damp = phys.projected ? 1.0 : 0.0, wet_factor = phys.wet_factor;
+void forces_of(const Cloth& cloth, const Physics& phys, bool projected, const MeshRecords& records, Index first,
+               Index last) {
+    const double damp = projected ? 1.0 : 0.0, wet_factor = phys.wet_factor;
     Chunk c;
     for (Index start = first; start < last; start += CHUNK) {
         const Index count = last - start < CHUNK ? last - start : CHUNK;
@@ -111,7 +112,7 @@ void forces_of(const Cloth& cloth, const Physics& phys, const MeshRecords& recor
             const double l0 = rest[k];
             chunk_force(c, k, g, tension<L>(g, l0, TENSION_ROUNDING * l0, damp, damping[k], rate));
         }
-        scatter_forces(cloth, phys, c, start, count, records);
+        scatter_forces(cloth, projected, c, start, count, records);
     }
 }
 
@@ -147,18 +148,18 @@ void coefficients_loop(Index count, double wet_factor, bool projected, double h,
 }
 
 template <Law L>
-void blocks_of(const Cloth& cloth, const Physics& phys, const MeshRecords& records, double h, double slack_slope,
-               Index first, Index last, Work& work) {
+void blocks_of(const Cloth& cloth, const Physics& phys, bool projected, const MeshRecords& records, double h,
+               double slack_slope, Index first, Index last, Work& work) {
     const Index all = cloth.pair_count;
     double* u = work.pair_direction;
     Chunk c;
     for (Index start = first; start < last; start += CHUNK) {
         const Index count = last - start < CHUNK ? last - start : CHUNK;
         gather(cloth, records.state, start, count, c);
-        coefficients_loop<L>(count, phys.wet_factor, phys.projected, h, slack_slope, cloth.pair_rest + start,
+        coefficients_loop<L>(count, phys.wet_factor, projected, h, slack_slope, cloth.pair_rest + start,
                              cloth.pair_damping + start, cloth.pair_stiffness + start, &c, u + start, u + all + start,
                              u + 2 * all + start, work.pair_along + start, work.pair_across + start);
-        scatter_forces(cloth, phys, c, start, count, records);
+        scatter_forces(cloth, projected, c, start, count, records);
         for (Index k = 0; k < count; ++k) {
             const Ends e = ends(cloth, start + k);
             double* a = records.sums + records.stride * e.i + SUM_DIAGONAL;
@@ -174,18 +175,22 @@ void blocks_of(const Cloth& cloth, const Physics& phys, const MeshRecords& recor
 }  // namespace
 
 void listed_spring_forces(const Cloth& cloth, const Physics& phys, const MeshRecords& records) {
-    const Index t = cloth.pair_tension_count, b = in_plane_count(cloth);
-    forces_of<Law::CLAMPED>(cloth, phys, records, 0, t);
-    forces_of<Law::BUCKLING>(cloth, phys, records, t, b);
-    forces_of<Law::BOTH_WAYS>(cloth, phys, records, b, cloth.pair_count);
+    const Index t = cloth.pair_tension_count, b = in_plane_count(cloth), hinges = first_hinge(cloth);
+    const bool projected = phys.projected;
+    forces_of<Law::CLAMPED>(cloth, phys, projected, records, 0, t);
+    forces_of<Law::BUCKLING>(cloth, phys, projected, records, t, b);
+    forces_of<Law::BOTH_WAYS>(cloth, phys, projected, records, b, hinges);
+    forces_of<Law::BOTH_WAYS>(cloth, phys, false, records, hinges, cloth.pair_count);
 }
 
 void listed_spring_forces_and_blocks(const Cloth& cloth, const Physics& phys, const MeshRecords& records, double h,
                                      double slack_slope, Work& work) {
-    const Index t = cloth.pair_tension_count, b = in_plane_count(cloth);
-    blocks_of<Law::CLAMPED>(cloth, phys, records, h, slack_slope, 0, t, work);
-    blocks_of<Law::BUCKLING>(cloth, phys, records, h, slack_slope, t, b, work);
-    blocks_of<Law::BOTH_WAYS>(cloth, phys, records, h, slack_slope, b, cloth.pair_count, work);
+    const Index t = cloth.pair_tension_count, b = in_plane_count(cloth), hinges = first_hinge(cloth);
+    const bool projected = phys.projected;
+    blocks_of<Law::CLAMPED>(cloth, phys, projected, records, h, slack_slope, 0, t, work);
+    blocks_of<Law::BUCKLING>(cloth, phys, projected, records, h, slack_slope, t, b, work);
+    blocks_of<Law::BOTH_WAYS>(cloth, phys, projected, records, h, slack_slope, b, hinges, work);
+    blocks_of<Law::BOTH_WAYS>(cloth, phys, false, records, h, slack_slope, hinges, cloth.pair_count, work);
 }
 
 void listed_spring_matvec(const Cloth& cloth, const Work& work, const double* p, double* out) {

@@ -117,8 +117,16 @@ std::string fixed_differences(const Scene& a, const Scene& b) {
     return text;
 }
 
+std::string grid_rigidity_problem(const Scene& s) {
+    if (s.bend_rigidity == 0.0) return "";
+    return "parameter 'bend_rigidity': " + py_repr(s.bend_rigidity) + " N m bends a triangle mesh by hinges, and the "
+           "grid bends by its bending springs (bend_stiffness); allowed: 0 N m on the grid";
+}
+
 std::string scene_problem(const Scene& s, const ClothMesh* mesh, const Pins* pins) {
     if (mesh != nullptr) return mesh_scene_problem(s, *mesh, pins);
+    const std::string rigidity = grid_rigidity_problem(s);
+    if (!rigidity.empty()) return rigidity;
     const double half_drop = 0.5 * s.length * std::fabs(std::sin(s.initial_tilt * (PI / 180.0)));
     const double lowest = s.initial_height - half_drop - 0.5 * s.thickness;
     if (lowest <= s.floor_level) {
@@ -465,6 +473,7 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
         cloth.pair_count = static_cast<Index>(mesh->pair_rest.size());
         cloth.pair_tension_count = mesh->pair_tension_count;
         cloth.pair_buckling_count = mesh->pair_buckling_count;
+        cloth.pair_hinge_count = mesh->hinge_count();
         cloth.pairs = mesh->pairs.data();
         cloth.pair_rest = mesh->pair_rest.data();
         cloth.pair_stiffness = topo_.pair_stiffness.data();

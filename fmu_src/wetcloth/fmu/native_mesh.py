@@ -8,20 +8,22 @@ listed springs' ends, rest lengths, kinds and shapes (``listed_springs``), the t
 shares, the area-weighted centroid that ``place_mesh`` turns about, self-collision's gaps
 (``self_collision.make_contact``) and the preconditioner's structure (``preconditioner.make_mesh_plane``: the band order of its coarsest level and
 the algebraic multigrid hierarchy's patterns and prolongators, pyamg's).  From the parameters, in C++:
-spring constants (``stretch_stiffness``, ``bend_stiffness``, ``damping`` times the shapes), masses and
+spring constants (``stretch_stiffness``, ``bend_stiffness``, ``bend_rigidity``, ``damping`` times the shapes), masses and
 wicking (``areal_density``, ...) and the start (``place_mesh``, ``initial_height``, ``initial_tilt``).
 
 The pins of ``pinned_vertices`` (``pins_header``), on a mesh or the built-in grid: a point attribute's
 vertices, or a box, whose particles the core finds at the start positions.
 
 What the structure fixes (``fixed_ranges``): ``bend_stiffness`` 0 or not (the bending springs are listed or
-not), and, on a mesh with an algebraic hierarchy (more than ``ALGEBRAIC_SIZE`` vertices), ``stretch_stiffness``
+not), ``bend_rigidity`` 0 or not (the hinges' terms are listed or not), and, on a mesh with an algebraic hierarchy (more than ``ALGEBRAIC_SIZE`` vertices), ``stretch_stiffness``
 (pyamg's aggregation weighs the springs by it; the unit refuses another value with an error naming it).
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from wetcloth.topology import HINGE
 
 #: The ClothMesh arrays in the generated header: C++ name, element type, key of ``cloth_arrays``.
 CLOTH_ARRAYS = (
@@ -135,6 +137,11 @@ def fixed_ranges(arrays: dict | None) -> dict[str, tuple[float, float, bool, str
                                                     f"springs, built in with bend_stiffness > 0{rebuild})")
     else:
         ranges["bend_stiffness"] = (0.0, 0.0, False, f"0 N/m (this unit's mesh has no bending springs{rebuild})")
+    if np.any(np.asarray(arrays["pair_kind"]) == HINGE):
+        ranges["bend_rigidity"] = (0.0, 100.0, True, "0 < bend_rigidity <= 100 N m (this unit's mesh has hinges, built "
+                                                     f"in with bend_rigidity > 0{rebuild})")
+    else:
+        ranges["bend_rigidity"] = (0.0, 0.0, False, f"0 N m (this unit's mesh has no hinges{rebuild})")
     if hierarchy_levels(arrays) > 1:
         k = float(arrays["hierarchy_stretch_stiffness"])
         ranges["stretch_stiffness"] = (k, k, False, f"{k:g} N/m (the algebraic multigrid hierarchy of this unit's "

@@ -46,7 +46,8 @@ struct Cloth {
     const Index* wick_offsets = nullptr;  // (W)
     const double* wick_conductance = nullptr;  // (W, n) kg/s
     Index pair_count = 0, pair_tension_count = 0;  // listed springs S, the first T of them tension-only
-    Index pair_buckling_count = 0;                 // the B after them buckling (spring_law.hpp), the rest both ways
+    Index pair_buckling_count = 0;                 // the B after them buckling (spring_law.hpp), the rest both ways,
+    Index pair_hinge_count = 0;                    // the last H of those hinges' terms: rest length 0, isotropic damping
     const Index* pairs = nullptr;                  // (2, S) first ends, then second ends
     const double* pair_rest = nullptr;             // (S) m
     const double* pair_stiffness = nullptr;        // (S) N/m
@@ -64,6 +65,9 @@ inline bool is_mesh(const Cloth& cloth) { return cloth.grid_x == 0; }
 
 //: The listed springs in the cloth's plane, tension-only and buckling: the first this many.
 inline Index in_plane_count(const Cloth& cloth) { return cloth.pair_tension_count + cloth.pair_buckling_count; }
+
+//: The first of the listed springs that are hinges' terms (the last pair_hinge_count).
+inline Index first_hinge(const Cloth& cloth) { return cloth.pair_count - cloth.pair_hinge_count; }
 
 //: Doubles a mesh's Work::cells holds per particle: its records (mesh_records.hpp), and room to align them.
 inline constexpr Index MESH_RECORD_SLOTS = 32;

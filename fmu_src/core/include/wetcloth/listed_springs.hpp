@@ -1,6 +1,8 @@
 // A mesh's springs, listed (docs/model.md section 3.3): spring k joins particles pairs[k] and
 // pairs[S + k], with its own rest length, stiffness and damping; the first T are tension-only, the next
-// B buckling (a triangle's edges), the rest both ways.  The same laws as the grid's families
+// B buckling (a triangle's edges), the rest both ways; of those the last H are hinges' terms (rest length 0,
+// linear), damped by c (v_i - v_j) whatever the damping model, so that a hinge's damping, like its
+// stiffness, is a positive semidefinite form although some of its terms' coefficients are negative.  The same laws as the grid's families
 // (spring_law.hpp), gathered and scattered through the index lists.
 #pragma once
 #include "wetcloth/core.hpp"

@@ -76,6 +76,7 @@ struct Scene {
     double areal_density = 0.45;                                 // kg/m2
     double thickness = 0.002;                                    // m
     double stretch_stiffness = 2000.0, bend_stiffness = 20.0;    // N/m
+    double bend_rigidity = 0.0;                                  // N m
     double damping = 0.2;                                        // N s/m
     Index damping_model = DAMPING_PROJECTED;
     double water_level = 0.0;                                    // m (input)
@@ -110,7 +111,7 @@ struct Scene {
 
 //: The field names of Scene, in its order (the generated FMU variable table checks them against Python's).
 inline constexpr const char* SCENE_FIELDS[] = {
-    "nx", "ny", "width", "length", "cloth_mesh", "place_mesh", "areal_density", "thickness", "stretch_stiffness", "bend_stiffness", "damping",
+    "nx", "ny", "width", "length", "cloth_mesh", "place_mesh", "areal_density", "thickness", "stretch_stiffness", "bend_stiffness", "bend_rigidity", "damping",
     "damping_model", "water_level", "water_density", "water_viscosity", "drag_model", "drag_normal",
     "drag_tangential", "drag_linear", "buoyancy_model", "absorption_capacity", "absorption_rate", "wicking_rate",
     "drying_rate", "wet_stiffness_factor", "current_x", "current_y", "air_density", "wind_x", "wind_y", "wind_z",
@@ -134,6 +135,7 @@ void for_each_field(S& s, Visit&& visit) {
     visit("cloth_mesh", s.cloth_mesh); visit("place_mesh", s.place_mesh);
     visit("areal_density", s.areal_density); visit("thickness", s.thickness);
     visit("stretch_stiffness", s.stretch_stiffness); visit("bend_stiffness", s.bend_stiffness);
+    visit("bend_rigidity", s.bend_rigidity);
     visit("damping", s.damping); visit("damping_model", s.damping_model); visit("water_level", s.water_level);
     visit("water_density", s.water_density); visit("water_viscosity", s.water_viscosity);
     visit("drag_model", s.drag_model); visit("drag_normal", s.drag_normal);
@@ -164,6 +166,9 @@ struct Pins;
 //: fixes (ClothMesh::fixed_problem); with `pins`, a box that holds a particle (pinned_mask).
 std::string scene_problem(const Scene& scene, const ClothMesh* mesh = nullptr, const Pins* pins = nullptr);
 
+//: "" or the ParameterError's text of a bend_rigidity on a grid (scene.GRID_RIGIDITY): hinges bend meshes only.
+std::string grid_rigidity_problem(const Scene& scene);
+
 //: The grid's particle positions (3, n) m at t = 0 (topology.initial_positions).
 std::vector<double> grid_start(const Scene& scene);
 
@@ -180,8 +185,8 @@ enum Family : Index { STRUCTURAL_X = 0, STRUCTURAL_Y, SHEAR_UP_RIGHT, SHEAR_UP_L
 inline constexpr const char* FAMILY_NAMES[] = {"structural_x", "structural_y", "shear_up_right", "shear_up_left",
                                                "bend_x", "bend_y"};
 
-//: Kinds of a mesh's listed springs (topology.py's STRETCH, SHEAR, BEND).
-enum PairKind : Index { PAIR_STRETCH = 0, PAIR_SHEAR = 1, PAIR_BEND = 2 };
+//: Kinds of a mesh's listed springs (topology.py's STRETCH, SHEAR, BEND, HINGE).
+enum PairKind : Index { PAIR_STRETCH = 0, PAIR_SHEAR = 1, PAIR_BEND = 2, PAIR_HINGE = 3 };
 
 //: Pins by pinned_vertices, built into a native FMU with its scene (topology.pinned_mask): a box over the
 //: particles' start positions, or a mesh file's point attribute (its nonzero vertices).
@@ -235,6 +240,8 @@ struct ClothMesh {
     Index grid_nx = 0, grid_ny = 0;
     double grid_width = 0.0, grid_length = 0.0;
     bool forms_grid() const { return grid_nx > 0; }
+    //: The hinges' terms among the listed springs (PAIR_HINGE: built with bend_rigidity > 0), the last this many.
+    Index hinge_count() const;
     //: `scene` with the grid's nx, ny, width and length, if this file forms one (else `scene`).
     Scene on_grid(const Scene& scene) const;
     Index level_count() const { return static_cast<Index>(levels.size() / ALGEBRAIC_COLUMNS); }
