@@ -300,3 +300,29 @@ def test_a_start_below_the_floor_or_a_box_without_vertices_fails_the_initializat
         with pytest.raises(ParameterError) as exc:
             wetcloth.load_scene(units["small"], **{name: value})
         assert records[-1] == {"status": 3, "errors": [f"initialization refused: {exc.value}"]}, name
+
+
+def test_a_unit_of_a_mesh_bent_by_hinges_runs_as_the_python_api_and_keeps_them(units, tmp_path):
+    """The small disc bent by hinges (bend_rigidity, their terms built in with the listed springs): the FMI 2
+    unit runs it as Simulation does, bit for bit, with the built rigidity and another one; it declares
+    bend_rigidity above 0 and refuses 0 (the hinges stay), as the unit without hinges declares and takes only 0."""
+    import fmpy
+    from fmpy.fmi1 import FMICallException
+
+    path = write_scene(tmp_path, SMALL_RINGS, "hinged")
+    path.write_text(path.read_text() + "bend_rigidity = 1e-4\n")
+    scene = wetcloth.load_scene(path)
+    assert wetcloth.Simulation(scene).model.topology.hinge_count > 0
+    fmu = native.build_native_fmu(tmp_path / "hinged2.fmu", 2, build_dir=units["objects"], scene=path)
+    runs = {}
+    for rigidity in (1e-4, 3e-3):
+        result = fmpy.simulate_fmu(str(fmu), stop_time=0.2, output_interval=0.05, start_values={"bend_rigidity": rigidity})
+        rows, _ = python_rows(scene.replace(bend_rigidity=rigidity), result["time"])
+        assert_agree([[row[k] for k in COLUMNS] for row in result], rows, f"bend_rigidity {rigidity}")
+        runs[rigidity] = result["centroid_z"]
+    assert np.abs(runs[1e-4] - runs[3e-3]).max() > 1e-6
+    for unit, hinged in ((fmu, True), (units[2], False)):
+        declared = {v.name: v for v in fmpy.read_model_description(str(unit)).modelVariables}["bend_rigidity"]
+        assert (float(declared.min) > 0.0) is hinged and float(declared.max) == (100.0 if hinged else 0.0)
+        with pytest.raises(FMICallException, match="fmi2SetReal failed with status 3"):  # logged, naming it
+            fmpy.simulate_fmu(str(unit), stop_time=0.05, start_values={"bend_rigidity": 0.0 if hinged else 1e-4})
