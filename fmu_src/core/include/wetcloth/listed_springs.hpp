@@ -2,8 +2,8 @@
 // pairs[S + k], with its own rest length, stiffness and damping; the first T are tension-only, the next
 // B buckling (a triangle's edges), the rest both ways; of those the last H are hinges' terms (rest length 0,
 // linear), damped by c (v_i - v_j) whatever the damping model, so that a hinge's damping, like its
-// stiffness, is a positive semidefinite form although some of its terms' coefficients are negative.  The same laws as the grid's families
-// (spring_law.hpp), gathered and scattered through the index lists.
+// stiffness, is a positive semidefinite form although some of its terms' coefficients are negative.  The
+// same laws as the grid's families (spring_law.hpp), gathered and scattered through the index lists.
 #pragma once
 #include "wetcloth/core.hpp"
 #include "wetcloth/mesh_records.hpp"
