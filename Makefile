@@ -31,10 +31,14 @@ BPY_NEWEST := 5.3.0
 
 .PHONY: demo test test-newest-blender bench extension clean
 
+# The build's own requirements (pyproject.toml's build-system) go into the environment, and no isolated one is
+# made: every build then shares build/ (the Blender extension's wheel relinks in seconds instead of compiling anew).
 $(STAMP): pyproject.toml $(CORE_FILES)
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[test]'
+	$(BIN)/python -c "import tomllib; print('\n'.join(tomllib.load(open('pyproject.toml', 'rb'))['build-system']['requires']))" \
+		| xargs $(BIN)/python -m pip install --quiet
+	$(BIN)/python -m pip install --quiet --no-build-isolation -e '.[test]'
 	touch $(STAMP)
 
 $(BLENDER_STAMP):

@@ -121,9 +121,14 @@ def python_tag(python: str | Path) -> str:
 
 
 def build_wheel(directory: Path, python: str | Path = sys.executable) -> Path:
-    """``pip wheel --no-deps`` of the source tree by interpreter ``python`` into ``directory``; the wheel."""
+    """``pip wheel --no-deps`` of the source tree by interpreter ``python`` into ``directory``; the wheel.  Where
+    ``python`` has the build's requirements (as ``make`` installs them), without an isolated build environment:
+    the build then reuses build/ (pyproject.toml's ``build-dir``), compiled by the editable install."""
     before = set(directory.glob("wetcloth-*.whl"))
-    done = run_python(python, "-m", "pip", "wheel", "--no-deps", "--quiet", str(source_tree()), "-w", str(directory))
+    has_backend = run_python(python, "-c", "import scikit_build_core, nanobind").returncode == 0
+    isolation = ["--no-build-isolation"] if has_backend else []
+    done = run_python(python, "-m", "pip", "wheel", "--no-deps", "--quiet", *isolation, str(source_tree()),
+                      "-w", str(directory))
     wheels = sorted(set(directory.glob("wetcloth-*.whl")) - before)
     if done.returncode != 0 or len(wheels) != 1:
         raise ValueError(f"pip wheel of {source_tree()} by {python} failed (exit {done.returncode}):\n"
