@@ -25,7 +25,7 @@ from wetcloth.mesh_file import MeshFile, face_edges, is_mesh, read_mesh_file, tr
 from wetcloth.scene import GRID_RIGIDITY, PINS_ALLOWED, Scene
 
 #: Kinds of listed springs (``pair_kind``): along a face's edge, across a quad, bending, a hinge's term
-#: (rest length 0, linear, last: ``hinges``).
+#: (rest length 0, linear, listed last: ``hinge_terms``).
 STRETCH, SHEAR, BEND, HINGE = 0, 1, 2, 3
 #: A vertex's two edges carry a quad mesh's bending spring when they make an angle above this (deg).
 BEND_ANGLE = 120.0
@@ -348,22 +348,22 @@ def listed_springs(mesh: MeshFile, scene: Scene) -> dict:
         diagonals = np.concatenate([q[:, [0, 2]], q[:, [1, 3]]])
         groups.append((np.sort(diagonals, axis=1), np.tile(0.5 * quad_area, 2), SHEAR))
     groups.append((edges[on_triangle], stretch[on_triangle], STRETCH))
-    hinged = _triangle_hinges(mesh, rows, first, second, face1, face2)
+    hinges, shared = _triangle_hinges(mesh, rows, first, second, face1, face2)
     if scene.bend_stiffness != 0.0:
         groups.append(_vertex_bends(p, edges, strip, face1, face2, ~on_triangle))
-        if scene.bend_rigidity == 0.0:
-            groups.append((np.sort(hinged[:, 2:4], axis=1), area[face1[hinged[:, 4]]] + area[face2[hinged[:, 4]]], BEND))
+        if scene.bend_rigidity == 0.0:  # springs across the hinges' opposite corners, strip: their two triangles
+            groups.append((np.sort(hinges[:, 2:], axis=1), area[face1[shared]] + area[face2[shared]], BEND))
 
     pairs = np.concatenate([g[0] for g in groups]).T.astype(np.int64)
     kind = np.concatenate([np.full(len(g[0]), g[2], dtype=np.int8) for g in groups])
     rest = np.linalg.norm(p[pairs[1]] - p[pairs[0]], axis=1)
     shape = np.concatenate([g[1] for g in groups]) / rest**2
     if scene.bend_rigidity != 0.0:
-        if len(hinged) == 0:
+        if len(hinges) == 0:
             raise ParameterError("bend_rigidity", f"{scene.bend_rigidity!r} N m bends a cloth across the edges that two "
                                                   f"triangles share, and {mesh.source} has none; allowed: 0 N m (its "
                                                   "bending springs: bend_stiffness)")
-        hinge_pairs, hinge_shape = hinge_terms(p, hinged[:, :4])
+        hinge_pairs, hinge_shape = hinge_terms(p, hinges)
         pairs = np.concatenate([pairs, hinge_pairs], axis=1)
         kind = np.concatenate([kind, np.full(len(hinge_shape), HINGE, dtype=np.int8)])
         rest = np.concatenate([rest, np.zeros(len(hinge_shape))])
@@ -376,9 +376,10 @@ def listed_springs(mesh: MeshFile, scene: Scene) -> dict:
                 pair_buckling_count=buckling)
 
 
-def _triangle_hinges(mesh: MeshFile, rows, first, second, face1, face2) -> np.ndarray:
-    """The edges that two triangles share (h, 5): the edge's ends i, j, the corner k of its first triangle and
-    l of its second opposite it, and the edge's index (among the unique edges of listed_springs)."""
+def _triangle_hinges(mesh: MeshFile, rows, first, second, face1, face2) -> tuple[np.ndarray, np.ndarray]:
+    """The edges that two triangles share: their hinges (h, 4: the edge's ends i, j, the corner k of its first
+    triangle and l of its second opposite it) and the edges' indices (h,) among the unique edges of
+    listed_springs."""
     opposite = np.full(len(rows), -1)
     start = 0
     for b in mesh.blocks:
@@ -387,7 +388,8 @@ def _triangle_hinges(mesh: MeshFile, rows, first, second, face1, face2) -> np.nd
         start += b.size
     corners = mesh.corners
     shared = np.flatnonzero((second >= 0) & (corners[face1] == 3) & (corners[np.maximum(face2, 0)] == 3))
-    return np.column_stack([rows[first[shared]], opposite[first[shared]], opposite[second[shared]], shared]).astype(np.int64)
+    hinges = np.column_stack([rows[first[shared]], opposite[first[shared]], opposite[second[shared]]])
+    return hinges.astype(np.int64), shared
 
 
 def hinge_terms(points: np.ndarray, hinges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -410,7 +412,7 @@ def hinge_terms(points: np.ndarray, hinges: np.ndarray) -> tuple[np.ndarray, np.
     def unfolded(x, side):
         """x's coordinates (along the edge from i, across it on ``side``) in the hinge unfolded flat (m)."""
         a = x - p[0]
-        along = np.einsum("ij,ij->i", a, u)
+        along = _dot(a, u)
         return along, side * np.linalg.norm(a - along[:, None] * u, axis=1)
 
     (ku, kv), (lu, lv) = unfolded(p[2], -1.0), unfolded(p[3], 1.0)

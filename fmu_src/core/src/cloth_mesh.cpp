@@ -39,10 +39,11 @@ Index ClothMesh::hinge_count() const {
 
 std::string ClothMesh::fixed_problem(const Scene& scene) const {
     if (forms_grid()) return grid_rigidity_problem(scene);  // the grid's families: any bend and stretch stiffness
-    if ((scene.bend_rigidity != 0.0) != (hinge_count() > 0)) {
+    const bool hinged = hinge_count() > 0;
+    if ((scene.bend_rigidity != 0.0) != hinged) {
         return parameter_error("bend_rigidity", py_repr(scene.bend_rigidity) + " is not allowed in this unit: its mesh "
-                               "was built " + (hinge_count() > 0 ? "with" : "without") + " hinges; allowed: " +
-                               (hinge_count() > 0 ? "0 < bend_rigidity <= 100 N m" : "0 N m") +
+                               "was built " + (hinged ? "with" : "without") + " hinges; allowed: " +
+                               (hinged ? "0 < bend_rigidity <= 100 N m" : "0 N m") +
                                " (rebuild the unit with wetcloth build-fmu --native --scene for another)");
     }
     if ((scene.bend_stiffness != 0.0) != bends) {
