@@ -306,9 +306,10 @@ def test_a_start_below_the_floor_or_a_box_without_vertices_fails_the_initializat
 
 def test_a_unit_of_a_mesh_bent_by_hinges_runs_as_the_python_api_and_keeps_them(units, tmp_path):
     """The small disc bent by hinges (bend_rigidity, their terms built in with the listed springs): the FMI 2
-    unit runs it as Simulation does, bit for bit, with the built rigidity and another one; it declares
-    bend_rigidity above 0 and refuses 0 (the hinges stay: an FMI error from the set call), as the unit without
-    hinges declares and takes only 0 (test_what_the_built_in_mesh_fixes_is_refused_with_its_name)."""
+    unit runs it as Simulation does, bit for bit, with the built rigidity and another one with bend_stiffness 0
+    (unused where hinges bend); it declares bend_rigidity above 0 and refuses 0 (the hinges stay: an FMI error
+    from the set call), as the unit without hinges declares and takes only 0
+    (test_what_the_built_in_mesh_fixes_is_refused_with_its_name), and takes any bend_stiffness."""
     import fmpy
 
     path = write_scene(tmp_path, SMALL_RINGS, "hinged")
@@ -317,14 +318,16 @@ def test_a_unit_of_a_mesh_bent_by_hinges_runs_as_the_python_api_and_keeps_them(u
     assert wetcloth.Simulation(scene).model.topology.hinge_count > 0
     fmu = native.build_native_fmu(tmp_path / "hinged2.fmu", 2, build_dir=units["objects"], scene=path)
     runs = {}
-    for rigidity in (1e-4, 3e-3):
-        result = fmpy.simulate_fmu(str(fmu), stop_time=0.2, output_interval=0.05, start_values={"bend_rigidity": rigidity})
-        rows, _ = python_rows(scene.replace(bend_rigidity=rigidity), result["time"])
-        assert_agree([[row[k] for k in COLUMNS] for row in result], rows, f"bend_rigidity {rigidity}")
-        runs[rigidity] = result["centroid_z"]
+    for changes in ({"bend_rigidity": 1e-4}, {"bend_rigidity": 3e-3, "bend_stiffness": 0.0}):
+        result = fmpy.simulate_fmu(str(fmu), stop_time=0.2, output_interval=0.05, start_values=changes)
+        rows, _ = python_rows(scene.replace(**changes), result["time"])
+        assert_agree([[row[k] for k in COLUMNS] for row in result], rows, str(changes))
+        runs[changes["bend_rigidity"]] = result["centroid_z"]
     assert np.abs(runs[1e-4] - runs[3e-3]).max() > 1e-6
     for unit, hinged in ((fmu, True), (units[2], False)):
-        declared = {v.name: v for v in fmpy.read_model_description(str(unit)).modelVariables}["bend_rigidity"]
-        assert (float(declared.min) > 0.0) is hinged and float(declared.max) == (100.0 if hinged else 0.0)
+        declared = {v.name: v for v in fmpy.read_model_description(str(unit)).modelVariables}
+        rigidity, bend = declared["bend_rigidity"], declared["bend_stiffness"]
+        assert (float(rigidity.min) > 0.0) is hinged and float(rigidity.max) == (100.0 if hinged else 0.0)
+        assert (float(bend.min) == 0.0) is hinged  # hinges bend every face: any bend_stiffness, unused
     records, _ = run_child(STATES, fmu)  # (a set call the unit refuses, in a process of its own)
-    assert records[-1]["refused"][2:] == [["bend_rigidity", 3], ["bend_rigidity", 0]]  # hinges built in: above 0
+    assert records[-1]["refused"][1:] == [["bend_stiffness", 0], ["bend_rigidity", 3], ["bend_rigidity", 0]]

@@ -52,8 +52,8 @@ SWITCH = ("on", "off")
 PINS_ALLOWED = ("'' (none), the name of a point attribute of the mesh file (nonzero = pinned), or "
                 "'box:x0,y0,z0,x1,y1,z1' (m, x0 <= x1, y0 <= y1, z0 <= z1)")
 #: Why ``bend_rigidity`` is refused on a grid (the built-in one, or a file whose vertices form it; model.cpp's too).
-GRID_RIGIDITY = ("{value!r} N m bends a triangle mesh by hinges, and the grid bends by its bending springs "
-                 "(bend_stiffness); allowed: 0 N m on the grid")
+GRID_RIGIDITY = ("{value!r} N m bends a mesh file's faces by hinges, and the built-in grid bends by its bending "
+                 "springs (bend_stiffness); allowed: 0 N m on the grid (a mesh file of the rectangle bends by hinges)")
 
 
 #: How far (m) Collider.distance looks for a mesh collider's surface.
@@ -263,9 +263,10 @@ class Scene:
     stretch_stiffness: float = _param(
         2000.0, "N/m", "spring stiffness per unit strain per unit width", 0.0, 1e8, lo_open=True
     )
-    bend_stiffness: float = _param(20.0, "N/m", "bending-spring stiffness per unit strain per unit width; 0 = off", 0.0, 1e8)
+    bend_stiffness: float = _param(20.0, "N/m", "bending-spring stiffness per unit strain per unit width; 0 = off (unused where "
+                                                "bend_rigidity > 0)", 0.0, 1e8)
     bend_rigidity: float = _param(
-        0.0, "N m", "a triangle mesh's bending rigidity (quadratic hinges instead of its bending springs); 0 = springs",
+        0.0, "N m", "a mesh file's bending rigidity (quadratic hinges instead of its bending springs); 0 = springs",
         0.0, 100.0,
     )
     damping: float = _param(0.2, "N s/m", "spring damping per unit strain rate per unit width", 0.0, 1e6)

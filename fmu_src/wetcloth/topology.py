@@ -22,7 +22,7 @@ import numpy as np
 
 from wetcloth.errors import ParameterError
 from wetcloth.mesh_file import MeshFile, face_edges, is_mesh, read_mesh_file, triangle_areas
-from wetcloth.scene import GRID_RIGIDITY, PINS_ALLOWED, Scene
+from wetcloth.scene import PINS_ALLOWED, Scene
 
 #: Kinds of listed springs (``pair_kind``): along a face's edge, across a quad, bending, a hinge's term
 #: (rest length 0, linear, listed last: ``hinge_terms``).
@@ -143,10 +143,8 @@ def build_topology(scene: Scene) -> Topology:
         topo = _grid(scene, scene.nx, scene.ny, scene.width, scene.length)
     else:
         faces = MeshFaces(faces=mesh.faces, uv=mesh.uv, source=mesh.source)
-        grid = file_grid(mesh)
+        grid = file_grid(mesh) if scene.bend_rigidity == 0.0 else None  # (hinges bend listed springs only)
         if grid is not None:  # the grid's own springs and preconditioner, the file's faces for export
-            if scene.bend_rigidity != 0.0:
-                raise ParameterError("bend_rigidity", GRID_RIGIDITY.format(value=scene.bend_rigidity))
             topo = replace(_grid(scene, *grid), rest_pos=mesh.points.T.copy(), mesh=faces)
         else:
             topo = _mesh(scene, mesh, faces)
@@ -309,13 +307,14 @@ def listed_springs(mesh: MeshFile, scene: Scene) -> dict:
 
     Stretch springs along every edge, tension-only along the edges of quads only, buckling (both ways,
     the push bounded: spring_law.hpp) along those of a triangle; shear springs along each quad's diagonals,
-    tension-only; then bending springs join a and b across a vertex v whose edges (v, a), (v, b) lie on
-    quads only, share no face and make an angle above BEND_ANGLE (strip a_s(v, a) + a_s(v, b)), and, unless
-    ``bend_rigidity`` is set, the opposite corners of two triangles that share an edge (strip: their areas).
+    tension-only; then, unless ``bend_rigidity`` is set, bending springs join a and b across a vertex v whose
+    edges (v, a), (v, b) lie on quads only, share no face and make an angle above BEND_ANGLE (strip
+    a_s(v, a) + a_s(v, b)), and the opposite corners of two triangles that share an edge (strip: their areas).
     A quad spreads three times its area evenly over its 4 edges and 2 diagonals, a triangle its stiffness
     over its edges as ``triangle_edge_shapes`` says; an edge's strip area a_s sums its faces'.
     k = modulus * a_s / l^2, c = damping * a_s / l^2 (a_s / l^2: the shape).  With ``bend_rigidity`` D > 0
-    the hinges' terms come last (``hinge_terms``): k = D * shape, c = (damping / stretch_stiffness) * k."""
+    every face bends by hinges instead (``bend_stiffness`` unused), their terms last (``hinge_terms``):
+    k = D * shape, c = (damping / stretch_stiffness) * k."""
     p = mesh.points
     area = face_areas(mesh)
     rows, owner = face_edges(mesh.blocks)
@@ -348,22 +347,20 @@ def listed_springs(mesh: MeshFile, scene: Scene) -> dict:
         diagonals = np.concatenate([q[:, [0, 2]], q[:, [1, 3]]])
         groups.append((np.sort(diagonals, axis=1), np.tile(0.5 * quad_area, 2), SHEAR))
     groups.append((edges[on_triangle], stretch[on_triangle], STRETCH))
-    hinges, shared = _triangle_hinges(mesh, rows, first, second, face1, face2)
-    if scene.bend_stiffness != 0.0:
+    shared = np.flatnonzero(second >= 0)  # the edges two faces share
+    if scene.bend_stiffness != 0.0 and scene.bend_rigidity == 0.0:
         groups.append(_vertex_bends(p, edges, strip, face1, face2, ~on_triangle))
-        if scene.bend_rigidity == 0.0:  # springs across the hinges' opposite corners, strip: their two triangles
-            groups.append((np.sort(hinges[:, 2:], axis=1), area[face1[shared]] + area[face2[shared]], BEND))
+        groups.append(_triangle_bends(mesh, rows, first, second, face1, face2, area))
 
     pairs = np.concatenate([g[0] for g in groups]).T.astype(np.int64)
     kind = np.concatenate([np.full(len(g[0]), g[2], dtype=np.int8) for g in groups])
     rest = np.linalg.norm(p[pairs[1]] - p[pairs[0]], axis=1)
     shape = np.concatenate([g[1] for g in groups]) / rest**2
     if scene.bend_rigidity != 0.0:
-        if len(hinges) == 0:
+        if len(shared) == 0:
             raise ParameterError("bend_rigidity", f"{scene.bend_rigidity!r} N m bends a cloth across the edges that two "
-                                                  f"triangles share, and {mesh.source} has none; allowed: 0 N m (its "
-                                                  "bending springs: bend_stiffness)")
-        hinge_pairs, hinge_shape = hinge_terms(p, hinges)
+                                                  f"faces share, and {mesh.source} has none; allowed: 0 N m (no bending)")
+        hinge_pairs, hinge_shape = hinge_terms(mesh, edges[shared], face1[shared], face2[shared])
         pairs = np.concatenate([pairs, hinge_pairs], axis=1)
         kind = np.concatenate([kind, np.full(len(hinge_shape), HINGE, dtype=np.int8)])
         rest = np.concatenate([rest, np.zeros(len(hinge_shape))])
@@ -376,10 +373,9 @@ def listed_springs(mesh: MeshFile, scene: Scene) -> dict:
                 pair_buckling_count=buckling)
 
 
-def _triangle_hinges(mesh: MeshFile, rows, first, second, face1, face2) -> tuple[np.ndarray, np.ndarray]:
-    """The edges that two triangles share: their hinges (h, 4: the edge's ends i, j, the corner k of its first
-    triangle and l of its second opposite it) and the edges' indices (h,) among the unique edges of
-    listed_springs."""
+def _triangle_bends(mesh: MeshFile, rows, first, second, face1, face2, area):
+    """Bending springs across the edges two triangles share, between the corners opposite the edge (strip: the
+    two triangles' areas)."""
     opposite = np.full(len(rows), -1)
     start = 0
     for b in mesh.blocks:
@@ -388,47 +384,99 @@ def _triangle_hinges(mesh: MeshFile, rows, first, second, face1, face2) -> tuple
         start += b.size
     corners = mesh.corners
     shared = np.flatnonzero((second >= 0) & (corners[face1] == 3) & (corners[np.maximum(face2, 0)] == 3))
-    hinges = np.column_stack([rows[first[shared]], opposite[first[shared]], opposite[second[shared]]])
-    return hinges.astype(np.int64), shared
+    across = np.column_stack([opposite[first[shared]], opposite[second[shared]]])
+    return np.sort(across, axis=1), area[face1[shared]] + area[face2[shared]], BEND
 
 
-def hinge_terms(points: np.ndarray, hinges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The quadratic bending of hinges (h, 4: an edge's ends i, j and the corners k, l opposite it) as springs
-    of rest length 0: their pairs (2, P) int64 and shapes k / D (P,) 1/m^2 (a pair that hinges share once).
+def hinge_terms(mesh: MeshFile, edges: np.ndarray, face1: np.ndarray, face2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The quadratic bending of a mesh (docs/model.md section 2.4) as springs of rest length 0: their pairs (2, P)
+    int64 and shapes k / D (P,) 1/m^2 (a pair that several terms share once).  Its terms:
 
-    Each hinge, unfolded flat from its rest triangles (points (n, 3) m), stores (Bergou et al. 2006, the
-    discrete shells' hinge linearised about the flat sheet) D |e|^2 / (2 (A1 + A2)) |sum_m w_m x_m|^2 (J; D
-    the rigidity, N m), with w_m = n . (grad b_m(2) - grad b_m(1)) the jump across the edge of the corners'
-    linear shape functions' gradients along the edge's normal n in the unfolded plane: a flat or rigidly
-    moved hinge stores nothing, a sheet bent to a curvature kappa D kappa^2 / 2 per area.  As sum_m w_m = 0,
-    that is the sum over the hinge's six pairs of -D |e|^2 / (A1 + A2) w_a w_b |x_a - x_b|^2 / 2: springs of
-    rest length 0 and stiffness -D |e|^2 / (A1 + A2) w_a w_b (N/m, some negative; their sum positive
-    semidefinite)."""
-    p = [points[hinges[:, m]] for m in range(4)]
-    edge = p[1] - p[0]
+    - a hinge across each edge (i, j) (``edges`` (h, 2)) that faces ``face1`` and ``face2`` (h,) share, unfolded
+      flat from the rest mesh: D |e|^2 / (2 (c1 A1 + c2 A2)) (g2 - g1)^2, g the two faces' slopes across the
+      edge (a triangle's linear interpolant's, a quad's bilinear one's at its centre), c = 1 for a triangle (Bergou
+      et al. 2006's hinge, linearised about the flat sheet) and 1/2 for a quad (its area shared by its two pairs
+      of opposite edges): across a regular grid of quads, D / 2 (H_xx^2 + H_yy^2) per area for a bend H;
+    - each quad's twist (corners 0..3 in turn), D A / (|a|^2 |b|^2) (t0 x0 - t1 x1 + t2 x2 - t3 x3)^2, a and b the
+      mean of its opposite edges, t_m the area of the triangle of its other three corners over A / 2 (1 on a
+      parallelogram; so that an affine field stores nothing): D H_xy^2 per area on a rectangle, so that quads
+      store D |H|^2 / 2 whichever way they bend.
+
+    A flat or rigidly moved sheet stores nothing: each term is |sum_m w_m x_m|^2 with sum_m w_m = 0, the sum over
+    its pairs of -w_a w_b |x_a - x_b|^2, springs of stiffness -2 S w_a w_b for a term of weight S (some negative;
+    each term's sum positive semidefinite)."""
+    p = mesh.points
+    faces = _padded_faces(mesh)
+    area = face_areas(mesh)
+    i, j = edges[:, 0], edges[:, 1]
+    edge = p[j] - p[i]
     length = np.linalg.norm(edge, axis=1)
     u = edge / length[:, None]
 
-    def unfolded(x, side):
-        """x's coordinates (along the edge from i, across it on ``side``) in the hinge unfolded flat (m)."""
-        a = x - p[0]
-        along = _dot(a, u)
-        return along, side * np.linalg.norm(a - along[:, None] * u, axis=1)
+    def unfolded(f, side):
+        """Face f's corners (h, 4) and their coordinates (h, 4, 2) along the edge from i and across it on
+        ``side`` (toward the face's centroid) in the hinge unfolded flat (m)."""
+        corners = faces[f]
+        a = p[np.maximum(corners, 0)] - p[i][:, None, :]
+        along = _dot(a, u[:, None, :])
+        off = a - along[..., None] * u[:, None, :]
+        inward = off[:, 0] + off[:, 1] + off[:, 2] + off[:, 3] * (corners[:, 3:] >= 0)
+        inward /= np.linalg.norm(inward, axis=1)[:, None]
+        return corners, np.stack([along, side * _dot(off, inward[:, None, :])], axis=2)
 
-    (ku, kv), (lu, lv) = unfolded(p[2], -1.0), unfolded(p[3], 1.0)
-    # the across-edge components of the shape functions' gradients in triangles (i, j, k) and (i, j, l): for
-    # corners (a, b, c) of signed double area t, grad b_a . n = (c_u - b_u) / t
-    t1, t2 = length * kv, length * lv  # (i, j, k) runs clockwise in the unfolded plane (t1 < 0), (i, j, l) not
-    g1 = ((ku - length) / t1, -ku / t1, length / t1)  # corners i, j, k
-    g2 = ((lu - length) / t2, -lu / t2, length / t2)  # corners i, j, l
-    w = np.column_stack([g2[0] - g1[0], g2[1] - g1[1], -g1[2], g2[2]])
-    scale = length**2 / (0.5 * (np.abs(t1) + np.abs(t2)))  # |e|^2 / (A1 + A2)
+    corners1, flat1 = unfolded(face1, -1.0)
+    corners2, flat2 = unfolded(face2, 1.0)
+    weight = np.where(mesh.corners[face1] == 3, 1.0, 0.5) * area[face1] + np.where(mesh.corners[face2] == 3, 1.0, 0.5) * area[face2]
+    slots = np.concatenate([corners1, corners2], axis=1)
+    w = np.concatenate([-_across_slope(flat1, mesh.corners[face1]), _across_slope(flat2, mesh.corners[face2])], axis=1)
+    terms = [(slots, w, 0.5 * length**2 / weight)]
+    quads = np.flatnonzero(mesh.corners == 4)
+    if len(quads):
+        q = faces[quads]
+        x = [p[q[:, m]] for m in range(4)]
+        a, b = 0.5 * (x[1] - x[0] + x[2] - x[3]), 0.5 * (x[3] - x[0] + x[2] - x[1])
+        # the weights that take nothing from an affine map: each corner's the area of the triangle of the other
+        # three (signed about the quad's normal: a dart's too), signs alternating, over half the quad's
+        normal = np.cross(x[2] - x[0], x[3] - x[1])
+        normal /= np.linalg.norm(normal, axis=1)[:, None]
+        left = [_dot(np.cross(x[(m + 2) % 4] - x[(m + 1) % 4], x[(m + 3) % 4] - x[(m + 1) % 4]), normal) for m in range(4)]
+        twist = np.column_stack([left[0], -left[1], left[2], -left[3]]) / area[quads][:, None]
+        terms.append((q, twist, area[quads] / (_dot(a, a) * _dot(b, b))))
     pairs, shapes = [], []
-    for a, b in itertools.combinations(range(4), 2):
-        pairs.append(np.sort(hinges[:, [a, b]], axis=1))
-        shapes.append(-scale * w[:, a] * w[:, b])
+    for slots, w, strength in terms:
+        for m, k in itertools.combinations(range(slots.shape[1]), 2):
+            keep = (slots[:, m] >= 0) & (slots[:, k] >= 0) & (slots[:, m] != slots[:, k])
+            pairs.append(np.sort(slots[keep][:, [m, k]], axis=1))
+            shapes.append(-2.0 * strength[keep] * w[keep, m] * w[keep, k])
     unique, inverse = np.unique(np.concatenate(pairs), axis=0, return_inverse=True)
     return unique.T.astype(np.int64), np.bincount(inverse.ravel(), np.concatenate(shapes), minlength=len(unique))
+
+
+def _padded_faces(mesh: MeshFile) -> np.ndarray:
+    """Every face's corners (k, 4) in the file's order, a triangle's fourth -1."""
+    faces = np.full((len(mesh.corners), 4), -1, dtype=np.int64)
+    start = 0
+    for b in mesh.blocks:
+        faces[start:start + len(b), :b.shape[1]] = b
+        start += len(b)
+    return faces
+
+
+def _across_slope(flat: np.ndarray, corners: np.ndarray) -> np.ndarray:
+    """The weights (h, 4) on a face's corners of its slope across the edge (the second coordinate of ``flat``
+    (h, 4, 2) m): a triangle's linear interpolant's (its fourth weight 0), a quad's bilinear one's at its centre."""
+    x = [flat[:, m] for m in range(4)]
+    # a triangle (a, b, c): grad = [b - a; c - a]^-1 (z_b - z_a, z_c - z_a)
+    (b0, b1), (c0, c1) = (x[1] - x[0]).T, (x[2] - x[0]).T
+    det = np.where(corners == 3, b0 * c1 - b1 * c0, 1.0)
+    wb, wc = -c0 / det, b0 / det
+    triangle = np.column_stack([-(wb + wc), wb, wc, np.zeros(len(flat))])
+    # a quad: grad = [a b]^-T (z_xi, z_eta), a and b the mean of its opposite edges, z_xi and z_eta likewise
+    a, b = 0.5 * (x[1] - x[0] + x[2] - x[3]), 0.5 * (x[3] - x[0] + x[2] - x[1])
+    quad_det = np.where(corners == 4, a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], 1.0)
+    along_xi, along_eta = -b[:, 0] / quad_det, a[:, 0] / quad_det
+    quad = 0.5 * (along_xi[:, None] * np.array([-1.0, 1.0, 1.0, -1.0]) + along_eta[:, None] * np.array([-1.0, -1.0, 1.0, 1.0]))
+    return np.where((corners == 3)[:, None], triangle, quad)
 
 
 #: The isotropic membrane a triangle's three edge springs stand for, per unit Young's modulus: Poisson's

@@ -46,7 +46,7 @@ std::string ClothMesh::fixed_problem(const Scene& scene) const {
                                (hinged ? "0 < bend_rigidity <= 100 N m" : "0 N m") +
                                " (rebuild the unit with wetcloth build-fmu --native --scene for another)");
     }
-    if ((scene.bend_stiffness != 0.0) != bends) {
+    if (!hinged && (scene.bend_stiffness != 0.0) != bends) {  // (hinges bend every face: bend_stiffness unused)
         return parameter_error("bend_stiffness", py_repr(scene.bend_stiffness) + " is not allowed in this unit: its mesh's "
                                "springs were built " + (bends ? "with" : "without") + " bending springs; allowed: " +
                                (bends ? "0 < bend_stiffness <= 1e+08 N/m" : "0 N/m") +

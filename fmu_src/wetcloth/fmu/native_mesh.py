@@ -77,7 +77,7 @@ def cloth_arrays(scene) -> dict | None:
                   hierarchy_stretch_stiffness=scene.stretch_stiffness)
     arrays.update(n=topo.n, pair_tension_count=topo.pair_tension_count, pair_buckling_count=topo.pair_buckling_count,
                   kd=plane.bands.shape[2] - 1,
-                  marker_size=len(h.marker), bends=int(scene.bend_stiffness != 0.0), source=str(topo.mesh.source),
+                  marker_size=len(h.marker), bends=int(scene.bend_stiffness != 0.0 and scene.bend_rigidity == 0.0), source=str(topo.mesh.source),
                   grid_width=0.0, grid_length=0.0, grid_nx=0, grid_ny=0)
     return arrays
 
@@ -132,12 +132,13 @@ def fixed_ranges(arrays: dict | None) -> dict[str, tuple[float, float, bool, str
         return {}
     rebuild = "; rebuild the unit (wetcloth build-fmu --native --scene) for another"
     ranges = {}
+    hinged = np.any(np.asarray(arrays["pair_kind"]) == HINGE)  # (then every face bends by hinges: any bend_stiffness)
     if arrays["bends"]:
         ranges["bend_stiffness"] = (0.0, 1e8, True, "0 < bend_stiffness <= 1e+08 N/m (this unit's mesh has bending "
                                                     f"springs, built in with bend_stiffness > 0{rebuild})")
-    else:
+    elif not hinged:
         ranges["bend_stiffness"] = (0.0, 0.0, False, f"0 N/m (this unit's mesh has no bending springs{rebuild})")
-    if np.any(np.asarray(arrays["pair_kind"]) == HINGE):
+    if hinged:
         ranges["bend_rigidity"] = (0.0, 100.0, True, "0 < bend_rigidity <= 100 N m (this unit's mesh has hinges, built "
                                                      f"in with bend_rigidity > 0{rebuild})")
     else:
