@@ -77,7 +77,7 @@ class Simulation:
         self.integrator = make_integrator(scene.integrator, model)
         self._control = self.integrator.control()
         self._solver = make_solver(topo.n)
-        self._plane = plane_for(topo)
+        self._plane = plane_for(topo, fixed_steps=scene.tolerance == 0.0)
         self._contact = self_collision.make_contact(topo, scene.self_collision == "on", scene.self_friction)
         self.skip_idle_work = skip_idle_work
         #: The compiled step loop over these arrays (it keeps them alive and views them in place).

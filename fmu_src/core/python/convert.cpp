@@ -216,6 +216,7 @@ Algebraic algebraic_from(nb::handle h) {
     a.r_column = array<const Column>(h, "r_column");
     a.r_value = array<const double>(h, "r_value", size_of(h.attr("r_column")));
     a.spring_entries = array<const Index>(h, "spring_entries");
+    a.coupled = size_of(h.attr("spring_entries")) / 2;
     a.inverse_diagonal = array<double>(h, "inverse_diagonal", COMPONENTS * a.vectors);
     a.x = array<double>(h, "x", COMPONENTS * a.vectors);
     a.b = array<double>(h, "b", COMPONENTS * a.vectors);

@@ -57,12 +57,12 @@ inline void add_diagonal(Plane& plane, Index c, Index i, double value) {
 }
 
 //: Add value to the entries (i, j) and (j, i) of component c's level-0 matrix, i, j the ends of
-//: in-plane spring k of T (in_plane_count).
-inline void add_between(Plane& plane, Index c, Index k, Index in_plane_springs, double value) {
+//: coupled spring e (Algebraic::coupled: the in-plane springs, then the hinges' terms it couples).
+inline void add_between(Plane& plane, Index c, Index e, double value) {
     Algebraic& h = plane.algebraic;
     double* a = h.a_value + c * h.entries;
-    a[h.spring_entries[k]] += value;
-    a[h.spring_entries[in_plane_springs + k]] += value;
+    a[h.spring_entries[e]] += value;
+    a[h.spring_entries[h.coupled + e]] += value;
 }
 
 //: Component c's matrix of level + 1, R A P of `level`'s, and the inverse diagonal of `level`.  Row
@@ -339,7 +339,7 @@ Index mesh_factor(Plane& plane, const Cloth& cloth, const double* mass, double s
         const Index i = cloth.pairs[k], j = cloth.pairs[count + k];
         add_diagonal(plane, 0, i, w);
         add_diagonal(plane, 0, j, w);
-        add_between(plane, 0, k, in_plane_springs, -w);
+        add_between(plane, 0, k, -w);
     }
     const Index info = factor_component(plane, 0);
     if (info != 0) return info;
@@ -388,6 +388,7 @@ void mesh_follow_cloth(Plane& plane, const Cloth& cloth, const double* pos) {
 
 Index mesh_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double* mass, const Work& work) {
     const Index n = cloth.n, count = cloth.pair_count, in_plane_springs = in_plane_count(cloth);
+    const Index coupled = plane.algebraic.coupled, hinges = first_hinge(cloth);
     plane.reference[1] = plane.reference[2] = 0.0;  // the rest-stiffness factors are overwritten
     plane.reference[3] = 1.0;
     Index result = 1;
@@ -398,7 +399,10 @@ Index mesh_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double*
         axis_diagonal<false>(plane, n, c, mass, nullptr, work.blocks, diagonal);
         diagonal_matrix(plane, n, c, diagonal);
         const double* t = plane.frame + 3 * c * n;
-        for (Index k = 0; k < in_plane_springs; ++k) {  // bending left out whole, as on a grid
+        // the in-plane springs, then the hinges' terms the pattern couples (fixed steps); bending springs left
+        // out whole, as on a grid
+        for (Index e = 0; e < coupled; ++e) {
+            const Index k = e < in_plane_springs ? e : hinges + (e - in_plane_springs);
             const Index i = cloth.pairs[k], j = cloth.pairs[count + k];
             const double along = work.pair_along[k], across = work.pair_across[k];
             if (along == 0.0 && across == 0.0) continue;
@@ -406,7 +410,7 @@ Index mesh_systems_from_jacobian(Plane& plane, const Cloth& cloth, const double*
                                                u[count + k], u[2 * count + k], along, across);
             add_diagonal(plane, c, i, s.at_i);
             add_diagonal(plane, c, j, s.at_j);
-            if (cloth.free[i] != 0.0 && cloth.free[j] != 0.0) add_between(plane, c, k, in_plane_springs, s.between);
+            if (cloth.free[i] != 0.0 && cloth.free[j] != 0.0) add_between(plane, c, e, s.between);
         }
         if (factor_component(plane, c) == 0) continue;
         diagonal_matrix(plane, n, c, diagonal);  // not positive definite (round-off on a crumpled cloth)

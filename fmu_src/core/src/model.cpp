@@ -822,6 +822,7 @@ void Simulation::build_mesh_plane() {
     h.r_column = m.r_column.data();
     h.r_value = m.r_value.data();
     h.spring_entries = m.spring_entries.data();
+    h.coupled = static_cast<Index>(m.spring_entries.size() / 2);
     const std::size_t entries = static_cast<std::size_t>(h.entries), vectors = static_cast<std::size_t>(h.vectors);
     algebraic_.assign(COMPONENTS * (entries + 4 * vectors), 0.0);
     h.a_value = algebraic_.data();

@@ -60,7 +60,7 @@ def cloth_arrays(scene) -> dict | None:
     topo = build_topology(scene)
     if not topo.listed:
         return _grid_file_arrays(scene, topo)
-    plane = plane_for(topo)
+    plane = plane_for(topo, fixed_steps=scene.tolerance == 0.0)
     contact = make_contact(topo, True, 0.0)
     h = plane.algebraic
     centre = topo.rest_pos @ topo.area / topo.area.sum()  # topology.placed's
