@@ -15,7 +15,7 @@ from wetcloth.scene import PARAMETERS
 
 #: The scene parameters a preset sets, in the panel's order (``initial_saturation`` is the cloth's state
 #: at t = 0, not a property of the fabric: presets leave it).
-FABRIC_PARAMETERS = ("areal_density", "thickness", "stretch_stiffness", "bend_stiffness", "damping",
+FABRIC_PARAMETERS = ("areal_density", "thickness", "stretch_stiffness", "bend_stiffness", "bend_rigidity", "damping",
                      "absorption_capacity", "absorption_rate")
 
 #: kg/m3, the water that fills the pores.
@@ -27,6 +27,8 @@ FIBRE_DENSITY = {"cotton": 1550.0, "polyester": 1380.0, "silk": 1340.0}
 TOWEL_BULK_DENSITY = PARAMETERS["areal_density"].default / PARAMETERS["thickness"].default
 #: N/m in one gf/cm (Kawabata's unit of force per width).
 NEWTON_PER_METRE_PER_GF_PER_CM = 9.80665e-3 / 1e-2
+#: N m in one gf cm2/cm (Kawabata's unit of bending rigidity, moment per curvature per width).
+NEWTON_METRE_PER_GF_CM2_PER_CM = 9.80665e-3 * 1e-4 / 1e-2
 #: kg/m2 in one oz/yd2.
 KG_PER_M2_PER_OZ_PER_YD2 = 0.028349523125 / 0.83612736
 #: kg/m2 in one momme, the weight of silk (4.340 g/m2).
@@ -53,13 +55,15 @@ def pore_water_capacity(thickness: float, areal_density: float, fibre: str) -> f
 DENIM_THICKNESS_MM = (1.066, 1.188, 0.801, 1.040, 0.887, 0.973)
 DENIM_TENSILE_ENERGY = (9.400, 8.975, 8.675, 8.950)
 DENIM_STRAIN_PERCENT = (5.735, 4.695, 5.135, 5.455)
+#: Their bending rigidity B (gf cm2/cm), all six.
+DENIM_BENDING_RIGIDITY = (0.172, 0.144, 0.227, 0.147, 0.207, 0.148)
 
 
 @dataclass(frozen=True)
 class Fabric:
     """One preset: its label and tooltip, its fibre (a key of FIBRE_DENSITY), areal density (kg/m2) and,
-    where measured, thickness (m) and stretch stiffness (N/m); ``None``: the thickness at the towel's
-    bulk density, the towel's stiffness."""
+    where measured, thickness (m), stretch stiffness (N/m) and bending rigidity (N m); ``None``: the thickness
+    at the towel's bulk density, the towel's stiffness; a rigidity of 0: the bending springs."""
 
     label: str
     description: str
@@ -67,15 +71,17 @@ class Fabric:
     areal_density: float
     thickness: float | None = None
     stretch_stiffness: float | None = None
+    bend_rigidity: float = 0.0
 
 
 FABRICS = {
     "COTTON_TERRY_TOWEL": Fabric("Cotton terry towel", "The default towel: 450 g/m2, 2 mm (models/towel.toml)",
                                  "cotton", PARAMETERS["areal_density"].default, PARAMETERS["thickness"].default),
     "COTTON_JERSEY": Fabric("Cotton jersey", "Single jersey (t-shirts), 170 g/m2", "cotton", 0.17),
-    "DENIM": Fabric("Denim", "12 oz/yd2 jeans denim, 0.99 mm, stiffness from KES-F tensile tests", "cotton",
+    "DENIM": Fabric("Denim", "12 oz/yd2 jeans denim, 0.99 mm, stiffness and bending from KES-F tests", "cotton",
                     round(12 * KG_PER_M2_PER_OZ_PER_YD2, 3), round(fmean(DENIM_THICKNESS_MM), 2) / 1000,
-                    round(fmean(map(energy_equivalent_stiffness, DENIM_TENSILE_ENERGY, DENIM_STRAIN_PERCENT)), -1)),
+                    round(fmean(map(energy_equivalent_stiffness, DENIM_TENSILE_ENERGY, DENIM_STRAIN_PERCENT)), -1),
+                    float(f"{fmean(DENIM_BENDING_RIGIDITY) * NEWTON_METRE_PER_GF_CM2_PER_CM:.3g}")),
     "POLYESTER": Fabric("Polyester", "Woven polyester shirting, 135 g/m2", "polyester", 0.135),
     "SILK": Fabric("Silk", "16 momme habotai or crepe de chine, 69 g/m2", "silk", round(16 * KG_PER_M2_PER_MOMME, 3)),
 }
@@ -93,5 +99,6 @@ def fabric_parameters(identifier: str) -> dict[str, float]:
         "areal_density": fabric.areal_density,
         "thickness": thickness,
         "stretch_stiffness": fabric.stretch_stiffness or towel["stretch_stiffness"],
+        "bend_rigidity": fabric.bend_rigidity,
         "absorption_capacity": round(pore_water_capacity(thickness, fabric.areal_density, fabric.fibre), 2),
     }

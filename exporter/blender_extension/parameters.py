@@ -10,7 +10,7 @@ from wetcloth.scene import PARAMETERS
 FROM_CLOTH = ("nx", "ny", "width", "length", "initial_height", "initial_tilt", "pinned_edge", "cloth_mesh",
               "place_mesh", "pinned_vertices")
 #: Parameters of the fabric, set on each Cloth object (its preset fills all but initial_saturation).
-FABRIC = ("areal_density", "thickness", "stretch_stiffness", "bend_stiffness", "damping", "absorption_capacity",
-          "absorption_rate", "initial_saturation")
+FABRIC = ("areal_density", "thickness", "stretch_stiffness", "bend_stiffness", "bend_rigidity", "damping",
+          "absorption_capacity", "absorption_rate", "initial_saturation")
 #: The rest: settings of the whole scene (``water_level`` is the Water object's height if there is one).
 SCENE = tuple(name for name in PARAMETERS if name not in FROM_CLOTH + FABRIC)
