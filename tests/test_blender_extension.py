@@ -358,18 +358,15 @@ def test_a_bake_over_another_range_and_fps_starts_at_its_first_frame(baked):
 
 
 def test_pin_group_preset_and_the_cloths_own_modifiers(baked):
-    """The denim preset sets the fabric's parameters, its bend_rigidity among them, so the plane goes to wetcloth
-    as its mesh (hinges bend a mesh's faces, not the built-in grid), a vertex group holding the vertices of the
-    largest y pinning them by its point attribute (on the grid it is pinned_edge y_max:
-    tests/test_blender_extension_parts.py); the plane is baked from the mesh as stored, so a Solidify modifier
-    of the towel's own stays, after the cache."""
+    """A vertex group holding the vertices of the largest y is pinned_edge y_max; the denim preset
+    sets the fabric's parameters, its bend_rigidity (hinges) among them; the plane is baked from the mesh as
+    stored, so a Solidify modifier of the towel's own stays, after the cache."""
     from wetcloth.exporter.blender_extension.fabrics import FABRIC_PARAMETERS, fabric_parameters
-    from wetcloth.exporter.blender_extension.geometry import PIN_ATTRIBUTE
 
     pinned = baked.report["pinned"]
     assert pinned["result"] == ["CANCELLED"] and pinned["manifest"]["frame_count"] == 3
     scene = pinned["manifest"]["scene"]
-    assert scene["pinned_edge"] == "none" and scene["pinned_vertices"] == PIN_ATTRIBUTE
+    assert scene["pinned_edge"] == "y_max"
     assert {name: scene[name] for name in FABRIC_PARAMETERS} == fabric_parameters("DENIM")
     assert scene["bend_rigidity"] > 0.0
     assert pinned["modifiers"] == ["MESH_SEQUENCE_CACHE", "SOLIDIFY"]

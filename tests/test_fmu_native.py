@@ -933,6 +933,12 @@ r["mesh_output_dir"] = [set(mesh, "mesh_output_dir", "out/frames"), status(mesh.
                         status(mesh.exitInitializationMode)]
 mesh.freeInstance()
 
+rigid = new("rigid")
+k = len(messages)
+r["bend_rigidity"] = [set(rigid, "bend_rigidity", 1e-4), status(rigid.enterInitializationMode),
+                      status(rigid.exitInitializationMode), since(k)]
+rigid.freeInstance()
+
 floor = new("floor")
 set(floor, "initial_height", -0.99)
 k = len(messages)
@@ -1007,6 +1013,18 @@ def test_calls_the_master_must_not_make_are_errors_and_change_nothing(errors):
     assert "finite communication point" in text and "restore an FMU state to go back in time" in text
     assert "'depth' is an output" in text and "value reference 999" in text and "'width' is a Real" in text
     assert errors["terminate"] == [0, 0, 3]
+
+
+def test_a_unit_of_the_grid_declares_and_takes_no_bend_rigidity(build, errors):
+    """Its families have no hinges (Python runs the grid as a mesh of its quads for them): the model description
+    declares bend_rigidity 0 only, and a value above 0 is an FMI error naming it and what is allowed."""
+    declared = {v.name: v for v in build[2]["md"].modelVariables}["bend_rigidity"]
+    assert float(declared.min) == float(declared.max) == 0.0
+    statuses, messages = errors["bend_rigidity"][:3], errors["bend_rigidity"][3]
+    assert statuses == [3, 0, 3]  # the set call, and the initialization it left refused (as for other values)
+    assert messages[0].startswith("parameter 'bend_rigidity': 0.0001 is out of range; allowed: 0 N m in a native unit "
+                                  "of the built-in grid, which bends by its springs")
+    assert messages[1].startswith("initialization refused: parameter 'bend_rigidity'")
 
 
 def test_mesh_output_dir_is_refused_with_a_logged_message(errors):

@@ -187,14 +187,47 @@ def test_the_core_rests_the_cantilever_on_its_hinges_static_solution(tmp_path):
 
 
 def test_bend_rigidity_is_refused_where_no_hinge_can_carry_it(tmp_path):
-    """The built-in grid bends by its springs, and a mesh whose faces share no edge has nowhere to bend:
-    bend_rigidity > 0 there is a ParameterError naming it and what is allowed."""
-    with pytest.raises(ParameterError, match="bend_rigidity.*allowed: 0 N m on the grid"):
-        wetcloth.Scene(bend_rigidity=1e-4)
+    """A mesh whose faces share no edge has nowhere to bend, and a native unit of the built-in grid bends by its
+    springs: bend_rigidity > 0 there is a ParameterError naming it and what is allowed."""
+    from wetcloth.fmu.native_mesh import cloth_arrays
+
     apart = tmp_path / "apart.obj"
     apart.write_text("v 0 0 1\nv 0.1 0 1\nv 0.1 0.1 1\nv 0 0.1 1\nv 0.2 0.1 1\nv 0.2 0.2 1\nf 1 2 3 4\nf 3 5 6\n")
     with pytest.raises(ParameterError, match="bend_rigidity.*has none; allowed: 0 N m"):
         build_topology(wetcloth.Scene(cloth_mesh=str(apart), bend_rigidity=1e-4))
+    with pytest.raises(ParameterError, match="bend_rigidity.*allowed: 0 N m in a native unit of the built-in grid"):
+        cloth_arrays(wetcloth.Scene(bend_rigidity=1e-4))
+
+
+def test_the_built_in_grid_bends_by_hinges_as_a_mesh_file_of_it_does(tmp_path):
+    """With bend_rigidity the built-in rectangle lists the springs and hinges of a mesh file of its quads: the same
+    springs, areas and pins as that file (its points the grid's, placed at the same height), so the same motion
+    bit for bit; it pins and exports as the grid (pinned_edge, no mesh faces)."""
+    import meshio
+
+    nx, ny, width, length = 9, 7, 0.4, 0.3
+    grid = wetcloth.load_scene(nx=nx, ny=ny, width=width, length=length, bend_rigidity=2e-5, pinned_edge="y_max",
+                               initial_tilt=0.0, initial_height=0.5)
+    topo = build_topology(grid)
+    assert topo.listed and topo.hinge_count > 0 and topo.mesh is None and topo.pinned.sum() == nx
+    row = np.repeat(np.arange(ny), nx)
+    points = topo.rest_pos.T  # (the grid's own arithmetic)
+    cells = np.array([[r * nx + c, r * nx + c + 1, (r + 1) * nx + c + 1, (r + 1) * nx + c]
+                      for r in range(ny - 1) for c in range(nx - 1)], dtype=np.int32)
+    meshio.write(tmp_path / "rectangle.ply", meshio.Mesh(points, [("quad", cells)],
+                                                        point_data={"held": (row == ny - 1).astype(np.float64)}))
+    fromfile = grid.replace(cloth_mesh=str(tmp_path / "rectangle.ply"), place_mesh="on", pinned_edge="none",
+                            pinned_vertices="held")
+    listed = build_topology(fromfile)
+    for field in ("pairs", "pair_shape", "pair_kind", "area", "triangles", "pinned"):
+        np.testing.assert_array_equal(getattr(listed, field), getattr(topo, field), field)
+    runs = []
+    for scene in (grid, fromfile):
+        sim = wetcloth.Simulation(scene)
+        sim.advance(0.3)
+        runs.append(sim.positions)
+    np.testing.assert_array_equal(runs[0], runs[1])
+    assert np.ptp(runs[0][:, 2]) > 0.01  # it hangs from its pinned edge and bends
 
 
 def test_every_face_of_a_mixed_or_distorted_mesh_bends_by_hinges_that_hold_it_flat_at_rest(tmp_path):

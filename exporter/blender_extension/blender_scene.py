@@ -272,12 +272,11 @@ def cloth_jobs(context) -> list[ClothJob]:
     jobs = []
     for obj in cloths:
         members = pin_members(obj)
-        fabric = {name: clean(getattr(obj.wetcloth, name)) for name in FABRIC}
-        # (hinges bend a mesh's faces only: a subdivided plane with a bend_rigidity goes as its mesh)
-        cloth, pins = cloth_of(*cloth_mesh(obj), members, obj.name, grid=fabric["bend_rigidity"] == 0.0)
+        cloth, pins = cloth_of(*cloth_mesh(obj), members, obj.name)
         if isinstance(cloth, GridCloth):
             cloth = replace(cloth, width=clean(cloth.width), length=clean(cloth.length),
                             centre=tuple(clean(c) for c in cloth.centre), tilt=clean(cloth.tilt))
+        fabric = {name: clean(getattr(obj.wetcloth, name)) for name in FABRIC}
         shift = cloth.shift
         moved = [c | {"x": clean(c["x"] - shift[0]), "y": clean(c["y"] - shift[1])} for c in colliders]
         gripped = grip_keys if members else []  # the grip moves pins: a cloth without any takes no keys

@@ -173,18 +173,17 @@ def face_blocks(sizes, loops, triangles, triangle_faces) -> list[np.ndarray]:
     return [b for b in blocks if len(b)]
 
 
-def cloth_of(positions, edges, polygons, loop_triangles, pins, name: str = "cloth", grid: bool = True):
-    """The cloth of a Cloth object: a GridCloth (and its pinned_edge) if ``grid`` allows, the mesh is a subdivided
-    plane and ``pins`` (the pin group's vertex indices) are none or one whole edge of it, else a MeshCloth
+def cloth_of(positions, edges, polygons, loop_triangles, pins, name: str = "cloth"):
+    """The cloth of a Cloth object: a GridCloth (and its pinned_edge) if the mesh is a subdivided plane
+    and ``pins`` (the pin group's vertex indices) are none or one whole edge of it, else a MeshCloth
     (and 'none') of vertex ``positions`` (n, 3) in world space (m) and faces ``polygons`` (corner counts,
     corner vertices), n-gons split as ``loop_triangles`` (vertices, faces) are (face_blocks); ``edges``
     (e, 2).  A ValueError naming the object for a mesh no cloth can be (non-manifold, loose vertices)."""
-    if grid:
-        try:
-            plane = grid_cloth(positions, edges, name)
-            return plane, pinned_edge(plane, pins, "pins")
-        except ValueError:
-            pass
+    try:
+        grid = grid_cloth(positions, edges, name)
+        return grid, pinned_edge(grid, pins, "pins")
+    except ValueError:
+        pass
     pinned = np.zeros(len(positions))
     pinned[np.asarray(pins, dtype=np.int64)] = 1.0
     try:

@@ -51,9 +51,6 @@ SWITCH = ("on", "off")
 #: What ``pinned_vertices`` allows, as its messages say.
 PINS_ALLOWED = ("'' (none), the name of a point attribute of the mesh file (nonzero = pinned), or "
                 "'box:x0,y0,z0,x1,y1,z1' (m, x0 <= x1, y0 <= y1, z0 <= z1)")
-#: Why ``bend_rigidity`` is refused on a grid (the built-in one, or a file whose vertices form it; model.cpp's too).
-GRID_RIGIDITY = ("{value!r} N m bends a mesh file's faces by hinges, and the built-in grid bends by its bending "
-                 "springs (bend_stiffness); allowed: 0 N m on the grid (a mesh file of the rectangle bends by hinges)")
 
 
 #: How far (m) Collider.distance looks for a mesh collider's surface.
@@ -266,7 +263,7 @@ class Scene:
     bend_stiffness: float = _param(20.0, "N/m", "bending-spring stiffness per unit strain per unit width; 0 = off (unused where "
                                                 "bend_rigidity > 0)", 0.0, 1e8)
     bend_rigidity: float = _param(
-        0.0, "N m", "a mesh file's bending rigidity (quadratic hinges instead of its bending springs); 0 = springs",
+        0.0, "N m", "bending rigidity (quadratic hinges instead of the bending springs); 0 = springs",
         0.0, 100.0,
     )
     damping: float = _param(0.2, "N s/m", "spring damping per unit strain rate per unit width", 0.0, 1e6)
@@ -503,8 +500,6 @@ def validate(scene: Scene) -> None:
     object.__setattr__(scene, "grip_keys", _checked_grip_keys(scene, mistakes))
     object.__setattr__(scene, "collider_keys", _checked_collider_keys(scene, given, mistakes))
     mistakes.raise_if_any()
-    if scene.bend_rigidity != 0.0 and not is_mesh(scene.cloth_mesh):
-        raise ParameterError("bend_rigidity", GRID_RIGIDITY.format(value=scene.bend_rigidity))
     start = _check_mesh_start(scene) if is_mesh(scene.cloth_mesh) else None
     if start is None:
         half_drop = 0.5 * scene.length * abs(math.sin(math.radians(scene.initial_tilt)))

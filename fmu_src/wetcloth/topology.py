@@ -21,7 +21,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from wetcloth.errors import ParameterError
-from wetcloth.mesh_file import MeshFile, face_edges, is_mesh, read_mesh_file, triangle_areas
+from wetcloth.mesh_file import MeshFile, face_edges, is_mesh, make_mesh, read_mesh_file, triangle_areas
 from wetcloth.scene import PINS_ALLOWED, Scene
 
 #: Kinds of listed springs (``pair_kind``): along a face's edge, across a quad, bending, a hinge's term
@@ -141,6 +141,8 @@ def build_topology(scene: Scene) -> Topology:
     mesh = None if not is_mesh(scene.cloth_mesh) else read_mesh_file(scene.cloth_mesh)
     if mesh is None:
         topo = _grid(scene, scene.nx, scene.ny, scene.width, scene.length)
+        if scene.bend_rigidity != 0.0:  # hinges bend listed springs only: the grid's quads as a mesh
+            topo = _hinged_grid(scene, topo)
     else:
         faces = MeshFaces(faces=mesh.faces, uv=mesh.uv, source=mesh.source)
         grid = file_grid(mesh) if scene.bend_rigidity == 0.0 else None  # (hinges bend listed springs only)
@@ -216,6 +218,16 @@ def _grid(scene: Scene, nx: int, ny: int, width: float, length: float) -> Topolo
     )
 
 
+def _hinged_grid(scene: Scene, grid: Topology) -> Topology:
+    """The built-in grid (``grid``, its topology) bent by hinges (``bend_rigidity``): the listed springs of a mesh
+    file of its quads (docs/model.md section 2.4), placed, pinned and exported as the grid (``mesh`` None)."""
+    nx, ny = scene.nx, scene.ny
+    cell = np.flatnonzero((np.arange(nx * ny) % nx < nx - 1) & (np.arange(nx * ny) // nx < ny - 1))
+    quads = np.stack([cell, cell + 1, cell + nx + 1, cell + nx], axis=1)
+    mesh = make_mesh(grid.rest_pos.T, [quads], shown="the nx x ny rectangle")
+    return replace(_mesh(scene, mesh, None), rest_xy=grid.rest_xy)
+
+
 def _no_pairs() -> dict:
     return dict(pairs=np.zeros((2, 0), dtype=np.int64), pair_rest=np.zeros(0), pair_stiffness=np.zeros(0),
                 pair_damping=np.zeros(0), pair_shape=np.zeros(0), pair_kind=np.zeros(0, dtype=np.int8),
@@ -286,7 +298,7 @@ def flat_coordinates(points: np.ndarray, area: np.ndarray, triangles: np.ndarray
     return np.stack([d @ first, d @ second])
 
 
-def _mesh(scene: Scene, mesh: MeshFile, faces: MeshFaces) -> Topology:
+def _mesh(scene: Scene, mesh: MeshFile, faces: MeshFaces | None) -> Topology:
     n = mesh.n
     area = vertex_areas(mesh)
     springs = listed_springs(mesh, scene)

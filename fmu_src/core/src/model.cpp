@@ -119,9 +119,9 @@ std::string fixed_differences(const Scene& a, const Scene& b) {
 
 std::string grid_rigidity_problem(const Scene& s) {
     if (s.bend_rigidity == 0.0) return "";
-    return "parameter 'bend_rigidity': " + py_repr(s.bend_rigidity) + " N m bends a mesh file's faces by hinges, and the "
-           "built-in grid bends by its bending springs (bend_stiffness); allowed: 0 N m on the grid (a mesh file of the "
-           "rectangle bends by hinges)";
+    return "parameter 'bend_rigidity': " + py_repr(s.bend_rigidity) + " N m bends by hinges; allowed: 0 N m in a "
+           "native unit of the built-in grid, which bends by its springs (bend_stiffness); for hinges build it from a "
+           "scene with a mesh file (cloth_mesh, the rectangle's too) and bend_rigidity > 0";
 }
 
 std::string scene_problem(const Scene& s, const ClothMesh* mesh, const Pins* pins) {

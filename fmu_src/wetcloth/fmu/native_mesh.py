@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from wetcloth.errors import ParameterError
 from wetcloth.topology import HINGE
 
 #: The ClothMesh arrays in the generated header: C++ name, element type, key of ``cloth_arrays``.
@@ -45,6 +46,11 @@ CLOTH_SCALARS = ("centre_x", "centre_y", "centre_z", "size", "rest_gap", "typica
 CLOTH_COUNTS = ("n", "pair_tension_count", "kd", "marker_size", "bends", "grid_nx", "grid_ny", "pair_buckling_count")
 
 
+#: Why a native unit of the built-in grid takes no ``bend_rigidity`` (model.cpp's grid_rigidity_problem says the same).
+GRID_RIGIDITY = ("0 N m in a native unit of the built-in grid, which bends by its springs (bend_stiffness); for hinges "
+                 "build it from a scene with a mesh file (cloth_mesh, the rectangle's too) and bend_rigidity > 0")
+
+
 def cloth_arrays(scene) -> dict | None:
     """The ClothMesh of ``scene`` (a ``wetcloth.Scene`` whose cloth comes from a mesh file) as arrays and
     numbers (keys of CLOTH_ARRAYS, CLOTH_SCALARS, CLOTH_COUNTS, and the file's name ``source``); None for the
@@ -56,6 +62,8 @@ def cloth_arrays(scene) -> dict | None:
     from wetcloth.topology import build_topology, corner_shares
 
     if not is_mesh(scene.cloth_mesh):
+        if scene.bend_rigidity != 0.0:
+            raise ParameterError("bend_rigidity", f"{scene.bend_rigidity!r} N m bends by hinges; allowed: {GRID_RIGIDITY}")
         return None
     topo = build_topology(scene)
     if not topo.listed:
@@ -128,8 +136,8 @@ def hierarchy_levels(arrays: dict | None) -> int:
 def fixed_ranges(arrays: dict | None) -> dict[str, tuple[float, float, bool, str]]:
     """The parameters the built-in mesh fixes: name -> (lo, hi, lo_open, range text) of the values the unit
     takes (ClothMesh::fixed_problem gives the same verdicts)."""
-    if arrays is None or arrays["grid_nx"]:  # the grid's families take any stiffness
-        return {}
+    if arrays is None or arrays["grid_nx"]:  # the grid's families take any stiffness, and no hinges
+        return {"bend_rigidity": (0.0, 0.0, False, GRID_RIGIDITY)}
     rebuild = "; rebuild the unit (wetcloth build-fmu --native --scene) for another"
     ranges = {}
     hinged = np.any(np.asarray(arrays["pair_kind"]) == HINGE)  # (then every face bends by hinges: any bend_stiffness)

@@ -166,7 +166,8 @@ struct Pins;
 //: fixes (ClothMesh::fixed_problem); with `pins`, a box that holds a particle (pinned_mask).
 std::string scene_problem(const Scene& scene, const ClothMesh* mesh = nullptr, const Pins* pins = nullptr);
 
-//: "" or the ParameterError's text of a bend_rigidity on a grid (scene.GRID_RIGIDITY): hinges bend meshes only.
+//: "" or the ParameterError's text of a bend_rigidity on a native unit's grid (native_mesh.GRID_RIGIDITY): its
+//: families have no hinges (Python lists the grid's springs for them: topology._hinged_grid).
 std::string grid_rigidity_problem(const Scene& scene);
 
 //: The grid's particle positions (3, n) m at t = 0 (topology.initial_positions).
