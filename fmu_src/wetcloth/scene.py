@@ -260,8 +260,10 @@ class Scene:
     stretch_stiffness: float = _param(
         2000.0, "N/m", "spring stiffness per unit strain per unit width", 0.0, 1e8, lo_open=True
     )
-    bend_stiffness: float = _param(20.0, "N/m", "bending-spring stiffness per unit strain per unit width; 0 = off (unused where "
-                                                "bend_rigidity > 0)", 0.0, 1e8)
+    bend_stiffness: float = _param(
+        20.0, "N/m", "bending-spring stiffness per unit strain per unit width; 0 = off (unused where bend_rigidity > 0)",
+        0.0, 1e8,
+    )
     bend_rigidity: float = _param(
         0.0, "N m", "bending rigidity (quadratic hinges instead of the bending springs); 0 = springs",
         0.0, 100.0,

@@ -400,7 +400,8 @@ def _triangle_bends(mesh: MeshFile, rows, first, second, face1, face2, area):
     return np.sort(across, axis=1), area[face1[shared]] + area[face2[shared]], BEND
 
 
-def hinge_terms(mesh: MeshFile, edges: np.ndarray, face1: np.ndarray, face2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def hinge_terms(mesh: MeshFile, edges: np.ndarray, face1: np.ndarray,
+                face2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The quadratic bending of a mesh (docs/model.md section 2.4) as springs of rest length 0: their pairs (2, P)
     int64 and shapes k / D (P,) 1/m^2 (a pair that several terms share once).  Its terms:
 
@@ -438,7 +439,8 @@ def hinge_terms(mesh: MeshFile, edges: np.ndarray, face1: np.ndarray, face2: np.
 
     corners1, flat1 = unfolded(face1, -1.0)
     corners2, flat2 = unfolded(face2, 1.0)
-    weight = np.where(mesh.corners[face1] == 3, 1.0, 0.5) * area[face1] + np.where(mesh.corners[face2] == 3, 1.0, 0.5) * area[face2]
+    share = np.where(mesh.corners == 3, 1.0, 0.5) * area  # c A of each face
+    weight = share[face1] + share[face2]
     slots = np.concatenate([corners1, corners2], axis=1)
     w = np.concatenate([-_across_slope(flat1, mesh.corners[face1]), _across_slope(flat2, mesh.corners[face2])], axis=1)
     terms = [(slots, w, 0.5 * length**2 / weight)]
@@ -487,7 +489,8 @@ def _across_slope(flat: np.ndarray, corners: np.ndarray) -> np.ndarray:
     a, b = 0.5 * (x[1] - x[0] + x[2] - x[3]), 0.5 * (x[3] - x[0] + x[2] - x[1])
     quad_det = np.where(corners == 4, a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], 1.0)
     along_xi, along_eta = -b[:, 0] / quad_det, a[:, 0] / quad_det
-    quad = 0.5 * (along_xi[:, None] * np.array([-1.0, 1.0, 1.0, -1.0]) + along_eta[:, None] * np.array([-1.0, -1.0, 1.0, 1.0]))
+    xi, eta = np.array([-1.0, 1.0, 1.0, -1.0]), np.array([-1.0, -1.0, 1.0, 1.0])  # z_xi and z_eta's weights, doubled
+    quad = 0.5 * (along_xi[:, None] * xi + along_eta[:, None] * eta)
     return np.where((corners == 3)[:, None], triangle, quad)
 
 

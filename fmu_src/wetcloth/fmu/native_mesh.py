@@ -85,7 +85,8 @@ def cloth_arrays(scene) -> dict | None:
                   hierarchy_stretch_stiffness=scene.stretch_stiffness)
     arrays.update(n=topo.n, pair_tension_count=topo.pair_tension_count, pair_buckling_count=topo.pair_buckling_count,
                   kd=plane.bands.shape[2] - 1,
-                  marker_size=len(h.marker), bends=int(scene.bend_stiffness != 0.0 and scene.bend_rigidity == 0.0), source=str(topo.mesh.source),
+                  marker_size=len(h.marker), bends=int(scene.bend_stiffness != 0.0 and scene.bend_rigidity == 0.0),
+                  source=str(topo.mesh.source),
                   grid_width=0.0, grid_length=0.0, grid_nx=0, grid_ny=0)
     return arrays
 
