@@ -28,7 +28,7 @@ TOWEL_BULK_DENSITY = PARAMETERS["areal_density"].default / PARAMETERS["thickness
 #: N/m in one gf/cm (Kawabata's unit of force per width).
 NEWTON_PER_METRE_PER_GF_PER_CM = 9.80665e-3 / 1e-2
 #: N m in one gf cm2/cm (Kawabata's unit of bending rigidity, moment per curvature per width).
-NEWTON_METRE_PER_GF_CM2_PER_CM = 9.80665e-3 * 1e-4 / 1e-2
+NEWTON_METRE_PER_GF_CM2_PER_CM = NEWTON_PER_METRE_PER_GF_PER_CM * 1e-4
 #: kg/m2 in one oz/yd2.
 KG_PER_M2_PER_OZ_PER_YD2 = 0.028349523125 / 0.83612736
 #: kg/m2 in one momme, the weight of silk (4.340 g/m2).

@@ -190,11 +190,8 @@ def _grid(scene: Scene, nx: int, ny: int, width: float, length: float) -> Topolo
         cs.append(np.where(exists, scene.damping * strip_area / rest**2, 0.0))
         shapes.append(np.where(exists, strip_area / rest**2, 0.0))
 
-    quads = (col < nx - 1) & (row < ny - 1)
-    a = np.flatnonzero(quads)
-    triangles = np.concatenate(
-        [np.stack([a, a + 1, a + nx + 1], axis=1), np.stack([a, a + nx + 1, a + nx], axis=1)]
-    )
+    cells = grid_cells(nx, ny)
+    triangles = np.concatenate([cells[:, [0, 1, 2]], cells[:, [0, 2, 3]]])
     return Topology(
         nx=nx,
         ny=ny,
@@ -221,11 +218,16 @@ def _grid(scene: Scene, nx: int, ny: int, width: float, length: float) -> Topolo
 def _hinged_grid(scene: Scene, grid: Topology) -> Topology:
     """The built-in grid (``grid``, its topology) bent by hinges (``bend_rigidity``): the listed springs of a mesh
     file of its quads (docs/model.md section 2.4), placed, pinned and exported as the grid (``mesh`` None)."""
-    nx, ny = scene.nx, scene.ny
-    cell = np.flatnonzero((np.arange(nx * ny) % nx < nx - 1) & (np.arange(nx * ny) // nx < ny - 1))
-    quads = np.stack([cell, cell + 1, cell + nx + 1, cell + nx], axis=1)
-    mesh = make_mesh(grid.rest_pos.T, [quads], shown="the nx x ny rectangle")
+    mesh = make_mesh(grid.rest_pos.T, [grid_cells(scene.nx, scene.ny)], shown="the nx x ny rectangle")
     return replace(_mesh(scene, mesh, None), rest_xy=grid.rest_xy)
+
+
+def grid_cells(nx: int, ny: int) -> np.ndarray:
+    """The cells (m, 4) int64 of the nx x ny grid (particle i = row * nx + col): corners i, i + 1, i + nx + 1,
+    i + nx, counter-clockwise seen from +z."""
+    index = np.arange(nx * ny)
+    a = np.flatnonzero((index % nx < nx - 1) & (index // nx < ny - 1))
+    return np.stack([a, a + 1, a + nx + 1, a + nx], axis=1)
 
 
 def _no_pairs() -> dict:
@@ -257,8 +259,7 @@ def file_grid(mesh: MeshFile) -> tuple[int, int, float, float] | None:
     expected = np.stack([p[0, 0] + col * (width / (nx - 1)), p[0, 1] + row * (length / (ny - 1))], axis=1)
     if np.abs(p[:, :2] - expected).max() > tol:
         return None
-    a = np.flatnonzero((col < nx - 1) & (row < ny - 1))
-    cells = np.stack([a, a + 1, a + nx + 1, a + nx], axis=1)
+    cells = grid_cells(nx, ny)
     faces = mesh.blocks[0]
     if len(faces) != len(cells):
         return None
