@@ -1,6 +1,7 @@
 """Shared helpers for the tests."""
 
 import numpy as np
+import pytest
 from hypothesis import settings
 
 import wetcloth
@@ -13,6 +14,16 @@ settings.register_profile("explore", derandomize=False)
 settings.load_profile("repeatable")
 
 G = 9.81
+
+
+@pytest.fixture(scope="session")
+def native_objects(tmp_path_factory):
+    """The folder every native build of the session compiles into (``build_native_fmu``'s ``build_dir``),
+    beside pytest's temporary folders of the session and so shared by its xdist workers: objects are named
+    by the digest of compiler, flags, source and headers, and locked while compiled, so the core and the
+    unit's fixed sources compile once a session."""
+    return tmp_path_factory.getbasetemp().parent / "wetcloth-native-objects"
+
 INTEGRATORS = ["explicit_euler", "symplectic_euler", "implicit_euler", "bdf2"]
 
 

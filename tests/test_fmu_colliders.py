@@ -120,7 +120,7 @@ def test_the_pythonfmu_units_take_the_colliders_fields_as_parameters(tmp_path, e
     assert resumed["radius"] == [0.3, RADIUS] and resumed["second"] == resumed["first"]
 
 
-def test_the_native_unit_takes_the_colliders_fields_as_parameters(tmp_path, tmp_path_factory, expected):
+def test_the_native_unit_takes_the_colliders_fields_as_parameters(tmp_path, native_objects, expected):
     """The native unit's collider1_radius, set to 0.26 m through fmpy, gives the Python run of the scene with that
     radius bit for bit; -0.1 m is refused by the set call (an FMI error naming the parameter and its range); an
     FMU state of the run holds the radius: restored in a fresh instance, whose radius is the scene's, the run
@@ -128,8 +128,7 @@ def test_the_native_unit_takes_the_colliders_fields_as_parameters(tmp_path, tmp_
     import fmpy
     from fmpy.fmi2 import FMU2Slave
 
-    objects = tmp_path_factory.getbasetemp().parent / "wetcloth-native-objects"
-    fmu = native.build_native_fmu(tmp_path / "sphere.fmu", 2, build_dir=objects, scene="tablecloth_sphere")
+    fmu = native.build_native_fmu(tmp_path / "sphere.fmu", 2, build_dir=native_objects, scene="tablecloth_sphere")
     result = fmpy.simulate_fmu(str(fmu), stop_time=STOP, output_interval=STEP,
                                start_values={"collider1_radius": RADIUS})
     np.testing.assert_array_equal(np.array([[row[n] for n in OUTPUT_NAMES] for row in result]), expected["smaller"])

@@ -196,10 +196,15 @@ def test_overwrite_replaces_only_the_sequence_its_frames_json_describes(tmp_path
         open_sequence(tmp_path, fps=10, scene=scene, overwrite=True)
 
 
-def test_demo_command_writes_frames_csv_and_plot(fmu, tmp_path):
+def test_demo_command_writes_frames_csv_and_plot(fmu, tmp_path, native_objects):
     out = tmp_path / "demo"
+    # The demo keeps the native unit's objects in ./build/native: here the session's shared folder.
+    native_objects.mkdir(parents=True, exist_ok=True)
+    (tmp_path / "build").mkdir()
+    (tmp_path / "build" / "native").symlink_to(native_objects, target_is_directory=True)
     done = subprocess.run([sys.executable, "-m", "wetcloth.cli", "demo", "--out", str(out), "--fmu", fmu,
-                           "--duration", "0.2", "--no-progress"], capture_output=True, text=True, timeout=300)
+                           "--duration", "0.2", "--no-progress"], capture_output=True, text=True, timeout=300,
+                          cwd=tmp_path)
     assert done.returncode == 0, done.stderr[-3000:]
     header, *rows = (out / "outputs.csv").read_text().splitlines()
     assert header.split(",") == ["time", *OUTPUT_NAMES]

@@ -53,14 +53,14 @@ def quad_mesh(folder):
     return scene, faces, uv
 
 
-def test_the_fmi3_units_of_a_mesh_cloth_give_its_faces_and_uvs_as_the_file_has_them(tmp_path, tmp_path_factory):
+def test_the_fmi3_units_of_a_mesh_cloth_give_its_faces_and_uvs_as_the_file_has_them(tmp_path, native_objects):
     """Both FMI 3.0 units of the quad mesh: `faces` is a constant UInt64 output [6, 4] equal to the file's quads,
     `uv` a constant Float64 output [12, 2] equal to its UVs, in the model description and through the API.
     (bb80f15: the units have no such variables.)"""
     scene, faces, uv = quad_mesh(tmp_path)
-    objects = tmp_path_factory.getbasetemp().parent / "wetcloth-native-objects"
     units = {"pythonfmu3": build_fmu(tmp_path / "Quads3.fmu", fmi_version=3, scene=scene),
-             "native": native.build_native_fmu(tmp_path / "QuadsNative3.fmu", 3, build_dir=objects, scene=scene)}
+             "native": native.build_native_fmu(tmp_path / "QuadsNative3.fmu", 3, build_dir=native_objects,
+                                               scene=scene)}
     for label, fmu in units.items():
         (read,), _ = run_child(READ, fmu, cwd=tmp_path)
         for name, kind, expected in (("faces", "UInt64", faces), ("uv", "Float64", uv)):

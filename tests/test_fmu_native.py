@@ -58,14 +58,12 @@ def advance_as_the_unit(sim: wetcloth.Simulation, t: float) -> None:
 
 # ----------------------------------------------------------------------------------------- the build
 @pytest.fixture(scope="session")
-def build(tmp_path_factory):
+def build(tmp_path_factory, native_objects):
     """Both units, built once; their extracted folders and model descriptions."""
     import fmpy
 
     folder = tmp_path_factory.mktemp("native_fmu")
-    # Objects are named by the digest of compiler, flags, source and headers: kept beside pytest's
-    # temporary folders, a later session recompiles only what changed.
-    objects = tmp_path_factory.getbasetemp().parent / "wetcloth-native-objects"
+    objects = native_objects
     units = {}
     for version in (2, 3):
         fmu = native.build_native_fmu(folder / f"WetClothNative{'' if version == 2 else 3}.fmu", version,
@@ -92,9 +90,10 @@ def test_fmpy_validates_both_units_without_remarks(build):
         configurations = read_build_description(str(build[version]["fmu"]), validate=True)
         assert configurations[0].sourceFileSets[0].language == "C++17"
         files = configurations[0].sourceFileSets[0].sourceFiles
-        assert f"fmu/fmi{version}.cpp" in files and "core/model.cpp" in files and "core/stepping.cpp" in files
+        assert {f"fmu/fmi{version}.cpp", "core/model.cpp", "core/stepping.cpp", native.VARIABLES_SOURCE} <= set(files)
         assert all((build[version]["dir"] / "sources" / f).is_file() for f in files)
-    assert build[2]["md"].buildConfigurations[0].sourceFileSets[0].sourceFiles == files[:-1] + ["fmu/fmi2.cpp"]
+    assert build[2]["md"].buildConfigurations[0].sourceFileSets[0].sourceFiles == [
+        "fmu/fmi2.cpp" if f == "fmu/fmi3.cpp" else f for f in files]
 
 
 def test_the_variables_are_those_of_the_python_units(build):
@@ -630,6 +629,25 @@ def test_a_unit_built_with_a_scene_runs_its_colliders_and_grip_keys_as_the_pytho
     with pytest.raises(ParameterError) as exc:
         wetcloth.load_scene("tablecloth_sphere", initial_height=0.05)
     assert records[-1] == {"status": 3, "errors": [f"initialization refused: {exc.value}"]}
+
+
+def test_a_unit_of_another_scene_compiles_its_generated_source_alone(build, tmp_path, monkeypatch):
+    """What a unit is built with is one generated source (native.VARIABLES_SOURCE): the units of two scenes
+    link the same objects of the core and of the unit's fixed sources (unit.cpp, fmi2.cpp), which a build
+    reuses, and each its own object of the generated source.  (708bb22: unit.cpp and fmi2.cpp depended on
+    the generated header, and every unit compiled them again, 10 s.)"""
+    linked, link = [], native.link
+    monkeypatch.setattr(native, "link", lambda compiler, objects, out, version: linked.append(objects) or
+                        link(compiler, objects, out, version))
+    for k, (nx, ny) in enumerate(((6, 7), (7, 6))):
+        path = tmp_path / f"scene{k}.toml"
+        path.write_text(f"nx = {nx}\nny = {ny}\n")
+        native.build_native_fmu(tmp_path / f"scene{k}.fmu", 2, build_dir=build["objects"], scene=str(path))
+    generated = [{p for p in objects if p.name.startswith(Path(native.VARIABLES_SOURCE).stem + "-")}
+                 for objects in linked]
+    assert all(len(g) == 1 for g in generated) and generated[0] != generated[1]
+    assert set(linked[0]) - generated[0] == set(linked[1]) - generated[1]
+    assert {p.name.split("-")[0] for p in linked[0]} >= {"unit", "fmi2", "stepping"}
 
 
 def test_a_unit_built_with_a_scene_turns_its_colliders_by_their_keys_as_the_python_api(build, tmp_path):

@@ -53,10 +53,10 @@ def write_scene(folder: Path, rings: int, name: str, pins: bool = True) -> Path:
 
 
 @pytest.fixture(scope="module")
-def units(tmp_path_factory):
+def units(tmp_path_factory, native_objects):
     """The small disc's scene and its native units (FMI 2 and 3), the large disc's and its FMI 2 unit."""
     folder = tmp_path_factory.mktemp("native_mesh")
-    objects = tmp_path_factory.getbasetemp().parent / "wetcloth-native-objects"
+    objects = native_objects
     small = write_scene(folder, SMALL_RINGS, "small")
     large = write_scene(folder, LARGE_RINGS, "large", pins=False)
     return {"small": small, "large": large, "objects": objects,

@@ -503,12 +503,11 @@ def test_an_fmi3_unit_refuses_a_state_of_another_grid_and_its_arrays_keep_their_
 
 # ============================================================== 3, 4, 5. the native units, same rule
 @pytest.fixture(scope="module")
-def native_checker(tmp_path_factory):
+def native_checker(tmp_path_factory, native_objects):
     """A wc::Simulation through ctypes (tests/test_fmu_native.py's checker), built from the core."""
     import test_fmu_native as native_tests
 
-    objects = tmp_path_factory.getbasetemp().parent / "wetcloth-native-objects"
-    lib = native_tests.compile_checker(tmp_path_factory.mktemp("checker"), objects)
+    lib = native_tests.compile_checker(tmp_path_factory.mktemp("checker"), native_objects)
     return native_tests.Checker, lib, native_tests.fnv1a
 
 

@@ -255,10 +255,10 @@ def test_the_native_unit_compiles_in_the_collider_keys():
     """`build-fmu --native --scene`: the scene's collider keys become the unit's SCENE_COLLIDER_KEYS rows
     (collider from 0, time, x, y, z, rx, ry, rz in rad; by collider and time), as the Python model hands them
     to the core."""
-    from wetcloth.fmu.native import fixtures_header
+    from wetcloth.fmu.native import fixtures_source
 
-    header = fixtures_header(load_scene("sweep"))
+    header = fixtures_source(load_scene("sweep"))
     assert "SCENE_COLLIDER_KEYS_SIZE = 16;" in header
     assert ("SCENE_COLLIDER_KEYS[] = {0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.6, 0.0, 0.0, 0.0, 0.0, 0};"
             in header)
-    assert "SCENE_COLLIDER_KEYS_SIZE = 0;" in fixtures_header(load_scene("tablecloth_sphere"))
+    assert "SCENE_COLLIDER_KEYS_SIZE = 0;" in fixtures_source(load_scene("tablecloth_sphere"))

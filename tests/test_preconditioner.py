@@ -382,7 +382,8 @@ def test_systems_from_the_jacobian_are_its_projection_on_the_frames():
     along, across = work.along.copy(), work.across.copy()
     work.along[~stretch] = 0.0
     work.across[~stretch] = 0.0
-    dense = np.column_stack([matvec(model, mass, np.eye(3 * n)[k].reshape(3, n)).ravel() for k in range(3 * n)])
+    units = np.eye(3 * n)
+    dense = np.column_stack([matvec(model, mass, units[k].reshape(3, n)).ravel() for k in range(3 * n)])
     work.along[...], work.across[...] = along, across
     pinned = free == 0
     frames = banded.frame.reshape(3, 3, n)

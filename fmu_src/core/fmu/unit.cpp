@@ -15,14 +15,9 @@
 
 #include "wetcloth/byte_record.hpp"
 #include "wetcloth/stepping.hpp"
-#include "wetcloth_fmu_variables.hpp"  // generated: VARIABLES, INSTANTIATION_TOKEN, FMI_VERSION
+#include "unit_data.hpp"  // defined in the unit's generated source, with the variable table
 
 namespace wc::fmu {
-
-const Variable* variables() { return VARIABLES; }
-std::size_t variable_count() { return sizeof(VARIABLES) / sizeof(VARIABLES[0]); }
-const char* instantiation_token() { return INSTANTIATION_TOKEN; }
-int fmi_version() { return FMI_VERSION; }
 
 namespace {
 
@@ -143,8 +138,8 @@ std::string collider_problem(const std::vector<double>& fields) {
     return "";
 }
 
-template <class T, std::size_t N>
-std::vector<T> vector_of(const T (&values)[N], std::size_t size) {
+template <class T>
+std::vector<T> vector_of(const T* values, std::size_t size) {
     return std::vector<T>(values, values + size);
 }
 

@@ -1,7 +1,7 @@
 // The native WetCloth unit, whatever its FMI version: a port of wetcloth/fmu/unit.py over wc::Simulation
 // (fmi2.cpp and fmi3.cpp only translate FMI calls into these methods).
 //
-// The variables are the generated table (wetcloth_fmu_variables.hpp, written by wetcloth.fmu.native
+// The variables are the generated table (wetcloth_fmu_variables.cpp, written by wetcloth.fmu.native
 // from wetcloth.fmu.vocabulary): the same names, value references, ranges and messages as the pythonfmu
 // units.  What differs: every refusal is an FMI error status (never Fatal: the instance stays usable), a
 // set call that is refused returns it at once (and, as in unit.py, the refusal stays pending: the
@@ -62,7 +62,7 @@ constexpr bool same_text(const char* a, const char* b) {
     return *a == *b;
 }
 
-//: The generated table (wetcloth_fmu_variables.hpp, included by unit.cpp only).
+//: The generated table, defined in the unit's generated source (wetcloth_fmu_variables.cpp).
 const Variable* variables();
 std::size_t variable_count();
 const char* instantiation_token();

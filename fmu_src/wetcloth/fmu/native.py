@@ -7,8 +7,8 @@
 The unit has the model name, variables, value references, units, ranges and model structure of the
 pythonfmu units (``WetCloth.fmu``, ``WetCloth3.fmu``): its ``modelDescription.xml`` is made by the same
 code (``description.py``, ``description3.py`` on pythonfmu's and pythonfmu3's model-description writers),
-and the C++ side reads the same vocabulary through a generated header
-(``wetcloth_fmu_variables.hpp``: every variable in value-reference order with its Scene field, range,
+and the C++ side reads the same vocabulary through a generated source
+(``wetcloth_fmu_variables.cpp``: every variable in value-reference order with its Scene field, range,
 start value and the texts of its messages (a collider's number field: its place in the colliders' rows,
 which the unit makes from the values set); with ``--scene``, the scene's colliders and keys as the arrays
 the Python model hands the core, and a cloth from a mesh file as the arrays of its structure,
@@ -33,6 +33,7 @@ not carry them, and the build is refused there.
 from __future__ import annotations
 
 import concurrent.futures
+import contextlib
 import dataclasses
 import functools
 import hashlib
@@ -73,8 +74,10 @@ LINK_FLAGS = ("-shared", "-static-libstdc++", "-static-libgcc", "-Wl,--exclude-l
 #: ``pinned_vertices``): '' without --scene, else the scene's.
 NO_TEXT_REASON = ("the native unit runs the cloth and the pins built into it: build it with --scene from a scene "
                   "with another cloth_mesh or pinned_vertices, or use WetCloth.fmu")
-#: The generated variable table (included by ``fmu/unit.cpp``).
-VARIABLES_HEADER = "wetcloth_fmu_variables.hpp"
+#: The generated source of a unit: its variable table and what it is built with (``fmu/unit_data.hpp``).
+VARIABLES_SOURCE = "wetcloth_fmu_variables.cpp"
+#: The unit's fixed sources beside the generated one: compiled once for every unit, whatever its scene.
+UNIT_FILES = ("unit.hpp", "unit_data.hpp", "unit.cpp", "instance.hpp")
 #: Binary folder in the archive, by FMI version.
 PLATFORM_FOLDER = {2: "linux64", 3: "x86_64-linux"}
 #: What the model description says of the unit.
@@ -133,14 +136,14 @@ def find_compiler() -> str:
 
 def _sources(core: Path, fmi_version: int) -> list[tuple[Path, str]]:
     """(file, name under ``sources/``) of every file the unit is compiled from, headers included; the
-    generated header is added by the caller."""
+    generated source is added by the caller."""
     files = []
     for path in sorted((core / "include").rglob("*.hpp")):
         files.append((path, path.relative_to(core / "include").as_posix()))
     for path in sorted((core / "src").rglob("*.cpp")):
         files.append((path, "core/" + path.relative_to(core / "src").as_posix()))
     fmu = core / "fmu"
-    for name in ("unit.hpp", "unit.cpp", "instance.hpp", f"fmi{fmi_version}.cpp"):
+    for name in (*UNIT_FILES, f"fmi{fmi_version}.cpp"):
         files.append((fmu / name, f"fmu/{name}"))
     headers = sorted(fmu.glob(f"fmi{fmi_version}*.h"))
     if not headers:
@@ -167,11 +170,11 @@ def _c_array(name: str, kind: str, values) -> str:
 
     values = np.ascontiguousarray(values).ravel()
     text = ", ".join(_c_double(v) if kind == "double" else str(int(v)) for v in values)
-    return (f"inline constexpr std::size_t {name}_SIZE = {values.size};\n"
-            f"inline constexpr {kind} {name}[] = {{{text}{', ' if text else ''}0}};")
+    return (f"extern const std::size_t {name}_SIZE = {values.size};\n"
+            f"extern const {kind} {name}[] = {{{text}{', ' if text else ''}0}};")
 
 
-#: The fixtures' arrays in the generated header (``unit.cpp``'s scene_fixtures): C++ name, element type, and
+#: The fixtures' arrays in the generated source (``unit.cpp``'s scene_fixtures): C++ name, element type, and
 #: where each comes from: the collider rows, a ColliderMeshes field (``collider_meshes``), the grip keys.
 FIXTURE_ARRAYS = (("SCENE_COLLIDERS", "double", "rows"), ("SCENE_MESH_HEADERS", "double", "headers"),
                   ("SCENE_MESH_VERTICES", "double", "vertices"), ("SCENE_FACE_NORMALS", "double", "face_normals"),
@@ -181,7 +184,7 @@ FIXTURE_ARRAYS = (("SCENE_COLLIDERS", "double", "rows"), ("SCENE_MESH_HEADERS", 
                   ("SCENE_COLLIDER_KEYS", "double", "collider_keys"))
 
 
-def fixtures_header(scene=None, cloth: dict | None = None) -> str:
+def fixtures_source(scene=None, cloth: dict | None = None) -> str:
     """The C++ arrays of what a scene holds beside its variables (``Scene.colliders``, ``Scene.grip_keys``),
     as the Python model hands them to the core (``model.py``), for ``unit.cpp``'s scene_fixtures: each
     ``NAME[]`` (with a trailing 0: C++ has no empty arrays) and its length ``NAME_SIZE``; none without a
@@ -196,8 +199,8 @@ def fixtures_header(scene=None, cloth: dict | None = None) -> str:
     sources = dict(meshes._asdict(), rows=rows, grip_keys=grip_key_rows(scene.grip_keys if scene is not None else ()),
                    collider_keys=collider_key_rows(scene.collider_keys if scene is not None else ()))
     lines = [_c_array(name, kind, sources[source]) for name, kind, source in FIXTURE_ARRAYS]
-    lines.append(native_mesh.cloth_header(cloth, _c_array, _c_double, _c_string))
-    lines.append(native_mesh.pins_header(scene, _c_array, _c_double, _c_string))
+    lines.append(native_mesh.cloth_source(cloth, _c_array, _c_double, _c_string))
+    lines.append(native_mesh.pins_source(scene, _c_array, _c_double, _c_string))
     return "\n".join(lines)
 
 
@@ -228,11 +231,11 @@ def _c_range(md: dict, name: str, text: str, fixed: dict) -> tuple[str, str, str
     return "true", _c_double(md["lo"]), _c_double(md["hi"]), str(bool(md["lo_open"])).lower(), _c_string(text)
 
 
-def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "", fixtures: str = "",
+def variables_source(specs: list[VariableSpec], fmi_version: int, token: str = "", fixtures: str = "",
                      fixed: dict | None = None) -> str:
     """The generated C++ table of the unit's variables (value reference = index), with compile-time
     checks that ``model.hpp``'s Scene, its choices and inputs are those of ``wetcloth.scene``, and the
-    scene's ``fixtures`` (``fixtures_header``).  A free-text parameter takes its start value alone;
+    scene's ``fixtures`` (``fixtures_source``).  A free-text parameter takes its start value alone;
     ``fixed``: the ranges a built-in mesh allows instead of Python's (``native_mesh.fixed_ranges``)."""
     from wetcloth.fmu.description3 import dimension_sources
     from wetcloth.scene import COLLIDER_FIELDS, INPUT, PARAMETERS, describe_range
@@ -279,7 +282,7 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
                 if md["text"]:  # its one value: the start (the built-in mesh and pins)
                     range_text = _c_string(f"{spec.start!r} ({NO_TEXT_REASON})")
                     choices, count = f"TEXT_{spec.name.upper()}", "1"
-                    texts.append(f"inline constexpr const char* TEXT_{spec.name.upper()}[] = {{{_c_string(spec.start)}}};")
+                    texts.append(f"constexpr const char* TEXT_{spec.name.upper()}[] = {{{_c_string(spec.start)}}};")
                 names = " && ".join(f'same_text(scene_choices("{spec.name}").names[{k}], {_c_string(c)})'
                                     for k, c in enumerate(allowed))
                 checks.append(f'static_assert(scene_choices("{spec.name}").count == {len(allowed)} && {names},\n'
@@ -323,22 +326,30 @@ def variables_header(specs: list[VariableSpec], fmi_version: int, token: str = "
     return f"""\
 // Generated by wetcloth.fmu.native (wetcloth {wetcloth.__version__}) from wetcloth.fmu.vocabulary: the variables
 // of the FMI {fmi_version}.0 unit in value-reference order (the index), as the pythonfmu units number them.
-// Do not edit: `wetcloth build-fmu --native` writes it again.  Included by fmu/unit.cpp after unit.hpp.
-#pragma once
+// Do not edit: `wetcloth build-fmu --native` writes it again.  What it defines, fmu/unit_data.hpp declares.
+#include "fmu/unit.hpp"
+#include "fmu/unit_data.hpp"
+#include "wetcloth/stepping.hpp"
 
 namespace wc::fmu {{
 
-inline constexpr int FMI_VERSION = {fmi_version};
-inline constexpr const char INSTANTIATION_TOKEN[] = {_c_string(token)};
-inline constexpr const char* MESH_FORMATS[] = {{{formats}}};
+namespace {{
+constexpr const char INSTANTIATION_TOKEN[] = {_c_string(token)};
+constexpr const char* MESH_FORMATS[] = {{{formats}}};
 {chr(10).join(texts)}
 
-inline constexpr Variable VARIABLES[] = {{
+constexpr Variable VARIABLES[] = {{
 {chr(10).join(rows)}
 }};
+}}  // namespace
+
+const Variable* variables() {{ return VARIABLES; }}
+std::size_t variable_count() {{ return sizeof(VARIABLES) / sizeof(VARIABLES[0]); }}
+const char* instantiation_token() {{ return INSTANTIATION_TOKEN; }}
+int fmi_version() {{ return {fmi_version}; }}
 
 // The scene's colliders and grip keys (none unless built with --scene).
-{fixtures or fixtures_header()}
+{fixtures or fixtures_source()}
 
 // The FMI 3.0 constant array outputs: a mesh cloth's faces and UVs (none unless built with --scene of one).
 {chr(10).join(constants.values())}
@@ -550,11 +561,26 @@ KEEP_OBJECTS_DAYS = 30
 
 
 def _forget_unused(objects: Path) -> None:
-    """Remove the objects in ``objects`` that no build has used for KEEP_OBJECTS_DAYS days."""
+    """Remove the objects in ``objects`` (and their lock files) that no build has used for KEEP_OBJECTS_DAYS days."""
     oldest = time.time() - KEEP_OBJECTS_DAYS * 86400.0
-    for path in objects.glob("*.o"):
+    for path in [*objects.glob("*.o"), *objects.glob("*.lock")]:
         if path.stat().st_mtime < oldest:
             path.unlink(missing_ok=True)
+
+
+@contextlib.contextmanager
+def _compiling(target: Path):
+    """Hold ``target``'s lock file (``.lock`` beside it) while it is looked for and compiled: another build
+    of the same object (another process sharing the folder) waits for it and reuses it instead of compiling
+    it at the same time."""
+    import fcntl
+
+    with open(target.with_suffix(".lock"), "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
 
 
 def compile_objects(compiler: str, sources: list[Path], include_dirs: list[Path], objects: Path,
@@ -574,17 +600,18 @@ def compile_objects(compiler: str, sources: list[Path], include_dirs: list[Path]
     def run(task):
         source, target = task
         try:
-            if target.exists():
-                os.utime(target)  # used now: kept by _forget_unused
+            with _compiling(target):
+                if target.exists():
+                    os.utime(target)  # used now: kept by _forget_unused
+                    return None
+                partial = new_temporary(target, ".tmp.o")  # created new (a random name): never a link planted there
+                done = subprocess.run([compiler, *flags, "-c", str(source), "-o", str(partial)], capture_output=True,
+                                      text=True)
+                if done.returncode != 0:
+                    partial.unlink(missing_ok=True)
+                    return f"{source}:\n{done.stderr[-6000:]}"
+                os.replace(partial, target)
                 return None
-            partial = new_temporary(target, ".tmp.o")  # created new (a random name): never a link planted there
-            done = subprocess.run([compiler, *flags, "-c", str(source), "-o", str(partial)], capture_output=True,
-                                  text=True)
-            if done.returncode != 0:
-                partial.unlink(missing_ok=True)
-                return f"{source}:\n{done.stderr[-6000:]}"
-            os.replace(partial, target)
-            return None
         finally:
             if bar is not None:
                 bar.update(1)
@@ -646,35 +673,37 @@ def build_native_fmu(out: str | Path | None = None, fmi_version: int = 2, build_
     out = Path(native_fmu_path(fmi_version) if out is None else out)
     specs = variable_specs(fmi_version=fmi_version, packed=packed)
     files = _sources(core, fmi_version)
-    sources = [name for _, name in files if name.endswith(".cpp")]
+    sources = [*(name for _, name in files if name.endswith(".cpp")), VARIABLES_SOURCE]
     # The instantiation token: a digest of the table and every source, so that a rebuild of the same
     # sources carries the same token and another build another.
     from wetcloth.scene import load_scene
 
     loaded = None if scene is None else load_scene(scene)
     cloth = None if loaded is None else native_mesh.cloth_arrays(loaded)
-    fixtures = fixtures_header(loaded, cloth)
+    fixtures = fixtures_source(loaded, cloth)
     fixed = {**native_mesh.fixed_ranges(cloth), **placed_meshes(loaded)}
     specs = [dataclasses.replace(spec, min=fixed[spec.name][0], max=fixed[spec.name][1], min_open=fixed[spec.name][2])
              if spec.name in fixed else spec for spec in specs]  # the model description declares what the unit takes
-    body = variables_header(specs, fmi_version, fixtures=fixtures, fixed=fixed).encode()
+    body = variables_source(specs, fmi_version, fixtures=fixtures, fixed=fixed).encode()
     token = "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, "wetcloth-native:" + _digest(
         body, " ".join(CXX_FLAGS).encode(), *(p.read_bytes() for p, _ in files)))) + "}"
-    header = variables_header(specs, fmi_version, token, fixtures, fixed)
+    generated_text = variables_source(specs, fmi_version, token, fixtures, fixed)
     with tempfile.TemporaryDirectory(prefix="wetcloth_native_") as tmp:
         stage = Path(tmp)
-        generated = stage / "generated"
-        generated.mkdir()
-        (generated / VARIABLES_HEADER).write_text(header, encoding="utf-8")
+        generated = stage / VARIABLES_SOURCE
+        generated.write_text(generated_text, encoding="utf-8")
         objects_dir = Path(build_dir) if build_dir is not None else default_build_dir()
-        include = [core / "include", generated]
-        fmu_headers = [*sorted((core / "include").rglob("*.hpp")), core / "fmu" / "unit.hpp",
-                       core / "fmu" / "instance.hpp", generated / VARIABLES_HEADER, *sorted((core / "fmu").glob(f"fmi{fmi_version}*.h"))]
-        unit_sources = [core / "fmu" / "unit.cpp", core / "fmu" / f"fmi{fmi_version}.cpp"]
+        # The unit's fixed sources depend on no scene, so every unit reuses their objects; the generated
+        # source alone is compiled for each.
+        fmu_headers = [*sorted((core / "include").rglob("*.hpp")),
+                       *(core / "fmu" / name for name in UNIT_FILES if name.endswith(".hpp")),
+                       *sorted((core / "fmu").glob(f"fmi{fmi_version}*.h"))]
+        unit_sources = [core / "fmu" / "unit.cpp", core / "fmu" / f"fmi{fmi_version}.cpp", generated]
         with tqdm(total=len(core_sources()) + len(unit_sources), desc=f"compiling {out.name}", unit="file",
                   delay=SHOW_AFTER, disable=not progress) as bar:
             objects = core_objects(objects_dir, compiler, jobs, bar)
-            objects += compile_objects(compiler, unit_sources, include, objects_dir, fmu_headers, jobs, bar)
+            objects += compile_objects(compiler, unit_sources, [core / "include", core], objects_dir, fmu_headers,
+                                       jobs, bar)
         binary = link(compiler, objects, stage / f"{MODEL_NAME}.so", fmi_version)
         _forget_unused(objects_dir)
 
@@ -684,7 +713,7 @@ def build_native_fmu(out: str | Path | None = None, fmi_version: int = 2, build_
             archive.write(binary, f"binaries/{PLATFORM_FOLDER[fmi_version]}/{MODEL_NAME}.so")
             for path, name in files:
                 archive.write(path, f"sources/{name}")
-            archive.writestr(f"sources/{VARIABLES_HEADER}", header)
+            archive.writestr(f"sources/{VARIABLES_SOURCE}", generated_text)
             archive.writestr("sources/buildDescription.xml", build_description(fmi_version, sources))
             archive.writestr("documentation/index.html", documentation_html(specs, fmi_version))
             if packed is not None:  # what was built in, for a master to check (batch.engines.fmu_series)

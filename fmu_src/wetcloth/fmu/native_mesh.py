@@ -1,5 +1,5 @@
 """A scene's cloth from a mesh file, built into the native unit (``native.py``): what depends on the file alone,
-computed here once by the Python front end and written into the unit's generated header as arrays, which
+computed here once by the Python front end and written into the unit's generated source as arrays, which
 the core's ``ClothMesh`` (``model.hpp``, ``cloth_mesh.cpp``) turns, with the unit's parameter values, into
 the arrays ``wetcloth.Simulation`` hands the core.
 
@@ -11,7 +11,7 @@ the algebraic multigrid hierarchy's patterns and prolongators, pyamg's).  From t
 spring constants (``stretch_stiffness``, ``bend_stiffness``, ``bend_rigidity``, ``damping`` times the shapes), masses and
 wicking (``areal_density``, ...) and the start (``place_mesh``, ``initial_height``, ``initial_tilt``).
 
-The pins of ``pinned_vertices`` (``pins_header``), on a mesh or the built-in grid: a point attribute's
+The pins of ``pinned_vertices`` (``pins_source``), on a mesh or the built-in grid: a point attribute's
 vertices, or a box, whose particles the core finds at the start positions.
 
 What the structure fixes (``fixed_ranges``): ``bend_stiffness`` 0 or not (the bending springs are listed or
@@ -26,7 +26,7 @@ import numpy as np
 from wetcloth.errors import ParameterError
 from wetcloth.topology import HINGE
 
-#: The ClothMesh arrays in the generated header: C++ name, element type, key of ``cloth_arrays``.
+#: The ClothMesh arrays in the generated source: C++ name, element type, key of ``cloth_arrays``.
 CLOTH_ARRAYS = (
     ("CLOTH_REST_POS", "double", "rest_pos"), ("CLOTH_REST_XY", "double", "rest_xy"), ("CLOTH_AREA", "double", "area"),
     ("CLOTH_PAIRS", "Index", "pairs"), ("CLOTH_PAIR_REST", "double", "pair_rest"),
@@ -40,7 +40,7 @@ CLOTH_ARRAYS = (
     ("CLOTH_R_COLUMN", "Column", "r_column"), ("CLOTH_R_VALUE", "double", "r_value"),
     ("CLOTH_SPRING_ENTRIES", "Index", "spring_entries"),
 )
-#: The ClothMesh numbers, in the order of the header's CLOTH_SCALARS and CLOTH_COUNTS (unit.cpp reads them so).
+#: The ClothMesh numbers, in the order of the generated source's CLOTH_SCALARS and CLOTH_COUNTS (unit.cpp reads them so).
 CLOTH_SCALARS = ("centre_x", "centre_y", "centre_z", "size", "rest_gap", "typical_gap", "least_margin",
                  "hierarchy_stretch_stiffness", "grid_width", "grid_length")
 CLOTH_COUNTS = ("n", "pair_tension_count", "kd", "marker_size", "bends", "grid_nx", "grid_ny", "pair_buckling_count")
@@ -108,8 +108,8 @@ def _grid_file_arrays(scene, topo) -> dict:
     return arrays
 
 
-def pins_header(scene, c_array, c_double, c_string) -> str:
-    """The generated header's Pins (model.hpp) of ``scene``'s pinned_vertices (a ``wetcloth.Scene``, or None):
+def pins_source(scene, c_array, c_double, c_string) -> str:
+    """The generated source's Pins (model.hpp) of ``scene``'s pinned_vertices (a ``wetcloth.Scene``, or None):
     ``PINS`` (false: none), the box (``PIN_BOX``, ``PIN_CORNERS``), a point attribute's pins (``PIN_ATTRIBUTE``)
     and the texts of the messages."""
     from wetcloth.mesh_file import read_mesh_file
@@ -122,11 +122,11 @@ def pins_header(scene, c_array, c_double, c_string) -> str:
     attribute = (_attribute(spec, read_mesh_file(scene.cloth_mesh)).astype(np.int64) if spec and not box
                  else np.zeros(0, dtype=np.int64))
     return "\n".join([
-        f"inline constexpr bool PINS = {'true' if spec else 'false'};",
-        f"inline constexpr bool PIN_BOX = {'true' if box else 'false'};",
-        f"inline constexpr double PIN_CORNERS[] = {{{', '.join(c_double(v) for v in corners)}}};",
+        f"extern const bool PINS = {'true' if spec else 'false'};",
+        f"extern const bool PIN_BOX = {'true' if box else 'false'};",
+        f"extern const double PIN_CORNERS[] = {{{', '.join(c_double(v) for v in corners)}}};",
         c_array("PIN_ATTRIBUTE", "Index", attribute),
-        f"inline constexpr const char* PIN_TEXTS[] = {{{c_string(repr(spec))}, {c_string(PINS_ALLOWED)}}};"])
+        f"extern const char* const PIN_TEXTS[] = {{{c_string(repr(spec))}, {c_string(PINS_ALLOWED)}}};"])
 
 
 def hierarchy_levels(arrays: dict | None) -> int:
@@ -159,16 +159,16 @@ def fixed_ranges(arrays: dict | None) -> dict[str, tuple[float, float, bool, str
     return ranges
 
 
-def cloth_header(arrays: dict | None, c_array, c_double, c_string) -> str:
-    """The generated header's ClothMesh arrays (each ``NAME[]`` with a trailing 0 and ``NAME_SIZE``), numbers
+def cloth_source(arrays: dict | None, c_array, c_double, c_string) -> str:
+    """The generated source's ClothMesh arrays (each ``NAME[]`` with a trailing 0 and ``NAME_SIZE``), numbers
     and texts, and ``CLOTH_MESH`` (false, every array empty, for the built-in grid).  ``c_array``,
     ``c_double``, ``c_string``: native.py's literal writers."""
-    lines = [f"inline constexpr bool CLOTH_MESH = {'true' if arrays is not None else 'false'};"]
+    lines = [f"extern const bool CLOTH_MESH = {'true' if arrays is not None else 'false'};"]
     lines += [c_array(name, kind, np.zeros(0) if arrays is None else arrays[key]) for name, kind, key in CLOTH_ARRAYS]
     scalars = ", ".join(c_double(0.0 if arrays is None else arrays[k]) for k in CLOTH_SCALARS)
     counts = ", ".join(str(0 if arrays is None else int(arrays[k])) for k in CLOTH_COUNTS)
     source = c_string("" if arrays is None else arrays["source"])
-    lines += [f"inline constexpr double CLOTH_SCALARS[] = {{{scalars}}};  // {', '.join(CLOTH_SCALARS)}",
-              f"inline constexpr Index CLOTH_COUNTS[] = {{{counts}}};  // {', '.join(CLOTH_COUNTS)}",
-              f"inline constexpr const char* CLOTH_SOURCE = {source};"]
+    lines += [f"extern const double CLOTH_SCALARS[] = {{{scalars}}};  // {', '.join(CLOTH_SCALARS)}",
+              f"extern const Index CLOTH_COUNTS[] = {{{counts}}};  // {', '.join(CLOTH_COUNTS)}",
+              f"extern const char* const CLOTH_SOURCE = {source};"]
     return "\n".join(lines)
