@@ -17,6 +17,7 @@ import os
 import shutil
 import struct
 import subprocess
+import time
 from pathlib import Path
 
 import numpy as np
@@ -648,6 +649,53 @@ def test_a_unit_of_another_scene_compiles_its_generated_source_alone(build, tmp_
     assert all(len(g) == 1 for g in generated) and generated[0] != generated[1]
     assert set(linked[0]) - generated[0] == set(linked[1]) - generated[1]
     assert {p.name.split("-")[0] for p in linked[0]} >= {"unit", "fmi2", "stepping"}
+
+
+def compiles_counted(monkeypatch, pause: float = 0.0) -> list:
+    """The compiler runs of native.compile_objects from now on (each held ``pause`` s more), as a list."""
+    runs, run = [], subprocess.run
+
+    def counted(command, **kwargs):
+        if "-c" in command:  # (not the compiler's --version, its identity)
+            runs.append(command)
+            time.sleep(pause)
+        return run(command, **kwargs)
+
+    monkeypatch.setattr(native.subprocess, "run", counted)
+    return runs
+
+
+def test_builds_sharing_a_folder_compile_each_object_once(tmp_path, monkeypatch):
+    """Two builds (threads here; the lock file is per open file, so processes alike) ask for the same
+    object at once: one compiles it while the other waits for its lock, then finds and reuses it."""
+    import threading
+
+    source = tmp_path / "small.cpp"
+    source.write_text("int small() { return 1; }\n")
+    runs = compiles_counted(monkeypatch, pause=0.5)
+    found = []
+    builders = [threading.Thread(target=lambda: found.append(native.compile_objects(
+        native.find_compiler(), [source], [], tmp_path / "objects", [], jobs=1))) for _ in range(2)]
+    for builder in builders:
+        builder.start()
+    for builder in builders:
+        builder.join()
+    assert len(runs) == 1 and found[0] == found[1] and found[0][0].is_file()
+
+
+def test_a_folder_that_takes_no_lock_still_builds(tmp_path, monkeypatch):
+    """Where flock fails (some network file systems), the object is compiled without the lock."""
+    import fcntl
+
+    def refused(*_):
+        raise OSError(37, "No locks available")
+
+    monkeypatch.setattr(fcntl, "flock", refused)
+    source = tmp_path / "small.cpp"
+    source.write_text("int small() { return 1; }\n")
+    runs = compiles_counted(monkeypatch)
+    objects = native.compile_objects(native.find_compiler(), [source], [], tmp_path / "objects", [], jobs=1)
+    assert len(runs) == 1 and objects[0].is_file()
 
 
 def test_a_unit_built_with_a_scene_turns_its_colliders_by_their_keys_as_the_python_api(build, tmp_path):

@@ -572,11 +572,16 @@ def _forget_unused(objects: Path) -> None:
 def _compiling(target: Path):
     """Hold ``target``'s lock file (``.lock`` beside it) while it is looked for and compiled: another build
     of the same object (another process sharing the folder) waits for it and reuses it instead of compiling
-    it at the same time."""
+    it at the same time.  Where the folder takes no lock (some network file systems), the builds compile
+    it side by side, as before: each object is written whole (``os.replace``)."""
     import fcntl
 
     with open(target.with_suffix(".lock"), "a") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+        except OSError:
+            yield
+            return
         try:
             yield
         finally:
