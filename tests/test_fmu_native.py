@@ -1082,14 +1082,15 @@ def test_calls_the_master_must_not_make_are_errors_and_change_nothing(errors):
 
 
 def test_a_unit_of_the_grid_declares_and_takes_no_bend_rigidity(build, errors):
-    """Its families have no hinges (Python runs the grid as a mesh of its quads for them): the model description
-    declares bend_rigidity 0 only, and a value above 0 is an FMI error naming it and what is allowed."""
+    """Built without hinges, its families have none (a unit built from a scene with bend_rigidity lists the
+    grid's springs and hinges: tests/test_fmu_native_mesh.py): the model description declares bend_rigidity 0
+    only, and a value above 0 is an FMI error naming it and what is allowed."""
     declared = {v.name: v for v in build[2]["md"].modelVariables}["bend_rigidity"]
     assert float(declared.min) == float(declared.max) == 0.0
     statuses, messages = errors["bend_rigidity"][:3], errors["bend_rigidity"][3]
     assert statuses == [3, 0, 3]  # the set call, and the initialization it left refused (as for other values)
-    assert messages[0].startswith("parameter 'bend_rigidity': 0.0001 is out of range; allowed: 0 N m in a native unit "
-                                  "of the built-in grid, which bends by its springs")
+    assert messages[0].startswith("parameter 'bend_rigidity': 0.0001 is out of range; allowed: 0 N m in this native "
+                                  "unit of the built-in grid, built without hinges")
     assert messages[1].startswith("initialization refused: parameter 'bend_rigidity'")
 
 

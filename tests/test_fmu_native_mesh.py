@@ -9,6 +9,7 @@ so their outputs and positions must be equal bit for bit, as for the grid's nati
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
@@ -331,3 +332,61 @@ def test_a_unit_of_a_mesh_bent_by_hinges_runs_as_the_python_api_and_keeps_them(u
         assert (float(bend.min) == 0.0) is hinged  # hinges bend every face: any bend_stiffness, unused
     records, _ = run_child(STATES, fmu)  # (a set call the unit refuses, in a process of its own)
     assert records[-1]["refused"][1:] == [["bend_stiffness", 0], ["bend_rigidity", 3], ["bend_rigidity", 0]]
+
+
+#: A child master: each (name, value) set in an instance of its own; the set call's status and the messages logged.
+SETS = """
+import json, sys
+import fmpy
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave
+from test_fmu_support import message_callbacks
+directory = fmpy.extract(sys.argv[1])
+md = fmpy.read_model_description(directory)
+variables = {v.name: v for v in md.modelVariables}
+for name, value in json.loads(sys.argv[2]):
+    messages = []
+    callbacks = message_callbacks(messages)
+    unit = FMU2Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier="WetCloth", instanceName=name)
+    unit.instantiate(callbacks=callbacks)
+    setter = unit.setInteger if variables[name].type == "Integer" else unit.setReal
+    try:
+        setter([variables[name].valueReference], [value])
+        status = 0
+    except FMICallException as exc:
+        status = int(exc.status)
+    print(json.dumps({"name": name, "status": status, "messages": [m for _, m in messages]}))
+"""
+
+
+def test_a_unit_of_the_built_in_grid_bent_by_hinges_runs_as_the_python_api(units, tmp_path):
+    """The built-in rectangle with bend_rigidity (topology._hinged_grid: the listed springs and hinges of its
+    quads, started and pinned as the grid) built into a native unit: it runs as Simulation does, bit for bit,
+    tilted and hanging from its pinned edge, with the built rigidity and another; it declares nx, ny, width and
+    length fixed to those its hinges were built for, and refuses another value, and bend_rigidity 0, with an
+    FMI error naming it.  (708bb22: a native unit of the grid refused bend_rigidity above 0.)"""
+    import fmpy
+
+    path = tmp_path / "hinged_grid.toml"
+    path.write_text('nx = 9\nny = 7\nwidth = 0.4\nlength = 0.3\nbend_rigidity = 2e-5\npinned_edge = "y_max"\n'
+                    "initial_tilt = 20.0\ninitial_height = 0.5\n")
+    scene = wetcloth.load_scene(path)
+    fmu = native.build_native_fmu(tmp_path / "hinged_grid.fmu", 2, build_dir=units["objects"], scene=path)
+    ends = []
+    for changes in ({}, {"bend_rigidity": 2e-4}):
+        result = fmpy.simulate_fmu(str(fmu), stop_time=0.3, output_interval=0.05, start_values=changes)
+        rows, _ = python_rows(scene.replace(**changes), result["time"])
+        assert_agree([[row[k] for k in COLUMNS] for row in result], rows, str(changes))
+        ends.append(rows[-1])
+    assert abs(ends[0][2] - ends[1][2]) > 1e-5  # the rigidity acts (5e-5 m apart at 0.3 s: far above round-off)
+    declared = {v.name: v for v in fmpy.read_model_description(str(fmu)).modelVariables}
+    for name, value in (("nx", 9), ("ny", 7), ("width", 0.4), ("length", 0.3)):
+        assert float(declared[name].min) == float(declared[name].max) == value, name
+    assert float(declared["bend_rigidity"].min) > 0.0 and float(declared["bend_rigidity"].max) == 100.0  # (0, 100]
+    records, _ = run_child(SETS, fmu, json.dumps([["nx", 10], ["width", 0.5], ["bend_rigidity", 0.0],
+                                                  ["bend_stiffness", 0.0]]), cwd=Path(__file__).resolve().parent)
+    assert [r["status"] for r in records] == [3, 3, 3, 0]
+    assert records[0]["messages"][0].startswith("parameter 'nx': 10 is out of range; allowed: 9 (the hinges of this "
+                                                "unit's grid were built for 9 x 7 particles; rebuild the unit")
+    assert records[1]["messages"][0].startswith("parameter 'width': 0.5 is out of range; allowed: 0.4 m (the hinges")
+    assert "this unit's mesh has hinges" in records[2]["messages"][0]

@@ -187,16 +187,12 @@ def test_the_core_rests_the_cantilever_on_its_hinges_static_solution(tmp_path):
 
 
 def test_bend_rigidity_is_refused_where_no_hinge_can_carry_it(tmp_path):
-    """A mesh whose faces share no edge has nowhere to bend, and a native unit of the built-in grid bends by its
-    springs: bend_rigidity > 0 there is a ParameterError naming it and what is allowed."""
-    from wetcloth.fmu.native_mesh import cloth_arrays
-
+    """A mesh whose faces share no edge has nowhere to bend: bend_rigidity > 0 there is a ParameterError naming
+    it and what is allowed."""
     apart = tmp_path / "apart.obj"
     apart.write_text("v 0 0 1\nv 0.1 0 1\nv 0.1 0.1 1\nv 0 0.1 1\nv 0.2 0.1 1\nv 0.2 0.2 1\nf 1 2 3 4\nf 3 5 6\n")
     with pytest.raises(ParameterError, match="bend_rigidity.*has none; allowed: 0 N m"):
         build_topology(wetcloth.Scene(cloth_mesh=str(apart), bend_rigidity=1e-4))
-    with pytest.raises(ParameterError, match="bend_rigidity.*allowed: 0 N m in a native unit of the built-in grid"):
-        cloth_arrays(wetcloth.Scene(bend_rigidity=1e-4))
 
 
 def test_the_built_in_grid_bends_by_hinges_as_a_mesh_file_of_it_does(tmp_path):

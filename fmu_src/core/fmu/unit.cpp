@@ -165,6 +165,7 @@ const std::shared_ptr<const ClothMesh>& built_in_cloth() {
         m->grid_nx = CLOTH_COUNTS[5];
         m->grid_ny = CLOTH_COUNTS[6];
         m->pair_buckling_count = CLOTH_COUNTS[7];
+        m->hinged_grid = CLOTH_COUNTS[8] != 0;
         m->rest_pos = vector_of(CLOTH_REST_POS, CLOTH_REST_POS_SIZE);
         m->rest_xy = vector_of(CLOTH_REST_XY, CLOTH_REST_XY_SIZE);
         m->area = vector_of(CLOTH_AREA, CLOTH_AREA_SIZE);

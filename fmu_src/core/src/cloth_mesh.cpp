@@ -39,6 +39,23 @@ Index ClothMesh::hinge_count() const {
 
 std::string ClothMesh::fixed_problem(const Scene& scene) const {
     if (forms_grid()) return grid_rigidity_problem(scene);  // the grid's families: any bend and stretch stiffness
+    if (hinged_grid) {
+        const std::string rebuild = " (rebuild the unit with wetcloth build-fmu --native --scene for another)";
+        if (scene.nx != grid_nx || scene.ny != grid_ny) {
+            const bool x = scene.nx != grid_nx;
+            return parameter_error(x ? "nx" : "ny", std::to_string(x ? scene.nx : scene.ny) + " is not allowed in "
+                                   "this unit: the hinges of its grid were built for " + std::to_string(grid_nx) + " x " +
+                                   std::to_string(grid_ny) + " particles; allowed: " +
+                                   std::to_string(x ? grid_nx : grid_ny) + rebuild);
+        }
+        if (scene.width != grid_width || scene.length != grid_length) {
+            const bool x = scene.width != grid_width;
+            return parameter_error(x ? "width" : "length", py_repr(x ? scene.width : scene.length) + " is not allowed "
+                                   "in this unit: the hinges of its grid were built for " + py_repr(grid_width) +
+                                   " x " + py_repr(grid_length) + " m; allowed: " +
+                                   py_repr(x ? grid_width : grid_length) + " m" + rebuild);
+        }
+    }
     const bool hinged = hinge_count() > 0;
     if ((scene.bend_rigidity != 0.0) != hinged) {
         return parameter_error("bend_rigidity", py_repr(scene.bend_rigidity) + " is not allowed in this unit: its mesh "
@@ -63,6 +80,7 @@ std::string ClothMesh::fixed_problem(const Scene& scene) const {
 }
 
 std::vector<double> ClothMesh::start_positions(const Scene& scene) const {
+    if (hinged_grid) return grid_start(scene);
     if (scene.place_mesh == SWITCH_OFF) return rest_pos;
     const double tilt = scene.initial_tilt * (PI / 180.0);  // math.radians
     const double c = std::cos(tilt), s = std::sin(tilt);
@@ -107,7 +125,9 @@ std::vector<char> ClothMesh::pinned_at(const Scene& scene, const std::vector<dou
                                        std::string& problem) const {
     std::vector<char> pinned(static_cast<std::size_t>(n), 0);
     problem.clear();
-    if (scene.pinned_edge != EDGE_NONE) {
+    if (hinged_grid) {
+        for (Index i = 0; i < n; ++i) pinned[i] = on_pinned_edge(scene, i) ? 1 : 0;
+    } else if (scene.pinned_edge != EDGE_NONE) {
         problem = parameter_error("pinned_edge", py_repr(std::string_view(EDGES[scene.pinned_edge])) +
                                   " is an edge of the nx x ny rectangle, but the cloth comes from cloth_mesh (pin its "
                                   "vertices with pinned_vertices: a point attribute or a box); allowed here: 'none'");
@@ -130,12 +150,13 @@ struct MeshStart {
 MeshStart mesh_start(const Scene& scene, const ClothMesh& mesh, const Pins* pins) {
     MeshStart start;
     start.problem = mesh.fixed_problem(scene);
+    if (mesh.hinged_grid && start.problem.empty()) start.problem = grid_start_problem(scene, pins);
     if (!start.problem.empty()) return start;
     start.pos = mesh.start_positions(scene);
     double lowest = start.pos[2 * mesh.n];
     for (Index i = 0; i < mesh.n; ++i) lowest = std::fmin(lowest, start.pos[2 * mesh.n + i]);
     lowest -= 0.5 * scene.thickness;
-    if (lowest <= scene.floor_level) {
+    if (lowest <= scene.floor_level && !mesh.hinged_grid) {
         const bool placed = scene.place_mesh == SWITCH_ON;
         start.problem = parameter_error(placed ? "initial_height" : "cloth_mesh",
                                         "the cloth starts at or below the floor (lowest point " + py_g(lowest) +

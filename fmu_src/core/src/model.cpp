@@ -119,15 +119,19 @@ std::string fixed_differences(const Scene& a, const Scene& b) {
 
 std::string grid_rigidity_problem(const Scene& s) {
     if (s.bend_rigidity == 0.0) return "";
-    return "parameter 'bend_rigidity': " + py_repr(s.bend_rigidity) + " N m bends by hinges; allowed: 0 N m in a "
-           "native unit of the built-in grid, which bends by its springs (bend_stiffness); for hinges build it from a "
-           "scene with a mesh file (cloth_mesh, the rectangle's too) and bend_rigidity > 0";
+    return "parameter 'bend_rigidity': " + py_repr(s.bend_rigidity) + " N m bends by hinges; allowed: 0 N m in this "
+           "native unit of the built-in grid, built without hinges (it bends by its springs, bend_stiffness); for "
+           "hinges build it from a scene with bend_rigidity > 0 (wetcloth build-fmu --native --scene)";
 }
 
 std::string scene_problem(const Scene& s, const ClothMesh* mesh, const Pins* pins) {
     if (mesh != nullptr) return mesh_scene_problem(s, *mesh, pins);
     const std::string rigidity = grid_rigidity_problem(s);
     if (!rigidity.empty()) return rigidity;
+    return grid_start_problem(s, pins);
+}
+
+std::string grid_start_problem(const Scene& s, const Pins* pins) {
     const double half_drop = 0.5 * s.length * std::fabs(std::sin(s.initial_tilt * (PI / 180.0)));
     const double lowest = s.initial_height - half_drop - 0.5 * s.thickness;
     if (lowest <= s.floor_level) {
@@ -230,6 +234,12 @@ Topology build_topology(const Scene& scene, const ClothMesh* mesh, const Pins* p
     return mesh != nullptr ? mesh_topology(scene, *mesh, pins) : grid_topology(scene, pins);
 }
 
+bool on_pinned_edge(const Scene& scene, Index i) {
+    const Index col = i % scene.nx, row = i / scene.nx;
+    return (scene.pinned_edge == EDGE_X_MIN && col == 0) || (scene.pinned_edge == EDGE_X_MAX && col == scene.nx - 1) ||
+           (scene.pinned_edge == EDGE_Y_MIN && row == 0) || (scene.pinned_edge == EDGE_Y_MAX && row == scene.ny - 1);
+}
+
 Topology grid_topology(const Scene& scene, const Pins* pins) {
     if (scene.nx < 2 || scene.ny < 2) {
         throw std::invalid_argument("the grid needs at least 2 x 2 particles, got " + std::to_string(scene.nx) +
@@ -318,11 +328,7 @@ Topology grid_topology(const Scene& scene, const Pins* pins) {
 
     t.free.assign(n, 1.0);
     for (Index i = 0; i < n; ++i) {
-        const bool pinned = (scene.pinned_edge == EDGE_X_MIN && col[i] == 0) ||
-                            (scene.pinned_edge == EDGE_X_MAX && col[i] == nx - 1) ||
-                            (scene.pinned_edge == EDGE_Y_MIN && row[i] == 0) ||
-                            (scene.pinned_edge == EDGE_Y_MAX && row[i] == ny - 1);
-        if (pinned) t.free[i] = 0.0;
+        if (on_pinned_edge(scene, i)) t.free[i] = 0.0;
     }
     t.start = grid_start(scene);
     if (pins != nullptr) {  // pinned_vertices' box, over the start positions

@@ -15,15 +15,16 @@ The pins of ``pinned_vertices`` (``pins_source``), on a mesh or the built-in gri
 vertices, or a box, whose particles the core finds at the start positions.
 
 What the structure fixes (``fixed_ranges``): ``bend_stiffness`` 0 or not (the bending springs are listed or
-not), ``bend_rigidity`` 0 or not (the hinges' terms are listed or not), and, on a mesh with an algebraic hierarchy (more than ``ALGEBRAIC_SIZE`` vertices), ``stretch_stiffness``
-(pyamg's aggregation weighs the springs by it; the unit refuses another value with an error naming it).
+not), ``bend_rigidity`` 0 or not (the hinges' terms are listed or not), on a mesh with an algebraic hierarchy
+(more than ``ALGEBRAIC_SIZE`` vertices) ``stretch_stiffness`` (pyamg's aggregation weighs the springs by it),
+and on the built-in grid bent by hinges (its quads' springs listed) ``nx``, ``ny``, ``width`` and ``length``;
+the unit refuses another value with an error naming it.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from wetcloth.errors import ParameterError
 from wetcloth.topology import HINGE
 
 #: The ClothMesh arrays in the generated source: C++ name, element type, key of ``cloth_arrays``.
@@ -43,27 +44,30 @@ CLOTH_ARRAYS = (
 #: The ClothMesh numbers, in the order of the generated source's CLOTH_SCALARS and CLOTH_COUNTS (unit.cpp reads them so).
 CLOTH_SCALARS = ("centre_x", "centre_y", "centre_z", "size", "rest_gap", "typical_gap", "least_margin",
                  "hierarchy_stretch_stiffness", "grid_width", "grid_length")
-CLOTH_COUNTS = ("n", "pair_tension_count", "kd", "marker_size", "bends", "grid_nx", "grid_ny", "pair_buckling_count")
+CLOTH_COUNTS = ("n", "pair_tension_count", "kd", "marker_size", "bends", "grid_nx", "grid_ny", "pair_buckling_count",
+                "hinged_grid")
 
 
-#: Why a native unit of the built-in grid takes no ``bend_rigidity`` (model.cpp's grid_rigidity_problem says the same).
-GRID_RIGIDITY = ("0 N m in a native unit of the built-in grid, which bends by its springs (bend_stiffness); for hinges "
-                 "build it from a scene with a mesh file (cloth_mesh, the rectangle's too) and bend_rigidity > 0")
+#: Why a native unit of the built-in grid built without hinges takes no ``bend_rigidity`` (model.cpp's
+#: grid_rigidity_problem says the same).
+GRID_RIGIDITY = ("0 N m in this native unit of the built-in grid, built without hinges (it bends by its springs, "
+                 "bend_stiffness); for hinges build it from a scene with bend_rigidity > 0 (wetcloth build-fmu --native "
+                 "--scene)")
 
 
 def cloth_arrays(scene) -> dict | None:
     """The ClothMesh of ``scene`` (a ``wetcloth.Scene`` whose cloth comes from a mesh file) as arrays and
     numbers (keys of CLOTH_ARRAYS, CLOTH_SCALARS, CLOTH_COUNTS, and the file's name ``source``); None for the
     built-in grid.  A file whose vertices form the built-in grid (``topology.file_grid``) runs with the grid's
-    springs, as in Python: it carries only its start (rest_pos and the centroid) and the grid's numbers."""
+    springs, as in Python: it carries only its start (rest_pos and the centroid) and the grid's numbers.  The
+    built-in grid with ``bend_rigidity`` lists its springs and hinges (``topology._hinged_grid``), as a mesh
+    would, with ``hinged_grid`` and the grid's numbers: the unit starts and pins it as the grid."""
     from wetcloth.mesh_file import is_mesh
     from wetcloth.preconditioner import plane_for
     from wetcloth.self_collision import make_contact
     from wetcloth.topology import build_topology, corner_shares
 
-    if not is_mesh(scene.cloth_mesh):
-        if scene.bend_rigidity != 0.0:
-            raise ParameterError("bend_rigidity", f"{scene.bend_rigidity!r} N m bends by hinges; allowed: {GRID_RIGIDITY}")
+    if not is_mesh(scene.cloth_mesh) and scene.bend_rigidity == 0.0:
         return None
     topo = build_topology(scene)
     if not topo.listed:
@@ -86,8 +90,10 @@ def cloth_arrays(scene) -> dict | None:
     arrays.update(n=topo.n, pair_tension_count=topo.pair_tension_count, pair_buckling_count=topo.pair_buckling_count,
                   kd=plane.bands.shape[2] - 1,
                   marker_size=len(h.marker), bends=int(scene.bend_stiffness != 0.0 and scene.bend_rigidity == 0.0),
-                  source=str(topo.mesh.source),
-                  grid_width=0.0, grid_length=0.0, grid_nx=0, grid_ny=0)
+                  source=str(topo.mesh.source) if topo.mesh is not None else "the nx x ny rectangle",
+                  grid_width=0.0, grid_length=0.0, grid_nx=0, grid_ny=0, hinged_grid=int(topo.mesh is None))
+    if topo.mesh is None:  # the built-in grid: what its listed springs were built for
+        arrays.update(grid_width=scene.width, grid_length=scene.length, grid_nx=scene.nx, grid_ny=scene.ny)
     return arrays
 
 
@@ -104,7 +110,7 @@ def _grid_file_arrays(scene, topo) -> dict:
     arrays.update(rest_pos=topo.rest_pos, centre_x=centre[0], centre_y=centre[1], centre_z=centre[2], size=topo.size,
                   rest_gap=0.0, typical_gap=0.0, least_margin=0.0, hierarchy_stretch_stiffness=0.0,
                   grid_width=width, grid_length=length, n=topo.n, pair_tension_count=0, pair_buckling_count=0, kd=0, marker_size=0, bends=0,
-                  grid_nx=nx, grid_ny=ny, source=str(topo.mesh.source))
+                  grid_nx=nx, grid_ny=ny, hinged_grid=0, source=str(topo.mesh.source))
     return arrays
 
 
@@ -137,10 +143,18 @@ def hierarchy_levels(arrays: dict | None) -> int:
 def fixed_ranges(arrays: dict | None) -> dict[str, tuple[float, float, bool, str]]:
     """The parameters the built-in mesh fixes: name -> (lo, hi, lo_open, range text) of the values the unit
     takes (ClothMesh::fixed_problem gives the same verdicts)."""
-    if arrays is None or arrays["grid_nx"]:  # the grid's families take any stiffness, and no hinges
+    if arrays is None or (arrays["grid_nx"] and not arrays["hinged_grid"]):  # the grid's families: no hinges
         return {"bend_rigidity": (0.0, 0.0, False, GRID_RIGIDITY)}
     rebuild = "; rebuild the unit (wetcloth build-fmu --native --scene) for another"
     ranges = {}
+    if arrays["hinged_grid"]:  # (ClothMesh::fixed_problem's texts)
+        size = f"{arrays['grid_nx']} x {arrays['grid_ny']} particles"
+        for name, key, unit, what in (("nx", "grid_nx", "", size), ("ny", "grid_ny", "", size),
+                                      ("width", "grid_width", " m", f"{arrays['grid_width']!r} x {arrays['grid_length']!r} m"),
+                                      ("length", "grid_length", " m", f"{arrays['grid_width']!r} x {arrays['grid_length']!r} m")):
+            value = arrays[key]
+            ranges[name] = (value, value, False, f"{value!r}{unit} (the hinges of this unit's grid were built for "
+                                                 f"{what}{rebuild})")
     hinged = np.any(np.asarray(arrays["pair_kind"]) == HINGE)  # (then every face bends by hinges: any bend_stiffness)
     if arrays["bends"]:
         ranges["bend_stiffness"] = (0.0, 1e8, True, "0 < bend_stiffness <= 1e+08 N/m (this unit's mesh has bending "

@@ -166,12 +166,19 @@ struct Pins;
 //: fixes (ClothMesh::fixed_problem); with `pins`, a box that holds a particle (pinned_mask).
 std::string scene_problem(const Scene& scene, const ClothMesh* mesh = nullptr, const Pins* pins = nullptr);
 
-//: "" or the ParameterError's text of a bend_rigidity on a native unit's grid (native_mesh.GRID_RIGIDITY): its
-//: families have no hinges (Python lists the grid's springs for them: topology._hinged_grid).
+//: "" or the ParameterError's text of a bend_rigidity on a native unit's grid built without hinges
+//: (native_mesh.GRID_RIGIDITY): its families have none (built with them, the grid's springs are listed,
+//: topology._hinged_grid: a ClothMesh with hinged_grid).
 std::string grid_rigidity_problem(const Scene& scene);
 
 //: The grid's particle positions (3, n) m at t = 0 (topology.initial_positions).
 std::vector<double> grid_start(const Scene& scene);
+
+//: scene_problem's rule on the grid's start: above the floor, and `pins`' box holding a particle there.
+std::string grid_start_problem(const Scene& scene, const Pins* pins);
+
+//: Whether particle i of the scene's nx x ny grid is on its pinned_edge (pinned_mask).
+bool on_pinned_edge(const Scene& scene, Index i);
 
 // ------------------------------------------------------------------------------------------ formatting
 //: Python's repr of a float ('0.1', '1e-05', '1e+16', 'inf', 'nan') and of a str ('text').
@@ -238,9 +245,13 @@ struct ClothMesh {
     // A file whose vertices form the built-in grid (topology.file_grid): its grid_nx x grid_ny particles and
     // grid_width x grid_length (m).  It runs with the grid's springs, preconditioner and self-collision gaps,
     // from the file's start (rest_pos, centre); the listed springs and hierarchy are empty.  0: a mesh.
+    // The built-in grid bent by hinges (topology._hinged_grid; hinged_grid true): the listed springs and hinges
+    // of its quads, started and pinned as the grid (grid_start, pinned_edge), for the grid_nx x grid_ny,
+    // grid_width x grid_length it was built for, which the scene must keep.
     Index grid_nx = 0, grid_ny = 0;
     double grid_width = 0.0, grid_length = 0.0;
-    bool forms_grid() const { return grid_nx > 0; }
+    bool hinged_grid = false;
+    bool forms_grid() const { return grid_nx > 0 && !hinged_grid; }
     //: The hinges' terms among the listed springs (PAIR_HINGE: built with bend_rigidity > 0), the last this many.
     Index hinge_count() const;
     //: `scene` with the grid's nx, ny, width and length, if this file forms one (else `scene`).
