@@ -33,11 +33,13 @@ BPY_NEWEST := 5.3.0
 
 # The build's own requirements (pyproject.toml's build-system) go into the environment, and no isolated one is
 # made: every build then shares build/ (the Blender extension's wheel relinks in seconds instead of compiling anew).
+# The cmake package too, which fmpy (a test requirement) brings: installed after the first build, it would make
+# scikit-build-core configure the next one with another CMake, which compiles everything again.
 $(STAMP): pyproject.toml $(CORE_FILES)
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -c "import tomllib; print('\n'.join(tomllib.load(open('pyproject.toml', 'rb'))['build-system']['requires']))" \
-		| xargs $(BIN)/python -m pip install --quiet
+		| xargs $(BIN)/python -m pip install --quiet cmake
 	$(BIN)/python -m pip install --quiet --no-build-isolation -e '.[test]'
 	touch $(STAMP)
 
