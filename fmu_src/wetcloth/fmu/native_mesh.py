@@ -41,7 +41,8 @@ CLOTH_ARRAYS = (
     ("CLOTH_R_COLUMN", "Column", "r_column"), ("CLOTH_R_VALUE", "double", "r_value"),
     ("CLOTH_SPRING_ENTRIES", "Index", "spring_entries"),
 )
-#: The ClothMesh numbers, in the order of the generated source's CLOTH_SCALARS and CLOTH_COUNTS (unit.cpp reads them so).
+#: The ClothMesh numbers, in the order of the generated source's CLOTH_SCALARS and CLOTH_COUNTS (unit.cpp reads
+#: them so).
 CLOTH_SCALARS = ("centre_x", "centre_y", "centre_z", "size", "rest_gap", "typical_gap", "least_margin",
                  "hierarchy_stretch_stiffness", "grid_width", "grid_length")
 CLOTH_COUNTS = ("n", "pair_tension_count", "kd", "marker_size", "bends", "grid_nx", "grid_ny", "pair_buckling_count",
@@ -148,11 +149,10 @@ def fixed_ranges(arrays: dict | None) -> dict[str, tuple[float, float, bool, str
     rebuild = "; rebuild the unit (wetcloth build-fmu --native --scene) for another"
     ranges = {}
     if arrays["hinged_grid"]:  # (ClothMesh::fixed_problem's texts)
-        size = f"{arrays['grid_nx']} x {arrays['grid_ny']} particles"
-        for name, key, unit, what in (("nx", "grid_nx", "", size), ("ny", "grid_ny", "", size),
-                                      ("width", "grid_width", " m", f"{arrays['grid_width']!r} x {arrays['grid_length']!r} m"),
-                                      ("length", "grid_length", " m", f"{arrays['grid_width']!r} x {arrays['grid_length']!r} m")):
-            value = arrays[key]
+        count = f"{arrays['grid_nx']} x {arrays['grid_ny']} particles"
+        size = f"{arrays['grid_width']!r} x {arrays['grid_length']!r} m"
+        for name, unit, what in (("nx", "", count), ("ny", "", count), ("width", " m", size), ("length", " m", size)):
+            value = arrays[f"grid_{name}"]
             ranges[name] = (value, value, False, f"{value!r}{unit} (the hinges of this unit's grid were built for "
                                                  f"{what}{rebuild})")
     hinged = np.any(np.asarray(arrays["pair_kind"]) == HINGE)  # (then every face bends by hinges: any bend_stiffness)
