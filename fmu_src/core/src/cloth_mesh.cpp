@@ -147,25 +147,29 @@ struct MeshStart {
     std::string problem;
 };
 
+//: "" or the ParameterError's text of a mesh whose start positions `pos` (3, n) reach the floor (_check_mesh_start).
+std::string floor_problem(const Scene& scene, const std::vector<double>& pos, Index n) {
+    double lowest = pos[2 * n];
+    for (Index i = 0; i < n; ++i) lowest = std::fmin(lowest, pos[2 * n + i]);
+    lowest -= 0.5 * scene.thickness;
+    if (lowest > scene.floor_level) return "";
+    const bool placed = scene.place_mesh == SWITCH_ON;
+    return parameter_error(placed ? "initial_height" : "cloth_mesh",
+                           "the cloth starts at or below the floor (lowest point " + py_g(lowest) +
+                               " m with thickness/2, floor_level " + py_g(scene.floor_level) + " m): " +
+                               (placed ? "raise initial_height" :
+                                         "raise the mesh in its file, or place it: place_mesh = 'on'") +
+                               "; allowed: every vertex above floor_level + thickness/2");
+}
+
 MeshStart mesh_start(const Scene& scene, const ClothMesh& mesh, const Pins* pins) {
     MeshStart start;
     start.problem = mesh.fixed_problem(scene);
-    if (mesh.hinged_grid && start.problem.empty()) start.problem = grid_start_problem(scene, pins);
     if (!start.problem.empty()) return start;
     start.pos = mesh.start_positions(scene);
-    double lowest = start.pos[2 * mesh.n];
-    for (Index i = 0; i < mesh.n; ++i) lowest = std::fmin(lowest, start.pos[2 * mesh.n + i]);
-    lowest -= 0.5 * scene.thickness;
-    if (lowest <= scene.floor_level && !mesh.hinged_grid) {
-        const bool placed = scene.place_mesh == SWITCH_ON;
-        start.problem = parameter_error(placed ? "initial_height" : "cloth_mesh",
-                                        "the cloth starts at or below the floor (lowest point " + py_g(lowest) +
-                                            " m with thickness/2, floor_level " + py_g(scene.floor_level) + " m): " +
-                                            (placed ? "raise initial_height" :
-                                                      "raise the mesh in its file, or place it: place_mesh = 'on'") +
-                                            "; allowed: every vertex above floor_level + thickness/2");
-        return start;
-    }
+    // (the built-in grid bent by hinges starts as the grid, checked as the grid is)
+    start.problem = mesh.hinged_grid ? grid_start_problem(scene, pins) : floor_problem(scene, start.pos, mesh.n);
+    if (!start.problem.empty()) return start;
     start.pinned = mesh.pinned_at(scene, start.pos, pins, start.problem);
     return start;
 }

@@ -301,10 +301,9 @@ enum AlgebraicColumn : Index { SIZE = 0, VECTOR = 1, A_ROWS = 2, P_ROWS = 3, R_R
 //: r_start, r_column, r_value (columns int32).  spring_entries (2, coupled) the positions of each coupled listed
 //: spring's (i, j) and (j, i) entries at level 0: the in-plane springs (in_plane_count), then the hinges' terms
 //: when the systems from the Jacobian couple them (fixed steps: preconditioner.plane_for); inverse_diagonal, x,
-//: b, r (COMPONENTS, vectors: r a level's
-//: residual after its forward sweep, which R restricts row by row; the cycle keeps x, b and r's first two
-//: rows as t1 and t2 side by side, [2 v + c]: mesh_plane.cpp); marker
-//: (n_0) scratch.  The coarsest level is solved by the plane's band factors.  A grid has none (L = 0).
+//: b, r (COMPONENTS, vectors: r a level's residual after its forward sweep, which R restricts row by row; the
+//: cycle keeps x, b and r's first two rows as t1 and t2 side by side, [2 v + c]: mesh_plane.cpp); marker (n_0)
+//: scratch.  The coarsest level is solved by the plane's band factors.  A grid has none (L = 0).
 struct Algebraic {
     Index level_count = 0;
     Index entries = 0, vectors = 0;
