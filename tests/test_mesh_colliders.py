@@ -170,6 +170,27 @@ def _crossings(x, cloth_triangles, points, triangles):
     return int(cloth_cuts.sum()), int(collider_cuts.sum())
 
 
+def test_whether_a_box_meets_a_listed_cell_is_whether_the_cells_list_a_triangle():
+    """The edges' pass asks only whether a box's cells list a triangle (collider_mesh.cpp's
+    mesh_lists_triangles_in, one look per row of cells): the same answer as collecting them
+    (mesh_triangles_in), for boxes of every size in and around an icosphere's grid, whose inner cells are
+    empty; a box at a vertex always meets its triangles' cells."""
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=RADIUS)
+    meshes = pack([(sphere.vertices + CENTRE, sphere.faces)])
+    rng = np.random.default_rng(4)
+    answers = []
+    for _ in range(3000):
+        centre = CENTRE + rng.uniform(-1.3 * RADIUS, 1.3 * RADIUS, 3)
+        half = rng.uniform(0.0, 0.4 * RADIUS) * rng.uniform(0.1, 1.0, 3)
+        lo, hi = centre - half, centre + half
+        found = _core.mesh_triangles_in(meshes, 0, lo, hi)
+        answers.append(bool(found))
+        assert _core.mesh_triangles_in(meshes, 0, lo, hi, any=True) == bool(found)
+    assert 0.1 < np.mean(answers) < 0.9  # boxes of both kinds were asked about
+    for vertex in sphere.vertices[::7] + CENTRE:
+        assert _core.mesh_triangles_in(meshes, 0, vertex, vertex, any=True)
+
+
 def test_the_crossing_check_sees_a_segment_through_a_triangle_and_not_beside_it():
     triangle = [np.array([[0.0, 0.0, 0.0]]), np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]])]
     a = np.array([[0.2, 0.2, -1.0], [0.8, 0.8, -1.0], [0.2, 0.2, 0.1], [0.2, 0.2, -1e-3]])

@@ -48,6 +48,23 @@ WETCLOTH_BINDINGS(m) {
         "(m), the outward normals into normal (3, m); a mesh collider's (its triangles in meshes, a ColliderMeshes) "
         "at most reach (m).");
     m.def(
+        "mesh_triangles_in",
+        [](nb::handle meshes, Index mesh, nb::handle lo, nb::handle hi, bool any) -> nb::object {
+            const ColliderMeshes m = meshes_from(meshes);
+            if (mesh < 0 || mesh >= m.count) throw std::out_of_range("mesh index out of range");
+            const double* low = argument<const double>(lo, "lo", 3);
+            const double* high = argument<const double>(hi, "hi", 3);
+            if (any) return nb::bool_(mesh_lists_triangles_in(m, mesh, low, high));
+            std::vector<Index> found;
+            mesh_triangles_in(m, mesh, low, high, found);
+            nb::list out;
+            for (const Index t : found) out.append(t);
+            return out;
+        },
+        nb::arg("meshes"), nb::arg("mesh"), nb::arg("lo"), nb::arg("hi"), nb::arg("any") = false,
+        "The triangles (a list, one entry per cell that lists it) of mesh `mesh` of meshes (a ColliderMeshes) in the "
+        "cells that the box [lo, hi] (3 each, m) overlaps; with any=True, whether there is one.");
+    m.def(
         "slip_on_supports",
         [](nb::handle colliders, nb::handle meshes, double thickness, double floor_z, double floor_friction,
            nb::handle force, nb::handle mass, double h, double limit, nb::handle held, nb::handle pos, nb::handle vel) {

@@ -343,13 +343,11 @@ bool list_holds(const ColliderPairList& kept, const Physics& phys, Index n, cons
 //: Mark (near = 1) the particles of the cloth's elements of `width` particles (as gather's) whose boxes at x,
 //: grown by pad (m), overlap a cell of mesh `mesh` that lists a triangle.
 void mark_near(const Index* elements, Index count, int width, Index mesh, const ColliderMeshes& m, Index n,
-               const double* x, double pad, std::vector<Index>& found, std::vector<double>& near) {
+               const double* x, double pad, std::vector<double>& near) {
     for (Index e = 0; e < count; ++e) {
         const Index* idx = elements ? elements + e * width : &e;
         const Box box = path_box(idx, width, n, x, x, pad);
-        found.clear();
-        mesh_triangles_in(m, mesh, box.lo, box.hi, found);
-        if (found.empty()) continue;
+        if (!mesh_lists_triangles_in(m, mesh, box.lo, box.hi)) continue;
         for (int k = 0; k < width; ++k) near[static_cast<std::size_t>(idx[k])] = 1.0;
     }
 }
@@ -447,9 +445,9 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
     meshes_met(far_pad, reached);
     for (const Index k : reached) {
         const Index mesh = static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_RADIUS]);
-        mark_near(nullptr, n, 1, mesh, phys.meshes, n, x.data(), far_pad, found, near);
-        mark_near(contact.edges, contact.edge_count, 2, mesh, phys.meshes, n, x.data(), far_pad, found, near);
-        mark_near(contact.triangles, contact.triangle_count, 3, mesh, phys.meshes, n, x.data(), far_pad, found, near);
+        mark_near(nullptr, n, 1, mesh, phys.meshes, n, x.data(), far_pad, near);
+        mark_near(contact.edges, contact.edge_count, 2, mesh, phys.meshes, n, x.data(), far_pad, near);
+        mark_near(contact.triangles, contact.triangle_count, 3, mesh, phys.meshes, n, x.data(), far_pad, near);
     }
     const double least = (frame.shift != nullptr ? MOVING_LEAST_MARGIN : LEAST_MARGIN) * reach;
     double widest = 0.0;

@@ -163,6 +163,20 @@ void mesh_triangles_in(const ColliderMeshes& m, Index mesh, const double* lo, co
     if (cells_of(header, lo, hi, r)) for_each_triangle(m, header, r, [&](Index t) { out.push_back(t); });
 }
 
+bool mesh_lists_triangles_in(const ColliderMeshes& m, Index mesh, const double* lo, const double* hi) {
+    const double* header = m.headers + mesh * MESH_COLUMNS;
+    CellRange r;
+    if (!cells_of(header, lo, hi, r)) return false;
+    const Index nx = static_cast<Index>(header[M_CELLS_X]), ny = static_cast<Index>(header[M_CELLS_Y]);
+    const Index first = static_cast<Index>(header[M_FIRST_CELL]);
+    for (Index z = r.lo[2]; z <= r.hi[2]; ++z)
+        for (Index y = r.lo[1]; y <= r.hi[1]; ++y) {  // a row of cells, consecutive in number: its lists' span
+            const Index row = first + (z * ny + y) * nx;
+            if (m.cell_start[row + r.hi[0] + 1] > m.cell_start[row + r.lo[0]]) return true;
+        }
+    return false;
+}
+
 void mesh_vertex_cells(const ColliderMeshes& m, Index mesh, std::vector<std::pair<Index, Index>>& out) {
     const double* header = m.headers + mesh * MESH_COLUMNS;
     const Index nx = static_cast<Index>(header[M_CELLS_X]), ny = static_cast<Index>(header[M_CELLS_Y]);

@@ -32,6 +32,10 @@ bool mesh_crossing(const ColliderMeshes& meshes, Index mesh, const double* a, co
 void mesh_triangles_in(const ColliderMeshes& meshes, Index mesh, const double* lo, const double* hi,
                        std::vector<Index>& out);
 
+//: Whether a cell of mesh `mesh` that the box [lo, hi] (3 each, m) overlaps lists a triangle (whether
+//: mesh_triangles_in would append any), by one look at each row of cells.
+bool mesh_lists_triangles_in(const ColliderMeshes& meshes, Index mesh, const double* lo, const double* hi);
+
 //: Mesh `mesh`'s vertices (those of its triangles) as (cell, vertex) in `out`, by cell: the cell of its grid
 //: that holds each (the nearest, for rounding at the grid's edge).
 void mesh_vertex_cells(const ColliderMeshes& meshes, Index mesh, std::vector<std::pair<Index, Index>>& out);
