@@ -387,6 +387,7 @@ struct ColliderPairList {
     std::vector<double> stride;     // (n) m: how far each particle may move in a step
     std::vector<double> motion;     // (n) m: each particle's motion over the last step the edges' pass looked at
     double margin = 0.0;            // m: the least allowance (0: no list)
+    bool clear = false;             // gathered with the cloth far from every mesh: no pairs, one allowance for all
     const void* key[2] = {nullptr, nullptr};  // the meshes and collider rows it was gathered from
 };
 
