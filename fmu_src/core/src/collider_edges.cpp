@@ -389,8 +389,7 @@ void sort_pairs(std::vector<Pair>& pairs, Index vertex_count, Index n) {
 //: allowance START_ROOM of that; both at least LEAST_MARGIN of reach (thickness / 2, m; MOVING_LEAST_MARGIN in
 //: a moving mesh's frame) near a mesh, FAR_MARGIN of reach elsewhere.  A cloth whose box is far from every
 //: mesh's box keeps an empty list while no particle moves more than what that distance allows (if this
-//: step's motion fits in it).  Each pair keeps the bits of its distance at the reference (P_START), and
-//: kept.members lists the particles of its pairs.
+//: step's motion fits in it).  Each pair keeps the bits of its distance at the reference (P_START).
 //: With `renew` (n: 1 for the particles the list no longer holds), only those particles get a new reference,
 //: stride and allowance, and only the pairs of the cloth's elements that have one of them are gathered again
 //: (the others', gathered at their own particles' references, still hold every pair they must: a list holds a
@@ -410,7 +409,6 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
     }
     std::vector<Index>& found = lists.collider_items;
     std::vector<Pair>& pairs = kept.pairs;
-    kept.members.clear();
     kept.key[0] = phys.meshes.vertices;
     kept.key[1] = phys.colliders;
     // Each particle's motion: over this step, and over the last one the pass looked at.
@@ -531,17 +529,6 @@ void keep_list(const Contact& contact, ContactLists& lists, ColliderPairList& ke
     }
     sort_pairs(pairs, phys.meshes.vertex_count, n);  // (a pair found twice has the same distance: one copy kept)
     pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-    std::vector<Index>& stamp = lists.collider_stamp;
-    stamp.assign(size, 0);
-    for (const Pair& pair : pairs) {
-        for (int k = 0; k < 4; ++k) {
-            const Index s = pair[P_POINTS + k];
-            if (s >= 0) stamp[static_cast<std::size_t>(s)] = 1;
-        }
-    }
-    for (Index i = 0; i < n; ++i) {
-        if (stamp[static_cast<std::size_t>(i)] != 0) kept.members.push_back(i);
-    }
     kept.margin = *std::min_element(allowance.begin(), allowance.end());
 }
 
@@ -567,17 +554,20 @@ void renew_list(const Contact& contact, ContactLists& lists, ColliderPairList& k
     keep_list(contact, lists, kept, phys, frame, n, x0, x1, reach, renew.data());
 }
 
-//: The kept pairs' particles' largest move (m) from the list's reference to x0, and their largest motion
-//: from x0 to x1 (3, n each).
-struct MembersMoves {
-    double moved, motion;
-};
-MembersMoves members_moves(const ColliderPairList& kept, Index n, const double* x0, const double* x1) {
-    double most2 = 0.0, motion2 = 0.0;
-    for (const Index i : kept.members) {
-        most2 = py_max(most2, moved2(n, i, x0, kept.reference.data())), motion2 = py_max(motion2, moved2(n, i, x1, x0));
+//: Each particle's distance (m) from its place in the kept list's reference to x (3, n), into `out` (n).
+void moves_from_reference(const ColliderPairList& kept, Index n, const double* x, std::vector<double>& out) {
+    out.resize(static_cast<std::size_t>(n));
+    for (Index i = 0; i < n; ++i) out[static_cast<std::size_t>(i)] = std::sqrt(moved2(n, i, x, kept.reference.data()));
+}
+
+//: The largest of values (n) over a pair's cloth points.
+inline double pair_largest(const Pair& pair, const std::vector<double>& values) {
+    double most = 0.0;
+    for (int k = 0; k < 4; ++k) {
+        const Index s = pair[P_POINTS + k];
+        if (s >= 0) most = py_max(most, values[static_cast<std::size_t>(s)]);
     }
-    return {std::sqrt(most2), std::sqrt(motion2)};
+    return most;
 }
 
 //: The pairs near enough to need a look over the step from x0 to x1, in lists.collider_pairs with their
@@ -596,9 +586,10 @@ void pairs_for_step(const Contact& contact, ContactLists& lists, ColliderPairLis
     // move from there, and its motion's bound at most 2.5 times their largest motion over the step (a
     // vertex and a cloth triangle's; a cloth edge's 1.5, a particle's 1): a pair farther at the reference
     // than its distance plus reach plus those two (and a nanometre for rounding) is left out without a look.
-    const MembersMoves moves = members_moves(kept, n, x0, x1);
-    const double unseen = moves.moved + 2.5 * moves.motion + ROUNDING_SLACK * reach;
+    std::vector<double>& moved = lists.collider_moved;
+    moves_from_reference(kept, n, x0, moved);
     for (const Pair& pair : kept.pairs) {
+        const double unseen = pair_largest(pair, moved) + 2.5 * pair_largest(pair, kept.motion) + ROUNDING_SLACK * reach;
         if (gap_of(pair[P_START]) - unseen >= target_of(pair, reach) + reach) continue;
         const Motion mo = motion_of(pair, phys.meshes, n, nullptr, nullptr, x0, x1);
         const double bound = motion_bound(mo.kind, mo.p[0], mo.p[1], mo.p[2], mo.p[3]);
@@ -827,7 +818,8 @@ void add_support_terms(const Contact& contact, ContactLists& lists, ColliderPair
                        const Frame& frame, Index n, const double* q, const double* vel, double ahead, double reach,
                        double within, Supports& supports) {
     if (!list_holds(kept, phys, n, q, nullptr)) renew_list(contact, lists, kept, phys, frame, n, q, q, reach);
-    const double moved = members_moves(kept, n, q, q).moved + ROUNDING_SLACK * reach;
+    std::vector<double>& moved = lists.collider_moved;
+    moves_from_reference(kept, n, q, moved);
     for (const Pair& pair : kept.pairs) {
         if (pair[P_KIND] == POINT_TRIANGLE && pair[P_POINTS] >= 0) continue;  // a particle: the particles' contact
         double fastest = 0.0;  // m/s
@@ -837,7 +829,7 @@ void add_support_terms(const Contact& contact, ContactLists& lists, ColliderPair
             fastest = py_max(fastest, std::sqrt(vel[s] * vel[s] + vel[n + s] * vel[n + s] + vel[2 * n + s] * vel[2 * n + s]));
         }
         const double near = within + ahead * fastest;
-        if (gap_of(pair[P_START]) - moved >= near) continue;
+        if (gap_of(pair[P_START]) - (pair_largest(pair, moved) + ROUNDING_SLACK * reach) >= near) continue;
         const Motion mo = motion_of(pair, phys.meshes, n, nullptr, nullptr, q, q);
         if (box_gap(mo.kind, mo.x) >= near) continue;
         const Weights w = closest(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
@@ -909,15 +901,19 @@ Index hold_on_collider_edges(const Contact& contact, ContactLists& lists, const 
         renew_list(contact, lists, kept, phys, Frame{-1, nullptr}, n, pos, pos, reach);
     }
     lists.collider_rest.resize(4 * static_cast<std::size_t>(n));
+    std::vector<double>& moved = lists.collider_moved;  // (a pair's distance is at least its reference's less that)
+    moves_from_reference(kept, n, pos, moved);
     Index count = 0;
     for (const Pair& pair : kept.pairs) {
         if (pair[P_KIND] == POINT_TRIANGLE && pair[P_POINTS] >= 0) continue;  // a particle: the particles' contact
+        const double resting = (1.0 + RESTING_SLACK) * target_of(pair, reach);
+        if (gap_of(pair[P_START]) - (pair_largest(pair, moved) + ROUNDING_SLACK * reach) > resting) continue;
         const Motion mo = motion_of(pair, phys.meshes, n, nullptr, nullptr, pos, pos);
-        if (box_gap(mo.kind, mo.x) > (1.0 + RESTING_SLACK) * target_of(pair, reach)) continue;
+        if (box_gap(mo.kind, mo.x) > resting) continue;
         const Weights w = closest(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
         const Vec3 d = combine(w, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
         const double length = norm(d);
-        if (!(length > 0.0 && length <= (1.0 + RESTING_SLACK) * target_of(pair, reach))) continue;
+        if (!(length > 0.0 && length <= resting)) continue;
         const double friction = phys.colliders[pair[P_COLLIDER] * COLLIDER_COLUMNS + C_FRICTION];
         const double side[4] = {w.w0, w.w1, w.w2, w.w3};
         for (int k = 0; k < 4; ++k) {

@@ -381,7 +381,6 @@ struct ReusedPlane {
 //: (collider_edges.cpp), in the frame they were gathered in.
 struct ColliderPairList {
     std::vector<std::array<Index, 7>> pairs;  // with the bits of their distances at the reference (m)
-    std::vector<Index> members;     // the particles of its pairs
     std::vector<double> reference;  // (3, n) the positions the pairs were gathered at, m
     std::vector<double> allowance;  // (n) m: how far each particle may be from them at a step's start
     std::vector<double> stride;     // (n) m: how far each particle may move in a step
@@ -433,6 +432,7 @@ struct ContactLists {
     std::vector<Index> collider_vertex_stamp;  // (mesh vertices) scratch: the last cloth edge that took each as an end
     std::vector<double> collider_start;  // (count) their distances at the step's start, m
     std::vector<double> collider_end;    // (3, n) the end positions when they were gathered, m
+    std::vector<double> collider_moved;  // (n) scratch: each particle's move from the kept list's reference, m
     std::vector<Index> collider_pushed;  // (n) 1 for the particles they pushed
     std::vector<double> collider_normals;  // (3, n) the direction of each one's last push
     Index point_triangle_count() const { return static_cast<Index>(point_triangle.size() / 2); }
