@@ -390,7 +390,7 @@ void sort_pairs(std::vector<Pair>& pairs, Index vertex_count, Index n) {
 //: a moving mesh's frame) near a mesh, FAR_MARGIN of reach elsewhere.  A cloth whose box is far from every
 //: mesh's box keeps an empty list while no particle moves more than what that distance allows (if this
 //: step's motion fits in it).  Each pair keeps the bits of its distance at the reference (P_START).
-//: With `renew` (n: 1 for the particles the list no longer holds), only those particles get a new reference,
+//: With `renew` (n: 1 for the particles to renew, renew_list's), only those particles get a new reference,
 //: stride and allowance, and only the pairs of the cloth's elements that have one of them are gathered again
 //: (the others', gathered at their own particles' references, still hold every pair they must: a list holds a
 //: pair while each of its particles stays within its own allowance of its own reference).
