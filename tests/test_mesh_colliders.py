@@ -185,10 +185,10 @@ def test_whether_a_box_meets_a_listed_cell_is_whether_the_cells_list_a_triangle(
         lo, hi = centre - half, centre + half
         found = _core.mesh_triangles_in(meshes, 0, lo, hi)
         answers.append(bool(found))
-        assert _core.mesh_triangles_in(meshes, 0, lo, hi, any=True) == bool(found)
+        assert _core.mesh_lists_triangles_in(meshes, 0, lo, hi) == bool(found)
     assert 0.1 < np.mean(answers) < 0.9  # boxes of both kinds were asked about
     for vertex in sphere.vertices[::7] + CENTRE:
-        assert _core.mesh_triangles_in(meshes, 0, vertex, vertex, any=True)
+        assert _core.mesh_lists_triangles_in(meshes, 0, vertex, vertex)
 
 
 def test_the_crossing_check_sees_a_segment_through_a_triangle_and_not_beside_it():

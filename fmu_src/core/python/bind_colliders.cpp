@@ -19,6 +19,13 @@ Physics with_colliders(nb::handle colliders, nb::handle meshes) {
     return phys;
 }
 
+//: The meshes (a ColliderMeshes), having mesh `mesh`.
+ColliderMeshes mesh_of(nb::handle meshes, Index mesh) {
+    const ColliderMeshes m = meshes_from(meshes);
+    if (mesh < 0 || mesh >= m.count) throw std::out_of_range("mesh index out of range");
+    return m;
+}
+
 }  // namespace
 
 WETCLOTH_BINDINGS(m) {
@@ -49,21 +56,26 @@ WETCLOTH_BINDINGS(m) {
         "at most reach (m).");
     m.def(
         "mesh_triangles_in",
-        [](nb::handle meshes, Index mesh, nb::handle lo, nb::handle hi, bool any) -> nb::object {
-            const ColliderMeshes m = meshes_from(meshes);
-            if (mesh < 0 || mesh >= m.count) throw std::out_of_range("mesh index out of range");
-            const double* low = argument<const double>(lo, "lo", 3);
-            const double* high = argument<const double>(hi, "hi", 3);
-            if (any) return nb::bool_(mesh_lists_triangles_in(m, mesh, low, high));
+        [](nb::handle meshes, Index mesh, nb::handle lo, nb::handle hi) {
+            const ColliderMeshes m = mesh_of(meshes, mesh);
             std::vector<Index> found;
-            mesh_triangles_in(m, mesh, low, high, found);
+            mesh_triangles_in(m, mesh, argument<const double>(lo, "lo", 3), argument<const double>(hi, "hi", 3), found);
             nb::list out;
             for (const Index t : found) out.append(t);
             return out;
         },
-        nb::arg("meshes"), nb::arg("mesh"), nb::arg("lo"), nb::arg("hi"), nb::arg("any") = false,
+        nb::arg("meshes"), nb::arg("mesh"), nb::arg("lo"), nb::arg("hi"),
         "The triangles (a list, one entry per cell that lists it) of mesh `mesh` of meshes (a ColliderMeshes) in the "
-        "cells that the box [lo, hi] (3 each, m) overlaps; with any=True, whether there is one.");
+        "cells that the box [lo, hi] (3 each, m) overlaps.");
+    m.def(
+        "mesh_lists_triangles_in",
+        [](nb::handle meshes, Index mesh, nb::handle lo, nb::handle hi) {
+            return mesh_lists_triangles_in(mesh_of(meshes, mesh), mesh, argument<const double>(lo, "lo", 3),
+                                           argument<const double>(hi, "hi", 3));
+        },
+        nb::arg("meshes"), nb::arg("mesh"), nb::arg("lo"), nb::arg("hi"),
+        "Whether a cell of mesh `mesh` of meshes (a ColliderMeshes) that the box [lo, hi] (3 each, m) overlaps lists "
+        "a triangle.");
     m.def(
         "slip_on_supports",
         [](nb::handle colliders, nb::handle meshes, double thickness, double floor_z, double floor_friction,
