@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_fmu_support import BLOW_UP, SMALL, last_good_time, run_child
+from test_fmu_support import BLOW_UP, SMALL, assert_like_direct_runs, last_good_time, run_child
 
 import wetcloth
 from wetcloth._core import CLOCK_SIZE
@@ -822,19 +822,7 @@ def test_libcosim_runs_the_native_unit(build, tmp_path):
     records, _ = run_child(LIBCOSIM, build[2]["fmu"], json.dumps(SMALL), cwd=tmp_path)
     rows = records[-1]["rows"]
     assert len(rows) == 12
-    scene = wetcloth.Scene(**SMALL)
-    sim = wetcloth.Simulation(scene)
-    expected = []
-    for k, row in enumerate(rows):
-        if k == 5:
-            sim.set_inputs(water_level=0.02)
-        assert row["time"] == pytest.approx((k + 1) * 0.05, abs=1e-12)
-        sim.advance(row["time"] - sim.time)
-        expected.append([sim.outputs()[n] for n in OUTPUT_NAMES])
-    # libcosim's integer-nanosecond clock may put communication points a few ulp from ours: rounding
-    # differences at most, far inside the bounds (and not bitwise on the same core: hence rtol).
-    got = np.array([[row[n] for n in OUTPUT_NAMES] for row in rows])
-    np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-12)
+    assert_like_direct_runs(rows, 5, 0.02, 0.05)
     assert rows[-1]["centroid_z"] > rows[4]["centroid_z"] + 0.01  # the new level reached the cloth
 
 

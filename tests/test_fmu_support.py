@@ -39,6 +39,44 @@ def last_good_time(params: dict, interval: float, duration: float = 1.0) -> floa
             return k * interval
     raise AssertionError(f"{params} did not blow up within {duration} s")
 
+#: A unit run by libcosim may differ from a direct run by this many times what last-bit differences of the
+#: communication times alone make (measured by assert_like_direct_runs): libcosim's time arithmetic is a third
+#: such path.
+TIME_ROUNDING_MARGIN = 10.0
+
+
+def direct_outputs(rows: list[dict], raise_at: int, level: float, interval) -> list[dict]:
+    """The outputs of a Simulation of SMALL advanced by interval(sim, k) s at each of the master's ``rows``,
+    with the water raised to ``level`` m before row ``raise_at``, as the master raised it."""
+    sim = wetcloth.Simulation(wetcloth.Scene(**SMALL))
+    outputs = []
+    for k in range(len(rows)):
+        if k == raise_at:
+            sim.set_inputs(water_level=level)
+        sim.advance(max(0.0, interval(sim, k)))
+        outputs.append(sim.outputs())
+    return outputs
+
+
+def assert_like_direct_runs(rows: list[dict], raise_at: int, level: float, step: float) -> None:
+    """Check a master's rows (time and outputs after each communication step of ``step`` s) against a
+    Simulation of SMALL run directly to the rows' times.  Communication times that differ from the master's
+    in the last bits (libcosim counts integer nanoseconds: ~1e-17 s) move the steps' ends, and the step
+    control amplifies that into the outputs (the water's rise within a step is taken again at smaller
+    steps).  How far, this process measures: the direct run again, by whole steps from the last row's time
+    as the unit advances; the rows may differ from the first run by TIME_ROUNDING_MARGIN times the two
+    direct runs' largest difference in each output, by 1e-12, or by 1e-9 of the value."""
+    direct = direct_outputs(rows, raise_at, level, lambda sim, k: rows[k]["time"] - sim.time)
+    by_steps = direct_outputs(rows, raise_at, level,
+                              lambda sim, k: (rows[k - 1]["time"] if k else 0.0) + step - sim.time)
+    spread = {name: max(abs(a[name] - b[name]) for a, b in zip(direct, by_steps)) for name in OUTPUT_NAMES}
+    for k, (row, want) in enumerate(zip(rows, direct)):
+        assert math.isclose(row["time"], (k + 1) * step, rel_tol=0.0, abs_tol=1e-12), (k, row["time"])
+        for name in OUTPUT_NAMES:
+            allowed = max(1e-12, TIME_ROUNDING_MARGIN * spread[name])
+            assert math.isclose(row[name], want[name], rel_tol=1e-9, abs_tol=allowed), (k, name, spread[name])
+
+
 _BUILT: dict[str, Path] = {}
 
 

@@ -36,6 +36,13 @@ double surface(const Physics& phys) { return phys.water_level + (phys.smooth ? 0
 
 bool absorbing(const Physics& phys) { return phys.absorption_capacity > 0.0 && phys.absorption_rate > 0.0; }
 
+//: The exponent at which a step's error ratio fell from ratio_1 at step h_1 to ratio_2 at h_2 < h_1, within
+//: LEAST_OBSERVED_ORDER and the scheme's order + 1 (its local error's).
+double observed_order(double h_1, double ratio_1, double h_2, double ratio_2, int order) {
+    const double exponent = ratio_2 > 0.0 && ratio_1 > ratio_2 ? std::log(ratio_1 / ratio_2) / std::log(h_1 / h_2) : 0.0;
+    return std::clamp(exponent, LEAST_OBSERVED_ORDER, static_cast<double>(order + 1));
+}
+
 struct Trial {
     double error;  // m, local position error estimate
     int order;     // order of that estimate
@@ -288,6 +295,9 @@ Status step(Core& core, double remaining, double span) {
     Trial trial{};
     GripMove grip;
     int rejections = 0;  // by the controller (the floor's releases are bounded by the particles held)
+    // The last try rejected for its error, at this step's start, with nothing changed since (no release or
+    // lift-off): its step (s; 0 if none) and error ratio, to measure the order at which the error falls.
+    double rejected_h = 0.0, rejected_ratio = 0.0;
     while (true) {
         if (rejections > MAX_REJECTIONS) {  // no step it accepts: a state it cannot go on from
             if (held > 0) release_all(n, cloth.free, buf.held);
@@ -316,6 +326,7 @@ Status step(Core& core, double remaining, double span) {
                 if (core.sliding.count() == 0) core.solver.sliding = nullptr;
                 if (analytic) support();
                 clock[REJECTED] += 1;
+                rejected_h = 0.0;
                 continue;
             }
             trial.error = pymax(trial.error, lifted);
@@ -363,6 +374,7 @@ Status step(Core& core, double remaining, double span) {
                     core.solver.sliding = &core.sliding;
                 }
                 clock[REJECTED] += 1;
+                rejected_h = 0.0;
                 continue;
             }
         }
@@ -370,6 +382,7 @@ Status step(Core& core, double remaining, double span) {
             clock[NEXT_STEP] = pymax(control.smallest_step, 0.25 * h);
             clock[REJECTED] += 1;
             ++rejections;
+            rejected_h = 0.0;
             continue;
         }
         if (!adaptive) {  // the blow-up guard watches
@@ -392,13 +405,20 @@ Status step(Core& core, double remaining, double span) {
             }
         }
         const bool finite = std::isfinite(ratio);
-        const double factor = ratio > 0.0 ? STEP_SAFETY * std::pow(ratio, -1.0 / (order + 1)) : control.growth;
+        double factor = ratio > 0.0 ? STEP_SAFETY * std::pow(ratio, -1.0 / (order + 1)) : control.growth;
         if (ratio <= 1.0 || h <= control.smallest_step || !finite) {
             const double proposed = finite ? h * pymin(control.growth, pymax(control.shrink, factor)) : h;
             // A step cut short by the end of the interval says nothing against the planned one.
             clock[NEXT_STEP] = (h < planned && ratio <= 1.0) ? pymax(proposed, planned) : proposed;
             break;
         }
+        // Rejected again: the error fell from the last try's more slowly than the order says (a release or slip
+        // within the step errs at a lower order), so the cut follows the order observed between the two.
+        if (finite && rejected_h > h) {
+            factor = STEP_SAFETY * std::pow(ratio, -1.0 / observed_order(rejected_h, rejected_ratio, h, ratio, order));
+        }
+        rejected_h = h;
+        rejected_ratio = ratio;
         clock[NEXT_STEP] = pymax(control.smallest_step, h * pymax(control.shrink, factor));
         clock[REJECTED] += 1;
         ++rejections;

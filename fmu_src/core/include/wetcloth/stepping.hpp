@@ -17,6 +17,9 @@ namespace wc {
 //: Safety factor on the explicit schemes' linear-stability limit, and on the proposed next step.
 inline constexpr double STABILITY_SAFETY = 0.9;
 inline constexpr double STEP_SAFETY = 0.9;
+//: A step rejected again for its error is cut by the order its error showed between the two tries, at least
+//: this one.
+inline constexpr double LEAST_OBSERVED_ORDER = 0.5;
 //: Wicking's explicit sub-steps are at most this fraction of their stability limit
 //: (Physics::wick_step_limit): forward Euler then errs in time by at most a tenth of what the finite
 //: volumes err in space (ratio 6 D dt / dx^2 = 3 dt / limit), and both errors fall as dx^2.
