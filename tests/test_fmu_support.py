@@ -39,6 +39,7 @@ def last_good_time(params: dict, interval: float, duration: float = 1.0) -> floa
             return k * interval
     raise AssertionError(f"{params} did not blow up within {duration} s")
 
+
 #: A unit run by libcosim may differ from a direct run by this many times what last-bit differences of the
 #: communication times alone make (measured by assert_like_direct_runs): libcosim's time arithmetic is a third
 #: such path.
