@@ -412,8 +412,9 @@ Status step(Core& core, double remaining, double span) {
             clock[NEXT_STEP] = (h < planned && ratio <= 1.0) ? pymax(proposed, planned) : proposed;
             break;
         }
-        // Rejected again: the error fell from the last try's more slowly than the order says (a release or slip
-        // within the step errs at a lower order), so the cut follows the order observed between the two.
+        // Rejected again: the error fell from the last try's more slowly than the order says (right after the
+        // particles held on a collider changed, or an input jumped, the motion is not smooth on the step's scale:
+        // a draping towel's errors fell as h^1.3-1.7), so the cut follows the order observed between the two.
         if (finite && rejected_h > h) {
             factor = STEP_SAFETY * std::pow(ratio, -1.0 / observed_order(rejected_h, rejected_ratio, h, ratio, order));
         }
