@@ -570,6 +570,12 @@ inline double pair_largest(const Pair& pair, const std::vector<double>& values) 
     return most;
 }
 
+//: The least distance (m) a kept pair can have with its cloth points moved by `moved` (n, m) from the list's
+//: reference (its distance there less their largest move, less a nanometre for rounding).
+inline double least_gap(const Pair& pair, const std::vector<double>& moved, double reach) {
+    return gap_of(pair[P_START]) - (pair_largest(pair, moved) + ROUNDING_SLACK * reach);
+}
+
 //: The pairs near enough to need a look over the step from x0 to x1, in lists.collider_pairs with their
 //: start distances: those of the kept list (gathered again unless it holds at x0 and x1) nearer than their
 //: distance (target_of) plus reach (m) at the start less their motion's bound (pushes that move no particle
@@ -829,7 +835,7 @@ void add_support_terms(const Contact& contact, ContactLists& lists, ColliderPair
             fastest = py_max(fastest, std::sqrt(vel[s] * vel[s] + vel[n + s] * vel[n + s] + vel[2 * n + s] * vel[2 * n + s]));
         }
         const double near = within + ahead * fastest;
-        if (gap_of(pair[P_START]) - (pair_largest(pair, moved) + ROUNDING_SLACK * reach) >= near) continue;
+        if (least_gap(pair, moved, reach) >= near) continue;
         const Motion mo = motion_of(pair, phys.meshes, n, nullptr, nullptr, q, q);
         if (box_gap(mo.kind, mo.x) >= near) continue;
         const Weights w = closest(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);
@@ -901,13 +907,13 @@ Index hold_on_collider_edges(const Contact& contact, ContactLists& lists, const 
         renew_list(contact, lists, kept, phys, Frame{-1, nullptr}, n, pos, pos, reach);
     }
     lists.collider_rest.resize(4 * static_cast<std::size_t>(n));
-    std::vector<double>& moved = lists.collider_moved;  // (a pair's distance is at least its reference's less that)
+    std::vector<double>& moved = lists.collider_moved;
     moves_from_reference(kept, n, pos, moved);
     Index count = 0;
     for (const Pair& pair : kept.pairs) {
         if (pair[P_KIND] == POINT_TRIANGLE && pair[P_POINTS] >= 0) continue;  // a particle: the particles' contact
         const double resting = (1.0 + RESTING_SLACK) * target_of(pair, reach);
-        if (gap_of(pair[P_START]) - (pair_largest(pair, moved) + ROUNDING_SLACK * reach) > resting) continue;
+        if (least_gap(pair, moved, reach) > resting) continue;
         const Motion mo = motion_of(pair, phys.meshes, n, nullptr, nullptr, pos, pos);
         if (box_gap(mo.kind, mo.x) > resting) continue;
         const Weights w = closest(mo.kind, mo.x[0], mo.x[1], mo.x[2], mo.x[3]);

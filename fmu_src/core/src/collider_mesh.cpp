@@ -64,17 +64,27 @@ bool cells_of(const double* header, const double* lo, const double* hi, CellRang
     return true;
 }
 
-//: Calls visit(t) for every triangle listed in the cells of range r (a triangle in several cells more than once).
-template <class Visit>
-void for_each_triangle(const ColliderMeshes& m, const double* header, const CellRange& r, Visit&& visit) {
+//: Calls stop(from, to) for each row of cells of range r, its cells numbered from..to (inclusive, consecutive:
+//: their lists lie together in cell_items), until stop returns true; returns whether one did.
+template <class Stop>
+bool any_row(const double* header, const CellRange& r, Stop&& stop) {
     const Index nx = static_cast<Index>(header[M_CELLS_X]), ny = static_cast<Index>(header[M_CELLS_Y]);
     const Index first = static_cast<Index>(header[M_FIRST_CELL]);
     for (Index z = r.lo[2]; z <= r.hi[2]; ++z)
-        for (Index y = r.lo[1]; y <= r.hi[1]; ++y)
-            for (Index x = r.lo[0]; x <= r.hi[0]; ++x) {
-                const Index cell = first + (z * ny + y) * nx + x;
-                for (Index k = m.cell_start[cell]; k < m.cell_start[cell + 1]; ++k) visit(m.cell_items[k]);
-            }
+        for (Index y = r.lo[1]; y <= r.hi[1]; ++y) {
+            const Index row = first + (z * ny + y) * nx;
+            if (stop(row + r.lo[0], row + r.hi[0])) return true;
+        }
+    return false;
+}
+
+//: Calls visit(t) for every triangle listed in the cells of range r (a triangle in several cells more than once).
+template <class Visit>
+void for_each_triangle(const ColliderMeshes& m, const double* header, const CellRange& r, Visit&& visit) {
+    any_row(header, r, [&](Index from, Index to) {
+        for (Index k = m.cell_start[from]; k < m.cell_start[to + 1]; ++k) visit(m.cell_items[k]);
+        return false;
+    });
 }
 
 //: The pseudo-normal of triangle t's feature (Baerentzen and Aanaes 2005): its face's, an edge's, a vertex's.
@@ -166,15 +176,8 @@ void mesh_triangles_in(const ColliderMeshes& m, Index mesh, const double* lo, co
 bool mesh_lists_triangles_in(const ColliderMeshes& m, Index mesh, const double* lo, const double* hi) {
     const double* header = m.headers + mesh * MESH_COLUMNS;
     CellRange r;
-    if (!cells_of(header, lo, hi, r)) return false;
-    const Index nx = static_cast<Index>(header[M_CELLS_X]), ny = static_cast<Index>(header[M_CELLS_Y]);
-    const Index first = static_cast<Index>(header[M_FIRST_CELL]);
-    for (Index z = r.lo[2]; z <= r.hi[2]; ++z)
-        for (Index y = r.lo[1]; y <= r.hi[1]; ++y) {  // a row of cells, consecutive in number: its lists' span
-            const Index row = first + (z * ny + y) * nx;
-            if (m.cell_start[row + r.hi[0] + 1] > m.cell_start[row + r.lo[0]]) return true;
-        }
-    return false;
+    return cells_of(header, lo, hi, r) &&
+           any_row(header, r, [&](Index from, Index to) { return m.cell_start[to + 1] > m.cell_start[from]; });
 }
 
 void mesh_vertex_cells(const ColliderMeshes& m, Index mesh, std::vector<std::pair<Index, Index>>& out) {
@@ -204,14 +207,11 @@ void mesh_vertices_in(const ColliderMeshes& m, Index mesh, const std::vector<std
     const double* header = m.headers + mesh * MESH_COLUMNS;
     CellRange r;
     if (!cells_of(header, lo, hi, r)) return;
-    const Index nx = static_cast<Index>(header[M_CELLS_X]), ny = static_cast<Index>(header[M_CELLS_Y]);
-    const Index first = static_cast<Index>(header[M_FIRST_CELL]);
-    for (Index z = r.lo[2]; z <= r.hi[2]; ++z)
-        for (Index y = r.lo[1]; y <= r.hi[1]; ++y) {  // a row of cells, consecutive in number
-            const Index row = first + (z * ny + y) * nx;
-            auto k = std::lower_bound(cells.begin(), cells.end(), std::pair<Index, Index>{row + r.lo[0], -1});
-            for (; k != cells.end() && k->first <= row + r.hi[0]; ++k) out.push_back(k->second);
-        }
+    any_row(header, r, [&](Index from, Index to) {
+        auto k = std::lower_bound(cells.begin(), cells.end(), std::pair<Index, Index>{from, -1});
+        for (; k != cells.end() && k->first <= to; ++k) out.push_back(k->second);
+        return false;
+    });
 }
 
 }  // namespace wc
