@@ -248,6 +248,17 @@ bool energy_settled(Index n, const double* mass, const double* free, const doubl
     return std::fabs(work) <= DESCENT_ENERGY_FRACTION * damped;
 }
 
+//: Whether the cloth moves freely at the iterate whose forces work holds: no particle on a surface or held by
+//: a support in the step's solve, none in the water (DESCENT_LATER_CG_ITERATIONS).
+bool moves_freely(const Cloth& cloth, const Work& work, const Solver& solver) {
+    if (solver.sliding != nullptr && solver.sliding->count() > 0) return false;
+    if (solver.supports != nullptr && solver.supports->count() > 0) return false;
+    for (Index i = 0; i < cloth.n; ++i) {
+        if (work.submerged[i] > 0.0) return false;
+    }
+    return true;
+}
+
 //: The velocities v+ at which a backward Euler step would leave its free particles where they start
 //: (x+ = x): 0 for them, out_vel's prescribed ones for the pinned, gripped and held, and the sliding
 //: particles' speed across their surface as the step prescribes it.  The step's incremental potential
@@ -448,8 +459,11 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
                 }
             }
             const double floor = CG_FLOOR * py_min(newton_tolerance / bh, newton_tolerance / NEWTON_VELOCITY_TIME);
-            const PlaneSolve solve = plane_pcg(cloth, work, solver, *solving, rhs, dv, cg_tolerance, floor,
-                                               NEWTON_CG_ITERATIONS, coarse);
+            const Index cg_limit = descent && !adaptive && iteration > 0 && moves_freely(cloth, work, solver)
+                                       ? DESCENT_LATER_CG_ITERATIONS
+                                       : NEWTON_CG_ITERATIONS;
+            const PlaneSolve solve = plane_pcg(cloth, work, solver, *solving, rhs, dv, cg_tolerance, floor, cg_limit,
+                                               coarse);
             memory[3] = static_cast<double>(solve.iterations);
             if (reused != nullptr && in_use(*reused)) count_reused_solve(*reused, solve.iterations);
             solver.counters[NEWTON_ITERATIONS] += 1;

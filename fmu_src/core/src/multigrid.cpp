@@ -53,15 +53,15 @@ void to_double(const Hierarchy& h, Index level, const float* from, double* to, I
 namespace {
 
 //: One fine entry's part of a coarse entry: the fine point 2 Q + (px, py) of coarse point Q, its stencil
-//: slot k, and how many times a / 16 is added (the product of the interpolation weights of both ends,
-//: times 16).
+//: slot k, and the weight its entry a takes (the product of the interpolation weights of both ends).
 struct Contribution {
-    Index px, py, k, count;
+    Index px, py, k;
+    double weight;
 };
 
 //: The fine entries (a of point p, slot k: p and its neighbour j) that coarse slot `slot` of every
-//: coarse point takes, in the order of the fine points (row after row), then of k: P^T A P adds a / 16
-//: times 16 w_p w_j (w the bilinear weights: 1 at even, 1/2 at odd indices) for each p among Q's fine
+//: coarse point takes, in the order of the fine points (row after row), then of k: P^T A P adds
+//: w_p w_j a (w the bilinear weights: 1 at even, 1/2 at odd indices) for each p among Q's fine
 //: points and j among those of the neighbour Q + (dx, dy).  Returns their number (at most 49).
 Index contributions(Index slot, Contribution* out) {
     const Index dx = slot % 3 - 1, dy = slot / 3 - 1;
@@ -72,32 +72,25 @@ Index contributions(Index slot, Contribution* out) {
                 const Index jx = px + k % 3 - 1 - 2 * dx, jy = py + k / 3 - 1 - 2 * dy;  // j from 2 (Q + d)
                 if (jx < -1 || jx > 1 || jy < -1 || jy > 1) continue;
                 const Index weights = (py == 0 ? 2 : 1) * (px == 0 ? 2 : 1) * (jy == 0 ? 2 : 1) * (jx == 0 ? 2 : 1);
-                out[count++] = {px, py, k, weights};
+                out[count++] = {px, py, k, 0.0625 * static_cast<double>(weights)};
             }
         }
     }
     return count;
 }
 
-//: target[q] += v, COUNT times over, v = a[2 q] / 16, for the m points q of a coarse row (a: the
-//: fine entries from the row's first fine point, every other one).
-template <Index COUNT>
-void add_repeated(double* __restrict target, const double* __restrict a, Index m) {
-    for (Index q = 0; q < m; ++q) {
-        const double v = 0.0625 * a[2 * q];
-        double sum = target[q];
-        for (Index r = 0; r < COUNT; ++r) sum += v;
-        target[q] = sum;
-    }
+//: target[q] += weight a[2 q] for the m points q of a coarse row (a: the fine entries from the row's
+//: first fine point, every other one).
+void add_weighted(double* __restrict target, const double* __restrict a, double weight, Index m) {
+    for (Index q = 0; q < m; ++q) target[q] += weight * a[2 * q];
 }
 
 }  // namespace
 
 void galerkin(Hierarchy& h, Index level, Index first, Index end) {
-    // Each coarse entry gathers its fine entries' additions in the order in which a scatter over the
-    // fine points (row after row), their slots and parents would make them: the same roundings, but
-    // coarse points side by side (vectorised).  A fine point or neighbour outside the grid has zero
-    // entries (the padding): adding them changes no sum.
+    // Each coarse entry gathers its fine entries times their weights (the product of the interpolation
+    // weights of both ends), coarse points side by side (vectorised).  A fine point or neighbour outside
+    // the grid has zero entries (the padding): adding them changes no sum.
     const Index* levels = h.levels;
     const Index size = h.size;
     const Index nx = level_value(levels, level, NX), ny = level_value(levels, level, NY);
@@ -126,13 +119,7 @@ void galerkin(Hierarchy& h, Index level, Index first, Index end) {
                     const Contribution& t = list[slot][e];
                     // fine point (2 qx + px, 2 qy + py) for qx = 0: its padded index
                     const double* a = coef + t.k * size + padded_index(levels, level, t.px, 2 * qy + t.py);
-                    switch (t.count) {
-                        case 1: add_repeated<1>(target, a, coarse_nx); break;
-                        case 2: add_repeated<2>(target, a, coarse_nx); break;
-                        case 4: add_repeated<4>(target, a, coarse_nx); break;
-                        case 8: add_repeated<8>(target, a, coarse_nx); break;
-                        default: add_repeated<16>(target, a, coarse_nx); break;
-                    }
+                    add_weighted(target, a, t.weight, coarse_nx);
                 }
             }
         }
