@@ -249,8 +249,9 @@ bool energy_settled(Index n, const double* mass, const double* free, const doubl
 }
 
 //: Whether the cloth moves freely at the iterate whose forces work holds: no particle on a surface or held by
-//: a support in the step's solve, none in the water (DESCENT_LATER_CG_ITERATIONS).
+//: a support in the step's solve, none in the water, no layers near each other (DESCENT_LATER_CG_ITERATIONS).
 bool moves_freely(const Cloth& cloth, const Work& work, const Solver& solver) {
+    if (solver.near_itself) return false;
     if (solver.sliding != nullptr && solver.sliding->count() > 0) return false;
     if (solver.supports != nullptr && solver.supports->count() > 0) return false;
     for (Index i = 0; i < cloth.n; ++i) {
@@ -459,9 +460,9 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
                 }
             }
             const double floor = CG_FLOOR * py_min(newton_tolerance / bh, newton_tolerance / NEWTON_VELOCITY_TIME);
-            const Index cg_limit = descent && !adaptive && iteration > 0 && moves_freely(cloth, work, solver)
-                                       ? DESCENT_LATER_CG_ITERATIONS
-                                       : NEWTON_CG_ITERATIONS;
+            const bool truncated = descent && !adaptive && iteration > 0 && coarse != nullptr &&
+                                   moves_freely(cloth, work, solver);
+            const Index cg_limit = truncated ? DESCENT_LATER_CG_ITERATIONS : NEWTON_CG_ITERATIONS;
             const PlaneSolve solve = plane_pcg(cloth, work, solver, *solving, rhs, dv, cg_tolerance, floor, cg_limit,
                                                coarse);
             memory[3] = static_cast<double>(solve.iterations);

@@ -21,6 +21,7 @@
 #include "wetcloth/implicit.hpp"
 #include "wetcloth/integration.hpp"
 #include "wetcloth/self_contact.hpp"
+#include "wetcloth/self_contact/broad_phase.hpp"
 #include "wetcloth/sliding.hpp"
 
 namespace wc {
@@ -260,6 +261,8 @@ Status step(Core& core, double remaining, double span) {
     const bool sliding = implicit && gather_sliding(n, phys, buf.pos, buf.vel, cloth.free, core.sliding) > 0;
     core.sliding.smoothed = !adaptive;
     core.solver.sliding = sliding ? &core.sliding : nullptr;
+    core.solver.near_itself = core.contact.enabled && core.contact.lists != nullptr &&
+                              self_contact::candidate_count(core.contact) > 0;
     // A moving mesh's vertices and edges near the cloth's triangles and edges: supports its solve sees; at
     // fixed steps a still mesh's too (its frame-long moves at a bucket's rim the edges' pass cannot show safe).
     const bool meshes_support = implicit && core.contact.lists != nullptr &&

@@ -255,6 +255,7 @@ struct Solver {
     Index* counters = nullptr;
     Sliding* sliding = nullptr;  // the particles sliding on a surface during the step (sliding.hpp), or none
     Supports* supports = nullptr;  // mesh colliders' features the step's solve sees (collider_supports.hpp), or none
+    bool near_itself = false;  // whether the cloth's self-collision list holds candidate pairs at the step's start
 };
 
 //: Columns of Hierarchy::levels.
