@@ -4,6 +4,7 @@ stiffness the derivative of its force, and a cloth triangle resting on a collide
 penalty carries its weight."""
 
 import numpy as np
+import pytest
 import trimesh
 
 import wetcloth
@@ -14,8 +15,9 @@ STIFFNESS, DISTANCE, SCALE = 5000.0, 1e-3, 4e-6  # N/m, m, s^2
 
 
 #: Two terms on 5 particles, a vertex-triangle one (weights -u, -v, -w) and an edge-edge one (two cloth
-#: points): their points, weights, normals and offsets (m).
-TWO_TERMS = (np.array([[0, 1, 2], [3, 4, -1]], dtype=np.int64), np.array([[-0.2, -0.3, -0.5], [0.6, 0.4, 0.0]]),
+#: points): their points (SUPPORT_POINTS each, -1 unused), weights, normals and offsets (m).
+TWO_TERMS = (np.array([[0, 1, 2, -1], [3, 4, -1, -1]], dtype=np.int64),
+             np.array([[-0.2, -0.3, -0.5, 0.0], [0.6, 0.4, 0.0, 0.0]]),
              np.array([[0.36, 0.48, 0.8], [0.0, 0.6, -0.8]]), np.array([0.11, -0.07]))
 
 
@@ -80,6 +82,39 @@ def test_the_stiffness_is_the_derivative_of_the_force():
     np.testing.assert_allclose(matrix_times_p, difference, rtol=0, atol=1e-6 * np.abs(difference).max())
     # off the diagonal blocks: the product is zero at a particle whose term has no other point moving
     assert np.abs(product[:, 3]).max() > 0.0 and np.abs(product[:, 0]).max() > 0.0
+
+
+def test_a_pair_of_the_cloth_with_itself_is_a_term_of_four_points():
+    """A point of the cloth over one of its triangles (self_contact/supports.hpp: weights 1, -u, -v, -w, offset
+    DISTANCE - thickness so that it presses below the thickness): its force is minus the gradient of its energy
+    and its stiffness the derivative of its force (central differences, as above), and its forces sum to zero,
+    as the pair's own push must (momentum: the weights sum to 0)."""
+    assert _core.SUPPORT_POINTS == 4
+    thickness = 2e-3
+    weights = np.array([1.0, -0.2, -0.3, -0.5])
+    normal = np.array([0.36, 0.48, 0.8])
+    term = (np.array([[0, 1, 2, 3]], dtype=np.int64), weights[None], normal[None], np.array([DISTANCE - thickness]))
+    pos = np.random.default_rng(13).normal(scale=0.05, size=(3, 4))
+    pos[:, 0] += (0.8 * thickness - normal @ pos @ weights) * normal  # the point 0.8 thickness over the triangle
+
+    def terms(x, p=np.zeros((3, 4))):
+        force, blocks, product = np.zeros((3, 4)), np.zeros((6, 4)), np.zeros((3, 4))
+        energy = _core.support_terms(*term, STIFFNESS, DISTANCE, SCALE, x, np.ones(4), p, force, blocks, product)
+        return energy, force, blocks, product
+
+    energy, force, _, _ = terms(pos)
+    assert energy == pytest.approx(0.5 * STIFFNESS * (0.2 * thickness) ** 2, rel=1e-9)
+    np.testing.assert_allclose(force.sum(axis=1), 0.0, rtol=0, atol=1e-12 * np.abs(force).max())
+    difference = -_central_differences(lambda x: terms(x)[0], pos, 1e-7)
+    np.testing.assert_allclose(difference, force, rtol=0, atol=1e-6 * np.abs(force).max())
+    p = np.random.default_rng(17).normal(size=pos.shape)
+    _, _, blocks, product = terms(pos, p)
+    xx, yy, zz, xy, xz, yz = blocks
+    matrix_times_p = product + np.array([xx * p[0] + xy * p[1] + xz * p[2], xy * p[0] + yy * p[1] + yz * p[2],
+                                         xz * p[0] + yz * p[1] + zz * p[2]])
+    step = 1e-8
+    derivative = -(terms(pos + step * p)[1] - terms(pos - step * p)[1]) / (2 * step) * SCALE
+    np.testing.assert_allclose(matrix_times_p, derivative, rtol=0, atol=1e-6 * np.abs(derivative).max())
 
 
 def test_a_released_term_has_no_force_energy_or_stiffness():

@@ -6,16 +6,17 @@ namespace wc::py {
 
 namespace {
 
-//: Supports given in the world: points (m, 3) cloth particles or -1, weights (m, 3), normals (m, 3), offsets (m) m.
+//: Supports given in the world: points (m, SUPPORT_POINTS) cloth particles or -1, weights (m, SUPPORT_POINTS),
+//: normals (m, 3), offsets (m) m.
 Supports given_supports(nb::handle points, nb::handle weights, nb::handle normals, nb::handle offsets) {
     Supports s;
     const Index count = size_of(offsets);
-    const Index* pt = argument<const Index>(points, "points", 3 * count);
-    const double* w = argument<const double>(weights, "weights", 3 * count);
+    const Index* pt = argument<const Index>(points, "points", SUPPORT_POINTS * count);
+    const double* w = argument<const double>(weights, "weights", SUPPORT_POINTS * count);
     const double* nn = argument<const double>(normals, "normals", 3 * count);
     const double* off = argument<const double>(offsets, "offsets", count);
-    s.points.assign(pt, pt + 3 * count);
-    s.weights.assign(w, w + 3 * count);
+    s.points.assign(pt, pt + SUPPORT_POINTS * count);
+    s.weights.assign(w, w + SUPPORT_POINTS * count);
     s.normal.assign(nn, nn + 3 * count);
     s.offset.assign(off, off + count);
     s.collider.assign(static_cast<std::size_t>(count), 0);
@@ -36,6 +37,7 @@ void add_terms(Supports& s, Index n, const double* x, const double* v, nb::handl
 
 WETCLOTH_BINDINGS(m) {
     m.attr("SUPPORT_DISTANCE") = SUPPORT_DISTANCE;
+    m.attr("SUPPORT_POINTS") = SUPPORT_POINTS;
     m.attr("SUPPORT_STIFFNESS") = SUPPORT_STIFFNESS;
     m.def(
         "support_terms",
@@ -52,7 +54,7 @@ WETCLOTH_BINDINGS(m) {
         nb::arg("points"), nb::arg("weights"), nb::arg("normals"), nb::arg("offsets"), nb::arg("stiffness"),
         nb::arg("distance"), nb::arg("scale"), nb::arg("pos"), nb::arg("free"), nb::arg("p"), nb::arg("force"),
         nb::arg("blocks"), nb::arg("product"),
-        "Supports' terms given in the world (points (m, 3) int64 cloth particles or -1, weights (m, 3), normals "
+        "Supports' terms given in the world (points (m, SUPPORT_POINTS) int64 cloth particles or -1, weights (m, SUPPORT_POINTS), normals "
         "(m, 3), offsets (m) m; stiffness N/m, distance m, scale s^2) at pos (3, n): adds their forces (N) into "
         "force (3, n), their stiffness's diagonal blocks times scale into blocks (6, n) and the rest of their "
         "stiffness times scale times p (3, n) into product (3, n) (rows of free particles); returns the energy (J).");

@@ -15,11 +15,11 @@ namespace {
 //: Add the term of particle i alone (weight 1) against collider k's (FLOOR_SUPPORT: the floor's) tangent plane
 //: of normal (3) at the step's start, the particle then at q (3, in the collider's frame) and gap (m) off it.
 void add_term(Supports& supports, Index i, Index k, const double* normal, const double* q, double gap) {
-    const Index points[3] = {i, -1, -1};
-    const double weights[3] = {1.0, 0.0, 0.0};
+    for (int j = 0; j < SUPPORT_POINTS; ++j) {
+        supports.points.push_back(j == 0 ? i : -1);
+        supports.weights.push_back(j == 0 ? 1.0 : 0.0);
+    }
     for (int c = 0; c < 3; ++c) {
-        supports.points.push_back(points[c]);
-        supports.weights.push_back(weights[c]);
         supports.table_normal.push_back(normal[c]);
         supports.table_part.push_back(gap * normal[c] - q[c]);  // minus the plane's point (weight -1)
     }

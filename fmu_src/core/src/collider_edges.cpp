@@ -859,7 +859,7 @@ void add_support_terms(const Contact& contact, ContactLists& lists, ColliderPair
                 slots += 1;
             }
         }
-        for (; slots < 3; ++slots) supports.points.push_back(-1), supports.weights.push_back(0.0);
+        for (; slots < SUPPORT_POINTS; ++slots) supports.points.push_back(-1), supports.weights.push_back(0.0);
         supports.table_normal.insert(supports.table_normal.end(), {d.x / length, d.y / length, d.z / length});
         supports.table_part.insert(supports.table_part.end(), {part.x, part.y, part.z});
         supports.collider.push_back(k);

@@ -15,10 +15,10 @@ namespace {
 double slip_velocity(const Supports& supports, Index t, Index n, const double* vel, double* u) {
     const double* nn = supports.normal.data() + 3 * t;
     for (int c = 0; c < 3; ++c) u[c] = supports.collider_velocity[3 * t + c];
-    for (int j = 0; j < 3; ++j) {
-        const Index i = supports.points[3 * t + j];
+    for (int j = 0; j < SUPPORT_POINTS; ++j) {
+        const Index i = supports.points[SUPPORT_POINTS * t + j];
         if (i < 0) continue;
-        const double w = supports.weights[3 * t + j];
+        const double w = supports.weights[SUPPORT_POINTS * t + j];
         for (Index c = 0; c < 3; ++c) u[c] += w * vel[c * n + i];
     }
     const double along = nn[0] * u[0] + nn[1] * u[1] + nn[2] * u[2];
@@ -29,10 +29,10 @@ double slip_velocity(const Supports& supports, Index t, Index n, const double* v
 //: start + sum_k w_k normal . x_k over term t's cloth points at pos (3, n), normal (3) its world normal.
 double cloth_along(const Supports& supports, Index t, Index n, const double* pos, const double* normal, double start) {
     double g = start;
-    for (int j = 0; j < 3; ++j) {
-        const Index i = supports.points[3 * t + j];
+    for (int j = 0; j < SUPPORT_POINTS; ++j) {
+        const Index i = supports.points[SUPPORT_POINTS * t + j];
         if (i < 0) continue;
-        const double w = supports.weights[3 * t + j];
+        const double w = supports.weights[SUPPORT_POINTS * t + j];
         g += w * (normal[0] * pos[i] + normal[1] * pos[n + i] + normal[2] * pos[2 * n + i]);
     }
     return g;
@@ -55,10 +55,10 @@ void add_friction(Supports& supports, Index t, Index n, const double* vel, doubl
     const double a = slip_factor(y);
     double* h = supports.friction_block.data() + 6 * t;
     slip_stiffness(mu_n, y, u, supports.normal.data() + 3 * t, h);
-    for (int j = 0; j < 3; ++j) {
-        const Index i = supports.points[3 * t + j];
+    for (int j = 0; j < SUPPORT_POINTS; ++j) {
+        const Index i = supports.points[SUPPORT_POINTS * t + j];
         if (i < 0) continue;
-        const double w = supports.weights[3 * t + j];
+        const double w = supports.weights[SUPPORT_POINTS * t + j];
         for (Index c = 0; c < 3; ++c) force[c * n + i] -= w * mu_n * a * u[c];
         const double scaled = supports.velocity_scale * w * w;
         for (int e = 0; e < 6; ++e) blocks[e * n + i] += scaled * h[e];
@@ -92,7 +92,7 @@ void place_friction(Supports& supports, const Physics& phys, Index t, Index n, c
     const double gap = cloth_along(supports, t, n, pos, normal,
                                    collider_along(supports, phys, t, 0.0, normal, cloth_weight, start_part));
     const double depth = supports.distance - gap;
-    supports.normal_force[static_cast<std::size_t>(t)] = depth > 0.0 ? supports.stiffness * depth : 0.0;
+    supports.normal_force[static_cast<std::size_t>(t)] = depth > 0.0 ? term_stiffness(supports, t) * depth : 0.0;
     // sum_k w_k (u + omega x (p_k - c - d)) = W u + omega x (part - W (c + d)), W = -cloth_weight
     double* velocity = supports.collider_velocity.data() + 3 * t;
     for (int c = 0; c < 3; ++c) velocity[c] = shift != nullptr ? -cloth_weight * shift[MOTION_VELOCITY + c] : 0.0;
@@ -105,23 +105,35 @@ void place_friction(Supports& supports, const Physics& phys, Index t, Index n, c
     for (int c = 0; c < 3; ++c) velocity[c] += spin[c];
 }
 
+//: Term t of the cloth with itself: its normal and offset as gathered (fixed in the world), its friction
+//: Supports::self_friction with its normal force at the cloth's start pos (3, n); no collider to move.
+void place_self(Supports& supports, Index t, Index n, const double* pos) {
+    const std::size_t term = static_cast<std::size_t>(t);
+    supports.offset[term] = supports.table_part[3 * term];
+    supports.friction[term] = supports.self_friction;
+    if (!(supports.self_friction > 0.0)) return;
+    const double depth = supports.distance - support_gap(supports, t, n, pos);
+    supports.normal_force[term] = depth > 0.0 ? supports.self_stiffness * depth : 0.0;
+    supports.any_friction = true;
+}
+
 }  // namespace
 
 void keep_terms(Supports& supports, Index kept) {
     const std::size_t k = static_cast<std::size_t>(kept);
-    supports.points.resize(3 * k);
-    supports.weights.resize(3 * k);
+    supports.points.resize(SUPPORT_POINTS * k);
+    supports.weights.resize(SUPPORT_POINTS * k);
     supports.table_normal.resize(3 * k);
     supports.table_part.resize(3 * k);
     supports.collider.resize(k);
 }
 
-double support_stiffness(const Cloth& cloth) {
+double stiffest_spring(const Cloth& cloth) {
     double stiffest = 0.0;
     const Index springs = is_mesh(cloth) ? cloth.pair_count : cloth.families * cloth.n;
     const double* k = is_mesh(cloth) ? cloth.pair_stiffness : cloth.stiffness;
     for (Index s = 0; s < springs; ++s) stiffest = k[s] > stiffest ? k[s] : stiffest;
-    return SUPPORT_STIFFNESS * stiffest;
+    return stiffest;
 }
 
 void place_supports(Supports& supports, const Physics& phys, Index n, const double* pos, double h, double bh) {
@@ -140,9 +152,13 @@ void place_supports(Supports& supports, const Physics& phys, Index n, const doub
         const Index k = supports.collider[t];
         double* normal = supports.normal.data() + 3 * t;
         for (int c = 0; c < 3; ++c) normal[c] = supports.table_normal[3 * t + c];
+        if (k == SELF_SUPPORT) {
+            place_self(supports, t, n, pos);
+            continue;
+        }
         world_direction_after(phys, k, h, normal);
         double cloth_weight = 0.0;
-        for (int j = 0; j < 3; ++j) cloth_weight += supports.points[3 * t + j] >= 0 ? supports.weights[3 * t + j] : 0.0;
+        for (int j = 0; j < SUPPORT_POINTS; ++j) cloth_weight += supports.points[SUPPORT_POINTS * t + j] >= 0 ? supports.weights[SUPPORT_POINTS * t + j] : 0.0;
         double part[3];  // the collider's points' weighted sum at the step's end
         supports.offset[static_cast<std::size_t>(t)] = collider_along(supports, phys, t, h, normal, cloth_weight, part);
         const double mu = k == FLOOR_SUPPORT ? phys.floor_friction : phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
@@ -172,15 +188,15 @@ Index lag_arriving_normal_force(Supports& supports, Index n, const double* mass,
         double inertia = 0.0;
         double approach = 0.0;
         for (int c = 0; c < 3; ++c) approach += nn[c] * supports.collider_velocity[3 * t + c];
-        for (int j = 0; j < 3; ++j) {
-            const Index i = supports.points[3 * t + j];
+        for (int j = 0; j < SUPPORT_POINTS; ++j) {
+            const Index i = supports.points[SUPPORT_POINTS * t + j];
             if (i < 0) continue;
-            const double w = supports.weights[3 * t + j];
+            const double w = supports.weights[SUPPORT_POINTS * t + j];
             inertia += w * mass[i];
             approach -= w * (nn[0] * start_vel[i] + nn[1] * start_vel[n + i] + nn[2] * start_vel[2 * n + i]);
         }
         const double landing = inertia * (std::max(approach, 0.0) / h + GRAVITY * std::max(nn[2], 0.0));
-        supports.normal_force[term] = std::min(supports.stiffness * depth, landing);
+        supports.normal_force[term] = std::min(term_stiffness(supports, t) * depth, landing);
         add_friction(supports, t, n, vel, force, blocks);
         arrived += 1;
     }
@@ -191,7 +207,7 @@ double support_energy(const Supports& supports, Index n, const double* pos) {
     double energy = 0.0;
     for (Index t = 0; t < supports.count(); ++t) {
         const double depth = supports.distance - support_gap(supports, t, n, pos);
-        if (depth > 0.0) energy += 0.5 * supports.stiffness * depth * depth;
+        if (depth > 0.0) energy += 0.5 * term_stiffness(supports, t) * depth * depth;
     }
     return energy;
 }
@@ -210,19 +226,19 @@ double support_dissipation(const Supports& supports, Index n, const double* vel)
 
 void add_support_forces(Supports& supports, Index n, const double* pos, const double* vel, double* force,
                         double* blocks) {
-    const double k = supports.stiffness;
-    const double scaled = supports.scale * k;
     for (Index t = 0; t < supports.count(); ++t) {
+        const double k = term_stiffness(supports, t);
+        const double scaled = supports.scale * k;
         const double depth = supports.distance - support_gap(supports, t, n, pos);
         const bool presses = depth > 0.0;
         supports.pressing[static_cast<std::size_t>(t)] = presses;
         if (rubs(supports, t)) add_friction(supports, t, n, vel, force, blocks);
         if (!presses) continue;
         const double* nn = supports.normal.data() + 3 * t;
-        for (int j = 0; j < 3; ++j) {
-            const Index i = supports.points[3 * t + j];
+        for (int j = 0; j < SUPPORT_POINTS; ++j) {
+            const Index i = supports.points[SUPPORT_POINTS * t + j];
             if (i < 0) continue;
-            const double w = supports.weights[3 * t + j];
+            const double w = supports.weights[SUPPORT_POINTS * t + j];
             for (Index c = 0; c < 3; ++c) force[c * n + i] += k * depth * w * nn[c];
             const double b = scaled * w * w;
             blocks[i] += b * nn[0] * nn[0];
@@ -236,29 +252,29 @@ void add_support_forces(Supports& supports, Index n, const double* pos, const do
 }
 
 void add_support_product(const Supports& supports, Index n, const double* free, const double* p, double* out) {
-    const double scaled = supports.scale * supports.stiffness;
     for (Index t = 0; t < supports.count(); ++t) {
+        const double scaled = supports.scale * term_stiffness(supports, t);
         const bool presses = supports.pressing[static_cast<std::size_t>(t)] != 0;
         const bool rubbing = rubs(supports, t);
         if (!presses && !rubbing) continue;
         const double* nn = supports.normal.data() + 3 * t;
-        double along[3];  // w_j n . p_j of each point
+        double along[SUPPORT_POINTS];  // w_j n . p_j of each point
         double sum = 0.0;
         double total[3] = {0.0, 0.0, 0.0};  // sum_j w_j p_j
-        for (int j = 0; j < 3; ++j) {
-            const Index i = supports.points[3 * t + j];
+        for (int j = 0; j < SUPPORT_POINTS; ++j) {
+            const Index i = supports.points[SUPPORT_POINTS * t + j];
             along[j] = 0.0;
             if (i < 0) continue;
-            const double w = supports.weights[3 * t + j];
+            const double w = supports.weights[SUPPORT_POINTS * t + j];
             along[j] = w * (nn[0] * p[i] + nn[1] * p[n + i] + nn[2] * p[2 * n + i]);
             sum += along[j];
             for (Index c = 0; c < 3; ++c) total[c] += w * p[c * n + i];
         }
         const double* h = supports.friction_block.data() + 6 * t;  // xx yy zz xy xz yz
-        for (int j = 0; j < 3; ++j) {
-            const Index i = supports.points[3 * t + j];
+        for (int j = 0; j < SUPPORT_POINTS; ++j) {
+            const Index i = supports.points[SUPPORT_POINTS * t + j];
             if (i < 0) continue;
-            const double w = supports.weights[3 * t + j];
+            const double w = supports.weights[SUPPORT_POINTS * t + j];
             if (presses) {
                 const double a = scaled * free[i] * w * (sum - along[j]);
                 for (Index c = 0; c < 3; ++c) out[c * n + i] += a * nn[c];
@@ -277,9 +293,9 @@ void project_supported(const Supports& supports, Index n, double* a) {
     for (Index t = 0; t < supports.count(); ++t) {
         if (!supports.pressing[static_cast<std::size_t>(t)]) continue;
         const double* nn = supports.normal.data() + 3 * t;
-        for (int j = 0; j < 3; ++j) {
-            const Index i = supports.points[3 * t + j];
-            if (i < 0 || supports.weights[3 * t + j] == 0.0) continue;
+        for (int j = 0; j < SUPPORT_POINTS; ++j) {
+            const Index i = supports.points[SUPPORT_POINTS * t + j];
+            if (i < 0 || supports.weights[SUPPORT_POINTS * t + j] == 0.0) continue;
             const double along = nn[0] * a[i] + nn[1] * a[n + i] + nn[2] * a[2 * n + i];
             for (Index c = 0; c < 3; ++c) a[c * n + i] -= along * nn[c];
         }
@@ -290,9 +306,9 @@ void support_history(const Supports& supports, Index n, const double* pos, const
                      double* prev_vel, double h) {
     for (Index t = 0; t < supports.count(); ++t) {
         if (!supports.pressing[static_cast<std::size_t>(t)]) continue;
-        for (int j = 0; j < 3; ++j) {
-            const Index i = supports.points[3 * t + j];
-            if (i >= 0 && supports.weights[3 * t + j] != 0.0) {
+        for (int j = 0; j < SUPPORT_POINTS; ++j) {
+            const Index i = supports.points[SUPPORT_POINTS * t + j];
+            if (i >= 0 && supports.weights[SUPPORT_POINTS * t + j] != 0.0) {
                 normal_history(n, i, supports.normal.data() + 3 * t, pos, vel, prev_pos, prev_vel, h);
             }
         }

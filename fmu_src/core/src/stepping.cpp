@@ -22,6 +22,7 @@
 #include "wetcloth/integration.hpp"
 #include "wetcloth/self_contact.hpp"
 #include "wetcloth/self_contact/broad_phase.hpp"
+#include "wetcloth/self_contact/supports.hpp"
 #include "wetcloth/sliding.hpp"
 
 namespace wc {
@@ -275,12 +276,19 @@ Status step(Core& core, double remaining, double span) {
     // unsupported, and the tablecloth's springs were stretched by 38 % at 1/24 s steps).
     const bool analytic = implicit && !adaptive;
     const Index mesh_terms = meshes_support ? core.supports.count() : 0;
+    // And the cloth's pairs with itself near at the step's start (self_contact/supports.hpp).
+    const bool self_supports = analytic && core.solver.near_itself;
     const auto support = [&]() {
         bool any = mesh_terms > 0;
         if (analytic) {
             any = gather_analytic_supports(phys, n, buf.pos, buf.vel, cloth.free, core.solver.sliding,
                                            SUPPORT_DISTANCE * 0.5 * phys.thickness, control.max_step, mesh_terms,
                                            core.supports) > 0;
+        }
+        if (self_supports) {
+            any = self_contact::gather_self_supports(core.contact, cloth, n, buf.pos, buf.vel, phys.thickness,
+                                                     SUPPORT_DISTANCE * 0.5 * phys.thickness, control.max_step,
+                                                     core.supports) > 0;
         }
         if (any) {
             core.supports.distance = SUPPORT_DISTANCE * 0.5 * phys.thickness;

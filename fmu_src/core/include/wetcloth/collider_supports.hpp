@@ -37,6 +37,14 @@ inline constexpr double SUPPORT_STIFFNESS = 10.0;
 //: (smoothed_friction.hpp).
 inline constexpr double SUPPORT_SLIP_SPEED = SLIP_SPEED;
 
+//: The cloth particles a term holds at most (a pair of the cloth with itself: four; with a collider: up to three,
+//: the others -1).
+inline constexpr int SUPPORT_POINTS = 4;
+
+//: A term's collider index for a pair of the cloth's own elements (self_contact/supports.hpp): its normal fixed
+//: in the world for the step, its offset table_part's first entry, its friction Supports::self_friction.
+inline constexpr Index SELF_SUPPORT = -2;
+
 //: A term's collider index for the floor (a horizontal plane at the floor's level that never moves, with the
 //: floor's friction): the analytic supports' (collider_analytic_supports.hpp) at fixed steps.
 inline constexpr Index FLOOR_SUPPORT = -1;
@@ -44,8 +52,16 @@ inline constexpr Index FLOOR_SUPPORT = -1;
 //: Keep the first `kept` gathered terms of supports (0: none), dropping the rest.
 void keep_terms(Supports& supports, Index kept);
 
+//: The cloth's stiffest spring (N/m).
+double stiffest_spring(const Cloth& cloth);
+
 //: The penalty's stiffness (N/m) for a cloth: SUPPORT_STIFFNESS times its stiffest spring.
-double support_stiffness(const Cloth& cloth);
+inline double support_stiffness(const Cloth& cloth) { return SUPPORT_STIFFNESS * stiffest_spring(cloth); }
+
+//: Term t's penalty stiffness (N/m): Supports::self_stiffness for a pair of the cloth with itself, else stiffness.
+inline double term_stiffness(const Supports& supports, Index t) {
+    return supports.collider[static_cast<std::size_t>(t)] == SELF_SUPPORT ? supports.self_stiffness : supports.stiffness;
+}
 
 //: Set each term's world normal and offset for a step of h s from the step's start (the colliders' motion
 //: rows set for it: collider_motion.hpp), the collider's points where it is at the step's end, and its

@@ -1,0 +1,53 @@
+// The cloth's pairs with itself as supports (self_contact/supports.hpp).
+#include "wetcloth/self_contact/supports.hpp"
+
+#include "wetcloth/collider_supports.hpp"
+#include "wetcloth/self_contact/elements.hpp"
+#include "wetcloth/self_contact/geometry.hpp"
+
+namespace wc::self_contact {
+
+namespace {
+
+//: Append the listed pairs of one kind (rows: first elements, then second; count of them).
+template <int KIND>
+void gather(const Contact& contact, const Index* rows, Index count, Index n, const double* pos, const double* vel,
+            double thickness, double distance, double ahead, Supports& supports) {
+    for (Index p = 0; p < count; ++p) {
+        Index idx[4];
+        particles<KIND>(contact, rows[p], rows[count + p], idx);
+        const Vec3 x[4] = {point(pos, n, idx[0]), point(pos, n, idx[1]), point(pos, n, idx[2]), point(pos, n, idx[3])};
+        const Weights w = closest(KIND, x[0], x[1], x[2], x[3]);
+        const Vec3 d = combine(w, x[0], x[1], x[2], x[3]);
+        const double gap = norm(d);
+        if (!(gap > 0.0)) continue;  // no normal: the stage after the solve takes it
+        const Vec3 normal{d.x / gap, d.y / gap, d.z / gap};
+        const Vec3 v[4] = {point(vel, n, idx[0]), point(vel, n, idx[1]), point(vel, n, idx[2]), point(vel, n, idx[3])};
+        const double closing = -dot(normal, combine(w, v[0], v[1], v[2], v[3]));  // m/s
+        if (!(gap < thickness + ahead * py_max(closing, 0.0))) continue;
+        const double weights[4] = {w.w0, w.w1, w.w2, w.w3};
+        static_assert(SUPPORT_POINTS == 4, "a pair's four particles fill a term");
+        supports.points.insert(supports.points.end(), idx, idx + 4);
+        supports.weights.insert(supports.weights.end(), weights, weights + 4);
+        // g = offset + n . sum_k w_k x_k presses below `distance` where the pair's gap is below the thickness.
+        supports.table_normal.insert(supports.table_normal.end(), {normal.x, normal.y, normal.z});
+        supports.table_part.insert(supports.table_part.end(), {distance - thickness, 0.0, 0.0});
+        supports.collider.push_back(SELF_SUPPORT);
+    }
+}
+
+}  // namespace
+
+Index gather_self_supports(const Contact& contact, const Cloth& cloth, Index n, const double* pos, const double* vel,
+                           double thickness, double distance, double ahead, Supports& supports) {
+    const ContactLists& lists = *contact.lists;
+    gather<POINT_TRIANGLE>(contact, lists.point_triangle.data(), lists.point_triangle_count(), n, pos, vel, thickness,
+                           distance, ahead, supports);
+    gather<EDGE_EDGE>(contact, lists.edge_edge.data(), lists.edge_edge_count(), n, pos, vel, thickness, distance,
+                      ahead, supports);
+    supports.self_friction = contact.friction;
+    supports.self_stiffness = SELF_SUPPORT_STIFFNESS * stiffest_spring(cloth);
+    return supports.count();
+}
+
+}  // namespace wc::self_contact
