@@ -21,14 +21,26 @@ TWO_TERMS = (np.array([[0, 1, 2, -1], [3, 4, -1, -1]], dtype=np.int64),
              np.array([[0.36, 0.48, 0.8], [0.0, 0.6, -0.8]]), np.array([0.11, -0.07]))
 
 
-def _terms(pos, p=None):
-    """TWO_TERMS, both pressing at pos: their energy (J), forces (3, n), diagonal blocks (6, n) and the rest of
+def _terms(pos, p=None, terms=TWO_TERMS):
+    """The terms (TWO_TERMS) at pos: their energy (J), forces (3, n), diagonal blocks (6, n) and the rest of
     their stiffness times p (3, n), the blocks and product times SCALE."""
     n = pos.shape[1]
     force, blocks, product = np.zeros((3, n)), np.zeros((6, n)), np.zeros((3, n))
-    energy = _core.support_terms(*TWO_TERMS, STIFFNESS, DISTANCE, SCALE, pos, np.ones(n),
+    energy = _core.support_terms(*terms, STIFFNESS, DISTANCE, SCALE, pos, np.ones(n),
                                  np.zeros((3, n)) if p is None else p, force, blocks, product)
     return energy, force, blocks, product
+
+
+def _stiffness_against_force_differences(pos, p, terms=TWO_TERMS):
+    """The terms' whole stiffness times SCALE applied to p (their blocks and product), and central differences
+    of their forces along p times SCALE (steps of 1e-8 m)."""
+    _, _, blocks, product = _terms(pos, p, terms)
+    xx, yy, zz, xy, xz, yz = blocks
+    matrix_times_p = product + np.array([xx * p[0] + xy * p[1] + xz * p[2], xy * p[0] + yy * p[1] + yz * p[2],
+                                         xz * p[0] + yz * p[1] + zz * p[2]])
+    step = 1e-8
+    difference = -(_terms(pos + step * p, terms=terms)[1] - _terms(pos - step * p, terms=terms)[1]) / (2 * step)
+    return matrix_times_p, difference * SCALE
 
 
 def _pressing_place():
@@ -72,15 +84,11 @@ def test_the_stiffness_is_the_derivative_of_the_force():
     differences of the forces along p (the force linear while the terms press: exact but for rounding)."""
     pos = _pressing_place()
     p = np.random.default_rng(5).normal(size=pos.shape)
-    _, _, blocks, product = _terms(pos, p)
-    xx, yy, zz, xy, xz, yz = blocks
-    matrix_times_p = product + np.array([xx * p[0] + xy * p[1] + xz * p[2], xy * p[0] + yy * p[1] + yz * p[2],
-                                         xz * p[0] + yz * p[1] + zz * p[2]])
-    step = 1e-8
-    difference = -(_terms(pos + step * p)[1] - _terms(pos - step * p)[1]) / (2 * step) * SCALE
+    matrix_times_p, difference = _stiffness_against_force_differences(pos, p)
     assert np.abs(matrix_times_p).max() > 0.0
     np.testing.assert_allclose(matrix_times_p, difference, rtol=0, atol=1e-6 * np.abs(difference).max())
     # off the diagonal blocks: the product is zero at a particle whose term has no other point moving
+    product = _terms(pos, p)[3]
     assert np.abs(product[:, 3]).max() > 0.0 and np.abs(product[:, 0]).max() > 0.0
 
 
@@ -96,24 +104,13 @@ def test_a_pair_of_the_cloth_with_itself_is_a_term_of_four_points():
     term = (np.array([[0, 1, 2, 3]], dtype=np.int64), weights[None], normal[None], np.array([DISTANCE - thickness]))
     pos = np.random.default_rng(13).normal(scale=0.05, size=(3, 4))
     pos[:, 0] += (0.8 * thickness - normal @ pos @ weights) * normal  # the point 0.8 thickness over the triangle
-
-    def terms(x, p=np.zeros((3, 4))):
-        force, blocks, product = np.zeros((3, 4)), np.zeros((6, 4)), np.zeros((3, 4))
-        energy = _core.support_terms(*term, STIFFNESS, DISTANCE, SCALE, x, np.ones(4), p, force, blocks, product)
-        return energy, force, blocks, product
-
-    energy, force, _, _ = terms(pos)
+    energy, force, _, _ = _terms(pos, terms=term)
     assert energy == pytest.approx(0.5 * STIFFNESS * (0.2 * thickness) ** 2, rel=1e-9)
     np.testing.assert_allclose(force.sum(axis=1), 0.0, rtol=0, atol=1e-12 * np.abs(force).max())
-    difference = -_central_differences(lambda x: terms(x)[0], pos, 1e-7)
+    difference = -_central_differences(lambda x: _terms(x, terms=term)[0], pos, 1e-7)
     np.testing.assert_allclose(difference, force, rtol=0, atol=1e-6 * np.abs(force).max())
     p = np.random.default_rng(17).normal(size=pos.shape)
-    _, _, blocks, product = terms(pos, p)
-    xx, yy, zz, xy, xz, yz = blocks
-    matrix_times_p = product + np.array([xx * p[0] + xy * p[1] + xz * p[2], xy * p[0] + yy * p[1] + yz * p[2],
-                                         xz * p[0] + yz * p[1] + zz * p[2]])
-    step = 1e-8
-    derivative = -(terms(pos + step * p)[1] - terms(pos - step * p)[1]) / (2 * step) * SCALE
+    matrix_times_p, derivative = _stiffness_against_force_differences(pos, p, term)
     np.testing.assert_allclose(matrix_times_p, derivative, rtol=0, atol=1e-6 * np.abs(derivative).max())
 
 

@@ -352,10 +352,10 @@ def test_a_sheet_folding_onto_itself_at_frame_steps_loses_energy_in_nearly_every
     """The fixed-step mode (implicit_euler, tolerance 0, max_step 1/30 s) on a 41 x 41 sheet, 1 m square, hung by
     one corner in still air for 3 s: its sides swing together and fold over each other.  Nothing drives it, so its
     mechanical energy should fall in every frame.  With the layers' contact in the solve (docs/model.md section
-    6.2, "Layers in the solve") it rose in 0-2 of the 90 frames from each of seven starting heights a micrometre
-    apart (bench/self_contact_energy.py), where the stage after the solve alone let it rise in 20-27 frames (by up
-    to 0.12 J).  The folding is chaotic (another CPU's rounding takes another path), hence a count with room: at
-    most 5 frames.  And the fold never crosses itself."""
+    6.2, "Layers in the solve") it rose in none of the 90 frames from six of seven starting heights a micrometre
+    apart, in one from the seventh (by 0.0004 J; bench/self_contact_energy.py), where the stage after the solve
+    alone let it rise in 20-27 frames (by up to 0.12 J).  The folding is chaotic (another CPU's rounding takes
+    another path), hence a count with room: at most 3 frames.  And the fold never crosses itself."""
     scene = wetcloth.load_scene(nx=41, ny=41, width=1.0, length=1.0, pinned_vertices="box:-9,0.45,-9,-0.45,9,9",
                                 initial_tilt=0.0, initial_height=2.0, water_level=-10.0, floor_level=-20.0,
                                 integrator="implicit_euler", tolerance=0.0, max_step=1 / 30)
@@ -367,7 +367,7 @@ def test_a_sheet_folding_onto_itself_at_frame_steps_loses_energy_in_nearly_every
         crossed += crossings(sim.positions, sim.triangles)
     rising = int((np.diff(energies) > 1e-9).sum())  # 1e-9 J: round-off in summing the energy (test_sanity.py)
     assert sim.contact_counts["responses"] > 10_000, "its sides met"
-    assert rising <= 5, np.diff(energies).max()
+    assert rising <= 3, np.diff(energies).max()
     assert crossed == 0
 
 

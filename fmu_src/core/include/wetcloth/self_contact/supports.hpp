@@ -13,14 +13,16 @@
 
 namespace wc::self_contact {
 
-//: The terms' penalty stiffness as a multiple of the cloth's stiffest spring (N/m per N/m): soft, so that the
-//: penalty steers the solve and leaves the thickness to the stage after it.  On a 41 x 41 sheet hung by a corner
-//: at 1/30 s steps (its sides fold together) and the 2.5k-vertex disc hung by its cap, three starting heights a
-//: micrometre apart each: at 0.1 no frame gained energy on the sheet and up to 0.003 J in 1-3 frames on the disc
-//: (without the terms 0.04-0.14 J in 20-26 frames, 0.045-0.05 J in 10-11), the sheet's frames 0.65x the time
-//: and the disc's 1.05x; at 1 (the colliders' 10 is stiffer still) the sheet took 0.27x the time but gained up
-//: to 0.086 J, the disc 0.037 J at 1.5x the time; at 0.4 the sheet 0.3x, up to 0.0013 J, the disc 1.08x, 0.006 J.
-inline constexpr double SELF_SUPPORT_STIFFNESS = 0.1;
+//: The terms' penalty stiffness as a multiple of the cloth's stiffest spring (N/m per N/m).  Soft: a fixed normal
+//: keeps each layer on its side through a frame-long step, and the thickness is left to the stage after the solve.
+//: bench/self_contact_energy.py (a 41 x 41 sheet hung by a corner, the 2.5k-vertex disc hung by its cap, 1/30 s
+//: steps, three starting heights a micrometre apart), frames in which the energy rose, and the time against
+//: the stage alone (which let it rise in 18-27 and 9-12 frames, by up to 0.12 J): at 0.025 none on either (one
+//: frame in seven starts of the sheet), 0.6x and 0.97x the time; at 0.005 none, 0.55x and 1.03x; at 0 (the
+//: terms there but without force) as without them; at 0.1 0-2 frames on the sheet (up to 0.054 J), 1-8 on the
+//: disc, 0.7x and 1.1x; at 0.4 2-4 and 3-7, 0.4x and 1.0x; at 10, the colliders' stiffness, up to 0.086 J,
+//: 0.3x and 1.5x.
+inline constexpr double SELF_SUPPORT_STIFFNESS = 0.025;
 
 //: Append to supports the candidate pairs (the list in contact) whose gap at positions pos (3, n) is below
 //: `thickness` (m) plus how far they close in `ahead` s at velocities vel (3, n), as SELF_SUPPORT terms whose
