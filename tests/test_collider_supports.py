@@ -114,6 +114,36 @@ def test_a_pair_of_the_cloth_with_itself_is_a_term_of_four_points():
     np.testing.assert_allclose(matrix_times_p, derivative, rtol=0, atol=1e-6 * np.abs(derivative).max())
 
 
+def test_a_term_met_within_the_step_takes_the_normal_force_that_lands_its_pair():
+    """A term with friction met within a fixed step (lag_arriving_normal_force) takes the normal force that stops
+    its pair's approach within the step and holds its weight, at most its penalty's: N = m (a / h + g n_z), m the
+    pair's mass along its gap, 1 / sum_k w_k^2 / m_k, what a force on the gap shared as the weights share it
+    accelerates.  Two terms, each moving up at 0.5 m/s onto its normal (0, 0, 1) and sliding at 1 m/s: a cloth
+    triangle under a collider's vertex (weights -0.2, -0.3, -0.5 on masses of 10, 20, 30 g) and a point of the
+    cloth over one of its own triangles (weights 1, -0.2, -0.3, -0.5, 10 g each), both 1 mm into a stiff
+    penalty (1e6 N/m: not the bound).  On the old code the pair's mass was sum_k w_k m_k: -23 g for the first
+    (a negative normal force, friction pushing the slide along), 0 for the second."""
+    h, normal = 1 / 30, np.array([0.0, 0.0, 1.0])
+    points = np.array([[0, 1, 2, -1], [3, 4, 5, 6]], dtype=np.int64)
+    weights = np.array([[-0.2, -0.3, -0.5, 0.0], [1.0, -0.2, -0.3, -0.5]])
+    mass = np.array([0.01, 0.02, 0.03, 0.01, 0.01, 0.01, 0.01])
+    pos = np.random.default_rng(19).normal(scale=0.05, size=(3, 7))
+    offsets = np.array([DISTANCE - 1e-3 - normal @ pos[:, p[p >= 0]] @ w[p >= 0] for p, w in zip(points, weights)])
+    start_vel = np.zeros((3, 7))
+    start_vel[2, :3] = 0.5  # the triangle up onto the vertex above it
+    start_vel[2, 3] = -0.5  # the point down onto the triangle below it
+    vel = start_vel + np.array([[1.0], [0.0], [0.0]]) * (np.arange(7) % 2)  # a slide across the normal
+    forces = _core.support_arrivals(points, weights, np.array([normal, normal]), offsets, 1e6, DISTANCE,
+                                    np.array([0.5, 0.5]), mass, start_vel, pos, vel, h)
+    for term, force in enumerate(forces):
+        present = points[term] >= 0
+        w, m = weights[term][present], mass[points[term][present]]
+        approach = -(w * start_vel[2, points[term][present]]).sum()
+        assert approach == pytest.approx(0.5)
+        expected = (approach / h + 9.81) / (w**2 / m).sum()
+        assert force == pytest.approx(expected, rel=1e-3), (term, force, expected)
+
+
 def test_a_released_term_has_no_force_energy_or_stiffness():
     """Where each gap is above DISTANCE the terms are off: no energy, force, blocks or product."""
     pos = _pressing_place()

@@ -1,4 +1,8 @@
 // Bindings of a moving mesh's supports inside the implicit step (collider_supports.cpp), for the tests.
+#include <nanobind/stl/vector.h>
+
+#include <vector>
+
 #include "convert.hpp"
 #include "wetcloth/collider_supports.hpp"
 
@@ -93,6 +97,34 @@ WETCLOTH_BINDINGS(m) {
         "out (scale 0): adds their forces (N, normal and friction) into force (3, n), their friction's stiffness in velocity times velocity_scale (s): the "
         "diagonal blocks into blocks (6, n), the rest times p (3, n) into product (3, n); returns the friction's "
         "dissipation potential (W).");
+    m.def(
+        "support_arrivals",
+        [](nb::handle points, nb::handle weights, nb::handle normals, nb::handle offsets, double stiffness,
+           double distance, nb::handle frictions, nb::handle mass, nb::handle start_vel, nb::handle pos,
+           nb::handle vel, double h) {
+            Supports s = given_supports(points, weights, normals, offsets);
+            const Index count = s.count();
+            const Index n = size_of(mass);
+            const double* mu = argument<const double>(frictions, "frictions", count);
+            s.friction.assign(mu, mu + count);
+            s.normal_force.assign(static_cast<std::size_t>(count), 0.0);
+            s.collider_velocity.assign(3 * static_cast<std::size_t>(count), 0.0);
+            s.friction_block.assign(6 * static_cast<std::size_t>(count), 0.0);
+            s.stiffness = stiffness, s.distance = distance, s.velocity_scale = h;
+            for (Index t = 0; t < count; ++t) s.any_friction = s.any_friction || mu[t] > 0.0;
+            std::vector<double> force(3 * static_cast<std::size_t>(n)), blocks(6 * static_cast<std::size_t>(n));
+            lag_arriving_normal_force(s, n, argument<const double>(mass, "mass", n),
+                                      argument<const double>(start_vel, "start_vel", 3 * n),
+                                      argument<const double>(pos, "pos", 3 * n), argument<const double>(vel, "vel", 3 * n),
+                                      h, force.data(), blocks.data());
+            return s.normal_force;
+        },
+        nb::arg("points"), nb::arg("weights"), nb::arg("normals"), nb::arg("offsets"), nb::arg("stiffness"),
+        nb::arg("distance"), nb::arg("frictions"), nb::arg("mass"), nb::arg("start_vel"), nb::arg("pos"),
+        nb::arg("vel"), nb::arg("h"),
+        "support_terms' terms met within a step of h s (no normal force at its start; frictions (m)), the cloth's "
+        "masses (n) kg and its velocities at the start (3, n) m/s, at an iterate pos, vel (3, n): the normal "
+        "force (N) each term takes there for the rest of the step (lag_arriving_normal_force).");
 }
 
 }  // namespace wc::py

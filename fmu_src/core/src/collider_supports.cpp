@@ -158,7 +158,9 @@ void place_supports(Supports& supports, const Physics& phys, Index n, const doub
         }
         world_direction_after(phys, k, h, normal);
         double cloth_weight = 0.0;
-        for (int j = 0; j < SUPPORT_POINTS; ++j) cloth_weight += supports.points[SUPPORT_POINTS * t + j] >= 0 ? supports.weights[SUPPORT_POINTS * t + j] : 0.0;
+        for (int j = 0; j < SUPPORT_POINTS; ++j) {
+            if (supports.points[SUPPORT_POINTS * t + j] >= 0) cloth_weight += supports.weights[SUPPORT_POINTS * t + j];
+        }
         double part[3];  // the collider's points' weighted sum at the step's end
         supports.offset[static_cast<std::size_t>(t)] = collider_along(supports, phys, t, h, normal, cloth_weight, part);
         const double mu = k == FLOOR_SUPPORT ? phys.floor_friction : phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
@@ -183,18 +185,22 @@ Index lag_arriving_normal_force(Supports& supports, Index n, const double* mass,
         const double depth = supports.distance - support_gap(supports, t, n, pos);
         double u[3];
         if (!(depth > 0.0) || !(slip_velocity(supports, t, n, vel, u) > SUPPORT_SLIP_SPEED)) continue;
-        // The pair's mass (kg) and its approach at the start (m/s) against its surface's velocity.
+        // The pair's mass along its gap (kg): 1 / sum_k w_k^2 / m_k, what a force on the gap, shared as the
+        // weights share it, accelerates (a single point's own mass; the sum of signed weights times masses, as
+        // before, was negative for a cloth triangle under a collider's vertex, and zero for the cloth's own pairs);
+        // and its approach at the start (m/s) against its surface's velocity.
         const double* nn = supports.normal.data() + 3 * t;
-        double inertia = 0.0;
+        double compliance = 0.0;
         double approach = 0.0;
         for (int c = 0; c < 3; ++c) approach += nn[c] * supports.collider_velocity[3 * t + c];
         for (int j = 0; j < SUPPORT_POINTS; ++j) {
             const Index i = supports.points[SUPPORT_POINTS * t + j];
             if (i < 0) continue;
             const double w = supports.weights[SUPPORT_POINTS * t + j];
-            inertia += w * mass[i];
+            if (mass[i] > 0.0) compliance += w * w / mass[i];
             approach -= w * (nn[0] * start_vel[i] + nn[1] * start_vel[n + i] + nn[2] * start_vel[2 * n + i]);
         }
+        const double inertia = compliance > 0.0 ? 1.0 / compliance : 0.0;
         const double landing = inertia * (std::max(approach, 0.0) / h + GRAVITY * std::max(nn[2], 0.0));
         supports.normal_force[term] = std::min(term_stiffness(supports, t) * depth, landing);
         add_friction(supports, t, n, vel, force, blocks);

@@ -60,7 +60,8 @@ inline double support_stiffness(const Cloth& cloth) { return SUPPORT_STIFFNESS *
 
 //: Term t's penalty stiffness (N/m): Supports::self_stiffness for a pair of the cloth with itself, else stiffness.
 inline double term_stiffness(const Supports& supports, Index t) {
-    return supports.collider[static_cast<std::size_t>(t)] == SELF_SUPPORT ? supports.self_stiffness : supports.stiffness;
+    const bool self = supports.collider[static_cast<std::size_t>(t)] == SELF_SUPPORT;
+    return self ? supports.self_stiffness : supports.stiffness;
 }
 
 //: Set each term's world normal and offset for a step of h s from the step's start (the colliders' motion
@@ -73,9 +74,9 @@ void place_supports(Supports& supports, const Physics& phys, Index n, const doub
 //: pos (3, n) and slip faster than SUPPORT_SLIP_SPEED at velocities vel (3, n), a Newton iterate: their normal
 //: force there, stiffness (distance - g) (N), held for the rest of the step (IPC's friction lagged from an
 //: iterate), so that a particle arriving within a step of h s has friction in it.  At most what lands the
-//: pair (mass (n) kg) within the step: its approach at start_vel (3, n, m/s) stopped and its weight held (an
-//: iterate far from the solution can lie deep in the penalty).  Their friction at vel joins force (3, n) and
-//: blocks (6, n) as add_support_forces adds it.  Returns how many.
+//: pair (mass (n) kg; along its gap 1 / sum_k w_k^2 / m_k) within the step: its approach at start_vel (3, n,
+//: m/s) stopped and its weight held (an iterate far from the solution can lie deep in the penalty).  Their
+//: friction at vel joins force (3, n) and blocks (6, n) as add_support_forces adds it.  Returns how many.
 Index lag_arriving_normal_force(Supports& supports, Index n, const double* mass, const double* start_vel,
                                 const double* pos, const double* vel, double h, double* force, double* blocks);
 

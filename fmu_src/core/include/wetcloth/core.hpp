@@ -216,10 +216,10 @@ struct Sliding {
 
 //: A mesh collider's features near the cloth's elements at a step's start (a moving mesh's; at fixed steps a
 //: still mesh's too, and a free particle against a still analytic collider's tangent plane:
-//: collider_analytic_supports.hpp), and at fixed steps the cloth's pairs with itself near then (self_contact/supports.hpp),
-//: as supports the implicit step sees (collider_supports.hpp): per term, the pair's cloth particles (SUPPORT_POINTS, -1
-//: where unused) and their weights (the pair's closest-point weights, self_contact/geometry.hpp), and in the collider's table
-//: frame the contact normal at the start (3) and the weighted sum of its own points (3, m); its collider.
+//: collider_analytic_supports.hpp), and at fixed steps the cloth's pairs with itself near then
+//: (self_contact/supports.hpp), as supports the implicit step sees (collider_supports.hpp): per term, the pair's
+//: cloth particles (SUPPORT_POINTS, -1 where unused) and their weights (the pair's closest-point weights,
+//: self_contact/geometry.hpp), and in the collider's table frame the contact normal at the start (3) and the weighted sum of its own points (3, m); its collider.
 //: For the step being tried: each term's world normal (3) and offset (m), so that its gap is
 //: g = offset + sum_k weight_k normal . x_k, and whether it presses (g below `distance`); stiffness (N/m),
 //: distance (m) and scale (bh^2, s^2: the position Jacobian's factor in the step's matrix).  Friction: each
@@ -237,7 +237,8 @@ struct Supports {
     std::vector<double> normal, offset;
     std::vector<char> pressing;
     std::vector<double> friction, normal_force, collider_velocity, friction_block;
-    double stiffness = 0.0, distance = 0.0, scale = 0.0, velocity_scale = 0.0, self_stiffness = 0.0, self_friction = 0.0;
+    double stiffness = 0.0, distance = 0.0, scale = 0.0, velocity_scale = 0.0;
+    double self_stiffness = 0.0, self_friction = 0.0;
     bool any_friction = false;
     Index count() const { return static_cast<Index>(collider.size()); }
 };
