@@ -5,11 +5,11 @@ with self-collision on: the energy the steps make, and what they cost.
 
 Cases: `corner`, a 41 x 41 sheet, 1 m square, hung by one corner (its sides swing together and fold over each
 other), and `disc`, the 2.5k-vertex disc of bench/mesh_cost.py hung by its cap.  Nothing drives them (no water,
-wind, grip or keyed collider), so a rise of the mechanical energy (``wetcloth.energy``) from one frame to the next is energy the
-steps made.  The folding is chaotic (a micrometre of starting height changes which frame rises most), so each
-case runs from --starts starting heights a micrometre apart; per start: the largest rise (J) and in how many
-frames the energy rose at all, the steps taken again, the self-collision stage's pushes and the CPU time per
-frame.
+wind, grip or keyed collider), so a rise of the mechanical energy (``wetcloth.energy``) from one frame to the
+next is energy the steps made.  The folding is chaotic (a micrometre of starting height changes which frame
+rises most), so each case runs from --starts starting heights a micrometre apart; per start: the largest rise
+(J) and in how many frames the energy rose at all, the steps taken again, the self-collision stage's pushes and
+the CPU time per frame.
 """
 
 from __future__ import annotations
@@ -60,8 +60,9 @@ def run(fields: dict, lift: float, fps: float, duration: float) -> str:
         rises.append(now - energy)
         energy = now
     rises = np.array(rises)
-    return (f"start +{1e6 * lift:.0f} um: largest rise {rises.max():+.2g} J, energy rose in {int((rises > RISE).sum()):2d} "
-            f"frames; steps taken again {sim.rejected_steps:3d}; pushes {sim.contact_counts['responses']:6d}; "
+    rising = int((rises > RISE).sum())
+    return (f"start +{1e6 * lift:.0f} um: largest rise {rises.max():+.2g} J, energy rose in {rising:2d} frames; "
+            f"steps taken again {sim.rejected_steps:3d}; pushes {sim.contact_counts['responses']:6d}; "
             f"{1e3 * cpu / frames:6.1f} ms/frame")
 
 

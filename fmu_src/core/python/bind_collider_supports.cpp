@@ -58,8 +58,9 @@ WETCLOTH_BINDINGS(m) {
         nb::arg("points"), nb::arg("weights"), nb::arg("normals"), nb::arg("offsets"), nb::arg("stiffness"),
         nb::arg("distance"), nb::arg("scale"), nb::arg("pos"), nb::arg("free"), nb::arg("p"), nb::arg("force"),
         nb::arg("blocks"), nb::arg("product"),
-        "Supports' terms given in the world (points (m, SUPPORT_POINTS) int64 cloth particles or -1, weights (m, SUPPORT_POINTS), normals "
-        "(m, 3), offsets (m) m; stiffness N/m, distance m, scale s^2) at pos (3, n): adds their forces (N) into "
+        "Supports' terms given in the world (points (m, SUPPORT_POINTS) int64 cloth particles or -1, weights "
+        "(m, SUPPORT_POINTS), normals (m, 3), offsets (m) m; stiffness N/m, distance m, scale s^2) at pos (3, n): "
+        "adds their forces (N) into "
         "force (3, n), their stiffness's diagonal blocks times scale into blocks (6, n) and the rest of their "
         "stiffness times scale times p (3, n) into product (3, n) (rows of free particles); returns the energy (J).");
     m.attr("SUPPORT_SLIP_SPEED") = SUPPORT_SLIP_SPEED;
@@ -115,8 +116,8 @@ WETCLOTH_BINDINGS(m) {
             std::vector<double> force(3 * static_cast<std::size_t>(n)), blocks(6 * static_cast<std::size_t>(n));
             lag_arriving_normal_force(s, n, argument<const double>(mass, "mass", n),
                                       argument<const double>(start_vel, "start_vel", 3 * n),
-                                      argument<const double>(pos, "pos", 3 * n), argument<const double>(vel, "vel", 3 * n),
-                                      h, force.data(), blocks.data());
+                                      argument<const double>(pos, "pos", 3 * n),
+                                      argument<const double>(vel, "vel", 3 * n), h, force.data(), blocks.data());
             return s.normal_force;
         },
         nb::arg("points"), nb::arg("weights"), nb::arg("normals"), nb::arg("offsets"), nb::arg("stiffness"),

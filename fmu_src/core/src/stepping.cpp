@@ -278,21 +278,22 @@ Status step(Core& core, double remaining, double span) {
     const Index mesh_terms = meshes_support ? core.supports.count() : 0;
     // And the cloth's pairs with itself near at the step's start (self_contact/supports.hpp).
     const bool self_supports = analytic && core.solver.near_itself;
+    const double support_distance = SUPPORT_DISTANCE * 0.5 * phys.thickness;  // m: where the penalties start
     const auto support = [&]() {
         bool any = mesh_terms > 0;
         if (analytic) {
             any = gather_analytic_supports(phys, n, buf.pos, buf.vel, cloth.free, core.solver.sliding,
-                                           SUPPORT_DISTANCE * 0.5 * phys.thickness, control.max_step, mesh_terms,
-                                           core.supports) > 0;
+                                           support_distance, control.max_step, mesh_terms, core.supports) > 0;
         }
         if (self_supports) {
-            any = self_contact::gather_self_supports(core.contact, cloth, n, buf.pos, buf.vel, phys.thickness,
-                                                     SUPPORT_DISTANCE * 0.5 * phys.thickness, control.max_step,
-                                                     core.supports) > 0;
+            any = self_contact::gather_self_supports(core.contact, n, buf.pos, buf.vel, phys.thickness,
+                                                     support_distance, control.max_step, core.supports) > 0;
         }
         if (any) {
-            core.supports.distance = SUPPORT_DISTANCE * 0.5 * phys.thickness;
-            core.supports.stiffness = support_stiffness(cloth);
+            const double stiffest = stiffest_spring(cloth);
+            core.supports.distance = support_distance;
+            core.supports.stiffness = SUPPORT_STIFFNESS * stiffest;
+            core.supports.self_stiffness = self_contact::SELF_SUPPORT_STIFFNESS * stiffest;
         }
         core.solver.supports = any ? &core.supports : nullptr;
     };

@@ -52,11 +52,9 @@ inline constexpr Index FLOOR_SUPPORT = -1;
 //: Keep the first `kept` gathered terms of supports (0: none), dropping the rest.
 void keep_terms(Supports& supports, Index kept);
 
-//: The cloth's stiffest spring (N/m).
+//: The cloth's stiffest spring (N/m): the penalties' stiffness is a multiple of it (Supports::stiffness,
+//: SUPPORT_STIFFNESS times; Supports::self_stiffness, self_contact::SELF_SUPPORT_STIFFNESS times).
 double stiffest_spring(const Cloth& cloth);
-
-//: The penalty's stiffness (N/m) for a cloth: SUPPORT_STIFFNESS times its stiffest spring.
-inline double support_stiffness(const Cloth& cloth) { return SUPPORT_STIFFNESS * stiffest_spring(cloth); }
 
 //: Term t's penalty stiffness (N/m): Supports::self_stiffness for a pair of the cloth with itself, else stiffness.
 inline double term_stiffness(const Supports& supports, Index t) {

@@ -219,7 +219,8 @@ struct Sliding {
 //: collider_analytic_supports.hpp), and at fixed steps the cloth's pairs with itself near then
 //: (self_contact/supports.hpp), as supports the implicit step sees (collider_supports.hpp): per term, the pair's
 //: cloth particles (SUPPORT_POINTS, -1 where unused) and their weights (the pair's closest-point weights,
-//: self_contact/geometry.hpp), and in the collider's table frame the contact normal at the start (3) and the weighted sum of its own points (3, m); its collider.
+//: self_contact/geometry.hpp), and in the collider's table frame the contact normal at the start (3) and the
+//: weighted sum of its own points (3, m); its collider.
 //: For the step being tried: each term's world normal (3) and offset (m), so that its gap is
 //: g = offset + sum_k weight_k normal . x_k, and whether it presses (g below `distance`); stiffness (N/m),
 //: distance (m) and scale (bh^2, s^2: the position Jacobian's factor in the step's matrix).  Friction: each

@@ -38,15 +38,14 @@ void gather(const Contact& contact, const Index* rows, Index count, Index n, con
 
 }  // namespace
 
-Index gather_self_supports(const Contact& contact, const Cloth& cloth, Index n, const double* pos, const double* vel,
-                           double thickness, double distance, double ahead, Supports& supports) {
+Index gather_self_supports(const Contact& contact, Index n, const double* pos, const double* vel, double thickness,
+                           double distance, double ahead, Supports& supports) {
     const ContactLists& lists = *contact.lists;
     gather<POINT_TRIANGLE>(contact, lists.point_triangle.data(), lists.point_triangle_count(), n, pos, vel, thickness,
                            distance, ahead, supports);
     gather<EDGE_EDGE>(contact, lists.edge_edge.data(), lists.edge_edge_count(), n, pos, vel, thickness, distance,
                       ahead, supports);
     supports.self_friction = contact.friction;
-    supports.self_stiffness = SELF_SUPPORT_STIFFNESS * stiffest_spring(cloth);
     return supports.count();
 }
 

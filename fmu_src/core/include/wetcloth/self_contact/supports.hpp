@@ -26,10 +26,11 @@ inline constexpr double SELF_SUPPORT_STIFFNESS = 0.025;
 
 //: Append to supports the candidate pairs (the list in contact) whose gap at positions pos (3, n) is below
 //: `thickness` (m) plus how far they close in `ahead` s at velocities vel (3, n), as SELF_SUPPORT terms whose
-//: penalty starts at `thickness` (its onset `distance`, m: the supports' gap, Supports::distance); their
-//: stiffness SELF_SUPPORT_STIFFNESS times the cloth's stiffest spring, their friction the cloth's
-//: self-contact coefficient.  Returns how many terms supports has.
-Index gather_self_supports(const Contact& contact, const Cloth& cloth, Index n, const double* pos, const double* vel,
-                           double thickness, double distance, double ahead, Supports& supports);
+//: penalty starts at `thickness` (its onset `distance`, m: the supports' gap, Supports::distance), their
+//: friction the cloth's self-contact coefficient (their stiffness, Supports::self_stiffness, is
+//: SELF_SUPPORT_STIFFNESS times the cloth's stiffest spring: the stepper sets it with the colliders').
+//: Returns how many terms supports has.
+Index gather_self_supports(const Contact& contact, Index n, const double* pos, const double* vel, double thickness,
+                           double distance, double ahead, Supports& supports);
 
 }  // namespace wc::self_contact
