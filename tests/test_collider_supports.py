@@ -119,8 +119,9 @@ def test_a_term_met_within_the_step_takes_the_normal_force_that_lands_its_pair()
     its pair's approach within the step and holds its weight, at most its penalty's: N = m (a / h + g n_z), m the
     pair's mass along its gap, 1 / sum_k w_k^2 / m_k, what a force on the gap shared as the weights share it
     accelerates.  Two terms, each moving up at 0.5 m/s onto its normal (0, 0, 1) and sliding at 1 m/s: a cloth
-    triangle under a collider's vertex (weights -0.2, -0.3, -0.5 on masses of 10, 20, 30 g) and a point of the
-    cloth over one of its own triangles (weights 1, -0.2, -0.3, -0.5, 10 g each), both 1 mm into a stiff
+    triangle under a collider's vertex (weights -0.2, -0.3, -0.5 on masses of 10, 20, 30 g) and a term of four
+    points, as a cloth point over a cloth triangle would be (weights 1, -0.2, -0.3, -0.5, 10 g each; the cloth's
+    own pairs themselves take no friction on arrival), both 1 mm into a stiff
     penalty (1e6 N/m: not the bound).  On the old code the pair's mass was sum_k w_k m_k: -23 g for the first
     (a negative normal force, friction pushing the slide along), 0 for the second."""
     h, normal = 1 / 30, np.array([0.0, 0.0, 1.0])

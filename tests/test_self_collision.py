@@ -353,7 +353,7 @@ def test_a_sheet_folding_onto_itself_at_frame_steps_loses_energy_in_nearly_every
     one corner in still air for 3 s: its sides swing together and fold over each other.  Nothing drives it, so its
     mechanical energy should fall in every frame.  With the layers' contact in the solve (docs/model.md section
     6.2, "Layers in the solve") it rose in none of the 90 frames from six of seven starting heights a micrometre
-    apart, in one from the seventh (by 0.0004 J; bench/self_contact_energy.py), where the stage after the solve
+    apart, in one from the seventh (by 0.0002 J; bench/self_contact_energy.py), where the stage after the solve
     alone let it rise in 20-27 frames (by up to 0.12 J).  The folding is chaotic (another CPU's rounding takes
     another path), hence a count with room: at most 3 frames.  And the fold never crosses itself."""
     scene = wetcloth.load_scene(nx=41, ny=41, width=1.0, length=1.0, pinned_vertices="box:-9,0.45,-9,-0.45,9,9",

@@ -68,7 +68,8 @@ inline double term_stiffness(const Supports& supports, Index t) {
 //: pos (3, n); bh (s) the step matrix's velocity factor (its position factor bh^2).
 void place_supports(Supports& supports, const Physics& phys, Index n, const double* pos, double h, double bh);
 
-//: The terms with friction but no normal force at the step's start (met within it) that press at positions
+//: The terms with friction but no normal force at the step's start (met within it; not the cloth's own pairs,
+//: whose friction the self-collision stage applies after the step) that press at positions
 //: pos (3, n) and slip faster than SUPPORT_SLIP_SPEED at velocities vel (3, n), a Newton iterate: their normal
 //: force there, stiffness (distance - g) (N), held for the rest of the step (IPC's friction lagged from an
 //: iterate), so that a particle arriving within a step of h s has friction in it.  At most what lands the
