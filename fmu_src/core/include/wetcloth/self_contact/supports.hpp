@@ -17,8 +17,8 @@ namespace wc::self_contact {
 //: keeps each layer on its side through a frame-long step, and the thickness is left to the stage after the solve.
 //: bench/self_contact_energy.py (a 41 x 41 sheet hung by a corner, the 2.5k-vertex disc hung by its cap, 1/30 s
 //: steps, three starting heights a micrometre apart), frames in which the energy rose, and the time against
-//: the stage alone (which let it rise in 18-27 and 9-12 frames, by up to 0.12 J): at 0.025 none on either (one
-//: frame in seven starts of the sheet), 0.6x and 0.97x the time; at 0.005 none, 0.55x and 1.03x; at 0 (the
+//: the stage alone (which let it rise in 18-27 and 9-12 frames, by up to 0.12 J): at 0.025 0-1 on either (one
+//: frame in seven starts of the sheet, 0.0002 J; one in three of the disc, 0.001 J), 0.6x and 0.97x the time; at 0.005 none, 0.55x and 1.03x; at 0 (the
 //: terms there but without force) as without them; at 0.1 0-2 frames on the sheet (up to 0.054 J), 1-8 on the
 //: disc, 0.7x and 1.1x; at 0.4 2-4 and 3-7, 0.4x and 1.0x; at 10, the colliders' stiffness, up to 0.086 J,
 //: 0.3x and 1.5x.
