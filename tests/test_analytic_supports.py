@@ -53,7 +53,10 @@ def test_the_tablecloth_at_frame_steps_of_1_24_s_never_gains_energy():
     steps of 1/24 s for 2 s: its mechanical energy does not rise from one frame to the next beyond rounding.
     A frame-long step in contact can converge to a worse local minimum of its incremental potential, one
     above the energy the step started with (implicit.cpp, DESCENT_RESTARTS): the solve then starts again
-    from the lowest point between rest and there.  Without, a frame gained 0.073 J (90deede)."""
+    from the lowest point between rest and there.  Without, a frame gained 0.073 J (90deede), and 4 steps were
+    taken again; with them, none until the line search stopped creeping where the table's penalty is met within
+    the step (implicit.cpp, line_search): the cloth then lands a step earlier, and the landing's lift-off at
+    0.125 s, farther than thickness / 2 within its step (stepping.cpp), takes that step once again."""
     scene = load_scene("tablecloth").replace(integrator="implicit_euler", tolerance=0.0, max_step=1.0 / 24.0)
     sim = wetcloth.Simulation(scene)
     energy = [mechanical_energy(sim)]
@@ -61,8 +64,25 @@ def test_the_tablecloth_at_frame_steps_of_1_24_s_never_gains_energy():
         sim.advance(1.0 / 24.0)
         energy.append(mechanical_energy(sim))
     assert np.diff(energy).max() <= ENERGY_ROUNDING, np.diff(energy).max()
-    assert sim.rejected_steps == 0
+    assert sim.rejected_steps <= 1
     assert sim.solver_counts["descent_restarts"] > 0  # (the restarts are what keeps it: 11 over the 48 steps here)
+
+
+@pytest.mark.parametrize("fps", [20.0, 12.0])
+def test_the_tablecloth_at_frame_steps_beyond_1_24_s_lands_on_its_table(fps):
+    """The tablecloth preset (placed 1 cm above its table) at fixed steps of 1/20 and 1/12 s: after 1 s every
+    vertex within 0.3 m of the table's axis rests on the top, thickness / 2 above it, within 0.01 mm (as at
+    1/30 s).  Each step's first Newton correction, without the table's penalty in its matrix, drove the cloth
+    deep into the table; the line search's false-position guesses then crept from the start, the next
+    corrections alike, and the cloth hovered 8.3 and 9.8 mm above the top (implicit.cpp, line_search)."""
+    scene = load_scene("tablecloth").replace(integrator="implicit_euler", tolerance=0.0, max_step=1.0 / fps)
+    table = scene.colliders[0]
+    sim = wetcloth.Simulation(scene)
+    sim.advance(1.0)
+    pos = sim.state.pos
+    on_top = np.hypot(pos[0] - table.x, pos[1] - table.y) < 0.3
+    resting = table.z + 0.5 * table.height + 0.5 * scene.thickness
+    assert np.abs(pos[2, on_top] - resting).max() <= 1e-5
 
 
 @pytest.mark.parametrize("fps", [30.0, 24.0])

@@ -141,6 +141,8 @@ void place_supports(Supports& supports, const Physics& phys, Index n, const doub
     supports.normal.resize(3 * count);
     supports.offset.resize(count);
     supports.pressing.assign(count, 0);
+    supports.anticipated.assign(count, 0);
+    supports.stiff.assign(count, 0);
     supports.friction.resize(count);
     supports.normal_force.assign(count, 0.0);
     supports.collider_velocity.assign(3 * count, 0.0);
@@ -240,15 +242,19 @@ void add_support_forces(Supports& supports, Index n, const double* pos, const do
         const double scaled = supports.scale * k;
         const double depth = supports.distance - support_gap(supports, t, n, pos);
         const bool presses = depth > 0.0;
+        const bool stiff = presses || supports.anticipated[static_cast<std::size_t>(t)] != 0;
         supports.pressing[static_cast<std::size_t>(t)] = presses;
+        supports.stiff[static_cast<std::size_t>(t)] = stiff;
         if (rubs(supports, t)) add_friction(supports, t, n, vel, force, blocks);
-        if (!presses) continue;
+        if (!stiff) continue;
         const double* nn = supports.normal.data() + 3 * t;
         for (int j = 0; j < SUPPORT_POINTS; ++j) {
             const Index i = supports.points[SUPPORT_POINTS * t + j];
             if (i < 0) continue;
             const double w = supports.weights[SUPPORT_POINTS * t + j];
-            for (Index c = 0; c < 3; ++c) force[c * n + i] += k * depth * w * nn[c];
+            if (presses) {
+                for (Index c = 0; c < 3; ++c) force[c * n + i] += k * depth * w * nn[c];
+            }
             const double b = scaled * w * w;
             blocks[i] += b * nn[0] * nn[0];
             blocks[n + i] += b * nn[1] * nn[1];
@@ -263,7 +269,7 @@ void add_support_forces(Supports& supports, Index n, const double* pos, const do
 void add_support_product(const Supports& supports, Index n, const double* free, const double* p, double* out) {
     for (Index t = 0; t < supports.count(); ++t) {
         const double scaled = supports.scale * term_stiffness(supports, t);
-        const bool presses = supports.pressing[static_cast<std::size_t>(t)] != 0;
+        const bool presses = supports.stiff[static_cast<std::size_t>(t)] != 0;
         const bool rubbing = rubs(supports, t);
         if (!presses && !rubbing) continue;
         const double* nn = supports.normal.data() + 3 * t;

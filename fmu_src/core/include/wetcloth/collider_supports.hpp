@@ -88,14 +88,15 @@ double support_energy(const Supports& supports, Index n, const double* pos);
 //: The friction's dissipation potential (W) at velocities vel (3, n): sum mu N f0(|u_t|).
 double support_dissipation(const Supports& supports, Index n, const double* vel);
 
-//: The pressing terms' forces (N) at positions pos into force (3, n) and their stiffness's diagonal blocks
-//: times scale into blocks (6, n; xx, yy, zz, xy, xz, yz), marking which press; the friction's forces at
+//: The pressing terms' forces (N) at positions pos into force (3, n) and the stiffness's diagonal blocks of
+//: those and the anticipated ones times scale into blocks (6, n; xx, yy, zz, xy, xz, yz), marking which press
+//: and which are stiff; the friction's forces at
 //: velocities vel (3, n) of the terms with a normal force at the step's start and their velocity stiffness's
 //: diagonal blocks times velocity_scale, keeping that stiffness for the product.
 void add_support_forces(Supports& supports, Index n, const double* pos, const double* vel, double* force,
                         double* blocks);
 
-//: out (3, n) += the terms' stiffness off the diagonal blocks (the pressing ones' times scale, the friction's
+//: out (3, n) += the terms' stiffness off the diagonal blocks (the stiff ones' times scale, the friction's
 //: times velocity_scale) times p (3, n), in the rows of free particles (free (n) 1).
 void add_support_product(const Supports& supports, Index n, const double* free, const double* p, double* out);
 

@@ -230,13 +230,16 @@ struct Sliding {
 //: (6 per term, xx yy zz xy xz yz, N s/m); velocity_scale (bh, s: the velocity Jacobian's factor in the
 //: step's matrix); any_friction whether a term has a coefficient above 0; self_stiffness (N/m) and self_friction
 //: (-) the penalty's stiffness and the coefficient of the cloth's pairs with itself.
+//: anticipated: the terms the step's matrix holds stiff before they press (those a Newton correction pressed
+//: at its full length where the line search stalled short of it, bdf2_step: the wall it met within the step);
+//: stiff: whether a term's stiffness is in the matrix at the last force evaluation (pressing or anticipated).
 struct Supports {
     std::vector<Index> points;
     std::vector<double> weights;
     std::vector<double> table_normal, table_part;
     std::vector<Index> collider;
     std::vector<double> normal, offset;
-    std::vector<char> pressing;
+    std::vector<char> pressing, anticipated, stiff;
     std::vector<double> friction, normal_force, collider_velocity, friction_block;
     double stiffness = 0.0, distance = 0.0, scale = 0.0, velocity_scale = 0.0;
     double self_stiffness = 0.0, self_friction = 0.0;
