@@ -202,7 +202,7 @@ bool met_within(const std::vector<char>& before, const std::vector<char>& at) {
 //: were taken again instead of 7), and the supports pressing at the full step are anticipated (stiff in the
 //: matrix for the rest of the step), so that the next correction sees the wall.  (A sheet swinging onto the
 //: floor at 1/24 s stopped at 0.0015 of its correction four times in a row and gained 0.012 J in the step; at
-//: 1/20 s the tablecloth hovered 11 cm above its table: bench/frame_step_energy.py, tests/test_frame_steps.py.)
+//: 1/20 s the tablecloth hovered 8.3 mm above its table: bench/frame_step_energy.py, tests/test_analytic_supports.py.)
 //: Without such a support the guesses are left as they are: bisecting a smoothed friction's steep stick too slid
 //: a pushed sheet 0.4 % past Coulomb's distance.
 double line_search(const Cloth& cloth, const Physics& phys, Work& work, Solver& solver, const double* hat_pos,
