@@ -269,9 +269,9 @@ void add_support_forces(Supports& supports, Index n, const double* pos, const do
 void add_support_product(const Supports& supports, Index n, const double* free, const double* p, double* out) {
     for (Index t = 0; t < supports.count(); ++t) {
         const double scaled = supports.scale * term_stiffness(supports, t);
-        const bool presses = supports.stiff[static_cast<std::size_t>(t)] != 0;
+        const bool stiff = supports.stiff[static_cast<std::size_t>(t)] != 0;
         const bool rubbing = rubs(supports, t);
-        if (!presses && !rubbing) continue;
+        if (!stiff && !rubbing) continue;
         const double* nn = supports.normal.data() + 3 * t;
         double along[SUPPORT_POINTS];  // w_j n . p_j of each point
         double sum = 0.0;
@@ -290,7 +290,7 @@ void add_support_product(const Supports& supports, Index n, const double* free, 
             const Index i = supports.points[SUPPORT_POINTS * t + j];
             if (i < 0) continue;
             const double w = supports.weights[SUPPORT_POINTS * t + j];
-            if (presses) {
+            if (stiff) {
                 const double a = scaled * free[i] * w * (sum - along[j]);
                 for (Index c = 0; c < 3; ++c) out[c * n + i] += a * nn[c];
             }
