@@ -11,16 +11,22 @@ namespace wc {
 
 namespace {
 
+//: f(i, w) for each cloth particle i of term t with its weight w, in slot order (unused slots, -1, passed over).
+template <class F>
+void each_point(const Supports& supports, Index t, F&& f) {
+    for (int j = 0; j < SUPPORT_POINTS; ++j) {
+        const Index i = supports.points[SUPPORT_POINTS * t + j];
+        if (i >= 0) f(i, supports.weights[SUPPORT_POINTS * t + j]);
+    }
+}
+
 //: Term t's relative velocity across its normal, u_t (3, m/s), at velocities vel (3, n); returns |u_t|.
 double slip_velocity(const Supports& supports, Index t, Index n, const double* vel, double* u) {
     const double* nn = supports.normal.data() + 3 * t;
     for (int c = 0; c < 3; ++c) u[c] = supports.collider_velocity[3 * t + c];
-    for (int j = 0; j < SUPPORT_POINTS; ++j) {
-        const Index i = supports.points[SUPPORT_POINTS * t + j];
-        if (i < 0) continue;
-        const double w = supports.weights[SUPPORT_POINTS * t + j];
+    each_point(supports, t, [&](Index i, double w) {
         for (Index c = 0; c < 3; ++c) u[c] += w * vel[c * n + i];
-    }
+    });
     const double along = nn[0] * u[0] + nn[1] * u[1] + nn[2] * u[2];
     for (int c = 0; c < 3; ++c) u[c] -= along * nn[c];
     return std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
@@ -29,12 +35,9 @@ double slip_velocity(const Supports& supports, Index t, Index n, const double* v
 //: start + sum_k w_k normal . x_k over term t's cloth points at pos (3, n), normal (3) its world normal.
 double cloth_along(const Supports& supports, Index t, Index n, const double* pos, const double* normal, double start) {
     double g = start;
-    for (int j = 0; j < SUPPORT_POINTS; ++j) {
-        const Index i = supports.points[SUPPORT_POINTS * t + j];
-        if (i < 0) continue;
-        const double w = supports.weights[SUPPORT_POINTS * t + j];
+    each_point(supports, t, [&](Index i, double w) {
         g += w * (normal[0] * pos[i] + normal[1] * pos[n + i] + normal[2] * pos[2 * n + i]);
-    }
+    });
     return g;
 }
 
@@ -55,14 +58,11 @@ void add_friction(Supports& supports, Index t, Index n, const double* vel, doubl
     const double a = slip_factor(y);
     double* h = supports.friction_block.data() + 6 * t;
     slip_stiffness(mu_n, y, u, supports.normal.data() + 3 * t, h);
-    for (int j = 0; j < SUPPORT_POINTS; ++j) {
-        const Index i = supports.points[SUPPORT_POINTS * t + j];
-        if (i < 0) continue;
-        const double w = supports.weights[SUPPORT_POINTS * t + j];
+    each_point(supports, t, [&](Index i, double w) {
         for (Index c = 0; c < 3; ++c) force[c * n + i] -= w * mu_n * a * u[c];
         const double scaled = supports.velocity_scale * w * w;
         for (int e = 0; e < 6; ++e) blocks[e * n + i] += scaled * h[e];
-    }
+    });
 }
 
 //: n . sum_k w_k p_k over term t's collider points where collider k is h s after the step's start (normal (3)
@@ -160,9 +160,7 @@ void place_supports(Supports& supports, const Physics& phys, Index n, const doub
         }
         world_direction_after(phys, k, h, normal);
         double cloth_weight = 0.0;
-        for (int j = 0; j < SUPPORT_POINTS; ++j) {
-            if (supports.points[SUPPORT_POINTS * t + j] >= 0) cloth_weight += supports.weights[SUPPORT_POINTS * t + j];
-        }
+        each_point(supports, t, [&](Index, double w) { cloth_weight += w; });
         double part[3];  // the collider's points' weighted sum at the step's end
         supports.offset[static_cast<std::size_t>(t)] = collider_along(supports, phys, t, h, normal, cloth_weight, part);
         const double mu = k == FLOOR_SUPPORT ? phys.floor_friction : phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
@@ -198,13 +196,10 @@ Index lag_arriving_normal_force(Supports& supports, Index n, const double* mass,
         double compliance = 0.0;
         double approach = 0.0;
         for (int c = 0; c < 3; ++c) approach += nn[c] * supports.collider_velocity[3 * t + c];
-        for (int j = 0; j < SUPPORT_POINTS; ++j) {
-            const Index i = supports.points[SUPPORT_POINTS * t + j];
-            if (i < 0) continue;
-            const double w = supports.weights[SUPPORT_POINTS * t + j];
+        each_point(supports, t, [&](Index i, double w) {
             if (mass[i] > 0.0) compliance += w * w / mass[i];
             approach -= w * (nn[0] * start_vel[i] + nn[1] * start_vel[n + i] + nn[2] * start_vel[2 * n + i]);
-        }
+        });
         const double inertia = compliance > 0.0 ? 1.0 / compliance : 0.0;
         const double landing = inertia * (std::max(approach, 0.0) / h + GRAVITY * std::max(nn[2], 0.0));
         supports.normal_force[term] = std::min(term_stiffness(supports, t) * depth, landing);
@@ -248,10 +243,7 @@ void add_support_forces(Supports& supports, Index n, const double* pos, const do
         if (rubs(supports, t)) add_friction(supports, t, n, vel, force, blocks);
         if (!stiff) continue;
         const double* nn = supports.normal.data() + 3 * t;
-        for (int j = 0; j < SUPPORT_POINTS; ++j) {
-            const Index i = supports.points[SUPPORT_POINTS * t + j];
-            if (i < 0) continue;
-            const double w = supports.weights[SUPPORT_POINTS * t + j];
+        each_point(supports, t, [&](Index i, double w) {
             if (presses) {
                 for (Index c = 0; c < 3; ++c) force[c * n + i] += k * depth * w * nn[c];
             }
@@ -262,7 +254,7 @@ void add_support_forces(Supports& supports, Index n, const double* pos, const do
             blocks[3 * n + i] += b * nn[0] * nn[1];
             blocks[4 * n + i] += b * nn[0] * nn[2];
             blocks[5 * n + i] += b * nn[1] * nn[2];
-        }
+        });
     }
 }
 
@@ -273,34 +265,30 @@ void add_support_product(const Supports& supports, Index n, const double* free, 
         const bool rubbing = rubs(supports, t);
         if (!stiff && !rubbing) continue;
         const double* nn = supports.normal.data() + 3 * t;
-        double along[SUPPORT_POINTS];  // w_j n . p_j of each point
+        double along[SUPPORT_POINTS];  // w_j n . p_j of each point, in each_point's order
+        int points = 0;
         double sum = 0.0;
         double total[3] = {0.0, 0.0, 0.0};  // sum_j w_j p_j
-        for (int j = 0; j < SUPPORT_POINTS; ++j) {
-            const Index i = supports.points[SUPPORT_POINTS * t + j];
-            along[j] = 0.0;
-            if (i < 0) continue;
-            const double w = supports.weights[SUPPORT_POINTS * t + j];
-            along[j] = w * (nn[0] * p[i] + nn[1] * p[n + i] + nn[2] * p[2 * n + i]);
-            sum += along[j];
+        each_point(supports, t, [&](Index i, double w) {
+            along[points] = w * (nn[0] * p[i] + nn[1] * p[n + i] + nn[2] * p[2 * n + i]);
+            sum += along[points++];
             for (Index c = 0; c < 3; ++c) total[c] += w * p[c * n + i];
-        }
+        });
         const double* h = supports.friction_block.data() + 6 * t;  // xx yy zz xy xz yz
-        for (int j = 0; j < SUPPORT_POINTS; ++j) {
-            const Index i = supports.points[SUPPORT_POINTS * t + j];
-            if (i < 0) continue;
-            const double w = supports.weights[SUPPORT_POINTS * t + j];
+        int j = 0;
+        each_point(supports, t, [&](Index i, double w) {
+            const double others = sum - along[j++];
             if (stiff) {
-                const double a = scaled * free[i] * w * (sum - along[j]);
+                const double a = scaled * free[i] * w * others;
                 for (Index c = 0; c < 3; ++c) out[c * n + i] += a * nn[c];
             }
-            if (!rubbing) continue;
+            if (!rubbing) return;
             const double o[3] = {total[0] - w * p[i], total[1] - w * p[n + i], total[2] - w * p[2 * n + i]};
             const double a = supports.velocity_scale * free[i] * w;
             out[i] += a * (h[0] * o[0] + h[3] * o[1] + h[4] * o[2]);
             out[n + i] += a * (h[3] * o[0] + h[1] * o[1] + h[5] * o[2]);
             out[2 * n + i] += a * (h[4] * o[0] + h[5] * o[1] + h[2] * o[2]);
-        }
+        });
     }
 }
 
@@ -308,12 +296,11 @@ void project_supported(const Supports& supports, Index n, double* a) {
     for (Index t = 0; t < supports.count(); ++t) {
         if (!supports.pressing[static_cast<std::size_t>(t)]) continue;
         const double* nn = supports.normal.data() + 3 * t;
-        for (int j = 0; j < SUPPORT_POINTS; ++j) {
-            const Index i = supports.points[SUPPORT_POINTS * t + j];
-            if (i < 0 || supports.weights[SUPPORT_POINTS * t + j] == 0.0) continue;
+        each_point(supports, t, [&](Index i, double w) {
+            if (w == 0.0) return;
             const double along = nn[0] * a[i] + nn[1] * a[n + i] + nn[2] * a[2 * n + i];
             for (Index c = 0; c < 3; ++c) a[c * n + i] -= along * nn[c];
-        }
+        });
     }
 }
 
@@ -321,12 +308,9 @@ void support_history(const Supports& supports, Index n, const double* pos, const
                      double* prev_vel, double h) {
     for (Index t = 0; t < supports.count(); ++t) {
         if (!supports.pressing[static_cast<std::size_t>(t)]) continue;
-        for (int j = 0; j < SUPPORT_POINTS; ++j) {
-            const Index i = supports.points[SUPPORT_POINTS * t + j];
-            if (i >= 0 && supports.weights[SUPPORT_POINTS * t + j] != 0.0) {
-                normal_history(n, i, supports.normal.data() + 3 * t, pos, vel, prev_pos, prev_vel, h);
-            }
-        }
+        each_point(supports, t, [&](Index i, double w) {
+            if (w != 0.0) normal_history(n, i, supports.normal.data() + 3 * t, pos, vel, prev_pos, prev_vel, h);
+        });
     }
 }
 
