@@ -55,3 +55,30 @@ def test_a_check_starting_where_the_last_ended_decides_as_a_fresh_one():
             low, high = (middle, high) if holds(middle, reused) else (low, middle)
         limits.append(low)
     assert limits[0] == limits[1], limits
+
+
+def test_lists_kept_from_one_rest_sheet_cut_the_tiers_again_for_another():
+    """The tiers are cut from the rest sheet once and kept (prepare_tiers compares the rest positions, triangles
+    and edges bit for bit), and the far pairs' search keeps each tier's cells' elements with them.  Lists that
+    served one rest sheet, given another (the same grid stretched along x, the more the farther out: x + x^2
+    from its side, so that particles change cells), must find the same allowances and fine cells as fresh
+    lists; those differ from the first sheet's, so kept tiers would show."""
+    sim, (x0, x1, _) = swinging_states()
+    first, thickness = sim._contact, sim.scene.thickness
+    rest = first.rest.copy()
+    rest[0] += (rest[0] - rest[0].min()) ** 2
+    second = first._replace(rest=rest)
+    n = first.rest.shape[1]
+    first.reference[...] = 0.5 * (x0 + x1)
+
+    def built(contact, lists):
+        widest = max(contact.least_margin, 0.5 * (_core.WIDE_REACH * contact.rest_gap - thickness))
+        _core.build_widest(contact, thickness, contact.least_margin, widest, lists=lists)
+        return list(lists.allowances), list(lists.fine_cells(n))
+
+    kept = _core.ContactState()
+    on_first = built(first, kept)
+    on_second_kept = built(second, kept)
+    on_second_fresh = built(second, _core.ContactState())
+    assert on_second_kept == on_second_fresh
+    assert on_second_fresh != on_first

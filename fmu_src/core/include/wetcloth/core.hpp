@@ -426,6 +426,11 @@ struct ContactLists {
                                               // pairs of the fine tier's windows, then the others (empty: none)
     std::vector<double> tier_scratch;   // the tiers' sums and fits
     Index tiers_made = 0;               // how many times `tiers` was cut
+    std::vector<double> tiers_rest;     // (3, n) m: the rest sheet `tiers` was last cut from
+    std::vector<Index> tiers_elements;  // and its triangles' and edges' rows, one after the other
+    std::vector<std::vector<Index>> far_cells;  // per tier, its cells' elements for the far pairs' search, or
+                                                // empty (far_pairs.cpp); for the tiers as cut `far_cells_made` times
+    Index far_cells_made = -1;
     WindowFits fits;                    // the tiers' shapes and fits kept between steps
     std::vector<Index> resting;         // (n, 3) what a particle held on a layer rests on (-1 padding)
     std::vector<double> resting_normal;  // (n, 3) the unit normal from that support to the particle

@@ -39,6 +39,54 @@ void touching(const Tier& t, const Index* elements, Index count, int width, Inde
     start[0] = 0;
 }
 
+//: The elements of each cell of a tier, as far as the search needs them: the triangles and the edges touching
+//: it (as touching() lists them), and the particles of the cell and of those elements (each once): whose
+//: positions bound every element touching the cell.
+struct CellElements {
+    const Index *triangle_start, *triangle_items, *edge_start, *edge_items, *particle_start, *particle_items;
+};
+
+//: Tier t's (tier `s`) CellElements, listed once for the tiers as cut (the rest sheet's, not the positions').
+CellElements cell_elements(const Contact& contact, Index n, int s, const Tier& t) {
+    ContactLists& lists = *contact.lists;
+    if (lists.far_cells_made != lists.tiers_made) {
+        lists.far_cells.assign(TIERS, {});
+        lists.far_cells_made = lists.tiers_made;
+    }
+    std::vector<Index>& out = lists.far_cells[s];
+    const Index cells = t.nx * t.ny, m = contact.triangle_count, k = contact.edge_count;
+    if (out.empty()) {
+        out.resize(static_cast<std::size_t>(3 * (cells + 1) + 3 * m + 2 * k));
+        Index* triangle_start = out.data();
+        Index* triangle_items = triangle_start + cells + 1;
+        Index* edge_start = triangle_items + 3 * m;
+        Index* edge_items = edge_start + cells + 1;
+        Index* particle_start = edge_items + 2 * k;
+        touching(t, contact.triangles, m, 3, triangle_start, triangle_items);
+        touching(t, contact.edges, k, 2, edge_start, edge_items);
+        std::vector<Index> stamp(static_cast<std::size_t>(n), -1);
+        std::vector<Index> particles;
+        for (Index c = 0; c < cells; ++c) {
+            particle_start[c] = static_cast<Index>(particles.size());
+            auto take = [&](Index i) {
+                if (stamp[i] != c) stamp[i] = c, particles.push_back(i);
+            };
+            for (Index q = t.start[c]; q < t.start[c + 1]; ++q) take(t.members[q]);
+            for (Index q = triangle_start[c]; q < triangle_start[c + 1]; ++q)
+                for (int j = 0; j < 3; ++j) take(contact.triangles[3 * triangle_items[q] + j]);
+            for (Index q = edge_start[c]; q < edge_start[c + 1]; ++q)
+                for (int j = 0; j < 2; ++j) take(contact.edges[2 * edge_items[q] + j]);
+        }
+        particle_start[cells] = static_cast<Index>(particles.size());
+        out.insert(out.end(), particles.begin(), particles.end());
+    }
+    const Index* triangle_start = out.data();
+    const Index* edge_start = triangle_start + cells + 1 + 3 * m;
+    const Index* particle_start = edge_start + cells + 1 + 2 * k;
+    return {triangle_start, triangle_start + cells + 1, edge_start, edge_start + cells + 1, particle_start,
+            particle_start + cells + 1};
+}
+
 //: Whether cells a and b of tier t lie WINDOW or more apart along an axis.
 inline bool apart(const Tier& t, Index a, Index b) {
     const Index dx = a % t.nx - b % t.nx, dy = a / t.nx - b / t.nx;
@@ -78,34 +126,33 @@ double nearest_far_pair(const Contact& contact, Index n, const double* x, int fi
                         const Boxes& triangles, const Boxes& edges) {
     const Tier t = tier_of(contact, n, finer);
     if (t.nx <= WINDOW && t.ny <= WINDOW) return INF;  // every pair fits one window of the finer tier
-    const Index cells = t.nx * t.ny, m = contact.triangle_count, k = contact.edge_count;
-    // Integer scratch: the elements touching each cell, and the cells in sweep order.
+    const Index cells = t.nx * t.ny;
+    const CellElements elements = cell_elements(contact, n, finer, t);
+    const Index* triangle_start = elements.triangle_start;
+    const Index* triangle_items = elements.triangle_items;
+    const Index* edge_start = elements.edge_start;
+    const Index* edge_items = elements.edge_items;
+    // Integer scratch: the cells in sweep order.
     std::vector<Index>& ints = contact.lists->index_scratch;
-    ints.resize(static_cast<std::size_t>(2 * (cells + 1) + 3 * m + 2 * k + cells));
-    Index* triangle_start = ints.data();
-    Index* triangle_items = triangle_start + cells + 1;
-    Index* edge_start = triangle_items + 3 * m;
-    Index* edge_items = edge_start + cells + 1;
-    Index* order = edge_items + 2 * k;
-    touching(t, contact.triangles, m, 3, triangle_start, triangle_items);
-    touching(t, contact.edges, k, 2, edge_start, edge_items);
-    // Each cell's box: its particles and the elements touching it, at x.
+    ints.resize(static_cast<std::size_t>(cells));
+    Index* order = ints.data();
+    // Each cell's box: the box of its elements' particles at x.
     std::vector<double>& reals = contact.lists->tier_scratch;
     reals.assign(static_cast<std::size_t>(6 * cells), 0.0);
     double* lo = reals.data();
     double* hi = lo + 3 * cells;
     const Boxes points{x, x, n};
-    for (Index c = 0; c < cells; ++c) {
-        for (int d = 0; d < 3; ++d) lo[d * cells + c] = INF, hi[d * cells + c] = -INF;
-        auto grow = [&](const Boxes& b, Index e) {
-            for (int d = 0; d < 3; ++d) {
-                lo[d * cells + c] = py_min(lo[d * cells + c], b.low(d, e));
-                hi[d * cells + c] = py_max(hi[d * cells + c], b.high(d, e));
+    for (int d = 0; d < 3; ++d) {
+        const double* row = x + d * n;
+        for (Index c = 0; c < cells; ++c) {
+            double low = INF, high = -INF;
+            for (Index q = elements.particle_start[c]; q < elements.particle_start[c + 1]; ++q) {
+                const double v = row[elements.particle_items[q]];
+                low = py_min(low, v);
+                high = py_max(high, v);
             }
-        };
-        for (Index q = t.start[c]; q < t.start[c + 1]; ++q) grow(points, t.members[q]);
-        for (Index q = triangle_start[c]; q < triangle_start[c + 1]; ++q) grow(triangles, triangle_items[q]);
-        for (Index q = edge_start[c]; q < edge_start[c + 1]; ++q) grow(edges, edge_items[q]);
+            lo[d * cells + c] = low, hi[d * cells + c] = high;
+        }
     }
     const Boxes cell_boxes{lo, hi, cells};
     // The cells apart and within reach of each other, by sweeping along the axis of the widest spread.

@@ -116,7 +116,32 @@ inline Index cell_along(double v, double origin, double side, Index count) {
 
 }  // namespace
 
+namespace {
+
+//: Whether contact.lists->tiers was cut from this rest sheet (its positions, triangles and edges, compared bit for
+//: bit); if not, remember it as the one the tiers are about to be cut from.
+bool cut_from(const Contact& contact, Index n) {
+    ContactLists& lists = *contact.lists;
+    const std::size_t positions = static_cast<std::size_t>(3 * n);
+    const std::size_t corners = static_cast<std::size_t>(3 * contact.triangle_count);
+    const std::size_t ends = static_cast<std::size_t>(2 * contact.edge_count);
+    const bool same = lists.tiers_made > 0 && lists.tiers_rest.size() == positions &&
+                      lists.tiers_elements.size() == corners + ends &&
+                      std::memcmp(lists.tiers_rest.data(), contact.rest, positions * sizeof(double)) == 0 &&
+                      std::memcmp(lists.tiers_elements.data(), contact.triangles, corners * sizeof(Index)) == 0 &&
+                      std::memcmp(lists.tiers_elements.data() + corners, contact.edges, ends * sizeof(Index)) == 0;
+    if (!same) {
+        lists.tiers_rest.assign(contact.rest, contact.rest + positions);
+        lists.tiers_elements.assign(contact.triangles, contact.triangles + corners);
+        lists.tiers_elements.insert(lists.tiers_elements.end(), contact.edges, contact.edges + ends);
+    }
+    return same;
+}
+
+}  // namespace
+
 void prepare_tiers(Contact& contact, Index n) {
+    if (cut_from(contact, n)) return;  // cut already: the rest sheet does not change while a cloth moves
     const double* rx = contact.rest;
     const double* ry = contact.rest + n;
     double lo_x = INF, lo_y = INF, hi_x = -INF, hi_y = -INF;

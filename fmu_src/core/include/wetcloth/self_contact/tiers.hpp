@@ -48,7 +48,8 @@ struct Tier {
     Index cy(Index i) const { return cell[i] / nx; }
 };
 
-//: Cut the rest sheet (contact.rest) into the tiers' cells, into contact.lists->tiers.
+//: Cut the rest sheet (contact.rest) into the tiers' cells, into contact.lists->tiers; nothing to do where they
+//: were cut from the same rest positions, triangles and edges.
 void prepare_tiers(Contact& contact, Index n);
 
 //: Tier s of `tiers` (as ContactLists::tiers holds them) for n particles.
