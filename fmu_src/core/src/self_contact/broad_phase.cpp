@@ -104,25 +104,27 @@ double search(const Contact& contact, Index n, const double* x, const Boxes& fir
     Index entries = 0;
     for (Index e = 0; e < second.count; ++e) entries += cell_count(box_cells(second, e, reach, g));
     const Index mask = table_mask(entries);
-    scratch.resize(static_cast<std::size_t>(MOST_CELLS + second.count + 2 * (mask + 2) + entries));
+    scratch.resize(static_cast<std::size_t>(MOST_CELLS + second.count + 2 * (mask + 2) + 2 * entries));
     Index* out = scratch.data();
     Index* seen = out + MOST_CELLS;
     Index* start = seen + second.count;
     Index* cursor = start + (mask + 2);
     Index* items = cursor + (mask + 2);
+    Index* ids = items + entries;  // each second element's buckets, one element after the other
     for (Index b = 0; b < mask + 2; ++b) cursor[b] = 0;
+    Index* next = ids;
     for (Index e = 0; e < second.count; ++e) {
-        const Index count = buckets(box_cells(second, e, reach, g), mask, out);
-        for (Index k = 0; k < count; ++k) cursor[out[k] + 1] += 1;
+        const Index count = buckets(box_cells(second, e, reach, g), mask, next);
+        for (Index k = 0; k < count; ++k) cursor[next[k] + 1] += 1;
+        next += count;
     }
     for (Index b = 0; b < mask + 1; ++b) cursor[b + 1] += cursor[b];
     for (Index b = 0; b < mask + 2; ++b) start[b] = cursor[b];
+    next = ids;
     for (Index e = 0; e < second.count; ++e) {
-        const Index count = buckets(box_cells(second, e, reach, g), mask, out);
-        for (Index k = 0; k < count; ++k) {
-            items[cursor[out[k]]] = e;
-            cursor[out[k]] += 1;
-        }
+        const Index count = cell_count(box_cells(second, e, reach, g));
+        for (Index k = 0; k < count; ++k) items[cursor[next[k]]++] = e;
+        next += count;
     }
     // The search.
     const double* rest = contact.rest;
