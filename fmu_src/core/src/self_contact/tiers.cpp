@@ -114,10 +114,6 @@ inline Index cell_along(double v, double origin, double side, Index count) {
     return c < 0.0 ? 0 : (c > count - 1.0 ? count - 1 : static_cast<Index>(c));
 }
 
-}  // namespace
-
-namespace {
-
 //: Whether contact.lists->tiers was cut from this rest sheet (its positions, triangles and edges, compared bit for
 //: bit); if not, remember it as the one the tiers are about to be cut from.
 bool cut_from(const Contact& contact, Index n) {
