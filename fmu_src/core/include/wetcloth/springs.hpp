@@ -4,10 +4,8 @@
 
 namespace wc {
 
-//: Tension-only springs pull with the stretch rounded over their first TENSION_ROUNDING of strain (docs/model.md
-//: section 3).  Over 6e-4 a swinging sheet's Newton corrections, a few micrometres, spanned the rounding and Newton
-//: converged only linearly; over 3e-3 the hanging sheet takes 19 % fewer Newton and 38 % fewer CG iterations.
-inline constexpr double TENSION_ROUNDING = 3e-3;
+//: Tension-only springs pull with the stretch rounded over their first TENSION_ROUNDING of strain.
+inline constexpr double TENSION_ROUNDING = 6e-4;
 
 //: A mesh's triangles' edges (buckling springs) pull, and push back while slightly compressed, as both-ways
 //: springs past an onset rounded over BUCKLING_ROUNDING of strain each way, their push rounding off to at most
