@@ -223,18 +223,27 @@ def test_the_bucket_preset_at_frame_steps_keeps_the_washcloth_inside_the_wall():
     cloth edge crosses a triangle of the bucket nor a rim edge a cloth triangle.  The still mesh's rim is a
     support inside each frame-long step (collider_edges.cpp, gather_supports); without, the edges' pass
     alone could not show the frame-long moves at the rim safe, stopped whole rows as its last resort, and
-    the towel crossed the wall in frame 39 (1.3 s; cloth edges through the mesh in 52 of 90 frames)."""
+    the towel crossed the wall in frame 39 (1.3 s; cloth edges through the mesh in 52 of 90 frames).  A frame
+    taken again in parts (for self-collision's impact zones, or pushes that gained energy) moves each particle
+    along several straight steps, which its chord over the frame does not follow: in frame 7 one went over the
+    rim in three (z 0.2918, 0.3049, 0.3044, 0.3005 m while r fell from 0.176 to 0.159 m; measured step by step),
+    its chord passing 0.2 mm below the rim.  Those frames' chords are not checked (3 of the 60, measured)."""
     scene = load_scene("bucket").replace(integrator="implicit_euler", tolerance=0.0, max_step=1 / 30)
     bucket = trimesh.load(wetcloth.scene.preset_dir() / "meshes" / "bucket.ply", process=False)
     points, triangles = np.asarray(bucket.vertices, dtype=float), np.asarray(bucket.faces)
     sim = wetcloth.Simulation(scene)
     before = sim.state.pos.copy()
+    single = 0
     for _ in range(60):
+        taken_again = sim.rejected_steps
         sim.advance(1 / 30)
         pos = sim.state.pos
-        assert not _wall_crossings(before, pos, 0.16, 0.3).any(), sim.time
+        if sim.rejected_steps == taken_again:  # one step: the frame's chord is each particle's path
+            single += 1
+            assert not _wall_crossings(before, pos, 0.16, 0.3).any(), sim.time
         assert _crossings(pos.T, np.asarray(sim.triangles), points, triangles) == (0, 0), sim.time
         before = pos.copy()
+    assert single >= 50
 
 
 def test_the_washcloth_at_rest_in_the_bucket_stays_at_rest_at_frame_steps():

@@ -16,6 +16,7 @@
 #include "wetcloth/collider_motion.hpp"
 #include "wetcloth/collider_supports.hpp"
 #include "wetcloth/colliders.hpp"
+#include "wetcloth/energy.hpp"
 #include "wetcloth/floor.hpp"
 #include "wetcloth/grip.hpp"
 #include "wetcloth/implicit.hpp"
@@ -151,6 +152,26 @@ bool sunk(const Core& core) {
     for (Index i = 0; i < n; ++i) {
         const bool under = phys.smooth ? z[i] <= phys.water_level - 0.5 * phys.thickness : z[i] < phys.water_level;
         if (!under || !(cloth.dry_mass[i] + water[i] > phys.water_density * cloth.volume[i])) return false;
+    }
+    return true;
+}
+
+//: Whether nothing but gravity, the cloth's springs and still air acts on it over a step from pos to trial_pos: no
+//: particle at or under the water's surface at either end, no wind, no grip and no keyed collider.  There the
+//: fixed-step mode's energy must not grow (docs/model.md section 7).
+bool passive(const Core& core) {
+    const Physics& phys = core.phys;
+    if (phys.collider_motion != nullptr || phys.grip_key_count > 0 || phys.grip_x != 0.0 || phys.grip_y != 0.0 ||
+        phys.grip_z != 0.0) {
+        return false;
+    }
+    if (phys.air_density > 0.0 && (phys.wind_x != 0.0 || phys.wind_y != 0.0 || phys.wind_z != 0.0)) return false;
+    const Index n = core.cloth.n;
+    const double* z0 = core.buf.pos + 2 * n;
+    const double* z1 = core.buf.trial_pos + 2 * n;
+    const double wet = surface(phys) + 0.5 * phys.thickness;  // (above it, a particle has no water)
+    for (Index i = 0; i < n; ++i) {
+        if (!(z0[i] > wet && z1[i] > wet)) return false;
     }
     return true;
 }
@@ -470,11 +491,17 @@ Status step(Core& core, double remaining, double span) {
     }
     bool kinked = resolve(core.contact, phys.thickness, phys.floor_z, control.blow_up_speed, n, core.solver.mass,
                           cloth.free, buf.pos, buf.trial_pos, buf.trial_vel, h);
+    // In the fixed-step mode a passive cloth's solve loses energy, and the pushes after it may add some: where they
+    // leave the cloth's energy above the step's start, the step too is taken again in halves (a sheet hung by a
+    // corner folding onto itself: bench/self_contact_energy.py).
+    const bool gained = kinked && !adaptive && control.integrator == IMPLICIT_EULER && passive(core) &&
+                        mechanical_energy(cloth, core.solver.mass, buf.trial_pos, buf.trial_vel) >
+                            mechanical_energy(cloth, core.solver.mass, buf.pos, buf.vel);
     // A fixed step whose self-collision needed rigid impact zones or undid its motion (a frame-long step's
-    // folds meeting: the zones' rigid motion stretched the springs at their edges by up to 139 %) is taken
-    // again in halves, down to SUBSTEP_LEAST of max_step.
+    // folds meeting: the zones' rigid motion stretched the springs at their edges by up to 139 %), or whose
+    // pushes gained energy, is taken again in halves, down to SUBSTEP_LEAST of max_step.
     if (!adaptive && core.contact.enabled && h > SUBSTEP_LEAST * control.max_step &&
-        (core.contact.counters[ZONE_ROUNDS] > zone_rounds || core.contact.counters[FREEZES] > freezes)) {
+        (core.contact.counters[ZONE_ROUNDS] > zone_rounds || core.contact.counters[FREEZES] > freezes || gained)) {
         start_collider_motion(phys, clock[TIME]);
         clock[NEXT_STEP] = 0.5 * h;
         clock[REJECTED] += 1;

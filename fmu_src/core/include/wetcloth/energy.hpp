@@ -1,0 +1,14 @@
+// The cloth's mechanical energy (kinetic, gravitational, the springs' elastic), as wetcloth.energy weighs it: the
+// fixed-step mode takes a step again in halves where self-collision's pushes leave it above its start's
+// (stepping.cpp; docs/model.md section 6.2).
+#pragma once
+#include "wetcloth/core.hpp"
+
+namespace wc {
+
+//: Kinetic + gravitational (zero at z = 0) + elastic energy (J) of the cloth at pos, vel (both (3, n)) with the
+//: particles' masses `mass` (n, kg): every spring with its dry stiffness and its law (docs/model.md sections 2.4
+//: and 3; hinges' terms both ways).
+double mechanical_energy(const Cloth& cloth, const double* mass, const double* pos, const double* vel);
+
+}  // namespace wc

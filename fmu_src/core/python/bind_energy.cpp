@@ -1,0 +1,21 @@
+// The cloth's mechanical energy as the core weighs it (the fixed-step mode's check of self-collision's pushes).
+#include "convert.hpp"
+#include "wetcloth/energy.hpp"
+
+namespace wc::py {
+
+WETCLOTH_BINDINGS(m) {
+    m.def(
+        "mechanical_energy",
+        [](nb::handle cloth, nb::handle mass, nb::handle pos, nb::handle vel) {
+            const Cloth c = cloth_from(cloth);
+            return mechanical_energy(c, argument<const double>(mass, "mass", c.n),
+                                     argument<const double>(pos, "pos", 3 * c.n),
+                                     argument<const double>(vel, "vel", 3 * c.n));
+        },
+        nb::arg("cloth"), nb::arg("mass"), nb::arg("pos"), nb::arg("vel"),
+        "Kinetic + gravitational (zero at z = 0) + elastic energy (J) of the cloth at pos, vel ((3, n)) with the "
+        "particles' masses (n, kg), every spring with its dry stiffness (wetcloth.energy's).");
+}
+
+}  // namespace wc::py

@@ -1,0 +1,73 @@
+// The cloth's mechanical energy, as wetcloth/energy.py weighs it.
+#include "wetcloth/energy.hpp"
+
+#include <cmath>
+
+#include "wetcloth/springs.hpp"
+
+namespace wc {
+
+namespace {
+
+//: Energy (J) of a spring of stiffness k (N/m) stretched by s (m): k s^2 / 2 both ways; tension-only, the
+//: integral of its law rounded over its first `width` (m) of stretch, nothing when compressed.
+double spring_energy(double s, double k, bool tension_only, double width) {
+    if (!tension_only) return 0.5 * k * s * s;
+    const double p = s > 0.0 ? s : 0.0;
+    if (p < width) return k * (2.0 * p * p * p / (3.0 * width) - p * p * p * p / (4.0 * width * width));
+    return k * (5.0 / 12.0 * width * width + 0.5 * (p * p - width * width));
+}
+
+//: Energy (J) of a buckling spring (spring_law.hpp's buckled_stretch) of stiffness k (N/m) and rest length l
+//: (m) stretched by s (m): pulling, the tension-only law rounded over c = BUCKLING_ROUNDING l; compressed by x,
+//: the integral of the push b r (2 - r), r = min(R(x) / (2 b), 1), b = BUCKLING_STRAIN l, R(x) the same onset.
+double buckling_energy(double s, double k, double l) {
+    const double c = BUCKLING_ROUNDING * l, b = BUCKLING_STRAIN * l;
+    const double x = s < 0.0 ? -s : 0.0;
+    const double onset = x < c ? x : c;
+    const double ramp = x < c ? c : (x > 2.0 * b ? 2.0 * b : x);
+    const double o2 = onset * onset, o3 = o2 * onset, o4 = o3 * onset;
+    const double pushing = 2.0 * o3 / (3.0 * c) - o4 / (4.0 * c * c) -
+                           (4.0 * o4 * onset / (5.0 * c * c) - 2.0 * o3 * o3 / (3.0 * c * c * c) +
+                            o4 * o3 / (7.0 * c * c * c * c)) / (4.0 * b) +
+                           0.5 * (ramp * ramp - c * c) - (ramp * ramp * ramp - c * c * c) / (12.0 * b) +
+                           b * (x > 2.0 * b ? x - 2.0 * b : 0.0);
+    return spring_energy(s, k, true, c) + k * pushing;
+}
+
+double distance(const double* pos, Index n, Index i, Index j) {
+    const double dx = pos[i] - pos[j], dy = pos[n + i] - pos[n + j], dz = pos[2 * n + i] - pos[2 * n + j];
+    return std::sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+}  // namespace
+
+double mechanical_energy(const Cloth& cloth, const double* mass, const double* pos, const double* vel) {
+    const Index n = cloth.n;
+    double energy = 0.0;
+    for (Index i = 0; i < n; ++i) {
+        const double vx = vel[i], vy = vel[n + i], vz = vel[2 * n + i];
+        energy += mass[i] * (0.5 * (vx * vx + vy * vy + vz * vz) + GRAVITY * pos[2 * n + i]);
+    }
+    for (Index f = 0; f < cloth.families; ++f) {
+        const Index off = cloth.offsets[f];
+        const double rest = cloth.rest[f];
+        const double* k = cloth.stiffness + f * n;
+        for (Index i = 0; i + off < n; ++i) {
+            if (k[i] == 0.0) continue;
+            energy += spring_energy(distance(pos, n, i, i + off) - rest, k[i], cloth.tension_only[f],
+                                    TENSION_ROUNDING * rest);
+        }
+    }
+    const Index tension = cloth.pair_tension_count, buckling = tension + cloth.pair_buckling_count;
+    for (Index p = 0; p < cloth.pair_count; ++p) {
+        const double rest = cloth.pair_rest[p], k = cloth.pair_stiffness[p];
+        const double s = distance(pos, n, cloth.pairs[p], cloth.pairs[cloth.pair_count + p]) - rest;
+        energy += p < tension    ? spring_energy(s, k, true, TENSION_ROUNDING * rest)
+                  : p < buckling ? buckling_energy(s, k, rest)
+                                 : spring_energy(s, k, false, 0.0);
+    }
+    return energy;
+}
+
+}  // namespace wc
