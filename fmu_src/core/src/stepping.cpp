@@ -494,7 +494,8 @@ Status step(Core& core, double remaining, double span) {
     // In the fixed-step mode a passive cloth's solve loses energy, and the pushes after it may add some: where they
     // leave the cloth's energy above the step's start, the step too is taken again in halves (a sheet hung by a
     // corner folding onto itself: bench/self_contact_energy.py).
-    const bool gained = kinked && !adaptive && control.integrator == IMPLICIT_EULER && passive(core) &&
+    const bool gained = kinked && !adaptive && control.integrator == IMPLICIT_EULER &&
+                        h > SUBSTEP_LEAST * control.max_step && passive(core) &&
                         mechanical_energy(cloth, core.solver.mass, buf.trial_pos, buf.trial_vel) >
                             mechanical_energy(cloth, core.solver.mass, buf.pos, buf.vel);
     // A fixed step whose self-collision needed rigid impact zones or undid its motion (a frame-long step's
