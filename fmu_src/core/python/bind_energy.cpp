@@ -1,4 +1,4 @@
-// The cloth's mechanical energy as the core weighs it (the fixed-step mode's check of self-collision's pushes).
+// The cloth's mechanical energy as the core weighs it (wetcloth.energy; the fixed-step mode's check of its steps).
 #include "convert.hpp"
 #include "wetcloth/energy.hpp"
 

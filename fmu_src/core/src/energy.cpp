@@ -1,8 +1,7 @@
 // The cloth's mechanical energy, as wetcloth/energy.py weighs it.
 #include "wetcloth/energy.hpp"
 
-#include <cmath>
-
+#include "wetcloth/self_contact/geometry.hpp"
 #include "wetcloth/springs.hpp"
 
 namespace wc {
@@ -35,9 +34,10 @@ double buckling_energy(double s, double k, double l) {
     return spring_energy(s, k, true, c) + k * pushing;
 }
 
+//: |x_i - x_j| (m) at pos (3, n).
 double distance(const double* pos, Index n, Index i, Index j) {
-    const double dx = pos[i] - pos[j], dy = pos[n + i] - pos[n + j], dz = pos[2 * n + i] - pos[2 * n + j];
-    return std::sqrt(dx * dx + dy * dy + dz * dz);
+    using namespace self_contact;
+    return norm(sub(point(pos, n, i), point(pos, n, j)));
 }
 
 }  // namespace
