@@ -11,8 +11,9 @@ import wetcloth
 from wetcloth.energy import mechanical_energy
 
 #: Central differences of the energy over a displacement of STEP (m): their error, E''' STEP^2 / 6 with E''' at
-#: most about k / w (the rounded onset's w = 6e-4 l, a few um) times the ~10 springs of a particle, stays far
-#: below the 1e-6 N allowed, as does the round-off of differencing a few joules (1e-16 J / STEP = 1e-8 N).
+#: most about k / w (the rounded onset's w = TENSION_ROUNDING l, some micrometres) times the ~10 springs of a
+#: particle, stays far below the 1e-6 N allowed, as does the round-off of differencing a few joules
+#: (1e-16 J / STEP = 1e-8 N).
 STEP = 1e-8
 
 
@@ -42,15 +43,21 @@ HANGING = dict(initial_tilt=0.0, initial_height=2.0, water_level=-10.0, floor_le
     ("towel", dict(nx=9, ny=11, pinned_edge="y_max", bend_rigidity=6e-5, **HANGING)),
     # a triangle mesh (the round tablecloth falling onto its table): buckling springs
     ("tablecloth", dict(air_density=0.0)),
-], ids=["grid", "hinged", "triangles"])
+    # wet cloths whose springs stiffen with their ends' saturation: a grid, and its quads as a hinged mesh
+    ("towel", dict(nx=9, ny=11, pinned_edge="y_max", wet_stiffness_factor=2.0, **HANGING)),
+    ("towel", dict(nx=9, ny=11, pinned_edge="y_max", bend_rigidity=6e-5, wet_stiffness_factor=-0.5, **HANGING)),
+], ids=["grid", "hinged", "triangles", "wet grid", "wet hinged"])
 def test_the_energy_is_the_potential_of_the_springs_and_gravity(scene):
-    """A cloth after 0.4 s (springs stretched, slack and compressed), velocities then zeroed: at a dozen
-    particles, minus the energy's gradient is the force the core computes (no damping at rest, no drag in vacuum,
-    no water; colliders are not among these forces), to 1e-6 N of forces up to a few newtons."""
+    """A cloth after 0.4 s (springs stretched, slack and compressed), velocities then zeroed and, where its
+    stiffness follows its wetness, each particle given water up to its capacity at random: at a dozen particles,
+    minus the energy's gradient is the force the core computes (no damping at rest, no drag in vacuum, no water
+    around it; colliders are not among these forces), to 1e-6 N of forces up to a few newtons."""
     preset, values = scene
     sim = wetcloth.Simulation(wetcloth.load_scene(preset, **values))
     sim.advance(0.4)
     sim.state.vel[:] = 0.0
+    if values.get("wet_stiffness_factor"):
+        sim.state.water[:] = np.random.default_rng(3).uniform(0.0, 1.0, sim.state.water.shape) * sim.model.capacity
     particles = np.random.default_rng(7).choice(sim.positions.shape[0], 12, replace=False)
     force = sim.model.forces(sim.state.pos, sim.state.vel, sim.state.water)[:, particles]
     assert np.abs(force).max() > 1e-3  # the springs pull

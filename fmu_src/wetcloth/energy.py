@@ -14,9 +14,10 @@ from wetcloth import _core
 
 def mechanical_energy(sim) -> float:
     """Kinetic + gravitational (zero at z = 0) + elastic energy (J) of a Simulation's cloth, each spring
-    (a grid's families, a mesh's listed springs: tension-only, buckling, both ways) with its dry stiffness and
-    the integral of its law (docs/model.md sections 2.4 and 3).  The core's (energy.cpp), which the fixed-step
-    mode also weighs self-collision's pushes with."""
+    (a grid's families, a mesh's listed springs: tension-only, buckling, both ways) with the integral of its law
+    and its stiffness as the forces take it (grown with ``wet_stiffness_factor`` on a wet cloth; docs/model.md
+    sections 2.4 and 3).  The core's (energy.cpp), which the fixed-step mode also weighs its steps with."""
     cloth, state = sim.model.cloth, sim.state
     mass = np.asarray(cloth.dry_mass) + state.water
-    return float(_core.mechanical_energy(cloth, mass, state.pos, state.vel))
+    return float(_core.mechanical_energy(cloth, sim.model.physics.wet_factor, mass, state.water, state.pos,
+                                         state.vel))

@@ -7,15 +7,17 @@ namespace wc::py {
 WETCLOTH_BINDINGS(m) {
     m.def(
         "mechanical_energy",
-        [](nb::handle cloth, nb::handle mass, nb::handle pos, nb::handle vel) {
+        [](nb::handle cloth, double wet_factor, nb::handle mass, nb::handle water, nb::handle pos, nb::handle vel) {
             const Cloth c = cloth_from(cloth);
-            return mechanical_energy(c, argument<const double>(mass, "mass", c.n),
+            return mechanical_energy(c, wet_factor, argument<const double>(mass, "mass", c.n),
+                                     argument<const double>(water, "water", c.n),
                                      argument<const double>(pos, "pos", 3 * c.n),
                                      argument<const double>(vel, "vel", 3 * c.n));
         },
-        nb::arg("cloth"), nb::arg("mass"), nb::arg("pos"), nb::arg("vel"),
+        nb::arg("cloth"), nb::arg("wet_factor"), nb::arg("mass"), nb::arg("water"), nb::arg("pos"), nb::arg("vel"),
         "Kinetic + gravitational (zero at z = 0) + elastic energy (J) of the cloth at pos, vel ((3, n)) with the "
-        "particles' masses (n, kg), every spring with its dry stiffness (wetcloth.energy's).");
+        "particles' masses and water (n, kg), every spring's stiffness grown by wet_factor times its ends' mean "
+        "saturation (wetcloth.energy's).");
 }
 
 }  // namespace wc::py

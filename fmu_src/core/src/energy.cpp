@@ -42,8 +42,14 @@ double distance(const double* pos, Index n, Index i, Index j) {
 
 }  // namespace
 
-double mechanical_energy(const Cloth& cloth, const double* mass, const double* pos, const double* vel) {
+double mechanical_energy(const Cloth& cloth, double wet_factor, const double* mass, const double* water,
+                         const double* pos, const double* vel) {
     const Index n = cloth.n;
+    // A spring's stiffness grows by wet_factor times its ends' mean saturation (spring_law.hpp's spring_geometry).
+    const auto wet = [&](Index i, Index j) {
+        if (wet_factor == 0.0) return 1.0;
+        return 1.0 + wet_factor * 0.5 * (water[i] / cloth.capacity[i] + water[j] / cloth.capacity[j]);
+    };
     double energy = 0.0;
     for (Index i = 0; i < n; ++i) {
         const double vx = vel[i], vy = vel[n + i], vz = vel[2 * n + i];
@@ -55,14 +61,15 @@ double mechanical_energy(const Cloth& cloth, const double* mass, const double* p
         const double* k = cloth.stiffness + f * n;
         for (Index i = 0; i + off < n; ++i) {
             if (k[i] == 0.0) continue;
-            energy += spring_energy(distance(pos, n, i, i + off) - rest, k[i], cloth.tension_only[f],
+            energy += spring_energy(distance(pos, n, i, i + off) - rest, k[i] * wet(i, i + off), cloth.tension_only[f],
                                     TENSION_ROUNDING * rest);
         }
     }
     const Index tension = cloth.pair_tension_count, buckling = tension + cloth.pair_buckling_count;
     for (Index p = 0; p < cloth.pair_count; ++p) {
-        const double rest = cloth.pair_rest[p], k = cloth.pair_stiffness[p];
-        const double s = distance(pos, n, cloth.pairs[p], cloth.pairs[cloth.pair_count + p]) - rest;
+        const Index i = cloth.pairs[p], j = cloth.pairs[cloth.pair_count + p];
+        const double rest = cloth.pair_rest[p], k = cloth.pair_stiffness[p] * wet(i, j);
+        const double s = distance(pos, n, i, j) - rest;
         energy += p < tension    ? spring_energy(s, k, true, TENSION_ROUNDING * rest)
                   : p < buckling ? buckling_energy(s, k, rest)
                                  : spring_energy(s, k, false, 0.0);

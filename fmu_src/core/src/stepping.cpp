@@ -501,8 +501,9 @@ Status step(Core& core, double remaining, double span) {
     const bool zoned = halves && core.contact.enabled &&
                        (core.contact.counters[ZONE_ROUNDS] > zone_rounds || core.contact.counters[FREEZES] > freezes);
     const bool gained = halves && !zoned && control.integrator == IMPLICIT_EULER && passive(core) &&
-                        mechanical_energy(cloth, core.solver.mass, buf.trial_pos, buf.trial_vel) >
-                            mechanical_energy(cloth, core.solver.mass, buf.pos, buf.vel);
+                        mechanical_energy(cloth, phys.wet_factor, core.solver.mass, buf.trial_water, buf.trial_pos,
+                                          buf.trial_vel) > mechanical_energy(cloth, phys.wet_factor, core.solver.mass,
+                                                                             buf.trial_water, buf.pos, buf.vel);
     if (zoned || gained) {
         start_collider_motion(phys, clock[TIME]);
         clock[NEXT_STEP] = 0.5 * h;

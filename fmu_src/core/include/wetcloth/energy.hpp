@@ -7,8 +7,10 @@
 namespace wc {
 
 //: Kinetic + gravitational (zero at z = 0) + elastic energy (J) of the cloth at pos, vel (both (3, n)) with the
-//: particles' masses `mass` (n, kg): every spring with its dry stiffness and its law (docs/model.md sections 2.4
-//: and 3; hinges' terms both ways).
-double mechanical_energy(const Cloth& cloth, const double* mass, const double* pos, const double* vel);
+//: particles' masses `mass` and water `water` (n, kg): every spring with its law (docs/model.md sections 2.4
+//: and 3; hinges' terms both ways) and its stiffness, grown by wet_factor (Physics::wet_factor) times its ends'
+//: mean saturation (water / capacity).
+double mechanical_energy(const Cloth& cloth, double wet_factor, const double* mass, const double* water,
+                         const double* pos, const double* vel);
 
 }  // namespace wc
