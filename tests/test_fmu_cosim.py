@@ -164,11 +164,14 @@ def test_an_input_changed_at_a_communication_point_acts_from_that_point():
 def test_any_communication_step_is_as_accurate_as_a_fine_one(fmu):
     """The unit sub-steps as the integrator needs: a 1 s communication step is as accurate as a fine one.
 
-    The error of a run is set by the scene's ``tolerance`` (the integrator's error control).  The
-    default integrator's steps grow to what the tolerance allows, so a fine communication step,
-    which cuts them short, is a little more accurate; a coarse one must err by no more than 1.5 times
-    the finest one's error against a run at a hundredfold tighter tolerance (measured: 1.0 to 1.4
-    times), and by under the 1 mm the defaults promise.
+    The error of a run is set by the scene's ``tolerance`` (the integrator's error control), against a run
+    at a hundredfold tighter tolerance: every communication step must err by under the 1 mm the defaults
+    promise.  A unit that took one step a communication step would not (BDF2's fixed steps of 0.5 and 1 s
+    err by 1.6 and 3.0 mm, measured).  The errors are
+    sums of the steps' errors, which fall differently as the communication points cut the steps: their
+    ratio to the finest step's error is no measure of the communication step (measured 1.0 to 1.3 with
+    the tension-only onset rounded over 6e-4 of strain, errors 0.56 to 0.73 mm; 1.8 to 3.3 over 1.5e-3,
+    0.16 to 0.54 mm; 0.9 to 1.1 over 3e-3, 0.29 to 0.38 mm).
 
     In vacuum (air_density 0).  With the default air the errors, 0.37 to 0.70 mm, are almost all the
     floating towel's drift along y, which nothing restores and in which the reference itself moves by
@@ -188,7 +191,7 @@ def test_any_communication_step_is_as_accurate_as_a_fine_one(fmu):
         errors[step] = max(abs(result[-1][n] - ref[n]) for n in names)
     assert errors[0.01] > 0
     for step, error in errors.items():
-        assert error < min(1.5 * errors[0.01], 1e-3), (step, errors)
+        assert error < 1e-3, (step, errors)
 
 
 def test_two_instances_in_one_process_keep_separate_states():
@@ -233,8 +236,11 @@ def test_a_run_may_start_at_any_time(fmu):
     early = fmpy.simulate_fmu(fmu, start_time=0.0, stop_time=0.5, output_interval=0.1, start_values=SMALL)
     np.testing.assert_allclose(late["time"], early["time"] + 10.0)
     for name in OUTPUT_NAMES:
-        # Communication points 10 + k/10 carry rounding of order 1e-15 s: round-off in the outputs.
-        np.testing.assert_allclose(late[name], early[name], rtol=1e-9, atol=1e-12)
+        # Communication points 10 + k/10 carry rounding of order 1e-15 s.  The iterative solves' stopping tests
+        # turn such round-off into larger differences (up to their tolerance, about 1e-7 m here, where one
+        # stops an iteration sooner): measured 6e-13 m with the tension-only onset rounded over 6e-4 of strain,
+        # 1.9e-12 m over 1.5e-3.  A cloth not started as at t = 0 would differ by millimetres.
+        np.testing.assert_allclose(late[name], early[name], rtol=1e-9, atol=1e-9)
 
 
 # ------------------------------------------------------------------ the fmpy wrapper and the batch engine

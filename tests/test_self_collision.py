@@ -247,22 +247,23 @@ def test_a_crease_resting_on_the_layer_below_stops_costing_steps():
     assert np.abs(sim.velocities).max() < 1e-3
 
 
-#: A run of the sensitivity example whose towel sinks onto the floor (about 20 s) with a fold whose corner
-#: particles lie on a flat layer and against a sloping one.
-CORNER_OF_A_FOLD = dict(nx=5, ny=7, absorption_rate=0.3405299508137902, absorption_capacity=6.332655557431281,
-                        areal_density=0.46345495274290444, thickness=0.002032068322226405,
-                        initial_tilt=21.734800888225436, drag_normal=1.0071618467569352)
+#: A run of the sensitivity example (run 495 of its 512) whose towel sinks onto the floor with a fold whose
+#: corner particles lie on a flat layer and against a sloping one.
+CORNER_OF_A_FOLD = dict(nx=5, ny=7, absorption_rate=0.3756255906808212, absorption_capacity=7.365530998446047,
+                        areal_density=0.48989970264956356, thickness=0.002070942471921444,
+                        initial_tilt=40.39055386092514, drag_normal=1.541422474384308)
 
 
 def test_a_particle_in_the_corner_of_a_fold_rests_on_the_layer_that_holds_it():
     """A particle touching two still elements, a flat layer and a sloping one, is held on one that holds it
     within friction (self_contact/resting.cpp, hold_within_friction).  Held on the sloping one, it was let
     go before every step (the force slides it off), fell onto the flat layer, was pushed back and came to
-    rest there, 200 steps and redone steps every simulated second from 30 to 40 s (measured 207); now
-    the towel comes to rest and sleeps but for its wakes as it absorbs (measured 3.7 a second).  Run as
-    the batch runner does (samples every 0.1 s): fewer than 50 a second, and no edge crosses a triangle
-    in any sample.  (The fold forms on this machine; where rounding lets the towel land without it, the
-    bound holds all the more.)"""
+    rest there: without hold_within_friction, 243 steps and redone steps every simulated second from 30 to
+    40 s (measured); with it the towel comes to rest and sleeps but for its wakes as it absorbs (measured
+    4.4 a second).  Run as the batch runner does (samples every 0.1 s): fewer than 50 a second, and no edge
+    crosses a triangle in any sample.  (The fold forms on this machine; where rounding lets the towel land
+    without it, the bound holds all the more.  The study's run that shows this changes with the tension-only
+    springs' law: runs 364 and 500 did with their onset rounded over 6e-4 and 3e-3 of strain.)"""
     sim = wetcloth.Simulation(wetcloth.load_scene(**CORNER_OF_A_FOLD))
     crossed = 0
     for _ in range(300):
@@ -373,11 +374,11 @@ def test_a_sheet_folding_onto_itself_at_frame_steps_loses_energy_in_nearly_every
 
 
 def test_a_frame_step_whose_pushes_gain_energy_is_taken_again_in_halves():
-    """The fixed-step mode takes a step again in halves (down to a quarter of max_step) where self-collision's
+    """The fixed-step mode takes a step again in halves (down to a sixteenth of max_step) where self-collision's
     pushes after its solve leave the cloth's energy above the step's start (stepping.cpp).  A 5 x 9 sheet folded in
     half on the floor, its upper layer half a thickness into the lower one: the first step's pushes lift that layer
     by half a thickness, m g e / 2 = 2.9e-4 J gained (measured; without the halving the frame was one step taken as
-    it came).  Its frame is taken in quarters: two steps taken again."""
+    it came).  Its first step is halved down to a sixteenth of the frame: four steps taken again."""
     scene = wetcloth.load_scene(nx=5, ny=9, width=0.2, length=0.4, initial_tilt=0.0, initial_height=0.00101,
                                 floor_level=0.0, water_level=-10.0, bend_stiffness=0.0, absorption_rate=0.0,
                                 integrator="implicit_euler", tolerance=0.0, max_step=1 / 30)
@@ -392,7 +393,7 @@ def test_a_frame_step_whose_pushes_gain_energy_is_taken_again_in_halves():
     sim.advance(1 / 30)
     assert sim.contact_counts["responses"] > 0, "the layers were pushed apart"
     assert mechanical_energy(sim) > before, "lifting the layer gained energy"
-    assert sim.rejected_steps == 2
+    assert sim.rejected_steps == 4
 
 
 @settings(max_examples=4, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])

@@ -492,15 +492,15 @@ Status step(Core& core, double remaining, double span) {
     bool kinked = resolve(core.contact, phys.thickness, phys.floor_z, control.blow_up_speed, n, core.solver.mass,
                           cloth.free, buf.pos, buf.trial_pos, buf.trial_vel, h);
     // A fixed step whose self-collision needed rigid impact zones or undid its motion (a frame-long step's
-    // folds meeting: the zones' rigid motion stretched the springs at their edges by up to 139 %), or that gained
-    // energy, is taken again in halves, down to SUBSTEP_LEAST of max_step.  In the fixed-step mode nothing may add
-    // to a passive cloth's energy, but a solve stopped short of converging (what its unsolved residual does: a
-    // sheet swinging onto the floor) and self-collision's pushes after it (a sheet hung by a corner folding onto
-    // itself) may (bench/frame_step_energy.py, bench/self_contact_energy.py).
-    const bool halves = !adaptive && h > SUBSTEP_LEAST * control.max_step;
-    const bool zoned = halves && core.contact.enabled &&
+    // folds meeting: the zones' rigid motion stretched the springs at their edges by up to 139 %), down to
+    // SUBSTEP_LEAST of max_step, or that gained energy, down to GAIN_SUBSTEP_LEAST, is taken again in halves.  In
+    // the fixed-step mode nothing may add to a passive cloth's energy, but a solve stopped short of converging
+    // (what its unsolved residual does: a sheet swinging onto the floor) and self-collision's pushes after it (a
+    // sheet hung by a corner folding onto itself) may (bench/frame_step_energy.py, bench/self_contact_energy.py).
+    const bool zoned = !adaptive && h > SUBSTEP_LEAST * control.max_step && core.contact.enabled &&
                        (core.contact.counters[ZONE_ROUNDS] > zone_rounds || core.contact.counters[FREEZES] > freezes);
-    const bool gained = halves && !zoned && control.integrator == IMPLICIT_EULER && passive(core) &&
+    const bool gained = !adaptive && h > GAIN_SUBSTEP_LEAST * control.max_step && !zoned &&
+                        control.integrator == IMPLICIT_EULER && passive(core) &&
                         mechanical_energy(cloth, phys.wet_factor, core.solver.mass, buf.trial_water, buf.trial_pos,
                                           buf.trial_vel) > mechanical_energy(cloth, phys.wet_factor, core.solver.mass,
                                                                              buf.trial_water, buf.pos, buf.vel);
