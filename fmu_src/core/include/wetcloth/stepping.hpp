@@ -36,7 +36,7 @@ inline constexpr int MAX_REJECTIONS = 100;
 //: Fixed steps whose self-collision needs rigid impact zones are halved down to this fraction of max_step.
 inline constexpr double SUBSTEP_LEAST = 0.25;
 //: Fixed steps that gain energy are halved down to this fraction of max_step: self-collision's pushes on a sheet
-//: folding onto itself still gained up to 0.051 J in quarter-frame steps (bench/self_contact_energy.py).
+//: folding onto itself still gained up to 0.088 J in quarter-frame steps (bench/self_contact_energy.py).
 inline constexpr double GAIN_SUBSTEP_LEAST = 1.0 / 16.0;
 //: Wall-clock seconds after which advance returns PAUSED (checked between steps), so that its caller
 //: sees signals (Ctrl-C) in time.  Where a call returns never changes what is computed.
