@@ -167,11 +167,10 @@ def test_any_communication_step_is_as_accurate_as_a_fine_one(fmu):
     The error of a run is set by the scene's ``tolerance`` (the integrator's error control), against a run
     at a hundredfold tighter tolerance: every communication step must err by under the 1 mm the defaults
     promise.  A unit that took one step a communication step would not (BDF2's fixed steps of 0.5 and 1 s
-    err by 1.6 and 3.0 mm, measured).  The errors are
-    sums of the steps' errors, which fall differently as the communication points cut the steps: their
-    ratio to the finest step's error is no measure of the communication step (measured 1.0 to 1.3 with
-    the tension-only onset rounded over 6e-4 of strain, errors 0.56 to 0.73 mm; 1.8 to 3.3 over 1.5e-3,
-    0.16 to 0.54 mm; 0.9 to 1.1 over 3e-3, 0.29 to 0.38 mm).
+    err by 1.6 and 3.0 mm, measured).  The errors are sums of the steps' errors, which fall differently as
+    the communication points cut the steps: their ratio to the finest step's error is no measure of the
+    communication step (measured 1.0 to 1.3 with the tension-only onset rounded over 6e-4 of strain, errors
+    0.56 to 0.73 mm; 1.8 to 3.3 over 1.5e-3, 0.16 to 0.54 mm; 0.9 to 1.1 over 3e-3, 0.29 to 0.38 mm).
 
     In vacuum (air_density 0).  With the default air the errors, 0.37 to 0.70 mm, are almost all the
     floating towel's drift along y, which nothing restores and in which the reference itself moves by
