@@ -1,12 +1,13 @@
 """Energy at fixed frame steps (``implicit_euler``, ``tolerance = 0``, ``max_step`` one frame) in contact:
-passive sheets in still air meeting the floor and the analytic colliders, which must not gain energy.
+passive sheets in still air and still water meeting the floor, the analytic colliders and the water, which must
+not gain energy.
 
     .venv/bin/python bench/frame_step_energy.py [--fps 30 24] [--duration 2] [--starts 1] [CASE ...]
 
-For each case and frame rate: the largest rise of the cloth's mechanical energy from one frame to the next
-(``wetcloth.energy``) against the energy it starts with, in how many frames it rose at all, the largest strain
-of any spring at a frame's end, the steps taken again and the CPU time.  Nothing drives these sheets (no water,
-wind, grip or keyed collider), so a rise is energy the step made.  Where a sheet lands and folds, its path is
+For each case and frame rate: the largest rise of the cloth's energy, mechanical and buoyancy's
+(``wetcloth.energy``), from one frame to the next against the energy it starts with, in how many frames it rose
+at all, the largest strain of any spring at a frame's end, the steps taken again and the CPU time.  Nothing
+drives these sheets (no current, wind, grip or keyed collider; no uptake), so a rise is energy the step made.  Where a sheet lands and folds, its path is
 chaotic in the steps' rounding: with --starts N each case runs from N starting heights a micrometre apart, and
 the figures are over all of them (frames and steps taken again summed).
 """
@@ -22,13 +23,15 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # idle BLAS threads would sp
 import numpy as np  # noqa: E402
 
 import wetcloth  # noqa: E402
-from wetcloth.energy import mechanical_energy  # noqa: E402
+from wetcloth.energy import buoyancy_energy, mechanical_energy  # noqa: E402
 
 #: A 0.6 m square 21 x 21 sheet in air over the floor (z = 0), dry: what each case shares.
 SHEET = dict(nx=21, ny=21, width=0.6, length=0.6, initial_tilt=0.0, water_level=-10.0, floor_level=0.0,
              absorption_rate=0.0, absorption_capacity=0.0)
 #: Above the 1e-9 J of round-off in summing the energy over the particles: a frame that made energy.
 RISE = 1e-9
+#: Still water at z = 0 over a floor 1 m down.
+POOL = dict(water_level=0.0, floor_level=-1.0)
 #: A 0.3 m block under the sheet's middle.
 BLOCK = dict(x=0.0, y=0.0, z=0.15)
 CASES = {
@@ -43,7 +46,14 @@ CASES = {
                                                                          radius=0.2, friction=0.0),)),
     "down a slope": dict(initial_height=0.5, colliders=(dict(shape="plane", z=0.2, normal_x=0.3, normal_z=1.0,
                                                              friction=0.2),)),
+    "tilted onto still water": dict(initial_height=0.3, initial_tilt=40.0, **POOL),
+    "swinging into still water": dict(initial_height=0.4, pinned_edge="y_max", **POOL),
 }
+
+
+def energy(sim: wetcloth.Simulation) -> float:
+    """Mechanical energy and buoyancy's potential (J)."""
+    return mechanical_energy(sim) + buoyancy_energy(sim)
 
 
 def largest_strain(sim: wetcloth.Simulation) -> float:
@@ -63,13 +73,13 @@ def run(case: dict, fps: float, duration: float, starts: int) -> str:
         scene = wetcloth.load_scene(**{**SHEET, **lifted}).replace(integrator="implicit_euler", tolerance=0.0,
                                                                    max_step=1.0 / fps)
         sim = wetcloth.Simulation(scene)
-        start = energy = mechanical_energy(sim)
+        start = last = energy(sim)
         for _ in range(frames):
             clock = time.process_time()
             sim.advance(1.0 / fps)
             cpu += time.process_time() - clock
-            now = mechanical_energy(sim)
-            rise, rising, energy = max(rise, now - energy), rising + (now - energy > RISE), now
+            now = energy(sim)
+            rise, rising, last = max(rise, now - last), rising + (now - last > RISE), now
             strain = max(strain, largest_strain(sim))
         again += sim.rejected_steps
     return (f"{rise:.2g} J of {start:.2f} J | {rising} of {starts * frames} | {100 * strain:.1f} % | {again} | "

@@ -18,6 +18,14 @@ WETCLOTH_BINDINGS(m) {
         "Kinetic + gravitational (zero at z = 0) + elastic energy (J) of the cloth at pos, vel ((3, n)) with the "
         "particles' masses and water (n, kg), every spring's stiffness grown by wet_factor times its ends' mean "
         "saturation (wetcloth.energy's).");
+    m.def(
+        "buoyancy_energy",
+        [](nb::handle cloth, nb::handle phys, nb::handle pos) {
+            const Cloth c = cloth_from(cloth);
+            return buoyancy_energy(c, physics_from(phys), argument<const double>(pos, "pos", 3 * c.n));
+        },
+        nb::arg("cloth"), nb::arg("phys"), nb::arg("pos"),
+        "Buoyancy's potential energy (J) of the cloth at pos ((3, n)): minus its gradient is the buoyancy force.");
 }
 
 }  // namespace wc::py

@@ -77,4 +77,23 @@ double mechanical_energy(const Cloth& cloth, double wet_factor, const double* ma
     return energy;
 }
 
+double buoyancy_energy(const Cloth& cloth, const Physics& phys, const double* pos) {
+    const Index n = cloth.n;
+    const double* z = pos + 2 * n;
+    const double e = phys.thickness, level = phys.water_level;
+    double energy = 0.0;
+    for (Index i = 0; i < n; ++i) {
+        // The depth integral of the submerged fraction (water.cpp's submerged_fractions) from z up.
+        double depth;
+        if (phys.smooth) {
+            const double u = level + 0.5 * e - z[i];  // into the surface slab, whose fraction rises as u / e
+            depth = u <= 0.0 ? 0.0 : u < e ? 0.5 * u * u / e : u - 0.5 * e;
+        } else {
+            depth = level > z[i] ? level - z[i] : 0.0;
+        }
+        energy += cloth.volume[i] * depth;
+    }
+    return phys.water_density * GRAVITY * energy;
+}
+
 }  // namespace wc

@@ -13,4 +13,8 @@ namespace wc {
 double mechanical_energy(const Cloth& cloth, double wet_factor, const double* mass, const double* water,
                          const double* pos, const double* vel);
 
+//: Buoyancy's potential energy (J) at pos (3, n): rho g times each particle's volume times the depth integral of
+//: its submerged fraction (docs/model.md sections 4.1 and 4.2), so that minus its gradient is the buoyancy force.
+double buoyancy_energy(const Cloth& cloth, const Physics& phys, const double* pos);
+
 }  // namespace wc
