@@ -4,6 +4,8 @@
 #include "wetcloth/self_contact/geometry.hpp"
 #include "wetcloth/springs.hpp"
 
+#include <cmath>
+
 namespace wc {
 
 namespace {
@@ -43,18 +45,21 @@ double distance(const double* pos, Index n, Index i, Index j) {
 }  // namespace
 
 double mechanical_energy(const Cloth& cloth, double wet_factor, const double* mass, const double* water,
-                         const double* pos, const double* vel) {
+                         const double* pos, const double* vel, double* magnitude) {
     const Index n = cloth.n;
     // A spring's stiffness grows by wet_factor times its ends' mean saturation (spring_law.hpp's spring_geometry).
     const auto wet = [&](Index i, Index j) {
         if (wet_factor == 0.0) return 1.0;
         return 1.0 + wet_factor * 0.5 * (water[i] / cloth.capacity[i] + water[j] / cloth.capacity[j]);
     };
-    double energy = 0.0;
+    double energy = 0.0, size = 0.0;  // (size: the sum of the terms' magnitudes)
     for (Index i = 0; i < n; ++i) {
         const double vx = vel[i], vy = vel[n + i], vz = vel[2 * n + i];
-        energy += mass[i] * (0.5 * (vx * vx + vy * vy + vz * vz) + GRAVITY * pos[2 * n + i]);
+        const double kinetic = 0.5 * (vx * vx + vy * vy + vz * vz), height = GRAVITY * pos[2 * n + i];
+        energy += mass[i] * (kinetic + height);
+        size += mass[i] * (kinetic + std::fabs(height));
     }
+    const double gravity_and_motion = energy;
     for (Index f = 0; f < cloth.families; ++f) {
         const Index off = cloth.offsets[f];
         const double rest = cloth.rest[f];
@@ -74,6 +79,7 @@ double mechanical_energy(const Cloth& cloth, double wet_factor, const double* ma
                   : p < buckling ? buckling_energy(s, k, rest)
                                  : spring_energy(s, k, false, 0.0);
     }
+    if (magnitude != nullptr) *magnitude = size + (energy - gravity_and_motion);  // (elastic terms are >= 0)
     return energy;
 }
 

@@ -180,10 +180,21 @@ bool passive(const Core& core) {
 }
 
 //: The energy a passive step (`passive`) may not add (J): mechanical (energy.hpp's, with the step's water) and
-//: buoyancy's potential, at pos, vel.
-double passive_energy(const Core& core, const double* pos, const double* vel) {
-    return mechanical_energy(core.cloth, core.phys.wet_factor, core.solver.mass, core.buf.trial_water, pos, vel) +
-           buoyancy_energy(core.cloth, core.phys, pos);
+//: buoyancy's potential, at pos, vel; and the sum of its terms' magnitudes into `magnitude` (J).
+double passive_energy(const Core& core, const double* pos, const double* vel, double& magnitude) {
+    const double buoyancy = buoyancy_energy(core.cloth, core.phys, pos);  // (its terms are >= 0)
+    const double mechanical =
+        mechanical_energy(core.cloth, core.phys.wet_factor, core.solver.mass, core.buf.trial_water, pos, vel, &magnitude);
+    magnitude += buoyancy;
+    return mechanical + buoyancy;
+}
+
+//: Whether a passive step from pos, vel to trial_pos, trial_vel gained energy beyond noise (ENERGY_NOISE).
+bool gained_energy(const Core& core) {
+    double start_size = 0.0, end_size = 0.0;
+    const double start = passive_energy(core, core.buf.pos, core.buf.vel, start_size);
+    const double end = passive_energy(core, core.buf.trial_pos, core.buf.trial_vel, end_size);
+    return end - start > ENERGY_NOISE * (start_size + end_size);
 }
 
 //: Fall asleep after sleep_after s still, with no water exchange and no grip moving (`exchanging`:
@@ -510,8 +521,7 @@ Status step(Core& core, double remaining, double span) {
     const bool zoned = !adaptive && h > SUBSTEP_LEAST * control.max_step && core.contact.enabled &&
                        (core.contact.counters[ZONE_ROUNDS] > zone_rounds || core.contact.counters[FREEZES] > freezes);
     const bool gained = !adaptive && h > GAIN_SUBSTEP_LEAST * control.max_step && !zoned &&
-                        control.integrator == IMPLICIT_EULER && passive(core) &&
-                        passive_energy(core, buf.trial_pos, buf.trial_vel) > passive_energy(core, buf.pos, buf.vel);
+                        control.integrator == IMPLICIT_EULER && passive(core) && gained_energy(core);
     if (zoned || gained) {
         start_collider_motion(phys, clock[TIME]);
         clock[NEXT_STEP] = 0.5 * h;
