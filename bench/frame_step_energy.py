@@ -5,11 +5,12 @@ not gain energy.
     .venv/bin/python bench/frame_step_energy.py [--fps 30 24] [--duration 2] [--starts 1] [CASE ...]
 
 For each case and frame rate: the largest rise of the cloth's energy, mechanical and buoyancy's
-(``wetcloth.energy``), from one frame to the next against the energy it starts with, in how many frames it rose
-at all, the largest strain of any spring at a frame's end, the steps taken again and the CPU time.  Nothing
-drives these sheets (no current, wind, grip or keyed collider; no uptake), so a rise is energy the step made.  Where a sheet lands and folds, its path is
-chaotic in the steps' rounding: with --starts N each case runs from N starting heights a micrometre apart, and
-the figures are over all of them (frames and steps taken again summed).
+(``wetcloth.energy.total_energy``), from one frame to the next against the energy it starts with, in how many
+frames it rose at all, the largest strain of any spring at a frame's end, the steps taken again and the CPU time.
+Nothing drives these sheets (no current, wind, grip or keyed collider; no uptake), so a rise is energy the step
+made.  Where a sheet lands and folds, its path is chaotic in the steps' rounding: with --starts N each case runs
+from N starting heights a micrometre apart, and the figures are over all of them (frames and steps taken again
+summed).
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # idle BLAS threads would sp
 import numpy as np  # noqa: E402
 
 import wetcloth  # noqa: E402
-from wetcloth.energy import buoyancy_energy, mechanical_energy  # noqa: E402
+from wetcloth.energy import total_energy  # noqa: E402
 
 #: A 0.6 m square 21 x 21 sheet in air over the floor (z = 0), dry: what each case shares.
 SHEET = dict(nx=21, ny=21, width=0.6, length=0.6, initial_tilt=0.0, water_level=-10.0, floor_level=0.0,
@@ -51,10 +52,6 @@ CASES = {
 }
 
 
-def energy(sim: wetcloth.Simulation) -> float:
-    """Mechanical energy and buoyancy's potential (J)."""
-    return mechanical_energy(sim) + buoyancy_energy(sim)
-
 
 def largest_strain(sim: wetcloth.Simulation) -> float:
     """The largest relative stretch of a grid spring now (-)."""
@@ -73,12 +70,12 @@ def run(case: dict, fps: float, duration: float, starts: int) -> str:
         scene = wetcloth.load_scene(**{**SHEET, **lifted}).replace(integrator="implicit_euler", tolerance=0.0,
                                                                    max_step=1.0 / fps)
         sim = wetcloth.Simulation(scene)
-        start = last = energy(sim)
+        start = last = total_energy(sim)
         for _ in range(frames):
             clock = time.process_time()
             sim.advance(1.0 / fps)
             cpu += time.process_time() - clock
-            now = energy(sim)
+            now = total_energy(sim)
             rise, rising, last = max(rise, now - last), rising + (now - last > RISE), now
             strain = max(strain, largest_strain(sim))
         again += sim.rejected_steps

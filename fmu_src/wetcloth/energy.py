@@ -28,3 +28,9 @@ def buoyancy_energy(sim) -> float:
     integral of its submerged fraction (docs/model.md sections 4.1 and 4.2), so that minus its gradient is the
     buoyancy force; 0 for a cloth wholly above the water.  The core's (energy.cpp)."""
     return float(_core.buoyancy_energy(sim.model.cloth, sim.model.physics, sim.state.pos))
+
+
+def total_energy(sim) -> float:
+    """Mechanical energy and buoyancy's potential (J) of a Simulation's cloth: what the fixed-step mode does not
+    let grow where nothing drives the cloth (docs/model.md section 7)."""
+    return mechanical_energy(sim) + buoyancy_energy(sim)

@@ -1,4 +1,4 @@
-// The cloth's mechanical energy, as wetcloth/energy.py weighs it.
+// The cloth's mechanical energy and buoyancy's potential, as wetcloth/energy.py weighs them.
 #include "wetcloth/energy.hpp"
 
 #include "wetcloth/self_contact/geometry.hpp"
