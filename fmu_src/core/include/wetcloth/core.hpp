@@ -448,6 +448,8 @@ struct ContactLists {
     std::vector<double> collider_moved;  // (n) scratch: each particle's move from the kept list's reference, m
     std::vector<Index> collider_pushed;  // (n) 1 for the particles they pushed
     std::vector<double> collider_normals;  // (3, n) the direction of each one's last push
+    std::vector<Index> settle_moved;     // (n) scratch: the settling passes' clock when a push last moved each particle
+    std::vector<Index> settle_checked;   // (count) scratch: and when each candidate pair was last checked
     Index point_triangle_count() const { return static_cast<Index>(point_triangle.size() / 2); }
     Index edge_edge_count() const { return static_cast<Index>(edge_edge.size() / 2); }
 };
