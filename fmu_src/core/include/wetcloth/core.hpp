@@ -449,7 +449,8 @@ struct ContactLists {
     std::vector<Index> collider_pushed;  // (n) 1 for the particles they pushed
     std::vector<double> collider_normals;  // (3, n) the direction of each one's last push
     std::vector<Index> settle_moved;     // (n) scratch: the settling passes' clock when a push last moved each particle
-    std::vector<Index> settle_checked;   // (count) scratch: and when each candidate pair was last checked
+    std::vector<Index> settle_checked;   // (count) scratch: and, times 2, when each candidate pair was last checked
+                                         // (plus 1 if that check left it to the impact zones)
     Index point_triangle_count() const { return static_cast<Index>(point_triangle.size() / 2); }
     Index edge_edge_count() const { return static_cast<Index>(edge_edge.size() / 2); }
 };

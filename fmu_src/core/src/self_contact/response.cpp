@@ -194,9 +194,9 @@ Settled settle_pair(const Candidate& p, double start_distance, const Contact& co
 //: every pass.  (The crumpled towel of bench/self_collision.py: 6 passes a step over its 1300 pairs.)
 bool settle(Contact& contact, double thickness, double floor_z, Index n, const double* mass, const double* free,
             const double* x0, double* x1, double* v1, Index count, const double* start) {
-    std::vector<Index>& moved = contact.lists->settle_moved;  // the clock when a push last moved each particle
-    std::vector<Index>& checked = contact.lists->settle_checked;  // when each pair was last checked, times 2,
-    moved.assign(static_cast<std::size_t>(n), 0);                 // plus 1 if it was then left to the zones
+    std::vector<Index>& moved = contact.lists->settle_moved;      // (see ContactLists)
+    std::vector<Index>& checked = contact.lists->settle_checked;
+    moved.assign(static_cast<std::size_t>(n), 0);
     checked.assign(static_cast<std::size_t>(count), 0);
     Index clock = 0;  // pushes so far
     Index left = 0;   // pairs whose last check left them to the impact zones
