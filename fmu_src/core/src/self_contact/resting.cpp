@@ -26,6 +26,12 @@ bool all_still(const double* free, const Index* support) {
     return true;
 }
 
+//: Whether particle p is free and its support (up to 3 particles, -1 padding) still: the first condition of
+//: hold_if_resting, which needs no distance.
+inline bool may_rest(const double* free, Index p, const Index* support) {
+    return free[p] != 0.0 && all_still(free, support);
+}
+
 //: Hold particle p (free) on a still support (up to 3 particles, -1 padding) lying along `normal` (unit,
 //: from the support to p) at `distance` (m), if it is at rest there or coming onto it slowly enough that
 //: the self-collision response's inelastic impulse would stop it, and, given the force on the particles
@@ -34,7 +40,7 @@ bool all_still(const double* free, const Index* support) {
 bool hold_if_resting(ContactLists& lists, double thickness, double friction, Index n, const double* vel,
                      const double* force, double* free, double* held, Index p, const Index support[3],
                      const Vec3& normal, double distance) {
-    if (free[p] == 0.0 || !all_still(free, support)) return false;
+    if (!may_rest(free, p, support)) return false;
     if (!(distance > 0.0 && distance <= (1.0 + RESTING_SLACK) * thickness)) return false;
     const double v[3] = {vel[p], vel[n + p], vel[2 * n + p]};
     const double up[3] = {normal.x, normal.y, normal.z};
@@ -54,7 +60,8 @@ bool hold_if_resting(ContactLists& lists, double thickness, double friction, Ind
 }
 
 //: RESTING_PASSES passes of hold_if_resting over the candidate pairs (force: as there).  Returns how many
-//: it held.
+//: it held.  A pair's distance is measured only where one of its particles may rest on the other element
+//: (may_rest): no other can be held, so no other changes what the pair's checks find.
 Index hold_passes(Contact& contact, double thickness, Index n, const double* pos, const double* vel,
                   const double* force, double* free, double* held) {
     using namespace self_contact;
@@ -68,6 +75,7 @@ Index hold_passes(Contact& contact, double thickness, Index n, const double* pos
         for (Index j = 0; j < points; ++j) {  // a particle on a triangle
             const Index p = lists.point_triangle[j];
             const Index* t = contact.triangles + 3 * lists.point_triangle[points + j];
+            if (!may_rest(free, p, t)) continue;
             const Vec3 x0 = point(pos, n, p), x1 = point(pos, n, t[0]), x2 = point(pos, n, t[1]),
                        x3 = point(pos, n, t[2]);
             const Vec3 d = combine(closest(POINT_TRIANGLE, x0, x1, x2, x3), x0, x1, x2, x3);
@@ -78,14 +86,18 @@ Index hold_passes(Contact& contact, double thickness, Index n, const double* pos
         for (Index j = 0; j < edges; ++j) {  // the ends of an edge on an edge
             const Index* a = contact.edges + 2 * lists.edge_edge[j];
             const Index* b = contact.edges + 2 * lists.edge_edge[edges + j];
+            const Index on_b[3] = {b[0], b[1], -1};
+            const Index on_a[3] = {a[0], a[1], -1};
+            if (!(may_rest(free, a[0], on_b) || may_rest(free, a[1], on_b) || may_rest(free, b[0], on_a) ||
+                  may_rest(free, b[1], on_a))) {
+                continue;
+            }
             const Vec3 x0 = point(pos, n, a[0]), x1 = point(pos, n, a[1]), x2 = point(pos, n, b[0]),
                        x3 = point(pos, n, b[1]);
             const Vec3 d = combine(closest(EDGE_EDGE, x0, x1, x2, x3), x0, x1, x2, x3);  // from b to a
             const double length = norm(d);
             const Vec3 up = {d.x / length, d.y / length, d.z / length};
             const Vec3 down = {-up.x, -up.y, -up.z};
-            const Index on_b[3] = {b[0], b[1], -1};
-            const Index on_a[3] = {a[0], a[1], -1};
             for (int k = 0; k < 2; ++k) {
                 added += hold_if_resting(lists, thickness, friction, n, vel, force, free, held, a[k], on_b, up, length);
                 added += hold_if_resting(lists, thickness, friction, n, vel, force, free, held, b[k], on_a, down, length);
