@@ -49,8 +49,11 @@ inline bool surely_apart(const Vec3 p[4], double start, double gap) {
     if (!(room > 1e-9 * start)) return false;
     const Vec3 mean = {0.25 * (p[0].x + p[1].x + p[2].x + p[3].x), 0.25 * (p[0].y + p[1].y + p[2].y + p[3].y),
                        0.25 * (p[0].z + p[1].z + p[2].z + p[3].z)};
-    double largest = 0.0;
-    for (int k = 0; k < 4; ++k) largest = py_max(largest, dot(sub(p[k], mean), sub(p[k], mean)));
+    double largest = 0.0;  // (NaN once a motion is: then not surely apart)
+    for (int k = 0; k < 4; ++k) {
+        const double squared = dot(sub(p[k], mean), sub(p[k], mean));
+        largest = squared > largest || squared != squared ? squared : largest;
+    }
     return 4.0 * (1.0 + 1e-6) * largest < room * room;
 }
 
