@@ -2,6 +2,7 @@
 #include "wetcloth/energy.hpp"
 
 #include "wetcloth/self_contact/geometry.hpp"
+#include "wetcloth/spring_law.hpp"
 #include "wetcloth/springs.hpp"
 
 #include <cmath>
@@ -47,10 +48,10 @@ double distance(const double* pos, Index n, Index i, Index j) {
 double mechanical_energy(const Cloth& cloth, double wet_factor, const double* mass, const double* water,
                          const double* pos, const double* vel, double* magnitude) {
     const Index n = cloth.n;
-    // A spring's stiffness grows by wet_factor times its ends' mean saturation (spring_law.hpp's spring_geometry).
-    const auto wet = [&](Index i, Index j) {
-        if (wet_factor == 0.0) return 1.0;
-        return 1.0 + wet_factor * 0.5 * (water[i] / cloth.capacity[i] + water[j] / cloth.capacity[j]);
+    // A spring's stiffness as the forces take it (saturations as update_saturation's: water / capacity).
+    const auto stiffness = [&](double k, Index i, Index j) {
+        if (wet_factor == 0.0) return k;
+        return spring_law::wet_stiffness(k, water[i] / cloth.capacity[i], water[j] / cloth.capacity[j], wet_factor);
     };
     double energy = 0.0, size = 0.0;  // (size: the sum of the terms' magnitudes)
     for (Index i = 0; i < n; ++i) {
@@ -66,14 +67,14 @@ double mechanical_energy(const Cloth& cloth, double wet_factor, const double* ma
         const double* k = cloth.stiffness + f * n;
         for (Index i = 0; i + off < n; ++i) {
             if (k[i] == 0.0) continue;
-            energy += spring_energy(distance(pos, n, i, i + off) - rest, k[i] * wet(i, i + off), cloth.tension_only[f],
+            energy += spring_energy(distance(pos, n, i, i + off) - rest, stiffness(k[i], i, i + off), cloth.tension_only[f],
                                     TENSION_ROUNDING * rest);
         }
     }
     const Index tension = cloth.pair_tension_count, buckling = tension + cloth.pair_buckling_count;
     for (Index p = 0; p < cloth.pair_count; ++p) {
         const Index i = cloth.pairs[p], j = cloth.pairs[cloth.pair_count + p];
-        const double rest = cloth.pair_rest[p], k = cloth.pair_stiffness[p] * wet(i, j);
+        const double rest = cloth.pair_rest[p], k = stiffness(cloth.pair_stiffness[p], i, j);
         const double s = distance(pos, n, i, j) - rest;
         energy += p < tension    ? spring_energy(s, k, true, TENSION_ROUNDING * rest)
                   : p < buckling ? buckling_energy(s, k, rest)

@@ -80,13 +80,19 @@ struct Geometry {
     double dx, dy, dz, length, inv, stiffness;
 };
 
+//: Stiffness (N/m) of a spring of dry stiffness kf (N/m) whose ends' saturations are si, sj: grown by
+//: wet_factor times their mean.
+inline double wet_stiffness(double kf, double si, double sj, double wet_factor) {
+    return kf * (1.0 + wet_factor * 0.5 * (si + sj));
+}
+
 inline Geometry spring_geometry(double xi, double yi, double zi, double xj, double yj, double zj, double kf, double si,
                                 double sj, double wet_factor) {
     const double dx = xi - xj;
     const double dy = yi - yj;
     const double dz = zi - zj;
     const double length = std::sqrt(dx * dx + dy * dy + dz * dz);
-    return {dx, dy, dz, length, inverse_length(length), kf * (1.0 + wet_factor * 0.5 * (si + sj))};
+    return {dx, dy, dz, length, inverse_length(length), wet_stiffness(kf, si, sj, wet_factor)};
 }
 
 //: The spring's force on its first end is t (x_i - x_j) (plus thesis damping): tension (eq. 3.1)

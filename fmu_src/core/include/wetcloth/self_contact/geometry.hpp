@@ -165,11 +165,15 @@ inline double distance(int kind, const Vec3& x0, const Vec3& x1, const Vec3& x2,
     return std::sqrt(dot(d, d));
 }
 
+//: The mean of a pair's four displacements p0..p3 (m).
+inline Vec3 mean_motion(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3) {
+    return {0.25 * (p0.x + p1.x + p2.x + p3.x), 0.25 * (p0.y + p1.y + p2.y + p3.y), 0.25 * (p0.z + p1.z + p2.z + p3.z)};
+}
+
 //: Largest change (m) of the pair's distance over straight-line displacements p0..p3: after the mean
 //: displacement is taken out, the largest on one side plus the largest on the other.
 inline double motion_bound(int kind, const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3) {
-    const Vec3 mean = {0.25 * (p0.x + p1.x + p2.x + p3.x), 0.25 * (p0.y + p1.y + p2.y + p3.y),
-                       0.25 * (p0.z + p1.z + p2.z + p3.z)};
+    const Vec3 mean = mean_motion(p0, p1, p2, p3);
     const double n0 = norm(sub(p0, mean)), n1 = norm(sub(p1, mean)), n2 = norm(sub(p2, mean)),
                  n3 = norm(sub(p3, mean));
     if (kind == POINT_TRIANGLE) return n0 + py_max(py_max(n1, n2), n3);

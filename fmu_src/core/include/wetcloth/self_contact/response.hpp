@@ -42,13 +42,12 @@ struct ContactTime {
 
 //: Whether a pair `start` (m) apart whose points move by p[0..3] surely stays `gap` (m) apart, as contact_time's
 //: motion bound shows, without its square roots: that bound is at most twice the largest motion from the
-//: mean.  (With a relative margin of 1e-6, and only where start - gap is not lost in start's rounding, so that
-//: the bound would show it too.)
+//: mean (the same mean, to the bit).  (With a relative margin of 1e-6, and only where start - gap is not lost
+//: in start's rounding, so that the bound would show it too.)
 inline bool surely_apart(const Vec3 p[4], double start, double gap) {
     const double room = start - gap;
     if (!(room > 1e-9 * start)) return false;
-    const Vec3 mean = {0.25 * (p[0].x + p[1].x + p[2].x + p[3].x), 0.25 * (p[0].y + p[1].y + p[2].y + p[3].y),
-                       0.25 * (p[0].z + p[1].z + p[2].z + p[3].z)};
+    const Vec3 mean = mean_motion(p[0], p[1], p[2], p[3]);
     double largest = 0.0;  // (NaN once a motion is: then not surely apart)
     for (int k = 0; k < 4; ++k) {
         const double squared = dot(sub(p[k], mean), sub(p[k], mean));
