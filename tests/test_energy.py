@@ -1,7 +1,8 @@
 """The cloth's energy (wetcloth.energy, the core's energy.cpp), mechanical and buoyancy's, is the potential of its
 forces: at rest velocities, in still air and still water, minus its gradient is the force of the springs, gravity
 and buoyancy on every particle, for each spring law (tension-only, both ways, buckling, hinges' terms) and each
-buoyancy model.  And the fixed-step mode does not let it grow where nothing drives the cloth."""
+buoyancy model.  And the fixed-step mode does not let it grow where nothing drives the cloth (driven cloth:
+test_driven_energy.py)."""
 
 from __future__ import annotations
 
@@ -74,7 +75,7 @@ def test_the_energy_is_the_potential_of_the_springs_gravity_and_buoyancy(scene):
 
 def test_a_towel_dropped_onto_still_water_at_frame_steps_never_gains_energy():
     """The fixed-step mode (backward Euler at 1/24 s frames) takes a step again in halves where it ends above its
-    start's energy, mechanical and buoyancy's, also in still water (stepping.cpp, passive).  The towel dropped
+    start's energy, mechanical and buoyancy's, also in still water (stepping.cpp, gained_energy).  The towel dropped
     from 30 cm without uptake: its energy falls in every one of 96 frames (to 1e-9 J of summing's round-off);
     before the check covered water, 2 frames rose, by up to 0.083 J (measured), as the towel struck the water."""
     scene = wetcloth.load_scene("towel", absorption_rate=0.0, initial_height=0.3, integrator="implicit_euler",

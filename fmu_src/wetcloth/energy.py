@@ -1,8 +1,8 @@
 """The cloth's energy (J): mechanical (kinetic, gravitational, the springs' elastic) and buoyancy's potential.
 
-Their sum is what the fixed-step mode promises not to grow where nothing drives the cloth (docs/model.md
-section 7); the mechanical energy alone is what the hanging-sheet benchmark reports.  Drag and the water's
-uptake are not counted.
+Their sum is what the fixed-step mode promises not to grow by more than the wind, the current and the grip
+do on the cloth (docs/model.md section 7); the mechanical energy alone is what the hanging-sheet benchmark
+reports.  Drag and the water's uptake are not counted.
 """
 
 from __future__ import annotations
@@ -32,5 +32,5 @@ def buoyancy_energy(sim) -> float:
 
 def total_energy(sim) -> float:
     """Mechanical energy and buoyancy's potential (J) of a Simulation's cloth: what the fixed-step mode does not
-    let grow where nothing drives the cloth (docs/model.md section 7)."""
+    let grow by more than what drives the cloth does (docs/model.md section 7)."""
     return mechanical_energy(sim) + buoyancy_energy(sim)

@@ -126,7 +126,48 @@ void mesh_forces(const Cloth& cloth, const Physics& phys, Work& work, const doub
     if (blocks_wanted && phys.smooth) add_buoyancy_blocks(cloth, phys, s, h, work.blocks);
 }
 
+//: Into work.force (3, n) the drag of one fluid alone on the cloth at pos, vel (the water's: Stokes or face drag
+//: in it, `water` true; else the air's face drag); work.submerged set.
+void drag_alone(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel, bool water) {
+    const Index n = cloth.n;
+    double* s = work.submerged;
+    submerged(phys, n, pos + 2 * n, s);
+    fill_zero(work.force, 3 * n);
+    if (water && phys.stokes) return stokes_drag(n, s, cloth.stokes_coefficient, phys.current_x, phys.current_y, vel,
+                                                 work.force);
+    const Fluid fluid = water ? water_fluid(phys) : air_fluid(phys);
+    if (!is_mesh(cloth)) {
+        face_drag(cloth.grid_x, cloth.grid_y, pos, vel, s, fluid, work.force, work.cells, phys.skip_idle);
+        return;
+    }
+    const MeshRecords records = fill_records(n, work.cells, false, pos, vel, work.saturation, s, work.force);
+    mesh_face_drag(cloth.triangle_count, cloth.triangles, cloth.corner_shares, &fluid, 1, 0.0, records,
+                   phys.skip_idle);
+    store_sums(n, records, work.force, nullptr, nullptr);
+}
+
+//: The sum over the particles of force (3, n) dotted with the uniform velocity u (m/s).
+double dot_uniform(Index n, const double* force, double ux, double uy, double uz) {
+    double sum = 0.0;
+    for (Index i = 0; i < n; ++i) sum += force[i] * ux + force[n + i] * uy + force[2 * n + i] * uz;
+    return sum;
+}
+
 }  // namespace
+
+double fluid_drive(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel) {
+    const Index n = cloth.n;
+    double drive = 0.0;
+    if (phys.current_x != 0.0 || phys.current_y != 0.0) {
+        drag_alone(cloth, phys, work, pos, vel, true);
+        drive += dot_uniform(n, work.force, phys.current_x, phys.current_y, 0.0);
+    }
+    if (phys.air_density > 0.0 && (phys.wind_x != 0.0 || phys.wind_y != 0.0 || phys.wind_z != 0.0)) {
+        drag_alone(cloth, phys, work, pos, vel, false);
+        drive += dot_uniform(n, work.force, phys.wind_x, phys.wind_y, phys.wind_z);
+    }
+    return drive;
+}
 
 double submerged(const Physics& phys, Index n, const double* z, double* out) {
     return submerged_fractions(n, z, phys.water_level, phys.thickness, phys.smooth, out);

@@ -156,19 +156,14 @@ bool sunk(const Core& core) {
     return true;
 }
 
-//: Whether nothing but gravity, the cloth's springs, still air and still water acts on it over a step from pos to
-//: trial_pos: no wind, no grip, no keyed collider and, where a particle is at or under the water's surface at either
-//: end, no current and smooth buoyancy.  There the fixed-step mode's energy (mechanical and buoyancy's) must not
-//: grow (docs/model.md section 7).  (The thesis's buoyancy, a step at the surface, leaves Newton no slope to
-//: converge on there: its steps gained energy at every halving, 55 steps taken again a frame.)
-bool passive(const Core& core) {
+//: Whether the fixed-step mode checks a step from pos to trial_pos for energy it made (docs/model.md section 7): always
+//: but where a keyed collider moves (its supports' work is not weighed) or where, with the thesis's buoyancy, a
+//: particle is at or under the water's surface at either end (a step at the surface: Newton has no slope to converge
+//: on there, and its steps gained energy at every halving, 55 steps taken again a frame).
+bool energy_checked(const Core& core) {
     const Physics& phys = core.phys;
-    if (phys.collider_motion != nullptr || phys.grip_key_count > 0 || phys.grip_x != 0.0 || phys.grip_y != 0.0 ||
-        phys.grip_z != 0.0) {
-        return false;
-    }
-    if (phys.air_density > 0.0 && (phys.wind_x != 0.0 || phys.wind_y != 0.0 || phys.wind_z != 0.0)) return false;
-    if (phys.smooth && phys.current_x == 0.0 && phys.current_y == 0.0) return true;
+    if (phys.collider_motion != nullptr) return false;
+    if (phys.smooth) return true;
     const Index n = core.cloth.n;
     const double* z0 = core.buf.pos + 2 * n;
     const double* z1 = core.buf.trial_pos + 2 * n;
@@ -179,9 +174,9 @@ bool passive(const Core& core) {
     return true;
 }
 
-//: The energy a passive step (`passive`) may not add (J): mechanical (energy.hpp's, with the step's water) and
-//: buoyancy's potential, at pos, vel; and the sum of its terms' magnitudes into `magnitude` (J).
-double passive_energy(const Core& core, const double* pos, const double* vel, double& magnitude) {
+//: The energy a step may not add (J): mechanical (energy.hpp's, with the step's water) and buoyancy's potential,
+//: at pos, vel; and the sum of its terms' magnitudes into `magnitude` (J).
+double checked_energy(const Core& core, const double* pos, const double* vel, double& magnitude) {
     const double buoyancy = buoyancy_energy(core.cloth, core.phys, pos);  // (its terms are >= 0)
     const double mechanical =
         mechanical_energy(core.cloth, core.phys.wet_factor, core.solver.mass, core.buf.trial_water, pos, vel, &magnitude);
@@ -189,12 +184,40 @@ double passive_energy(const Core& core, const double* pos, const double* vel, do
     return mechanical + buoyancy;
 }
 
-//: Whether a passive step from pos, vel to trial_pos, trial_vel gained energy beyond noise (ENERGY_NOISE).
-bool gained_energy(const Core& core) {
+//: The most work (J) what drives the cloth may have done on it over a backward Euler step of h s from pos, vel to
+//: trial_pos, trial_vel, from the step's end (docs/model.md section 7): the flowing fluids' h fluid_drive, and
+//: the grip's h R . v+ over the pinned particles, R = m (v+ - v) / h - F(x+, v+) the force that keeps them on its
+//: path (a pinned particle moves by h v+).  A solved step of a cloth whose forces are conservative with a convex
+//: energy (gravity, the springs, smooth buoyancy), dissipative (damping) or drag ends at most this much above its
+//: start.  0 where nothing drives it.  work.force is its scratch.
+double drivers_work(Core& core, double h) {
+    const Cloth& cloth = core.cloth;
+    const Physics& phys = core.phys;
+    const Buffers& buf = core.buf;
+    const Index n = cloth.n;
+    double work = h * fluid_drive(cloth, phys, core.work, buf.trial_pos, buf.trial_vel);
+    bool gripped = false;  // a pinned particle moving
+    for (Index k = 0; k < 3 * n && !gripped; ++k) gripped = cloth.free[k % n] == 0.0 && buf.trial_vel[k] != 0.0;
+    if (!gripped) return work;
+    forces(cloth, phys, core.work, buf.trial_pos, buf.trial_vel, buf.trial_water);
+    const double* mass = core.solver.mass;
+    for (Index c = 0; c < 3; ++c) {
+        for (Index i = 0; i < n; ++i) {
+            if (cloth.free[i] != 0.0) continue;
+            const Index k = c * n + i;
+            work += (mass[i] * (buf.trial_vel[k] - buf.vel[k]) - h * core.work.force[k]) * buf.trial_vel[k];
+        }
+    }
+    return work;
+}
+
+//: Whether a step of h s from pos, vel to trial_pos, trial_vel gained energy beyond what drives the cloth
+//: (drivers_work) and beyond noise (ENERGY_NOISE).
+bool gained_energy(Core& core, double h) {
     double start_size = 0.0, end_size = 0.0;
-    const double start = passive_energy(core, core.buf.pos, core.buf.vel, start_size);
-    const double end = passive_energy(core, core.buf.trial_pos, core.buf.trial_vel, end_size);
-    return end - start > ENERGY_NOISE * (start_size + end_size);
+    const double start = checked_energy(core, core.buf.pos, core.buf.vel, start_size);
+    const double end = checked_energy(core, core.buf.trial_pos, core.buf.trial_vel, end_size);
+    return end - start - drivers_work(core, h) > ENERGY_NOISE * (start_size + end_size);
 }
 
 //: Fall asleep after sleep_after s still, with no water exchange and no grip moving (`exchanging`:
@@ -515,13 +538,14 @@ Status step(Core& core, double remaining, double span) {
     // A fixed step whose self-collision needed rigid impact zones or undid its motion (a frame-long step's
     // folds meeting: the zones' rigid motion stretched the springs at their edges by up to 139 %), down to
     // SUBSTEP_LEAST of max_step, or that gained energy, down to GAIN_SUBSTEP_LEAST, is taken again in halves.  In
-    // the fixed-step mode nothing may add to a passive cloth's energy, but a solve stopped short of converging
-    // (what its unsolved residual does: a sheet swinging onto the floor) and self-collision's pushes after it (a
-    // sheet hung by a corner folding onto itself) may (bench/frame_step_energy.py, bench/self_contact_energy.py).
+    // the fixed-step mode nothing may add to the cloth's energy beyond the work of what drives it, but a solve
+    // stopped short of converging (what its unsolved residual does: a sheet swinging onto the floor, a towel whose
+    // grip stops) and self-collision's pushes after it (a sheet hung by a corner folding onto itself) may
+    // (bench/frame_step_energy.py, bench/self_contact_energy.py, tests/test_driven_energy.py).
     const bool zoned = !adaptive && h > SUBSTEP_LEAST * control.max_step && core.contact.enabled &&
                        (core.contact.counters[ZONE_ROUNDS] > zone_rounds || core.contact.counters[FREEZES] > freezes);
     const bool gained = !adaptive && h > GAIN_SUBSTEP_LEAST * control.max_step && !zoned &&
-                        control.integrator == IMPLICIT_EULER && passive(core) && gained_energy(core);
+                        control.integrator == IMPLICIT_EULER && energy_checked(core) && gained_energy(core, h);
     if (zoned || gained) {
         start_collider_motion(phys, clock[TIME]);
         clock[NEXT_STEP] = 0.5 * h;

@@ -1,6 +1,6 @@
 // The cloth's mechanical energy (kinetic, gravitational, the springs' elastic), as wetcloth.energy weighs it: the
-// fixed-step mode takes a passive cloth's step again in halves where it ends above its start's (stepping.cpp;
-// docs/model.md section 7).
+// fixed-step mode takes a step again in halves where it ends above its start's by more than what drives the cloth
+// may have done (stepping.cpp; docs/model.md section 7).
 #pragma once
 #include "wetcloth/core.hpp"
 
