@@ -61,3 +61,24 @@ def test_driven_cloth_at_frame_steps_gains_no_more_energy_than_its_drivers_give(
         energy = now
     assert checked >= 0.8 * frames
     assert np.isfinite(sim.positions).all()
+
+
+def test_a_keyed_collider_standing_still_lets_no_frame_gain_energy():
+    """The sweep preset at 1/24 s frames: its ball waits 0.5 s, sweeps through the hanging towel until 2 s, then
+    stays.  A keyed collider's work is not weighed, so steps over which it moves are not checked; over the frames
+    in which it stands still the towel's energy never rises (to ROUND_OFF).  Before, every step of a scene with
+    collider keys went unchecked: the frame after the ball stopped gained 0.0135 J, and four early frames up to
+    3.9e-7 J (measured)."""
+    h = 1 / 24
+    scene = wetcloth.load_scene("sweep", integrator="implicit_euler", tolerance=0.0, max_step=h)
+    sim = wetcloth.Simulation(scene)
+    energy, still_frames = total_energy(sim), 0
+    for _ in range(round(2.5 / h)):
+        start = sim.time
+        sim.advance(h)
+        now = total_energy(sim)
+        if sim.time <= 0.5 + 1e-9 or start >= 2.0 - 1e-9:
+            assert now - energy <= ROUND_OFF, (sim.time, now - energy)
+            still_frames += 1
+        energy = now
+    assert still_frames == 24  # 0-0.5 s and 2-2.5 s

@@ -349,6 +349,17 @@ bool colliders_ahead(const Physics& phys, double t) {
     return next_collider_key(phys, t) < std::numeric_limits<double>::infinity();
 }
 
+bool colliders_move(const Physics& phys) {
+    if (phys.collider_motion == nullptr) return false;
+    for (Index k = 0; k < phys.collider_count; ++k) {
+        const double* motion = phys.collider_motion + k * MOTION_COLUMNS;
+        for (int c = 0; c < 3; ++c) {
+            if (motion[MOTION_VELOCITY + c] != 0.0 || (turns(motion) && motion[MOTION_SPIN + c] != 0.0)) return true;
+        }
+    }
+    return false;
+}
+
 double collider_step_limit(const Physics& phys) {
     double limit = std::numeric_limits<double>::infinity();
     if (phys.collider_motion == nullptr) return limit;

@@ -157,12 +157,12 @@ bool sunk(const Core& core) {
 }
 
 //: Whether the fixed-step mode checks a step from pos to trial_pos for energy it made (docs/model.md section 7): always
-//: but where a keyed collider moves (its supports' work is not weighed) or where, with the thesis's buoyancy, a
+//: but where a keyed collider moves over the step (its work is not weighed) or where, with the thesis's buoyancy, a
 //: particle is at or under the water's surface at either end (a step at the surface: Newton has no slope to converge
 //: on there, and its steps gained energy at every halving, 55 steps taken again a frame).
 bool energy_checked(const Core& core) {
     const Physics& phys = core.phys;
-    if (phys.collider_motion != nullptr) return false;
+    if (colliders_move(phys)) return false;
     if (phys.smooth) return true;
     const Index n = core.cloth.n;
     const double* z0 = core.buf.pos + 2 * n;

@@ -54,6 +54,10 @@ double next_collider_key(const Physics& phys, double t);
 //: Whether a collider moves at t (s) or will (then the cloth does not fall asleep).
 bool colliders_ahead(const Physics& phys, double t);
 
+//: Whether a collider moves over the step its motion rows are set for (start_collider_motion): a velocity or,
+//: for one that turns, an angular velocity other than zero.
+bool colliders_move(const Physics& phys);
+
 //: The longest step (s) over which no point of a moving collider's surface moves farther than
 //: MOTION_STEP_FRACTION of its half size (a sphere's radius, a box's or cylinder's smallest half edge, a
 //: solid mesh's smallest half box edge; planes and open meshes are not limited), or infinity.  A point's
