@@ -188,8 +188,8 @@ double checked_energy(const Core& core, const double* pos, const double* vel, do
 //: trial_pos, trial_vel, from the step's end (docs/model.md section 7): the flowing fluids' h fluid_drive, and
 //: the grip's h R . v+ over the pinned particles, R = m (v+ - v) / h - F(x+, v+) the force that keeps them on its
 //: path (a pinned particle moves by h v+).  A solved step of a cloth whose forces are conservative with a convex
-//: energy (gravity, the springs, smooth buoyancy), dissipative (damping) or drag ends at most this much above its
-//: start.  0 where nothing drives it.  work.force is its scratch.
+//: energy (gravity, tension-only springs, smooth buoyancy), dissipative (damping) or drag ends at most this much
+//: above its start.  0 where nothing drives it.  work.force is its scratch.
 double drivers_work(Core& core, double h) {
     const Cloth& cloth = core.cloth;
     const Physics& phys = core.phys;
@@ -197,7 +197,9 @@ double drivers_work(Core& core, double h) {
     const Index n = cloth.n;
     double work = h * fluid_drive(cloth, phys, core.work, buf.trial_pos, buf.trial_vel);
     bool gripped = false;  // a pinned particle moving
-    for (Index k = 0; k < 3 * n && !gripped; ++k) gripped = cloth.free[k % n] == 0.0 && buf.trial_vel[k] != 0.0;
+    for (Index c = 0; c < 3; ++c) {
+        for (Index i = 0; i < n; ++i) gripped |= cloth.free[i] == 0.0 && buf.trial_vel[c * n + i] != 0.0;
+    }
     if (!gripped) return work;
     forces(cloth, phys, core.work, buf.trial_pos, buf.trial_vel, buf.trial_water);
     const double* mass = core.solver.mass;
