@@ -1,0 +1,50 @@
+"""The energy check of driven cloth at frame steps, recomputed outside the core: how much work the wind, the
+current and the grip can have done on the cloth over a backward Euler step (docs/model.md section 7), and whether a
+keyed collider moved over a span of time.  Shared by tests/test_driven_energy.py and bench/driven_energy.py."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import wetcloth
+
+
+class DriveBound:
+    """The most work (J) the wind, the current and the grip can have done on a Simulation's cloth over a backward
+    Euler step of h s that ended at its state.  The drags are told apart from the other forces by models of the
+    same scene without them: the air's drag F_a (all forces less those without air) is dotted with the wind and
+    the water's F_w (less those without the water's drag too) with the current, each at least the drag's power as
+    it opposes the motion relative to its fluid.  Over the pinned particles, the force R that held them on the
+    grip's path, R = m (v+ - v) / h - F, is dotted with v+."""
+
+    def __init__(self, scene: wetcloth.Scene):
+        self.still_air = wetcloth.Simulation(scene.replace(air_density=0.0)).model
+        self.still_water = wetcloth.Simulation(scene.replace(air_density=0.0, drag_normal=0.0, drag_tangential=0.0,
+                                                             drag_linear=0.0, water_viscosity=0.0)).model
+        self.wind = np.array([scene.wind_x, scene.wind_y, scene.wind_z])[:, None]
+        self.current = np.array([scene.current_x, scene.current_y, 0.0])[:, None]
+
+    def __call__(self, sim: wetcloth.Simulation, start_vel: np.ndarray, h: float) -> float:
+        state = sim.state
+        force = sim.model.forces(state.pos, state.vel, state.water).copy()
+        without_air = self.still_air.forces(state.pos, state.vel, state.water).copy()
+        without_drag = self.still_water.forces(state.pos, state.vel, state.water).copy()
+        pinned = np.asarray(sim.model.cloth.free) == 0
+        mass = np.asarray(sim.model.cloth.dry_mass) + state.water
+        held = mass * (state.vel - start_vel) / h - force
+        return h * float(((force - without_air) * self.wind).sum() + ((without_air - without_drag) * self.current).sum()
+                         + (held[:, pinned] * state.vel[:, pinned]).sum())
+
+
+def collider_moves(scene: wetcloth.Scene, start: float, end: float) -> bool:
+    """Whether a keyed collider of the scene moves between start and end (s): its displacement and rotation,
+    linear between its keys from zero at t = 0 and the last key's after it, differ anywhere in the span."""
+    for collider in {key.collider for key in scene.collider_keys}:
+        keys = sorted((key for key in scene.collider_keys if key.collider == collider), key=lambda key: key.time)
+        times = [0.0] + [key.time for key in keys]
+        values = np.array([[0.0] * 6] + [[key.x, key.y, key.z, key.rx, key.ry, key.rz] for key in keys])
+        inside = [start, end] + [t for t in times if start < t < end]
+        at = np.array([[np.interp(t, times, values[:, c]) for c in range(6)] for t in inside])
+        if np.ptp(at, axis=0).max() > 0.0:
+            return True
+    return False
