@@ -7,7 +7,8 @@ For each preset and both steppings: CPU time per frame, steps taken and taken ag
 steps also the ratio of their time to the adaptive run's, the largest error a step estimated for itself
 (``error_estimate``), the largest rise of the cloth's mechanical energy from one frame to the next
 (``wetcloth.energy``; only a passive cloth in still air, as in ``tablecloth`` and ``tablecloth_sphere``,
-must not gain any: water, wind, grips and keyed colliders do work on the others) and the median and
+must not gain any: water, wind, grips and keyed colliders do work on the others, bench/driven_energy.py weighs
+it) and the median and
 largest distance of a particle from where the adaptive run has it at the end.
 """
 
