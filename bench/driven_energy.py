@@ -7,8 +7,9 @@ For each preset and frame rate: of the frames taken as one step, over which no k
 the cloth's energy (mechanical and buoyancy's, ``wetcloth.energy``) ended above its start's by more than the
 drivers' work bound (``tests/support/driven.py``, recomputed from the forces: docs/model.md section 7), and the
 largest such excess (J; negative: every frame within its bound); then the steps taken again and the CPU time per
-frame.  Frames taken in parts are checked by the core in those parts, against their own bounds; steps over which
-a keyed collider moves are not checked (its work is not weighed), nor counted here.
+frame.  Frames taken in parts are checked by the core in those parts, against their own bounds; steps in which a
+moving keyed collider touches the cloth are not checked (its work is not weighed), and frames over which a keyed
+collider moves are not counted here.
 """
 
 from __future__ import annotations

@@ -36,15 +36,21 @@ class DriveBound:
                          + (held[:, pinned] * state.vel[:, pinned]).sum())
 
 
+def collider_shift(scene: wetcloth.Scene, collider: int, t: float) -> np.ndarray:
+    """Keyed collider `collider`'s (numbered from 1, as its keys) displacement (m) and rotation vector (rad) at t
+    (s): linear between its keys, from zero at t = 0, the last key's after it ((6,); zeros without keys)."""
+    keys = sorted((key for key in scene.collider_keys if key.collider == collider), key=lambda key: key.time)
+    times = [0.0] + [key.time for key in keys]
+    values = np.array([[0.0] * 6] + [[key.x, key.y, key.z, key.rx, key.ry, key.rz] for key in keys])
+    return np.array([np.interp(t, times, values[:, c]) for c in range(6)])
+
+
 def collider_moves(scene: wetcloth.Scene, start: float, end: float) -> bool:
-    """Whether a keyed collider of the scene moves between start and end (s): its displacement and rotation,
-    linear between its keys from zero at t = 0 and the last key's after it, differ anywhere in the span."""
+    """Whether a keyed collider of the scene moves between start and end (s): its displacement or rotation
+    (collider_shift) differs anywhere in the span."""
     for collider in {key.collider for key in scene.collider_keys}:
-        keys = sorted((key for key in scene.collider_keys if key.collider == collider), key=lambda key: key.time)
-        times = [0.0] + [key.time for key in keys]
-        values = np.array([[0.0] * 6] + [[key.x, key.y, key.z, key.rx, key.ry, key.rz] for key in keys])
-        inside = [start, end] + [t for t in times if start < t < end]
-        at = np.array([[np.interp(t, times, values[:, c]) for c in range(6)] for t in inside])
-        if np.ptp(at, axis=0).max() > 0.0:
+        inside = [start, end] + [key.time for key in scene.collider_keys if start < key.time < end]
+        shifts = np.array([collider_shift(scene, collider, t) for t in inside])
+        if np.ptp(shifts, axis=0).max() > 0.0:
             return True
     return False

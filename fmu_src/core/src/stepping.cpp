@@ -157,12 +157,13 @@ bool sunk(const Core& core) {
 }
 
 //: Whether the fixed-step mode checks a step from pos to trial_pos for energy it made (docs/model.md section 7): always
-//: but where a keyed collider moves over the step (its work is not weighed) or where, with the thesis's buoyancy, a
+//: but where a keyed collider that moves over the step touches the cloth (`touching`: any collider holds, carries,
+//: supports or pushed a particle; a moving collider's work is not weighed) or where, with the thesis's buoyancy, a
 //: particle is at or under the water's surface at either end (a step at the surface: Newton has no slope to converge
 //: on there, and its steps gained energy at every halving, 55 steps taken again a frame).
-bool energy_checked(const Core& core) {
+bool energy_checked(const Core& core, bool touching) {
     const Physics& phys = core.phys;
-    if (colliders_move(phys)) return false;
+    if (touching && colliders_move(phys)) return false;
     if (phys.smooth) return true;
     const Index n = core.cloth.n;
     const double* z0 = core.buf.pos + 2 * n;
@@ -547,7 +548,9 @@ Status step(Core& core, double remaining, double span) {
     const bool zoned = !adaptive && h > SUBSTEP_LEAST * control.max_step && core.contact.enabled &&
                        (core.contact.counters[ZONE_ROUNDS] > zone_rounds || core.contact.counters[FREEZES] > freezes);
     const bool gained = !adaptive && h > GAIN_SUBSTEP_LEAST * control.max_step && !zoned &&
-                        control.integrator == IMPLICIT_EULER && energy_checked(core) && gained_energy(core, h);
+                        control.integrator == IMPLICIT_EULER &&
+                        energy_checked(core, on_collider || edged != 0 || held_on_edges > 0 || core.solver.supports != nullptr) &&
+                        gained_energy(core, h);
     if (zoned || gained) {
         start_collider_motion(phys, clock[TIME]);
         clock[NEXT_STEP] = 0.5 * h;
