@@ -50,7 +50,7 @@ def test_a_keyed_collider_standing_still_or_clear_of_the_cloth_lets_no_frame_gai
     about 0.9 s), the towel's energy never rises (to ROUND_OFF): a moving collider's work is not weighed, so only
     the steps in which it touches the cloth go unchecked.  Before, no step of a scene with collider keys was
     checked: the frame after the ball stopped gained 0.0135 J, and eight others, still or clear, up to 3.9e-7 J
-    (bench/driven_energy.py)."""
+    (measured; bench/driven_energy.py counts the frames with the ball still)."""
     scene = wetcloth.load_scene("sweep", integrator="implicit_euler", tolerance=0.0, max_step=FRAME)
     ball = scene.colliders[0]
 
