@@ -38,8 +38,9 @@ def run(preset: str, seconds: float, fps: float) -> str:
     scene = wetcloth.load_scene(preset, integrator="implicit_euler", tolerance=0.0, max_step=h)
     sim = wetcloth.Simulation(scene)
     bound = DriveBound(scene)
+    frames = round(seconds * fps)
     energy, checked, over, excess, cpu = total_energy(sim), 0, 0, -np.inf, 0.0
-    for _ in range(round(seconds * fps)):
+    for _ in range(frames):
         start, start_vel, again = sim.time, sim.state.vel.copy(), sim.rejected_steps
         clock = time.process_time()
         sim.advance(h)
@@ -49,7 +50,6 @@ def run(preset: str, seconds: float, fps: float) -> str:
             beyond = now - energy - bound(sim, start_vel, h)
             checked, over, excess = checked + 1, over + (beyond > ROUND_OFF), max(excess, beyond)
         energy = now
-    frames = round(seconds * fps)
     return f"{checked} of {frames} | {over} | {excess:+.2g} J | {sim.rejected_steps} | {1000 * cpu / frames:.1f}"
 
 

@@ -52,7 +52,6 @@ CASES = {
 }
 
 
-
 def largest_strain(sim: wetcloth.Simulation) -> float:
     """The largest relative stretch of a grid spring now (-)."""
     cloth, pos, worst = sim.model.cloth, sim.state.pos, 0.0

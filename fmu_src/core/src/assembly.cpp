@@ -127,11 +127,10 @@ void mesh_forces(const Cloth& cloth, const Physics& phys, Work& work, const doub
 }
 
 //: Into work.force (3, n) the drag of one fluid alone on the cloth at pos, vel (the water's: Stokes or face drag
-//: in it, `water` true; else the air's face drag); work.submerged set.
+//: in it, `water` true; else the air's face drag), work.submerged holding the particles' submerged fractions.
 void drag_alone(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel, bool water) {
     const Index n = cloth.n;
-    double* s = work.submerged;
-    submerged(phys, n, pos + 2 * n, s);
+    const double* s = work.submerged;
     fill_zero(work.force, 3 * n);
     if (water && phys.stokes) return stokes_drag(n, s, cloth.stokes_coefficient, phys.current_x, phys.current_y, vel,
                                                  work.force);
@@ -157,12 +156,16 @@ double dot_uniform(Index n, const double* force, double ux, double uy, double uz
 
 double fluid_drive(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel) {
     const Index n = cloth.n;
+    const bool current = phys.current_x != 0.0 || phys.current_y != 0.0;
+    const bool wind = phys.air_density > 0.0 && (phys.wind_x != 0.0 || phys.wind_y != 0.0 || phys.wind_z != 0.0);
+    if (!current && !wind) return 0.0;
+    submerged(phys, n, pos + 2 * n, work.submerged);  // (both fluids' drag reads it)
     double drive = 0.0;
-    if (phys.current_x != 0.0 || phys.current_y != 0.0) {
+    if (current) {
         drag_alone(cloth, phys, work, pos, vel, true);
         drive += dot_uniform(n, work.force, phys.current_x, phys.current_y, 0.0);
     }
-    if (phys.air_density > 0.0 && (phys.wind_x != 0.0 || phys.wind_y != 0.0 || phys.wind_z != 0.0)) {
+    if (wind) {
         drag_alone(cloth, phys, work, pos, vel, false);
         drive += dot_uniform(n, work.force, phys.wind_x, phys.wind_y, phys.wind_z);
     }

@@ -547,10 +547,9 @@ Status step(Core& core, double remaining, double span) {
     // (bench/frame_step_energy.py, bench/self_contact_energy.py, tests/test_driven_energy.py).
     const bool zoned = !adaptive && h > SUBSTEP_LEAST * control.max_step && core.contact.enabled &&
                        (core.contact.counters[ZONE_ROUNDS] > zone_rounds || core.contact.counters[FREEZES] > freezes);
+    const bool touching = on_collider || edged != 0 || held_on_edges > 0 || core.solver.supports != nullptr;
     const bool gained = !adaptive && h > GAIN_SUBSTEP_LEAST * control.max_step && !zoned &&
-                        control.integrator == IMPLICIT_EULER &&
-                        energy_checked(core, on_collider || edged != 0 || held_on_edges > 0 || core.solver.supports != nullptr) &&
-                        gained_energy(core, h);
+                        control.integrator == IMPLICIT_EULER && energy_checked(core, touching) && gained_energy(core, h);
     if (zoned || gained) {
         start_collider_motion(phys, clock[TIME]);
         clock[NEXT_STEP] = 0.5 * h;
