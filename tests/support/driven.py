@@ -1,12 +1,14 @@
 """The energy check of driven cloth at frame steps, recomputed outside the core: how much work the wind, the
-current and the grip can have done on the cloth over a backward Euler step (docs/model.md section 7), and whether a
-keyed collider moved over a span of time.  Shared by tests/test_driven_energy.py and bench/driven_energy.py."""
+current and the grip can have done on the cloth over a backward Euler step (docs/model.md section 7), also as seen
+from a frame moving with a keyed collider, and whether a keyed collider moved over a span of time.  Shared by
+tests/test_driven_energy.py and bench/driven_energy.py."""
 
 from __future__ import annotations
 
 import numpy as np
 
 import wetcloth
+from wetcloth.energy import total_energy
 
 
 class DriveBound:
@@ -15,7 +17,12 @@ class DriveBound:
     same scene without them: the air's drag F_a (all forces less those without air) is dotted with the wind and
     the water's F_w (less those without the water's drag too) with the current, each at least the drag's power as
     it opposes the motion relative to its fluid.  Over the pinned particles, the force R that held them on the
-    grip's path, R = m (v+ - v) / h - F, is dotted with v+."""
+    grip's path, R = m (v+ - v) / h - F, is dotted with v+.
+
+    Seen from a frame moving at a uniform horizontal velocity `frame` (m/s; gravity and the forces are the same
+    there, the velocities less `frame`): the fluids flow at wind - frame and current - frame, and the pinned
+    particles move at v+ - frame.  A collider moving with that frame is still in it, where contact only takes
+    energy (energy_in_frame)."""
 
     def __init__(self, scene: wetcloth.Scene):
         self.still_air = wetcloth.Simulation(scene.replace(air_density=0.0)).model
@@ -24,7 +31,9 @@ class DriveBound:
         self.wind = np.array([scene.wind_x, scene.wind_y, scene.wind_z])[:, None]
         self.current = np.array([scene.current_x, scene.current_y, 0.0])[:, None]
 
-    def __call__(self, sim: wetcloth.Simulation, start_vel: np.ndarray, h: float) -> float:
+    def __call__(self, sim: wetcloth.Simulation, start_vel: np.ndarray, h: float,
+                 frame: np.ndarray = np.zeros(3)) -> float:
+        assert frame[2] == 0.0, "a frame moving vertically would see the water's surface move"
         state = sim.state
         force = sim.model.forces(state.pos, state.vel, state.water).copy()
         without_air = self.still_air.forces(state.pos, state.vel, state.water).copy()
@@ -32,8 +41,19 @@ class DriveBound:
         pinned = np.asarray(sim.model.cloth.free) == 0
         mass = np.asarray(sim.model.cloth.dry_mass) + state.water
         held = mass * (state.vel - start_vel) / h - force
-        return h * float(((force - without_air) * self.wind).sum() + ((without_air - without_drag) * self.current).sum()
-                         + (held[:, pinned] * state.vel[:, pinned]).sum())
+        u = np.asarray(frame, dtype=float)[:, None]
+        return h * float(((force - without_air) * (self.wind - u)).sum()
+                         + ((without_air - without_drag) * (self.current - u)).sum()
+                         + (held[:, pinned] * (state.vel - u)[:, pinned]).sum())
+
+
+def energy_in_frame(sim: wetcloth.Simulation, frame: np.ndarray) -> float:
+    """The cloth's energy (J, wetcloth.energy.total_energy's: mechanical and buoyancy's) seen from a frame moving at
+    the uniform horizontal velocity `frame` (m/s): its kinetic energy that of the velocities less `frame`."""
+    state = sim.state
+    mass = np.asarray(sim.model.cloth.dry_mass) + state.water
+    u = np.asarray(frame, dtype=float)[:, None]
+    return total_energy(sim) + 0.5 * float((mass * ((state.vel - u) ** 2 - state.vel ** 2)).sum())
 
 
 def collider_shift(scene: wetcloth.Scene, collider: int, t: float) -> np.ndarray:

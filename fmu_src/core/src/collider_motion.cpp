@@ -349,13 +349,18 @@ bool colliders_ahead(const Physics& phys, double t) {
     return next_collider_key(phys, t) < std::numeric_limits<double>::infinity();
 }
 
+bool collider_moving(const Physics& phys, Index k) {
+    if (phys.collider_motion == nullptr || k < 0 || k >= phys.collider_count) return false;
+    const double* motion = phys.collider_motion + k * MOTION_COLUMNS;
+    for (int c = 0; c < 3; ++c) {
+        if (motion[MOTION_VELOCITY + c] != 0.0 || (turns(motion) && motion[MOTION_SPIN + c] != 0.0)) return true;
+    }
+    return false;
+}
+
 bool colliders_move(const Physics& phys) {
-    if (phys.collider_motion == nullptr) return false;
     for (Index k = 0; k < phys.collider_count; ++k) {
-        const double* motion = phys.collider_motion + k * MOTION_COLUMNS;
-        for (int c = 0; c < 3; ++c) {
-            if (motion[MOTION_VELOCITY + c] != 0.0 || (turns(motion) && motion[MOTION_SPIN + c] != 0.0)) return true;
-        }
+        if (collider_moving(phys, k)) return true;
     }
     return false;
 }

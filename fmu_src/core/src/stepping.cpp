@@ -156,14 +156,12 @@ bool sunk(const Core& core) {
     return true;
 }
 
-//: Whether the fixed-step mode checks a step from pos to trial_pos for energy it made (docs/model.md section 7): always
-//: but where a keyed collider that moves over the step touches the cloth (`touching`: any collider holds, carries,
-//: supports or pushed a particle; a moving collider's work is not weighed) or where, with the thesis's buoyancy, a
-//: particle is at or under the water's surface at either end (a step at the surface: Newton has no slope to converge
-//: on there, and its steps gained energy at every halving, 55 steps taken again a frame).
-bool energy_checked(const Core& core, bool touching) {
+//: Whether the fixed-step mode checks a step from pos to trial_pos for energy it made (docs/model.md section 7):
+//: always but where, with the thesis's buoyancy, a particle is at or under the water's surface at either end (a step
+//: at the surface: Newton has no slope to converge on there, and its steps gained energy at every halving, 55 steps
+//: taken again a frame).
+bool energy_checked(const Core& core) {
     const Physics& phys = core.phys;
-    if (touching && colliders_move(phys)) return false;
     if (phys.smooth) return true;
     const Index n = core.cloth.n;
     const double* z0 = core.buf.pos + 2 * n;
@@ -185,42 +183,124 @@ double checked_energy(const Core& core, const double* pos, const double* vel, do
     return mechanical + buoyancy;
 }
 
+//: The particles a keyed collider that moves over the step may have acted on in the solve, 1 in (n) where so:
+//: those held on it (or on a mesh collider's edges), sliding on it or in one of its support terms.  Read before
+//: release_all (buf.held).
+std::vector<double> on_moving_colliders(const Core& core) {
+    const Physics& phys = core.phys;
+    const Index n = core.cloth.n;
+    std::vector<double> marks(static_cast<std::size_t>(n), 0.0);
+    for (Index i = 0; i < n; ++i) {
+        const double held = core.buf.held[i];
+        const bool on_moving = held >= collider_held(0)
+            ? collider_moving(phys, static_cast<Index>(held - collider_held(0)))
+            : held == EDGE_HELD;  // (which mesh holds it is not kept)
+        if (on_moving) marks[static_cast<std::size_t>(i)] = 1.0;
+    }
+    if (const Sliding* sliding = core.solver.sliding) {
+        for (std::size_t s = 0; s < sliding->index.size(); ++s) {
+            if (collider_moving(phys, sliding->collider[s])) marks[static_cast<std::size_t>(sliding->index[s])] = 1.0;
+        }
+    }
+    if (const Supports* supports = core.solver.supports) {
+        for (Index t = 0; t < supports->count(); ++t) {
+            if (!collider_moving(phys, supports->collider[static_cast<std::size_t>(t)])) continue;
+            for (int j = 0; j < SUPPORT_POINTS; ++j) {
+                const Index i = supports->points[static_cast<std::size_t>(SUPPORT_POINTS * t + j)];
+                if (i >= 0) marks[static_cast<std::size_t>(i)] = 1.0;
+            }
+        }
+    }
+    return marks;
+}
+
+//: What keyed colliders that move over a fixed step did to the cloth: acted_on (n) marks the particles they acted
+//: on in the solve (on_moving_colliders), solved (6 n) holds the step's end as the solve left it (positions, then
+//: velocities), and contact (J) bounds the work of what contact did to that end before self-collision
+//: (contact_work).
+struct MovingColliders {
+    std::vector<double> acted_on, solved;
+    double contact = 0.0;
+};
+
 //: The most work (J) what drives the cloth may have done on it over a backward Euler step of h s from pos, vel to
-//: trial_pos, trial_vel, from the step's end (docs/model.md section 7): the flowing fluids' h fluid_drive, and
-//: the grip's h R . v+ over the pinned particles, R = m (v+ - v) / h - F(x+, v+) the force that keeps them on its
-//: path (a pinned particle moves by h v+).  A solved step of a cloth whose forces are conservative with a convex
-//: energy (gravity, tension-only springs, smooth buoyancy), dissipative (damping) or drag ends at most this much
-//: above its start.  0 where nothing drives it.  work.force is its scratch.
-double drivers_work(Core& core, double h) {
+//: end_pos, end_vel (with end_pos = pos + h end_vel), from that end (docs/model.md section 7): the flowing fluids'
+//: h fluid_drive, and over the particles held to a path (pinned ones the grip moves, and those marked in
+//: `acted_on` (n, or empty), on which a moving keyed collider acted in the solve) the work h R . v+ of
+//: R = m (v+ - v) / h - F(x+, v+), the force that kept them there.  A solved step of a cloth whose forces are
+//: conservative with a convex energy (gravity, tension-only springs, smooth buoyancy), dissipative (damping) or
+//: drag ends at most this much above its start.  0 where nothing drives it.  work.force is its scratch.
+double drivers_work(Core& core, double h, const double* end_pos, const double* end_vel,
+                    const std::vector<double>& acted_on) {
     const Cloth& cloth = core.cloth;
     const Physics& phys = core.phys;
     const Buffers& buf = core.buf;
     const Index n = cloth.n;
-    double work = h * fluid_drive(cloth, phys, core.work, buf.trial_pos, buf.trial_vel);
-    bool gripped = false;  // a pinned particle moving
-    for (Index c = 0; c < 3; ++c) {
-        for (Index i = 0; i < n; ++i) gripped |= cloth.free[i] == 0.0 && buf.trial_vel[c * n + i] != 0.0;
+    double work = h * fluid_drive(cloth, phys, core.work, end_pos, end_vel);
+    std::vector<char> held(static_cast<std::size_t>(n), 0);
+    bool any = false;
+    for (Index i = 0; i < n; ++i) {
+        bool moved = false;  // a pinned particle the grip moves
+        for (Index c = 0; c < 3; ++c) moved |= cloth.free[i] == 0.0 && end_vel[c * n + i] != 0.0;
+        const bool on_collider = !acted_on.empty() && acted_on[static_cast<std::size_t>(i)] != 0.0;
+        held[static_cast<std::size_t>(i)] = moved || on_collider;
+        any |= moved || on_collider;
     }
-    if (!gripped) return work;
-    forces(cloth, phys, core.work, buf.trial_pos, buf.trial_vel, buf.trial_water);
+    if (!any) return work;
+    forces(cloth, phys, core.work, end_pos, end_vel, buf.trial_water);
     const double* mass = core.solver.mass;
     for (Index c = 0; c < 3; ++c) {
         for (Index i = 0; i < n; ++i) {
-            if (cloth.free[i] != 0.0) continue;
+            if (!held[static_cast<std::size_t>(i)]) continue;
             const Index k = c * n + i;
-            work += (mass[i] * (buf.trial_vel[k] - buf.vel[k]) - h * core.work.force[k]) * buf.trial_vel[k];
+            work += (mass[i] * (end_vel[k] - buf.vel[k]) - h * core.work.force[k]) * end_vel[k];
         }
     }
     return work;
 }
 
-//: Whether a step of h s from pos, vel to trial_pos, trial_vel gained energy beyond what drives the cloth
-//: (drivers_work) and beyond noise (ENERGY_NOISE).
-bool gained_energy(Core& core, double h) {
+//: The most work (J) contact did on the cloth from the step's end as solved (solved: positions, then velocities,
+//: (6 n)) to trial_pos, trial_vel (docs/model.md section 7): sum m u . (v2 - v0) over the particles within the
+//: cloth's thickness of a collider that moves, u its surface's velocity there, v0 and v2 the particle's velocity
+//: before and after.  Contact is inelastic relative to the surface and its friction opposes the slip, so relative
+//: to the surface it only takes kinetic energy, m |v2 - u|^2 <= m |v0 - u|^2: the kinetic energy then rises by at
+//: most m u . (v2 - v0).  Nothing is allowed for the floor, a still collider, or positions moved (a push that
+//: stretches the springs makes energy).
+double contact_work(const Core& core, const std::vector<double>& solved) {
+    const Physics& phys = core.phys;
+    const Index n = core.cloth.n;
+    const double* pos = core.buf.trial_pos;
+    const double* vel = core.buf.trial_vel;
+    const double* before = solved.data() + 3 * n;
+    double work = 0.0;
+    for (Index i = 0; i < n; ++i) {
+        const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+        double nearest = phys.thickness, u[3] = {0.0, 0.0, 0.0}, normal[3];
+        for (Index k = 0; k < phys.collider_count; ++k) {
+            if (!collider_moving(phys, k)) continue;
+            const double distance = collider_distance(phys, k, p, phys.thickness, normal);
+            if (distance <= nearest) {
+                nearest = distance;
+                surface_velocity(phys, k, p, u);
+            }
+        }
+        for (Index c = 0; c < 3; ++c) work += core.solver.mass[i] * u[c] * (vel[c * n + i] - before[c * n + i]);
+    }
+    return work;
+}
+
+//: Whether a step of h s from pos, vel to trial_pos, trial_vel gained energy beyond what drives the cloth and beyond
+//: noise (ENERGY_NOISE).  What drives it: drivers_work at the step's end, or, where keyed colliders moved over it
+//: (`moving`, else null), drivers_work at its end as solved and what contact did after the solve (contact_work).
+bool gained_energy(Core& core, double h, const MovingColliders* moving) {
     double start_size = 0.0, end_size = 0.0;
     const double start = checked_energy(core, core.buf.pos, core.buf.vel, start_size);
     const double end = checked_energy(core, core.buf.trial_pos, core.buf.trial_vel, end_size);
-    return end - start - drivers_work(core, h) > ENERGY_NOISE * (start_size + end_size);
+    const Index n = core.cloth.n;
+    const double drive = moving == nullptr
+        ? drivers_work(core, h, core.buf.trial_pos, core.buf.trial_vel, {})
+        : drivers_work(core, h, moving->solved.data(), moving->solved.data() + 3 * n, moving->acted_on) + moving->contact;
+    return end - start - drive > ENERGY_NOISE * (start_size + end_size);
 }
 
 //: Fall asleep after sleep_after s still, with no water exchange and no grip moving (`exchanging`:
@@ -304,6 +384,10 @@ Status step(Core& core, double remaining, double span) {
     const bool adaptive = control.allowed > 0.0;
     const bool implicit = control.integrator == BDF2 || control.integrator == IMPLICIT_EULER;
     start_collider_motion(phys, clock[TIME]);
+    // The fixed-step mode's energy check weighs the work of keyed colliders that move over the step on the
+    // particles they act on (drivers_work).
+    const bool weighs_colliders = !adaptive && control.integrator == IMPLICIT_EULER && colliders_move(phys);
+    MovingColliders moving;
     // Particles at rest on the floor take no part in the step (a constraint of its solve) unless its forces
     // would move them; the model's free flags are theirs again before the step ends.
     Index held = hold_resting(n, phys.floor_z, buf.pos, buf.vel, cloth.free, buf.held);
@@ -394,6 +478,10 @@ Status step(Core& core, double remaining, double span) {
         h = span / pymax(1.0, std::ceil(span / planned - STEP_COUNT_SLACK));
         grip = grip_move(n, phys, cloth.free, buf.held, buf.pos, clock[TIME], h, remaining);
         trial = take_step(core, h, grip);
+        if (weighs_colliders) {
+            moving.solved.assign(buf.trial_pos, buf.trial_pos + 3 * n);
+            moving.solved.insert(moving.solved.end(), buf.trial_vel, buf.trial_vel + 3 * n);
+        }
         carry_held(n, phys, buf.held, buf.pos, h, buf.trial_pos, buf.trial_vel);  // on moving colliders
         if (core.solver.sliding != nullptr && trial.converged) {
             // Those the step's force lifts off their surface move off it at the step's end if that moves
@@ -507,6 +595,7 @@ Status step(Core& core, double remaining, double span) {
     if (phys.meshes.count > 0 && core.contact.lists != nullptr) {
         core.contact.lists->collider_free.assign(cloth.free, cloth.free + n);
     }
+    if (weighs_colliders) moving.acted_on = on_moving_colliders(core);
     if (held > 0) release_all(n, cloth.free, buf.held);
     if (std::isfinite(trial.error)) clock[LARGEST_ERROR] = pymax(clock[LARGEST_ERROR], trial.error);
     if (!(h > 0.0 && clock[TIME] + h > clock[TIME])) {  // a step that would not advance the time
@@ -524,6 +613,7 @@ Status step(Core& core, double remaining, double span) {
     // The cloth's edges and triangles against mesh colliders' edges and vertices, before self-collision and
     // again after it if it moved the cloth.
     int edged = collider_edges(core, buf.pos, buf.trial_pos, buf.trial_vel);
+    if (weighs_colliders) moving.contact = contact_work(core, moving.solved);
     // Self-collision's pushes: with BDF2 the pushed particles' history is carried through their pushed state
     // (carry_pushed_history); a step whose motion it froze, or that mesh colliders' edges changed, restarts it.
     const bool carries = control.integrator == BDF2 && core.contact.enabled && phys.meshes.count == 0;
@@ -547,9 +637,9 @@ Status step(Core& core, double remaining, double span) {
     // (bench/frame_step_energy.py, bench/self_contact_energy.py, tests/test_driven_energy.py).
     const bool zoned = !adaptive && h > SUBSTEP_LEAST * control.max_step && core.contact.enabled &&
                        (core.contact.counters[ZONE_ROUNDS] > zone_rounds || core.contact.counters[FREEZES] > freezes);
-    const bool touching = on_collider || edged != 0 || held_on_edges > 0 || core.solver.supports != nullptr;
     const bool gained = !adaptive && h > GAIN_SUBSTEP_LEAST * control.max_step && !zoned &&
-                        control.integrator == IMPLICIT_EULER && energy_checked(core, touching) && gained_energy(core, h);
+                        control.integrator == IMPLICIT_EULER && energy_checked(core) &&
+                        gained_energy(core, h, weighs_colliders ? &moving : nullptr);
     if (zoned || gained) {
         start_collider_motion(phys, clock[TIME]);
         clock[NEXT_STEP] = 0.5 * h;
