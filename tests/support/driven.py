@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 import wetcloth
+from wetcloth import _core
 from wetcloth.energy import total_energy
 
 
@@ -45,6 +46,16 @@ class DriveBound:
         return h * float(((force - without_air) * (self.wind - u)).sum()
                          + ((without_air - without_drag) * (self.current - u)).sum()
                          + (held[:, pinned] * (state.vel - u)[:, pinned]).sum())
+
+
+def energy_noise(sim: wetcloth.Simulation, frame: np.ndarray) -> float:
+    """The round-off (J) the core's energy check allows a Simulation's cloth at its state, seen from a frame moving
+    at `frame` (m/s): ENERGY_NOISE times the sum of the energy's terms' magnitudes (kinetic, each particle's
+    gravitational m g |z|, the springs' elastic, buoyancy's: energy.cpp's `magnitude`)."""
+    state = sim.state
+    mass = np.asarray(sim.model.cloth.dry_mass) + state.water
+    gravity = 9.81 * mass * state.pos[2]
+    return _core.ENERGY_NOISE * (energy_in_frame(sim, frame) - float(gravity.sum()) + float(np.abs(gravity).sum()))
 
 
 def energy_in_frame(sim: wetcloth.Simulation, frame: np.ndarray) -> float:

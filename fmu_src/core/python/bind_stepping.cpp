@@ -176,6 +176,7 @@ WETCLOTH_BINDINGS(m) {
     m.attr("PAUSE_AFTER") = PAUSE_AFTER;
     m.attr("MAX_TIME") = MAX_TIME;
     m.attr("MAX_COORDINATE") = MAX_COORDINATE;
+    m.attr("ENERGY_NOISE") = ENERGY_NOISE;
     m.attr("MAX_WATER_RATIO") = MAX_WATER_RATIO;
     const char* slots[] = {"TIME", "NEXT_STEP", "LAST_STEP", "SPEED", "CALM_TIME", "UNCHECKED_TIME", "EXCHANGING",
                            "SLEEPING", "STEPS", "REJECTED", "FAILED_STEP", "NEWTON_RATE", "RATE_CORRECTION",

@@ -154,20 +154,23 @@ double dot_uniform(Index n, const double* force, double ux, double uy, double uz
 
 }  // namespace
 
-double fluid_drive(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel) {
+double fluid_drive(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
+                   const double* frame) {
     const Index n = cloth.n;
-    const bool current = phys.current_x != 0.0 || phys.current_y != 0.0;
-    const bool wind = phys.air_density > 0.0 && (phys.wind_x != 0.0 || phys.wind_y != 0.0 || phys.wind_z != 0.0);
-    if (!current && !wind) return 0.0;
+    const double current[3] = {phys.current_x - frame[0], phys.current_y - frame[1], -frame[2]};
+    const double wind[3] = {phys.wind_x - frame[0], phys.wind_y - frame[1], phys.wind_z - frame[2]};
+    const bool water_flows = current[0] != 0.0 || current[1] != 0.0 || current[2] != 0.0;
+    const bool air_flows = phys.air_density > 0.0 && (wind[0] != 0.0 || wind[1] != 0.0 || wind[2] != 0.0);
+    if (!water_flows && !air_flows) return 0.0;
     submerged(phys, n, pos + 2 * n, work.submerged);  // (both fluids' drag reads it)
     double drive = 0.0;
-    if (current) {
+    if (water_flows) {
         drag_alone(cloth, phys, work, pos, vel, true);
-        drive += dot_uniform(n, work.force, phys.current_x, phys.current_y, 0.0);
+        drive += dot_uniform(n, work.force, current[0], current[1], current[2]);
     }
-    if (wind) {
+    if (air_flows) {
         drag_alone(cloth, phys, work, pos, vel, false);
-        drive += dot_uniform(n, work.force, phys.wind_x, phys.wind_y, phys.wind_z);
+        drive += dot_uniform(n, work.force, wind[0], wind[1], wind[2]);
     }
     return drive;
 }

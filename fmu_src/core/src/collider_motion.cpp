@@ -358,6 +358,21 @@ bool collider_moving(const Physics& phys, Index k) {
     return false;
 }
 
+bool common_frame(const Physics& phys, double* u) {
+    bool found = false;
+    for (Index k = 0; k < phys.collider_count; ++k) {
+        if (!collider_moving(phys, k)) continue;
+        const double* motion = phys.collider_motion + k * MOTION_COLUMNS;
+        for (int c = 0; c < 3; ++c) {
+            if (turns(motion) && motion[MOTION_SPIN + c] != 0.0) return false;
+            if (found && motion[MOTION_VELOCITY + c] != u[c]) return false;
+        }
+        for (int c = 0; c < 3; ++c) u[c] = motion[MOTION_VELOCITY + c];
+        found = true;
+    }
+    return found;
+}
+
 bool colliders_move(const Physics& phys) {
     for (Index k = 0; k < phys.collider_count; ++k) {
         if (collider_moving(phys, k)) return true;

@@ -214,46 +214,55 @@ std::vector<double> on_moving_colliders(const Core& core) {
     return marks;
 }
 
-//: What keyed colliders that move over a fixed step did to the cloth: acted_on (n) marks the particles they acted
-//: on in the solve (on_moving_colliders), solved (6 n) holds the step's end as the solve left it (positions, then
-//: velocities), and contact (J) bounds the work of what contact did to that end before self-collision
-//: (contact_work).
+//: How the energy check weighs a fixed step over which keyed colliders move (docs/model.md section 7).  Where they
+//: all move at one velocity without turning (`in_frame`), it weighs the step in the frame moving at that velocity
+//: (`frame`, m/s), where they stand still (if that frame rises or sinks, only while the cloth is out of the
+//: water).  Else in the world's frame, with their work: acted_on (n) marks the
+//: particles they acted on in the solve (on_moving_colliders), solved (6 n) holds the step's end as the solve left
+//: it (positions, then velocities), and contact (J) bounds the work of what contact did to that end before
+//: self-collision (contact_work).
 struct MovingColliders {
+    bool in_frame = false;
+    double frame[3] = {0.0, 0.0, 0.0};
     std::vector<double> acted_on, solved;
     double contact = 0.0;
 };
 
 //: The most work (J) what drives the cloth may have done on it over a backward Euler step of h s from pos, vel to
-//: end_pos, end_vel (with end_pos = pos + h end_vel), from that end (docs/model.md section 7): the flowing fluids'
-//: h fluid_drive, and over the particles held to a path (pinned ones the grip moves, and those marked in
-//: `acted_on` (n, or empty), on which a moving keyed collider acted in the solve) the work h R . v+ of
-//: R = m (v+ - v) / h - F(x+, v+), the force that kept them there.  A solved step of a cloth whose forces are
-//: conservative with a convex energy (gravity, tension-only springs, smooth buoyancy), dissipative (damping) or
-//: drag ends at most this much above its start.  0 where nothing drives it.  work.force is its scratch.
+//: end_pos, end_vel (with end_pos = pos + h end_vel), from that end, seen from a frame moving at `frame` (3, m/s)
+//: (docs/model.md section 7): the flowing fluids' h fluid_drive there; over the particles held to a path (pinned
+//: ones, which the grip or the frame moves, and those marked in `acted_on` (n, or empty), on which a moving keyed
+//: collider acted in the solve) the work h R . (v+ - frame) of R = m (v+ - v) / h - F(x+, v+), the force that kept
+//: them there; and h frame_z g M, the gravity the frame rises against (M the cloth's mass).  A solved step of a
+//: cloth whose forces are conservative with a convex energy (gravity, tension-only springs, smooth buoyancy),
+//: dissipative (damping) or drag ends at most this much above its start.  0 where nothing drives it.  work.force
+//: is its scratch.
 double drivers_work(Core& core, double h, const double* end_pos, const double* end_vel,
-                    const std::vector<double>& acted_on) {
+                    const std::vector<double>& acted_on, const double* frame) {
     const Cloth& cloth = core.cloth;
     const Physics& phys = core.phys;
     const Buffers& buf = core.buf;
     const Index n = cloth.n;
-    double work = h * fluid_drive(cloth, phys, core.work, end_pos, end_vel);
+    const double* mass = core.solver.mass;
+    double work = h * fluid_drive(cloth, phys, core.work, end_pos, end_vel, frame);
+    const bool framed = frame[0] != 0.0 || frame[1] != 0.0 || frame[2] != 0.0;
+    if (frame[2] != 0.0) work += h * frame[2] * GRAVITY * total(n, mass);
     std::vector<char> held(static_cast<std::size_t>(n), 0);
     bool any = false;
     for (Index i = 0; i < n; ++i) {
-        bool moved = false;  // a pinned particle the grip moves
-        for (Index c = 0; c < 3; ++c) moved |= cloth.free[i] == 0.0 && end_vel[c * n + i] != 0.0;
+        bool moved = framed;  // a pinned particle the grip or the frame moves
+        for (Index c = 0; c < 3; ++c) moved |= end_vel[c * n + i] != 0.0;
         const bool on_collider = !acted_on.empty() && acted_on[static_cast<std::size_t>(i)] != 0.0;
-        held[static_cast<std::size_t>(i)] = moved || on_collider;
-        any |= moved || on_collider;
+        held[static_cast<std::size_t>(i)] = (cloth.free[i] == 0.0 && moved) || on_collider;
+        any |= held[static_cast<std::size_t>(i)] != 0;
     }
     if (!any) return work;
     forces(cloth, phys, core.work, end_pos, end_vel, buf.trial_water);
-    const double* mass = core.solver.mass;
     for (Index c = 0; c < 3; ++c) {
         for (Index i = 0; i < n; ++i) {
             if (!held[static_cast<std::size_t>(i)]) continue;
             const Index k = c * n + i;
-            work += (mass[i] * (end_vel[k] - buf.vel[k]) - h * core.work.force[k]) * end_vel[k];
+            work += (mass[i] * (end_vel[k] - buf.vel[k]) - h * core.work.force[k]) * (end_vel[k] - frame[c]);
         }
     }
     return work;
@@ -289,17 +298,42 @@ double contact_work(const Core& core, const std::vector<double>& solved) {
     return work;
 }
 
-//: Whether a step of h s from pos, vel to trial_pos, trial_vel gained energy beyond what drives the cloth and beyond
-//: noise (ENERGY_NOISE).  What drives it: drivers_work at the step's end, or, where keyed colliders moved over it
-//: (`moving`, else null), drivers_work at its end as solved and what contact did after the solve (contact_work).
-bool gained_energy(Core& core, double h, const MovingColliders* moving) {
-    double start_size = 0.0, end_size = 0.0;
-    const double start = checked_energy(core, core.buf.pos, core.buf.vel, start_size);
-    const double end = checked_energy(core, core.buf.trial_pos, core.buf.trial_vel, end_size);
+//: Whether no particle is in the water at the step's start or end (pos, trial_pos): a frame that rises or sinks would
+//: see the water's surface move, and buoyancy do work.
+bool dry(Core& core) {
     const Index n = core.cloth.n;
-    const double drive = moving == nullptr
-        ? drivers_work(core, h, core.buf.trial_pos, core.buf.trial_vel, {})
-        : drivers_work(core, h, moving->solved.data(), moving->solved.data() + 3 * n, moving->acted_on) + moving->contact;
+    return submerged(core.phys, n, core.buf.pos + 2 * n, core.work.submerged) == 0.0 &&
+           submerged(core.phys, n, core.buf.trial_pos + 2 * n, core.work.submerged) == 0.0;
+}
+
+//: checked_energy at pos and the velocities vel (3, n) less `frame` (3, m/s): seen from a frame moving at it.
+double checked_energy_in(const Core& core, const double* pos, const double* vel, const double* frame,
+                         double& magnitude) {
+    if (frame[0] == 0.0 && frame[1] == 0.0 && frame[2] == 0.0) return checked_energy(core, pos, vel, magnitude);
+    const Index n = core.cloth.n;
+    std::vector<double> relative(vel, vel + 3 * n);
+    for (Index c = 0; c < 3; ++c) {
+        for (Index i = 0; i < n; ++i) relative[static_cast<std::size_t>(c * n + i)] -= frame[c];
+    }
+    return checked_energy(core, pos, relative.data(), magnitude);
+}
+
+//: Whether a step of h s from pos, vel to trial_pos, trial_vel gained energy beyond what drives the cloth and beyond
+//: noise (ENERGY_NOISE).  What drives it: drivers_work at the step's end; where keyed colliders moved over it
+//: (`moving`, else null), both seen from their frame, or drivers_work at its end as solved and what contact did
+//: after the solve (contact_work).
+bool gained_energy(Core& core, double h, const MovingColliders* moving) {
+    const double still[3] = {0.0, 0.0, 0.0};
+    const bool in_frame = moving != nullptr && moving->in_frame && (moving->frame[2] == 0.0 || dry(core));
+    const double* frame = in_frame ? moving->frame : still;
+    double start_size = 0.0, end_size = 0.0;
+    const double start = checked_energy_in(core, core.buf.pos, core.buf.vel, frame, start_size);
+    const double end = checked_energy_in(core, core.buf.trial_pos, core.buf.trial_vel, frame, end_size);
+    const Index n = core.cloth.n;
+    const double drive = moving == nullptr || in_frame
+        ? drivers_work(core, h, core.buf.trial_pos, core.buf.trial_vel, {}, frame)
+        : drivers_work(core, h, moving->solved.data(), moving->solved.data() + 3 * n, moving->acted_on, still) +
+              moving->contact;
     return end - start - drive > ENERGY_NOISE * (start_size + end_size);
 }
 
@@ -388,6 +422,7 @@ Status step(Core& core, double remaining, double span) {
     // particles they act on (drivers_work).
     const bool weighs_colliders = !adaptive && control.integrator == IMPLICIT_EULER && colliders_move(phys);
     MovingColliders moving;
+    if (weighs_colliders) moving.in_frame = common_frame(phys, moving.frame);
     // Particles at rest on the floor take no part in the step (a constraint of its solve) unless its forces
     // would move them; the model's free flags are theirs again before the step ends.
     Index held = hold_resting(n, phys.floor_z, buf.pos, buf.vel, cloth.free, buf.held);

@@ -21,11 +21,13 @@ void forces(const Cloth& cloth, const Physics& phys, Work& work, const double* p
 void forces_and_blocks(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
                        const double* water, double h, double slack_slope = 0.0);
 
-//: The flowing fluids' drive (W) on the cloth at pos, vel (3, n): the sum over the particles of the water's drag
-//: dotted with the current and the air's drag dotted with the wind (drag as `forces` adds it; 0 where the fluid
-//: is still or absent).  Each drag opposes the cloth's motion relative to its fluid, F . (v - u) <= 0, so this
-//: bounds the drag's power F . v from above: the most work per second the fluids' flow can do on the cloth.
-//: work.force, work.submerged and work.cells are its scratch.
-double fluid_drive(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel);
+//: The flowing fluids' drive (W) on the cloth at pos, vel (3, n), seen from a frame moving at `frame` (3, m/s):
+//: the sum over the particles of the water's drag dotted with the current less `frame` and the air's drag dotted
+//: with the wind less `frame` (drag as `forces` adds it; 0 where neither fluid flows in that frame).  Each drag
+//: opposes the cloth's motion relative to its fluid, F . (v - u) <= 0, so this bounds the drag's power there,
+//: F . (v - frame), from above: the most work per second the fluids' flow can do on the cloth.  work.force,
+//: work.submerged and work.cells are its scratch.
+double fluid_drive(const Cloth& cloth, const Physics& phys, Work& work, const double* pos, const double* vel,
+                   const double* frame);
 
 }  // namespace wc

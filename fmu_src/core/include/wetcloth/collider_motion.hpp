@@ -61,6 +61,10 @@ bool colliders_move(const Physics& phys);
 //: Whether collider k moves over that step (none of another index does: the floor's, a pair of the cloth's own).
 bool collider_moving(const Physics& phys, Index k);
 
+//: Whether the colliders that move over that step all move at one velocity without turning: then that velocity
+//: (3, m/s) into u, the frame in which they all stand still.
+bool common_frame(const Physics& phys, double* u);
+
 //: The longest step (s) over which no point of a moving collider's surface moves farther than
 //: MOTION_STEP_FRACTION of its half size (a sphere's radius, a box's or cylinder's smallest half edge, a
 //: solid mesh's smallest half box edge; planes and open meshes are not limited), or infinity.  A point's
