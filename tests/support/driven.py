@@ -20,9 +20,11 @@ class DriveBound:
     it opposes the motion relative to its fluid.  Over the pinned particles, the force R that held them on the
     grip's path, R = m (v+ - v) / h - F, is dotted with v+.
 
-    Seen from a frame moving at a uniform horizontal velocity `frame` (m/s; gravity and the forces are the same
-    there, the velocities less `frame`): the fluids flow at wind - frame and current - frame, and the pinned
-    particles move at v+ - frame.  A collider moving with that frame is still in it, where contact only takes
+    Seen from a frame moving at a uniform velocity `frame` (m/s; the forces are the same there, the velocities
+    less `frame`): the fluids flow at wind - frame and current - frame, the pinned particles move at v+ - frame,
+    and a frame rising at frame_z adds h frame_z g M (M the cloth's mass: with the potential energy taken at the
+    world's positions, gravity does that work on a cloth at rest in the frame; the cloth out of the water, whose
+    surface would move in it).  A collider moving with that frame is still in it, where contact only takes
     energy (energy_in_frame)."""
 
     def __init__(self, scene: wetcloth.Scene):
@@ -34,8 +36,8 @@ class DriveBound:
 
     def __call__(self, sim: wetcloth.Simulation, start_vel: np.ndarray, h: float,
                  frame: np.ndarray = np.zeros(3)) -> float:
-        assert frame[2] == 0.0, "a frame moving vertically would see the water's surface move"
         state = sim.state
+        assert frame[2] == 0.0 or sim.model.update_submerged(state.pos[2]) == 0.0, "the water's surface would move"
         force = sim.model.forces(state.pos, state.vel, state.water).copy()
         without_air = self.still_air.forces(state.pos, state.vel, state.water).copy()
         without_drag = self.still_water.forces(state.pos, state.vel, state.water).copy()
@@ -45,7 +47,8 @@ class DriveBound:
         u = np.asarray(frame, dtype=float)[:, None]
         return h * float(((force - without_air) * (self.wind - u)).sum()
                          + ((without_air - without_drag) * (self.current - u)).sum()
-                         + (held[:, pinned] * (state.vel - u)[:, pinned]).sum())
+                         + (held[:, pinned] * (state.vel - u)[:, pinned]).sum()
+                         + frame[2] * 9.81 * mass.sum())
 
 
 def energy_noise(sim: wetcloth.Simulation, frame: np.ndarray) -> float:
