@@ -247,20 +247,20 @@ double drivers_work(Core& core, double h, const double* end_pos, const double* e
     double work = h * fluid_drive(cloth, phys, core.work, end_pos, end_vel, frame);
     const bool framed = frame[0] != 0.0 || frame[1] != 0.0 || frame[2] != 0.0;
     if (frame[2] != 0.0) work += h * frame[2] * GRAVITY * total(n, mass);
-    std::vector<char> held(static_cast<std::size_t>(n), 0);
+    std::vector<char> on_path(static_cast<std::size_t>(n), 0);  // held to a path
     bool any = false;
     for (Index i = 0; i < n; ++i) {
         bool moved = framed;  // a pinned particle the grip or the frame moves
         for (Index c = 0; c < 3; ++c) moved |= end_vel[c * n + i] != 0.0;
         const bool on_collider = !acted_on.empty() && acted_on[static_cast<std::size_t>(i)] != 0.0;
-        held[static_cast<std::size_t>(i)] = (cloth.free[i] == 0.0 && moved) || on_collider;
-        any |= held[static_cast<std::size_t>(i)] != 0;
+        on_path[static_cast<std::size_t>(i)] = (cloth.free[i] == 0.0 && moved) || on_collider;
+        any |= on_path[static_cast<std::size_t>(i)] != 0;
     }
     if (!any) return work;
     forces(cloth, phys, core.work, end_pos, end_vel, buf.trial_water);
     for (Index c = 0; c < 3; ++c) {
         for (Index i = 0; i < n; ++i) {
-            if (!held[static_cast<std::size_t>(i)]) continue;
+            if (!on_path[static_cast<std::size_t>(i)]) continue;
             const Index k = c * n + i;
             work += (mass[i] * (end_vel[k] - buf.vel[k]) - h * core.work.force[k]) * (end_vel[k] - frame[c]);
         }
@@ -418,11 +418,12 @@ Status step(Core& core, double remaining, double span) {
     const bool adaptive = control.allowed > 0.0;
     const bool implicit = control.integrator == BDF2 || control.integrator == IMPLICIT_EULER;
     start_collider_motion(phys, clock[TIME]);
-    // The fixed-step mode's energy check weighs the work of keyed colliders that move over the step on the
-    // particles they act on (drivers_work).
+    // The fixed-step mode's energy check weighs a step over which keyed colliders move in their frame or with
+    // their work (MovingColliders); for their work it keeps what they did.
     const bool weighs_colliders = !adaptive && control.integrator == IMPLICIT_EULER && colliders_move(phys);
     MovingColliders moving;
     if (weighs_colliders) moving.in_frame = common_frame(phys, moving.frame);
+    const bool weighs_work = weighs_colliders && !(moving.in_frame && moving.frame[2] == 0.0);
     // Particles at rest on the floor take no part in the step (a constraint of its solve) unless its forces
     // would move them; the model's free flags are theirs again before the step ends.
     Index held = hold_resting(n, phys.floor_z, buf.pos, buf.vel, cloth.free, buf.held);
@@ -513,7 +514,7 @@ Status step(Core& core, double remaining, double span) {
         h = span / pymax(1.0, std::ceil(span / planned - STEP_COUNT_SLACK));
         grip = grip_move(n, phys, cloth.free, buf.held, buf.pos, clock[TIME], h, remaining);
         trial = take_step(core, h, grip);
-        if (weighs_colliders) {
+        if (weighs_work) {
             moving.solved.assign(buf.trial_pos, buf.trial_pos + 3 * n);
             moving.solved.insert(moving.solved.end(), buf.trial_vel, buf.trial_vel + 3 * n);
         }
@@ -630,7 +631,7 @@ Status step(Core& core, double remaining, double span) {
     if (phys.meshes.count > 0 && core.contact.lists != nullptr) {
         core.contact.lists->collider_free.assign(cloth.free, cloth.free + n);
     }
-    if (weighs_colliders) moving.acted_on = on_moving_colliders(core);
+    if (weighs_work) moving.acted_on = on_moving_colliders(core);
     if (held > 0) release_all(n, cloth.free, buf.held);
     if (std::isfinite(trial.error)) clock[LARGEST_ERROR] = pymax(clock[LARGEST_ERROR], trial.error);
     if (!(h > 0.0 && clock[TIME] + h > clock[TIME])) {  // a step that would not advance the time
@@ -648,7 +649,7 @@ Status step(Core& core, double remaining, double span) {
     // The cloth's edges and triangles against mesh colliders' edges and vertices, before self-collision and
     // again after it if it moved the cloth.
     int edged = collider_edges(core, buf.pos, buf.trial_pos, buf.trial_vel);
-    if (weighs_colliders) moving.contact = contact_work(core, moving.solved);
+    if (weighs_work) moving.contact = contact_work(core, moving.solved);
     // Self-collision's pushes: with BDF2 the pushed particles' history is carried through their pushed state
     // (carry_pushed_history); a step whose motion it froze, or that mesh colliders' edges changed, restarts it.
     const bool carries = control.integrator == BDF2 && core.contact.enabled && phys.meshes.count == 0;
