@@ -88,3 +88,16 @@ def collider_moves(scene: wetcloth.Scene, start: float, end: float) -> bool:
         if np.ptp(shifts, axis=0).max() > 0.0:
             return True
     return False
+
+
+def ball_reaches(scene: wetcloth.Scene, sim: wetcloth.Simulation, t: float, h: float) -> bool:
+    """Whether keyed collider 1 (a sphere), moving from t (s) over a step of h s, may reach the cloth of `sim` (at
+    t) within it, by the core's rule (colliders_near in collider_motion.cpp): some particle lies within thickness
+    + h (its surface's speed + the fastest particle's) + g h^2 of its surface."""
+    ball = scene.colliders[0]
+    assert ball.shape == "sphere"
+    velocity = (collider_shift(scene, 1, t + h) - collider_shift(scene, 1, t))[:3] / h
+    centre = np.array([ball.x, ball.y, ball.z]) + collider_shift(scene, 1, t)[:3]
+    speed = float(np.linalg.norm(sim.state.vel, axis=0).max())
+    reach = scene.thickness + h * (float(np.linalg.norm(velocity)) + speed) + 9.81 * h * h
+    return bool((np.linalg.norm(sim.state.pos - centre[:, None], axis=0) - ball.radius <= reach).any())

@@ -358,10 +358,25 @@ bool collider_moving(const Physics& phys, Index k) {
     return false;
 }
 
-bool common_frame(const Physics& phys, double* u) {
-    bool found = false;
+std::vector<char> colliders_near(const Physics& phys, Index n, const double* pos, double cloth_speed, double h) {
+    std::vector<char> near(static_cast<std::size_t>(phys.collider_count), 0);
     for (Index k = 0; k < phys.collider_count; ++k) {
         if (!collider_moving(phys, k)) continue;
+        const double reach = phys.thickness + h * (surface_speed(phys, k) + cloth_speed) + GRAVITY * h * h;
+        double normal[3];
+        for (Index i = 0; i < n && !near[static_cast<std::size_t>(k)]; ++i) {
+            const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+            near[static_cast<std::size_t>(k)] = collider_distance(phys, k, p, reach, normal) <= reach;
+        }
+    }
+    return near;
+}
+
+bool common_frame(const Physics& phys, const std::vector<char>& near, double* u) {
+    bool found = false;
+    for (int c = 0; c < 3; ++c) u[c] = 0.0;
+    for (Index k = 0; k < phys.collider_count; ++k) {
+        if (!near[static_cast<std::size_t>(k)]) continue;
         const double* motion = phys.collider_motion + k * MOTION_COLUMNS;
         for (int c = 0; c < 3; ++c) {
             if (turns(motion) && motion[MOTION_SPIN + c] != 0.0) return false;
@@ -370,7 +385,7 @@ bool common_frame(const Physics& phys, double* u) {
         for (int c = 0; c < 3; ++c) u[c] = motion[MOTION_VELOCITY + c];
         found = true;
     }
-    return found;
+    return true;
 }
 
 bool colliders_move(const Physics& phys) {
@@ -380,18 +395,24 @@ bool colliders_move(const Physics& phys) {
     return false;
 }
 
+double surface_speed(const Physics& phys, Index k) {
+    const double* motion = phys.collider_motion + k * MOTION_COLUMNS;
+    const double* u = motion + MOTION_VELOCITY;
+    double speed = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    if (turns(motion)) {
+        const double* w = motion + MOTION_SPIN;
+        speed += std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) *
+                 turning_reach(phys, phys.colliders + k * COLLIDER_COLUMNS);
+    }
+    return speed;
+}
+
 double collider_step_limit(const Physics& phys) {
     double limit = std::numeric_limits<double>::infinity();
     if (phys.collider_motion == nullptr) return limit;
     for (Index k = 0; k < phys.collider_count; ++k) {
-        const double* motion = phys.collider_motion + k * MOTION_COLUMNS;
-        const double* u = motion + MOTION_VELOCITY;
         const double* row = phys.colliders + k * COLLIDER_COLUMNS;
-        double speed = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-        if (turns(motion)) {
-            const double* w = motion + MOTION_SPIN;
-            speed += std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * turning_reach(phys, row);
-        }
+        const double speed = surface_speed(phys, k);
         if (!(speed > 0.0)) continue;
         double half = std::numeric_limits<double>::infinity();
         switch (static_cast<Index>(row[C_SHAPE])) {

@@ -214,13 +214,13 @@ std::vector<double> on_moving_colliders(const Core& core) {
     return marks;
 }
 
-//: How the energy check weighs a fixed step over which keyed colliders move (docs/model.md section 7).  Where they
-//: all move at one velocity without turning (`in_frame`), it weighs the step in the frame moving at that velocity
-//: (`frame`, m/s), where they stand still (if that frame rises or sinks, only while the cloth is out of the
-//: water).  Else in the world's frame, with their work: acted_on (n) marks the
-//: particles they acted on in the solve (on_moving_colliders), solved (6 n) holds the step's end as the solve left
-//: it (positions, then velocities), and contact (J) bounds the work of what contact did to that end before
-//: self-collision (contact_work).
+//: How the energy check weighs a fixed step over which keyed colliders move (docs/model.md section 7).  Where those
+//: that may reach the cloth (colliders_near) all move at one velocity without turning (`in_frame`), it weighs the
+//: step in the frame moving at that velocity (`frame`, m/s; zero where none may reach it), where they stand still
+//: (if that frame rises or sinks, only while the cloth is out of the water).  Else in the world's frame, with
+//: their work: acted_on (n) marks the particles they acted on in the solve (on_moving_colliders), solved (6 n)
+//: holds the step's end as the solve left it (positions, then velocities), and contact (J) bounds the work of what
+//: contact did to that end before self-collision (contact_work).
 struct MovingColliders {
     bool in_frame = false;
     double frame[3] = {0.0, 0.0, 0.0};
@@ -422,7 +422,10 @@ Status step(Core& core, double remaining, double span) {
     // their work (MovingColliders); for their work it keeps what they did.
     const bool weighs_colliders = !adaptive && control.integrator == IMPLICIT_EULER && colliders_move(phys);
     MovingColliders moving;
-    if (weighs_colliders) moving.in_frame = common_frame(phys, moving.frame);
+    if (weighs_colliders) {  // (those that cannot reach the cloth in the step do no work on it)
+        moving.in_frame = common_frame(phys, colliders_near(phys, n, buf.pos, clock[SPEED], control.max_step),
+                                       moving.frame);
+    }
     const bool weighs_work = weighs_colliders && !(moving.in_frame && moving.frame[2] == 0.0);
     // Particles at rest on the floor take no part in the step (a constraint of its solve) unless its forces
     // would move them; the model's free flags are theirs again before the step ends.

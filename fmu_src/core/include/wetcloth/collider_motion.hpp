@@ -8,6 +8,8 @@
 // turn), normals turned back by R_k, and friction acts on the velocity relative to its surface's there,
 // v_k + omega x (p - c_k - d_k).
 #pragma once
+#include <vector>
+
 #include "wetcloth/colliders.hpp"
 #include "wetcloth/core.hpp"
 #include "wetcloth/vec3.hpp"
@@ -61,9 +63,18 @@ bool colliders_move(const Physics& phys);
 //: Whether collider k moves over that step (none of another index does: the floor's, a pair of the cloth's own).
 bool collider_moving(const Physics& phys, Index k);
 
-//: Whether the colliders that move over that step all move at one velocity without turning: then that velocity
-//: (3, m/s) into u, the frame in which they all stand still.
-bool common_frame(const Physics& phys, double* u);
+//: The greatest speed (m/s) of collider k's surface over that step: |v| + |omega| r_far (r_far as
+//: collider_step_limit's).
+double surface_speed(const Physics& phys, Index k);
+
+//: Which colliders (1 in (collider_count) where so) move over that step and may touch the cloth at pos (3, n)
+//: within it: within thickness + h (surface_speed + cloth_speed) + g h^2 of a particle (m; cloth_speed (m/s) the
+//: fastest particle's, h (s) the longest step).
+std::vector<char> colliders_near(const Physics& phys, Index n, const double* pos, double cloth_speed, double h);
+
+//: Whether the colliders marked in `near` (colliders_near) all move at one velocity without turning: then that
+//: velocity (3, m/s) into u, the frame in which they stand still (zero where none is near).
+bool common_frame(const Physics& phys, const std::vector<char>& near, double* u);
 
 //: The longest step (s) over which no point of a moving collider's surface moves farther than
 //: MOTION_STEP_FRACTION of its half size (a sphere's radius, a box's or cylinder's smallest half edge, a
