@@ -10,6 +10,7 @@ import numpy as np
 import wetcloth
 from wetcloth import _core
 from wetcloth.energy import total_energy
+from wetcloth.model import GRAVITY
 
 
 class DriveBound:
@@ -48,7 +49,7 @@ class DriveBound:
         return h * float(((force - without_air) * (self.wind - u)).sum()
                          + ((without_air - without_drag) * (self.current - u)).sum()
                          + (held[:, pinned] * (state.vel - u)[:, pinned]).sum()
-                         + frame[2] * 9.81 * mass.sum())
+                         + frame[2] * GRAVITY * mass.sum())
 
 
 def energy_noise(sim: wetcloth.Simulation, frame: np.ndarray) -> float:
@@ -57,7 +58,7 @@ def energy_noise(sim: wetcloth.Simulation, frame: np.ndarray) -> float:
     gravitational m g |z|, the springs' elastic, buoyancy's: energy.cpp's `magnitude`)."""
     state = sim.state
     mass = np.asarray(sim.model.cloth.dry_mass) + state.water
-    gravity = 9.81 * mass * state.pos[2]
+    gravity = GRAVITY * mass * state.pos[2]
     return _core.ENERGY_NOISE * (energy_in_frame(sim, frame) - float(gravity.sum()) + float(np.abs(gravity).sum()))
 
 
@@ -99,5 +100,5 @@ def ball_reaches(scene: wetcloth.Scene, sim: wetcloth.Simulation, t: float, h: f
     velocity = (collider_shift(scene, 1, t + h) - collider_shift(scene, 1, t))[:3] / h
     centre = np.array([ball.x, ball.y, ball.z]) + collider_shift(scene, 1, t)[:3]
     speed = float(np.linalg.norm(sim.state.vel, axis=0).max())
-    reach = scene.thickness + h * (float(np.linalg.norm(velocity)) + speed) + 9.81 * h * h
+    reach = scene.thickness + h * (float(np.linalg.norm(velocity)) + speed) + GRAVITY * h * h
     return bool((np.linalg.norm(sim.state.pos - centre[:, None], axis=0) - ball.radius <= reach).any())

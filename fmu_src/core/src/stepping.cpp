@@ -228,6 +228,9 @@ struct MovingColliders {
     double contact = 0.0;
 };
 
+//: Whether a frame's velocity `frame` (3, m/s) is zero: the world's frame.
+bool at_rest(const double* frame) { return frame[0] == 0.0 && frame[1] == 0.0 && frame[2] == 0.0; }
+
 //: The most work (J) what drives the cloth may have done on it over a backward Euler step of h s from pos, vel to
 //: end_pos, end_vel (with end_pos = pos + h end_vel), from that end, seen from a frame moving at `frame` (3, m/s)
 //: (docs/model.md section 7): the flowing fluids' h fluid_drive there; over the particles held to a path (pinned
@@ -245,7 +248,7 @@ double drivers_work(Core& core, double h, const double* end_pos, const double* e
     const Index n = cloth.n;
     const double* mass = core.solver.mass;
     double work = h * fluid_drive(cloth, phys, core.work, end_pos, end_vel, frame);
-    const bool framed = frame[0] != 0.0 || frame[1] != 0.0 || frame[2] != 0.0;
+    const bool framed = !at_rest(frame);
     if (frame[2] != 0.0) work += h * frame[2] * GRAVITY * total(n, mass);
     std::vector<char> on_path(static_cast<std::size_t>(n), 0);  // held to a path
     bool any = false;
@@ -309,7 +312,7 @@ bool dry(Core& core) {
 //: checked_energy at pos and the velocities vel (3, n) less `frame` (3, m/s): seen from a frame moving at it.
 double checked_energy_in(const Core& core, const double* pos, const double* vel, const double* frame,
                          double& magnitude) {
-    if (frame[0] == 0.0 && frame[1] == 0.0 && frame[2] == 0.0) return checked_energy(core, pos, vel, magnitude);
+    if (at_rest(frame)) return checked_energy(core, pos, vel, magnitude);
     const Index n = core.cloth.n;
     std::vector<double> relative(vel, vel + 3 * n);
     for (Index c = 0; c < 3; ++c) {
