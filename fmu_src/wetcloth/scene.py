@@ -230,7 +230,7 @@ def rotation_vector(turn) -> np.ndarray:
     return angle * axis
 
 
-def _turn_between(a, b) -> float:
+def turn_between(a, b) -> float:
     """The angle (deg) of the rotation from rotation vector a to b (3, deg each): of R_b R_a^T."""
     relative = rotation_matrix(np.radians(b)) @ rotation_matrix(np.radians(a)).T
     return math.degrees(float(np.linalg.norm(rotation_vector(relative))))
@@ -516,8 +516,11 @@ def validate(scene: Scene) -> None:
         from wetcloth.topology import pinned_mask, start_positions
 
         positions, mesh = start_positions(scene) if start is None else start
-        pinned_mask(scene, positions, mesh)
+        from wetcloth.pinned_paths import check_pinned_outside
+
+        pinned = pinned_mask(scene, positions, mesh)
         _check_collider_start(scene, positions)
+        check_pinned_outside(scene, positions, pinned)
 
 
 def _check_mesh_start(scene: Scene):
@@ -641,7 +644,7 @@ def _checked_collider_keys(scene: Scene, colliders: int, mistakes: Mistakes) -> 
                                      f"allowed: the times of one collider's keys increase")
             key = ColliderKey(**checked)
             before = turned.get(collider, (0.0, 0.0, 0.0))
-            turn = _turn_between(before, (key.rx, key.ry, key.rz))
+            turn = turn_between(before, (key.rx, key.ry, key.rz))
             if turn >= MAX_KEY_TURN:
                 after = (f"collider_key{last[collider][0]}" if collider in last
                          else f"its table's orientation (t = 0)")

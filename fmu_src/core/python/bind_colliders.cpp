@@ -35,9 +35,17 @@ WETCLOTH_BINDINGS(m) {
     m.def(
         "collider_distance",
         [](nb::handle colliders, nb::handle meshes, Index k, nb::handle points, double reach, nb::handle distance,
-           nb::handle normal) {
-            const Physics phys = with_colliders(colliders, meshes);
+           nb::handle normal, nb::handle keys, double t) {
+            Physics phys = with_colliders(colliders, meshes);
             if (k < 0 || k >= phys.collider_count) throw std::out_of_range("collider index out of range");
+            std::vector<double> motion;
+            if (!keys.is_none()) {
+                phys.collider_key_count = size_of(keys) / COLLIDER_KEY_COLUMNS;
+                phys.collider_keys = argument<const double>(keys, "keys", phys.collider_key_count * COLLIDER_KEY_COLUMNS);
+                motion.assign(static_cast<std::size_t>(phys.collider_count * MOTION_COLUMNS), 0.0);
+                phys.collider_motion = motion.data();
+                start_collider_motion(phys, t);
+            }
             const Index count = size_of(distance);
             const double* p = argument<const double>(points, "points", 3 * count);
             double* d = argument<double>(distance, "distance", count);
@@ -50,10 +58,10 @@ WETCLOTH_BINDINGS(m) {
             }
         },
         nb::arg("colliders"), nb::arg("meshes"), nb::arg("k"), nb::arg("points"), nb::arg("reach"), nb::arg("distance"),
-        nb::arg("normal"),
+        nb::arg("normal"), nb::arg("keys") = nb::none(), nb::arg("t") = 0.0,
         "Signed distance (m) of points (3, m) to collider k of the rows colliders (k, COLLIDER_COLUMNS) into distance "
         "(m), the outward normals into normal (3, m); a mesh collider's (its triangles in meshes, a ColliderMeshes) "
-        "at most reach (m).");
+        "at most reach (m).  With keys (rows (j, 8), collider_motion.hpp), where they have moved it at t (s).");
     m.def(
         "mesh_triangles_in",
         [](nb::handle meshes, Index mesh, nb::handle lo, nb::handle hi) {
