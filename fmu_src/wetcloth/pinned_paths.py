@@ -3,10 +3,16 @@
 A pinned particle follows the grip, so no collider can push it out: a collider keyed through the pinned
 edge, or a grip keyed into a collider, would crush the free cloth beside it into the collider's surface in
 a pile of layers that self-collision then takes minutes to keep apart, and the pinned edge stays inside.
-The check samples the motion between consecutive key times (of the collider and of the grip) so finely
-that no point of the collider, nor a pinned particle, moves more than half the cloth's thickness between
-samples, at most ``SAMPLES_MAX`` per interval, and asks the core for each pinned particle's signed
-distance there.  An open mesh (a shell) has no inside and is not checked.
+
+The check walks each interval between consecutive key times (the collider's and the grip's: the motion is
+uniform within one) by conservative advancement.  A signed distance changes no faster than the pinned
+particle moves relative to the collider's surface, at most ``speed``: the collider's velocity, its angular
+velocity times the particles' greatest distance from its centre, and the grip's velocity.  So from a
+sample whose least distance is ``d`` no particle reaches the surface within ``|d| / speed``; the next sample
+lies that far on, or half the cloth's thickness of motion on if that is farther (a particle may dip less
+than that deep unseen, as the contact keeps the free cloth that far off), at most ``SAMPLES_MAX`` samples
+an interval.  The core gives the distances where the keys have moved the collider.  An open mesh (a
+shell) has no inside and is not checked.
 """
 
 from __future__ import annotations
@@ -18,7 +24,7 @@ import numpy as np
 from wetcloth.errors import ParameterError
 from wetcloth.scene import Scene, collider_key_rows, turn_between
 
-#: The most samples per interval between consecutive key times.
+#: The most samples in one interval between consecutive key times.
 SAMPLES_MAX = 4096
 
 
@@ -39,18 +45,31 @@ def check_pinned_outside(scene: Scene, positions: np.ndarray, pinned: np.ndarray
         own = [(j, key) for j, key in enumerate(scene.collider_keys, 1) if key.collider == k + 1]
         if not own and not scene.grip_keys:
             continue
+
+        def least_distance(t: float) -> tuple[float, int]:
+            """The pinned particles' least signed distance (m) from the collider at t (s), and whose it is."""
+            points = np.ascontiguousarray(pins + _grip_at(scene, t)[:, None])
+            distance, normal = np.zeros(points.shape[1]), np.zeros_like(points)
+            _core.collider_distance(rows, meshes, k, points, 1.0, distance, normal, keys, t)
+            i = int(np.argmin(distance))
+            return float(distance[i]), i
+
         centre = np.array([collider.x, collider.y, collider.z])
         reach = (float(np.linalg.norm(pins - centre[:, None], axis=0).max()) + _path_length(scene.grip_keys)
                  + _path_length([key for _, key in own]))
         first, deepest = None, 0.0  # (t, start position) of the first sample with a pinned particle inside; depth
-        for t in _sample_times(scene, [key for _, key in own], reach):
-            points = np.ascontiguousarray(pins + _grip_at(scene, t)[:, None])
-            distance, normal = np.zeros(points.shape[1]), np.zeros_like(points)
-            _core.collider_distance(rows, meshes, k, points, 1.0, distance, normal, keys, float(t))
-            inside = int(np.argmin(distance))
-            if distance[inside] < 0.0:
-                first = first or (float(t), pins[:, inside])
-                deepest = max(deepest, float(-distance[inside]))
+        for a, b, speed in _intervals(scene, [key for _, key in own], reach):
+            t, samples = a, 0
+            while True:
+                d, i = least_distance(t)
+                if d < 0.0:
+                    first = first or (t, pins[:, i])
+                    deepest = max(deepest, -d)
+                samples += 1
+                if t >= b:
+                    break
+                wait = max(abs(d), 0.5 * scene.thickness) / speed if speed > 0.0 else math.inf
+                t = b if samples == SAMPLES_MAX - 1 else min(b, t + wait)
         if first is not None:
             raise _refusal(scene, k, own, *first, deepest)
 
@@ -69,34 +88,30 @@ def _path_length(keys) -> float:
     return float(sum(np.linalg.norm(b - a) for a, b in zip(at, at[1:])))
 
 
-def _sample_times(scene: Scene, own: list, reach: float) -> np.ndarray:
-    """Times (s) from 0 to the last key, each interval between consecutive key times (the collider's ``own``
-    and the grip's) cut so finely that neither the collider's surface within ``reach`` (m) of its centre nor
-    the grip moves more than half the thickness between samples."""
-    spacing = 0.5 * scene.thickness
+def _intervals(scene: Scene, own: list, reach: float) -> list[tuple[float, float, float]]:
+    """(start, end, speed): the intervals (s) between consecutive key times, the collider's ``own`` and the
+    grip's, from 0 to the last (one of zero length at 0 without any), and the greatest speed (m/s) within
+    each of a point within ``reach`` (m) of the collider's centre relative to its surface plus the grip's."""
     collider_times = [0.0] + [key.time for key in own]
     places = [np.zeros(3)] + [np.array([key.x, key.y, key.z]) for key in own]
     turns = [(0.0, 0.0, 0.0)] + [(key.rx, key.ry, key.rz) for key in own]
     edges = sorted({0.0, *collider_times[1:], *(key.time for key in scene.grip_keys)})
-    out = []
+    out = [(0.0, 0.0, 0.0)] if len(edges) == 1 else []
     for a, b in zip(edges, edges[1:]):
         j = int(np.searchsorted(collider_times, b))  # the collider's key interval (j-1, j) holds (a, b); none past it
-        collider = 0.0
+        speed = float(np.linalg.norm(_grip_at(scene, b) - _grip_at(scene, a))) / (b - a)
         if j < len(collider_times):
-            fraction = (b - a) / (collider_times[j] - collider_times[j - 1])
+            span = collider_times[j] - collider_times[j - 1]
             turn = math.radians(turn_between(turns[j - 1], turns[j]))
-            collider = fraction * (float(np.linalg.norm(places[j] - places[j - 1])) + turn * reach)
-        travel = collider + float(np.linalg.norm(_grip_at(scene, b) - _grip_at(scene, a)))
-        count = min(SAMPLES_MAX, max(1, math.ceil(travel / spacing)))
-        out.append(np.linspace(a, b, count, endpoint=False))
-    out.append(np.array([edges[-1]]))
-    return np.concatenate(out)
+            speed += (float(np.linalg.norm(places[j] - places[j - 1])) + turn * reach) / span
+        out.append((a, b, speed))
+    return out
 
 
 def _refusal(scene: Scene, k: int, own: list, t: float, start: np.ndarray, depth: float) -> ParameterError:
-    """The error for a pinned particle (at ``start`` (3, m) at t = 0) inside collider k (from 0) from t (s), up
-    to ``depth`` m: named after the collider's key (numbered ``own``) that ends the interval holding t, or the
-    grip's if the collider is not keyed."""
+    """The error for a pinned particle (at ``start`` (3, m) at t = 0) inside collider k (from 0) from t (s), at
+    least ``depth`` m deep: named after the collider's key (numbered ``own``) that ends the interval holding t,
+    or the grip's if the collider is not keyed."""
     def ending(numbered: list) -> int:  # the number of the first key at or after t (the last, past them all)
         return next((j for j, key in numbered if key.time >= t), numbered[-1][0])
 
@@ -104,6 +119,6 @@ def _refusal(scene: Scene, k: int, own: list, t: float, start: np.ndarray, depth
     mover = "the collider's keys" if own else "the grip's keys"
     return ParameterError(
         name, f"{mover} carry a pinned particle (at ({start[0]:.4g}, {start[1]:.4g}, {start[2]:.4g}) m at t = 0) "
-              f"into collider {k + 1} (a {scene.colliders[k].shape}) from t = {t:.4g} s, up to {depth:.3g} m deep, "
+              f"into collider {k + 1} (a {scene.colliders[k].shape}) from t = {t:.4g} s, at least {depth:.3g} m deep, "
               f"and nothing can push a pinned particle out; allowed: keys that keep every pinned particle outside "
               f"every collider")
