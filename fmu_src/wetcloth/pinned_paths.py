@@ -117,8 +117,9 @@ def _refusal(scene: Scene, k: int, own: list, t: float, start: np.ndarray, depth
 
     name = (f"collider_key{ending(own)}" if own else f"grip_key{ending(list(enumerate(scene.grip_keys, 1)))}")
     mover = "the collider's keys" if own else "the grip's keys"
+    x, y, z = (round(float(c), 9) + 0.0 for c in start)  # (no 2e-17 m from the cloth's tilt; no -0)
     return ParameterError(
-        name, f"{mover} carry a pinned particle (at ({start[0]:.4g}, {start[1]:.4g}, {start[2]:.4g}) m at t = 0) "
+        name, f"{mover} carry a pinned particle (at ({x:.4g}, {y:.4g}, {z:.4g}) m at t = 0) "
               f"into collider {k + 1} (a {scene.colliders[k].shape}) from t = {t:.4g} s, at least {depth:.3g} m deep, "
               f"and nothing can push a pinned particle out; allowed: keys that keep every pinned particle outside "
               f"every collider")
