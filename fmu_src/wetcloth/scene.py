@@ -513,11 +513,10 @@ def validate(scene: Scene) -> None:
                 f"{scene.floor_level:g} m); allowed: initial_height > floor_level + {half_drop + 0.5 * scene.thickness:g} m",
             )
     if scene.colliders or scene.pinned_vertices.strip() or scene.pinned_edge != "none":
+        from wetcloth.pinned_paths import check_pinned_outside
         from wetcloth.topology import pinned_mask, start_positions
 
         positions, mesh = start_positions(scene) if start is None else start
-        from wetcloth.pinned_paths import check_pinned_outside
-
         pinned = pinned_mask(scene, positions, mesh)
         _check_collider_start(scene, positions)
         check_pinned_outside(scene, positions, pinned)
