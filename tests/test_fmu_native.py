@@ -1015,6 +1015,17 @@ k = len(messages)
 r["blow up"] = [statuses, t, blow.getRealStatus(2), blow.getBooleanStatus(3), all(math.isfinite(x) for x in outputs(blow)),
                 [m for s, m in messages if "BlowUpError" in m]]
 blow.freeInstance()
+
+gripped = new("blow up while the grip moves")
+set(gripped, "pinned_edge", "y_max")
+gripped.enterInitializationMode(); gripped.exitInitializationMode()
+t, statuses, k = 0.0, [], len(messages)
+for grip_z in (0.02, 0.04, 0.06, 1e3):  # the grip lifts the pinned edge 2 cm a step, then flings it 1 km
+    set(gripped, "grip_z", grip_z)
+    statuses.append(status(gripped.doStep, t, 0.05))
+    t += 0.05
+r["blow up while the grip moves"] = [statuses, all(math.isfinite(x) for x in outputs(gripped)), since(k)]
+gripped.freeInstance()
 print(json.dumps(r))
 """
 
@@ -1108,6 +1119,16 @@ def test_a_blow_up_is_discarded_naming_the_time_and_the_unit_stays_finite(errors
     assert messages[0].startswith(f"step from t = {t:g} s by 0.05 s failed: BlowUpError: the cloth state ")
     assert "Last good time:" in messages[0] and messages[0].endswith(f"The unit stays at t = {t:g} s with its last "
                                                                      "good outputs.")
+
+
+def test_a_blow_up_while_the_grip_moves_is_discarded_too(errors):
+    """A grip input that flings the pinned edge 1 km in a step blows it up; the unit goes back to the step's
+    start, where the grip was moving the pinned particles (their velocities not zero).  (Before, it could not: "snapshot of a state the cloth cannot be in: ... pinned particles do not
+    move", and the step was an fmi2Error.)"""
+    statuses, finite, messages = errors["blow up while the grip moves"]
+    assert statuses == [0, 0, 0, 2]  # fmi2Discard of the step that flings the grip 1 km
+    assert finite
+    assert len(messages) == 1 and "BlowUpError" in messages[0] and "could not go back" not in messages[0]
 
 
 # ----------------------------------------------------------------------------------------- FMU states

@@ -824,9 +824,12 @@ std::string state_problem(const Cloth& cloth, const Physics& phys, const Control
     if (!(what = outside("state.pos", s.pos + 2 * n, n, lowest, c, " m", n)).empty()) {
         return what + ": the floor holds every particle at z >= " + g(phys.floor_z) + " m";
     }
-    // Velocities: below the blow-up speed; zero where pinned, and everywhere while asleep.
+    // Velocities: below the blow-up speed; the pinned particles' all one, the grip's (place_grip), and every
+    // particle's zero while asleep.
     const char* const velocity_names[] = {"state.vel", "prev_vel"};
     const double* const velocities[] = {s.vel, s.prev_vel};
+    Index first_pinned = 0;
+    while (first_pinned < n && cloth.free[first_pinned] != 0.0) ++first_pinned;
     for (int a = 0; a < 2; ++a) {
         const double* v = velocities[a];
         for (Index i = 0; i < n; ++i) {
@@ -836,11 +839,16 @@ std::string state_problem(const Cloth& cloth, const Physics& phys, const Control
                 return std::string(velocity_names[a]) + " holds a speed of " + g(speed) + " m/s at particle " +
                        std::to_string(i) + ": speeds are finite and below " + g(control.blow_up_speed) + " m/s";
             }
-            if (a == 0 && (x != 0.0 || y != 0.0 || z != 0.0)) {
-                if (cloth.free[i] == 0.0) {
-                    return "state.vel holds " + g(speed) + " m/s at particle " + std::to_string(i) +
-                           ", which is pinned: pinned particles do not move";
+            if (a == 0 && cloth.free[i] == 0.0) {
+                const Index r = first_pinned;
+                if (x != v[r] || y != v[n + r] || z != v[2 * n + r]) {
+                    return "state.vel holds (" + g(x) + ", " + g(y) + ", " + g(z) + ") m/s at particle " +
+                           std::to_string(i) + ", which is pinned, but (" + g(v[r]) + ", " + g(v[n + r]) + ", " +
+                           g(v[2 * n + r]) + ") m/s at pinned particle " + std::to_string(r) +
+                           ": the grip moves the pinned particles together";
                 }
+            }
+            if (a == 0 && (x != 0.0 || y != 0.0 || z != 0.0)) {
                 if (clock[SLEEPING] != 0.0) {
                     return "the state is asleep but moves (" + g(speed) + " m/s at particle " + std::to_string(i) +
                            "): a cloth sleeps only at rest";
