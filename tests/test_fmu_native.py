@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import ctypes
 import json
+import re
 import math
 import os
 import shutil
@@ -630,6 +631,36 @@ def test_a_unit_built_with_a_scene_runs_its_colliders_and_grip_keys_as_the_pytho
     with pytest.raises(ParameterError) as exc:
         wetcloth.load_scene("tablecloth_sphere", initial_height=0.05)
     assert records[-1] == {"status": 3, "errors": [f"initialization refused: {exc.value}"]}
+
+
+#: A child process: the unit at argv[1] run through fmpy to argv[2] s with the grip inputs of the JSON rows argv[3]
+#: ((time, grip_y, grip_z), linear between them); prints the messages logged with an error status.
+GRIP_SIGNAL = r"""
+import json, sys
+import numpy as np
+import fmpy
+rows = [tuple(r) for r in json.loads(sys.argv[3])]
+signal = np.array(rows, dtype=[("time", float), ("grip_y", float), ("grip_z", float)])
+messages = []
+fmpy.simulate_fmu(sys.argv[1], stop_time=float(sys.argv[2]), output_interval=0.05, input=signal,
+                  logger=lambda component, instance, status, category, message: messages.append((status, message.decode())))
+print(json.dumps({"errors": [m for s, m in messages if s >= 2]}))
+"""
+
+
+def test_a_blow_up_from_the_grip_pressing_pinned_particles_into_a_collider_says_so(build, tmp_path):
+    """The unit of the sweep scene, its grip inputs carrying the pinned edge into the ball after it has swept
+    (test_grip.py's case): the step that blows up is refused with the Python API's cause, the grip pressing a
+    pinned particle into collider 1."""
+    from test_grip import PRESSED_AFTER, PRESSING, RAMP
+
+    fmu = native.build_native_fmu(tmp_path / "sweep.fmu", 2, build_dir=build["objects"], scene="sweep")
+    rows = [(0.0, 0.0, 0.0), (PRESSED_AFTER, 0.0, 0.0), (PRESSED_AFTER + RAMP, PRESSING["grip_y"], PRESSING["grip_z"])]
+    records, _ = run_child(GRIP_SIGNAL, fmu, PRESSED_AFTER + 0.5, json.dumps(rows))
+    errors = records[-1]["errors"]
+    assert errors and "BlowUpError" in errors[0], errors
+    assert re.search(r"Likely cause: the grip presses pinned particle \d+ into collider 1 \(a sphere\), whose contact "
+                     r"puts it back 0\.001 m off its surface at every step", errors[0]), errors[0]
 
 
 def test_a_unit_of_another_scene_compiles_its_generated_source_alone(build, tmp_path, monkeypatch):

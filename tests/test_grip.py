@@ -2,11 +2,13 @@
 keys in the scene ([[grip_key]]) and from the inputs grip_x, grip_y, grip_z, with the displacement's
 rate as their velocity, under every integrator."""
 
+import re
+
 import numpy as np
 import pytest
 
 import wetcloth
-from wetcloth.errors import ConfigError, ParameterError
+from wetcloth.errors import BlowUpError, ConfigError, ParameterError
 from wetcloth.scene import load_scene
 
 INTEGRATORS = ["bdf2", "implicit_euler", "symplectic_euler", "explicit_euler"]
@@ -126,6 +128,31 @@ def test_a_state_taken_while_the_grip_moves_restores_and_runs_on_to_the_bit(move
     sim.advance(0.5)
     np.testing.assert_array_equal(sim.state.pos, went_on["state"].pos)
     np.testing.assert_array_equal(sim.state.vel, went_on["state"].vel)
+
+
+#: The sweep's towel after its ball has swept through it (the ball then at (0, 0.3, 0.35) m, radius 0.12 m), and
+#: grip inputs that carry its pinned top edge (y = 0, z = 0.85 m) to y = 0.3, z = 0.35 m, into the ball, over the
+#: next 0.1 s.
+PRESSED_AFTER, PRESSING, RAMP = 2.5, dict(grip_y=0.3, grip_z=-0.5), 0.1
+
+
+def test_a_blow_up_from_a_grip_pressing_pinned_particles_into_a_collider_says_so():
+    """Contact pushes those pinned particles back out to thickness / 2 at every step while the grip puts them
+    back in, until the cloth blows up; the message names that, not the springs' stiffness."""
+    sim = wetcloth.Simulation(load_scene("sweep"))
+    sim.advance(PRESSED_AFTER)
+    sim.set_inputs(**PRESSING)
+    with pytest.raises(BlowUpError) as caught:
+        sim.advance(RAMP)
+        sim.advance(1.0)
+    message = str(caught.value)
+    pressed = re.search(r"Likely cause: the grip presses pinned particle (\d+) into collider 1 \(a sphere\)", message)
+    assert pressed, message
+    assert "stretch_stiffness" not in message
+    i = int(pressed.group(1))
+    assert sim.model.cloth.free[i] == 0.0
+    centre = np.array([0.0, 0.3, 0.35])  # the ball, where its keys left it
+    assert np.linalg.norm(sim.state.pos[:, i] - centre) < 0.12 + 0.5 * sim.scene.thickness * (1 + 1e-6)
 
 
 def test_without_a_grip_a_pinned_cloth_runs_as_before():

@@ -381,22 +381,38 @@ class Simulation:
         buf = self._buffers
         speed, finite = _core.speed_and_finiteness(buf.trial_pos, buf.trial_vel, buf.trial_water)
         scene = self.scene
+        pinned = self._pinned_cause(buf.trial_pos)
         if finite and speed < self._control.blow_up_speed:  # neither: no step was accepted (the core's bound)
+            cause = pinned or (f"a state the cloth cannot be in, or a scene stiffer than the smallest step resolves; "
+                               f"{blow_up_advice(scene)}")
             raise BlowUpError(
                 f"the cloth state could not be stepped from t = {self.time:.6g} s: the step control accepted "
                 f"no step (rejected more than {MAX_REJECTIONS} times, the last of {h:.3g} s; integrator "
-                f"{scene.integrator!r}). Likely cause: a state the cloth cannot be in, or a scene stiffer than "
-                f"the smallest step resolves; {blow_up_advice(scene)}. Last good time: {self.time:.6g} s.",
+                f"{scene.integrator!r}). Likely cause: {cause}. Last good time: {self.time:.6g} s.",
                 last_good_time=self.time,
             )
         what = "became non-finite" if not finite else f"exploded (speed {speed:.3g} m/s)"
+        cause = pinned or (f"the step is too large for stretch_stiffness = {scene.stretch_stiffness:g} N/m; "
+                           f"{blow_up_advice(scene)}")
         raise BlowUpError(
             f"the cloth state {what} in the step from t = {self.time:.6g} s to {self.time + h:.6g} s "
-            f"(step {h:.3g} s, integrator {scene.integrator!r}). Likely cause: the step is too large for "
-            f"stretch_stiffness = {scene.stretch_stiffness:g} N/m; {blow_up_advice(scene)}. "
+            f"(step {h:.3g} s, integrator {scene.integrator!r}). Likely cause: {cause}. "
             f"Last good time: {self.time:.6g} s.",
             last_good_time=self.time,
         )
+
+    def _pinned_cause(self, pos: np.ndarray) -> str:
+        """Why a step that ends at pos (3, n) m failed, if a pinned particle is pressed into a collider there
+        (the core's pinned_pressed; the native unit's Simulation::blow_up_message says the same), else ''."""
+        if not self.scene.colliders:
+            return ""
+        i, k, distance = _core.pinned_pressed(self.model.physics, self.model.cloth.free, pos)
+        if i < 0:
+            return ""
+        return (f"the grip presses pinned particle {i} into collider {k + 1} (a {self.scene.colliders[k].shape}), "
+                f"whose contact puts it back {distance:.3g} m off its surface at every step while the grip holds it in; "
+                f"move the grip (grip_x, grip_y, grip_z, its keys) or the collider so that the pinned particles stay "
+                f"clear of it")
 
     # ----------------------------------------------------------------- results
     def outputs(self) -> dict[str, float]:

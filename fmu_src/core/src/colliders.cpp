@@ -156,6 +156,21 @@ double collider_distance(const Physics& phys, Index k, const double* at, double 
     return table_distance(phys, row, p, reach, normal);
 }
 
+PinnedPressed pinned_pressed(const Physics& phys, Index n, const double* free, const double* pos) {
+    PinnedPressed nearest;
+    nearest.distance = 0.5 * phys.thickness * (1.0 + 1e-6);  // (contact leaves a particle it pushed at thickness / 2)
+    for (Index i = 0; i < n; ++i) {
+        if (free[i] != 0.0) continue;
+        const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+        for (Index k = 0; k < phys.collider_count; ++k) {
+            double normal[3];
+            const double distance = collider_distance(phys, k, p, 1.0, normal);  // (a mesh's looked for within 1 m)
+            if (distance < nearest.distance) nearest = {i, k, distance};
+        }
+    }
+    return nearest;
+}
+
 double table_distance(const Physics& phys, const double* row, const double* p, double reach, double* normal) {
     const double d[3] = {p[0] - row[C_X], p[1] - row[C_Y], p[2] - row[C_Z]};
     switch (static_cast<Index>(row[C_SHAPE])) {

@@ -1019,16 +1019,32 @@ std::string Simulation::blow_up_message() const {
         advice += (k == 0 ? "" : k + 1 == options.size() ? " or " : ", ") + options[k];
     }
     const std::string integrator = py_repr(std::string_view(INTEGRATOR_NAMES[scene_.integrator]));
+    // (wetcloth.simulation.Simulation._pinned_cause)
+    const PinnedPressed pinned = pinned_pressed(core_.phys, topo_.n, core_.cloth.free, b.trial_pos);
+    std::string cause;
+    if (pinned.particle >= 0) {
+        const Index i = pinned.particle;
+        const Index shape = static_cast<Index>(core_.phys.colliders[pinned.collider * COLLIDER_COLUMNS + C_SHAPE]);
+        cause = "the grip presses pinned particle " + std::to_string(i) + " into collider " +
+                std::to_string(pinned.collider + 1) + " (a " + SHAPE_NAMES[shape] + "), whose contact puts it back " +
+                py_g(pinned.distance, 3) + " m off its surface at every step while the grip holds it in; move the "
+                "grip (grip_x, grip_y, grip_z, its keys) or the collider so that the pinned particles stay clear of it";
+    }
     if (check.finite && check.speed < core_.control.blow_up_speed) {  // no step was accepted (stepping.hpp)
         return "the cloth state could not be stepped from t = " + py_g(t) + " s: the step control accepted no step "
                "(rejected more than " + std::to_string(MAX_REJECTIONS) + " times, the last of " + py_g(h, 3) +
-               " s; integrator " + integrator + "). Likely cause: a state the cloth cannot be in, or a scene stiffer "
-               "than the smallest step resolves; " + advice + ". Last good time: " + py_g(t) + " s.";
+               " s; integrator " + integrator + "). Likely cause: " +
+               (cause.empty() ? "a state the cloth cannot be in, or a scene stiffer than the smallest step resolves; " +
+                                    advice
+                              : cause) +
+               ". Last good time: " + py_g(t) + " s.";
     }
     return "the cloth state " + what + " in the step from t = " + py_g(t) + " s to " + py_g(t + h) + " s (step " +
-           py_g(h, 3) + " s, integrator " + py_repr(std::string_view(INTEGRATOR_NAMES[scene_.integrator])) +
-           "). Likely cause: the step is too large for stretch_stiffness = " + py_g(scene_.stretch_stiffness) +
-           " N/m; " + advice + ". Last good time: " + py_g(t) + " s.";
+           py_g(h, 3) + " s, integrator " + integrator + "). Likely cause: " +
+           (cause.empty() ? "the step is too large for stretch_stiffness = " + py_g(scene_.stretch_stiffness) + " N/m; " +
+                                advice
+                          : cause) +
+           ". Last good time: " + py_g(t) + " s.";
 }
 
 // ------------------------------------------------------------------------------------------ checkpoints

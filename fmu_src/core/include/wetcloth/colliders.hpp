@@ -22,6 +22,16 @@ enum ColliderColumn : Index {
 //: outward normal there (normal, 3); a mesh collider's is at most reach (m): farther, it is not looked for.
 double collider_distance(const Physics& phys, Index k, const double* p, double reach, double* normal);
 
+//: The pinned particle (free 0) of pos (3, n) nearest a collider's surface, no farther than the thickness / 2
+//: that contact keeps the cloth off it: its index, the collider's and its signed distance (m, negative inside);
+//: particle and collider -1 where none is that close.  (A blow-up's likely cause: the grip presses it into the
+//: collider, and contact pushes it back out at every step, while its neighbours follow.)
+struct PinnedPressed {
+    Index particle = -1, collider = -1;
+    double distance = 0.0;
+};
+PinnedPressed pinned_pressed(const Physics& phys, Index n, const double* free, const double* pos);
+
 //: As collider_distance, for the collider of row `row` where its row puts it (unmoved), from point p (3).
 double table_distance(const Physics& phys, const double* row, const double* p, double reach, double* normal);
 
