@@ -9,7 +9,7 @@ buoyancy's, ``wetcloth.energy``) ended above its start's by more than the driver
 negative: every frame within its bound); then the steps taken again and the CPU time per frame.  Over a frame in
 which a keyed collider that may reach the cloth moves (the sweep's ball, without turning), energy and bound are
 those seen from a frame moving with it, where it stands still and contact only takes energy, as the core weighs
-them (``ball_reaches``).  Frames taken in parts are checked by the core in those parts, against their own
+them (``ball_velocity``).  Frames taken in parts are checked by the core in those parts, against their own
 bounds.
 """
 
@@ -25,24 +25,12 @@ import numpy as np  # noqa: E402
 
 import _paths  # noqa: E402,F401  (tests/ on sys.path)
 import wetcloth  # noqa: E402
-from support.driven import DriveBound, ball_reaches, collider_shift, energy_in_frame  # noqa: E402
+from support.driven import DriveBound, ball_velocity, energy_in_frame  # noqa: E402
 
 #: Each preset's run (s): the lift's grip stops at 5 s, the sweep's ball at 2 s.
 PRESETS = {"lift": 8.0, "current": 20.0, "flag": 5.0, "sweep": 4.0}
 #: Above the 1e-9 J of round-off in summing the energy over the particles.
 ROUND_OFF = 1e-9
-
-
-def keyed_velocity(scene: wetcloth.Scene, sim: wetcloth.Simulation, start: float, h: float) -> np.ndarray:
-    """The velocity (m/s) of the scene's one keyed collider (numbered 1, a sphere) over the frame from start (s)
-    where it may reach the cloth within it, else zero (and without keys); its keys neither turn it nor change
-    its velocity within a frame (the sweep's at 0.5 and 2 s)."""
-    if not scene.collider_keys or not ball_reaches(scene, sim, start, h):
-        return np.zeros(3)
-    assert {key.collider for key in scene.collider_keys} == {1}
-    shift = (collider_shift(scene, 1, start + h) - collider_shift(scene, 1, start)) / h
-    assert not shift[3:].any()
-    return shift[:3]
 
 
 def run(preset: str, seconds: float, fps: float) -> str:
@@ -54,7 +42,7 @@ def run(preset: str, seconds: float, fps: float) -> str:
     checked, over, excess, cpu = 0, 0, -np.inf, 0.0
     for _ in range(frames):
         start, start_vel, again = sim.time, sim.state.vel.copy(), sim.rejected_steps
-        ball = keyed_velocity(scene, sim, start, h)
+        ball = ball_velocity(scene, sim, start, h)
         energy = energy_in_frame(sim, ball)
         clock = time.process_time()
         sim.advance(h)

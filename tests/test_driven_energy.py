@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 import wetcloth
 from wetcloth.scene import Collider, ColliderKey
-from support.driven import (DriveBound, ball_reaches, collider_moves, collider_shift, energy_in_frame,
+from support.driven import (DriveBound, ball_velocity, collider_moves, collider_shift, energy_in_frame,
                             energy_noise)
 from wetcloth.energy import total_energy
 
@@ -82,15 +82,13 @@ def ball_frame_excesses(scene: wetcloth.Scene, frames: range):
     collider_step_limit), its index and how far the cloth's energy rose above the work of the air and the pinned
     edge (J; support.driven.DriveBound), less the round-off the core allows (energy_noise).  Both are seen from
     the ball's frame (its velocity over the frame) where it may reach the cloth within the frame, else from the
-    world's, as the core weighs them (support.driven.ball_reaches)."""
+    world's, as the core weighs them (support.driven.ball_velocity)."""
     frame = scene.max_step
     sim = wetcloth.Simulation(scene)
     bound = DriveBound(scene)
     for index in range(frames.stop):
         start = sim.time
-        ball = (collider_shift(scene, 1, start + frame) - collider_shift(scene, 1, start))[:3] / frame
-        if not ball_reaches(scene, sim, start, frame):
-            ball = np.zeros(3)
+        ball = ball_velocity(scene, sim, start, frame)
         energy, noise = energy_in_frame(sim, ball), energy_noise(sim, ball)
         start_vel, steps, again = sim.state.vel.copy(), sim.steps, sim.rejected_steps
         sim.advance(frame)

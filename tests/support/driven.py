@@ -102,3 +102,16 @@ def ball_reaches(scene: wetcloth.Scene, sim: wetcloth.Simulation, t: float, h: f
     speed = float(np.linalg.norm(sim.state.vel, axis=0).max())
     reach = scene.thickness + h * (float(np.linalg.norm(velocity)) + speed) + GRAVITY * h * h
     return bool((np.linalg.norm(sim.state.pos - centre[:, None], axis=0) - ball.radius <= reach).any())
+
+
+def ball_velocity(scene: wetcloth.Scene, sim: wetcloth.Simulation, start: float, h: float) -> np.ndarray:
+    """The frame the core weighs a step of h s from start (s) in: the velocity (m/s) of the scene's one keyed
+    collider (numbered 1, a sphere, not turning) over it where the collider may reach the cloth of `sim` within it
+    (ball_reaches), else zero (and without keys).  (Where a key changes that velocity within the span, its mean: the
+    core then takes the span in parts.)"""
+    if not scene.collider_keys or not ball_reaches(scene, sim, start, h):
+        return np.zeros(3)
+    assert {key.collider for key in scene.collider_keys} == {1}
+    shift = (collider_shift(scene, 1, start + h) - collider_shift(scene, 1, start)) / h
+    assert not shift[3:].any()
+    return shift[:3]
