@@ -187,6 +187,28 @@ def test_ctrl_c_keeps_the_outputs_and_prints_one_line(tmp_path):
     assert plot_path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_a_ctrl_c_while_the_outputs_are_written_keeps_them_whole(tmp_path, monkeypatch, capsys):
+    """Ctrl-C arrives after the run, while its plot is written: the plot is still written whole, then the
+    command stops with exit 130 and one line naming what was kept (the plot was lost before)."""
+    from wetcloth import plotting
+
+    drawing = plotting.plot_run
+
+    def interrupted(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.5)  # the signal's handler runs here
+        return drawing(*args, **kwargs)
+
+    monkeypatch.setattr(plotting, "plot_run", interrupted)
+    csv_path, plot_path = tmp_path / "o.csv", tmp_path / "p.png"
+    code = main(["run", "thesis_fast", "--duration", "0.2", "--set", "nx=5", "--set", "ny=5", "--csv", str(csv_path),
+                 "--plot", str(plot_path), "--no-progress"])
+    err = capsys.readouterr().err
+    assert code == 130, err
+    assert err.strip() == f"wetcloth run: interrupted; outputs up to t = 0.2 s are in {csv_path} and {plot_path}"
+    assert plot_path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
 def test_a_ctrl_c_during_a_frame_callback_stops_the_run_after_it():
     """Ctrl-C arrives while a frame callback runs library code that catches BaseException (as trimesh's
     vertex normals do): the callback finishes, and the run stops after it with the frames so far."""

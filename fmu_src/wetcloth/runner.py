@@ -161,6 +161,14 @@ def _add_rows(result: RunResult, times: np.ndarray, outputs, errors: np.ndarray)
 
 
 @contextlib.contextmanager
+def interrupts_held():
+    """A block inside which Ctrl-C is held back and raised as KeyboardInterrupt when it ends (in the main
+    thread, under Python's own handler; elsewhere it changes nothing): for writing outputs whole."""
+    with _deferrable_interrupts() as deferred, deferred():
+        yield
+
+
+@contextlib.contextmanager
 def _deferrable_interrupts():
     """Yields ``deferred``: a context manager inside which Ctrl-C is held back, and raised as
     KeyboardInterrupt when the block ends; elsewhere it is raised at once, as usual.  The frame

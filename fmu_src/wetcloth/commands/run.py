@@ -15,7 +15,7 @@ from tqdm.auto import tqdm
 from wetcloth import run_settings
 from wetcloth.commands.common import FAILED, INTERRUPTED, csv_path, path_argument, scene_with_overrides
 from wetcloth.errors import BlowUpError
-from wetcloth.runner import run, whole_frames
+from wetcloth.runner import interrupts_held, run, whole_frames
 from wetcloth.scene import read_scene_file
 
 
@@ -89,7 +89,12 @@ def main(args) -> int:
     except (Exception, KeyboardInterrupt) as exc:  # a blow-up, Ctrl-C, a full disk: keep what was good
         result, stop = getattr(exc, "partial_result", None), exc
     problems: list[str] = []  # what could not be written; reported after why the run stopped
-    kept = _keep(result, sequence, args, f"{args.scene or 'towel'}: {settings.duration:g} s", stop is None, problems)
+    try:  # a Ctrl-C while the outputs are written stops the command once they are
+        with interrupts_held():
+            kept = _keep(result, sequence, args, f"{args.scene or 'towel'}: {settings.duration:g} s", stop is None,
+                         problems)
+    except KeyboardInterrupt as exc:
+        stop = stop or exc
     trouble = "".join(f"; {p}" for p in problems)
     if stop is None:
         last = result.rows[-1]
