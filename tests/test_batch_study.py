@@ -417,6 +417,64 @@ def test_sensitivity_study_whose_runs_all_fail_exits_1_naming_them(tmp_path, cap
     assert pd.read_csv(tmp_path / "sa_sensitivity.csv").empty and (tmp_path / "sa_sensitivity.png").exists()
 
 
+def small_study_file(folder: Path) -> Path:
+    path = folder / "small.toml"
+    path.write_text('scene = "thesis_fast"\nduration = 2.0\n[axes]\nabsorption_rate = [0.5]\n')
+    return path
+
+
+@pytest.mark.parametrize("address", ["notanaddress", "tcp://host", "tcp://host:99999", "tcp://:8786", "foo://host:8786"])
+def test_a_malformed_scheduler_address_is_refused_before_any_connection(address, tmp_path, monkeypatch, capsys):
+    """It was taken to Dask's Client: an error, a 120 s hang, then a traceback of Client.__del__.  Now argparse
+    refuses it (batch and fit) with one line naming --scheduler and the form, and so does dask_client."""
+    import distributed
+
+    from wetcloth.batch.cluster import check_scheduler_address, dask_client
+    from wetcloth.cli import main
+
+    def no_connection(*args, **kwargs):
+        raise AssertionError("no connection is attempted")
+
+    monkeypatch.setattr(distributed, "Client", no_connection)
+    for argv in (["batch", str(small_study_file(tmp_path)), "--out", str(tmp_path / "t.parquet")],
+                 ["fit", "towel", "--data", str(tmp_path / "m.csv"), "--params", "absorption_rate", "--global"]):
+        with pytest.raises(SystemExit) as info:
+            main([*argv, "--scheduler", address])
+        assert info.value.code == 2
+        last = capsys.readouterr().err.splitlines()[-1]
+        assert last.startswith(f"wetcloth {argv[0]}: error: argument --scheduler: {address!r} is not a Dask "
+                               "scheduler's address (") and last.endswith("); expected the form tcp://host:8786"), last
+    with pytest.raises(ValueError, match="expected the form tcp://host:8786"), dask_client(scheduler=address):
+        pass
+    assert check_scheduler_address("tcp://head:8786") == "tcp://head:8786" and check_scheduler_address("head:8786")
+
+
+@pytest.mark.parametrize("dry_run", [False, True])
+@pytest.mark.parametrize("option, value, named", [("--out", "afile/t.parquet", "afile/t.parquet"),
+                                                  ("--plot-dir", "afile", "afile"),
+                                                  ("--plot-dir", "afile/plots", "afile/plots")])
+def test_an_output_path_through_a_file_is_refused_up_front(option, value, named, dry_run, tmp_path, monkeypatch,
+                                                           capsys):
+    """Such an --out was found only once the study had run (a dry run took it); such a --plot-dir after, as
+    a raw '[Errno 17] File exists'.  Now both are refused before anything, as fit --out is: one line."""
+    from wetcloth import batch
+    from wetcloth.cli import main
+    from wetcloth.commands import batch as command
+
+    def nothing(*args, **kwargs):
+        raise AssertionError("refused before anything runs")
+
+    monkeypatch.setattr(batch, "run_study", nothing)
+    monkeypatch.setattr(command, "dry_run", nothing)
+    monkeypatch.chdir(tmp_path)
+    Path("afile").write_text("x")
+    argv = ["batch", str(small_study_file(tmp_path)), option, value, *(["--dry-run"] if dry_run else [])]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"wetcloth batch: error: {option} {named}: cannot write there ("), err
+    assert "afile" in err.split("cannot write there")[1], err
+
+
 def test_dashboard_line_names_the_link_or_says_there_is_none():
     from types import SimpleNamespace
 

@@ -303,6 +303,24 @@ def test_cost_advice_names_the_expensive_settings_and_never_what_is_set():
     assert "implicit_euler" not in "; ".join(cheaper_settings(implicit, cost, 10.0, math.inf))
 
 
+@pytest.mark.parametrize("max_step, tolerance, took", [(1e-12, 5e-6, "about 3.2 years"), (1e-300, 5e-6, None),
+                                                       (1e-9, 0.0, "about 1.2 days")])
+def test_a_tiny_max_step_is_named_as_what_makes_the_run_long(max_step, tolerance, took):
+    """Steps held at max_step = 1e-12 s: the warning said only 'cheaper: a shorter duration'; 1e-300 printed
+    ~300 digits of years.  Now max_step is named with its value, and beyond 1000 years it says so."""
+    from wetcloth.advice import cost_warning
+    from wetcloth.progress import Sample
+
+    scene = wetcloth.Scene(max_step=max_step, tolerance=tolerance)
+    sample = Sample(elapsed=2.0, steps=20000, simulated=20000 * max_step, time=20000 * max_step)
+    warning = cost_warning(scene, 1.0, sample, stable_step=math.inf)
+    took = took or "more than 1000 years"
+    bound = "is every step (tolerance = 0: fixed steps)" if tolerance == 0.0 else "bounds every step"
+    assert warning.startswith(f"this run will take {took} ("), warning
+    assert (f"cheaper: a larger max_step (max_step = {max_step:g} s {bound}, and so makes the run this long); "
+            "a shorter duration (now 1 s)") in warning, warning
+
+
 def test_blow_up_advice_never_suggests_what_is_already_set():
     from wetcloth.advice import blow_up_advice
 

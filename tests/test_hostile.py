@@ -825,3 +825,18 @@ def test_a_misspelled_input_gets_the_nearest_inputs():
     with pytest.raises(wetcloth.ParameterError) as info:
         sim.set_inputs(water_levl=0.1)
     assert str(info.value) == "parameter 'water_levl': unknown input; did you mean 'water_level'?"
+
+
+# ============================================================== 11. command-line options refused by argparse
+@pytest.mark.parametrize("seed", ["-1", "99999999999999", "4294967296", "1.5", "x"])
+def test_a_seed_numpy_cannot_take_is_refused_naming_seed_and_its_range(seed, capsys):
+    """fit --global --seed -1 started the Dask cluster and then failed in numpy, not naming --seed."""
+    from wetcloth.cli import build_parser
+
+    argv = ["fit", "towel", "--data", "m.csv", "--params", "absorption_rate", "--global"]
+    with pytest.raises(SystemExit) as info:
+        build_parser().parse_args([*argv, "--seed", seed])
+    assert info.value.code == 2
+    assert capsys.readouterr().err.splitlines()[-1] == (
+        f"wetcloth fit: error: argument --seed: expected a whole number 0..2**32 - 1 (4294967295), got {seed!r}")
+    assert [build_parser().parse_args([*argv, "--seed", s]).seed for s in ("0", "4294967295")] == [0, 2**32 - 1]

@@ -57,6 +57,34 @@ def test_unknown_parameter_suggests_the_nearest_names():
         load_scene(colour="blue")
 
 
+@pytest.mark.parametrize("name, fixed", [
+    ("collider0_x", "collider1_x"), ("collider01_x", "collider1_x"), ("collider00_radus", "collider1_radius"),
+    ("grip_key0_time", "grip_key1_time"), ("grip_key01_time", "grip_key1_time"),
+    ("collider_key0_time", "collider_key1_time"), ("collider_key007_z", "collider_key7_z"),
+])
+def test_a_table_number_of_0_or_with_leading_zeros_is_named_not_suggested_back(name, fixed):
+    """Numbered names count from 1 without leading zeros: the message says so and names the fixed name (it
+    suggested the name itself: 'collider0_x': did you mean 'collider0_x'?), through --set as well."""
+    what = re.match(r"[a-z_]+?(?=\d)", name).group().replace("_", " ")
+    expected = f"parameter '{name}': {what} numbers start at 1, without leading zeros; did you mean '{fixed}'?"
+    with pytest.raises(ParameterError) as info:
+        load_scene(**{name: 1.0})
+    assert str(info.value) == expected
+    with pytest.raises(ParameterError) as info:
+        wetcloth.scene.parse_text(name, "1")
+    assert str(info.value) == expected
+
+
+@pytest.mark.parametrize("name", ["width", "length"])
+@pytest.mark.parametrize("value", [1e-300, 5e-324, 9.99e-4])
+def test_a_cloth_side_below_a_millimetre_is_refused_naming_the_range(name, value):
+    """A side near 0 made zero rest lengths and masses (numpy's divide-by-zero warnings, a motionless cloth)."""
+    with pytest.raises(ParameterError) as info:
+        load_scene(**{name: value})
+    assert str(info.value) == f"parameter '{name}': {value!r} is out of range; allowed: 0.001 <= {name} <= 100 m"
+    assert getattr(load_scene(**{name: 1e-3}), name) == 1e-3
+
+
 def _bad_values(f: dataclasses.Field):
     md = f.metadata
     if md["choices"]:

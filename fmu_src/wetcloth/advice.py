@@ -92,8 +92,9 @@ def cheaper_settings(scene: Scene, cost: Cost, duration: float, stable_step: flo
                        f"{stable_step:.2g} s{why}; implicit_euler is stable at any step")
         if causes:
             options.append("a less extreme " + " or ".join(c.split(" = ")[0] for c in causes))
-    if scene.tolerance == 0.0 and scene.max_step < 1e-3 and not stability_bound:
-        options.append(f"a larger max_step (now {scene.max_step:g} s, fixed steps)")
+    if scene.max_step < 1e-3 and cost.step >= 0.5 * scene.max_step and not stability_bound:
+        bound = "is every step (tolerance = 0: fixed steps)" if scene.tolerance == 0.0 else "bounds every step"
+        options.append(f"a larger max_step (max_step = {scene.max_step:g} s {bound}, and so makes the run this long)")
     if scene.tolerance > 0.0 and cost.exact and cost.step < 0.1 * min(scene.max_step, stable_step):
         options.append(f"a larger tolerance (now {scene.tolerance:g}; steps of {cost.step:.2g} s keep the error within it)")
     options.append(f"a shorter duration (now {duration:g} s)")
@@ -105,16 +106,26 @@ def cost_warning(scene: Scene, duration: float, sample: Sample, stable_step: flo
     cost = estimate_cost(scene, duration, sample, stable_step)
     if cost.seconds <= WARN_AFTER:
         return None
-    about = "at least" if not cost.exact else "about"
-    return (f"this run will take {about} {format_duration(cost.seconds)} ({cost.steps:.2g} steps of {cost.step:.2g} s, "
+    return (f"this run will take {about(cost.seconds, cost.exact)} ({cost.steps:.2g} steps of {cost.step:.2g} s, "
             f"{format_duration(cost.per_step)} each); cheaper: " + "; ".join(cheaper_settings(scene, cost, duration, stable_step)))
 
 
 _UNITS = (("years", 3.15e7), ("days", 86400.0), ("h", 3600.0), ("min", 60.0), ("s", 1.0), ("ms", 1e-3), ("µs", 1e-6))
+#: s: durations beyond this are said as 'more than 1000 years' (the figure itself means nothing then).
+LONGEST_SAID = 1000 * _UNITS[0][1]
 
 
 def format_duration(seconds: float) -> str:
-    """'3.2 h', '174 days', '45 s', '150 µs'."""
+    """'3.2 h', '174 days', '45 s', '150 µs'; 'more than 1000 years' beyond LONGEST_SAID."""
+    if seconds > LONGEST_SAID:
+        return "more than 1000 years"
     unit, size = next(((u, size) for u, size in _UNITS if seconds >= size), _UNITS[-1])
     value = seconds / size
     return f"{value:.0f} {unit}" if value >= 10 else f"{value:.2g} {unit}"
+
+
+def about(seconds: float, exact: bool = True) -> str:
+    """'about 3.2 h' of an estimate ('at least 3.2 h' of a lower bound, not ``exact``); 'more than 1000 years'
+    beyond LONGEST_SAID."""
+    said = format_duration(seconds)
+    return said if seconds > LONGEST_SAID else f"{'about' if exact else 'at least'} {said}"

@@ -53,6 +53,12 @@ PINS_ALLOWED = ("'' (none), the name of a point attribute of the mesh file (nonz
                 "'box:x0,y0,z0,x1,y1,z1' (m, x0 <= x1, y0 <= y1, z0 <= z1)")
 
 
+#: m: the smallest width and length of the rectangle.  A fabric's envelope is 0.4 to 2 mm thick (the presets'
+#: thickness): a smaller piece is no sheet for the slab buoyancy and the self-collision's layers a thickness
+#: apart.  Even on the finest grid (1024 particles) its springs' rest lengths (1 µm) and particles' masses then
+#: stay far from zero, where a size near 0 divides by zero and leaves the cloth motionless.
+SMALLEST_SIZE = 1e-3
+
 #: How far (m) Collider.distance looks for a mesh collider's surface.
 MESH_REACH = 0.05
 
@@ -243,8 +249,8 @@ class Scene:
     # --- cloth geometry and grid
     nx: int = _param(21, "-", "particles along the width (x)", 2, 1024)
     ny: int = _param(29, "-", "particles along the length (y)", 2, 1024)
-    width: float = _param(0.5, "m", "cloth size along x", 0.0, LARGEST_SIZE, lo_open=True)
-    length: float = _param(0.7, "m", "cloth size along y", 0.0, LARGEST_SIZE, lo_open=True)
+    width: float = _param(0.5, "m", "cloth size along x", SMALLEST_SIZE, LARGEST_SIZE)
+    length: float = _param(0.7, "m", "cloth size along y", SMALLEST_SIZE, LARGEST_SIZE)
     cloth_mesh: str = _param(
         "", "-", "the cloth's mesh file (OBJ, PLY, STL, OFF, VTK/VTU, glTF/GLB; triangles and quads), one particle "
         "per vertex; '' = the nx x ny rectangle (then nx, ny, width, length make the cloth); a relative path is "
@@ -387,14 +393,18 @@ def describe_range(f: dataclasses.Field, name: str | None = None) -> str:
 
 
 def _unknown_listed_field(name: str, prefix: str, fields: list[str], what: str) -> str:
-    """Why ``name`` (``prefix<k>_<field>``) names no field of a listed table (a collider, a key): the nearest
-    field if one is close, else the layout and every field."""
+    """Why ``name`` (``prefix<k>_<field>``) names no field of a listed table (a collider, a key): a number
+    that is 0 or has leading zeros (k counts from 1), a misspelled field (the nearest one named), else the
+    layout and every field."""
+    layout = f"a {what}'s fields are {prefix}<k>_<field> (k = 1, 2, ...) with <field> one of {', '.join(fields)}"
     match = re.fullmatch(rf"{prefix}(\d+)_(.+)", name)
-    close = difflib.get_close_matches(match.group(2), fields, n=1) if match else []
-    if close:
-        return f"unknown {what} field; did you mean '{prefix}{match.group(1)}_{close[0]}'?"
-    return (f"unknown {what} field; a {what}'s fields are {prefix}<k>_<field> (k = 1, 2, ...) with <field> one of "
-            f"{', '.join(fields)}")
+    if match is None:
+        return f"unknown {what} field; {layout}"
+    number, field_name = match.groups()
+    close = [field_name] if field_name in fields else difflib.get_close_matches(field_name, fields, n=1)
+    k = max(int(number), 1)
+    why = f"{what} numbers start at 1, without leading zeros" if number != str(k) else f"unknown {what} field"
+    return f"{why}; did you mean '{prefix}{k}_{close[0]}'?" if close else f"{why}; {layout}"
 
 
 def _field(name: str) -> dataclasses.Field:

@@ -23,6 +23,7 @@ from typing import Callable
 
 LOCAL_HTTP = "127.0.0.1:0"  # the local cluster's dashboard / HTTP address: any free port, loopback only
 SCHEDULER_TIMEOUT = 60.0  # s to connect to a scheduler, and then for the workers asked for to connect
+SCHEDULER_FORM = "tcp://host:8786"  # the form of a scheduler's address, as messages say
 
 
 class MainGuardMissing(SystemExit):
@@ -38,6 +39,21 @@ def check_workers(workers) -> int | None:
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be a whole number >= 1, got {workers!r}")
     return workers
+
+
+def check_scheduler_address(address: str) -> str:
+    """``address`` if it has the form of a Dask scheduler's (``[scheme://]host:port``, a scheme Dask knows, a
+    port 1..65535), read by Dask's own parser without connecting; else a ValueError naming the form."""
+    from distributed.comm import get_address_host_port
+
+    try:
+        host, port = get_address_host_port(address)
+        if not host or not 0 < port < 65536:
+            raise ValueError("it needs a host and a port 1..65535")
+    except ValueError as exc:
+        raise ValueError(f"{address!r} is not a Dask scheduler's address ({exc}); expected the form "
+                         f"{SCHEDULER_FORM}") from None
+    return address
 
 
 def dashboard_line(client) -> str:
@@ -59,7 +75,8 @@ def dask_client(client=None, scheduler: str | None = None, workers: int | None =
     ``timeout`` s each, default ``SCHEDULER_TIMEOUT``); or a local cluster of ``workers``
     single-threaded processes (default one per core) that starts here and stops on exit.
     ``announce(line)`` is given the dashboard's address (``dashboard_line``) once the client is
-    connected to a scheduler or a local cluster started here."""
+    connected to a scheduler or a local cluster started here.  A malformed ``scheduler`` is refused
+    before any connection (``check_scheduler_address``)."""
     workers = check_workers(workers)
     timeout = SCHEDULER_TIMEOUT if timeout is None else timeout
     if client is not None:
@@ -71,7 +88,7 @@ def dask_client(client=None, scheduler: str | None = None, workers: int | None =
     _drop_sync_cancel_errors()
 
     if scheduler:
-        with Client(scheduler, set_as_default=False, timeout=timeout) as c:
+        with Client(check_scheduler_address(scheduler), set_as_default=False, timeout=timeout) as c:
             if announce is not None:
                 announce(dashboard_line(c))
             if workers:

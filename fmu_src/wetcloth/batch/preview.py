@@ -189,7 +189,7 @@ def format_estimate(estimate: TimeEstimate, workers: int | None, budget: float =
                     startup: float | None = None) -> str:
     """'estimated time: about 1.4 s per run x 512 runs = 12 min of computing; about 6 min on 2 workers (...)';
     with ``startup`` (s, ``startup_time``: a local cluster) the wall time includes it and says so."""
-    from wetcloth.advice import format_duration
+    from wetcloth.advice import about, format_duration
 
     refused = (f"{estimate.refused} run{'s' if estimate.refused > 1 else ''} with a value out of range will be "
                "refused at once" if estimate.refused else "")
@@ -203,16 +203,16 @@ def format_estimate(estimate: TimeEstimate, workers: int | None, budget: float =
     spread = [p.seconds for p in estimate.timed]
     timed = (f"{len(spread)} of the runs timed in this process for up to {budget:g} s each"
              + (f", {format_duration(min(spread))} to {format_duration(max(spread))} per run" if len(spread) > 1 else ""))
-    text = (f"estimated time: about {format_duration(estimate.per_run)} per run x {estimate.runs} runs = "
+    text = (f"estimated time: {about(estimate.per_run)} per run x {estimate.runs} runs = "
             f"{format_duration(estimate.compute)} of computing")
     if workers:
         plural = "s" if workers > 1 else ""
         if startup is not None and math.isfinite(startup):
-            text += (f"; about {format_duration(estimate.wall(workers) + startup)} on {workers} worker{plural} of a "
+            text += (f"; {about(estimate.wall(workers) + startup)} on {workers} worker{plural} of a "
                      f"local cluster, {format_duration(startup)} of it to start the cluster, warm up its "
                      f"worker{plural} and stop it")
         else:
-            text += f"; about {format_duration(estimate.wall(workers))} on {workers} worker{plural}"
+            text += f"; {about(estimate.wall(workers))} on {workers} worker{plural}"
     else:
         text += "; divide by the number of workers of the cluster"
     return text + f" ({timed}{'; ' + notes if notes else ''})"

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from wetcloth.batch.engines import ENGINES
 from wetcloth.batch.results import KEY
-from wetcloth.commands.common import INTERRUPTED, csv_path, path_argument
+from wetcloth.commands.common import INTERRUPTED, check_writable_folder, csv_path, path_argument, scheduler_argument
 from wetcloth.scene import preset_dir
 
 #: Where results go without --out: <study name>.parquet in this folder.
@@ -34,7 +34,8 @@ def add_parser(sub) -> None:
     shipped = ", ".join(sorted(f.stem for f in (preset_dir() / "studies").glob("*.toml")))
     p.add_argument("study", type=path_argument,
                    help=f"study TOML file, or the name of one shipped with wetcloth ({shipped}); see docs/batch.md")
-    p.add_argument("--scheduler", metavar="ADDRESS", help="address of a running Dask scheduler, e.g. tcp://host:8786")
+    p.add_argument("--scheduler", type=scheduler_argument, metavar="ADDRESS",
+                   help="address of a running Dask scheduler, e.g. tcp://host:8786")
     p.add_argument("--workers", type=int, metavar="N",
                    help="local cluster: number of worker processes (default: one per core); "
                         "with --scheduler: wait until N workers are connected")
@@ -78,17 +79,20 @@ def main(args) -> int:
     from wetcloth import batch  # imports dask: only when the command runs
 
     study = batch.load_study(args.study)
+    plot_specs = [batch.parse_plot_spec(text) for text in args.plot]
+    study.check_plots(plot_specs)
+    out = args.out if args.out is not None else DEFAULT_OUT_DIR / f"{study.name}.parquet"  # the name is a plain file name
+    if out.suffix.lower() == ".csv":
+        raise ValueError(f"--out {out} is the Parquet results table; give --csv FILE for a CSV copy")
+    check_writable_folder(out.parent, "--out", out)  # before a unit is built or anything runs
+    if args.plot_dir is not None:
+        check_writable_folder(args.plot_dir, "--plot-dir")
     if args.engine is not None:
         study = study.replace(engine=args.engine)
     if args.fmu is not None:
         study = study.replace(fmu=str(args.fmu))
     if study.engine == "fmu" and not study.fmu:
         study = _with_unit(study)
-    plot_specs = [batch.parse_plot_spec(text) for text in args.plot]
-    study.check_plots(plot_specs)
-    out = args.out if args.out is not None else DEFAULT_OUT_DIR / f"{study.name}.parquet"  # the name is a plain file name
-    if out.suffix.lower() == ".csv":
-        raise ValueError(f"--out {out} is the Parquet results table; give --csv FILE for a CSV copy")
     if args.dry_run:
         return dry_run(study, out, args)
     try:

@@ -9,6 +9,8 @@ from pathlib import Path
 FAILED = 2
 #: Exit status of a command stopped by Ctrl-C (128 + SIGINT, as shells report it).
 INTERRUPTED = 130
+#: The largest random seed (numpy's seeds are 0..2**32 - 1).
+SEED_MAX = 2**32 - 1
 
 
 def path_argument(text: str) -> Path:
@@ -26,6 +28,41 @@ def csv_path(text: str) -> Path:
     if path.suffix.lower() != ".csv":
         raise argparse.ArgumentTypeError(f"{text}: a CSV file's name ends in .csv")
     return path
+
+
+def seed_argument(text: str) -> int:
+    """A random seed given on the command line: a whole number 0..2**32 - 1, as numpy takes."""
+    try:
+        seed = int(text)
+    except ValueError:
+        seed = None
+    if seed is None or not 0 <= seed <= SEED_MAX:
+        raise argparse.ArgumentTypeError(f"expected a whole number 0..2**32 - 1 ({SEED_MAX}), got {text!r}")
+    return seed
+
+
+def scheduler_argument(text: str) -> str:
+    """A Dask scheduler's address given on the command line, checked without connecting
+    (``wetcloth.batch.cluster.check_scheduler_address``)."""
+    from wetcloth.batch.cluster import check_scheduler_address
+
+    try:
+        return check_scheduler_address(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def check_writable_folder(folder: Path, option: str, given: Path | None = None) -> None:
+    """Refuse an output folder that cannot be made or written, before any work: a ValueError naming
+    ``option`` and its value ``given`` (default: ``folder``).  Makes the folder, as the output would."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        probe = folder / ".wetcloth-probe"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        where = f": {exc.filename}" if exc.filename else ""
+        raise ValueError(f"{option} {given or folder}: cannot write there ({exc.strerror or exc}{where})") from None
 
 
 def scene_with_overrides(scene: str | Path | None, overrides: list[tuple[str, str]]):
