@@ -18,8 +18,9 @@ import pytest
 
 import wetcloth
 from wetcloth.batch.metrics import first_crossing
-from wetcloth.calibration import Curves, SinkTimes, fit, read_measurements, write_report
+from wetcloth.calibration import Curves, DataError, SinkTimes, fit, read_measurements, scene_toml, write_report
 from wetcloth.calibration import fitting
+from wetcloth.calibration.data import check_against_scene
 from wetcloth.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -248,7 +249,12 @@ BAD_DATA = [
     ("time,depth\n0,0.1\n1,deep\n", "row 2 (line 3): column 'depth': 'deep' is not a number"),
     ("time,depth\n0,0.1\n,0.2\n", "row 2 (line 3): column 'time': empty"),
     ("time,depth\n-1,0.1\n", "column 'time': -1 s is before the start"),
-    ("time,depth,sigma_depth\n0,0.1,0\n", "column 'sigma_depth': 0; a sigma is > 0"),
+    ("time,depth,sigma_depth\n0,0.1,0\n", "row 1 (line 2): column 'sigma_depth': 0 m is outside a sigma's range"),
+    ("time,depth,sigma_depth\n1,0.01,1e-200\n2,0.02,1e-12\n",  # on 77fa5d2: overflow, then 'must not contain infs'
+     "row 1 (line 2): column 'sigma_depth': 1e-200 m is outside a sigma's range (the standard deviation of the "
+     "noise); allowed: 1e-12 <= sigma_depth <= 1e+12 m"),
+    ("time,wet_mass,sigma_wet_mass\n1,0.2,2e12\n", "column 'sigma_wet_mass': 2e+12 kg is outside a sigma's range"),
+    ("time_to_sink,sigma_time_to_sink\n30,1e-200\n", "column 'sigma_time_to_sink': 1e-200 s is outside a sigma's range"),
     ("time,sigma_depth\n0,0.1\n", "column 'sigma_depth': without a 'depth' column"),
     ("time,depth\n0,0.1,3\n", "row 1 (line 2): 3 cells, the header names 2 columns"),
     ("time,depth\n0,\n1,\n", "column 'depth': no values"),
@@ -288,7 +294,8 @@ BAD_OPTIONS = [
     (["--params", "absorption_rate,absorption_rate"], "parameter 'absorption_rate': named twice in --params"),
     (["--params", "absorption_rate", "--bounds", "absorption_rate=-1:2"],
      "--bounds 'absorption_rate': -1:2 is outside the allowed range: 0 <= absorption_rate <= 10000 1/s"),
-    (["--params", "width", "--bounds", "width=0:1"], "--bounds 'width': 0:1 is outside the allowed range: 0 < width <= 100 m"),
+    (["--params", "thickness", "--bounds", "thickness=0:0.5"],
+     "--bounds 'thickness': 0:0.5 is outside the allowed range: 0 < thickness <= 1 m"),
     (["--params", "absorption_rate", "--bounds", "absorption_rate=0.5:0.2"], "--bounds 'absorption_rate': LO must be below HI"),
     (["--params", "absorption_rate", "--bounds", "absorption_rate=0.5"], "--bounds 'absorption_rate': expected NAME=LO:HI"),
     (["--params", "absorption_rate", "--bounds", "width=0.1:1"], "--bounds 'width': not a fitted parameter"),
@@ -297,6 +304,10 @@ BAD_OPTIONS = [
     (["--params", "absorption_rate", "--global"], "--global searches within the bounds: give --bounds for absorption_rate"),
     (["--params", "absorption_rate", "--workers", "2"], "--scheduler and --workers are for the global search: add --global"),
     (["--params", "absorption_rate", "--set", "width=wide"], "parameter 'width': expected a number, got 'wide'"),
+    (["--params", "collider1_x"], "parameter 'collider1_x': the scene has no [[collider]] tables, so no collider1; "
+                                  "a fit varies the scene's number parameters ('wetcloth params') and the number "
+                                  "fields of its [[collider]], [[grip_key]] and [[collider_key]] tables"),
+    (["--params", "absorption_rate", "--bounds", "collider1_z=-1:0"], "--bounds 'collider1_z': not a fitted parameter"),
 ]
 
 
@@ -324,3 +335,143 @@ def test_too_few_values_for_the_parameters(tmp_path, capsys):
     assert main(["fit", "towel", "--data", str(data), "--params", "absorption_rate,absorption_capacity",
                  "--out", str(tmp_path / "o")]) == 2
     assert "2 measured values cannot determine 2 parameters and the noise" in capsys.readouterr().err
+
+
+def test_table_fields_a_fit_cannot_vary_are_one_clear_error(tmp_path, capsys):
+    """On 77fa5d2 --params grip_key1_z died with KeyError: 'grip_key1_z'.  The lift has two grip keys and no
+    colliders: a third key, a choice and a whole number are refused by name, with what is allowed."""
+    data = write(tmp_path / "m.csv", "time,centroid_z\n0,0.001\n1,0.0\n2,0.001\n")
+    status = main(["fit", "lift", "--data", str(data), "--out", str(tmp_path / "o"),
+                   "--params", "grip_key3_z,collider1_shape,collider_key1_collider"])
+    err = capsys.readouterr().err
+    assert status == 2 and err.startswith("wetcloth fit: error: 3 mistakes"), err
+    assert ("parameter 'grip_key3_z': the scene has 2 [[grip_key]] tables, so no grip_key3; allowed: grip_key1_z .. "
+            "grip_key2_z") in err
+    assert "parameter 'collider1_shape': takes a choice (one of 'plane', 'box'" in err
+    assert "parameter 'collider_key1_collider' is a whole number (1 <= collider_key1_collider <= 10000)" in err
+
+
+# ----------------------------------------------------------------------------- fields of [[collider]] and [[grip_key]] tables
+def _shelf_scene() -> wetcloth.Scene:
+    """A dense cloth (1.25x water, 5 x 5) sinking from 2 cm under the surface onto a submerged box, a shelf whose
+    top is at collider1_z + 0.05 m: there it rests, thickness/2 above the top."""
+    return wetcloth.load_scene(EXAMPLE / "dishcloth.toml", nx=5, ny=5, areal_density=0.5, thickness=0.0004,
+                               absorption_rate=0.0, absorption_capacity=0.0, initial_height=-0.02,
+                               colliders=({"shape": "box", "z": -0.2, "size_x": 1.0, "size_y": 1.0, "size_z": 0.1},))
+
+
+def test_a_colliders_position_is_fitted_and_written_into_the_fitted_scene(tmp_path):
+    """Noise-free depths (1 Hz, 20 s) of the cloth landing on the shelf at collider1_z = -0.22 m, fitted from
+    -0.2 m: the shelf's height, to the runs' noise (3e-6 m on a 5 x 5 grid; asked: 1e-4 m, a tenth of the
+    standard error of data of 1 mm).  The fitted scene keeps the box, with the estimate marked, and loads."""
+    scene = _shelf_scene()
+    times = np.arange(0.0, 20.01, 1.0)
+    depth = wetcloth.Simulation(scene.replace(collider1_z=-0.22)).sample(times)[:, DEPTH]
+    result = fit(scene, Curves(times=times, values={"depth": depth}, sigma={"depth": np.full(times.size, 1e-3)}),
+                 ["collider1_z"])
+    assert result.estimate("collider1_z") == pytest.approx(-0.22, abs=1e-4)
+    assert result.parameters[0].unit == "m" and result.standard_errors[0] < 1e-3
+    text = scene_toml(result)
+    assert f"z = {float(result.estimates[0])!r}    # fitted: +- " in text.split("[[collider]]")[1]
+    fitted = wetcloth.load_scene(write(tmp_path / "fitted.toml", text))
+    assert fitted.colliders[0].shape == "box" and fitted.colliders[0].z == result.estimates[0]
+    assert fitted.to_dict() == result.scene.to_dict()
+
+
+def test_grip_key_heights_are_fitted_from_zero_too():
+    """The soaked towel of models/lift.toml (5 x 5), its edge lifted to grip_key1_z = 0.1 m by 1 s and
+    grip_key2_z = 0.6 m by 5 s: its noise-free centroid height (2 Hz, 8 s), fitted from the file's 0 and
+    0.8 m, gives both to 1e-4 m (measured: 2e-6).  A start at 0 is measured in 1 m, not in its allowed
+    range's 2e4 m (which made the Jacobian's step 2 m, and the fit stayed at 0 with chi^2 7249)."""
+    scene = wetcloth.load_scene("lift", nx=5, ny=5)
+    times = np.arange(0.0, 8.01, 0.5)
+    centroid_z = wetcloth.OUTPUT_NAMES.index("centroid_z")
+    z = wetcloth.Simulation(scene.replace(grip_key1_z=0.1, grip_key2_z=0.6)).sample(times)[:, centroid_z]
+    result = fit(scene, Curves(times=times, values={"centroid_z": z}, sigma={"centroid_z": np.full(times.size, 1e-3)}),
+                 ["grip_key1_z", "grip_key2_z"])
+    assert [q.start for q in result.parameters] == [0.0, 0.8]
+    np.testing.assert_allclose(result.estimates, [0.1, 0.6], atol=1e-4)
+    assert [key.z for key in result.scene.grip_keys] == list(result.estimates)
+
+
+# ----------------------------------------------------------------------------- failed runs, undefined statistics
+def test_a_start_that_blows_up_is_an_error_and_writes_no_report(tmp_path, capsys):
+    """Explicit Euler at fixed steps of 0.01 s blows the dishcloth up at 0.11 s.  On 77fa5d2 the fit printed
+    'fitted ... in 3 runs' with penalty residuals, exit 0, "converged": true and a fitted scene, though no
+    run had succeeded: now the start run's blow-up is the error, and nothing is written."""
+    out = tmp_path / "o"
+    status = main(["fit", str(EXAMPLE / "dishcloth.toml"), "--data", str(EXAMPLE / "measured.csv"), "--params",
+                   "absorption_rate", "--set", "integrator=explicit_euler", "--set", "tolerance=0", "--set",
+                   "max_step=0.01", "--out", str(out), "--no-progress"])
+    captured = capsys.readouterr()
+    assert status == 2 and captured.out == ""
+    assert captured.err.startswith("wetcloth fit: error: the run at the start (absorption_rate = 0.25 1/s) failed, "
+                                   "so the fit has no curve to go from"), captured.err
+    assert "the cloth state exploded" in captured.err and "Last good time: 0.11 s" in captured.err
+    assert list(out.iterdir()) == []
+
+
+def test_an_undefined_correlation_is_said_so_not_printed_as_nan(tmp_path, capsys):
+    """Three wet masses of the first 3 s: the cloth is nowhere near the floor, so floor_friction changes
+    nothing and J^T J is singular: no covariance, so no correlation (fit.json: null; on 77fa5d2 the
+    summary printed '+nan')."""
+    data = write(tmp_path / "w.csv", "time,wet_mass,sigma_wet_mass\n1,0.05,0.001\n2,0.06,0.001\n3,0.07,0.001\n")
+    status = main(["fit", str(EXAMPLE / "dishcloth.toml"), "--data", str(data), "--params", "floor_friction,drying_rate",
+                   "--out", str(tmp_path / "o"), "--no-progress"])
+    out = capsys.readouterr().out
+    assert status == 0
+    assert ("  correlation: floor_friction ~ drying_rate undefined (no standard errors: the data do not identify "
+            "these parameters together)\n") in out
+    assert "nan" not in out.lower()
+    assert json.loads((tmp_path / "o" / "fit.json").read_text())["correlation"]["matrix"][0][1] is None
+
+
+# ----------------------------------------------------------------------------- values the scene cannot show
+UNIT_SLIPS = [
+    # the dishcloth (36 g) weighed in g: on 77fa5d2 fitted with exit 0
+    ("time,wet_mass\n5,91\n10,129.3\n15,149.9\n20,164.3\n",
+     "column 'wet_mass': 91 kg (row 1; 3 more rows likewise) is impossible for this scene: a wet mass lies between the "
+     "cloth's dry mass, 0.036 kg, and its dry mass times 1 + 100 (the largest allowed absorption_capacity), 3.636 kg; "
+     "masses are in kg (0.129, not 129 g), and the scene's areal_density and size are the cloth's"),
+    # its depths read in cm (the pool is 30 cm deep)
+    ("time,depth\n0,-4.86\n2,0.06\n20,29.9\n30,30.1\n",
+     "column 'depth': 29.9 m (row 3; 1 more row likewise) is impossible for this scene: the cloth cannot go below "
+     "the floor: a depth is at most water_level - floor_level = 0.3 m; positions are in m (0.05, not 5 cm)"),
+    ("time,water_mass\n5,60\n", "column 'water_mass': 60 kg (row 1) is impossible for this scene: the water held lies "
+                                 "between 0 and the cloth's dry mass times 100"),
+    ("time,centroid_z\n5,-30\n", "column 'centroid_z': -30 m (row 1) is impossible for this scene: the cloth cannot "
+                                  "go below the floor: centroid_z is at least floor_level = -0.3 m"),
+]
+
+
+@pytest.mark.parametrize("text, message", UNIT_SLIPS, ids=[m.split("'")[1] for _, m in UNIT_SLIPS])
+def test_values_impossible_for_the_scene_are_refused_before_any_run(tmp_path, capsys, text, message):
+    data = write(tmp_path / "slip.csv", text)
+    status = main(["fit", str(EXAMPLE / "dishcloth.toml"), "--data", str(data), "--out", str(tmp_path / "o"),
+                   "--params", "absorption_rate,absorption_capacity", "--no-progress"])
+    err = capsys.readouterr().err
+    assert status == 2 and err.startswith(f"wetcloth fit: error: data file {data}: {message}"), err
+    assert not (tmp_path / "o" / "fit.json").exists()
+
+
+def _check(column: str, values, sigma=None, fitted=None):
+    """check_against_scene of the dishcloth for one column's ``values`` (with ``sigma`` if given)."""
+    scene = wetcloth.load_scene(EXAMPLE / "dishcloth.toml")  # 36 g, in water 0.3 m deep
+    values = np.asarray(values, float)
+    curves = Curves(times=np.arange(1.0, values.size + 1), values={column: values},
+                    sigma={column: None if sigma is None else np.full(values.size, sigma)})
+    check_against_scene(curves, scene, fitted or {})
+
+
+def test_only_values_no_cloth_of_the_scene_can_show_are_refused():
+    """Reading errors pass, a tenth of the quantity's size (plus 5 sigma) beyond the range; so do values a fitted
+    parameter's bounds make possible.  Beyond that, an error."""
+    _check("depth", [-0.5, 0.1, 0.32])  # above the surface: not checked; 2 cm under the floor: a reading's error
+    _check("depth", [0.35], sigma=0.01)  # 5 cm under it, with 1 cm of noise
+    _check("wet_mass", [0.033, 0.5, 3.6])  # 3 g under the dry mass; 100x the dry mass in water
+    _check("water_mass", [-0.003, 3.6])
+    _check("wet_mass", [5.0], fitted={"areal_density": (0.1, 2.0)})  # a 5x denser cloth holds 18 kg
+    _check("depth", [0.9], fitted={"floor_level": (-1.0, -0.2)})  # a floor as deep as 1 m
+    for column, values in (("depth", [0.35]), ("wet_mass", [0.03]), ("wet_mass", [5.0]), ("water_mass", [-0.004])):
+        with pytest.raises(DataError, match=f"column '{column}': "):
+            _check(column, values)

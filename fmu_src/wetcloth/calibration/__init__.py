@@ -8,7 +8,8 @@
     print(result.estimates, result.standard_errors, result.intervals)   # 95 % intervals
     write_report(result, "out/fit")          # fit.json, fitted_scene.toml, fit.png
 
-Modules: ``data`` (the measurements CSV), ``parameters`` (what may be fitted, bounds), ``problem``
+Modules: ``data`` (the measurements CSV, and the values a scene can show), ``parameters`` (what may be
+fitted: the scene's number parameters and its tables' number fields, bounds), ``problem``
 (the runs a fit evaluates, its finite-difference step and tolerance), ``fitting`` (least squares,
 the global search on Dask, the sink-time root search), ``statistics`` (covariance, intervals,
 identifiability), ``report`` (text, JSON, TOML, plot).

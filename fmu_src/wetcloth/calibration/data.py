@@ -9,7 +9,9 @@ times than the depth was read); text that is not a finite number, ``nan`` includ
 Sink times: a ``time_to_sink`` column (s), one row per timed drop, optionally ``sigma_time_to_sink``.
 
 Lines starting with ``#`` are comments.  Every mistake of a file is reported at once, each naming
-its row or column (``DataError``, a ValueError: the command line's exit status 2).
+its row or column (``DataError``, a ValueError: the command line's exit status 2).  A sigma lies within
+``SIGMA_RANGE``; before a fit, ``check_against_scene`` refuses values no cloth of the scene can show
+(wet mass in g, depth in cm).
 """
 
 from __future__ import annotations
@@ -22,14 +24,28 @@ from pathlib import Path
 import numpy as np
 
 from wetcloth.errors import ConfigError, Mistakes, did_you_mean
+from wetcloth.mesh_file import is_mesh
 from wetcloth.run_settings import MAX_FRAMES, SETTINGS
+from wetcloth.scene import PARAMETERS, Scene
 from wetcloth.simulation import OUTPUT_NAMES, OUTPUTS
+from wetcloth.topology import build_topology
 
 TIME = "time"
 SINK = "time_to_sink"
 SIGMA = "sigma_"
 #: Units of every column a data file may have.
 UNITS = {TIME: "s", **{name: unit for name, (unit, _) in OUTPUTS.items()}, SINK: "s"}
+#: The values a sigma may take, in its column's unit (m, kg, s).  Below 1e-12 (a hundredth of an atom,
+#: a nanogram) no instrument measures, and the weighted residuals (model - data) / sigma of outputs
+#: within a scene's ranges (under 1e10 m or kg) stay below 1e22: their squares, summed over every
+#: value, and the Jacobian's products stay far from a float's largest, 1.8e308 (at 1e-200 they
+#: overflowed).  Above 1e12 a value says nothing, and the squares stay far above a float's smallest.
+SIGMA_RANGE = (1e-12, 1e12)
+#: How far a measured value may lie outside what the scene can produce (``check_against_scene``) before it
+#: is refused: a reading's error, not a unit's (g for kg is 1000x, cm for m 100x): MARGIN times the scene's
+#: size of that quantity (the water's depth, the cloth's dry mass) plus NOISE sigma where sigma is given.
+MARGIN = 0.1
+NOISE = 5.0
 
 
 class DataError(ConfigError):
@@ -201,11 +217,16 @@ def _check_header(header: list[str], mistakes: Mistakes) -> list[str]:
     return header
 
 
-def _positive_sigma(name: str, values: np.ndarray, present: np.ndarray, lines: list[int], mistakes: Mistakes) -> None:
-    for r in np.flatnonzero(present & ~(values > 0)):
-        mistakes.add(_row(r + 1, lines[r], f"column '{name}': {values[r]:g}; a sigma is > 0 (the standard deviation "
-                                           f"of the noise)" if np.isfinite(values[r]) else
-                                           f"column '{name}': empty, but the value it belongs to is measured"))
+def _check_sigma(name: str, values: np.ndarray, present: np.ndarray, lines: list[int], mistakes: Mistakes) -> None:
+    """A mistake for each row of sigma column ``name`` outside SIGMA_RANGE (in its column's unit), or
+    empty where its value is ``present``."""
+    lo, hi = SIGMA_RANGE
+    unit = UNITS[name[len(SIGMA):]]
+    for r in np.flatnonzero(present & ~((lo <= values) & (values <= hi))):
+        mistakes.add(_row(r + 1, lines[r], f"column '{name}': {values[r]:g} {unit} is outside a sigma's range (the "
+                                           f"standard deviation of the noise); allowed: {lo:g} <= {name} <= {hi:g} {unit}"
+                          if np.isfinite(values[r]) else
+                          f"column '{name}': empty, but the value it belongs to is measured"))
 
 
 def _curves(table: dict, lines: list[int], source: str, mistakes: Mistakes) -> Curves:
@@ -241,7 +262,7 @@ def _curves(table: dict, lines: list[int], source: str, mistakes: Mistakes) -> C
             mistakes.add(DataError(name, "no values: every cell is empty"))
         s = table.get(SIGMA + name)
         if s is not None:
-            _positive_sigma(SIGMA + name, s, present, lines, mistakes)
+            _check_sigma(SIGMA + name, s, present, lines, mistakes)
             s = np.where(present, s, np.nan)
         sigma[name] = s
     return Curves(times=t, values=values, sigma=sigma, source=source)
@@ -259,6 +280,53 @@ def _sink_times(table: dict, lines: list[int], source: str, mistakes: Mistakes) 
                                            f"({SETTINGS['duration'].hi / 2:g} s)"))
     s = table.get(SIGMA + SINK)
     if s is not None:
-        _positive_sigma(SIGMA + SINK, s, present, lines, mistakes)
+        _check_sigma(SIGMA + SINK, s, present, lines, mistakes)
         s = s[present]
     return SinkTimes(times=t[present], sigma=s, source=source)
+
+
+def check_against_scene(data: Curves, scene: Scene, fitted: dict[str, tuple[float, float]]) -> None:
+    """Refuse values no cloth of ``scene`` can show, whatever the fitted parameters ``fitted`` (name ->
+    (lo, hi) bounds) become: a DataError naming each such column, the range and what to check (the unit)."""
+    mistakes = Mistakes(data.source or None)
+    for name, (lo, hi, size, why, hint) in _scene_ranges(scene, fitted).items():
+        if name not in data.values:
+            continue
+        v, s = data.values[name], data.sigma[name]
+        slack = MARGIN * size + NOISE * (s if s is not None else 0.0)
+        bad = np.flatnonzero((v < lo - slack) | (v > hi + slack))  # False where not measured (NaN)
+        if bad.size:
+            more = f"; {bad.size - 1} more row{'s' if bad.size > 2 else ''} likewise" if bad.size > 1 else ""
+            mistakes.add(DataError(name, f"{v[bad[0]]:g} {UNITS[name]} (row {bad[0] + 1}{more}) is impossible for "
+                                         f"this scene: {why}; {hint}"))
+    mistakes.raise_if_any()
+
+
+def _scene_ranges(scene: Scene, fitted: dict[str, tuple[float, float]]) -> dict[str, tuple]:
+    """Per output, (lo, hi, size, why, hint): the values (m, kg) a cloth of ``scene`` can show with its
+    ``fitted`` parameters anywhere within their bounds, the size of that quantity (m, kg: the water's
+    depth, the dry mass), why, and what to check (the unit, the scene) when data lie beyond them."""
+    def extreme(name: str, side: int) -> float:  # side 0: the lowest the parameter may be, 1: the highest
+        return fitted[name][side] if name in fitted else float(getattr(scene, name))
+
+    cap = PARAMETERS["absorption_capacity"].metadata["hi"]
+    dry = [scene.areal_density * float(build_topology(scene).area.sum())] * 2  # kg: least, most
+    sizes = () if is_mesh(scene.cloth_mesh) else ("width", "length")  # a mesh cloth's area is its file's
+    for name in ("areal_density", *sizes):  # the dry mass is proportional to each
+        if name in fitted:
+            dry = [dry[side] * extreme(name, side) / getattr(scene, name) for side in (0, 1)]
+    floor = extreme("floor_level", 0)
+    deepest = extreme("water_level", 1) - floor
+    in_m = "positions are in m (0.05, not 5 cm), and the scene's water_level and floor_level are the container's"
+    in_kg = "masses are in kg (0.129, not 129 g), and the scene's areal_density and size are the cloth's"
+    return {
+        "depth": (-math.inf, deepest, max(deepest, 0.0), f"the cloth cannot go below the floor: a depth is at most "
+                  f"water_level - floor_level = {deepest:.4g} m", in_m),
+        "centroid_z": (floor, math.inf, max(deepest, 0.0), f"the cloth cannot go below the floor: centroid_z is at "
+                       f"least floor_level = {floor:.4g} m", in_m),
+        "wet_mass": (dry[0], dry[1] * (1 + cap), dry[0], f"a wet mass lies between the cloth's dry mass, "
+                     f"{dry[0]:.4g} kg, and its dry mass times 1 + {cap:g} (the largest allowed absorption_capacity), "
+                     f"{dry[1] * (1 + cap):.4g} kg", in_kg),
+        "water_mass": (0.0, dry[1] * cap, dry[0], f"the water held lies between 0 and the cloth's dry mass times "
+                       f"{cap:g} (the largest allowed absorption_capacity), {dry[1] * cap:.4g} kg", in_kg),
+    }

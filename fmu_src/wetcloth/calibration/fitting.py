@@ -20,12 +20,12 @@ from typing import Callable
 import numpy as np
 from scipy import optimize, stats
 
-from wetcloth.calibration.data import Curves, SinkTimes
+from wetcloth.calibration.data import Curves, SinkTimes, check_against_scene
 from wetcloth.calibration.parameters import FitParameter, fit_parameters
 from wetcloth.calibration.problem import DIFF_STEP, CurveModel, SinkModel, fit_scene
 from wetcloth.calibration.statistics import chi2_check, estimate_sigma, leverage, uncertainty
 from wetcloth.errors import BlowUpError, ParameterError
-from wetcloth.scene import Scene
+from wetcloth.scene import Scene, parameter_field
 
 #: Differential evolution's population per fitted parameter, and its generations at most: at most
 #: POPULATION * p * (GENERATIONS + 1) runs (330 for two parameters).
@@ -125,6 +125,8 @@ def fit(scene: Scene, data: Curves | SinkTimes, names: list[str], bounds: dict |
     # start inside them
     params = fit_parameters(scene, list(names), bounds,
                             need_start_inside=not (global_search or isinstance(data, SinkTimes)))
+    if isinstance(data, Curves):
+        check_against_scene(data, scene, {q.name: (q.lo, q.hi) for q in params})
     if isinstance(data, SinkTimes):
         if global_search:
             raise FitError("--global is for curves: a sink time is fitted by a root search within --bounds")
@@ -235,8 +237,10 @@ def _least_squares(model: CurveModel, start, lo, hi, scales, pool, runs: _Runs):
     def residuals(u):
         key = np.asarray(u, float).tobytes()
         if key not in cache:
-            r, ok = model.residuals(u * scales)
-            runs.add(ok)
+            r, failure = model.residuals(u * scales)
+            runs.add(failure is None)
+            if failure is not None and not cache:  # the start (nothing evaluated yet): nothing to go from
+                raise FitError(_start_failed(model, u * scales, failure))
             cache.clear()
             cache[key] = r
         return cache[key]
@@ -254,8 +258,8 @@ def _least_squares(model: CurveModel, start, lo, hi, scales, pool, runs: _Runs):
                 return base
             v = u.copy()
             v[j] = value
-            r, ok = model.residuals(v * scales)
-            runs.add(ok)
+            r, failure = model.residuals(v * scales)
+            runs.add(failure is None)
             return r
 
         tasks = [(j, e) for j in range(u.size) for e in ends[j]]
@@ -269,6 +273,14 @@ def _least_squares(model: CurveModel, start, lo, hi, scales, pool, runs: _Runs):
     return optimize.least_squares(residuals, u0, jac=jacobian, bounds=(lo / scales, hi / scales), method="trf",
                                   x_scale=1.0, ftol=1e-6, xtol=1e-6, gtol=1e-8,
                                   max_nfev=MAX_EVALUATIONS)
+
+
+def _start_failed(model: CurveModel, x: np.ndarray, failure: Exception) -> str:
+    """Why a fit cannot start: the run at the start values ``x`` (in the parameters' units) failed."""
+    values = ", ".join(f"{name} = {v:g} {parameter_field(name).metadata['unit']}"
+                       for name, v in zip(model.parameters, x))
+    return (f"the run at the start ({values}) failed, so the fit has no curve to go from (start where the scene "
+            f"runs: --set NAME=VALUE): {failure}")
 
 
 def _bound_warnings(params: list[FitParameter], x: np.ndarray) -> list[str]:

@@ -1,4 +1,8 @@
-"""The parameters a fit varies: scene number parameters, each with bounds within its allowed range."""
+"""The parameters a fit varies: scene number parameters, each with bounds within its allowed range.
+
+Besides the scene's own parameters, the number fields of its ``[[collider]]``, ``[[grip_key]]`` and
+``[[collider_key]]`` tables, by their flattened names (``collider1_z``, ``grip_key2_z``), as ``--set``
+takes them."""
 
 from __future__ import annotations
 
@@ -6,7 +10,8 @@ import math
 from dataclasses import dataclass
 
 from wetcloth.errors import ConfigError, Mistakes, ParameterError
-from wetcloth.scene import PARAMETERS, Scene, _field, describe_range
+from wetcloth.scene import (Scene, collider_key_name, collider_name, describe_range, grip_key_name, is_parameter,
+                            parameter_field)
 
 #: Number parameters that set how the equations are solved, not the cloth or the water: a fit does
 #: not vary them (the fit's own choice of ``tolerance`` is in ``problem.fit_tolerance``).
@@ -23,7 +28,8 @@ class BoundsError(ConfigError):
 class FitParameter:
     """One fitted parameter: its ``start`` value, the bounds ``lo`` .. ``hi`` the fit keeps it in
     (``given``: from ``--bounds``, else the allowed range), and ``scale``, the size the fit measures
-    it in (its start value's magnitude; the bounds' width if it starts at 0)."""
+    it in (its start value's magnitude; if it starts at 0, the width of its --bounds, else one unit:
+    1 m, 1 deg ..., or its allowed range's width if narrower)."""
 
     name: str
     start: float
@@ -33,13 +39,15 @@ class FitParameter:
 
     @property
     def unit(self) -> str:
-        return PARAMETERS[self.name].metadata["unit"]
+        return parameter_field(self.name).metadata["unit"]
 
     @property
     def scale(self) -> float:
+        """The size (its unit) the fit measures the parameter in; its Jacobian's step is 1e-4 of it at 0.
+        An allowed range is no size to go by: +-1e4 m for a collider's x made steps of 2 m."""
         if self.start != 0.0:
             return abs(self.start)
-        width = self.hi - self.lo
+        width = self.hi - self.lo if self.given else min(self.hi - self.lo, 1.0)
         return width if math.isfinite(width) and width > 0 else 1.0
 
     @property
@@ -48,19 +56,41 @@ class FitParameter:
         return math.isfinite(self.lo) and math.isfinite(self.hi)
 
 
-def check_name(name: str) -> str:
-    """``name`` if it is a number parameter a fit may vary; else a ParameterError naming it and what it takes."""
-    f = _field(name)  # unknown: 'did you mean ...?'
+def check_name(name: str, scene: Scene) -> str:
+    """``name`` if it is a number parameter of ``scene`` a fit may vary; else a ParameterError naming it
+    and what it takes."""
+    f = parameter_field(name)  # unknown: 'did you mean ...?'
     if f.type == "str":
-        raise ParameterError(name, f"takes a choice ({describe_range(f)}), not a number a fit can vary; "
+        kind = "a choice" if f.metadata["choices"] else "text"
+        raise ParameterError(name, f"takes {kind} ({describe_range(f, name)}), not a number a fit can vary; "
                                    f"choose it in the scene or with --set {name}=...")
     if f.type == "int":
-        raise ParameterError(name, f"is a whole number ({describe_range(f)}); a fit varies continuous number "
+        raise ParameterError(name, f"is a whole number ({describe_range(f, name)}); a fit varies continuous number "
                                    f"parameters: set it in the scene or with --set {name}=...")
     if name in NUMERICAL:
-        raise ParameterError(name, f"sets how the equations are solved ({describe_range(f)}), not the cloth or "
+        raise ParameterError(name, f"sets how the equations are solved ({describe_range(f, name)}), not the cloth or "
                                    f"the water: a fit does not vary it (set it with --set {name}=...)")
+    if name not in scene.to_dict():
+        raise ParameterError(name, _missing_table(name, scene))
     return name
+
+
+#: The scene's arrays of tables whose fields a fit may vary: (table, how a flattened name is parsed, the
+#: scene's attribute holding them).
+TABLES = (("collider", collider_name, "colliders"), ("grip_key", grip_key_name, "grip_keys"),
+          ("collider_key", collider_key_name, "collider_keys"))
+
+
+def _missing_table(name: str, scene: Scene) -> str:
+    """Why the flattened table field ``name`` (collider3_z) is not in ``scene``: how many such tables it has."""
+    table, (k, field), attribute = next((t, parse(name), a) for t, parse, a in TABLES if parse(name) is not None)
+    count = len(getattr(scene, attribute))
+    if count == 0:
+        return (f"the scene has no [[{table}]] tables, so no {table}{k}; a fit varies the scene's number "
+                f"parameters ('wetcloth params') and the number fields of its [[collider]], [[grip_key]] and "
+                f"[[collider_key]] tables")
+    return (f"the scene has {count} [[{table}]] table{'s' if count > 1 else ''}, so no {table}{k}; allowed: "
+            f"{table}1_{field}" + (f" .. {table}{count}_{field}" if count > 1 else ""))
 
 
 def parse_bounds(text: str) -> tuple[str, float, float]:
@@ -99,24 +129,25 @@ def fit_parameters(scene: Scene, names: list[str], bounds: dict[str, tuple[float
             if name in seen:
                 raise ParameterError(name, "named twice in --params")
             seen.add(name)
-            check_name(name)
+            check_name(name, scene)
     mistakes.raise_if_any()
     for name in bounds:
         if name not in names:
             with mistakes.collect():
-                message = "not a fitted parameter" if name in PARAMETERS else "unknown parameter"
+                message = "not a fitted parameter" if is_parameter(name) else "unknown parameter"
                 raise BoundsError(name, f"{message}; the fitted ones are {', '.join(names)} (--params)")
     out = []
+    values = scene.to_dict()
     for name in names:
-        f = PARAMETERS[name]
+        f = parameter_field(name)
         md = f.metadata
-        start = float(getattr(scene, name))
+        start = float(values[name])
         if name in bounds:
             lo, hi = bounds[name]
             with mistakes.collect():
                 below = lo <= md["lo"] if md["lo_open"] else lo < md["lo"]
                 if below or hi > md["hi"]:
-                    raise BoundsError(name, f"{lo:g}:{hi:g} is outside the allowed range: {describe_range(f)}")
+                    raise BoundsError(name, f"{lo:g}:{hi:g} is outside the allowed range: {describe_range(f, name)}")
                 if need_start_inside and not lo <= start <= hi:
                     raise BoundsError(name, f"{lo:g}:{hi:g} does not hold the start value {start:g} (the scene's): "
                                             f"widen the bounds, or start inside them with --set {name}=VALUE "

@@ -90,15 +90,15 @@ class CurveModel:
         r = np.concatenate(parts)
         return np.where(np.isfinite(r), r, PENALTY)
 
-    def residuals(self, x) -> tuple[np.ndarray, bool]:
-        """(weighted residuals at ``x``, whether the run succeeded)."""
+    def residuals(self, x) -> tuple[np.ndarray, BlowUpError | ParameterError | None]:
+        """(weighted residuals at ``x``, why the run failed: its BlowUpError or ParameterError, None if it ran)."""
         try:
-            return self.residuals_of(self.outputs(x)), True
+            return self.residuals_of(self.outputs(x)), None
         except (BlowUpError, ParameterError) as exc:
             partial = getattr(exc, "partial_outputs", np.empty((0, len(OUTPUT_NAMES))))
             out = np.full((self.times.size, len(OUTPUT_NAMES)), np.nan)
             out[:len(partial)] = partial
-            return self.residuals_of(out), False
+            return self.residuals_of(out), exc
 
     def __call__(self, x) -> float:
         """Half the sum of squared weighted residuals at ``x`` (least_squares' cost): a global search's objective."""

@@ -11,9 +11,9 @@ import numpy as np
 import wetcloth
 from wetcloth.calibration.data import SinkTimes
 from wetcloth.calibration.fitting import FitResult
+from wetcloth.calibration.parameters import TABLES
 from wetcloth.calibration.problem import DIFF_STEP
 from wetcloth.files import write_text
-from wetcloth.scene import PARAMETERS
 from wetcloth.simulation import OUTPUT_NAMES, OUTPUTS, Simulation
 
 JSON_NAME = "fit.json"
@@ -33,6 +33,13 @@ def _number(value):
 
 def _g(value, digits: int = 5) -> str:
     return "-" if value is None or not math.isfinite(value) else f"{value:.{digits}g}"
+
+
+def _correlation(value: float) -> str:
+    """A correlation as the summary prints it: '-0.995', or why it is undefined (NaN: no covariance)."""
+    if math.isfinite(value):
+        return f"{value:+.3f}"
+    return "undefined (no standard errors: the data do not identify these parameters together)"
 
 
 def distribution(result: FitResult) -> str:
@@ -64,7 +71,7 @@ def summary(result: FitResult, data_name: str = "the data", warnings: bool = Tru
     widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
     lines += ["  " + "  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows]
     if len(names) > 1:
-        pairs = [f"{names[i]} ~ {names[j]} {result.correlation[i, j]:+.3f}"
+        pairs = [f"{names[i]} ~ {names[j]} {_correlation(result.correlation[i, j])}"
                  for i in range(len(names)) for j in range(i + 1, len(names))]
         lines.append("  correlation: " + "; ".join(pairs))
     if result.kind == "sink":
@@ -131,19 +138,35 @@ def _toml_value(value) -> str:
     return repr(value)
 
 
+def _table_of(name: str) -> tuple[str, int, str] | None:
+    """(table, k, field) of a flattened table field such as 'collider2_z' ('collider', 2, 'z'); None for a
+    scene parameter."""
+    for table, parse, _ in TABLES:
+        where = parse(name)
+        if where is not None:
+            return table, *where
+    return None
+
+
 def scene_toml(result: FitResult, description: str = "", duration: float | None = None, fps: float | None = None) -> str:
-    """The fitted scene as a scene file (``wetcloth.load_scene`` reads it): every parameter, the fitted
-    ones marked with their standard error; ``[run]`` with ``duration`` and ``fps`` if given."""
+    """The fitted scene as a scene file (``wetcloth.load_scene`` reads it): every parameter and every
+    [[collider]], [[grip_key]] and [[collider_key]] table, the fitted values marked with their standard
+    error; ``[run]`` with ``duration`` and ``fps`` if given."""
     scene = result.scene
     fitted = dict(zip(result.names, range(len(result.names))))
     lines = ["# Fitted by 'wetcloth fit' (wetcloth " + wetcloth.__version__ + "): the fitted parameters are marked.",
              f"description = {_toml_value(description)}", ""]
-    for name in PARAMETERS:
-        line = f"{name} = {_toml_value(getattr(scene, name))}"
+    table = None
+    for name, value in scene.to_dict().items():
+        where = _table_of(name)
+        if where is not None and where[:2] != table:
+            table = where[:2]
+            lines += ["", f"[[{table[0]}]]"]
+        line = f"{name if where is None else where[2]} = {_toml_value(value)}"
         if name in fitted:
             j = fitted[name]
-            unit = PARAMETERS[name].metadata["unit"]
-            line += f"    # fitted: +- {_g(result.standard_errors[j], 3)} {unit} (standard error), start {result.parameters[j].start:g}"
+            line += (f"    # fitted: +- {_g(result.standard_errors[j], 3)} {result.parameters[j].unit} (standard "
+                     f"error), start {result.parameters[j].start:g}")
         elif name == "tolerance" and result.start_scene.tolerance != scene.tolerance:
             line += "    # the fit's"
         lines.append(line)

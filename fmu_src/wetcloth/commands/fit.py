@@ -6,7 +6,8 @@ import sys
 from pathlib import Path
 
 from wetcloth import run_settings
-from wetcloth.commands.common import path_argument, scene_with_overrides
+from wetcloth.commands.common import (check_writable_folder, path_argument, scene_with_overrides, scheduler_argument,
+                                      seed_argument)
 from wetcloth.commands.run import parse_assignment
 from wetcloth.errors import Mistakes
 from wetcloth.scene import read_scene_file
@@ -28,19 +29,21 @@ def add_parser(sub) -> None:
     p.add_argument("scene", help="scene TOML file or preset name: the cloth measured; the fitted parameters "
                                  "start from its values")
     p.add_argument("--data", type=path_argument, required=True, metavar="MEASURED.csv", help="the measurements (CSV)")
-    p.add_argument("--params", required=True, metavar="NAME[,NAME...]", help="the parameters to fit, comma-separated")
+    p.add_argument("--params", required=True, metavar="NAME[,NAME...]",
+                   help="the parameters to fit, comma-separated: number parameters of the scene, or number fields of "
+                        "its [[collider]], [[grip_key]] and [[collider_key]] tables (collider1_z, grip_key2_z)")
     p.add_argument("--bounds", nargs="+", action="extend", default=[], metavar="NAME=LO:HI",
                    help="keep a parameter within LO..HI (default: its allowed range; --global needs them)")
     p.add_argument("--set", dest="overrides", action="append", default=[], type=parse_assignment,
                    metavar="NAME=VALUE", help="override a scene parameter: a fixed one, or a fitted one's start (repeatable)")
     p.add_argument("--global", dest="global_search", action="store_true",
                    help="start with a global search (differential evolution within --bounds) on Dask")
-    p.add_argument("--scheduler", metavar="ADDRESS",
+    p.add_argument("--scheduler", type=scheduler_argument, metavar="ADDRESS",
                    help="with --global: the Dask scheduler to run on (default: a local cluster)")
     p.add_argument("--workers", type=int, metavar="N",
                    help="with --global: local cluster's worker processes (default one per core); with --scheduler: "
                         "wait for N workers")
-    p.add_argument("--seed", type=int, default=0, help="seed of the global search (default 0)")
+    p.add_argument("--seed", type=seed_argument, default=0, help="seed of the global search, 0..2**32 - 1 (default 0)")
     p.add_argument("--sink-depth", type=float, default=0.05, metavar="M",
                    help="sink times: m below the surface at which the cloth counts as sunk (default 0.05, "
                         "as in studies)")
@@ -69,7 +72,7 @@ def main(args) -> int:
         raise ValueError("--scheduler and --workers are for the global search: add --global")
     data = read_measurements(args.data)
     out = args.out if args.out is not None else DEFAULT_OUT_DIR / args.data.stem
-    _check_writable(out)
+    check_writable_folder(out, "--out")
     result = fit(scene, data, names, bounds, global_search=args.global_search, scheduler=args.scheduler,
                  workers=args.workers, seed=args.seed, sink_depth=args.sink_depth, progress=not args.no_progress,
                  announce=lambda line: print(line, file=sys.stderr, flush=True))
@@ -80,14 +83,3 @@ def main(args) -> int:
     written = write_report(result, out, data_path=str(args.data), scene=args.scene, fps=fps)
     print("wrote " + ", ".join(str(p) for p in written))
     return 0
-
-
-def _check_writable(folder: Path) -> None:
-    """Refuse an output folder that cannot be written before any run (ValueError naming --out)."""
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        probe = folder / ".wetcloth-fit-probe"
-        probe.write_bytes(b"")
-        probe.unlink()
-    except OSError as exc:
-        raise ValueError(f"--out {folder}: cannot write there ({exc.strerror or exc})") from None
