@@ -475,3 +475,19 @@ def test_only_values_no_cloth_of_the_scene_can_show_are_refused():
     for column, values in (("depth", [0.35]), ("wet_mass", [0.03]), ("wet_mass", [5.0]), ("water_mass", [-0.004])):
         with pytest.raises(DataError, match=f"column '{column}': "):
             _check(column, values)
+
+
+def test_a_failed_runs_values_weigh_more_than_a_real_runs_at_any_sigma():
+    """A value a failed run did not reach counts as far beyond any real run's, whatever its sigma: at a
+    micrometre's sigma a real run 1 cm off weighed as much as a failed one (a weighted 1e4 each), so the
+    optimiser could prefer a blow-up.  Its penalty is now 1e4 times the output's spread, over its sigma."""
+    from wetcloth.calibration.problem import CurveModel
+    from wetcloth.simulation import OUTPUT_NAMES
+
+    depth = np.array([0.01, 0.02, 0.03])  # m
+    model = CurveModel(wetcloth.load_scene("towel"), ("absorption_rate",), np.array([1.0, 2.0, 3.0]),
+                       {"depth": depth}, {"depth": np.full(3, 1e-6)})
+    real = np.zeros((3, len(OUTPUT_NAMES)))
+    real[:, OUTPUT_NAMES.index("depth")] = depth + 0.01  # 1 cm off: 1e4 sigma
+    failed = np.full_like(real, np.nan)
+    assert np.sum(model.residuals_of(failed) ** 2) > 1e6 * np.sum(model.residuals_of(real) ** 2)

@@ -22,7 +22,7 @@ from scipy import optimize, stats
 
 from wetcloth.calibration.data import Curves, SinkTimes, check_against_scene
 from wetcloth.calibration.parameters import FitParameter, fit_parameters
-from wetcloth.calibration.problem import DIFF_STEP, CurveModel, SinkModel, fit_scene
+from wetcloth.calibration.problem import DIFF_STEP, CurveModel, SinkModel, column_scale, fit_scene
 from wetcloth.calibration.statistics import chi2_check, estimate_sigma, leverage, uncertainty
 from wetcloth.errors import BlowUpError, ParameterError
 from wetcloth.scene import Scene, parameter_field
@@ -138,13 +138,6 @@ def fit(scene: Scene, data: Curves | SinkTimes, names: list[str], bounds: dict |
     return result
 
 
-def _column_scale(values: np.ndarray) -> float:
-    """A first weight for an output without sigma: its spread (the fit then estimates its sigma)."""
-    v = values[np.isfinite(values)]
-    spread = float(v.std()) if v.size > 1 else 0.0
-    return spread if spread > 0 else (float(np.abs(v).max()) or 1.0)
-
-
 def _fit_curves(scene, data: Curves, params: list[FitParameter], global_search, client, scheduler, workers, seed,
                 progress, announce) -> FitResult:
     p = len(params)
@@ -159,7 +152,7 @@ def _fit_curves(scene, data: Curves, params: list[FitParameter], global_search, 
             raise FitError(f"--global searches within the bounds: give --bounds for {', '.join(missing)} "
                            f"(the allowed ranges are far wider than any cloth's values)")
     start_scene = fit_scene(scene)
-    weights = {name: data.sigma[name] if data.sigma[name] is not None else _column_scale(data.values[name])
+    weights = {name: data.sigma[name] if data.sigma[name] is not None else column_scale(data.values[name])
                for name in data.names}
     model = CurveModel(start_scene, tuple(q.name for q in params), data.times, data.values, weights)
     scales = np.array([q.scale for q in params])
