@@ -26,7 +26,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from support.blender import BLENDER_PYTHON, DEFAULT_BLENDER_PYTHON, require_blender_python
+from support.blender import BLENDER_PYTHON, DEFAULT_BLENDER_PYTHON, probe_extension, require_blender_python
 from wetcloth.cli import main as cli_main
 from wetcloth.exporter.blender_extension.geometry import MeshCloth, cloth_of, collider_of
 from wetcloth.exporter.blender_extension.parameters import SCENE
@@ -51,26 +51,9 @@ CONTACT_TOL = 1e-4
 
 @pytest.fixture(scope="module")
 def baked(tmp_path_factory):
-    python = require_blender_python()
     root = tmp_path_factory.mktemp("extension")
-    version = subprocess.run([str(python), "-c", "import sys; print(*sys.version_info[:2])"], capture_output=True,
-                             text=True, check=True).stdout.split()
-    # another Blender's Python (5.1 and later run 3.13) gets its own wheel beside this Python's, as a release has
-    other = [] if tuple(map(int, version)) == sys.version_info[:2] else ["--python", sys.executable, "--python", str(python)]
-    assert cli_main(["blender-extension", "--out", str(root), *other]) == 0
-    (root / "work").mkdir()
-    (root / "user").mkdir()
-    spec = SPEC | {"zip": str(next(root.glob("wetcloth-*.zip"))), "work": str(root / "work")}
-    (root / "spec.json").write_text(json.dumps(spec))
-    env = os.environ | {"BLENDER_USER_RESOURCES": str(root / "user")}  # not the developer's Blender folder
-    done = subprocess.run([str(python), str(PROBE), str(root / "spec.json"), str(root / "result.json")],
-                          capture_output=True, text=True, timeout=600, env=env, cwd=root)
-    if done.returncode != 0 or not (root / "result.json").exists():
-        pytest.fail(f"the Blender probe failed (exit {done.returncode}):\n{done.stderr[-4000:]}")
-    report = json.loads((root / "result.json").read_text())
-    if "error" in report:
-        pytest.fail(f"the Blender probe stopped:\n{report['error']}")
-    return SimpleNamespace(report=report, root=root, zip=Path(spec["zip"]))
+    report = probe_extension(root, PROBE, SPEC)
+    return SimpleNamespace(report=report, root=root, zip=next(root.glob("wetcloth-*.zip")))
 
 
 def as_float32_decimal(value: float) -> float:

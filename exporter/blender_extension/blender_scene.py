@@ -5,7 +5,9 @@ as stored (its modifiers apply after the cache) gives the grid or the mesh cloth
 handed to wetcloth as arrays in Blender's vertex order; Collider objects' evaluated meshes the
 analytic or mesh colliders (``geometry.collider_of``, their triangles as arrays; an animated one's
 moves as a collider key at every frame), the Water plane ``water_level`` (and, if it is animated, the
-level over every frame).  Parameters come from
+level over every frame).  Positions are read in metres (``world_matrix``: Blender units times the
+scene's Unit Scale), and the cache is written back in the object's own coordinates.  The cloth's
+object stands still over the range (``check_still``).  Parameters come from
 ``scene.wetcloth`` and the cloth's ``obj.wetcloth``; Blender keeps them as 32-bit floats, which
 are read back as the shortest decimal that rounds to them (0.45, not 0.4499999881).
 """
@@ -20,12 +22,19 @@ from dataclasses import dataclass, replace
 import bpy
 import numpy as np
 
+from wetcloth.exporter.blender_extension.caches import cache_names
 from wetcloth.exporter.blender_extension.geometry import GridCloth, MeshCloth, cloth_of, collider_of
-from wetcloth.exporter.blender_extension.parameters import FABRIC, SCENE
+from wetcloth.errors import ParameterError
+from wetcloth.exporter.blender_extension.parameters import FABRIC, FROM_CLOTH, SCENE
 from wetcloth.scene import MAX_KEY_TURN, Scene, from_dict, rotation_matrix, rotation_vector
 
 #: The scene settings the bake follows when they change over the frame range (as grip keys at every frame).
 GRIP = ("grip_x", "grip_y", "grip_z")
+#: What the scene parameters the Cloth object sets (parameters.FROM_CLOTH) are in Blender, for its refusals.
+IN_BLENDER = {"nx": "its mesh", "ny": "its mesh", "width": "its mesh (its size)", "length": "its mesh (its size)",
+              "initial_height": "its height (Location Z)", "initial_tilt": "its rotation about x",
+              "pinned_edge": "its pin group", "cloth_mesh": "its mesh", "place_mesh": "its mesh",
+              "pinned_vertices": "its pin group"}
 
 
 @dataclass
@@ -48,10 +57,11 @@ def clean(value):
     return value
 
 
-def prefix_of(obj) -> str:
-    """The cache's file prefix of an object: its name in letters, digits, '.', '_' and '-'."""
-    name = re.sub(r"[^A-Za-z0-9._-]+", "_", obj.name).strip("._-")
-    return name or "cloth"
+def world_matrix(obj) -> np.ndarray:
+    """The object's 4 x 4 matrix from its coordinates to world space in metres: ``matrix_world`` (to Blender
+    units) times the scene's *Unit Scale* (Scene > Units: metres per Blender unit)."""
+    metres = clean(bpy.context.scene.unit_settings.scale_length)
+    return np.diag([metres, metres, metres, 1.0]) @ np.array(obj.matrix_world)
 
 
 def _vertices(obj, mesh) -> tuple[np.ndarray, np.ndarray]:
@@ -59,7 +69,7 @@ def _vertices(obj, mesh) -> tuple[np.ndarray, np.ndarray]:
     mesh.vertices.foreach_get("co", co)
     edges = np.empty(len(mesh.edges) * 2, dtype=np.int64)
     mesh.edges.foreach_get("vertices", edges)
-    matrix = np.array(obj.matrix_world)
+    matrix = world_matrix(obj)
     return co.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3], edges.reshape(-1, 2)
 
 
@@ -134,11 +144,11 @@ def _water(scene, waters, depsgraph) -> tuple[float, list | None]:
     level = clean(float(points[:, 2].mean()))
     if water.animation_data is None:
         return level, None
-    local = water.data.vertices[0].co.copy()  # any vertex: the plane is level
+    local = np.append(water.data.vertices[0].co, 1.0)  # any vertex: the plane is level
     levels = []
     for frame in range(scene.frame_start, scene.frame_end):  # the level from frame k to k + 1
         scene.frame_set(frame)
-        levels.append(clean(float((water.matrix_world @ local).z)))
+        levels.append(clean(float((world_matrix(water) @ local)[2])))
     scene.frame_set(scene.frame_start)
     return level, levels
 
@@ -163,13 +173,12 @@ def _collider_keys(scene, obj, number: int, centre) -> list[dict]:
         return []
     fps = scene.render.fps / scene.render.fps_base
     scene.frame_set(scene.frame_start)
-    first = np.array(obj.matrix_world)
-    to_first = np.linalg.inv(first)
+    to_first = np.linalg.inv(world_matrix(obj))
     c = np.asarray(centre, dtype=np.float64)
     keys, previous = [], np.zeros(3)
     for frame in range(scene.frame_start + 1, scene.frame_end + 1):
         scene.frame_set(frame)
-        motion = np.array(obj.matrix_world) @ to_first  # world at the first frame -> world at this one
+        motion = world_matrix(obj) @ to_first  # world at the first frame -> world at this one (m)
         turn, shift = motion[:3, :3], motion[:3, 3]
         if np.abs(turn.T @ turn - np.eye(3)).max() > 1e-6 or np.linalg.det(turn) < 0.0:
             scene.frame_set(scene.frame_start)
@@ -242,6 +251,70 @@ def _unwrapped(vector, previous) -> np.ndarray:
     return min(candidates, key=lambda v: float(np.linalg.norm(v - previous)))
 
 
+def check_still(scene, cloths) -> None:
+    """ValueError naming a cloth whose object moves, turns or scales over the frame range (keys, drivers,
+    constraints or a parent's): the bake simulates it from the first frame and plays it where it stands."""
+    moving = [o for o in cloths if _animated(o) or len(o.constraints)]
+    if not moving:
+        return
+    scene.frame_set(scene.frame_start)
+    first = [np.array(o.matrix_world) for o in moving]
+    for frame in range(scene.frame_start + 1, scene.frame_end + 1):
+        scene.frame_set(frame)
+        for obj, matrix in zip(moving, first):
+            if not np.array_equal(np.array(obj.matrix_world), matrix):
+                scene.frame_set(scene.frame_start)
+                raise ValueError(f"cloth {obj.name!r} moves at frame {frame} (its location, rotation or scale is "
+                                 "keyed or driven, or its parent's): the bake drapes the cloth from where it is at "
+                                 "the first frame and plays it there; bake with the cloth's object still (to move "
+                                 "the cloth, pin it and key the grip, or key the colliders)")
+    scene.frame_set(scene.frame_start)
+
+
+def check_above_floor(obj, positions, thickness: float, floor_level: float) -> None:
+    """ValueError naming the cloth if a vertex (world ``positions`` (n, 3), m) is not above the floor by
+    half the fabric's thickness."""
+    lowest = float(positions[:, 2].min())
+    if lowest - 0.5 * thickness <= floor_level:
+        raise ValueError(f"cloth {obj.name!r} starts at or below the floor: its lowest vertex is at z = {lowest:g} m, "
+                         f"the scene setting floor_level {floor_level:g} m; allowed: every vertex above floor_level "
+                         f"+ thickness/2 = {floor_level + 0.5 * thickness:g} m (raise the object: Location Z, or "
+                         "lower floor_level)")
+
+
+def _setting(name: str, colliders) -> str:
+    """Where parameter ``name`` lives in Blender, as a cloth's refusal says it (``colliders``: the Collider
+    objects, collider k the k-th)."""
+    if name in FABRIC:
+        return f"its setting {name!r}"
+    if name in FROM_CLOTH:
+        return IN_BLENDER[name]
+    collider = re.fullmatch(r"collider(\d+)(_friction)?(_\w+)?", name)
+    if collider and int(collider[1]) <= len(colliders):
+        return f"collider {colliders[int(collider[1]) - 1].name!r}" + ("'s setting 'friction'" if collider[2] else "")
+    if name.startswith(("collider_key", "grip_key")):
+        return "the colliders' motion" if name.startswith("collider_key") else f"the grip's keys ({', '.join(GRIP)})"
+    return f"scene setting {name!r}"
+
+
+def _in_blender(message: str) -> str:
+    """A wetcloth message with the scene parameters the Cloth object sets (IN_BLENDER; those with an '_', not
+    words such as 'length') said as Blender's."""
+    names = "|".join(name for name in IN_BLENDER if "_" in name)
+    return re.sub(rf"\b({names})\b", lambda found: f"the cloth's {IN_BLENDER[found[1]].removeprefix('its ')}",
+                  message)
+
+
+def scene_of(obj, values: dict, colliders) -> Scene:
+    """The cloth's wetcloth Scene of parameter ``values``; a ValueError naming the cloth and, for each
+    mistake, the setting or object at fault (``colliders``: the Collider objects in order)."""
+    try:
+        return from_dict(values)
+    except ParameterError as exc:
+        raise ValueError("; ".join(f"cloth {obj.name!r}, {_setting(name, colliders)}: {_in_blender(message)}"
+                                   for _, name, message in exc.problems)) from None
+
+
 def cloth_jobs(context) -> list[ClothJob]:
     """One job per Cloth object of the scene; ValueError naming the object or parameter at fault."""
     scene = context.scene
@@ -252,6 +325,7 @@ def cloth_jobs(context) -> list[ClothJob]:
     for obj in cloths:
         if obj.type != "MESH":
             raise ValueError(f"cloth {obj.name!r} is not a mesh")
+    check_still(scene, cloths)
     scene.frame_set(scene.frame_start)
     depsgraph = context.evaluated_depsgraph_get()
     depsgraph.update()
@@ -269,21 +343,24 @@ def cloth_jobs(context) -> list[ClothJob]:
     if grip_keys:  # the keys hold the whole grip
         settings |= {name: 0.0 for name in GRIP}
     directory = cache_directory(scene)
+    prefixes = cache_names([obj.name for obj in cloths])
     jobs = []
     for obj in cloths:
         members = pin_members(obj)
-        cloth, pins = cloth_of(*cloth_mesh(obj), members, obj.name)
+        mesh = cloth_mesh(obj)
+        cloth, pins = cloth_of(*mesh, members, obj.name)
         if isinstance(cloth, GridCloth):
             cloth = replace(cloth, width=clean(cloth.width), length=clean(cloth.length),
                             centre=tuple(clean(c) for c in cloth.centre), tilt=clean(cloth.tilt))
         fabric = {name: clean(getattr(obj.wetcloth, name)) for name in FABRIC}
+        check_above_floor(obj, mesh[0], fabric["thickness"], settings["floor_level"])
         shift = cloth.shift
         moved = [c | {"x": clean(c["x"] - shift[0]), "y": clean(c["y"] - shift[1])} for c in colliders]
         gripped = grip_keys if members else []  # the grip moves pins: a cloth without any takes no keys
         values = settings | fabric | cloth.scene_values() | {"pinned_edge": pins, "colliders": moved,
                                                              "collider_keys": collider_keys, "grip_keys": gripped}
-        prefix = prefix_of(obj)
-        jobs.append(ClothJob(obj=obj, scene=from_dict(values), cloth=cloth, directory=os.path.join(directory, prefix),
-                             prefix=prefix, to_local=np.array(obj.matrix_world.inverted()),
-                             water_levels=water_levels))
+        prefix = prefixes[obj.name]
+        jobs.append(ClothJob(obj=obj, scene=scene_of(obj, values, collider_objects), cloth=cloth,
+                             directory=os.path.join(directory, prefix), prefix=prefix,
+                             to_local=np.linalg.inv(world_matrix(obj)), water_levels=water_levels))
     return jobs

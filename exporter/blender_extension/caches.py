@@ -1,5 +1,6 @@
 """The baked cloth in the .blend: a Mesh Sequence Cache modifier playing the cloth's USD file (its path
-relative to the .blend), the wet material, and the check for missing caches when a file loads.
+relative to the .blend), the wet material, and the check for missing caches when a file loads; the
+caches' names (valid USD identifiers, one per cloth) and the check of the cache folder before a bake.
 
 A missing cache would leave the cloth frozen in its rest pose with only a console warning; the
 ``load_post`` handler instead names every missing file in Blender's interface (a pop-up, and the
@@ -10,6 +11,7 @@ for scripts and render farms.
 from __future__ import annotations
 
 import os
+import re
 import sys
 
 import bpy
@@ -45,6 +47,49 @@ def _relative(path: str) -> str:
         return bpy.path.relpath(path)
     except ValueError:
         return path
+
+
+def _identifier(name: str) -> str:
+    """``name`` as a USD prim name that is also a file prefix: pxr's Tf.MakeValidIdentifier (of
+    ``cloth_<name>`` if it does not start with a letter), each run of '_' made one."""
+    from pxr import Tf
+
+    start = name[:1]
+    valid = Tf.MakeValidIdentifier(name if start.isascii() and start.isalpha() else f"cloth_{name}")
+    return re.sub("_+", "_", valid).strip("_")
+
+
+def cache_names(names) -> dict[str, str]:
+    """The cache name (its folder, USD file and prim) of each cloth name: a valid USD identifier, distinct
+    from the others' even on a file system blind to case; a name valid as it is keeps itself, the others
+    (in sorted order) get ``_2``, ``_3``... where they would meet."""
+    taken, chosen = set(), {}
+    for name in sorted(names, key=lambda n: (_identifier(n) != n, n)):
+        base = candidate = _identifier(name)
+        number = 1
+        while candidate.lower() in taken:
+            number += 1
+            candidate = f"{base}_{number}"
+        taken.add(candidate.lower())
+        chosen[name] = candidate
+    return chosen
+
+
+def check_folder(folder: str, setting: str) -> None:
+    """ValueError unless ``folder`` (absolute; ``setting`` as typed) is a folder the bake can write
+    into or create: checked before any bake is touched."""
+    if not setting.strip():
+        raise ValueError("the Cache folder is empty: set it (Physics properties > Wet Cloth > Scene > Cache "
+                         "folder), e.g. //wetcloth_cache for a folder beside the .blend file")
+    existing = os.path.abspath(folder)
+    while not os.path.exists(existing):
+        existing = os.path.dirname(existing)
+    if not os.path.isdir(existing):
+        raise ValueError(f"the Cache folder {setting!r} cannot be made: {existing} is a file; choose another "
+                         "folder (Physics properties > Wet Cloth > Scene > Cache folder)")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise ValueError(f"the Cache folder {setting!r} cannot be written: no permission in {existing}; choose "
+                         "another folder (Physics properties > Wet Cloth > Scene > Cache folder)")
 
 
 def attach(obj, usd_path: str, prefix: str) -> None:
@@ -94,6 +139,16 @@ def detach(obj, delete_files: bool = True) -> list[str]:
         if not os.listdir(folder):
             os.rmdir(folder)
     return deleted
+
+
+def release(obj, usd_path: str) -> None:
+    """Before ``obj``'s bake writes ``usd_path``: remove its previous bake and that of any object playing
+    ``usd_path`` (a duplicate's), files kept, so that Blender lets go of the file."""
+    target = os.path.normpath(usd_path)
+    for other in bpy.data.objects:
+        if other == obj or cache_path(other) == target:
+            detach(other, delete_files=False)
+    bpy.context.evaluated_depsgraph_get().update()
 
 
 def missing_caches() -> list[tuple[str, str]]:

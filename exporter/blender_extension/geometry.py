@@ -1,9 +1,9 @@
 """What the Blender objects are, read from their vertices and faces in world space (m, z up); numpy only.
 
-* the cloth (``cloth_of``): a subdivided rectangular plane pinned along one whole edge or not at all
-  is wetcloth's grid cloth (``grid_cloth``: its particle counts, size, centre and tilt, and which grid
-  particle each Blender vertex is; ``pinned_edge``), which is exact for a plane and has the grid's
-  faster solver; any other mesh of triangles, quads and n-gons is a mesh cloth (``MeshCloth``: its
+* the cloth (``cloth_of``): a subdivided rectangular plane (every cell a face) pinned along one whole
+  edge or not at all is wetcloth's grid cloth (``grid_cloth``: its particle counts, size, centre and
+  tilt, and which grid particle each Blender vertex is; ``pinned_edge``), which is exact for a plane and
+  has the grid's faster solver; any other mesh of triangles, quads and n-gons is a mesh cloth (``MeshCloth``: its
   vertices in Blender's order, n-gons split into triangles, the pin group a point attribute);
 * colliders (``collider_of``): a closed UV sphere, cube (axis-aligned) or cylinder (vertical axis) is
   the analytic collider of that shape (``analytic_collider``); any other mesh a mesh collider of its
@@ -173,14 +173,33 @@ def face_blocks(sizes, loops, triangles, triangle_faces) -> list[np.ndarray]:
     return [b for b in blocks if len(b)]
 
 
+def check_cells(grid: GridCloth, sizes, loops, name: str = "cloth") -> None:
+    """ValueError unless the faces (corner counts ``sizes``, corner vertices ``loops``) are the grid's
+    cells, each once: a plane with a face deleted is no grid."""
+    sizes = np.asarray(sizes, dtype=np.int64)
+    cells = (grid.nx - 1) * (grid.ny - 1)
+    if len(sizes) != cells or (sizes != 4).any():
+        raise ValueError(f"cloth {name!r}: its {len(sizes)} faces are not the {cells} quads of its grid")
+    corners = grid.order[np.asarray(loops, dtype=np.int64)].reshape(-1, 4)
+    first = corners.min(axis=1)
+    expected = first[:, None] + np.array([0, 1, grid.nx, grid.nx + 1])
+    if (np.sort(corners, axis=1) != expected).any() or len(np.unique(first)) != cells:
+        raise ValueError(f"cloth {name!r}: its faces are not the quads of its grid, each once")
+
+
 def cloth_of(positions, edges, polygons, loop_triangles, pins, name: str = "cloth"):
     """The cloth of a Cloth object: a GridCloth (and its pinned_edge) if the mesh is a subdivided plane
-    and ``pins`` (the pin group's vertex indices) are none or one whole edge of it, else a MeshCloth
-    (and 'none') of vertex ``positions`` (n, 3) in world space (m) and faces ``polygons`` (corner counts,
-    corner vertices), n-gons split as ``loop_triangles`` (vertices, faces) are (face_blocks); ``edges``
-    (e, 2).  A ValueError naming the object for a mesh no cloth can be (non-manifold, loose vertices)."""
+    (its faces the grid's cells, check_cells) and ``pins`` (the pin group's vertex indices) are none or one
+    whole edge of it, else a MeshCloth (and 'none') of vertex ``positions`` (n, 3) in world space (m) and
+    faces ``polygons`` (corner counts, corner vertices), n-gons split as ``loop_triangles`` (vertices,
+    faces) are (face_blocks); ``edges`` (e, 2).  A ValueError naming the object for a mesh no cloth can be
+    (no faces, non-manifold, loose vertices)."""
+    if not len(polygons[0]):
+        raise ValueError(f"cloth {name!r} has no faces: a cloth is a surface (a mesh with faces; "
+                         "Add > Mesh > Grid, or a Plane subdivided)")
     try:
         grid = grid_cloth(positions, edges, name)
+        check_cells(grid, *polygons, name)
         return grid, pinned_edge(grid, pins, "pins")
     except ValueError:
         pass
@@ -208,8 +227,9 @@ def collider_of(positions, triangles, name: str = "collider") -> dict:
 
 def analytic_collider(positions) -> dict | None:
     """The ``[[collider]]`` fields (shape, x, y, z and its sizes, m) of a mesh's world-space vertices
-    (n, 3) if they are 8 corners of an axis-aligned box, a cylinder's two rings about a vertical axis
-    (cap centres allowed), or more than 8 vertices all as far from their centre (a UV sphere); else None."""
+    (n, 3) if they are 8 corners of an axis-aligned box, a cylinder's two rings about a vertical axis (as
+    many vertices at its bottom as at its top: a cone is no cylinder; cap centres allowed), or more than 8
+    vertices all as far from their centre (a UV sphere); else None."""
     p = np.unique(np.asarray(positions, dtype=np.float64).round(9), axis=0)
     if len(p) == 0:
         return None
@@ -222,7 +242,8 @@ def analytic_collider(positions) -> dict | None:
         return dict(shape="box", **where, size_x=float(extent[0]), size_y=float(extent[1]), size_z=float(extent[2]))
     radial = np.hypot(p[:, 0] - centre[0], p[:, 1] - centre[1])
     ring = radial > tol
-    if (at_bounds[:, 2].all() and ring.sum() >= 6 and np.ptp(radial[ring]) <= tol
+    bottom, top = (ring & (np.abs(p[:, 2] - z) <= tol) for z in (lo[2], hi[2]))
+    if (at_bounds[:, 2].all() and bottom.sum() == top.sum() >= 3 and np.ptp(radial[ring]) <= tol
             and abs(extent[0] - extent[1]) <= tol and extent[2] > tol):
         return dict(shape="cylinder", **where, radius=float(radial[ring].mean()), height=float(extent[2]))
     distance = np.linalg.norm(p - centre, axis=1)

@@ -24,6 +24,10 @@ ROLES = [("NONE", "None", "Not part of the wet cloth simulation"),
                                     "falling level)")]
 
 
+#: Decimal places the panel shows of a float setting.
+PRECISION = 6
+
+
 def parameter_property(name: str, field=None):
     """A Blender property for scene parameter ``name`` from its field's metadata (unit, meaning, range)."""
     f = field or PARAMETERS[name]
@@ -38,8 +42,14 @@ def parameter_property(name: str, field=None):
     if f.type == "int":
         return IntProperty(name=label, description=description, default=f.default, min=int(md["lo"]),
                            max=int(md["hi"]))
-    return FloatProperty(name=label, description=description, default=f.default, min=md["lo"], max=md["hi"],
-                         precision=6, step=1)
+    return FloatProperty(name=label, description=description, default=f.default, min=lower_limit(md),
+                         max=md["hi"], precision=PRECISION, step=1)
+
+
+def lower_limit(metadata: dict) -> float:
+    """The least value of a float setting: its parameter's lower bound, or for a bound its range excludes
+    (0 < thickness) the least value the panel shows above it (one unit of the last digit, PRECISION)."""
+    return metadata["lo"] + (10.0 ** -PRECISION if metadata["lo_open"] else 0.0)
 
 
 def _apply_preset(self, context) -> None:
@@ -65,7 +75,7 @@ def _object_annotations() -> dict:
 def _scene_annotations() -> dict:
     annotations = {name: parameter_property(name) for name in SCENE}
     annotations["cache_directory"] = StringProperty(
-        name="Cache folder", subtype="DIR_PATH", default="//wetcloth_cache",
+        name="Cache folder", subtype="DIR_PATH", default="//wetcloth_cache", options={"PATH_SUPPORTS_BLEND_RELATIVE"},
         description="Where the bake writes one USD file per cloth (// is the .blend file's folder)")
     return annotations
 
