@@ -22,7 +22,7 @@ import math
 import numpy as np
 
 from wetcloth.errors import ParameterError
-from wetcloth.scene import Scene, collider_key_rows, turn_between
+from wetcloth.scene import Scene, collider_key_rows, grip_key_rows, turn_between
 
 #: The most samples in one interval between consecutive key times.
 SAMPLES_MAX = 4096
@@ -75,11 +75,13 @@ def check_pinned_outside(scene: Scene, positions: np.ndarray, pinned: np.ndarray
 
 
 def _grip_at(scene: Scene, t: float) -> np.ndarray:
-    """The grip keys' displacement (3, m) at t (s): 0 at t = 0, linear between keys, the last key's after it."""
+    """The grip keys' displacement (3, m) at t (s), as the core moves the grip: 0 at t = 0, linear between keys,
+    the last key's after it."""
     if not scene.grip_keys:
         return np.zeros(3)
-    times = [0.0] + [key.time for key in scene.grip_keys]
-    return np.array([np.interp(t, times, [0.0] + [getattr(key, c) for key in scene.grip_keys]) for c in "xyz"])
+    from wetcloth import _core
+
+    return np.array(_core.grip_key_displacement(grip_key_rows(scene.grip_keys), t))
 
 
 def _path_length(keys) -> float:

@@ -1,7 +1,11 @@
-// Bindings of the colliders' geometry (colliders.cpp, collider_mesh.cpp), for tests and callers that check a scene.
+// Bindings of the colliders' geometry (colliders.cpp, collider_mesh.cpp) and of where the grip's keys put the pinned
+// particles (grip.cpp), for tests and callers that check a scene.
+#include <nanobind/stl/tuple.h>
+
 #include <vector>
 
 #include "convert.hpp"
+#include "wetcloth/grip.hpp"
 #include "wetcloth/collider_mesh.hpp"
 #include "wetcloth/collider_motion.hpp"
 #include "wetcloth/colliders.hpp"
@@ -62,6 +66,19 @@ WETCLOTH_BINDINGS(m) {
         "Signed distance (m) of points (3, m) to collider k of the rows colliders (k, COLLIDER_COLUMNS) into distance "
         "(m), the outward normals into normal (3, m); a mesh collider's (its triangles in meshes, a ColliderMeshes) "
         "at most reach (m).  With keys (rows (j, 8), collider_motion.hpp), where they have moved it at t (s).");
+    m.def(
+        "grip_key_displacement",
+        [](nb::handle keys, double t) {
+            Physics phys;
+            phys.grip_key_count = size_of(keys) / 4;
+            phys.grip_keys = argument<const double>(keys, "keys", 4 * phys.grip_key_count);
+            double d[3];
+            key_displacement(phys, t, d);
+            return nb::make_tuple(d[0], d[1], d[2]);
+        },
+        nb::arg("keys"), nb::arg("t"),
+        "(x, y, z) m: the grip keys' displacement of the pinned particles at t (s), keys the rows (k, 4) of time s and "
+        "x, y, z m (scene.grip_key_rows): 0 at t = 0, linear between keys, the last key's after it.");
     m.def(
         "pinned_pressed",
         [](nb::handle phys, nb::handle free, nb::handle pos) {
