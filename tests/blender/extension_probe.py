@@ -376,11 +376,23 @@ def mesh_cloth_over_a_cup(spec):
     return out
 
 
+@contextlib.contextmanager
+def reported(result_path, result: dict):
+    """Write ``result`` as JSON to ``result_path`` when the block ends, with the traceback that stopped it, if
+    one did, under "error"."""
+    try:
+        yield
+    except Exception:
+        result["error"] = traceback.format_exc()
+    with open(result_path, "w") as fh:
+        json.dump(result, fh)
+
+
 def main(spec_path, result_path):
     spec = json.load(open(spec_path))
     result = {"blender": bpy.app.version_string}
     frames = list(range(1, spec["frames"] + 1))
-    try:
+    with reported(result_path, result):
         result["install"] = operator(bpy.ops.extensions.package_install_files, filepath=spec["zip"],
                                      repo="user_default", enable_on_install=True)
         result["install"]["addons"] = [name for name in bpy.context.preferences.addons.keys() if "wetcloth" in name]
@@ -426,10 +438,6 @@ def main(spec_path, result_path):
         result["range"] = another_range(spec, blend)
         result["refusals"] = refusals(spec)
         result["mesh"] = mesh_cloth_over_a_cup(spec)
-    except Exception:
-        result["error"] = traceback.format_exc()
-    with open(result_path, "w") as fh:
-        json.dump(result, fh)
 
 
 if __name__ == "__main__":

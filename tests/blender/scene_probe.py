@@ -20,13 +20,12 @@ bake's result and error:
 import json
 import os
 import sys
-import traceback
 
 import bpy  # first: bpy makes bmesh importable
 import bmesh  # noqa: E402
 import numpy as np
 
-from extension_probe import operator, subdivided_plane
+from extension_probe import operator, reported, subdivided_plane
 
 #: Frames of the bakes compared across Unit Scales.
 FRAMES = 6
@@ -171,15 +170,11 @@ def main(spec_path, result_path):
     with open(spec_path) as fh:
         spec = json.load(fh)
     result = {}
-    try:
+    with reported(result_path, result):
         result["install"] = operator(bpy.ops.extensions.package_install_files, filepath=spec["zip"],
                                      repo="user_default", enable_on_install=True)
         for case in (hole, no_faces, unit_scale, animated, limits, unnamed):
             result[case.__name__] = case(spec)
-    except Exception:
-        result["error"] = traceback.format_exc()
-    with open(result_path, "w") as fh:
-        json.dump(result, fh)
 
 
 if __name__ == "__main__":
