@@ -136,7 +136,7 @@ def test_a_cloth_whose_object_moves_is_refused_naming_it(probed):
     assert animated["still"]["result"] == ["FINISHED"], animated["still"]["error"]
 
 
-@pytest.mark.parametrize("name", ["areal_density", "thickness", "stretch_stiffness", "water_density", "max_step"])
+@pytest.mark.parametrize("name", ["areal_density", "thickness", "stretch_stiffness", "water_density"])
 def test_the_panel_stops_settings_above_a_lower_bound_their_range_excludes(probed, name):
     """hard_min and soft_min above the parameter's lower bound (0 < x), and a bake at hard_min is not refused."""
     limit = probed.limits[name]

@@ -172,11 +172,16 @@ print(json.dumps(record))
 """
 
 
+def child_record(child: str) -> dict:
+    """The last record a child script printed, run over the extracted FMI 3.0 unit."""
+    directory, _ = extracted_fmu(3)
+    records, _ = run_child(child, directory)
+    return records[-1]
+
+
 @pytest.fixture(scope="module")
 def calls(fmu3):
-    directory, _ = extracted_fmu(3)
-    records, _ = run_child(CHILD, directory)
-    return records[-1]
+    return child_record(CHILD)
 
 
 def test_mesh_arrays_have_nx_times_ny_vertices(calls):
@@ -201,3 +206,57 @@ def test_bad_start_value_fails_initialization_naming_it(calls):
 def test_bad_state_bytes_are_refused_and_a_good_state_restores(calls):
     assert calls["random_state"] >= 3 and calls["truncated_state"] >= 3
     assert calls["step_after_bad_states"] == 0 and calls["step_after_restore"] == 0
+
+
+CHILD_REFUSALS = CHILD.split("record = {}")[0] + r"""
+import ctypes
+record = {}
+fmu = unit("refusals", nx=5, ny=5)
+fmu.exitInitializationMode()
+fmu.doStep(0.0, 0.05)
+record["set_time"] = status(fmu.setFloat64, [vr["time"]], [5.0])
+record["update_discrete_states"] = status(fmu.updateDiscreteStates)
+state = fmu.getFMUState()
+fmu.freeFMUState(state)
+record["set_freed_state"] = status(fmu.setFMUState, state)
+record["serialize_freed_state"] = status(fmu.serializeFMUState, state)
+record["step"] = status(fmu.doStep, 0.05, 0.05)
+text = unit("not utf8")
+record["not_utf8"] = status(text.fmi3SetString, text.component, (ctypes.c_uint32 * 1)(vr["integrator"]), 1,
+                            (ctypes.c_char_p * 1)(b"\xff\xfe"), 1)
+fresh = FMU3Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier="WetCloth", instanceName="fresh")
+fresh.instantiate(loggingOn=True, logMessage=lambda env, status, category, message: messages.append(
+    (int(status), message.decode())))
+record["exit_without_enter"] = status(fresh.exitInitializationMode)
+record["messages"] = messages
+print(json.dumps(record))
+"""
+
+
+@pytest.fixture(scope="module")
+def refusals(fmu3):
+    return child_record(CHILD_REFUSALS)
+
+
+def errors_of(record) -> str:
+    return "\n".join(message for status, message in record["messages"] if status >= 3)
+
+
+def test_setting_an_output_or_updating_discrete_states_is_refused_with_a_reason(refusals):
+    assert refusals["set_time"] >= 3 and refusals["update_discrete_states"] >= 3 and refusals["step"] == 0
+    text = errors_of(refusals)
+    assert "variable 'time' is an output: the master cannot set it" in text
+    assert "fmi3UpdateDiscreteStates is not supported" in text
+    assert "TypeError" not in text and "AttributeError" not in text
+
+
+def test_a_freed_state_is_refused_and_the_host_survives(refusals):
+    assert refusals["set_freed_state"] >= 3 and refusals["serialize_freed_state"] >= 3 and refusals["step"] == 0
+    assert "not a WetCloth FMU state" in errors_of(refusals)
+
+
+def test_bad_text_and_call_order_are_refused_naming_them(refusals):
+    assert refusals["not_utf8"] >= 3 and refusals["exit_without_enter"] >= 3
+    text = errors_of(refusals)
+    assert "the text for variable 'integrator' is not UTF-8" in text
+    assert "fmiExitInitializationMode is not allowed in the instantiated state" in text

@@ -254,3 +254,63 @@ def test_every_invalid_start_value_makes_simulate_fmu_raise_with_the_parameter_n
         assert f"'{name}'" in text, (name, text)
         if name in PARAMETERS:
             assert describe_range(PARAMETERS[name]) in text, (name, text)
+
+
+# ------------------------------------------------------------------------------------------ call order, bad text
+CHILD_CALLS = r"""
+import ctypes, json, sys
+sys.path.insert(0, sys.argv[2])
+from pathlib import Path
+import test_fmu_support as support
+support._BUILT["dir2"], support._BUILT["md2"] = Path(sys.argv[1]), __import__("fmpy").read_model_description(sys.argv[1])
+
+def fresh(name):
+    unit = support.Unit(name=name, initialize=False)
+    unit.fmu.setupExperiment(startTime=0.0)
+    return unit
+
+def record(name, unit, **statuses):
+    print(json.dumps({"case": name, **statuses, "step": unit.step(0.05), "errors": unit.errors()}), flush=True)
+
+unit = fresh("terminate_before_init")
+terminate = unit._call(unit.fmu.terminate)
+record("terminate_before_init", unit, terminate=terminate, enter=unit._call(unit.fmu.enterInitializationMode),
+       exit=unit._call(unit.fmu.exitInitializationMode))
+unit = fresh("exit_without_enter")
+record("exit_without_enter", unit, exit=unit._call(unit.fmu.exitInitializationMode))
+unit = fresh("not_utf8")
+unit.fmu.enterInitializationMode()
+vr = unit.vars["integrator"].valueReference
+text = unit._call(unit.fmu.fmi2SetString, unit.fmu.component, (ctypes.c_uint * 1)(vr), 1,
+                  (ctypes.c_char_p * 1)(b"\xff\xfe"))
+record("not_utf8", unit, set=text, exit=unit._call(unit.fmu.exitInitializationMode))
+"""
+
+
+@pytest.fixture(scope="module")
+def calls():
+    directory, _ = extracted_fmu()
+    records, _ = run_child(CHILD_CALLS, directory, __import__("pathlib").Path(__file__).parent)
+    return {r["case"]: r for r in records}
+
+
+def test_terminate_before_initialization_is_refused_naming_the_call_and_the_state(calls):
+    record = calls["terminate_before_init"]
+    assert (record["terminate"], record["enter"], record["exit"], record["step"]) == (FATAL, OK, OK, OK), record
+    assert ("fmiTerminate is not allowed in the instantiated state; allowed only in the initialized (stepping) "
+            "state") in "\n".join(record["errors"])
+
+
+def test_exit_initialization_without_enter_is_refused(calls):
+    record = calls["exit_without_enter"]
+    assert record["exit"] == FATAL and record["step"] != OK, record
+    assert ("fmiExitInitializationMode is not allowed in the instantiated state; allowed only in the "
+            "initialization mode state") in "\n".join(record["errors"])
+
+
+def test_a_text_that_is_not_utf8_is_refused_naming_the_variable(calls):
+    record = calls["not_utf8"]
+    assert (record["set"], record["exit"]) == (FATAL, FATAL) and record["step"] != OK, record
+    text = "\n".join(record["errors"])
+    assert "the text for variable 'integrator' is not UTF-8; allowed: UTF-8 text" in text
+    assert "AttributeError" not in text

@@ -29,8 +29,7 @@ for name, get in (("faces", unit.getUInt64), ("uv", unit.getFloat64)):
     out[name] = {"type": v[name].type, "variability": v[name].variability, "causality": v[name].causality,
                  "shape": shape, "start": [float(x) for x in str(v[name].start).split()],
                  "got": [float(x) for x in get([v[name].valueReference], nValues=shape[0] * shape[1])]}
-unit.terminate()
-unit.freeInstance()
+unit.freeInstance()  # never initialized: FMI allows no Terminate here
 print(json.dumps(out))
 """
 

@@ -141,6 +141,21 @@ def pointer(obj):
     keep.append(obj)
     return fmi2FMUstate(id(obj))
 
+def freed_state(frees):
+    state = unit.fmu.getFMUstate()
+    for _ in range(frees):
+        unit.fmu.freeFMUstate(state)
+    return state
+
+def target(payload):  # a freed state of this unit, raw memory (as another unit's state), or a Python object
+    if payload in ("freed", "freed_twice"):
+        return freed_state(1 if payload == "freed" else 2)
+    if payload == "raw_memory":
+        buffer = ctypes.create_string_buffer(b"\x01" * 256)
+        keep.append(buffer)
+        return fmi2FMUstate(ctypes.addressof(buffer))
+    return pointer(payload)
+
 SEQUENCES = {
     "random": [("deserialize", os.urandom(4096))],
     "empty": [("deserialize", b"")],
@@ -156,6 +171,11 @@ SEQUENCES = {
     "set_a_dict": [("set", {"format": "wetcloth-fmu-state/1"})],
     "set_missing_keys": [("set", checkpoint.Checkpoint(**{**decoded.__dict__, "leaves": {}}))],
     "serialize_a_list": [("serialize", [1, 2, 3])],
+    "set_freed": [("set", "freed")],
+    "set_freed_twice": [("set", "freed_twice")],
+    "serialize_freed": [("serialize", "freed")],
+    "set_raw_memory": [("set", "raw_memory")],
+    "serialize_raw_memory": [("serialize", "raw_memory")],
 }
 for name, calls in SEQUENCES.items():
     unit = support.Unit(support.SMALL, name=name)
@@ -166,9 +186,9 @@ for name, calls in SEQUENCES.items():
         if kind == "deserialize":
             statuses.append(unit._call(unit.fmu.deSerializeFMUstate, payload))
         elif kind == "set":
-            statuses.append(unit._call(unit.fmu.setFMUstate, pointer(payload)))
+            statuses.append(unit._call(unit.fmu.setFMUstate, target(payload)))
         else:
-            statuses.append(unit._call(unit.fmu.serializeFMUstate, pointer(payload)))
+            statuses.append(unit._call(unit.fmu.serializeFMUstate, target(payload)))
     after_refusal = unit.outputs()
     step = unit.step(0.1)
     record = {"case": name, "statuses": statuses, "step": step, "unchanged": after_refusal == before,
@@ -195,7 +215,8 @@ def bad_states(tmp_path_factory):
 
 BAD_STATES = ["random", "empty", "one_byte", "truncated", "flipped_byte", "pickle_payload", "magic_then_pickle",
               "missing_leaf", "wrong_shape", "invalid_value", "twice_then_step", "set_a_dict", "set_missing_keys",
-              "serialize_a_list"]
+              "serialize_a_list", "set_freed", "set_freed_twice", "serialize_freed", "set_raw_memory",
+              "serialize_raw_memory"]
 
 
 @pytest.mark.parametrize("case", BAD_STATES)
@@ -213,8 +234,10 @@ def test_refusals_name_the_reason(bad_states):
     for reason in ("without the 'wetcloth-fmu-state' header", "checksum does not match",
                    "missing ['anchor']", "'state.pos' is an array of <f8 (3, 80)", "'mesh_format'"):
         assert reason in stderr, reason
-    assert "not a WetCloth FMU state: a dict" in "\n".join(bad_states["set_a_dict"]["errors"])
-    assert "missing" in "\n".join(bad_states["set_missing_keys"]["errors"])
+    for case in ("set_a_dict", "set_missing_keys", "set_freed", "set_freed_twice", "set_raw_memory"):
+        assert "not a WetCloth FMU state: a pointer this unit did not hand out, or one already freed" in \
+            "\n".join(bad_states[case]["errors"]), case
+    assert stderr.count("FMU state not serialized: not a WetCloth FMU state") >= 3
 
 
 def test_a_crafted_pickle_state_runs_no_code(bad_states):
@@ -270,3 +293,35 @@ def test_a_state_names_its_scene_and_refuses_a_changed_one():
                                                         checkpoint.hashlib.sha256(body).digest()) + body
     with pytest.raises(checkpoint.StateError, match="scene identity"):
         checkpoint.from_bytes(forged)
+
+
+# ------------------------------------------------------------------------------------------ before initialization
+CHILD_BEFORE_INIT = r"""
+import json, sys
+sys.path.insert(0, sys.argv[2])
+from pathlib import Path
+import fmpy
+import test_fmu_support as support
+support._BUILT["dir2"], support._BUILT["md2"] = Path(sys.argv[1]), fmpy.read_model_description(sys.argv[1])
+source = support.Unit(support.SMALL, name="source")
+source.step(0.1)
+state = source.fmu.getFMUstate()
+target = support.Unit(name="target", initialize=False)
+target.fmu.setupExperiment(startTime=0.0)
+restored = target._call(target.fmu.setFMUstate, state)
+enter = target._call(target.fmu.enterInitializationMode)
+exit_ = target._call(target.fmu.exitInitializationMode)
+target.time = 0.1
+print(json.dumps({"set": restored, "enter": enter, "exit": exit_, "kept": target.outputs() == source.outputs(),
+                  "step": target.step(0.1), "errors": target.errors()}))
+"""
+
+
+def test_a_state_set_before_initialization_is_kept():
+    """As the native unit: the restored unit is initialized; initializing it again is refused."""
+    directory, _ = extracted_fmu()
+    (record,), _ = run_child(CHILD_BEFORE_INIT, directory, Path(__file__).parent)
+    assert record["set"] == 0 and record["kept"] and record["step"] == 0, record
+    assert record["enter"] >= 3 and record["exit"] >= 3, record
+    assert ("fmiEnterInitializationMode is not allowed in the initialized (stepping) state"
+            in "\n".join(record["errors"]))

@@ -85,6 +85,17 @@ def test_a_cloth_side_below_a_millimetre_is_refused_naming_the_range(name, value
     assert getattr(load_scene(**{name: 1e-3}), name) == 1e-3
 
 
+@pytest.mark.parametrize("value", [1e-300, 5e-324, 9.9e-7])
+def test_a_max_step_too_small_to_advance_time_at_1e9_s_is_refused_naming_the_range(value):
+    """max_step = 1e-300 s was accepted; a step then never ended (t + max_step == t from t ~ 1e-284 s on).
+    The least max_step keeps time advancing up to the latest time a state may hold (1e9 s)."""
+    with pytest.raises(ParameterError) as info:
+        load_scene(max_step=value)
+    assert str(info.value) == f"parameter 'max_step': {value!r} is out of range; allowed: 1e-06 <= max_step <= 1 s"
+    assert 1e9 + wetcloth.scene.SMALLEST_MAX_STEP > 1e9
+    assert load_scene(max_step=1e-6).max_step == 1e-6
+
+
 def _bad_values(f: dataclasses.Field):
     md = f.metadata
     if md["choices"]:

@@ -59,6 +59,11 @@ PINS_ALLOWED = ("'' (none), the name of a point attribute of the mesh file (nonz
 #: stay far from zero, where a size near 0 divides by zero and leaves the cloth motionless.
 SMALLEST_SIZE = 1e-3
 
+#: s: the least max_step, so that a step still advances time at the latest time a state may hold (MAX_TIME =
+#: 1e9 s, the core's stepping.hpp), where doubles lie 1e9 * 2.2e-16 = 2.2e-7 s apart at most: below that
+#: t + max_step == t and a step never ends (max_step = 1e-300 s did so from t ~ 1e-284 s on).
+SMALLEST_MAX_STEP = 1e-6
+
 #: How far (m) Collider.distance looks for a mesh collider's surface.
 MESH_REACH = 0.05
 
@@ -346,7 +351,7 @@ class Scene:
     tolerance: float = _param(
         5e-6, "-", "local position error per step relative to the cloth size; 0 = fixed steps", 0.0, 1.0
     )
-    max_step: float = _param(0.1, "s", "largest internal time step", 0.0, 1.0, lo_open=True)
+    max_step: float = _param(0.1, "s", "largest internal time step", SMALLEST_MAX_STEP, 1.0)
     # --- analytic colliders (docs/model.md section 6.3): [[collider]] tables, flattened as collider<k>_<field>
     colliders: tuple = field(default=(), metadata=dict(collider=True))
     # --- the grip's keys: [[grip_key]] tables, flattened as grip_key<k>_<field>

@@ -31,7 +31,7 @@ from extension_probe import operator, reported, subdivided_plane
 FRAMES = 6
 #: Float settings whose parameter's range excludes its lower bound: (cloth or scene, name).
 LIMITS = (("cloth", "areal_density"), ("cloth", "thickness"), ("cloth", "stretch_stiffness"),
-          ("scene", "water_density"), ("scene", "max_step"))
+          ("scene", "water_density"))
 
 
 def fresh(spec, name: str):

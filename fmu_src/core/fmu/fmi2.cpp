@@ -76,24 +76,29 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
     (void)toleranceDefined;
     (void)tolerance;
-    (void)stopTimeDefined;
-    (void)stopTime;
-    return Fmi::guarded(c, "fmi2SetupExperiment",
-                   [&](Instance& instance) { return Fmi::status_of(instance.unit->setup_experiment(startTime)); });
+    return Fmi::guarded(c, "fmi2SetupExperiment", [&](Instance& instance) {
+        return Fmi::status_of(
+            instance.unit->setup_experiment("fmi2SetupExperiment", startTime, stopTimeDefined != fmi2False, stopTime));
+    });
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
     return Fmi::guarded(c, "fmi2EnterInitializationMode",
-                   [&](Instance& instance) { return Fmi::status_of(instance.unit->enter_initialization()); });
+                   [&](Instance& instance) {
+                       return Fmi::status_of(instance.unit->enter_initialization("fmi2EnterInitializationMode"));
+                   });
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     return Fmi::guarded(c, "fmi2ExitInitializationMode",
-                   [&](Instance& instance) { return Fmi::status_of(instance.unit->exit_initialization()); });
+                   [&](Instance& instance) {
+                       return Fmi::status_of(instance.unit->exit_initialization("fmi2ExitInitializationMode"));
+                   });
 }
 
 fmi2Status fmi2Terminate(fmi2Component c) {
-    return Fmi::guarded(c, "fmi2Terminate", [&](Instance& instance) { return Fmi::status_of(instance.unit->terminate()); });
+    return Fmi::guarded(c, "fmi2Terminate",
+                   [&](Instance& instance) { return Fmi::status_of(instance.unit->terminate("fmi2Terminate")); });
 }
 
 fmi2Status fmi2Reset(fmi2Component c) {

@@ -168,24 +168,26 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance c, fmi3Boolean toleranceDefi
                                        fmi3Float64 startTime, fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {
     (void)toleranceDefined;
     (void)tolerance;
-    (void)stopTimeDefined;
-    (void)stopTime;
     return Fmi::guarded(c, "fmi3EnterInitializationMode", [&](Instance& instance) {
-        const Outcome outcome = instance.unit->setup_experiment(startTime);
+        const char* function = "fmi3EnterInitializationMode";
+        const Outcome outcome = instance.unit->setup_experiment(function, startTime, stopTimeDefined, stopTime);
         if (outcome != Outcome::OK) return Fmi::status_of(outcome);
-        return Fmi::status_of(instance.unit->enter_initialization());
+        return Fmi::status_of(instance.unit->enter_initialization(function));
     });
 }
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance c) {
     return Fmi::guarded(c, "fmi3ExitInitializationMode",
-                   [&](Instance& instance) { return Fmi::status_of(instance.unit->exit_initialization()); });
+                   [&](Instance& instance) {
+                       return Fmi::status_of(instance.unit->exit_initialization("fmi3ExitInitializationMode"));
+                   });
 }
 
 fmi3Status fmi3EnterEventMode(fmi3Instance c) { return Fmi::unsupported(c, "fmi3EnterEventMode"); }
 
 fmi3Status fmi3Terminate(fmi3Instance c) {
-    return Fmi::guarded(c, "fmi3Terminate", [&](Instance& instance) { return Fmi::status_of(instance.unit->terminate()); });
+    return Fmi::guarded(c, "fmi3Terminate",
+                   [&](Instance& instance) { return Fmi::status_of(instance.unit->terminate("fmi3Terminate")); });
 }
 
 fmi3Status fmi3Reset(fmi3Instance c) {

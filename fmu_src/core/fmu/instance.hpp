@@ -41,7 +41,7 @@ struct Interface {
 
     static void log(const Instance* instance, Status status, const char* category, const std::string& message) {
         if (instance == nullptr || instance->logger == nullptr) return;
-        Version::emit(*instance, status, category, message);
+        Version::emit(*instance, status, category, valid_text(message));
     }
 
     static Instance* instance_of(void* c) {

@@ -77,6 +77,32 @@ Index check_string(const Variable& var, const char* value) {
     return code;
 }
 
+//: The length of the well-formed UTF-8 sequence at text[at] (1 to 4), or 0 if there is none.
+std::size_t utf8_length(const std::string& text, std::size_t at) {
+    const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(k < text.size() ? text[k] : 0); };
+    const unsigned char lead = byte(at);
+    if (lead < 0x80) return 1;
+    // The second byte's range after each lead (Unicode's Table 3-7: no overlong forms, surrogates or > U+10FFFF).
+    unsigned char lo = 0x80, hi = 0xBF;
+    std::size_t length = 0;
+    if (lead >= 0xC2 && lead <= 0xDF) {
+        length = 2;
+    } else if (lead >= 0xE0 && lead <= 0xEF) {
+        length = 3;
+        lo = lead == 0xE0 ? 0xA0 : 0x80;
+        hi = lead == 0xED ? 0x9F : 0xBF;
+    } else if (lead >= 0xF0 && lead <= 0xF4) {
+        length = 4;
+        lo = lead == 0xF0 ? 0x90 : 0x80;
+        hi = lead == 0xF4 ? 0x8F : 0xBF;
+    }
+    if (length == 0 || byte(at + 1) < lo || byte(at + 1) > hi) return 0;
+    for (std::size_t k = 2; k < length; ++k) {
+        if (byte(at + k) < 0x80 || byte(at + k) > 0xBF) return 0;
+    }
+    return length;
+}
+
 const char* type_name(Type type) {
     switch (type) {
         case Type::REAL: return fmi_version() == 2 ? "Real" : "Float64";
@@ -404,6 +430,22 @@ const char* close_match(const std::string& word, const char* const* choices, Ind
 }
 
 // ------------------------------------------------------------------------------ the unit
+std::string valid_text(const std::string& text) {
+    std::string out;
+    for (std::size_t at = 0; at < text.size();) {
+        const std::size_t length = utf8_length(text, at);
+        if (length > 0) {
+            out.append(text, at, length);
+            at += length;
+            continue;
+        }
+        static const char digits[] = "0123456789abcdef";
+        const auto value = static_cast<unsigned char>(text[at++]);
+        out += std::string("\\x") + digits[value >> 4] + digits[value & 15];
+    }
+    return out;
+}
+
 Unit::Unit(std::string instance_name, Log log) : name_(std::move(instance_name)), log_(std::move(log)) {
     apply_starts();
 }
@@ -421,8 +463,8 @@ void Unit::apply_starts() {
 void Unit::reset() {
     apply_starts();
     refused_.clear();
-    initialized_ = terminated_ = clock_set_ = false;
-    start_time_ = 0.0;
+    initialized_ = terminated_ = clock_set_ = entered_ = stop_defined_ = false;
+    start_time_ = stop_time_ = 0.0;
     sim_.reset();
     preview_.reset();
     changed();
@@ -712,26 +754,46 @@ Outcome Unit::get_string(std::uint64_t vr, const char*& value, const char* funct
 }
 
 // ------------------------------------------------------------------------------ life cycle
-Outcome Unit::setup_experiment(double start_time) {
-    if (initialized_) {
-        error("the start time is fixed once the unit is initialized (got " + py_repr(start_time) + " s)");
+const char* Unit::phase() const {
+    if (terminated_) return "terminated";
+    if (initialized_) return "initialized (stepping)";
+    return entered_ ? "initialization mode" : "instantiated";
+}
+
+Outcome Unit::refuse_call(const char* function, const char* allowed) const {
+    error(std::string(function) + " is not allowed in the " + phase() + " state; allowed only in the " + allowed +
+          " state");
+    return Outcome::ERROR;
+}
+
+Outcome Unit::setup_experiment(const char* function, double start_time, bool stop_defined, double stop_time) {
+    if (initialized_ || terminated_ || entered_) return refuse_call(function, "instantiated");
+    if (!(std::fabs(start_time) <= MAX_TIME)) {
+        error(std::string(function) + ": the start time must be a finite number of seconds within +-" +
+              py_g(MAX_TIME) + " s, got " + py_repr(start_time));
         return Outcome::ERROR;
     }
-    if (!(std::fabs(start_time) <= MAX_TIME)) {
-        error("the start time must be a finite number of seconds within +-" + py_g(MAX_TIME) + " s, got " +
-              py_repr(start_time));
+    if (stop_defined && !(stop_time >= start_time)) {
+        error(std::string(function) + ": stopTime " + py_repr(stop_time) + " s lies before startTime " +
+              py_repr(start_time) + " s; allowed: stopTime >= startTime");
         return Outcome::ERROR;
     }
     start_time_ = start_time;
     clock_set_ = true;
+    stop_defined_ = stop_defined;
+    stop_time_ = stop_time;
     changed();
     return Outcome::OK;
 }
 
-Outcome Unit::enter_initialization() { return Outcome::OK; }
+Outcome Unit::enter_initialization(const char* function) {
+    if (initialized_ || terminated_ || entered_) return refuse_call(function, "instantiated");
+    entered_ = true;
+    return Outcome::OK;
+}
 
-Outcome Unit::exit_initialization() {
-    if (initialized_) return Outcome::OK;
+Outcome Unit::exit_initialization(const char* function) {
+    if (initialized_ || terminated_ || !entered_) return refuse_call(function, "initialization mode");
     std::vector<std::string> problems;
     for (const auto& entry : refused_) problems.push_back(entry.second);
     const std::string whole = unit_scene_problem(values_);
@@ -761,15 +823,22 @@ Outcome Unit::exit_initialization() {
     }
     preview_.reset();
     initialized_ = true;
+    entered_ = false;
     changed();
     return Outcome::OK;
 }
 
 Outcome Unit::do_step(double current_time, double step_size) {
-    if (!(std::fabs(current_time) <= MAX_TIME && step_size >= 0.0 && step_size <= MAX_TIME)) {
+    if (!(std::fabs(current_time) <= MAX_TIME && step_size >= 0.0 && current_time + step_size <= MAX_TIME)) {
         error("doStep needs a finite communication point within +-" + py_g(MAX_TIME) +
-              " s and a finite step size >= 0 s (at most as long), got t = " + py_repr(current_time) + " s, step " +
-              py_repr(step_size) + " s");
+              " s and a finite step size >= 0 s that ends there too (t + step <= " + py_g(MAX_TIME) +
+              " s), got t = " + py_repr(current_time) + " s, step " + py_repr(step_size) + " s");
+        return Outcome::ERROR;
+    }
+    const double slack = TIME_TOLERANCE * std::max(1.0, std::fabs(stop_time_));  // a sum of steps' rounding
+    if (stop_defined_ && current_time + step_size > stop_time_ + slack) {
+        error("doStep from t = " + py_repr(current_time) + " s by " + py_repr(step_size) +
+              " s ends past the experiment's stopTime " + py_repr(stop_time_) + " s; allowed: t + step <= stopTime");
         return Outcome::ERROR;
     }
     if (terminated_) {
@@ -819,11 +888,12 @@ Outcome Unit::do_step(double current_time, double step_size) {
     return Outcome::DISCARD;
 }
 
-Outcome Unit::terminate() {
+Outcome Unit::terminate(const char* function) {
     if (terminated_) {
         warning("fmiTerminate called again: the run had already ended; nothing done");
         return Outcome::OK;
     }
+    if (!initialized_) return refuse_call(function, "initialized (stepping)");
     terminated_ = true;
     return Outcome::OK;
 }
@@ -935,6 +1005,7 @@ Outcome Unit::set_state(const std::vector<unsigned char>& bytes) {
         mesh_output_dir_ = p.mesh_output_dir;
         mesh_format_ = p.mesh_format;
         refused_ = p.refused;
+        entered_ = entered_ && !initialized_ && !p.initialized;  // back to before initialization: instantiated
         initialized_ = p.initialized;
         start_time_ = p.start_time;
         clock_set_ = clock_set_ || p.initialized || p.clock_set;

@@ -72,6 +72,9 @@ int fmi_version();
 const char* close_match(const std::string& word, const char* const* choices, Index count);
 
 //: A serialized FMU state this unit refuses (the message says why).
+//: `text` as valid UTF-8 for the log: every byte outside a well-formed UTF-8 sequence written as \xNN.
+std::string valid_text(const std::string& text);
+
 struct StateError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
@@ -103,13 +106,15 @@ public:
     const Variable* variable(std::uint64_t vr, const char* function);
 
     // ---------------------------------------------------------------- life cycle
-    Outcome setup_experiment(double start_time);
-    Outcome enter_initialization();
-    Outcome exit_initialization();
+    //: The experiment (fmi2SetupExperiment, fmi3EnterInitializationMode, named by `function`): only in the
+    //: instantiated state; a defined stop time must not lie before the start time.
+    Outcome setup_experiment(const char* function, double start_time, bool stop_defined, double stop_time);
+    Outcome enter_initialization(const char* function);
+    Outcome exit_initialization(const char* function);
     //: doStep: OK, DISCARD (the unit stays at current_time, message logged) or ERROR (a call the master
     //: must not make: nothing changes).
     Outcome do_step(double current_time, double step_size);
-    Outcome terminate();
+    Outcome terminate(const char* function);
     void reset();
     bool initialized() const { return initialized_; }
     //: The master's time (s) of the current state.
@@ -133,6 +138,10 @@ private:
     void apply_starts();
     Simulation& simulation();  // the running one, or the preview of the current values
     void changed();             // the outputs read so far are stale
+    //: The FMI state the unit is in, as messages name it ("instantiated", "initialization mode", ...).
+    const char* phase() const;
+    //: ERROR, logged: `function` may not be called in the current state, only in `allowed`.
+    Outcome refuse_call(const char* function, const char* allowed) const;
     //: The variable vr if the master may set it with this type (else logged, null).
     const Variable* settable(std::uint64_t vr, Type type, const char* function);
     //: A refused value (unit.py's set_value): logged, pending, ERROR; an accepted one clears its refusal.
@@ -149,7 +158,10 @@ private:
     std::string mesh_output_dir_, mesh_format_;
     std::vector<std::pair<std::uint64_t, std::string>> refused_;  // value reference -> message, in order
     bool initialized_ = false, terminated_ = false, clock_set_ = false;
+    bool entered_ = false;  // in initialization mode (entered, not yet left)
     double start_time_ = 0.0;
+    bool stop_defined_ = false;
+    double stop_time_ = 0.0;  // s, the experiment's stop time where stop_defined_: no step ends beyond it
     std::unique_ptr<Simulation> sim_, preview_;
     Checkpoint before_;  // each doStep's start, to go back to after a failed step
     double outputs_[8] = {};

@@ -19,7 +19,8 @@ from wetcloth.fmu.unit import OK, UnitError, WetClothUnit, default_run
 #: pythonfmu3's methods that the binary calls on an instance, and on the class.
 ENTRY_POINTS = ("enter_initialization_mode", "exit_initialization_mode", "do_step", "terminate", "get_float64",
                 "get_int32", "get_int64", "get_uint64", "get_boolean", "get_string", "set_float64", "set_int32",
-                "set_int64", "set_uint64", "set_boolean", "set_string", "_get_fmu_state", "_set_fmu_state")
+                "set_int64", "set_uint64", "set_boolean", "set_string", "_get_fmu_state", "_set_fmu_state",
+                "update_discrete_states", "_refuse_undecodable_text")
 CLASS_ENTRY_POINTS = ("_fmu_state_to_bytes", "_fmu_state_from_bytes")
 
 
@@ -56,6 +57,11 @@ class Fmi3Unit(WetClothUnit, Fmi3Slave):
         except UnitError:
             return Fmi3StepResult(status=Fmi3Status.error)
         return Fmi3StepResult(status=Fmi3Status.ok if outcome == OK else Fmi3Status.discard)
+
+    def update_discrete_states(self):
+        """Refused (UnitError, logged): the unit has no event mode."""
+        self._refuse_call("fmi3UpdateDiscreteStates is not supported: this unit has no events and no event mode "
+                          "(allowed: fmi3DoStep in step mode)")
 
 
 guard.guard(Fmi3Unit, ENTRY_POINTS, CLASS_ENTRY_POINTS)

@@ -26,6 +26,19 @@
    when its host frees the unit, a binary runs the same exit handlers at once.  Only in a Python
    host: where the binary started the interpreter itself, its exit path must run as written.
 
+4. Both binaries hand the master the slave's Python object as the FMU state pointer and pass any
+   pointer the master gives back to Python as that object, unchecked (``fmi2SetFMUstate``,
+   ``fmi2SerializedFMUstateSize``...); ``fmi2FreeFMUstate`` only releases a reference and leaves the
+   master's pointer as it was.  A freed state therefore was freed memory read as an object: the host
+   crashed.  The unit hands out a ``StateHandle`` instead: freed by the master, it drops its
+   checkpoint but is kept alive (with ``SPARE_FREES`` references to spare for a master that frees
+   the same pointer again), and a handle is looked up by its address among those handed out before
+   anything reads it, so that a freed, stray or foreign pointer is refused with an error.  Limits
+   (the binaries' code, before Python runs): they add and remove one reference at the pointer
+   itself, so a pointer into unmapped memory, or to memory whose first word is 0, still crashes;
+   they cannot set the master's pointer to NULL at free as FMI 2.0 asks; every freed handle keeps
+   a few hundred bytes until the process ends.
+
 The references given back in 1 and 2 are real reference counts (``Py_IncRef``), not objects held in
 a list: the binary has already dropped them, and a list released at interpreter shutdown would
 drop them a second time.
@@ -99,3 +112,34 @@ def _class_entry(function):
             raise
 
     return entry
+
+
+# ------------------------------------------------------------------------------------ FMU state handles
+#: How many more times than once a master may free a state's handle before it is really freed (see 4.).
+SPARE_FREES = 64
+#: Handle address -> weak reference to the handle, for every handle handed out in this process.
+_ISSUED: dict[int, weakref.ref] = {}
+
+
+class StateHandle:
+    """What a master holds as an FMU state (see 4.): the unit's checkpoint, or None once freed."""
+
+    __slots__ = ("checkpoint", "__weakref__")
+
+    def __init__(self, checkpoint) -> None:
+        self.checkpoint = checkpoint
+        _ISSUED[id(self)] = weakref.ref(self)
+
+    def __del__(self) -> None:
+        self.checkpoint = None  # the master freed it: drop the state, keep the few bytes of the handle
+        for _ in range(1 + SPARE_FREES):
+            _incref(self)
+
+
+def handed_out(handle) -> object | None:
+    """The checkpoint of ``handle`` if it is a live handle of this process, else None; the object is
+    compared by address and identity only, never read, unless it is one of ours."""
+    ref = _ISSUED.get(id(handle))
+    if ref is None or ref() is not handle:
+        return None
+    return handle.checkpoint

@@ -23,7 +23,7 @@ from pathlib import Path
 from wetcloth import run_settings
 from wetcloth._core import MAX_TIME
 from wetcloth.errors import ParameterError
-from wetcloth.fmu import bootstrap, checkpoint, packed_scene
+from wetcloth.fmu import bootstrap, checkpoint, guard, packed_scene
 from wetcloth.fmu.checkpoint import Checkpoint, StateError
 from wetcloth.fmu.vocabulary import check_variable, variable_specs
 from wetcloth.scene import collider_name, from_dict, read_scene_file
@@ -41,6 +41,15 @@ OK, DISCARD = "ok", "discard"
 
 class UnitError(RuntimeError):
     """The master asked for something the unit refuses (the message says what and why)."""
+
+
+def _checkpoint_of(handle) -> Checkpoint:
+    """The checkpoint behind an FMU state pointer; StateError for a freed, stray or foreign one (``guard``, 4.)."""
+    found = guard.handed_out(handle)
+    if found is None:
+        raise StateError("not a WetCloth FMU state: a pointer this unit did not hand out, or one already freed "
+                         "(fmiFreeFMUstate); allowed: a live state from GetFMUstate or DeSerializeFMUstate")
+    return found
 
 
 def default_run() -> tuple[float, float]:
@@ -67,10 +76,12 @@ class WetClothUnit:
         self.specs = {spec.name: spec for spec in variable_specs(fmi_version=self.FMI_VERSION, packed=self.packed)}
         self.values = {name: spec.start for name, spec in self.specs.items() if spec.causality in ("parameter", "input")}
         self.refused: dict[str, str] = {}  # variable -> why its value was refused (pending)
+        self.entered = False  # fmiEnterInitializationMode called
         self.initialized = False
         self.terminated = False
         self.start_time = 0.0  # s, the master's time at the simulation's t = 0
         self._clock_set = False  # by fmi2SetupExperiment, else (FMI 3.0) by the first doStep
+        self.stop_time: float | None = None  # s, fmi2SetupExperiment's stop time if defined: no step ends beyond it
         self.sim: Simulation | None = None  # from initialization on
         self._preview: Simulation | None = None  # the initial state of the current values, before that
         self.frames = 0  # mesh frames written
@@ -85,10 +96,31 @@ class WetClothUnit:
 
     # ------------------------------------------------------------------ variables
     def accessors(self, name: str) -> tuple:
-        """The getter and setter (None for outputs) through which pythonfmu reads and writes variable ``name``."""
+        """The getter and setter (a refusal for outputs) through which pythonfmu reads and writes variable ``name``."""
         if name in self.values:
             return functools.partial(self.value, name), functools.partial(self.set_value, name)
-        return functools.partial(self.output, name), None
+        return functools.partial(self.output, name), functools.partial(self.refuse_output, name)
+
+    def refuse_output(self, name: str, value) -> None:
+        """UnitError (logged): the master set an output."""
+        self._refuse_call(f"fmiSet: variable {name!r} is an output: the master cannot set it "
+                          f"(allowed: parameters and inputs; value {value!r} refused)")
+
+    def __getattr__(self, name: str):
+        """pythonfmu's binary looks ``set_string`` up with its failed decoding of a text still pending,
+        and that lookup fails: here it finds the refusal (pythonfmu's binaries as of Python 3.11)."""
+        if name == "set_string":
+            return self._refuse_undecodable_text
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+    def _refuse_undecodable_text(self, vrs, values) -> None:
+        """UnitError (logged, pending like any refused value): a text the binary could not decode as
+        UTF-8 (``values`` holds no objects then: never read)."""
+        names = [self.vars[vr].name for vr in vrs if vr in self.vars]
+        message = (f"fmiSetString: the text for variable {' or '.join(map(repr, names)) or 'unknown'} is not "
+                   "UTF-8; allowed: UTF-8 text (value refused)")
+        self.refused |= {name: message for name in names if name in self.values}
+        self._refuse_call(message)
 
     def value(self, name: str):
         return self.values[name]
@@ -148,13 +180,32 @@ class WetClothUnit:
         return values
 
     # ------------------------------------------------------------------ life cycle
+    def phase(self) -> str:
+        """The unit's FMI state, as named in messages."""
+        if self.terminated:
+            return "terminated"
+        if self.initialized:
+            return "initialized (stepping)"
+        return "initialization mode" if self.entered else "instantiated"
+
+    def _check_phase(self, function: str, allowed: str) -> None:
+        """UnitError (logged) unless the unit is in the ``allowed`` phase."""
+        if self.phase() != allowed:
+            self._refuse_call(f"{function} is not allowed in the {self.phase()} state; allowed only in the "
+                              f"{allowed} state")
+
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):  # pythonfmu's call
         if self.initialized:
             self._refuse_call(f"the start time is fixed once the unit is initialized (got {start_time!r} s)")
+        self._check_phase("fmiSetupExperiment", "instantiated")
         if not abs(start_time) <= MAX_TIME:
             self._refuse_call(f"the start time must be a finite number of seconds within +-{MAX_TIME:g} s, "
                               f"got {start_time!r}")
+        if stop_time is not None and not stop_time >= start_time:
+            self._refuse_call(f"fmi2SetupExperiment: stopTime {stop_time!r} s lies before startTime {start_time!r} s; "
+                              "allowed: stopTime >= startTime")
         self.start_time, self._clock_set = float(start_time), True
+        self.stop_time = None if stop_time is None else float(stop_time)
         self._read.clear()
 
     def start(self) -> None:
@@ -204,10 +255,14 @@ class WetClothUnit:
     def step(self, current_time: float, step_size: float) -> str:
         """Advance from ``current_time`` by ``step_size`` s: OK, or DISCARD (the unit stays at
         ``current_time``, message logged); UnitError (logged) for a call the master must not make."""
-        if not (abs(current_time) <= MAX_TIME and 0.0 <= step_size <= MAX_TIME):
+        if not (abs(current_time) <= MAX_TIME and step_size >= 0.0 and current_time + step_size <= MAX_TIME):
             self._refuse_call(f"doStep needs a finite communication point within +-{MAX_TIME:g} s and a finite step "
-                              f"size >= 0 s (at most as long), "
+                              f"size >= 0 s that ends there too (t + step <= {MAX_TIME:g} s), "
                               f"got t = {current_time!r} s, step {step_size!r} s")
+        stop = self.stop_time
+        if stop is not None and current_time + step_size > stop + TIME_TOLERANCE * max(1.0, abs(stop)):
+            self._refuse_call(f"doStep from t = {current_time!r} s by {step_size!r} s ends past the experiment's "
+                              f"stopTime {stop!r} s; allowed: t + step <= stopTime")
         if self.terminated:
             self._refuse_call(f"doStep at t = {current_time:g} s after fmiTerminate: the run is over")
         if not self.initialized:
@@ -285,31 +340,40 @@ class WetClothUnit:
             self.sequence = None
 
     # ------------------------------------------------------------------ pythonfmu's and pythonfmu3's calls
+    def enter_initialization_mode(self):
+        self._check_phase("fmiEnterInitializationMode", "instantiated")
+        self.entered = True
+
     def exit_initialization_mode(self):
+        self._check_phase("fmiExitInitializationMode", "initialization mode")
         self.start()
 
     def terminate(self):
+        if not self.terminated:
+            self._check_phase("fmiTerminate", "initialized (stepping)")
         self.finish()
 
-    def _get_fmu_state(self) -> Checkpoint:
-        return self.capture()
+    def _get_fmu_state(self) -> guard.StateHandle:
+        return guard.StateHandle(self.capture())
 
-    def _set_fmu_state(self, state) -> None:
+    def _set_fmu_state(self, handle) -> None:
         try:
-            self.restore(state)
+            self.restore(_checkpoint_of(handle))
         except Exception as exc:  # whatever it is, the reason is logged (wetcloth.fmu too) and the unit unchanged
             reason = str(exc) if isinstance(exc, StateError) else f"{type(exc).__name__}: {exc}"
             self._report("error", f"FMU state refused, the unit is unchanged: {reason}")
             raise StateError(reason) from None
 
     @staticmethod
-    def _fmu_state_to_bytes(state) -> bytes:
-        if not isinstance(state, Checkpoint):
-            raise StateError(f"not a WetCloth FMU state: a {type(state).__name__}")
-        return checkpoint.to_bytes(state)
+    def _fmu_state_to_bytes(handle) -> bytes:
+        try:
+            return checkpoint.to_bytes(_checkpoint_of(handle))
+        except StateError as exc:
+            LOG.error("FMU state not serialized: %s", exc)
+            raise
 
     @classmethod
-    def _fmu_state_from_bytes(cls, data: bytes) -> Checkpoint:
+    def _fmu_state_from_bytes(cls, data: bytes) -> guard.StateHandle:
         """A state read from bytes, refused at once (StateError, logged) unless this unit wrote it
         and it fits a simulation of its scene.  (The class cannot know the instance's colliders: their
         parameters in the state are checked here one by one, and against the unit's at SetFMUstate.)"""
@@ -318,7 +382,7 @@ class WetClothUnit:
             names = {s.name for s in variable_specs(fmi_version=cls.FMI_VERSION) if s.causality in ("parameter", "input")}
             values = state.values if isinstance(state, Checkpoint) and isinstance(state.values, dict) else {}
             checkpoint.fitting_simulation(state, names | {name for name in values if collider_name(name)})
-            return state
+            return guard.StateHandle(state)
         except Exception as exc:  # whatever it is, the reason is logged on wetcloth.fmu
             reason = str(exc) if isinstance(exc, StateError) else f"{type(exc).__name__}: {exc}"
             LOG.error("serialized FMU state refused: %s", reason)
@@ -342,6 +406,7 @@ class WetClothUnit:
             sim.restore(checkpoint.snapshot_from(state.leaves, state.scene, sim.snapshot()))
         self._rewind_frames(state)
         self.values, self.refused = dict(state.values), dict(state.refused)
+        self.entered = self.entered and not self.initialized and not state.initialized  # else: instantiated
         self.initialized, self.start_time, self.frames = state.initialized, state.start_time, state.frames
         self._clock_set = self._clock_set or state.initialized
         self.sim, self._preview = sim, None
