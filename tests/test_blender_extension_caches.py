@@ -145,3 +145,13 @@ def test_a_second_bake_while_one_runs_is_refused(probed):
     assert twice["closed"].startswith(f"Wet Cloth: baked 'Towel' ({FRAMES} frames")
     assert twice["after"]["result"] == ["FINISHED"], twice["after"]["error"]
     assert_plays_its_own(twice["plays"], "Towel")
+
+
+def test_a_renamed_cloth_baked_again_leaves_no_cache_of_its_old_name(probed):
+    """'Towel' baked, renamed 'Sheet', baked again: the bake writes Sheet/ and deletes Towel/, its own previous
+    bake that nothing plays any more (it was left on disk)."""
+    renamed = case(probed, "renamed")
+    assert renamed["first"]["result"] == ["FINISHED"] and renamed["first"]["folders"] == ["Towel"]
+    assert renamed["second"]["result"] == ["FINISHED"], renamed["second"]["error"]
+    assert renamed["second"]["folders"] == ["Sheet"]
+    assert_plays_its_own(renamed["plays"], "Sheet")

@@ -143,11 +143,16 @@ def detach(obj, delete_files: bool = True) -> list[str]:
 
 def release(obj, usd_path: str) -> None:
     """Before ``obj``'s bake writes ``usd_path``: remove its previous bake and that of any object playing
-    ``usd_path`` (a duplicate's), files kept, so that Blender lets go of the file."""
+    ``usd_path`` (a duplicate's), so that Blender lets go of the file: files kept where the new bake replaces
+    them, deleted where ``obj``'s previous bake lies elsewhere (the cloth renamed since) and no other object
+    plays it."""
     target = os.path.normpath(usd_path)
+    previous = cache_path(obj)
+    orphaned = previous not in (None, target) and not any(
+        cache_path(other) == previous for other in bpy.data.objects if other != obj)
     for other in bpy.data.objects:
         if other == obj or cache_path(other) == target:
-            detach(other, delete_files=False)
+            detach(other, delete_files=other == obj and orphaned)
     bpy.context.evaluated_depsgraph_get().update()
 
 

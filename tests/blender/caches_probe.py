@@ -14,7 +14,8 @@ and what the cloths play (the assertions are in tests/test_blender_extension_cac
   "cancel_two": two cloths baked, then a bake cancelled within the first;
   "cache_dir": the Cache folder set to a '//' folder, then empty;
   "modal_delete": the modal bake's cloth deleted between two timer ticks;
-  "modal_twice": Bake pressed while a modal bake runs.
+  "modal_twice": Bake pressed while a modal bake runs;
+  "renamed": a baked towel renamed and baked again.
 """
 
 import ctypes
@@ -209,7 +210,18 @@ def modal_twice(spec):
             "plays": plays(towel)}
 
 
-CASES = (names, duplicate, same_name, stuck, refused, cancel_two, cache_dir, modal_delete, modal_twice)
+def renamed(spec):
+    """'Towel' baked, renamed 'Sheet' and baked again: the cache folder's contents after each bake."""
+    new_scene(spec, "renamed")
+    towel = cloth("Towel")
+    folder = bpy.path.abspath(bpy.context.scene.wetcloth.cache_directory)
+    first = operator(bpy.ops.wetcloth.bake) | {"folders": sorted(os.listdir(folder))}
+    towel.name = "Sheet"
+    second = operator(bpy.ops.wetcloth.bake) | {"folders": sorted(os.listdir(folder))}
+    return {"first": first, "second": second, "plays": plays(towel)}
+
+
+CASES = (names, duplicate, same_name, stuck, refused, cancel_two, cache_dir, modal_delete, modal_twice, renamed)
 
 
 def main(spec_path, result_path):
