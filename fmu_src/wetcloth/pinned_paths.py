@@ -38,6 +38,7 @@ def check_pinned_outside(scene: Scene, positions: np.ndarray, pinned: np.ndarray
 
     rows, meshes = meshes_of(scene.colliders)
     keys = collider_key_rows(scene.collider_keys)
+    grip = grip_key_rows(scene.grip_keys)
     pins = np.ascontiguousarray(positions[:, pinned])
     for k, collider in enumerate(scene.colliders):
         if collider.shape == "mesh" and not is_closed(mesh_of(collider)[1]):
@@ -48,7 +49,7 @@ def check_pinned_outside(scene: Scene, positions: np.ndarray, pinned: np.ndarray
 
         def least_distance(t: float) -> tuple[float, int]:
             """The pinned particles' least signed distance (m) from the collider at t (s), and whose it is."""
-            points = np.ascontiguousarray(pins + _grip_at(scene, t)[:, None])
+            points = np.ascontiguousarray(pins + _grip_at(grip, t)[:, None])
             distance, normal = np.zeros(points.shape[1]), np.zeros_like(points)
             _core.collider_distance(rows, meshes, k, points, 1.0, distance, normal, keys, t)
             i = int(np.argmin(distance))
@@ -58,7 +59,7 @@ def check_pinned_outside(scene: Scene, positions: np.ndarray, pinned: np.ndarray
         reach = (float(np.linalg.norm(pins - centre[:, None], axis=0).max()) + _path_length(scene.grip_keys)
                  + _path_length([key for _, key in own]))
         first, deepest = None, 0.0  # (t, start position) of the first sample with a pinned particle inside; depth
-        for a, b, speed in _intervals(scene, [key for _, key in own], reach):
+        for a, b, speed in _intervals(scene, grip, [key for _, key in own], reach):
             t, samples = a, 0
             while True:
                 d, i = least_distance(t)
@@ -74,14 +75,14 @@ def check_pinned_outside(scene: Scene, positions: np.ndarray, pinned: np.ndarray
             raise _refusal(scene, k, own, *first, deepest)
 
 
-def _grip_at(scene: Scene, t: float) -> np.ndarray:
-    """The grip keys' displacement (3, m) at t (s), as the core moves the grip: 0 at t = 0, linear between keys,
-    the last key's after it."""
-    if not scene.grip_keys:
+def _grip_at(grip: np.ndarray, t: float) -> np.ndarray:
+    """The displacement (3, m) at t (s) of the grip keys ``grip`` (rows of grip_key_rows), as the core moves the
+    grip: 0 at t = 0, linear between keys, the last key's after it."""
+    if not len(grip):
         return np.zeros(3)
     from wetcloth import _core
 
-    return np.array(_core.grip_key_displacement(grip_key_rows(scene.grip_keys), t))
+    return np.array(_core.grip_key_displacement(grip, t))
 
 
 def _path_length(keys) -> float:
@@ -90,9 +91,9 @@ def _path_length(keys) -> float:
     return float(sum(np.linalg.norm(b - a) for a, b in zip(at, at[1:])))
 
 
-def _intervals(scene: Scene, own: list, reach: float) -> list[tuple[float, float, float]]:
+def _intervals(scene: Scene, grip: np.ndarray, own: list, reach: float) -> list[tuple[float, float, float]]:
     """(start, end, speed): the intervals (s) between consecutive key times, the collider's ``own`` and the
-    grip's, from 0 to the last (one of zero length at 0 without any), and the greatest speed (m/s) within
+    grip's (``grip``: scene's grip_key_rows), from 0 to the last (one of zero length at 0 without any), and the greatest speed (m/s) within
     each of a point within ``reach`` (m) of the collider's centre relative to its surface plus the grip's."""
     collider_times = [0.0] + [key.time for key in own]
     places = [np.zeros(3)] + [np.array([key.x, key.y, key.z]) for key in own]
@@ -101,7 +102,7 @@ def _intervals(scene: Scene, own: list, reach: float) -> list[tuple[float, float
     out = [(0.0, 0.0, 0.0)] if len(edges) == 1 else []
     for a, b in zip(edges, edges[1:]):
         j = int(np.searchsorted(collider_times, b))  # the collider's key interval (j-1, j) holds (a, b); none past it
-        speed = float(np.linalg.norm(_grip_at(scene, b) - _grip_at(scene, a))) / (b - a)
+        speed = float(np.linalg.norm(_grip_at(grip, b) - _grip_at(grip, a))) / (b - a)
         if j < len(collider_times):
             span = collider_times[j] - collider_times[j - 1]
             turn = math.radians(turn_between(turns[j - 1], turns[j]))
