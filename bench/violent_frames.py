@@ -4,8 +4,8 @@ violently or folds onto itself, against the default adaptive steps run in the sa
     .venv/bin/python bench/violent_frames.py [CASE ...]
 
 The cases came from random trials (docs/open_problems.md): the ``flag`` preset blown back over its pole, the
-same flag falling onto itself without air, and the soaked ``lift`` towel dragged 2.2 m sideways through a
-26 m/s wind.  For each: CPU seconds, steps and steps taken again (halved for self-collision's impact zones or
+same flag falling onto itself without air, the soaked ``lift`` towel dragged 2.2 m sideways through a
+26 m/s wind, and the ``bucket`` towel bunched against the bucket's wall by an 8.25 m/s current.  For each: CPU seconds, steps and steps taken again (halved for self-collision's impact zones or
 for energy gained), and the ratio of the frame steps' time to the adaptive run's.  A step taken again in
 smaller pieces passes its size on to the next step (stepping.cpp), so a frame that folds is not tried whole
 again at every step.
@@ -51,8 +51,19 @@ def towel_dragged(steps: Steps) -> wetcloth.Simulation:
     return sim
 
 
+def bucket_torrent(steps: Steps) -> wetcloth.Simulation:
+    """The bucket preset's towel, dropped into it for 0.5 s, then 0.5 s in an 8.25 m/s current that bunches
+    it against the mesh bucket's wall (1/24 s frames)."""
+    sim = wetcloth.Simulation(wetcloth.load_scene("bucket", **steps(1 / 24)))
+    sim.advance(0.5)
+    sim.set_inputs(current_x=8.25)
+    sim.advance(0.5)
+    return sim
+
+
 CASES: dict[str, Callable[[Steps], wetcloth.Simulation]] = {
-    "flag_blown_back": flag_blown_back, "flag_falling": flag_falling, "towel_dragged": towel_dragged}
+    "flag_blown_back": flag_blown_back, "flag_falling": flag_falling, "towel_dragged": towel_dragged,
+    "bucket_torrent": bucket_torrent}
 
 
 def frame_steps(frame: float) -> dict:

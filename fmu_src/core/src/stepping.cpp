@@ -663,7 +663,7 @@ Status step(Core& core, double remaining, double span, bool retried = false) {
     if (weighs_work) moving.contact = contact_work(core, moving.solved);
     // Self-collision's pushes: with BDF2 the pushed particles' history is carried through their pushed state
     // (carry_pushed_history); a step whose motion it froze, or that mesh colliders' edges changed, restarts it.
-    const bool carries = control.integrator == BDF2 && core.contact.enabled && phys.meshes.count == 0;
+    const bool carries = control.integrator == BDF2 && core.contact.enabled;
     double* unpushed_pos = core.solver.p;  // scratch (the linear solves' directions, free between steps)
     double* unpushed_vel = core.solver.ap;
     double* pushed = core.solver.z;
