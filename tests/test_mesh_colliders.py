@@ -466,3 +466,31 @@ def test_a_mesh_collider_the_cloth_never_meets_changes_nothing(tmp_path):
     assert alone.contact_counts["responses"] > 1000, "folds for real: the stage pushes"
     assert (beside.steps, beside.rejected_steps) == (alone.steps, alone.rejected_steps)
     np.testing.assert_array_equal(beside.positions, alone.positions)
+
+
+def test_a_collider_file_of_a_wrong_suffix_is_refused_naming_its_field(tmp_path, capsys):
+    """An OBJ saved as .ply: meshio calls sys.exit(1), which on 0.1.0 ended the interpreter."""
+    path = tmp_path / "ball.ply"
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+    with pytest.raises(ParameterError, match=r"collider1_file.*cannot be read as a mesh by meshio: ") as err:
+        load_scene(colliders=({"shape": "mesh", "file": str(path)},))
+    assert err.value.name == "collider1_file"
+    assert capsys.readouterr() == ("", "")
+
+
+def test_a_collider_file_rewritten_with_its_modification_time_is_read_anew(tmp_path):
+    """The cache is keyed on the file's content: on 0.1.0 a rewrite that kept the modification time (cp -p,
+    tar) gave the old mesh."""
+    import os
+
+    from wetcloth.collider_meshes import mesh_of
+
+    path = tmp_path / "tetra.obj"
+    text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+    path.write_text(text)
+    collider = load_scene(water_level=-0.5, colliders=({"shape": "mesh", "file": str(path), "z": -1.0},)).colliders[0]
+    stat = path.stat()
+    assert mesh_of(collider)[0][:, 0].max() == 1.0
+    path.write_text(text.replace("v 1 0 0", "v 2 0 0"))
+    os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+    assert mesh_of(collider)[0][:, 0].max() == 2.0

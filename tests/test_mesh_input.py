@@ -3,6 +3,9 @@ files and export (docs/model.md section 2.4, docs/interface.md).  Every file is 
 
 from __future__ import annotations
 
+import os
+import re
+import subprocess
 import sys
 from pathlib import Path
 
@@ -578,3 +581,94 @@ def test_the_tablecloth_preset_is_a_round_triangle_mesh_placed_on_its_table():
 
     pos = initial_positions(scene, topo)  # flat, 1 cm above the table top
     np.testing.assert_allclose(pos[2] - 0.5 * scene.thickness - (table.z + 0.5 * table.height), 0.01, atol=1e-12)
+
+
+SQUARE_OBJ = "v 0 0 0.2\nv 1 0 0.2\nv 1 1 0.2\nv 0 1 0.2\nf 1 2 3 4\n"
+
+
+@pytest.mark.parametrize("suffix", ["ply", "off", "vtk", "vtu", "msh", "mesh"])
+def test_an_obj_saved_under_another_suffix_is_refused_and_the_interpreter_goes_on(tmp_path, capsys, suffix):
+    """meshio prints why it cannot read a file and calls sys.exit(1): on 0.1.0 ``Scene`` ended the
+    interpreter.  The file is refused naming cloth_mesh, and nothing is printed."""
+    path = tmp_path / f"square.{suffix}"
+    path.write_text(SQUARE_OBJ)
+    with pytest.raises(wetcloth.ParameterError, match=r"'cloth_mesh'.*cannot be read as a mesh by meshio: ") as err:
+        Scene(cloth_mesh=str(path))
+    assert err.value.name == "cloth_mesh"
+    assert capsys.readouterr() == ("", "")
+
+
+def test_a_ply_file_cut_short_in_its_header_is_refused_at_once(tmp_path):
+    """meshio's PLY reader reads a header's lines until its end_header line: in a file cut short before
+    that line it read past the end for ever (the hostile trial's 180 s timeout).  Loaded in a child
+    process, so that a hang fails the test instead of stopping the suite."""
+    path = tmp_path / "cut.ply"
+    path.write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n")
+    script = f"import wetcloth\ntry:\n    wetcloth.Scene(cloth_mesh={str(path)!r})\nexcept wetcloth.ParameterError as e:\n    print(e)"
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    assert re.search(r"'cloth_mesh'.*no end_header line", done.stdout), done.stdout + done.stderr
+
+
+def test_a_binary_obj_is_refused_without_a_missing_module_in_the_reason(tmp_path):
+    """trimesh guesses a text file's encoding with charset_normalizer, a dependency (it was missing: the
+    reason read "ModuleNotFoundError: No module named 'charset_normalizer'")."""
+    path = tmp_path / "binary.obj"
+    path.write_bytes(bytes(range(256)) * 4)
+    with pytest.raises(wetcloth.ParameterError, match=r"'cloth_mesh'") as err:
+        Scene(cloth_mesh=str(path))
+    assert "ModuleNotFoundError" not in str(err.value) and "charset" not in str(err.value)
+
+
+_QUAD = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float)
+
+
+@pytest.mark.parametrize("points, blocks, extra, message", [
+    (_QUAD.ravel(), [[[0, 1, 2], [0, 2, 3]]], {}, r"has no vertex coordinates: its points are of shape \(12,\)"),
+    (_QUAD, [[0, 1, 2]], {}, r"has faces of shape \(3,\): a face lists 3 or 4 vertex indices"),
+    (_QUAD, [[[0, 1], [2, 3]]], {}, r"has faces of shape \(2, 2\)"),
+    (np.vstack([_QUAD, [[0.5, 1.5, 0]]]), [[[0, 1, 2, 4, 3]]], {}, r"faces of 5 corners \(polygon\): split them"),
+    (_QUAD, [np.array([[0, 1, 2], [0, 1.9, 3]])], {}, r"face indices that are not whole numbers \(of type float64\)"),
+    (_QUAD, [[[0, 1, 2], [0, 2, 3]]], {"uv": np.zeros((4, 3))}, r"its uv \(of shape \(4, 3\), .*not \(4, 2\)"),
+    (_QUAD, [[[0, 1, 2], [0, 2, 3]]], {"attributes": {"pin": np.ones(3)}}, r"attribute 'pin' has 3 values, not one "
+                                                                            r"per vertex \(4\)"),
+    (_QUAD, [[[0, 1, 2], [0, 2, 3]]], {"attributes": {"pin": [np.nan, 0, 0, 0]}}, r"attribute 'pin' has values that "
+                                                                                  r"are not finite numbers"),
+    (_QUAD, [[[0, 1, 2], [0, 2, 3]]], {"attributes": {"pin": ["a", "", "b", "0"]}}, r"'pin' has values that are "
+                                                                                    r"not finite numbers \(of type <U1"),
+])
+def test_make_mesh_refuses_arrays_as_a_files_mesh_is_refused(points, blocks, extra, message):
+    """Faces of 2 or 5 corners, fractional indices, a uv or point attribute of the wrong length or not
+    numbers: on 0.1.0 an IndexError, a ValueError, or accepted (5 corners, indices truncated, the attribute
+    dropped or pinning at NaN and text) and failing later in the exporter."""
+    with pytest.raises(wetcloth.ParameterError, match=message) as err:
+        make_mesh(points, blocks, **extra)
+    assert err.value.name == "cloth_mesh"
+    assert str(err.value).endswith(f"; allowed: {describe_range(PARAMETERS['cloth_mesh'])}")
+
+
+def test_a_mesh_smaller_than_a_millimetre_is_refused(tmp_path):
+    """A cloth mesh, as the rectangle, is at least scene.SMALLEST_SIZE (1 mm) across: on 0.1.0 a 1 µm mesh
+    and a 1 nm file were accepted and the run blew up."""
+    triangles = [[[0, 1, 2], [0, 2, 3]]]
+    with pytest.raises(wetcloth.ParameterError, match=r"'cloth_mesh'.*is 1e-06 m across \(coordinates are metres, "
+                                                      r"at least 0.001 m\): scale it"):
+        make_mesh(_QUAD * 1e-6, triangles)
+    path = tmp_path / "nanometre.obj"
+    meshio.write(path, meshio.Mesh(_QUAD * 1e-9 + [0, 0, 0.2], [("triangle", np.array(triangles[0]))]))
+    with pytest.raises(wetcloth.ParameterError, match=r"'cloth_mesh'.*is 1e-09 m across"):
+        Scene(cloth_mesh=str(path))
+    assert make_mesh(_QUAD * 1e-3, triangles).n == 4
+
+
+def test_a_file_rewritten_with_its_size_and_modification_time_is_read_anew(tmp_path):
+    """The cache is keyed on the file's content: a rewrite of the same size that keeps the modification time
+    (cp -p, tar) is read again; on 0.1.0 the old mesh came back."""
+    path = tmp_path / "square.obj"
+    path.write_text(SQUARE_OBJ)
+    first = read_mesh_file(path)
+    stat = path.stat()
+    path.write_text(SQUARE_OBJ.replace("0.2", "0.3"))
+    os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+    assert path.stat().st_size == stat.st_size and path.stat().st_mtime_ns == stat.st_mtime_ns
+    np.testing.assert_array_equal(first.points[:, 2], 0.2)
+    np.testing.assert_array_equal(read_mesh_file(path).points[:, 2], 0.3)

@@ -17,7 +17,8 @@ import numpy as np
 
 from wetcloth._core import COLLIDER_COLUMNS, MESH_COLUMNS
 from wetcloth.errors import ParameterError
-from wetcloth.mesh_file import FORMATS, MeshFile, fan_triangles, locate, merged, read_faces, triangle_areas
+from wetcloth.mesh_file import (FORMATS, MeshFile, content_key, fan_triangles, locate, merged, read_faces,
+                                triangle_areas)
 
 #: All mesh colliders' arrays, as the core's ColliderMeshes: ``headers`` (k, MESH_COLUMNS) each mesh's
 #: first cell, grid origin (m), cell side (m), cells along x, y, z, solid flag and bounding box;
@@ -151,17 +152,22 @@ def mesh_of(collider, name: str = "collider_file") -> tuple[np.ndarray, np.ndarr
         points, triangles = _given(collider.file, name)
         return points + np.array([collider.x, collider.y, collider.z]), triangles
     path = locate(collider.file) if collider.file else None
-    if path is None or not path.is_file():
+    try:
+        digest = content_key(path) if path is not None and path.is_file() else None
+    except OSError as exc:
+        raise ParameterError(name, f"{str(path)!r} cannot be read: {exc.strerror or exc}; "
+                                   f"allowed: the path of a mesh file ({FORMATS})") from None
+    if digest is None:
         raise ParameterError(name, f"a mesh collider needs its mesh file; {str(collider.file)!r} is not a file; "
                                    f"allowed: the path of a mesh file ({FORMATS})")
-    points, triangles = _read(str(path.resolve()), path.stat().st_mtime_ns, name)
+    points, triangles = _read(str(path.resolve()), digest, name)
     return points + np.array([collider.x, collider.y, collider.z]), triangles
 
 
 @functools.lru_cache(maxsize=8)
-def _read(path: str, mtime_ns: int, name: str) -> tuple[np.ndarray, np.ndarray]:
+def _read(path: str, digest: str, name: str) -> tuple[np.ndarray, np.ndarray]:
     allowed = "a mesh file (" + FORMATS + ") of faces"
-    points, blocks, _, _ = read_faces(path, path, name, allowed, polygons=True)
+    points, blocks, _, _ = read_faces(path, path, name, allowed)
     blocks = [b for b in blocks if len(b)]
     faces = fan_triangles(blocks)[0] if blocks else np.zeros((0, 3), dtype=np.int64)
     return _with_area(*merged(points, faces), repr(path), allowed, name)

@@ -14,14 +14,18 @@ triangle's own corners: its exactly equal vertices are merged, numbered in order
 An OBJ file's normals (``vn``) are not read, nor its UVs (``vt``) unless each face corner's ``vt``
 index is its ``v`` index (UVs per vertex; at a UV seam they are per corner, which a particle cannot
 have).  Triangles and quads may be mixed; a face of more corners, a mesh without faces, a mesh more than
-LARGEST_SIZE across (a file in millimetres read as metres), a non-finite coordinate, a zero-area face, a vertex in no face, two vertices at the same place (a seam: the cloth
-would fall apart along it) and an edge in more than two faces are refused with a ParameterError
-naming ``cloth_mesh`` (the springs need each edge in at most two faces).
+LARGEST_SIZE across (a file in millimetres read as metres) or less than scene.SMALLEST_SIZE, a coordinate
+or point attribute that is not a finite number, a zero-area face, a vertex in no face, two vertices at the
+same place (a seam: the cloth would fall apart along it) and an edge in more than two faces are refused
+with a ParameterError naming ``cloth_mesh`` (the springs need each edge in at most two faces).  A mesh
+given as arrays (make_mesh) is checked as a file's.
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
+import hashlib
 import io
 import os
 from dataclasses import dataclass
@@ -98,23 +102,30 @@ def read_mesh_file(path: "str | Path | MeshFile") -> MeshFile:
         return path
     path = locate(path)
     try:
-        stat = path.stat()
+        digest = content_key(path)
     except OSError as exc:
         raise _error(f"{str(path)!r} cannot be read: {exc.strerror or exc}") from None
-    return _read_cached(str(path.resolve()), stat.st_mtime_ns, stat.st_size, str(path))
+    return _read_cached(str(path.resolve()), digest, str(path))
+
+
+def content_key(path: str | Path) -> str:
+    """The blake2b digest of a file's bytes, the mesh caches' key: a rewrite that keeps the file's size and
+    modification time (cp -p, tar) still changes it."""
+    with open(path, "rb") as fh:
+        return hashlib.file_digest(fh, "blake2b").hexdigest()
 
 
 @functools.lru_cache(maxsize=8)
-def _read_cached(resolved: str, mtime_ns: int, size: int, shown: str) -> MeshFile:
+def _read_cached(resolved: str, digest: str, shown: str) -> MeshFile:
     points, blocks, attributes, uv = read_faces(resolved, shown, NAME, ALLOWED)
     return make_mesh(points, blocks, attributes, uv, shown)
 
 
-def read_faces(path: str, shown: str, name: str, allowed: str, polygons: bool = False):
-    """A mesh file's vertices (n, 3) m, its faces as runs (j, 3) and (j, 4) in file order (with
-    ``polygons``, faces of more corners too, as runs (j, k)), its point attributes and UVs (or None),
-    unchecked: the one reader of cloth and collider files (meshio, then trimesh, by the suffix, see the
-    module).  A file no reader understands raises a ParameterError naming ``name``, ``allowed`` its range."""
+def read_faces(path: str, shown: str, name: str, allowed: str):
+    """A mesh file's vertices (n, 3) m, its faces as runs (j, k) of k corners in file order, its point
+    attributes and UVs (or None), unchecked: the one reader of cloth and collider files (meshio, then
+    trimesh, by the suffix, see the module).  A file no reader understands raises a ParameterError naming
+    ``name``, ``allowed`` its range."""
     suffix, reader = Path(path).suffix.lower(), reader_of(path)
     if reader is None:
         raise ParameterError(name, f"{shown!r}: unknown mesh format {suffix!r}: neither meshio nor trimesh reads "
@@ -124,15 +135,25 @@ def read_faces(path: str, shown: str, name: str, allowed: str, polygons: bool = 
         if attempt != reader and not _trimesh_reads(path):  # trimesh is imported only once meshio has failed
             break
         try:
-            return _read_meshio(path, polygons) if attempt == "meshio" else _read_trimesh(path)
-        except ParameterError:
-            raise
+            return _quietly(_read_meshio if attempt == "meshio" else _read_trimesh, path)
         except Exception as exc:  # the readers raise many kinds of errors for a damaged file
             label = attempt if attempt != reader or reader == "meshio" or suffix in TRIMESH_SUFFIXES else \
                 f"trimesh (meshio has no reader for {suffix!r})"
             failures.append(f"{label}: {type(exc).__name__}: {exc}")
     raise ParameterError(name, f"{shown!r} cannot be read as a mesh by {'; nor by '.join(failures)}; "
                                f"allowed: {allowed}") from None
+
+
+def _quietly(read, path: str):
+    """read(path) with what the reader prints kept off stdout and stderr, and its sys.exit (meshio's on a
+    file it cannot parse) raised as a ValueError of the reason it printed to stdout (its "Couldn't read
+    file" line on stderr, wrapped at 80 columns, adds nothing)."""
+    reason = io.StringIO()
+    try:
+        with contextlib.redirect_stdout(reason), contextlib.redirect_stderr(io.StringIO()):
+            return read(path)
+    except SystemExit:
+        raise ValueError(" ".join(reason.getvalue().split()) or "it cannot parse the file") from None
 
 
 def reader_of(path: str) -> str | None:
@@ -163,17 +184,24 @@ def _trimesh_reads(path: str) -> bool:
     return any(tail.lstrip(".") in trimesh.available_formats() for tail in _suffix_tails(path))
 
 
-def _read_meshio(path: str, polygons: bool):
+def _ply_header_ends(path: str) -> bool:
+    """Whether a PLY file's header ends (a line 'end_header') before the file does."""
+    with open(path, "rb") as fh:
+        return any(line.strip() == b"end_header" for line in fh)
+
+
+def _read_meshio(path: str):
     import meshio
 
+    if path.lower().endswith(".ply") and not _ply_header_ends(path):  # meshio reads past its end for ever
+        raise ValueError("its header has no end_header line (the file is cut short)")
     mesh = meshio.read(_obj_buffer(path), file_format="obj") if path.lower().endswith(".obj") else meshio.read(path)
     blocks = []
     for block in mesh.cells:
-        if block.type in ("triangle", "quad") or (polygons and block.type.startswith("polygon")):
+        if block.type in ("triangle", "quad") or block.type.startswith("polygon"):
             blocks.append(np.asarray(block.data, dtype=np.int64))
-        elif block.type.startswith("polygon") or block.dim == 2:
-            raise _error(f"{path!r} has faces of {np.asarray(block.data).shape[1]} corners ({block.type}): split "
-                         "them into triangles or quads in your modeller (e.g. Blender's Triangulate Faces)")
+        elif block.dim == 2:
+            raise ValueError(f"faces of type {block.type!r}: only triangles, quads and polygons are read")
     points = np.asarray(mesh.points, dtype=np.float64)
     attributes = {name: np.asarray(values) for name, values in mesh.point_data.items()}
     return points, blocks, attributes, _uv_of(attributes, len(points))
@@ -233,26 +261,11 @@ def merged(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 def make_mesh(points, blocks, attributes=None, uv=None, shown: str = "<arrays>") -> MeshFile:
     """The checked mesh of ``points`` (n, 3) m and faces ``blocks`` (a list of (j, 3) and (j, 4) integer
-    arrays in file order), with point ``attributes`` (name -> (n,)) and ``uv`` (n, 2) or None; ``shown``
-    names it in errors."""
-    points = np.asarray(points, dtype=np.float64)
-    blocks = [np.asarray(b, dtype=np.int64) for b in blocks]
-    attributes = {} if attributes is None else attributes
+    arrays in file order), with point ``attributes`` (name -> (n,) or (n, k) numbers) and ``uv`` (n, 2) or
+    None; ``shown`` names it in errors.  A file's mesh (read_faces) is checked here too."""
+    points, blocks, attributes, uv = _arrays(points, blocks, {} if attributes is None else attributes, uv, shown)
     n = len(points)
-    if points.ndim != 2 or points.shape[1] < 2:
-        raise _error(f"{shown!r} has no vertex coordinates")
-    if points.shape[1] == 2:
-        points = np.column_stack([points, np.zeros(n)])
-    points = np.ascontiguousarray(points[:, :3])
-    if not np.isfinite(points).all():
-        bad = int(np.flatnonzero(~np.isfinite(points).all(axis=1))[0])
-        raise _error(f"{shown!r}: vertex {bad} has a coordinate that is not a finite number ({points[bad].tolist()})")
-    blocks = [b for b in blocks if len(b)]
-    if not blocks:
-        raise _error(f"{shown!r} has no faces (a cloth needs triangles or quads)")
     corners = np.concatenate([np.full(len(b), b.shape[1]) for b in blocks])
-    if any(b.min() < 0 or b.max() >= n for b in blocks):
-        raise _error(f"{shown!r} has faces whose vertex indices are outside 0..{n - 1}")
     triangles, face_of = fan_triangles(blocks)
     unused = np.setdiff1d(np.arange(n), triangles)
     if len(unused):
@@ -265,12 +278,60 @@ def make_mesh(points, blocks, attributes=None, uv=None, shown: str = "<arrays>")
     triangles = _oriented(triangles)
     mixed = len({b.shape[1] for b in blocks}) > 1
     faces = triangles if mixed else np.concatenate(blocks)
-    attributes = {k: np.asarray(v) for k, v in attributes.items() if len(v) == n}
     for array in (points, faces, triangles, face_of, corners, uv, *blocks, *attributes.values()):
         if array is not None:  # shared by every reader of the (cached) file
             array.flags.writeable = False
     return MeshFile(points=points, faces=faces, triangles=triangles, face_of=face_of, corners=corners,
                     uv=uv, attributes=attributes, source=shown, blocks=tuple(blocks))
+
+
+def _arrays(points, blocks, attributes: dict, uv, shown: str):
+    """make_mesh's arguments as arrays, checked: points (n, 3) float64 of finite coordinates ((n, 2) given:
+    z = 0), blocks of faces (j, 3) and (j, 4) int64 indexing them (whole numbers; empty blocks left out),
+    attributes of n finite numbers each (a row per vertex) and uv (n, 2) float64 of finite numbers or None."""
+    try:
+        points = np.array(points, dtype=np.float64)
+        blocks = [np.asarray(b) for b in blocks]
+        attributes = {name: np.array(values) for name, values in attributes.items()}
+        uv = None if uv is None else np.asarray(uv)
+    except (TypeError, ValueError) as exc:
+        raise _error(f"{shown!r}: its points, faces, attributes or uv are not arrays ({exc})") from None
+    if points.ndim != 2 or points.shape[1] not in (2, 3):
+        raise _error(f"{shown!r} has no vertex coordinates: its points are of shape {points.shape}, not (n, 3)")
+    n = len(points)
+    if points.shape[1] == 2:
+        points = np.column_stack([points, np.zeros(n)])
+    if not np.isfinite(points).all():
+        bad = int(np.flatnonzero(~np.isfinite(points).all(axis=1))[0])
+        raise _error(f"{shown!r}: vertex {bad} has a coordinate that is not a finite number ({points[bad].tolist()})")
+    blocks = [b for b in blocks if b.size]
+    if not blocks:
+        raise _error(f"{shown!r} has no faces (a cloth needs triangles or quads)")
+    for b in blocks:
+        if b.ndim != 2 or b.shape[1] < 3:
+            raise _error(f"{shown!r} has faces of shape {b.shape}: a face lists 3 or 4 vertex indices")
+        if b.shape[1] > 4:
+            raise _error(f"{shown!r} has faces of {b.shape[1]} corners (polygon): split them into triangles or "
+                         "quads in your modeller (e.g. Blender's Triangulate Faces)")
+        if b.dtype.kind not in "iuf" or (b.dtype.kind == "f" and not (np.isfinite(b) & (b == np.round(b))).all()):
+            raise _error(f"{shown!r} has face indices that are not whole numbers (of type {b.dtype})")
+    blocks = [b.astype(np.int64) for b in blocks]
+    if any(b.min() < 0 or b.max() >= n for b in blocks):
+        raise _error(f"{shown!r} has faces whose vertex indices are outside 0..{n - 1}")
+    for name, values in attributes.items():
+        if values.ndim == 0 or len(values) != n:
+            raise _error(f"{shown!r}: its point attribute {name!r} has {values.size} values, not one per vertex ({n})")
+        if not _finite_numbers(values):
+            raise _error(f"{shown!r}: its point attribute {name!r} has values that are not finite numbers "
+                         f"(of type {values.dtype}); remove the attribute or give it numbers")
+    if uv is not None and (uv.shape != (n, 2) or not _finite_numbers(uv)):
+        raise _error(f"{shown!r}: its uv (of shape {uv.shape}, type {uv.dtype}) are not ({n}, 2) finite numbers, "
+                     "a row per vertex")
+    return np.ascontiguousarray(points), blocks, attributes, None if uv is None else uv.astype(np.float64)
+
+
+def _finite_numbers(values: np.ndarray) -> bool:
+    return values.dtype.kind in "biuf" and bool(np.isfinite(values).all())
 
 
 def fan_triangles(blocks: list) -> tuple[np.ndarray, np.ndarray]:
@@ -305,8 +366,14 @@ def _check_areas(shown: str, points: np.ndarray, triangles: np.ndarray, face_of:
 
 
 def _check_size(shown: str, points: np.ndarray) -> None:
-    """Refuse a mesh larger than LARGEST_SIZE along an axis: a file in millimetres or centimetres read as metres."""
+    """Refuse a mesh larger than LARGEST_SIZE along an axis (a file in millimetres or centimetres read as metres),
+    or smaller than scene.SMALLEST_SIZE along every axis (as the rectangle's width and length may not be)."""
+    from wetcloth.scene import SMALLEST_SIZE
+
     extent = points.max(axis=0) - points.min(axis=0)
+    if extent.max() < SMALLEST_SIZE:
+        raise _error(f"{shown!r} is {extent.max():g} m across (coordinates are metres, at least {SMALLEST_SIZE:g} m): "
+                     "scale it to its size in metres (Blender: the exporter's Scale, or Apply Scale)")
     if extent.max() > LARGEST_SIZE:
         raise _error(f"{shown!r} is {extent.max():g} m across (coordinates are metres, up to {LARGEST_SIZE:g} m): "
                      "a file in millimetres or centimetres must be scaled to metres (Blender: the exporter's Scale "
