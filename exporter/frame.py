@@ -171,6 +171,19 @@ def _check_indices(name: str, faces: np.ndarray, corners: tuple[int, ...], n: in
         raise ExportError(f"{name} index vertices outside 0..{n - 1}")
 
 
+#: The largest magnitude a float32 holds: the files store float32, so a larger value would be written as inf.
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+
+
+def check_float32(name: str, values: np.ndarray) -> None:
+    """ExportError naming ``name`` unless every value is finite and within float32's range."""
+    if not np.isfinite(values).all():
+        raise ExportError(f"{name} contain non-finite values; the frame cannot be written")
+    if values.size and np.abs(values).max() > FLOAT32_MAX:
+        raise ExportError(f"{name} contain values beyond float32's range (magnitude at most {FLOAT32_MAX:.4g}), "
+                          f"largest {np.abs(values).max():.4g}; the frame cannot be written")
+
+
 def make_frame(positions, wetness, triangles, uv, faces=None, velocities=None) -> Frame:
     """Check and convert one frame's data: positions (n, 3) m, wetness (n,) 0..1, triangles (m, 3),
     uv (n, 2); faces (k, 3 or 4) to write instead of the triangles (e.g. their quads); velocities (n, 3) m/s.
@@ -181,12 +194,11 @@ def make_frame(positions, wetness, triangles, uv, faces=None, velocities=None) -
     wetness = np.asarray(wetness, dtype=np.float64)
     triangles = np.asarray(triangles)
     faces = triangles if faces is None else np.asarray(faces)
-    uv = np.asarray(uv, dtype=np.float32)
+    uv = np.asarray(uv, dtype=np.float64)
     n = len(positions)
     if positions.ndim != 2 or positions.shape[1] != 3 or n == 0:
         raise ExportError(f"positions must have shape (n, 3) with n > 0, got {positions.shape}")
-    if not np.isfinite(positions).all():
-        raise ExportError("positions contain non-finite values; the frame cannot be written")
+    check_float32("positions", positions)
     if wetness.shape != (n,):
         raise ExportError(f"wetness must have shape ({n},) like the positions, got {wetness.shape}")
     if not np.isfinite(wetness).all() or wetness.min() < 0.0 or wetness.max() > 1.0:
@@ -195,17 +207,17 @@ def make_frame(positions, wetness, triangles, uv, faces=None, velocities=None) -
     _check_indices("faces", faces, (3, 4), n)
     if uv.shape != (n, 2):
         raise ExportError(f"uv must have shape ({n}, 2), got {uv.shape}")
+    check_float32("uv", uv)
     if velocities is not None:
         velocities = np.asarray(velocities, dtype=np.float64)
         if velocities.shape != (n, 3):
             raise ExportError(f"velocities must have shape ({n}, 3) like the positions, got {velocities.shape}")
-        if not np.isfinite(velocities).all():
-            raise ExportError("velocities contain non-finite values; the frame cannot be written")
+        check_float32("velocities", velocities)
         velocities = velocities.astype(np.float32)
     return Frame(
         positions=positions.astype(np.float32),
         normals=vertex_normals(positions, triangles),
-        uv=uv,
+        uv=uv.astype(np.float32),
         wetness=wetness.astype(np.float32),
         colors=wetness_colors(wetness),
         triangles=triangles.astype(np.int32),

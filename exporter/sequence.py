@@ -15,6 +15,7 @@ from __future__ import annotations
 import importlib
 import json
 import math
+import numbers
 import pprint
 import re
 from pathlib import Path
@@ -24,7 +25,8 @@ import numpy as np
 
 from wetcloth.exporter.blender_options import MAX_FRAME, OPTIONS, blender_options
 from wetcloth.exporter.errors import ExportError
-from wetcloth.exporter.frame import COLORMAP, FACES, Frame, cloth_faces, make_frame, quads_from_triangles, wetness_lut
+from wetcloth.exporter.frame import (COLORMAP, FACES, Frame, check_float32, cloth_faces, make_frame,
+                                     quads_from_triangles, wetness_lut)
 from wetcloth.files import whole_file
 from wetcloth.files import write_text as write_whole_text
 from wetcloth.mesh_file import as_text
@@ -119,6 +121,10 @@ def _listing(paths: list[Path]) -> str:
     return ", ".join(p.name for p in paths[:3]) + (f" and {len(paths) - 3} more" if len(paths) > 3 else "")
 
 
+#: How ``check_directory``'s refusal names the overwrite flag (the command line names its option instead).
+OVERWRITE = "overwrite=True"
+
+
 def check_directory(directory: str | Path, overwrite: bool = False, exclusive: bool = False) -> list[Path]:
     """May a new sequence be written into ``directory``?  Returns the files it would replace; changes nothing.
 
@@ -139,8 +145,9 @@ def check_directory(directory: str | Path, overwrite: bool = False, exclusive: b
     except OSError as exc:
         raise ExportError(f"cannot read export directory {directory}: {exc.strerror or exc}") from None
     if taken and not overwrite:
-        raise ExportError(f"export directory {directory} already holds another run's frames ({_listing(taken)}); "
-                          "choose a new directory or delete them first")
+        frames = [p for p in taken if p.name not in (MANIFEST, LOADER)] or taken  # the frames, else what shows a run
+        raise ExportError(f"export directory {directory} already holds another run's frames ({_listing(frames)}); "
+                          f"choose a new directory, delete them first or pass {OVERWRITE} to replace that run")
     foreign = [p for p in present if p not in own]
     if foreign:
         whose = ("files that are not part of the frame sequence its frames.json describes" if own
@@ -248,6 +255,9 @@ class FrameSequence:
         if self.format != "usd":
             _remove([p for p in self._frame_files() if _frame_number(p.name) >= self.first_frame + frames_written])
         self.frame_count = frames_written
+        self._last_time = None  # the next frame's time is checked against those written after this point only
+        if frames_written == 0:
+            self._first_time = None
 
     def _frame_files(self) -> list[Path]:
         """This sequence's frame files on disk (and half-written ones)."""
@@ -294,6 +304,7 @@ class FrameSequence:
             raise ExportError(f"frame {self.frame_count + 1} has {count} vertices, the cloth {len(uv)}: "
                               "the topology is fixed")
         frame = make_frame(positions, wetness, triangles, uv, faces=faces, velocities=velocities)
+        time = self._checked_time(time)
         self._shape = (frame.vertex_count, len(frame.faces))
         number = self.first_frame + self.frame_count
         path = self.frame_path(number)
@@ -307,7 +318,6 @@ class FrameSequence:
                 raise ExportError(f"cannot write frame {path}: {exc.strerror or exc}") from None
         before = (self.frame_count, self._first_time, self._last_time)
         self.frame_count += 1
-        time = float(number - self.first_frame) / self.fps if time is None else float(time)
         if self._first_time is None:
             self._first_time = time
         self._last_time = time
@@ -320,6 +330,17 @@ class FrameSequence:
                 raise ExportError(f"cannot write frame {path}: {MANIFEST} could not count it ({exc}); "
                                   f"removed it, {MANIFEST} counts the {self.frame_count} frames before") from None
         return path
+
+    def _checked_time(self, time) -> float:
+        """The next frame's time, s (None: its frame number over fps): a finite number after the last frame's."""
+        if time is None:
+            time = self.frame_count / self.fps
+        if isinstance(time, bool) or not isinstance(time, numbers.Real) or not math.isfinite(time):
+            raise ExportError(f"time must be a finite number of seconds, got {time!r}; the frame is not written")
+        if self._last_time is not None and time <= self._last_time:
+            raise ExportError(f"time {float(time):g} s is not after the last frame's {self._last_time:g} s: frames "
+                              "come in time order; the frame is not written")
+        return float(time)
 
     # ------------------------------------------------------------------ side files
     def _usd_metadata(self) -> dict:
@@ -427,6 +448,17 @@ def _checked_polygons(polygons, fmt: str) -> tuple[np.ndarray, np.ndarray]:
     return counts.astype(np.int64), indices.astype(np.int64)
 
 
+def _check_uv(uv) -> None:
+    """ExportError unless ``uv`` is (n, 2) finite numbers within float32's range."""
+    try:
+        uv = np.asarray(uv, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ExportError(f"uv must be numbers of shape (n, 2), got {uv!r:.80}") from None
+    if uv.ndim != 2 or uv.shape[1] != 2:
+        raise ExportError(f"uv must have shape (n, 2), got {uv.shape}")
+    check_float32("uv", uv)
+
+
 def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: float = 30.0, scene=None, *,
                   triangles=None, uv=None, prefix: str = "cloth", digits: int = MIN_DIGITS,
                   overwrite: bool = False, exclusive: bool = False, faces: str = "quads", first_frame: int = 1,
@@ -465,20 +497,26 @@ def open_sequence(directory, fmt: str = "ply", writer: str = "trimesh", fps: flo
     if fmt == "usd" and writer != "trimesh":
         raise ExportError(f"writer {writer!r} does not apply to usd: usd-core writes USD files (the writer "
                           "chooses the library for ply and obj)")
-    if not (isinstance(fps, (int, float)) and math.isfinite(fps) and fps > 0):
+    if isinstance(fps, bool) or not (isinstance(fps, numbers.Real) and math.isfinite(fps) and fps > 0):
         raise ExportError(f"fps must be a finite number > 0, got {fps!r}")
     if not _PREFIX.match(prefix):
         raise ExportError(f"file prefix {prefix!r} must be letters, digits, '.', '_' or '-' (no path)")
-    if not (isinstance(digits, int) and MIN_DIGITS <= digits <= 12):
+    if not (isinstance(digits, numbers.Integral) and not isinstance(digits, bool) and MIN_DIGITS <= digits <= 12):
         raise ExportError(f"digits must be a whole number from {MIN_DIGITS} to 12, got {digits!r}")
     if faces not in FACES:
         raise ExportError(f"unknown faces {faces!r}; choose one of {', '.join(FACES)}")
-    if not (isinstance(first_frame, int) and not isinstance(first_frame, bool) and 0 <= first_frame <= MAX_FRAME):
+    if not (isinstance(first_frame, numbers.Integral) and not isinstance(first_frame, bool)
+            and 0 <= first_frame <= MAX_FRAME):
         raise ExportError(f"first_frame must be a whole number from 0 to {MAX_FRAME}, got {first_frame!r}")
     if frame_count is not None and first_frame + frame_count - 1 > MAX_FRAME:
         raise ExportError(f"first_frame {first_frame} with {frame_count} frames ends at frame "
                           f"{first_frame + frame_count - 1}, beyond Blender's last frame {MAX_FRAME}; allowed: a "
                           f"first_frame up to {MAX_FRAME - frame_count + 1}")
+    first_frame, digits = int(first_frame), int(digits)  # NumPy's integers too, stored as Python's
+    if frame_count is not None:  # every frame's name as long: name order stays frame order
+        digits = max(digits, len(str(first_frame + frame_count - 1)))
+    if uv is not None:
+        _check_uv(uv)
     blender_options(blender, first_frame)  # checked before the directory is touched
     if polygons is not None:
         polygons = _checked_polygons(polygons, fmt)

@@ -148,8 +148,8 @@ def test_frames_beyond_blenders_last_frame_are_refused_before_simulating(tmp_pat
     code = main(["run", "--duration", "1", "--fps", "30", "--first-frame", "1048570", "--export", str(tmp_path / "f"),
                  "--csv", str(tmp_path / "o.csv"), "--plot", str(tmp_path / "p.png")])
     err = capsys.readouterr().err
-    assert code == 2 and ("first_frame 1048570 with 31 frames ends at frame 1048600, beyond Blender's last frame "
-                          "1048574; allowed: a first_frame up to 1048544") in err, err
+    assert code == 2 and ("error: --first-frame 1048570 with 31 frames ends at frame 1048600, beyond Blender's last "
+                          "frame 1048574; allowed: a --first-frame up to 1048544") in err, err
     assert list(tmp_path.iterdir()) == []
 
 

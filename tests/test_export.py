@@ -545,3 +545,102 @@ def test_a_restored_run_resumes_its_frames_after_the_restored_frame(tmp_path):
     np.testing.assert_allclose(trimesh.load(written, process=False).vertices, moved.astype(np.float32))
     with pytest.raises(ExportError, match="frames_written"):
         sequence.resume_after(-1)
+
+
+# ------------------------------------------------------------------ refusals found by hostile trials
+def _triangle_sequence(directory, **options):
+    """A sequence of one triangle (3 vertices), frames from ``write_frame``."""
+    return open_sequence(directory, triangles=np.array([[0, 1, 2]]), uv=np.zeros((3, 2)), faces="triangles",
+                         **options)
+
+
+@pytest.mark.parametrize("fmt", ["ply", "obj", "usd"])
+@pytest.mark.parametrize("bad, message", [
+    (dict(positions=np.eye(3) * 1e39), "positions contain values beyond float32's range"),
+    (dict(velocities=np.full((3, 3), 1e39)), "velocities contain values beyond float32's range"),
+    (dict(time=float("nan")), "time must be a finite number of seconds, got nan"),
+    (dict(time=float("inf")), "time must be a finite number"),
+    (dict(time="1"), "time must be a finite number"),
+])
+def test_a_frame_that_would_be_written_as_nan_or_inf_is_refused_and_not_written(tmp_path, fmt, bad, message):
+    """A position beyond float32 (1e39) passed the float64 check and was written as inf; a NaN time
+    went into frames.json as NaN (not JSON).  Refused, naming the argument, and nothing is written."""
+    sequence = _triangle_sequence(tmp_path / "s", fmt=fmt)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no float32 overflow on the way
+        with pytest.raises(ExportError, match=message):
+            sequence.write_frame(**(dict(positions=np.eye(3), wetness=np.zeros(3)) | bad))
+    sequence.close()
+    manifest = json.loads((tmp_path / "s" / "frames.json").read_text())  # strict JSON
+    assert manifest["frame_count"] == 0 and manifest["first_time"] is None
+    assert not list((tmp_path / "s").glob("cloth_*"))
+
+
+@pytest.mark.parametrize("uv", [np.full((3, 2), np.nan), np.full((3, 2), 1e39)])
+def test_uvs_that_are_not_finite_float32_are_refused(tmp_path, uv):
+    """``vt nan nan`` was written: the uv are checked when the sequence opens and in every frame."""
+    with pytest.raises(ExportError, match="uv contain"):
+        open_sequence(tmp_path / "s", fmt="obj", triangles=np.array([[0, 1, 2]]), uv=uv, faces="triangles")
+    assert not (tmp_path / "s").exists()
+    with pytest.raises(ExportError, match="uv contain"):
+        make_frame(np.eye(3), np.zeros(3), np.array([[0, 1, 2]]), uv)
+
+
+def test_frame_times_must_go_forward(tmp_path):
+    sequence = _triangle_sequence(tmp_path / "s")
+    sequence.write_frame(np.eye(3), np.zeros(3), time=1.0)
+    for time in (0.5, 1.0):
+        with pytest.raises(ExportError, match=f"time {time:g} s is not after the last frame's 1 s"):
+            sequence.write_frame(np.eye(3), np.zeros(3), time=time)
+    sequence.write_frame(np.eye(3), np.zeros(3), time=1.5)
+    sequence.close()
+    manifest = json.loads((tmp_path / "s" / "frames.json").read_text())
+    assert (manifest["frame_count"], manifest["first_time"], manifest["last_time"]) == (2, 1.0, 1.5)
+    assert sorted(p.name for p in (tmp_path / "s").glob("cloth_*")) == ["cloth_0001.ply", "cloth_0002.ply"]
+
+
+def test_a_rolled_back_sequence_takes_earlier_times_again(tmp_path):
+    """After ``resume_after`` (an FMU rollback) the next frames' times follow the restored point."""
+    sequence = _triangle_sequence(tmp_path / "s")
+    for k in range(3):
+        sequence.write_frame(np.eye(3), np.zeros(3), time=k * 0.1)
+    sequence.resume_after(1)
+    sequence.write_frame(np.eye(3), np.zeros(3), time=0.1)
+    sequence.close()
+    assert json.loads((tmp_path / "s" / "frames.json").read_text())["frame_count"] == 2
+
+
+def test_numpy_scalars_are_taken_as_fps_and_first_frame(tmp_path):
+    sequence = _triangle_sequence(tmp_path / "s", fps=np.int64(30), first_frame=np.int64(3), digits=np.int64(5))
+    sequence.write_frame(np.eye(3), np.zeros(3))
+    sequence.close()
+    manifest = json.loads((tmp_path / "s" / "frames.json").read_text())
+    assert (manifest["fps"], manifest["first_frame"]) == (30.0, 3) and (tmp_path / "s" / "cloth_00003.ply").is_file()
+    _triangle_sequence(tmp_path / "t", fps=np.float32(24.0)).close()
+    for fps in (True, np.float64("nan")):
+        with pytest.raises(ExportError, match="fps must be a finite number > 0"):
+            _triangle_sequence(tmp_path / "u", fps=fps)
+
+
+def test_frame_names_are_padded_to_the_last_frames_number(tmp_path):
+    """first_frame 9999 with 3 frames: cloth_09999 .. cloth_10001, name order is frame order."""
+    sequence = _triangle_sequence(tmp_path / "s", first_frame=9999, frame_count=3)
+    for _ in range(3):
+        sequence.write_frame(np.eye(3), np.zeros(3))
+    sequence.close()
+    assert sorted(p.name for p in (tmp_path / "s").glob("cloth_*")) == [
+        "cloth_09999.ply", "cloth_10000.ply", "cloth_10001.ply"]
+    assert json.loads((tmp_path / "s" / "frames.json").read_text())["files"] == "cloth_{frame:05d}.ply"
+
+
+def test_an_earlier_export_is_refused_naming_overwrite_and_counting_its_frames(tmp_path):
+    sequence = _triangle_sequence(tmp_path / "s")
+    for _ in range(5):
+        sequence.write_frame(np.eye(3), np.zeros(3))
+    sequence.close()
+    with pytest.raises(ExportError) as refused:
+        _triangle_sequence(tmp_path / "s")
+    assert str(refused.value).endswith("already holds another run's frames (cloth_0001.ply, cloth_0002.ply, "
+                                       "cloth_0003.ply and 2 more); choose a new directory, delete them first or "
+                                       "pass overwrite=True to replace that run")
+    _triangle_sequence(tmp_path / "s", overwrite=True).close()

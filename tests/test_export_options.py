@@ -232,7 +232,7 @@ def test_cli_faces_and_first_frame(tmp_path):
 def test_cli_refuses_a_bad_first_frame_in_one_line(tmp_path, capsys):
     assert cli_run(tmp_path, "--export", str(tmp_path / "frames"), "--first-frame", "-3") == 2
     err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and "first_frame must be a whole number from 0" in err
+    assert len(err.splitlines()) == 1 and "error: --first-frame must be a whole number from 0" in err
 
 
 def test_cli_overwrite_replaces_an_earlier_export(tmp_path):

@@ -24,8 +24,16 @@ COMMAND_MODULES = (
 )
 
 
+class Parser(argparse.ArgumentParser):
+    """An argument parser that takes options only as spelled in full (``--durat`` is not ``--duration``);
+    the subcommands' parsers are of this class too (``add_subparsers`` makes its own kind)."""
+
+    def __init__(self, *args, allow_abbrev: bool = False, **kwargs):
+        super().__init__(*args, allow_abbrev=allow_abbrev, **kwargs)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="wetcloth",
         description="Cloth that meets water: simulate, co-simulate (FMI 2.0 and 3.0), export to Blender, run studies.",
     )
@@ -38,6 +46,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if "--version" in argv and len(argv) > 1:  # argparse would print the version and ignore the rest
+        parser.error(f"--version takes no other arguments, got {' '.join(a for a in argv if a != '--version')}")
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)

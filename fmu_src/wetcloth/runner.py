@@ -16,7 +16,7 @@ import numpy as np
 
 from wetcloth.files import whole_file
 from wetcloth.progress import Watcher, time_bar
-from wetcloth.run_settings import check_frames
+from wetcloth.run_settings import MAX_FRAMES
 from wetcloth.scene import Scene
 from wetcloth.simulation import OUTPUT_NAMES, Simulation
 
@@ -80,7 +80,9 @@ def frame_times(duration: float, fps: float) -> np.ndarray:
         raise ValueError(f"fps must be a finite number > 0, got {fps!r}")
     if not (duration >= 0 and math.isfinite(duration)):
         raise ValueError(f"duration must be a finite number >= 0 s, got {duration!r}")
-    check_frames(duration, fps)
+    if whole_frames(duration, fps) > MAX_FRAMES:  # named as run()'s arguments, not a scene file's [run]
+        raise ValueError(f"duration {duration:g} s at fps {fps:g} is {whole_frames(duration, fps):.3g} frames; at "
+                         f"most {MAX_FRAMES} per run: a duration up to {(MAX_FRAMES - 1) / fps:g} s at this fps")
     times = np.arange(whole_frames(duration, fps)) / fps
     if duration - times[-1] > 1e-9:
         times = np.append(times, duration)

@@ -8,8 +8,8 @@ import textwrap
 
 from wetcloth import run_settings
 from wetcloth.scene import (COLLIDER_FIELDS, COLLIDER_KEY_FIELDS, GRIP_KEY_FIELDS, PARAMETERS, RESERVED_KEYS,
-                            collider_key_name, collider_name, describe_range, grip_key_name, parameter_field,
-                            read_scene_file)
+                            collider_key_name, collider_name, describe_range, grip_key_name, load_scene,
+                            parameter_field, read_scene_file)
 
 
 def add_parser(sub) -> None:
@@ -55,6 +55,7 @@ COLUMN_MOST = 24  # characters of a column but the last: a longer value runs pas
 
 
 def main(args) -> int:
+    load_scene(args.scene)  # a scene that run refuses (a missing mesh file, a value out of range) is refused here too
     table = rows(args.scene)
     if args.json:
         print(json.dumps(table, indent=1))

@@ -27,27 +27,44 @@ def parse_assignment(text: str) -> tuple[str, str]:
     return name.strip(), value.strip()
 
 
+def number_argument(kind):
+    """An argument type: the ``kind`` (int or float) a command-line number spells, refusing what Python
+    reads but a person would not mean (``1_0`` is 10 to ``float``)."""
+    def number(text: str):
+        if "_" not in text:
+            try:
+                return kind(text)
+            except ValueError:
+                pass
+        raise argparse.ArgumentTypeError(f"expected {'a whole number' if kind is int else 'a number'}, got {text!r}")
+    return number
+
+
+#: Options that only shape an export, and their defaults (the parser's are None: what was given is known).
+EXPORT_OPTIONS = {"format": "ply", "writer": None, "faces": "quads", "first_frame": 1, "overwrite": False}
+
+
 def add_parser(sub) -> None:
     p = sub.add_parser("run", help="simulate a scene and write its outputs",
                        description="Simulate a scene (default: the towel) and write CSV outputs and a plot. "
                                    "'wetcloth params' lists the parameters.")
     p.add_argument("scene", nargs="?", default=None, help="scene TOML file or preset name (default: towel)")
-    p.add_argument("--duration", type=float,
+    p.add_argument("--duration", type=number_argument(float),
                    help=f"simulated time, s (default: the scene file's [run] duration, else {run_settings.DEFAULTS['duration']:g})")
-    p.add_argument("--fps", type=float,
+    p.add_argument("--fps", type=number_argument(float),
                    help=f"output frames per second (default: the scene file's [run] fps, else {run_settings.DEFAULTS['fps']:g})")
     p.add_argument("--set", dest="overrides", action="append", default=[], type=parse_assignment,
                    metavar="NAME=VALUE", help="override a scene parameter (repeatable)")
     p.add_argument("--export", type=path_argument, metavar="DIR", help="write one mesh per frame into DIR")
-    p.add_argument("--format", default="ply", choices=["ply", "obj", "usd"], help="mesh format (default ply)")
+    p.add_argument("--format", choices=["ply", "obj", "usd"], help="mesh format (default ply)")
     p.add_argument("--writer", choices=["trimesh", "meshio"],
                    help="mesh writer of ply and obj frames (default trimesh; usd is written by usd-core)")
-    p.add_argument("--faces", default="quads", choices=["quads", "triangles"],
+    p.add_argument("--faces", choices=["quads", "triangles"],
                    help="mesh faces of a rectangle: one quad per grid cell or two triangles (default quads); a cloth "
                         "from a mesh file keeps its file's faces with quads, else its triangles")
-    p.add_argument("--first-frame", type=int, default=1, metavar="N",
+    p.add_argument("--first-frame", type=number_argument(int), metavar="N",
                    help="number of the first frame: file <prefix>_N, USD time code N, Blender frame N (default 1)")
-    p.add_argument("--overwrite", action="store_true",
+    p.add_argument("--overwrite", action="store_const", const=True,
                    help="replace an earlier export in DIR (one described by its own frames.json)")
     p.add_argument("--csv", type=csv_path, default=Path("out/run/outputs.csv"),
                    help="outputs CSV (default out/run/outputs.csv)")
@@ -65,10 +82,31 @@ def scene_and_settings(args):
     return scene, settings
 
 
+def check_options(args) -> None:
+    """Refuse what the command line asks for but the run would not do: export options without ``--export``,
+    a ``--set`` of a run setting or of one parameter twice (ValueError naming the option)."""
+    if args.export is None:
+        given = [name for name in EXPORT_OPTIONS if getattr(args, name) is not None]
+        if given:
+            option = "--" + given[0].replace("_", "-")
+            raise ValueError(f"{option} applies to an export only: add --export DIR (or leave out {option})")
+    names = [name for name, _ in args.overrides]
+    for name in names:
+        if name in run_settings.SETTINGS:
+            raise ValueError(f"--set {name}: {name} is a run setting, not a scene parameter: use --{name}")
+        if names.count(name) > 1:
+            values = ", ".join(value for n, value in args.overrides if n == name)
+            raise ValueError(f"--set {name} is given {names.count(name)} times ({values}): give each parameter once")
+
+
 def main(args) -> int:
+    check_options(args)
+    for name, default in EXPORT_OPTIONS.items():
+        if getattr(args, name) is None:
+            setattr(args, name, default)
     if args.writer is not None and args.format == "usd":
-        raise ValueError(f"--writer {args.writer} does not apply to --format usd: usd-core writes USD files "
-                         "(--writer chooses the library for ply and obj)")
+        raise ValueError(f"--writer {args.writer} does not apply to --format usd: usd-core writes USD files; "
+                         "leave out --writer (it chooses the library of ply and obj frames)")
     args.writer = args.writer or "trimesh"
     scene, settings = scene_and_settings(args)
     # Every output is checked before any simulating: a run is not thrown away at its end.
@@ -77,11 +115,18 @@ def main(args) -> int:
     _check_image_format(args.plot)
     sequence = None
     if args.export is not None:
-        from wetcloth.exporter import open_sequence  # only needed when exporting
+        from wetcloth.exporter import ExportError, open_sequence  # only needed when exporting
+        from wetcloth.exporter.sequence import OVERWRITE
 
-        sequence = open_sequence(args.export, fmt=args.format, writer=args.writer, fps=settings.fps, scene=scene,
-                                 faces=args.faces, first_frame=args.first_frame, overwrite=args.overwrite,
-                                 frame_count=whole_frames(settings.duration, settings.fps))
+        try:
+            sequence = open_sequence(args.export, fmt=args.format, writer=args.writer, fps=settings.fps, scene=scene,
+                                     faces=args.faces, first_frame=args.first_frame, overwrite=args.overwrite,
+                                     frame_count=whole_frames(settings.duration, settings.fps))
+        except ExportError as exc:  # the exporter's names of its arguments made the command line's
+            message = str(exc).replace(OVERWRITE, "--overwrite")
+            if message.startswith("first_frame "):
+                message = message.replace("first_frame ", "--first-frame ").replace("a first_frame", "a --first-frame")
+            raise ExportError(message) from None
     stop = None
     try:
         result = run(scene, settings.duration, settings.fps, on_frame=sequence.on_frame if sequence else None,
