@@ -189,7 +189,7 @@ def test_bad_study_errors_name_the_key(data, key, match):
 def test_scene_path_relative_to_the_study_file(tmp_path):
     (tmp_path / "bare.toml").write_text("nx = 5\n")
     study = tmp_path / "s.toml"
-    study.write_text('scene = "bare.toml"\nduration = 2.0\n')
+    study.write_text('scene = "bare.toml"\nduration = 2.0\n[axes]\nabsorption_rate = [0.5]\n')
     assert load_study(study).runs()[0].params["nx"] == 5
 
 
@@ -336,7 +336,7 @@ def test_dry_run_lists_runs_done_failed_and_to_run_and_estimates_their_time(tmp_
 
     study_file = tmp_path / "dry.toml"
     study_file.write_text('scene = "thesis_fast"\nduration = 2.0\n[base]\nnx = 5\nny = 5\n'
-                          '[axes]\nabsorption_rate = [-1.0, 0.5, 1.0, 2.0]\ninitial_tilt = [0.0, 30.0]\n')
+                          '[axes]\nabsorption_rate = [0.25, 0.5, 1.0, 2.0]\ninitial_tilt = [0.0, 30.0]\n')
     out = tmp_path / "dry.parquet"
     study = load_study(study_file)
     runs = study.runs()
@@ -354,13 +354,12 @@ def test_dry_run_lists_runs_done_failed_and_to_run_and_estimates_their_time(tmp_
                           "6 to run")
     assert printed[1].split() == ["run", "absorption_rate", "initial_tilt", "state"]
     assert [line.split()[-1] for line in printed[2:10]] == ["run", "run", "done", "failed", "run", "run", "run", "run"]
-    assert printed[4].split()[:3] == ["3", "0.5", "0.0"]
+    assert printed[4].split()[:3] == ["3", "0.50", "0.0"]
     estimate = printed[10]
-    # 6 to run: 2 refused at once (absorption_rate = -1), 4 timed at the pace of 3 of them or more
-    assert re.fullmatch(r"estimated time: about \S+ \S+ per run x 4 runs = \S+ \S+ of computing; about \S+ \S+ on 2 "
+    # 6 to run, timed at the pace of 3 of them or more
+    assert re.fullmatch(r"estimated time: about \S+ \S+ per run x 6 runs = \S+ \S+ of computing; about \S+ \S+ on 2 "
                         r"workers of a local cluster, \S+ \S+ of it to start the cluster, warm up its workers and "
-                        r"stop it \([34] of the runs timed in this process for up to 1 s each, .*; 2 runs with a value "
-                        r"out of range will be refused at once\)", estimate), estimate
+                        r"stop it \([3-6] of the runs timed in this process for up to 1 s each, .*\)", estimate), estimate
     assert out.stat().st_mtime_ns == stamp and sorted(p.name for p in tmp_path.iterdir()) == ["dry.parquet", "dry.toml"]
     # with --retry-errors the failed run is to run again
     listing = preview.run_listing(study, read_table(out), retry_errors=True)
@@ -397,8 +396,10 @@ def test_time_estimate_times_more_runs_while_its_total_budget_lasts():
 
 
 def test_sensitivity_study_whose_runs_all_fail_exits_1_naming_them(tmp_path, capsys):
-    """Values out of range fail every run before any worker is needed: the command reports which runs
-    the design misses, writes an empty indices table and a plot that says why, and exits 1."""
+    """A table whose runs all failed (values out of range: run_study records them without a worker; the
+    command would refuse them): the command reports which runs the design misses, writes an empty indices
+    table and a plot that says why, and exits 1."""
+    from wetcloth.batch import run_study
     from wetcloth.cli import main
 
     study_file = tmp_path / "sa.toml"
@@ -406,14 +407,18 @@ def test_sensitivity_study_whose_runs_all_fail_exits_1_naming_them(tmp_path, cap
                           '[axes]\nthickness = { low = -2.0, high = -1.0 }\nabsorption_rate = { low = 0.1, high = 1.0 }\n'
                           '[sensitivity]\nsamples = 2\n')
     out = tmp_path / "sa.parquet"
+    assert run_study(load_study(study_file), out).failed == 8
     assert main(["batch", str(study_file), "--out", str(out), "--no-progress"]) == 1
     captured = capsys.readouterr()
-    assert "sa: 8 runs; ran 8: 0 ok, 8 failed" in captured.out
+    assert "sa: 8 runs, 8 already in " in captured.out
     message = " ".join(captured.out.split("  final_depth (m)\n", 1)[1].split("\nwrote ")[0].split())  # unwrapped
     assert message.startswith("no indices: the sobol design needs a value from each of its 8 runs, and 8 failed (after "
                               "fixing the cause, --retry-errors runs them again): run ")
     assert "ParameterError: parameter 'thickness': " in message and message.endswith("; and 5 more")
-    assert captured.err.splitlines() == ["wetcloth batch: no sensitivity indices for final_depth (why: above)"]
+    assert captured.err.splitlines() == [
+        "wetcloth batch: every run of the study failed; the first: ParameterError: parameter 'thickness': "
+        + captured.err.split("'thickness': ", 1)[1].split("\n")[0],
+        "wetcloth batch: no sensitivity indices for final_depth (why: above)"]
     assert pd.read_csv(tmp_path / "sa_sensitivity.csv").empty and (tmp_path / "sa_sensitivity.png").exists()
 
 

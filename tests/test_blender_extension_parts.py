@@ -276,6 +276,7 @@ def test_given_wheels_are_bundled_as_they_are_one_per_python_with_dependencies_f
         wheels.append(tmp_path / f"wetcloth-0.1.0-{tag}-{tag}-linux_x86_64.whl")
         with zipfile.ZipFile(wheels[-1], "w") as archive:
             archive.writestr("wetcloth/__init__.py", tag)
+            archive.writestr("wetcloth-0.1.0.dist-info/METADATA", "Name: wetcloth\nVersion: 0.1.0\n")
     given = [arg for wheel in wheels for arg in ("--wheel", str(wheel))]
     assert cli_main(["blender-extension", "--out", str(tmp_path), *given]) == 0
     with zipfile.ZipFile(tmp_path / "wetcloth-0.1.0.zip") as archive:

@@ -166,9 +166,10 @@ class Study:
     # ---- construction
     @classmethod
     def from_dict(cls, data: dict[str, Any], base_dir: str | Path | None = None, name: str | None = None,
-                  source: str | None = None) -> "Study":
+                  source: str | None = None, require_axes: bool = False) -> "Study":
         """A study from the contents of a study file (relative scene paths resolve from ``base_dir``);
-        ``source`` (e.g. 'study file x.toml') heads the error listing every mistake."""
+        ``source`` (e.g. 'study file x.toml') heads the error listing every mistake.  ``require_axes``
+        (a study file): a study without axes, one run of its scene, is a mistake."""
         if not isinstance(data, dict):
             raise StudyError("study", f"expected a table of settings, got {type(data).__name__}")
         mistakes = Mistakes(source)
@@ -189,6 +190,10 @@ class Study:
             for key, spec in table.items():
                 with mistakes.collect():
                     axes.append(_located_axis(parse_axis(key, spec), base_dir))
+            if require_axes and not table:
+                raise StudyError("axes", "none given: a study varies at least one parameter, one [axes] entry "
+                                         "each (e.g. absorption_rate = [0.2, 0.4]); one run of a scene is "
+                                         "'wetcloth run'")
         plots = ()
         with mistakes.collect():
             plots = plot_specs(data.get("plot", []))
@@ -296,17 +301,22 @@ class Study:
         """Each plot names a recorded metric and one or two axes of this study; a series plot, saved
         outputs and an axis to colour by."""
         names = self.axis_names
+        mistakes = Mistakes()  # every plot's mistakes at once
         for spec in specs:
             if isinstance(spec, SeriesPlotSpec):
-                self._check_series_plot(spec)
+                with mistakes.collect():
+                    self._check_series_plot(spec)
                 continue
             if spec.metric not in self.metrics:
-                raise StudyError("plot", f"metric {spec.metric!r} is not recorded; recorded: {', '.join(self.metrics)}")
+                mistakes.add(StudyError("plot", f"metric {spec.metric!r} is not recorded; recorded: "
+                                                f"{', '.join(self.metrics)}"))
             for axis in (spec.x, spec.y):
                 if axis is not None and axis not in names:
-                    raise StudyError("plot", f"{axis!r} is not an axis of this study; axes: {', '.join(names) or 'none'}")
+                    mistakes.add(StudyError("plot", f"{axis!r} is not an axis of this study; axes: "
+                                                    f"{', '.join(names) or 'none'}"))
             if spec.y is not None and spec.y == spec.x:
-                raise StudyError("plot", f"a heatmap needs two different axes, got {spec.x!r} twice")
+                mistakes.add(StudyError("plot", f"a heatmap needs two different axes, got {spec.x!r} twice"))
+        mistakes.raise_if_any()
 
     def _check_series_plot(self, spec: SeriesPlotSpec) -> None:
         if not self.series:
@@ -424,5 +434,5 @@ def load_study(path: str | Path) -> "Study":
     mistake at once, naming the file."""
     path = resolve_preset_path(path, preset_dir() / "studies", "study")
     data = read_toml(path, "study file")
-    return Study.from_dict(data, base_dir=path.parent, name=path.stem, source=f"study file {path}")
+    return Study.from_dict(data, base_dir=path.parent, name=path.stem, source=f"study file {path}", require_axes=True)
 

@@ -9,13 +9,18 @@ from pathlib import Path
 
 from wetcloth.batch.engines import ENGINES
 from wetcloth.batch.results import KEY
-from wetcloth.commands.common import INTERRUPTED, check_writable_folder, csv_path, path_argument, scheduler_argument
+from wetcloth.commands.common import (INTERRUPTED, check_fmu_file, check_writable_folder, csv_path, path_argument,
+                                      scheduler_argument)
+from wetcloth.errors import Mistakes
 from wetcloth.scene import preset_dir
 
 #: Where results go without --out: <study name>.parquet in this folder.
 DEFAULT_OUT_DIR = Path("out/batch")
-#: Exit status of a sensitivity study that ran but could not compute every metric's indices.
+#: Exit status of a study whose runs all failed, or a sensitivity study that ran but could not compute
+#: every metric's indices.
 INCOMPLETE = 1
+#: How many refused runs an error names (then how many more there are).
+NAMED_RUNS = 3
 
 
 def add_parser(sub) -> None:
@@ -79,18 +84,27 @@ def main(args) -> int:
     from wetcloth import batch  # imports dask: only when the command runs
 
     study = batch.load_study(args.study)
-    plot_specs = [batch.parse_plot_spec(text) for text in args.plot]
-    study.check_plots(plot_specs)
+    mistakes, plot_specs = Mistakes(), []  # every --plot mistake at once
+    for text in args.plot:
+        with mistakes.collect():
+            plot_specs.append(batch.parse_plot_spec(text))
+    with mistakes.collect():
+        study.check_plots(plot_specs)
+    mistakes.raise_if_any()
     out = args.out if args.out is not None else DEFAULT_OUT_DIR / f"{study.name}.parquet"  # the name is a plain file name
     if out.suffix.lower() == ".csv":
         raise ValueError(f"--out {out} is the Parquet results table; give --csv FILE for a CSV copy")
     check_writable_folder(out.parent, "--out", out)  # before a unit is built or anything runs
+    existing = _existing_table(out)
     if args.plot_dir is not None:
         check_writable_folder(args.plot_dir, "--plot-dir")
     if args.engine is not None:
         study = study.replace(engine=args.engine)
     if args.fmu is not None:
         study = study.replace(fmu=str(args.fmu))
+    if study.engine == "fmu" and study.fmu:
+        check_fmu_file(Path(study.fmu), "--fmu" if args.fmu is not None else "the study's fmu")
+    _refuse_invalid_runs(study, existing, out, args.retry_errors)  # before a unit is built or anything runs
     if study.engine == "fmu" and not study.fmu:
         study = _with_unit(study)
     if args.dry_run:
@@ -115,6 +129,12 @@ def main(args) -> int:
         return INTERRUPTED
     table = report.table
     print(report.summary())
+    failed = table[table["status"] != "ok"]
+    status = 0
+    if len(table) and len(failed) == len(table):  # nothing to show for the study: say so in the status
+        print(f"wetcloth batch: every run of the study failed; the first: {failed['error'].iloc[0].splitlines()[0]}",
+              file=sys.stderr)
+        status = INCOMPLETE
     written = [str(out)]
     if report.series_path is not None and report.series_path.exists():
         written.append(str(report.series_path))
@@ -128,7 +148,6 @@ def main(args) -> int:
         else:
             name = spec.filename(out.stem)
         written.append(str(batch.plot(table, spec, plot_dir / name, study=study, series=report.series)))
-    status = 0
     if study.sensitivity is not None:
         result = batch.sensitivity_indices(study, table)
         print(batch.format_indices(result))
@@ -139,6 +158,46 @@ def main(args) -> int:
             status = INCOMPLETE
     print("wrote " + ", ".join(written))
     return status
+
+
+def _existing_table(out: Path):
+    """The results table at ``out`` (empty if there is none yet); a file there that is not one is refused,
+    naming --out, before anything runs (a rerun would read it, and then overwrite it)."""
+    from wetcloth.batch import read_table
+
+    if out.is_dir():
+        raise ValueError(f"--out {out} is a folder: give the results table's file name, e.g. {out / 'study.parquet'}")
+    try:
+        return read_table(out)
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"--out {out} holds something that is not a wetcloth results table (a Parquet file "
+                         f"with a run_key column; {str(exc).splitlines()[0]}): give another --out") from None
+
+
+def _refuse_invalid_runs(study, existing, out: Path, retry_errors: bool) -> None:
+    """Refuse the study, before any run, if a run still to run has a value its scene refuses (a value out
+    of range, a mesh file that is not there): a ValueError naming the first few runs (as the dry run
+    numbers them) and why."""
+    from wetcloth.batch.execution import runs_to_do, series_store
+    from wetcloth.scene import from_dict
+
+    store = series_store(study, out)
+    curves = store.complete_keys(study.series) if store is not None else None
+    runs = study.runs()
+    todo = {r.key for r in runs_to_do(runs, existing, retry_errors, curves)}
+    refused = []
+    for number, run in enumerate(runs, 1):
+        if run.key in todo:
+            try:
+                from_dict(run.params)
+            except ValueError as exc:
+                refused.append(f"run {number}: " + " ".join(line.strip() for line in str(exc).splitlines()))
+    if refused:
+        more = f"; and {len(refused) - NAMED_RUNS} more" if len(refused) > NAMED_RUNS else ""
+        has = "run has" if len(refused) == 1 else "runs have"
+        raise ValueError(f"study {study.name!r}: {len(refused)} of its {len(runs)} {has} a value that "
+                         f"is refused, so nothing was run (fix the axes or [base]; --dry-run lists the runs): "
+                         + "; ".join(refused[:NAMED_RUNS]) + more)
 
 
 def dry_run(study, out: Path, args) -> int:

@@ -2,7 +2,14 @@
 
 from __future__ import annotations
 
-from wetcloth.commands.common import path_argument
+import re
+import zipfile
+from pathlib import Path
+
+from wetcloth.commands.common import check_writable_folder, path_argument
+
+#: A wetcloth wheel's metadata, as pip writes it: wetcloth-VERSION.dist-info/METADATA.
+WHEEL_METADATA = re.compile(r"wetcloth-[^/]+\.dist-info/METADATA")
 
 
 def add_parser(sub) -> None:
@@ -21,9 +28,28 @@ def add_parser(sub) -> None:
     p.set_defaults(func=main)
 
 
-def main(args) -> int:
-    from wetcloth.exporter.blender_extension.build import build_extension
+def check_wheel_contents(wheel: Path) -> None:
+    """Refuse a --wheel that is not a wheel of wetcloth inside (a zip holding wetcloth's dist-info METADATA),
+    whatever its name says."""
+    if not wheel.is_file():
+        raise ValueError(f"--wheel {wheel}: no such file")
+    try:
+        with zipfile.ZipFile(wheel) as archive:
+            names = archive.namelist()
+    except (OSError, zipfile.BadZipFile) as exc:
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else "not a zip file"
+        raise ValueError(f"--wheel {wheel}: not a wheel ({why})") from None
+    if not any(WHEEL_METADATA.fullmatch(name) for name in names):
+        raise ValueError(f"--wheel {wheel}: not a wetcloth wheel (no wetcloth-VERSION.dist-info/METADATA in it)")
 
+
+def main(args) -> int:
+    from wetcloth.exporter.blender_extension.build import build_extension, check_wheel
+
+    for wheel in args.wheels:
+        check_wheel(wheel)  # its name first: the project, version and Python it says
+        check_wheel_contents(wheel)
+    check_writable_folder(args.out or Path("."), "--out", make=False)  # made once the Pythons are checked
     path = build_extension(args.out, args.wheels, args.pythons)
     print(f"wrote {path} ({path.stat().st_size / 1e6:.1f} MB)")
     return 0

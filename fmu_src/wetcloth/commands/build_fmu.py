@@ -3,7 +3,9 @@ with ``--native`` the unit compiled from the C++ core, ``WetClothNative.fmu`` or
 
 from __future__ import annotations
 
-from wetcloth.commands.common import path_argument
+from pathlib import Path
+
+from wetcloth.commands.common import check_out_suffix, check_writable_folder, path_argument
 
 
 def add_parser(sub) -> None:
@@ -16,7 +18,8 @@ def add_parser(sub) -> None:
                                    "from wetcloth's sources. With --native: the unit compiled from wetcloth's C++ "
                                    "core by the system C++ compiler ($CXX, else g++), which needs no Python "
                                    "(and writes no mesh frames).")
-    p.add_argument("--out", type=path_argument, help=f"where to write the FMU (default {default_fmu_path(2)}, "
+    p.add_argument("--out", type=path_argument, help=f"where to write the FMU, a file name ending in .fmu or a folder "
+                                            f"to write it into under its default name (default {default_fmu_path(2)}, "
                                             f"with --fmi 3 {default_fmu_path(3)}; with --native "
                                             f"{native_fmu_path(2)}, {native_fmu_path(3)})")
     p.add_argument("--fmi", type=int, choices=(2, 3), default=2, help="FMI version (default 2)")
@@ -29,14 +32,28 @@ def add_parser(sub) -> None:
     p.set_defaults(func=main)
 
 
+def out_path(out: Path | None, fmi_version: int, native: bool) -> Path:
+    """Where the unit goes: ``out``, or in the folder ``out`` (or models/) under the unit's default name;
+    a file name not ending in .fmu, or a folder that cannot be written, is refused naming --out."""
+    from wetcloth.fmu import default_fmu_path
+    from wetcloth.fmu.native import native_fmu_path
+
+    default = (native_fmu_path if native else default_fmu_path)(fmi_version)
+    path = default if out is None else out / default.name if out.is_dir() else out
+    check_out_suffix(path, ".fmu")
+    check_writable_folder(path.parent, "--out", out or path, make=False)  # made by the build, once it works
+    return path
+
+
 def main(args) -> int:
+    out = out_path(args.out, args.fmi, getattr(args, "native", False))
     if getattr(args, "native", False):
         from wetcloth.fmu.native import build_native_fmu
 
-        path = build_native_fmu(args.out, fmi_version=args.fmi, scene=args.scene, progress=True)
+        path = build_native_fmu(out, fmi_version=args.fmi, scene=args.scene, progress=True)
     else:
         from wetcloth.fmu.builder import build_fmu
 
-        path = build_fmu(args.out, fmi_version=args.fmi, scene=args.scene)
+        path = build_fmu(out, fmi_version=args.fmi, scene=args.scene)
     print(f"wrote {path} ({path.stat().st_size / 1e6:.1f} MB)")
     return 0

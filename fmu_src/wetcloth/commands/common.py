@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 
 #: Exit status of a command refused or failed for a reason it names (a bad option, a full disk).
@@ -52,9 +53,18 @@ def scheduler_argument(text: str) -> str:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
-def check_writable_folder(folder: Path, option: str, given: Path | None = None) -> None:
+def check_writable_folder(folder: Path, option: str, given: Path | None = None, make: bool = True) -> None:
     """Refuse an output folder that cannot be made or written, before any work: a ValueError naming
-    ``option`` and its value ``given`` (default: ``folder``).  Makes the folder, as the output would."""
+    ``option`` and its value ``given`` (default: ``folder``).  Makes the folder, as the output would; with
+    ``make=False`` (a command with more to check before it writes anything) only looks at the folder or
+    its nearest existing parent: a file there, or no permission to write, is refused."""
+    if not make:
+        existing = next(p for p in (folder.absolute(), *folder.absolute().parents) if p.exists() or p == p.parent)
+        why = ("not a folder" if not existing.is_dir() else
+               "Permission denied" if not os.access(existing, os.W_OK | os.X_OK) else None)
+        if why is not None:
+            raise ValueError(f"{option} {given or folder}: cannot write there ({why}: {existing})")
+        return
     try:
         folder.mkdir(parents=True, exist_ok=True)
         probe = folder / ".wetcloth-probe"
@@ -78,3 +88,29 @@ def scene_with_overrides(scene: str | Path | None, overrides: list[tuple[str, st
             values[name] = parse_text(name, text)
     mistakes.raise_if_any()
     return load_scene(scene, **values)
+
+
+def check_fmu_file(path: Path, option: str) -> None:
+    """Refuse a unit to run that is not an FMU, before any work: a ValueError naming ``option`` unless
+    ``path`` is a zip file holding a modelDescription.xml (an FMU) or a folder holding one (an FMU
+    unpacked)."""
+    import zipfile
+
+    if path.is_dir():
+        if not (path / "modelDescription.xml").is_file():
+            raise ValueError(f"{option} {path}: a folder without a modelDescription.xml, so not an unpacked FMU")
+        return
+    if not path.exists():
+        raise ValueError(f"{option} {path}: no such file (build one with 'wetcloth build-fmu')")
+    try:
+        with zipfile.ZipFile(path) as archive:
+            archive.getinfo("modelDescription.xml")
+    except (OSError, zipfile.BadZipFile, KeyError):
+        raise ValueError(f"{option} {path}: not an FMU (a zip file holding a modelDescription.xml)") from None
+
+
+def check_out_suffix(path: Path, suffix: str, option: str = "--out") -> None:
+    """Refuse an output file's name that does not end in ``suffix`` (any case), so that an output never
+    overwrites a file of another kind (a scene TOML, a mesh) given by mistake."""
+    if path.suffix.lower() != suffix:
+        raise ValueError(f"{option} {path}: the file's name must end in {suffix}")

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from wetcloth.commands.common import path_argument
+from wetcloth.commands.common import check_out_suffix, check_writable_folder, path_argument
 
 
 def add_parser(sub) -> None:
@@ -27,8 +27,20 @@ def add_parser(sub) -> None:
 
 
 def main(args) -> int:
+    from wetcloth import run_settings
     from wetcloth.fmu.cosim import demo
+    from wetcloth.scene import read_scene_file
 
+    # every argument checked before a unit is built (a minute)
+    if args.duration is not None:
+        try:
+            run_settings.check_setting("duration", args.duration)
+        except run_settings.RunSettingError as exc:
+            raise ValueError(f"--duration: {exc.problems[0][2]}") from None
+    run_settings.resolve(read_scene_file(None).get("run"), duration=args.duration)  # and its frames
+    check_out_suffix(args.fmu, ".fmu", "--fmu")  # built there if missing: never over a file of another kind
+    check_writable_folder(args.out, "--out", make=False)
+    check_writable_folder(args.fmu.parent, "--fmu", args.fmu, make=False)
     paths = demo(args.out, fmu=args.fmu, duration=args.duration, progress=not args.no_progress,
                  native=not args.no_native)
     print(f"co-simulated the towel through {paths['fmu']}: frames in {paths['frames']}, "
