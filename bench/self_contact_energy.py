@@ -49,7 +49,7 @@ def run(fields: dict, lift: float, fps: float, duration: float) -> str:
     scene = wetcloth.load_scene(**fields, self_collision="on", integrator="implicit_euler", tolerance=0.0,
                                 max_step=1.0 / fps)
     sim = wetcloth.Simulation(scene)
-    sim.state.pos[:, 2] += lift
+    sim._buffers.pos[:, 2] += lift
     energy, rises, cpu = mechanical_energy(sim), [], 0.0
     frames = round(duration * fps)
     for _ in range(frames):

@@ -326,7 +326,7 @@ def test_blow_up_advice_never_suggests_what_is_already_set():
     from wetcloth.advice import blow_up_advice
 
     sim = wetcloth.Simulation(wetcloth.load_scene(nx=3, ny=3, integrator="implicit_euler", tolerance=1e-4))
-    sim.state.vel[2, 0] = 1e9  # as if exploded: the guard refuses the next step
+    sim._buffers.vel[2, 0] = 1e9  # as if exploded: the guard refuses the next step
     with pytest.raises(wetcloth.BlowUpError) as info:
         sim.advance(0.01)
     message = str(info.value)

@@ -22,7 +22,7 @@ STEP = 1e-8
 def energy_gradient(sim: wetcloth.Simulation, particles: np.ndarray) -> np.ndarray:
     """dE/dx (N, (3, len(particles))) of the cloth's energy by central differences at its state."""
     gradient = np.empty((3, len(particles)))
-    pos = sim.state.pos
+    pos = sim._buffers.pos  # written in place: the energy at displaced positions
     for column, i in enumerate(particles):
         for c in range(3):
             start = pos[c, i]
@@ -64,9 +64,9 @@ def test_the_energy_is_the_potential_of_the_springs_gravity_and_buoyancy(scene):
     sim.advance(0.4)
     floats = "absorption_rate" in values
     assert (buoyancy_energy(sim) > 0) == floats  # only the floating towels are in the water
-    sim.state.vel[:] = 0.0
+    sim._buffers.vel[:] = 0.0
     if values.get("wet_stiffness_factor"):
-        sim.state.water[:] = np.random.default_rng(3).uniform(0.0, 1.0, sim.state.water.shape) * sim.model.capacity
+        sim._buffers.water[:] = np.random.default_rng(3).uniform(0.0, 1.0, sim.state.water.shape) * sim.model.capacity
     particles = np.random.default_rng(7).choice(sim.positions.shape[0], 12, replace=False)
     force = sim.model.forces(sim.state.pos, sim.state.vel, sim.state.water)[:, particles]
     assert np.abs(force).max() > 1e-3  # the springs pull

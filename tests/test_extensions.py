@@ -53,7 +53,7 @@ def wicking_strip(ny, duration, rate=1e-4, length=0.4):
                                 absorption_capacity=2.0, **DRY_FLOOR)
     sim = wetcloth.Simulation(scene)
     y = sim.model.topology.rest_xy[1]
-    sim.state.water[...] = np.where(y < 0, 1.0, np.where(y == 0, 0.5, 0.0)) * sim.model.capacity
+    sim._buffers.water[...] = np.where(y < 0, 1.0, np.where(y == 0, 0.5, 0.0)) * sim.model.capacity
     total = sim.state.water.sum()
     sim.advance(duration)
     return sim, y, total

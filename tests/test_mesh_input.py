@@ -461,8 +461,8 @@ def test_a_mesh_cloths_mechanical_energy_counts_its_listed_springs(tmp_path):
     rectangle, mesh = wetcloth.Simulation(scene), wetcloth.Simulation(_rectangle_file(tmp_path, scene, shuffle))
     assert mesh.model.cloth.pairs.shape[1] > 0
     rectangle.advance(0.5)
-    mesh.state.pos[:] = rectangle.state.pos[:, shuffle]
-    mesh.state.vel[:] = rectangle.state.vel[:, shuffle]
+    mesh._buffers.pos[:] = rectangle.state.pos[:, shuffle]
+    mesh._buffers.vel[:] = rectangle.state.vel[:, shuffle]
     mass = rectangle.model.cloth.dry_mass
     elastic = (mechanical_energy(rectangle) - 0.5 * np.sum(mass * rectangle.state.vel**2)
                - GRAVITY * np.sum(mass * rectangle.state.pos[2]))
@@ -516,13 +516,13 @@ def test_a_compressed_triangle_meshs_energy_is_the_potential_of_its_forces():
     assert sim.model.topology.pair_buckling_count > 0
     rng = np.random.default_rng(4)
     pos = sim.state.pos * np.array([[0.997], [1.0], [1.0]]) + rng.uniform(-1e-5, 1e-5, sim.state.pos.shape)
-    sim.state.vel[:] = 0.0
+    sim._buffers.vel[:] = 0.0
     direction = rng.normal(size=pos.shape)
     work = float(np.sum(sim.model.forces(pos, sim.state.vel, sim.state.water) * direction))
     step = 3e-9  # m: the difference's own error falls as its square (3e-4 of the work at 1e-6 m, 3e-8 at 1e-8 m)
     energies = []
     for sign in (1.0, -1.0):
-        sim.state.pos[:] = pos + sign * step * direction
+        sim._buffers.pos[:] = pos + sign * step * direction
         energies.append(mechanical_energy(sim))
     assert (energies[0] - energies[1]) / (2 * step) == pytest.approx(-work, rel=1e-7)
 

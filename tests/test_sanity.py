@@ -126,8 +126,8 @@ def test_a_frame_long_steps_error_estimate_is_the_size_of_its_true_error():
     for frame in range(1, 61):
         if frame in checked:
             converged = wetcloth.Simulation(scene.replace(integrator="bdf2", tolerance=5e-9, max_step=0.1))
-            converged.state.pos[...] = sim.state.pos
-            converged.state.vel[...] = sim.state.vel
+            converged._buffers.pos[...] = sim.state.pos
+            converged._buffers.vel[...] = sim.state.vel
             converged.advance(1 / 30)
         sim.advance(1 / 30)
         if frame in checked:

@@ -386,7 +386,7 @@ def test_a_frame_step_whose_pushes_gain_energy_is_taken_again_in_halves():
                                 floor_level=0.0, water_level=-10.0, bend_stiffness=0.0, absorption_rate=0.0,
                                 integrator="implicit_euler", tolerance=0.0, max_step=1 / 30)
     sim = wetcloth.Simulation(scene)
-    pos, e = sim.state.pos, scene.thickness
+    pos, e = sim._buffers.pos, scene.thickness  # written in place below
     rows = np.unique(pos[1])
     for j in range(5, 9):  # rows 5..8 folded back over rows 3..0, half a thickness into them
         upper = np.isclose(pos[1], rows[j])

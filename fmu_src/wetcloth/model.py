@@ -121,8 +121,9 @@ class Model:
         return self.work.submerged
 
     def update_submerged(self, z: np.ndarray) -> float:
-        """Set ``submerged`` from particle heights ``z`` (m); return its largest value."""
-        return _core.submerged(self.physics, z, self.work.submerged)
+        """Set ``submerged`` from particle heights ``z`` (m; a read-only view too, as ``Simulation.state``'s);
+        return its largest value."""
+        return _core.submerged(self.physics, np.require(z, np.float64, ("C", "W")), self.work.submerged)
 
     def forces(self, pos: np.ndarray, vel: np.ndarray, water: np.ndarray) -> np.ndarray:
         """Total force (N, (3, n)) on every particle; also sets ``submerged``."""

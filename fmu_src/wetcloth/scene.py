@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import functools
 import math
 import numbers
 import re
@@ -291,7 +292,7 @@ class Scene:
     drag_model: str = _param("face", "-", "'face' (per-triangle, default) or 'stokes' (thesis eq. 3.5)", choices=("face", "stokes"))
     drag_normal: float = _param(1.2, "-", "face-drag coefficient across the cloth, C_n", 0.0, 100.0)
     drag_tangential: float = _param(0.03, "-", "face-drag coefficient along the cloth, C_t", 0.0, 100.0)
-    drag_linear: float = _param(2.0, "N s/m3", "face-drag linear term c_lin per area", 0.0, 1e6)
+    drag_linear: float = _param(2.0, "N s/m3", "face-drag linear term c_lin per area", 0.0, 1e4)
     buoyancy_model: str = _param(
         "smooth", "-", "'smooth' (slab fraction, default) or 'thesis' (all or nothing)", choices=("smooth", "thesis")
     )
@@ -379,6 +380,25 @@ class Scene:
         return values
 
 
+_DATACLASS_INIT = Scene.__init__
+
+
+@functools.wraps(_DATACLASS_INIT)
+def _scene_init(self, *args, **values):
+    """The dataclass's __init__, with a ParameterError naming the nearest parameters for unknown names."""
+    mistakes = Mistakes()
+    for name in values:
+        if name not in _SCENE_FIELDS:
+            with mistakes.collect():
+                _field(name)  # a misspelled name: the nearest named
+                raise ParameterError(name, "is a field of a listed table; Scene takes the tables as lists (colliders, "
+                                           "grip_keys, collider_keys), load_scene and Scene.replace also by this name")
+    mistakes.raise_if_any()
+    _DATACLASS_INIT(self, *args, **values)
+
+
+Scene.__init__ = _scene_init
+_SCENE_FIELDS = {f.name for f in dataclasses.fields(Scene)}
 PARAMETERS: dict[str, dataclasses.Field] = {f.name: f for f in dataclasses.fields(Scene)
                                             if f.name not in ("colliders", "grip_keys", "collider_keys")}
 PARAMETER_LISTING = f"there are {len(PARAMETERS)}; 'wetcloth params' lists them"
@@ -578,12 +598,18 @@ def _checked_colliders(colliders, mistakes: Mistakes) -> tuple:
                 checked[name] = check_value(f"collider{k}_{name}", value)
         if len(checked) != len(values):
             continue
-        if checked.get("shape", "sphere") == "mesh":
+        shape = checked.get("shape", "sphere")
+        if shape == "mesh":
             with mistakes.collect():
                 from wetcloth.collider_meshes import mesh_of
 
                 mesh_of(Collider(**checked), f"collider{k}_file")  # readable, with faces
-        if checked.get("shape", "sphere") == "plane" and not any(
+        elif checked.get("file", "") != "":
+            with mistakes.collect():
+                raise ParameterError(f"collider{k}_file", f"a {shape} collider takes no file (its shape is its own); "
+                                                          f"allowed: a file with shape = 'mesh' only, else ''")
+            continue
+        if shape == "plane" and not any(
                 checked.get(f"normal_{c}", COLLIDER_FIELDS[f"normal_{c}"].default) != 0.0 for c in "xyz"):
             with mistakes.collect():
                 raise ParameterError(f"collider{k}_normal_z", "a plane's normal is zero; allowed: a nonzero "

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+import numbers
+import os
 
 import numpy as np
 
@@ -11,16 +13,16 @@ from wetcloth._core import (BLOWN_UP, CALM_TIME, CG_ITERATIONS, CLOCK_SIZE, EXCH
                             FIRST_GUESS, LAST_SOLVE, LAST_STEP, MAX_REJECTIONS, NEWTON_ITERATIONS, NEWTON_RATE,
                             NEXT_STEP, OUTPUT_COUNT, PAUSE_AFTER, PAUSED, RATE_CORRECTION, REJECTED, REUSE_RULE_SIZE,
                             RESTARTS, SLEEPING, SPEED, STEPS, TIME, UNCHECKED_TIME, UNCONVERGED,
-                            LARGEST_ERROR)
-from wetcloth.advice import blow_up_advice
+                            LARGEST_ERROR, MAX_TIME)
+from wetcloth.advice import blow_up_advice, fast_move, keyed_moves
 from wetcloth.bundles import Buffers, make_solver
-from wetcloth.errors import BlowUpError, ParameterError, did_you_mean
+from wetcloth.errors import BlowUpError, ParameterError, did_you_mean, not_a_number
 from wetcloth.integrators import make_integrator
 from wetcloth.model import Model
 from wetcloth.preconditioner import plane_for
-from wetcloth.scene import INPUT, PARAMETERS, Scene, load_scene
+from wetcloth.scene import INPUT, PARAMETERS, Scene, grip_key_rows, load_scene
 from wetcloth.state import State, initial_state
-from wetcloth.topology import Topology
+from wetcloth.topology import Topology, initial_positions, start_positions
 
 #: The outputs (docs/model.md section 8), as the FMU publishes them: name -> (unit, meaning).
 OUTPUTS = {
@@ -32,6 +34,9 @@ OUTPUTS = {
     "water_mass": ("kg", "absorbed water"),
 }
 OUTPUT_NAMES = tuple(OUTPUTS)
+
+#: m: a change of the grip's inputs below this is none (the core's GRIP_RESOLUTION, grip.hpp).
+GRIP_RESOLUTION = 1e-9
 
 #: Particle-steps (steps times particles) that one compiled call takes at most before it returns.
 STEPS_PER_CALL = 2_000_000
@@ -48,6 +53,30 @@ _SNAPSHOT_CLOCK = (("next_step", NEXT_STEP, float), ("last_step", LAST_STEP, flo
 
 
 
+def _check_topology(scene: Scene, topology) -> None:
+    """ParameterError naming ``topology`` unless it is a Topology of the scene's cloth: as many particles, at
+    the same rest positions (a mesh file's points; the grid's start positions, m)."""
+    if not isinstance(topology, Topology):
+        raise ParameterError("topology", f"expected a wetcloth.topology.Topology, got {type(topology).__name__}")
+    start, mesh = start_positions(scene)
+    allowed = "allowed: a topology of the scene's cloth (as wetcloth.topology.build_topology(scene) builds)"
+    if topology.n != start.shape[1]:
+        raise ParameterError("topology", f"has {topology.n} particles, the scene's cloth {start.shape[1]}; {allowed}")
+    if mesh is not None:
+        same = np.array_equal(topology.rest_pos, mesh.points.T)
+    else:
+        same = topology.mesh is None and np.allclose(initial_positions(scene, topology), start, rtol=0.0,
+                                                     atol=1e-12 * max(scene.width, scene.length))
+    if not same:
+        raise ParameterError("topology", f"has the scene's {topology.n} particles at other rest positions; {allowed}")
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    view = array.view()
+    view.flags.writeable = False
+    return view
+
+
 class Simulation:
     """A cloth on water, advanced in internal steps chosen by stability and ``tolerance``.
 
@@ -60,8 +89,15 @@ class Simulation:
 
     def __init__(self, scene: Scene | None = None, skip_idle_work: bool = True, topology: Topology | None = None):
         """``skip_idle_work=False`` computes every kernel at every step (for benchmarks of the skips);
-        ``topology`` replaces the one built from the scene (same particles)."""
+        ``topology`` replaces the one built from the scene (same particles at the same start positions)."""
         scene = load_scene() if scene is None else scene
+        if not isinstance(scene, Scene):
+            named = isinstance(scene, (str, os.PathLike))
+            load = f"wetcloth.load_scene({str(scene)!r})" if named else "wetcloth.load_scene()"
+            raise TypeError(f"scene: expected a wetcloth.Scene, got {type(scene).__name__} {scene!r}; load one with "
+                            f"{load} (a preset's name or a scene file) or build one with wetcloth.Scene(...)")
+        if topology is not None:
+            _check_topology(scene, topology)
         self.model = model = Model(scene, topology=topology, skip_idle_work=skip_idle_work)
         topo = model.topology
         start = initial_state(scene, topo)
@@ -254,27 +290,30 @@ class Simulation:
 
     @property
     def state(self) -> State:
-        """The current state (its arrays are the simulation's own: read them, or assign a State)."""
+        """The current state, as read-only views of the simulation's own arrays (assign a State to change it)."""
         buf = self._buffers
-        return State(self.time, buf.pos, buf.vel, buf.water)
+        return State(self.time, *(_read_only(getattr(buf, name)) for name in ("pos", "vel", "water")))
 
     @state.setter
     def state(self, state: State) -> None:
-        """Take ``state`` (arrays of this cloth's shapes) as the current one, with no history; a
+        """Take ``state`` (float64 arrays of this cloth's shapes) as the current one, with no history; a
         ValueError, and nothing changed, unless its contents are a state the cloth can be in (as for
         ``restore``)."""
         buf = self._buffers
         for name in ("pos", "vel", "water"):
             got, want = getattr(state, name, None), getattr(buf, name)
-            if not isinstance(got, np.ndarray) or got.shape != want.shape:
-                raise ValueError(f"state.{name}: expected an array of shape {want.shape}")
+            if not isinstance(got, np.ndarray) or got.shape != want.shape or got.dtype != want.dtype:
+                kind = f"{got.dtype} {got.shape}" if isinstance(got, np.ndarray) else type(got).__name__
+                raise ValueError(f"state.{name}: expected a {want.dtype} array of shape {want.shape}, got {kind}")
         if not isinstance(state.time, (int, float, np.integer, np.floating)) or isinstance(state.time, bool):
             raise ValueError(f"state.time: expected a number, got {type(state.time).__name__}")
+        if isinstance(state.time, numbers.Integral) and not state.time <= MAX_TIME:  # (perhaps beyond any float)
+            raise ValueError(f"state.time: a whole number above {MAX_TIME:g} s; a state's time is 0 (its start) to "
+                             f"{MAX_TIME:g} s")
         clock = self._clock.copy()
         clock[TIME], clock[LAST_STEP], clock[SLEEPING] = state.time, 0.0, 0.0
         arrays = {key: getattr(buf, key) for key in _SNAPSHOT_ARRAYS} | {"contact_reference": self._contact.reference}
-        contiguous = State(state.time, *(np.ascontiguousarray(getattr(state, k), dtype=float)
-                                         for k in ("pos", "vel", "water")))
+        contiguous = State(state.time, *(np.ascontiguousarray(getattr(state, k)) for k in ("pos", "vel", "water")))
         self._refuse_contents(contiguous, arrays, clock, 0.0, np.zeros(0))
         buf.pos[...] = state.pos
         buf.vel[...] = state.vel
@@ -318,16 +357,22 @@ class Simulation:
         return counts
 
     def advance(self, duration: float) -> None:
-        """Simulate ``duration`` seconds (>= 0) more."""
-        if not (duration >= 0.0 and math.isfinite(duration)):
-            raise ValueError(f"duration must be a finite number >= 0 s, got {duration!r}")
-        target = self.time + duration
+        """Simulate ``duration`` seconds (>= 0) more, to at most MAX_TIME (1e9 s)."""
+        left = MAX_TIME - self.time
+        allowed = (f"allowed: 0 <= duration <= {left:g} s (a simulation's time ends at {MAX_TIME:g} s, now "
+                   f"{self.time:g} s)")
+        if isinstance(duration, bool) or not isinstance(duration, numbers.Real):  # Real: NumPy's scalars too
+            raise TypeError(f"duration: {not_a_number(duration)}; {allowed}")
+        target = self.time + float(duration) if 0.0 <= duration <= MAX_TIME else math.nan  # (no huge int to float)
+        if not target <= MAX_TIME:
+            big = isinstance(duration, numbers.Integral) and duration > MAX_TIME  # (perhaps beyond any float)
+            raise ValueError(f"duration: {'a whole number' if big else repr(duration)} s is out of range; {allowed}")
         self._clock[LARGEST_ERROR] = 0.0
         status = PAUSED
         while status == PAUSED:
             status = self._stepper.advance(target, self._steps_per_call, self.pause_after)
         if status == BLOWN_UP:
-            self._blown_up(float(self._clock[FAILED_STEP]))
+            self._blown_up(float(self._clock[FAILED_STEP]), target)
 
     @property
     def error_estimate(self) -> float:
@@ -348,6 +393,9 @@ class Simulation:
                 times.size and times[0] < self.time):
             raise ValueError(f"times must be a 1-D sequence of finite times (s), ascending from the current time "
                              f"{self.time:g} s; got shape {times.shape}, first {times.ravel()[:3].tolist()}")
+        if times.size and times[-1] > MAX_TIME:
+            raise ValueError(f"times: the last, {times[-1]:g} s, is out of range; allowed: times from the current time "
+                             f"{self.time:g} s to {MAX_TIME:g} s (where a simulation's time ends)")
         outputs = np.full((times.size, OUTPUT_COUNT), np.nan)
         self.sample_errors = errors = np.zeros(times.size)
         status, done = PAUSED, 0
@@ -356,7 +404,8 @@ class Simulation:
                 status, done = self._stepper.advance_sampling(times, outputs, errors, done, self._steps_per_call,
                                                               self.pause_after)
             if status == BLOWN_UP:
-                self._blown_up(float(self._clock[FAILED_STEP]))
+                end = times[min(np.searchsorted(times, self.time, side="right"), times.size - 1)]
+                self._blown_up(float(self._clock[FAILED_STEP]), float(end))
         except BaseException as exc:
             # The times reached (a Ctrl-C may come before ``done`` is assigned): the loop stops on each
             # time exactly and records it there; a blow-up leaves the clock at the last good time.
@@ -375,16 +424,17 @@ class Simulation:
         within a fraction of a second even when steps are tiny."""
         return max(1, STEPS_PER_CALL // self.model.topology.n)
 
-    def _blown_up(self, h: float) -> None:
-        """Refuse a non-finite or exploded state, or one the step control accepts no step from; the
-        last good state stays current."""
+    def _blown_up(self, h: float, end: float) -> None:
+        """Refuse a non-finite or exploded state, or one the step control accepts no step from, in a call that
+        steps to ``end`` s; the last good state stays current."""
         buf = self._buffers
         speed, finite = _core.speed_and_finiteness(buf.trial_pos, buf.trial_vel, buf.trial_water)
         scene = self.scene
+        mover = self._fast_mover(h, end)
         pinned = self._pinned_cause(buf.trial_pos)
         if finite and speed < self._control.blow_up_speed:  # neither: no step was accepted (the core's bound)
-            cause = pinned or (f"a state the cloth cannot be in, or a scene stiffer than the smallest step resolves; "
-                               f"{blow_up_advice(scene)}")
+            cause = mover or pinned or (f"a state the cloth cannot be in, or a scene stiffer than the smallest step "
+                                        f"resolves; {blow_up_advice(scene)}")
             raise BlowUpError(
                 f"the cloth state could not be stepped from t = {self.time:.6g} s: the step control accepted "
                 f"no step (rejected more than {MAX_REJECTIONS} times, the last of {h:.3g} s; integrator "
@@ -392,14 +442,34 @@ class Simulation:
                 last_good_time=self.time,
             )
         what = "became non-finite" if not finite else f"exploded (speed {speed:.3g} m/s)"
-        cause = pinned or (f"the step is too large for stretch_stiffness = {scene.stretch_stiffness:g} N/m; "
-                           f"{blow_up_advice(scene)}")
+        cause = mover or pinned or (f"the step is too large for stretch_stiffness = {scene.stretch_stiffness:g} N/m; "
+                                    f"{blow_up_advice(scene)}")
         raise BlowUpError(
             f"the cloth state {what} in the step from t = {self.time:.6g} s to {self.time + h:.6g} s "
             f"(step {h:.3g} s, integrator {scene.integrator!r}). Likely cause: {cause}. "
             f"Last good time: {self.time:.6g} s.",
             last_good_time=self.time,
         )
+
+    def _fast_mover(self, h: float, end: float) -> str:
+        """The grip's or a keyed collider's move under way in the step of ``h`` s that failed, in a call that
+        steps to ``end`` s, if fast enough to blow the cloth up (``advice.fast_move``), and what to do about it;
+        else ''."""
+        scene = self.scene
+        moves = keyed_moves(scene, self.time, self.time + h)
+        pinned = np.flatnonzero((self.model.free == 0.0) & (self._buffers.held == 0.0))  # as the core's grip
+        if pinned.size and end > self.time:  # the inputs' part of the grip: reached linearly by ``end``
+            p = int(pinned[0])
+            keys = np.asarray(_core.grip_key_displacement(grip_key_rows(scene.grip_keys), self.time))
+            part = self._buffers.pos[:, p] - self.model.grip_origin[:, p] - keys
+            change = np.array([scene.grip_x, scene.grip_y, scene.grip_z]) - part
+            names = ", ".join(f"grip_{c}" for c, d in zip("xyz", change) if abs(d) > GRIP_RESOLUTION)
+            distance = float(np.linalg.norm(change))
+            if names:
+                moves.append((distance / (end - self.time), f"the grip's inputs ({names}) move the pinned particles "
+                                                            f"{distance:.3g} m over the {end - self.time:.3g} s to "
+                                                            f"t = {end:.6g} s"))
+        return fast_move(moves, self._control.blow_up_speed)
 
     def _pinned_cause(self, pos: np.ndarray) -> str:
         """Why a step that ends at pos (3, n) m failed, if a pinned particle is pressed into a collider there
