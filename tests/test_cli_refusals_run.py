@@ -69,6 +69,11 @@ def test_numbers_with_underscores_are_refused(tmp_path, capsys, option, text, ex
 def test_a_parameter_set_twice_is_refused(tmp_path, capsys):
     line = _refused(["run", *QUICK, *_outputs(tmp_path), "--set", "nx=5", "--set", "nx=6"], capsys)
     assert line == "wetcloth run: error: --set nx is given 3 times (3, 5, 6): give each parameter once"
+    data = tmp_path / "m.csv"
+    data.write_text("time,depth\n0,0\n1,0.1\n")
+    line = _refused(["fit", "towel", "--data", str(data), "--params", "drag_normal", "--set", "nx=5", "--set", "nx=6"],
+                    capsys)
+    assert line == "wetcloth fit: error: --set nx is given 2 times (5, 6): give each parameter once"
 
 
 @pytest.mark.parametrize("name", ["duration", "fps"])
@@ -107,3 +112,37 @@ def test_params_refuses_a_scene_that_run_refuses(tmp_path, capsys):
     line = _refused(["params", str(scene)], capsys)
     assert line.startswith("wetcloth params: error: parameter 'cloth_mesh': ") and "cannot be read" in line
     assert main(["params", "--json"]) == 0
+
+
+@pytest.mark.parametrize("text, expected", [("3.5", "expected a whole number, got 3.5"),
+                                            ("1_0", "expected a number, got '1_0'")])
+def test_set_reads_a_number_as_a_scene_file_does(tmp_path, capsys, text, expected):
+    """--set nx=3.5 said 'expected a number' where a scene file's 3.5 says 'a whole number', and
+    --set nx=1_0 was read as 10 (Python's int reads underscores; TOML and the scene file do not)."""
+    line = _refused(["run", *QUICK[:2], "--set", f"nx={text}", *_outputs(tmp_path)], capsys)
+    assert line.startswith(f"wetcloth run: error: --set: parameter 'nx': {expected}; allowed: 2 <= nx <= ")
+
+
+@pytest.mark.parametrize("missing", ["{tmp}/elsewhere/thesis_sink.toml", "{tmp}/towel.toml"])
+def test_a_missing_scene_path_is_refused_not_read_as_the_preset_of_its_name(tmp_path, capsys, missing):
+    """A path with a folder names a file only: a missing one ran the preset of the same name (exit 0)."""
+    path = missing.format(tmp=tmp_path)
+    line = _refused(["run", path, *QUICK, *_outputs(tmp_path)], capsys)
+    assert line.startswith(f"wetcloth run: error: scene {path!r} is not a file: unknown scene preset; did you mean")
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_a_preset_is_still_named_bare(tmp_path, monkeypatch):
+    """A bare name, with or without .toml, names the preset (no such file in the working folder)."""
+    monkeypatch.chdir(tmp_path)
+    assert wetcloth.load_scene("thesis_sink.toml") == wetcloth.load_scene("thesis_sink")
+    assert wetcloth.load_scene("thesis_sink") != wetcloth.load_scene("towel")
+
+
+def test_an_empty_collider_table_is_refused_not_dropped(tmp_path, capsys):
+    """An empty [[collider]] table vanished and the next was numbered as collider 1: its error then named
+    collider2 while 'there is no collider 1'."""
+    scene = tmp_path / "two.toml"
+    scene.write_text('nx = 3\nny = 3\n[[collider]]\n[[collider]]\nshape = "box"\nz = -0.5\n')
+    line = _refused(["run", str(scene), *QUICK[:2], *_outputs(tmp_path)], capsys)
+    assert line.endswith("parameter 'collider1': [[collider]] table 1 is empty: give its fields, or delete it")

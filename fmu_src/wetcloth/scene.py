@@ -517,9 +517,11 @@ def parse_text(name: str, text: str):
         return text
     for kind in (int, float):
         try:
-            return normalise(name, kind(text.strip()))
+            value = kind(text.strip()) if "_" not in text else None  # (Python reads 1_0 as 10)
         except ValueError:
             continue
+        if value is not None:
+            return normalise(name, value)
     raise ParameterError(name, f"expected a number, got {text!r}; allowed: {describe_range(f, name)}")
 
 
@@ -795,7 +797,7 @@ def resolve_preset_path(path: str | Path, folder: Path, what: str) -> Path:
     if candidate.exists():
         return candidate
     preset = folder / (candidate.name if candidate.suffix == ".toml" else candidate.name + ".toml")
-    if preset.exists():
+    if len(candidate.parts) == 1 and preset.exists():  # a bare name; a missing path names no preset
         return preset
     names = sorted(p.stem for p in folder.glob("*.toml"))
     hint = did_you_mean(candidate.stem, names, what=f"{what} preset", listing="presets: " + ", ".join(names))
@@ -847,6 +849,9 @@ def _flattened_tables(key: str, value, folder: Path, mistakes: Mistakes) -> dict
         raise ParameterError(key, f"{TABLE_LISTS[key]} (an array of tables)")
     out = {}
     for k, table in enumerate(value, 1):
+        if not table:  # it would vanish, and the tables after it would be numbered one less
+            with mistakes.collect():
+                raise ParameterError(f"{key}{k}", f"[[{key}]] table {k} is empty: give its fields, or delete it")
         for name, item in table.items():
             with mistakes.collect():
                 flat = f"{key}{k}_{name}"

@@ -77,10 +77,15 @@ def check_writable_folder(folder: Path, option: str, given: Path | None = None, 
 
 def scene_with_overrides(scene: str | Path | None, overrides: list[tuple[str, str]]):
     """The scene of a file or preset with the command line's ``--set NAME=VALUE`` texts applied;
-    every mistake of the ``--set`` options reported at once."""
+    every mistake of the ``--set`` options reported at once.  A parameter set twice is a ValueError."""
     from wetcloth.errors import Mistakes
     from wetcloth.scene import load_scene, parse_text
 
+    names = [name for name, _ in overrides]
+    for name in names:
+        if names.count(name) > 1:
+            values = ", ".join(value for n, value in overrides if n == name)
+            raise ValueError(f"--set {name} is given {names.count(name)} times ({values}): give each parameter once")
     mistakes = Mistakes("--set")
     values = {}
     for name, text in overrides:

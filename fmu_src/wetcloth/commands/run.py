@@ -84,19 +84,15 @@ def scene_and_settings(args):
 
 def check_options(args) -> None:
     """Refuse what the command line asks for but the run would not do: export options without ``--export``,
-    a ``--set`` of a run setting or of one parameter twice (ValueError naming the option)."""
+    a ``--set`` of a run setting (ValueError naming the option; a parameter set twice: scene_with_overrides)."""
     if args.export is None:
         given = [name for name in EXPORT_OPTIONS if getattr(args, name) is not None]
         if given:
             option = "--" + given[0].replace("_", "-")
             raise ValueError(f"{option} applies to an export only: add --export DIR (or leave out {option})")
-    names = [name for name, _ in args.overrides]
-    for name in names:
+    for name, _ in args.overrides:
         if name in run_settings.SETTINGS:
             raise ValueError(f"--set {name}: {name} is a run setting, not a scene parameter: use --{name}")
-        if names.count(name) > 1:
-            values = ", ".join(value for n, value in args.overrides if n == name)
-            raise ValueError(f"--set {name} is given {names.count(name)} times ({values}): give each parameter once")
 
 
 def main(args) -> int:
