@@ -13,7 +13,7 @@ from wetcloth._core import (BLOWN_UP, CALM_TIME, CG_ITERATIONS, CLOCK_SIZE, EXCH
                             FIRST_GUESS, LAST_SOLVE, LAST_STEP, MAX_REJECTIONS, NEWTON_ITERATIONS, NEWTON_RATE,
                             NEXT_STEP, OUTPUT_COUNT, PAUSE_AFTER, PAUSED, RATE_CORRECTION, REJECTED, REUSE_RULE_SIZE,
                             RESTARTS, SLEEPING, SPEED, STEPS, TIME, UNCHECKED_TIME, UNCONVERGED,
-                            LARGEST_ERROR, MAX_TIME)
+                            LARGEST_ERROR, MAX_TIME, GRIP_RESOLUTION)
 from wetcloth.advice import blow_up_advice, fast_move, keyed_moves
 from wetcloth.bundles import Buffers, make_solver
 from wetcloth.errors import BlowUpError, ParameterError, did_you_mean, not_a_number
@@ -34,9 +34,6 @@ OUTPUTS = {
     "water_mass": ("kg", "absorbed water"),
 }
 OUTPUT_NAMES = tuple(OUTPUTS)
-
-#: m: a change of the grip's inputs below this is none (the core's GRIP_RESOLUTION, grip.hpp).
-GRIP_RESOLUTION = 1e-9
 
 #: Particle-steps (steps times particles) that one compiled call takes at most before it returns.
 STEPS_PER_CALL = 2_000_000

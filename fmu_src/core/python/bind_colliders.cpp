@@ -36,6 +36,7 @@ WETCLOTH_BINDINGS(m) {
     m.attr("COLLIDER_COLUMNS") = static_cast<Index>(COLLIDER_COLUMNS);
     m.attr("MESH_COLUMNS") = static_cast<Index>(MESH_COLUMNS);
     m.attr("MOTION_COLUMNS") = static_cast<Index>(MOTION_COLUMNS);
+    m.attr("GRIP_RESOLUTION") = GRIP_RESOLUTION;
     m.def(
         "collider_distance",
         [](nb::handle colliders, nb::handle meshes, Index k, nb::handle points, double reach, nb::handle distance,
