@@ -1268,3 +1268,221 @@ def test_fmu_states_repeat_the_run_bit_for_bit_and_refuse_another_grid(build, ve
     assert messages == ["FMU state refused, the unit is unchanged: the state is of a cloth of nx x ny = 9 x 9 "
                         "particles, this unit runs 21 x 29 (fixed once it is initialized)"]
     assert r["bad bytes"] == [3, 3, 3] and r["after bad bytes"] == 0
+
+
+# ----------------------------------------------------------------------------------------- the trial's findings
+#: A child process: the unit at argv[1] run through fmpy to argv[2] s (output interval 0.05 s), with the input
+#: rows of the JSON argv[3] ({"names": [...], "rows": [[time, value, ...], ...]}, linear between them, a
+#: repeated time a jump) and start values of the JSON argv[4]; prints the messages logged with a blow-up.
+BLOW_UP_RUN = r"""
+import json, sys
+import numpy as np
+import fmpy
+inputs, start = json.loads(sys.argv[3]), json.loads(sys.argv[4])
+signal = None
+if inputs["rows"]:
+    signal = np.array([tuple(r) for r in inputs["rows"]], dtype=[("time", float)] + [(n, float) for n in inputs["names"]])
+messages = []
+fmpy.simulate_fmu(sys.argv[1], stop_time=float(sys.argv[2]), output_interval=0.05, input=signal, start_values=start,
+                  logger=lambda component, instance, status, category, message: messages.append(message.decode()))
+print(json.dumps({"blow_ups": [m for m in messages if "BlowUpError" in m]}))
+"""
+
+
+def python_blow_up(scene: wetcloth.Scene, stop: float, inputs: dict) -> wetcloth.BlowUpError:
+    """The BlowUpError of ``scene`` advanced as fmpy steps a unit (0.05 s) with ``inputs`` ({time: values}:
+    set from that time on)."""
+    sim = wetcloth.Simulation(scene)
+    with pytest.raises(wetcloth.BlowUpError) as exc:
+        for k in range(round(stop / 0.05)):
+            t = k * 0.05
+            for at, values in inputs.items():
+                if t >= at - 1e-12:
+                    sim.set_inputs(**values)
+            advance_as_the_unit(sim, t + 0.05)
+    return exc.value
+
+
+def test_a_blow_up_from_a_fast_grip_input_names_it_as_the_python_api_does(build, tmp_path):
+    """The lift's unit, its grip_z input jumping from 0 to 9999 m at t = 0.1 s (the trial's finding 1): the
+    step that blows up is refused naming the grip inputs' move, in the Python API's words (before, the native
+    unit blamed the step and stretch_stiffness)."""
+    fmu = native.build_native_fmu(tmp_path / "lift.fmu", 2, build_dir=build["objects"], scene="lift")
+    rows = {"names": ["grip_z"], "rows": [[0.0, 0.0], [0.1, 0.0], [0.1, 9999.0], [0.3, 9999.0]]}
+    records, _ = run_child(BLOW_UP_RUN, fmu, 0.3, json.dumps(rows), "{}")
+    blow_ups = records[-1]["blow_ups"]
+    exc = python_blow_up(wetcloth.load_scene("lift"), 0.3, {0.1: {"grip_z": 9999.0}})
+    assert "Likely cause: the grip's inputs (grip_z) move the pinned particles 1e+04 m over the 0.05 s" in str(exc)
+    assert len(blow_ups) == 1 and f"BlowUpError: {exc} The unit stays at" in blow_ups[0], (blow_ups, str(exc))
+
+
+def test_a_blow_up_from_a_fast_collider_key_names_it_as_the_python_api_does(build, tmp_path):
+    """The sweep scene with its ball's first key 100 m away 1 us after the start: the unit built from it
+    refuses the first step naming collider_key1's move, in the Python API's words."""
+    scene_file = tmp_path / "sweep_fast.toml"
+    text = (wetcloth.scene.preset_dir() / "sweep.toml").read_text()
+    assert "time = 0.5\ny = 0.0" in text
+    scene_file.write_text(text.replace("time = 0.5\ny = 0.0", "time = 1e-6\ny = 100.0", 1))
+    fmu = native.build_native_fmu(tmp_path / "sweep_fast.fmu", 2, build_dir=build["objects"], scene=scene_file)
+    records, _ = run_child(BLOW_UP_RUN, fmu, 0.1, json.dumps({"names": [], "rows": []}), "{}")
+    blow_ups = records[-1]["blow_ups"]
+    exc = python_blow_up(wetcloth.load_scene(scene_file), 0.1, {})
+    assert "Likely cause: collider_key1 moves collider 1 100 m in 1e-06 s from t = 0 s: 1e+08 m/s" in str(exc)
+    assert len(blow_ups) == 1 and f"BlowUpError: {exc} The unit stays at" in blow_ups[0], (blow_ups, str(exc))
+
+
+#: A child process: the unit of FMI version argv[2] extracted at argv[1], driven through the calls of the
+#: trial's findings 2 to 4 (the blow-up's values: the JSON argv[3]); prints what each returned and logged.
+TRIAL_CALLS = r"""
+import ctypes, json, math, sys
+import fmpy
+from fmpy.fmi1 import FMICallException
+directory, version, blow_up = sys.argv[1], int(sys.argv[2]), json.loads(sys.argv[3])
+md = fmpy.read_model_description(directory)
+vr = {v.name: v.valueReference for v in md.modelVariables}
+messages = []
+
+def status(call, *args, **kwargs):
+    try:
+        call(*args, **kwargs)
+        return 0
+    except FMICallException as exc:
+        return int(exc.status)
+
+def since(k):
+    return [[s, m] for s, m in messages[k:]]
+
+if version == 2:
+    from fmpy.fmi2 import FMU2Slave
+    from test_fmu_support import message_callbacks
+    callbacks = message_callbacks(messages)
+    def instance(name):
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier="WetCloth", instanceName=name)
+        fmu.instantiate(callbacks=callbacks, loggingOn=False)
+        return fmu
+    def setup(fmu, tolerance):
+        return status(fmu.setupExperiment, tolerance=tolerance, startTime=0.0)
+    def start(fmu, **values):
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        for key, value in values.items():
+            set_value(fmu, key, value)
+        fmu.exitInitializationMode()
+    def set_value(fmu, key, value):
+        if isinstance(value, str):
+            return status(fmu.setString, [vr[key]], [value])
+        return status(fmu.setInteger if key in ("nx", "ny") else fmu.setReal, [vr[key]], [value])
+    def step(fmu, t, h):
+        s = status(fmu.doStep, t, h)
+        return [s, bool(fmu.getBooleanStatus(3))]  # fmi2Terminated
+else:
+    from fmpy.fmi3 import FMU3Slave, fmi3Boolean, fmi3Float64
+    def instance(name):
+        fmu = FMU3Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier="WetCloth", instanceName=name)
+        fmu.instantiate(loggingOn=False, logMessage=lambda env, s, category, m: messages.append((int(s), m.decode())))
+        return fmu
+    def setup(fmu, tolerance):
+        return status(fmu.enterInitializationMode, tolerance=tolerance, startTime=0.0)
+    def start(fmu, **values):
+        for key, value in values.items():
+            set_value(fmu, key, value)
+        fmu.enterInitializationMode(startTime=0.0)
+        fmu.exitInitializationMode()
+    def set_value(fmu, key, value):
+        if isinstance(value, str):
+            return status(fmu.setString, [vr[key]], [value])
+        return status(fmu.setUInt64 if key in ("nx", "ny") else fmu.setFloat64, [vr[key]], [value])
+    def step(fmu, t, h):
+        flags = [fmi3Boolean(), fmi3Boolean(), fmi3Boolean(), fmi3Float64()]
+        s = status(fmu.fmi3DoStep, fmu.component, t, h, fmi3Boolean(False), *map(ctypes.byref, flags))
+        return [s, bool(flags[1].value)]  # terminateSimulation
+
+r = {}
+# finding 3: the experiment's tolerance
+for value in (float("nan"), -1.0, 0.0):
+    fmu = instance("tolerance")
+    k = len(messages)
+    r[f"tolerance {value}"] = [setup(fmu, value), since(k)]
+    fmu.freeInstance()
+fmu = instance("tolerance")
+k = len(messages)
+r["tolerance 1e-4"] = [setup(fmu, 1e-4), since(k)]
+if version == 2:  # (FMI 3.0 enters initialization mode with it: no second call)
+    k = len(messages)
+    r["tolerance again"] = [setup(fmu, 1e-3), since(k)]
+else:
+    r["tolerance again"] = [0, []]
+fmu.freeInstance()
+# findings 2 and 4: a pending refused value, a step at the wrong time
+fmu = instance("pending")
+start(fmu, nx=9, ny=9)
+r["first step"] = step(fmu, 0.0, 0.1)
+k = len(messages)
+r["refused input"] = [set_value(fmu, "water_level", float("nan")), step(fmu, 0.1, 0.1), since(k)]
+k = len(messages)
+r["wrong time"] = [step(fmu, 0.5, 0.1), since(k)]
+r["fixed"] = [set_value(fmu, "water_level", 0.01), step(fmu, 0.1, 0.1)]
+fmu.freeInstance()
+# a blow-up: the run cannot go on
+fmu = instance("blow up")
+start(fmu, **blow_up)
+t, result = 0.0, None
+for i in range(40):
+    result = step(fmu, t, 0.05)
+    if result[0]:
+        break
+    t += 0.05
+r["blow up"] = result
+fmu.freeInstance()
+print(json.dumps(r))
+"""
+
+
+@pytest.fixture(scope="module", params=[2, 3])
+def trial_calls(build, request):
+    """TRIAL_CALLS' record, and the FMI version it drove."""
+    records, _ = run_child(TRIAL_CALLS, build[request.param]["dir"], request.param, json.dumps(BLOW_UP),
+                           env=os.environ | {"PYTHONPATH": str(Path(__file__).parent)})
+    return records[-1], request.param
+
+
+def test_the_experiment_tolerance_is_checked_and_said_to_be_unused(trial_calls):
+    """The trial's finding 3: a defined tolerance that is NaN or <= 0 is an FMI error naming it; a valid one is
+    taken with a warning (the unit's accuracy is its parameter 'tolerance's), once (before, both were ignored
+    silently)."""
+    r, version = trial_calls
+    call = "fmi2SetupExperiment" if version == 2 else "fmi3EnterInitializationMode"
+    for value, text in ((math.nan, "nan"), (-1.0, "-1.0"), (0.0, "0.0")):
+        status, messages = r[f"tolerance {value}"]
+        assert status == 3, value  # Error
+        assert messages == [[3, f"{call}: tolerance {text} is not allowed; allowed: a tolerance > 0 where "
+                                 "toleranceDefined is true (or none). The unit's accuracy is set by its own parameter "
+                                 "'tolerance', not by the experiment's"]], value
+    status, messages = r["tolerance 1e-4"]
+    assert status == 0 and len(messages) == 1 and messages[0][0] == 1  # a warning, with fmi2Warning / fmi3Warning
+    assert messages[0][1].startswith(f"{call}: the experiment's tolerance 0.0001 is not used: the unit's accuracy is "
+                                     "set by its own parameter 'tolerance'")
+    assert r["tolerance again"] == [0, []]  # once
+
+
+def test_a_step_refused_for_a_pending_value_does_not_end_the_run(trial_calls):
+    """The trial's finding 2: after a doStep discarded because a refused input is pending, the run can go on
+    once a valid value is set: fmi2Terminated (FMI 3.0: doStep's terminateSimulation) is false; after a
+    blow-up, where it cannot, true (before, true after any Discard)."""
+    r, _ = trial_calls
+    assert r["first step"] == [0, False]
+    set_status, (step_status, terminated), messages = r["refused input"]
+    assert (set_status, step_status, terminated) == (3, 2, False)
+    assert messages[-1][1].startswith("step refused at t = 0.1 s: parameter 'water_level': nan")
+    assert r["fixed"] == [0, [0, False]]
+    assert r["blow up"] == [2, True]
+
+
+def test_a_step_at_the_wrong_time_says_so_while_a_value_is_pending(trial_calls):
+    """The trial's finding 4: a doStep from another time than the unit's, while a refused value is pending, is
+    refused naming both times (before: "step refused at t = 0.5 s: parameter 'water_level' ...")."""
+    r, _ = trial_calls
+    (step_status, terminated), messages = r["wrong time"]
+    assert (step_status, terminated) == (2, False)
+    assert messages == [[3, "doStep from t = 0.5 s, but the unit is at t = 0.1 s; restore an FMU state to go back "
+                            "in time"]]

@@ -74,11 +74,10 @@ void fmi2FreeInstance(fmi2Component c) { Fmi::free_instance(c); }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
-    (void)toleranceDefined;
-    (void)tolerance;
     return Fmi::guarded(c, "fmi2SetupExperiment", [&](Instance& instance) {
-        return Fmi::status_of(
-            instance.unit->setup_experiment("fmi2SetupExperiment", startTime, stopTimeDefined != fmi2False, stopTime));
+        return Fmi::status_of(instance.unit->setup_experiment("fmi2SetupExperiment", startTime,
+                                                              stopTimeDefined != fmi2False, stopTime,
+                                                              toleranceDefined != fmi2False, tolerance));
     });
 }
 
@@ -273,7 +272,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     (void)noSetFMUStatePriorToCurrentPoint;
     return Fmi::guarded(c, "fmi2DoStep", [&](Instance& instance) {
         const Outcome outcome = instance.unit->do_step(currentCommunicationPoint, communicationStepSize);
-        instance.discarded = outcome == Outcome::DISCARD;
+        instance.discarded = instance.unit->step_failed();
         return Fmi::status_of(outcome);
     });
 }
@@ -316,8 +315,10 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
             Fmi::log(&instance, fmi2Discard, "logStatusDiscard", "fmi2GetBooleanStatus: only fmi2Terminated is known");
             return fmi2Discard;
         }
-        // After a discarded step the unit stays where it was and asks the master to stop there (a repeated
-        // step would fail the same way); it can go on once the master restores a state or sets a valid value.
+        // After a step that failed (a blow-up) the unit stays where it was and asks the master to stop there
+        // (a repeated step would fail the same way), until the master restores a state.  A step refused for
+        // a pending refused value, or asked at the wrong time, can go on (a valid value set, the right time):
+        // not terminated.
         *value = instance.discarded ? fmi2True : fmi2False;
         return fmi2OK;
     });

@@ -166,13 +166,12 @@ void fmi3FreeInstance(fmi3Instance c) { Fmi::free_instance(c); }
 
 fmi3Status fmi3EnterInitializationMode(fmi3Instance c, fmi3Boolean toleranceDefined, fmi3Float64 tolerance,
                                        fmi3Float64 startTime, fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {
-    (void)toleranceDefined;
-    (void)tolerance;
     return Fmi::guarded(c, "fmi3EnterInitializationMode", [&](Instance& instance) {
         const char* function = "fmi3EnterInitializationMode";
-        const Outcome outcome = instance.unit->setup_experiment(function, startTime, stopTimeDefined, stopTime);
-        if (outcome != Outcome::OK) return Fmi::status_of(outcome);
-        return Fmi::status_of(instance.unit->enter_initialization(function));
+        const Outcome outcome = instance.unit->setup_experiment(function, startTime, stopTimeDefined, stopTime,
+                                                                toleranceDefined, tolerance);
+        if (outcome != Outcome::OK && outcome != Outcome::WARNING) return Fmi::status_of(outcome);
+        return Fmi::status_of(wc::fmu::worst(outcome, instance.unit->enter_initialization(function)));
     });
 }
 
@@ -472,8 +471,9 @@ fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 currentCommunicationPoint, fmi
         const Outcome outcome = instance.unit->do_step(currentCommunicationPoint, communicationStepSize);
         if (eventHandlingNeeded) *eventHandlingNeeded = fmi3False;
         if (earlyReturn) *earlyReturn = fmi3False;
-        // After a discarded step the unit stays where it was and asks the master to stop there.
-        if (terminateSimulation) *terminateSimulation = outcome == Outcome::DISCARD ? fmi3True : fmi3False;
+        // After a step that failed (a blow-up) the unit stays where it was and asks the master to stop there;
+        // a step refused for a pending refused value or the wrong time can go on.
+        if (terminateSimulation) *terminateSimulation = instance.unit->step_failed() ? fmi3True : fmi3False;
         if (lastSuccessfulTime) *lastSuccessfulTime = instance.unit->time();
         return Fmi::status_of(outcome);
     });

@@ -33,7 +33,7 @@ struct Interface {
         typename Version::Environment environment = nullptr;
         typename Version::Logger logger = nullptr;
         bool logging_on = false;
-        bool discarded = false;  // the last doStep was discarded: the unit asks the master to stop there
+        bool discarded = false;  // the last doStep failed (a blow-up): the unit asks the master to stop there
         std::unique_ptr<Unit> unit;
     };
 

@@ -463,7 +463,7 @@ void Unit::apply_starts() {
 void Unit::reset() {
     apply_starts();
     refused_.clear();
-    initialized_ = terminated_ = clock_set_ = entered_ = stop_defined_ = false;
+    initialized_ = terminated_ = clock_set_ = entered_ = stop_defined_ = step_failed_ = false;
     start_time_ = stop_time_ = 0.0;
     sim_.reset();
     preview_.reset();
@@ -766,8 +766,15 @@ Outcome Unit::refuse_call(const char* function, const char* allowed) const {
     return Outcome::ERROR;
 }
 
-Outcome Unit::setup_experiment(const char* function, double start_time, bool stop_defined, double stop_time) {
+Outcome Unit::setup_experiment(const char* function, double start_time, bool stop_defined, double stop_time,
+                               bool tolerance_defined, double tolerance) {
     if (initialized_ || terminated_ || entered_) return refuse_call(function, "instantiated");
+    if (tolerance_defined && !(tolerance > 0.0)) {
+        error(std::string(function) + ": tolerance " + py_repr(tolerance) + " is not allowed; allowed: a "
+              "tolerance > 0 where toleranceDefined is true (or none). The unit's accuracy is set by its own "
+              "parameter 'tolerance', not by the experiment's");
+        return Outcome::ERROR;
+    }
     if (!(std::fabs(start_time) <= MAX_TIME)) {
         error(std::string(function) + ": the start time must be a finite number of seconds within +-" +
               py_g(MAX_TIME) + " s, got " + py_repr(start_time));
@@ -783,6 +790,13 @@ Outcome Unit::setup_experiment(const char* function, double start_time, bool sto
     stop_defined_ = stop_defined;
     stop_time_ = stop_time;
     changed();
+    if (tolerance_defined && !tolerance_noted_) {
+        tolerance_noted_ = true;
+        warning(std::string(function) + ": the experiment's tolerance " + py_repr(tolerance) + " is not used: the "
+                "unit's accuracy is set by its own parameter 'tolerance' (a local error bound per internal step, "
+                "relative to the cloth's size; 0: fixed steps of max_step), not by the master's");
+        return Outcome::WARNING;
+    }
     return Outcome::OK;
 }
 
@@ -849,20 +863,23 @@ Outcome Unit::do_step(double current_time, double step_size) {
         error("doStep before the unit was initialized");
         return Outcome::ERROR;
     }
+    step_failed_ = false;
+    Simulation& sim = *sim_;
+    if (clock_set_) {  // the time first: a step at the wrong time is refused for that, whatever else is pending
+        const double now = start_time_ + sim.time();
+        if (std::fabs(current_time - now) > TIME_TOLERANCE * std::max(1.0, std::fabs(now))) {
+            error("doStep from t = " + py_repr(current_time) + " s, but the unit is at t = " + py_repr(now) +
+                  " s; restore an FMU state to go back in time");
+            return Outcome::DISCARD;
+        }
+    }
     if (!refused_.empty()) {
         for (const auto& entry : refused_) error("step refused at t = " + py_g(current_time) + " s: " + entry.second);
         return Outcome::DISCARD;
     }
-    Simulation& sim = *sim_;
     if (!clock_set_) {
         start_time_ = current_time - sim.time();
         clock_set_ = true;
-    }
-    const double now = start_time_ + sim.time();
-    if (std::fabs(current_time - now) > TIME_TOLERANCE * std::max(1.0, std::fabs(now))) {
-        error("doStep from t = " + py_repr(current_time) + " s, but the unit is at t = " + py_repr(now) +
-              " s; restore an FMU state to go back in time");
-        return Outcome::DISCARD;
     }
     sim.save(before_);
     changed();
@@ -876,6 +893,7 @@ Outcome Unit::do_step(double current_time, double step_size) {
         failure = std::string("RuntimeError: ") + exc.what();
     }
     if (failure.empty()) return Outcome::OK;
+    step_failed_ = true;
     try {
         sim.restore(before_);
     } catch (const std::exception& exc) {
@@ -1010,6 +1028,7 @@ Outcome Unit::set_state(const std::vector<unsigned char>& bytes) {
         start_time_ = p.start_time;
         clock_set_ = clock_set_ || p.initialized || p.clock_set;
         preview_.reset();
+        step_failed_ = false;
         changed();
         return Outcome::OK;
     } catch (const StateError& exc) {

@@ -107,13 +107,22 @@ public:
 
     // ---------------------------------------------------------------- life cycle
     //: The experiment (fmi2SetupExperiment, fmi3EnterInitializationMode, named by `function`): only in the
-    //: instantiated state; a defined stop time must not lie before the start time.
-    Outcome setup_experiment(const char* function, double start_time, bool stop_defined, double stop_time);
+    //: instantiated state; a defined stop time must not lie before the start time; a defined tolerance must
+    //: be a number > 0 (else ERROR).  The unit's accuracy is its own parameter `tolerance`'s: the first
+    //: tolerance the master defines is answered with a logged warning saying so (WARNING), later ones
+    //: pass silently (OK).
+    Outcome setup_experiment(const char* function, double start_time, bool stop_defined, double stop_time,
+                             bool tolerance_defined = false, double tolerance = 0.0);
     Outcome enter_initialization(const char* function);
     Outcome exit_initialization(const char* function);
     //: doStep: OK, DISCARD (the unit stays at current_time, message logged) or ERROR (a call the master
-    //: must not make: nothing changes).
+    //: must not make: nothing changes).  A doStep from another time than the unit's is refused for that
+    //: first, then one while a refused value is pending.
     Outcome do_step(double current_time, double step_size);
+    //: Whether the last doStep failed (a blow-up; or a failure the unit could not go back from): the run
+    //: cannot go on from there, and the unit asks the master to stop (fmi2Terminated, fmi3DoStep's
+    //: terminateSimulation).  A step refused for a pending value or the wrong time can go on: false.
+    bool step_failed() const { return step_failed_; }
     Outcome terminate(const char* function);
     void reset();
     bool initialized() const { return initialized_; }
@@ -159,6 +168,8 @@ private:
     std::vector<std::pair<std::uint64_t, std::string>> refused_;  // value reference -> message, in order
     bool initialized_ = false, terminated_ = false, clock_set_ = false;
     bool entered_ = false;  // in initialization mode (entered, not yet left)
+    bool step_failed_ = false;      // the last doStep failed (step_failed)
+    bool tolerance_noted_ = false;  // the warning that the master's tolerance is not used was logged
     double start_time_ = 0.0;
     bool stop_defined_ = false;
     double stop_time_ = 0.0;  // s, the experiment's stop time where stop_defined_: no step ends beyond it

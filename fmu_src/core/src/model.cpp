@@ -13,6 +13,7 @@
 #include "wetcloth/collider_mesh.hpp"
 #include "wetcloth/collider_motion.hpp"
 #include "wetcloth/colliders.hpp"
+#include "wetcloth/grip.hpp"
 #include "wetcloth/implicit.hpp"
 #include "wetcloth/integration.hpp"
 #include "wetcloth/multigrid.hpp"
@@ -975,6 +976,7 @@ Status Simulation::advance(double duration) {
         throw std::invalid_argument("duration must be a finite number >= 0 s, got " + py_repr(duration));
     }
     const double target = time() + duration;
+    advance_end_ = target;
     clock_[LARGEST_ERROR] = 0.0;
     const Index steps_per_call = std::max<Index>(1, STEPS_PER_CALL / topo_.n);
     Status status = PAUSED;
@@ -1003,6 +1005,76 @@ void Simulation::wetness(double* out) const {
     }
 }
 
+std::string Simulation::fast_mover(double h) const {
+    const double after = time(), before = time() + h;
+    // advice.keyed_moves: each move between consecutive keys of the grip and of each collider (from its start
+    // at t = 0 to its first key) under way between `after` and `before` s, as (speed m/s, what).
+    std::vector<std::pair<double, std::string>> moves;
+    const auto keyed = [&](const std::string& name, const std::string& what, const double* start, const double* key) {
+        // start, key: (time s, x, y, z m) of the mover's previous key (0 at t = 0) and of this one
+        if (start[0] < before && key[0] >= after) {
+            const double distance = std::hypot(start[1] - key[1], start[2] - key[2], start[3] - key[3]);
+            moves.emplace_back(distance / (key[0] - start[0]),
+                               name + " moves " + what + " " + py_g(distance, 3) + " m in " +
+                                   py_g(key[0] - start[0], 3) + " s from t = " + py_g(start[0]) + " s");
+        }
+    };
+    const std::vector<double>& grip = fixtures_.grip_keys;
+    double last[4] = {0.0, 0.0, 0.0, 0.0};
+    for (std::size_t k = 0; k < grip.size() / 4; ++k) {
+        const double* key = grip.data() + 4 * k;
+        keyed("grip_key" + std::to_string(k + 1), "the pinned particles", last, key);
+        std::copy(key, key + 4, last);
+    }
+    const std::vector<double>& keys = fixtures_.collider_keys;
+    Index mover = -1;
+    for (std::size_t k = 0; k < keys.size() / COLLIDER_KEY_COLUMNS; ++k) {
+        const double* row = keys.data() + COLLIDER_KEY_COLUMNS * k;
+        const Index collider = static_cast<Index>(row[K_COLLIDER]);
+        if (collider != mover) std::fill(last, last + 4, 0.0);  // by collider, then time: its first key
+        mover = collider;
+        const double key[4] = {row[K_TIME], row[K_X], row[K_Y], row[K_Z]};
+        keyed("collider_key" + std::to_string(k + 1), "collider " + std::to_string(collider + 1), last, key);
+        std::copy(key, key + 4, last);
+    }
+    // The inputs' part of the grip, reached linearly by the call's end (Simulation._fast_mover).
+    const Index n = topo_.n;
+    const double end = advance_end_;
+    Index p = -1;
+    for (Index i = 0; i < n && p < 0; ++i) {
+        if (core_.cloth.free[i] == 0.0 && core_.buf.held[i] == 0.0) p = i;
+    }
+    if (p >= 0 && !grip_origin_.empty() && end > time()) {
+        double keys_now[3];
+        key_displacement(core_.phys, time(), keys_now);
+        const double target[3] = {scene_.grip_x, scene_.grip_y, scene_.grip_z};
+        double change[3];
+        std::string names;
+        for (Index c = 0; c < 3; ++c) {
+            const double part = core_.buf.pos[c * n + p] - grip_origin_[c * n + p] - keys_now[c];
+            change[c] = target[c] - part;
+            if (std::fabs(change[c]) > GRIP_RESOLUTION) {
+                names += std::string(names.empty() ? "" : ", ") + "grip_" + "xyz"[c];
+            }
+        }
+        const double distance =
+            std::sqrt(change[0] * change[0] + change[1] * change[1] + change[2] * change[2]);
+        if (!names.empty()) {
+            moves.emplace_back(distance / (end - time()),
+                               "the grip's inputs (" + names + ") move the pinned particles " + py_g(distance, 3) +
+                                   " m over the " + py_g(end - time(), 3) + " s to t = " + py_g(end) + " s");
+        }
+    }
+    // advice.fast_move: the fastest (Python's max of (speed, what)), if fast enough.
+    std::pair<double, std::string> fastest{0.0, ""};
+    for (const auto& move : moves) fastest = std::max(fastest, move);
+    const double blow_up_speed = core_.control.blow_up_speed;
+    if (fastest.first < FAST_MOVE * blow_up_speed) return "";
+    return fastest.second + ": " + py_g(fastest.first, 3) + " m/s, too fast for the cloth (it blows up at " +
+           py_g(blow_up_speed) + " m/s); make that move smaller or slower (a later key; for the grip's inputs, a "
+           "longer advance)";
+}
+
 std::string Simulation::blow_up_message() const {
     const Buffers& b = core_.buf;
     const SpeedCheck check = speed_and_finiteness(topo_.n, b.trial_pos, b.trial_vel, b.trial_water);
@@ -1019,10 +1091,10 @@ std::string Simulation::blow_up_message() const {
         advice += (k == 0 ? "" : k + 1 == options.size() ? " or " : ", ") + options[k];
     }
     const std::string integrator = py_repr(std::string_view(INTEGRATOR_NAMES[scene_.integrator]));
-    // (wetcloth.simulation.Simulation._pinned_cause)
+    // (wetcloth.simulation.Simulation._fast_mover, then _pinned_cause)
+    std::string cause = fast_mover(h);
     const PinnedPressed pinned = pinned_pressed(core_.phys, topo_.n, core_.cloth.free, b.trial_pos);
-    std::string cause;
-    if (pinned.particle >= 0) {
+    if (cause.empty() && pinned.particle >= 0) {
         const Index i = pinned.particle;
         const Index shape = static_cast<Index>(core_.phys.colliders[pinned.collider * COLLIDER_COLUMNS + C_SHAPE]);
         cause = "the grip presses pinned particle " + std::to_string(i) + " into collider " +

@@ -317,6 +317,9 @@ std::vector<std::pair<Index, Index>> level_sizes(Index nx, Index ny, Index coars
 inline constexpr double SMALLEST_STEP = 1e-9;
 inline constexpr double STEP_GROWTH = 2.0, STEP_SHRINK = 0.2;
 inline constexpr double BLOW_UP_SPEED = 1.0e3;
+//: advice.FAST_MOVE: a move of the grip or of a collider at this fraction of the blow-up speed or faster is
+//: named as a blow-up's likely cause.
+inline constexpr double FAST_MOVE = 0.1;
 inline constexpr double NEWTON_FRACTION = 0.1;
 inline constexpr double FIXED_STEP_NEWTON_TOLERANCE = 1e-6;
 inline constexpr double SLEEP_DISTANCE = 5e-4, SLEEP_AFTER = 1.0;
@@ -363,7 +366,11 @@ struct Fixtures {
     std::vector<double> mesh_headers, mesh_vertices, face_normals, edge_normals, vertex_normals;
     std::vector<Index> mesh_triangles, cell_start, cell_items;
     std::vector<double> grip_keys;  // (g, 4) rows: time s, x, y, z m
-    std::vector<double> collider_keys;  // (c, 5) rows: collider (from 0), time s, x, y, z m; by collider, then time
+    //: (c, COLLIDER_KEY_COLUMNS) rows: collider (from 0), time s, x, y, z m, rotation vector rad; by collider,
+    //: then time (scene.collider_key_rows).  A blow-up's message names a key collider_key<k> by its place k
+    //: (from 1) in these rows: the scene's own k where its keys are listed collider by collider, as a scene
+    //: file or preset usually lists them (interleaved keys of several colliders are sorted here).
+    std::vector<double> collider_keys;
     std::shared_ptr<const ClothMesh> cloth_mesh;  // the cloth from a mesh file, or none: the nx x ny grid
     std::shared_ptr<const Pins> pins;             // the pins by pinned_vertices, or none
     Index collider_count() const { return static_cast<Index>(colliders.size() / COLLIDER_COLUMNS); }
@@ -402,7 +409,8 @@ public:
     bool set_inputs(const Scene& next);
 
     //: Simulate `duration` s (finite, >= 0) more: DONE, or BLOWN_UP with the last good state current
-    //: (blow_up_message says what happened).
+    //: (blow_up_message says what happened; it names the call's end, remembered here, for the grip inputs'
+    //: move).
     Status advance(double duration);
     //: The largest local position error (m) a step of the last advance estimated for itself
     //: (Simulation.error_estimate).
@@ -433,6 +441,9 @@ private:
     void check(const Checkpoint& checkpoint) const;
     void build_plane();                  // make_plane, make_hierarchy
     void build_mesh_plane();             // make_mesh_plane from the ClothMesh's arrays
+    //: Simulation._fast_mover: the grip's or a keyed collider's move under way in the failed step of h s, if
+    //: fast enough to blow the cloth up (advice.keyed_moves, advice.fast_move), and what to do; else "".
+    std::string fast_mover(double h) const;
     Index along_count() const;           // size of the plane's jacobian_along: F n (grid), S (mesh)
     //: The arrays a Checkpoint's values keep, in their order (const for a const self), and where each
     //: starts there (doubles; the last entry: their end).
@@ -472,6 +483,7 @@ private:
     // Buffers, clock
     std::vector<double> buffers_;
     double clock_[CLOCK_SIZE] = {};
+    double advance_end_ = 0.0;  // s, where the last advance was to end (its blow-up's grip inputs' move)
     Core core_;
 };
 
