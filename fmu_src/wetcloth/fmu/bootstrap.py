@@ -7,13 +7,18 @@ the host is known to have wetcloth's dependencies.
 pythonfmu's binary runs the slave in the Python of the process that loads the FMU (fmpy,
 libcosimpy, any Python master).  One wetcloth per process:
 
-1. a wetcloth already imported there is used, with a warning if its sources differ from the FMU's;
-2. else the host's installed wetcloth, if its sources are the FMU's (same SHA-256 digests);
-3. else the copy inside the FMU (``resources/wetcloth``), with its compiled core: it needs no more
-   than numpy from the host, and nothing is compiled at start.
+1. a wetcloth already imported there is used, with a warning if its files differ from the FMU's
+   copy (its sources, and the compiled core it loaded);
+2. else the copy inside the FMU (``resources/wetcloth``), with its compiled core: it needs no more
+   than numpy from the host, and nothing is compiled at start.  It is imported through a finder
+   placed first on ``sys.meta_path`` (``BundleFinder``), so that no installed wetcloth, not even an
+   editable install whose own finder redirects ``wetcloth`` to a working tree, takes its place; a
+   later ``import wetcloth`` in the host gets the same copy (one wetcloth per process).
 
-A dependency the host's Python lacks is named in an ImportError and in Python's logging (stderr
-unless the host configured logging), also while the master's FMI logging is off.
+Any failure to start (a dependency the host's Python lacks, named with how to install it; the
+unit's copy failing to import in this host, its compiled core missing a name...) is logged on Python's
+logger ``wetcloth.fmu`` (stderr unless the host configured logging), also while the master's FMI
+logging is off: pythonfmu's binaries drop the exception's text, and pythonfmu3's logs nothing.
 """
 
 from __future__ import annotations
@@ -22,7 +27,8 @@ import atexit
 import ctypes
 import hashlib
 import importlib
-import importlib.util
+import importlib.abc
+import importlib.machinery
 import json
 import logging
 import os
@@ -55,30 +61,53 @@ def _same_files(folder: Path, files: dict[str, str]) -> bool:
         return False
 
 
-def _path_without(resources: Path) -> list[str]:
-    return [p for p in sys.path if Path(p or ".").resolve() != resources]
+class BundleFinder(importlib.abc.MetaPathFinder):
+    """Finds ``wetcloth`` and its submodules in the unit's own copy only (first on ``sys.meta_path``)."""
+
+    def __init__(self, resources: Path) -> None:
+        self.resources = resources
+
+    def find_spec(self, fullname, path=None, target=None):
+        if fullname != "wetcloth" and not fullname.startswith("wetcloth."):
+            return None
+        if fullname == "wetcloth":
+            search = [str(self.resources)]
+        else:
+            parent = sys.modules.get(fullname.rpartition(".")[0])
+            search = list(getattr(parent, "__path__", None) or [])
+        spec = importlib.machinery.PathFinder.find_spec(fullname, search)
+        if spec is None:  # not in the unit's copy: no other wetcloth's module may stand in
+            raise ModuleNotFoundError(f"No module named {fullname!r} in this WetCloth FMU's copy of wetcloth "
+                                      f"({self.resources / 'wetcloth'})", name=fullname)
+        return spec
 
 
-def _host_wetcloth(resources: Path, package_files: dict[str, str]) -> bool:
-    """Whether an installed wetcloth (outside the FMU) has the FMU's package sources."""
-    saved = list(sys.path)
+def _import_bundle(resources: Path):
+    """``import wetcloth`` from the unit's ``resources/wetcloth``, whatever else is installed (``BundleFinder``)."""
+    finder = BundleFinder(resources)
+    sys.meta_path.insert(0, finder)
     try:
-        sys.path[:] = _path_without(resources)
-        spec = importlib.util.find_spec("wetcloth")
-    finally:
-        sys.path[:] = saved
-    return bool(spec and spec.submodule_search_locations) and _same_files(
-        Path(next(iter(spec.submodule_search_locations))), package_files)
-
-
-def _import(path: list[str]):
-    """``import wetcloth`` with ``path`` as ``sys.path`` (restored afterwards)."""
-    saved = list(sys.path)
-    try:
-        sys.path[:] = path
         return importlib.import_module("wetcloth")
-    finally:
-        sys.path[:] = saved
+    except BaseException:
+        sys.meta_path.remove(finder)
+        for name in [n for n in sys.modules if n == "wetcloth" or n.startswith("wetcloth.")]:
+            del sys.modules[name]  # a half-imported copy would be taken for the process's wetcloth
+        raise
+
+
+def differences(module, manifest: dict) -> list[str]:
+    """The files of the imported ``module`` (wetcloth) that differ from the unit's copy: the package's
+    sources and every compiled core module it loaded (``_core*``), by SHA-256."""
+    package = Path(module.__file__).parent
+    found = sorted(rel for rel, value in manifest["package_files"].items()
+                   if not _same_files(package, {rel: value}))
+    bundle = manifest.get("bundle_files", {})
+    for name, loaded in list(sys.modules.items()):
+        if name.startswith("wetcloth._core") and getattr(loaded, "__file__", None):
+            rel = Path(loaded.__file__).name
+            if rel not in bundle or digest(Path(loaded.__file__)) != bundle[rel]:
+                found.append(f"{rel} (compiled core)")
+    return found
 
 
 def missing_dependency(exc: ModuleNotFoundError, requires: list[str]) -> ImportError:
@@ -89,7 +118,9 @@ def missing_dependency(exc: ModuleNotFoundError, requires: list[str]) -> ImportE
                f"{sys.version_info.major}.{sys.version_info.minor}) has no module {exc.name!r}. Install it there: "
                f"{sys.executable} -m pip install '{wanted}'  (docs/fmi.md lists what the unit needs)")
     LOG.error("%s", message)
-    return ImportError(message, name=exc.name)
+    failure = ImportError(message, name=exc.name)
+    failure.wetcloth_logged = True  # logged here: load_wetcloth passes it on as it is
+    return failure
 
 
 class _LibraryInfo(ctypes.Structure):
@@ -152,31 +183,42 @@ def release_at_exit() -> None:
 
 def load_wetcloth(resources: Path):
     """The wetcloth module this FMU runs (see the module docstring), imported if needed.  First
-    of all, the unit's binary is made to exit safely (``release_at_exit``), also when this fails."""
+    of all, the unit's binary is made to exit safely (``release_at_exit``), also when this fails.
+    Any failure is logged (``wetcloth.fmu``) and raised as an ImportError saying that the unit cannot
+    start."""
     resources = resources.resolve()
     release_at_exit()
     if str(resources) in _LOADED:
         return _LOADED[str(resources)]
-    manifest_path = resources / MANIFEST_NAME
-    manifest = json.loads(manifest_path.read_text()) if manifest_path.exists() else None
     try:
-        if "wetcloth" in sys.modules or manifest is None:
-            module = importlib.import_module("wetcloth")
-            package = Path(module.__file__).parent
-            if manifest is not None and not _same_files(package, manifest["package_files"]):
-                LOG.warning("this WetCloth FMU runs the wetcloth already imported in this process (%s), whose "
-                            "sources differ from the copy the FMU was built with; results may differ from that "
-                            "build's", package)
-        elif _host_wetcloth(resources, manifest["package_files"]):
-            module = _import(_path_without(resources))
-        else:
-            module = _import([str(resources)] + _path_without(resources))
-    except ModuleNotFoundError as exc:
-        if exc.name and exc.name.split(".")[0] == "wetcloth":
-            raise
-        raise missing_dependency(exc, manifest["requires"] if manifest else []) from None
-    if manifest is not None:
-        _check_variables(module, manifest, resources)
+        manifest_path = resources / MANIFEST_NAME
+        manifest = json.loads(manifest_path.read_text()) if manifest_path.exists() else None
+        try:
+            if "wetcloth" in sys.modules or manifest is None:
+                module = importlib.import_module("wetcloth")
+                changed = [] if manifest is None else differences(module, manifest)
+                if changed:
+                    LOG.warning("this WetCloth FMU runs the wetcloth already imported in this process (%s), whose "
+                                "sources differ from the copy the FMU was built with (%s); results may differ "
+                                "from that build's", Path(module.__file__).parent,
+                                ", ".join(changed[:5]) + (f" and {len(changed) - 5} more" if len(changed) > 5 else ""))
+            else:
+                module = _import_bundle(resources)
+        except ModuleNotFoundError as exc:
+            if exc.name and exc.name.split(".")[0] == "wetcloth":
+                raise
+            raise missing_dependency(exc, manifest["requires"] if manifest else []) from None
+        if manifest is not None:
+            _check_variables(module, manifest, resources)
+    except Exception as exc:
+        message = str(exc) if getattr(exc, "wetcloth_logged", False) else (
+            f"WetCloth FMU cannot start: {type(exc).__name__}: {exc} (the Python that loads it: {sys.executable}, "
+            f"Python {sys.version_info.major}.{sys.version_info.minor}; the unit's resources: {resources})")
+        if not getattr(exc, "wetcloth_logged", False):
+            LOG.error("%s", message)
+        failure = ImportError(message, name=getattr(exc, "name", None))
+        failure.wetcloth_logged = True
+        raise failure from exc
     _LOADED[str(resources)] = module
     return module
 
@@ -193,4 +235,6 @@ def _check_variables(module, manifest: dict, resources: Path) -> None:
         message = (f"this WetCloth FMU was built for the variables {manifest['variables']}, but the wetcloth imported "
                    f"from {Path(module.__file__).parent} defines {names}; rebuild it with `wetcloth build-fmu`")
         LOG.error("%s", message)
-        raise RuntimeError(message)
+        failure = RuntimeError(message)
+        failure.wetcloth_logged = True
+        raise failure

@@ -8,8 +8,8 @@ documentation folder; ``build_fmu`` stages what the unit needs:
 * a copy of the wetcloth package with its compiled core (``_core``, built for this Python's version
   and platform), scene presets and exporter (``resources/wetcloth``), so the FMU runs with any
   such Python that has numpy (and pythonfmu);
-* a manifest: the copy's file digests (by which the bootstrap picks the host's identical wetcloth
-  or a per-user cached copy of its own), the variable names (a wetcloth whose variables differ
+* a manifest: the copy's file digests (by which the bootstrap names what differs in a wetcloth the
+  host imported before the unit), the variable names (a wetcloth whose variables differ
   from the model description is refused) and the requirements (named when one is missing);
 * with ``scene``: the scene's values as start values and its mesh file (``packed_scene``);
 * ``documentation/index.html``, generated from the same variable list as the model description,
@@ -178,6 +178,33 @@ def _pythonfmu_builder(fmi_version: int):
     return FmuBuilder
 
 
+#: The binaries folders (FMI 2.0 and 3.0 names) of a platform, by ``(sys.platform, machine)``.
+PLATFORM_FOLDERS = {("linux", "x86_64"): {"linux64", "x86_64-linux"}, ("win32", "amd64"): {"win64", "x86_64-windows"},
+                    ("darwin", "x86_64"): {"darwin64", "x86_64-darwin"}, ("darwin", "arm64"): {"aarch64-darwin"},
+                    ("linux", "aarch64"): {"aarch64-linux"}}
+
+
+def packed_platforms() -> set[str]:
+    """The ``binaries/`` folders of the platform whose compiled core the unit packs (this Python's)."""
+    import platform
+
+    return PLATFORM_FOLDERS.get((sys.platform, platform.machine().lower()), set())
+
+
+def _only_packed_platforms(built: Path, out: Path) -> Path:
+    """A copy of the archive ``built`` at ``out`` without pythonfmu's binaries for platforms whose compiled core
+    the unit does not carry (pythonfmu ships win64 and linux64 binaries, the core is this platform's only): a
+    master on another platform then finds no binary for it, rather than one that cannot start."""
+    keep = packed_platforms()
+    with zipfile.ZipFile(built) as source, zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as target:
+        for info in source.infolist():
+            parts = info.filename.split("/")
+            if parts[0] == "binaries" and len(parts) > 2 and parts[1] not in keep:
+                continue
+            target.writestr(info, source.read(info))
+    return out
+
+
 def content_token(fmi_version: int, files: list[Path]) -> str:
     """The unit's GUID (FMI 3.0: instantiationToken): a UUID 5 of a digest of what it is built from
     (the slave script, the bootstrap, the manifest with every bundled file's digest and the variable
@@ -232,6 +259,7 @@ def build_fmu(out: str | Path | None = None, fmi_version: int = 2, scene: str | 
             if not cached:
                 sys.modules.pop(slave.stem, None)  # let each loaded FMU import its own script
                 sys.modules.pop(MODULE_NAME, None)
+        built = _only_packed_platforms(built, stage / "unit.fmu")
         with zipfile.ZipFile(built, "a") as archive:
             archive.write(DOCS / "model.png", arcname=ICON_PATH[fmi_version])
         with whole_file(out) as tmp_out:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from pythonfmu import DefaultExperiment, Fmi2Slave
 from pythonfmu.enums import Fmi2Status
+from pythonfmu.variables import Boolean, Integer, Real, String
 
 import wetcloth
 import wetcloth.fmu as fmu_package
@@ -51,5 +52,22 @@ class Fmi2Unit(WetClothUnit, Fmi2Slave):
     def do_step(self, current_time: float, step_size: float) -> bool:
         return self.step(current_time, step_size) == OK
 
+
+def _checked(name: str, function: str, kind: type):
+    """pythonfmu's getter or setter ``name``, with its value references checked first (``check_references``)."""
+    base = getattr(Fmi2Slave, name)
+
+    def method(self, vrs, *values):
+        self.check_references(function, vrs, kind, kind.__name__)
+        return base(self, vrs, *values)
+
+    method.__name__ = method.__qualname__ = name
+    return method
+
+
+for _kind in (Real, Integer, Boolean, String):
+    for _verb in ("get", "set"):
+        setattr(Fmi2Unit, f"{_verb}_{_kind.__name__.lower()}",
+                _checked(f"{_verb}_{_kind.__name__.lower()}", f"fmi2{_verb.title()}{_kind.__name__}", _kind))
 
 guard.guard(Fmi2Unit, ENTRY_POINTS, CLASS_ENTRY_POINTS)

@@ -10,6 +10,7 @@ status (fmi3Fatal); ``guard`` keeps the instance usable afterwards.  pythonfmu3 
 from __future__ import annotations
 
 from pythonfmu3 import DefaultExperiment, Fmi3Slave, Fmi3Status, Fmi3StepResult
+from pythonfmu3.variables import Boolean, Float64, Int32, Int64, String, UInt64
 
 import wetcloth
 import wetcloth.fmu as fmu_package
@@ -63,5 +64,22 @@ class Fmi3Unit(WetClothUnit, Fmi3Slave):
         self._refuse_call("fmi3UpdateDiscreteStates is not supported: this unit has no events and no event mode "
                           "(allowed: fmi3DoStep in step mode)")
 
+
+def _checked(name: str, function: str, kind: type):
+    """pythonfmu3's getter or setter ``name``, with its value references checked first (``check_references``)."""
+    base = getattr(Fmi3Slave, name)
+
+    def method(self, vrs, *values):
+        self.check_references(function, vrs, kind, kind.__name__)
+        return base(self, vrs, *values)
+
+    method.__name__ = method.__qualname__ = name
+    return method
+
+
+for _kind in (Float64, Int32, Int64, UInt64, Boolean, String):
+    for _verb in ("get", "set"):
+        setattr(Fmi3Unit, f"{_verb}_{_kind.__name__.lower()}",
+                _checked(f"{_verb}_{_kind.__name__.lower()}", f"fmi3{_verb.title()}{_kind.__name__}", _kind))
 
 guard.guard(Fmi3Unit, ENTRY_POINTS, CLASS_ENTRY_POINTS)

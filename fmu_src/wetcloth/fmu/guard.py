@@ -39,6 +39,10 @@
    they cannot set the master's pointer to NULL at free as FMI 2.0 asks; every freed handle keeps
    a few hundred bytes until the process ends.
 
+5. An instance the master never frees, or one kept alive by 1., still holds its simulation when Python exits;
+   the compiled core's module then reports its objects as leaked ("nanobind: leaked 1 instances! ... Stepper").
+   At exit every live instance drops its simulation (``_release_all``), so nothing of the core outlives it.
+
 The references given back in 1 and 2 are real reference counts (``Py_IncRef``), not objects held in
 a list: the binary has already dropped them, and a list released at interpreter shutdown would
 drop them a second time.
@@ -46,6 +50,7 @@ drop them a second time.
 
 from __future__ import annotations
 
+import atexit
 import ctypes
 import functools
 import inspect
@@ -73,7 +78,26 @@ def hold_script_namespace(namespace: dict) -> None:
 
 def register(instance) -> None:
     """Note a new slave instance (called from its ``__init__``)."""
+    if not _LIVE and not _EXIT_HOOK:
+        _EXIT_HOOK.append(atexit.register(_release_all))
     _LIVE.add(instance)
+
+
+#: The exit hook, once registered.
+_EXIT_HOOK: list = []
+
+
+def _release_all() -> None:
+    """At Python's exit, let every instance still alive drop its simulation (see 5.): instances kept alive by 1.,
+    or never freed by their master, would otherwise hold the compiled core's objects past its module's end
+    ("nanobind: leaked ... Stepper" at exit)."""
+    for instance in list(_LIVE):
+        release = getattr(instance, "release", None)
+        if release is not None:
+            try:
+                release()
+            except Exception:
+                pass
 
 
 def guard(cls, methods: tuple[str, ...], class_methods: tuple[str, ...]):

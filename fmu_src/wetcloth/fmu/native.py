@@ -40,6 +40,7 @@ import hashlib
 import html
 import os
 import platform
+import re
 import shutil
 import subprocess
 import tempfile
@@ -369,6 +370,14 @@ def _start_getter(spec: VariableSpec):
     return functools.partial(lambda value: value, spec.values if spec.variability == "constant" else spec.start)
 
 
+def fixed_spec(spec: VariableSpec, fixed: tuple) -> VariableSpec:
+    """``spec`` with the range a native unit's built-in mesh fixes (``native_mesh.fixed_ranges``: lo, hi, lo_open,
+    text), its description's "allowed:" saying the same as its declared min and max."""
+    lo, hi, lo_open, text = fixed
+    description = re.sub(r"\(allowed: .*\)$", lambda _: f"(allowed: {text})", spec.description)
+    return dataclasses.replace(spec, min=lo, max=hi, min_open=lo_open, description=description)
+
+
 def model_description(specs: list[VariableSpec], fmi_version: int, token: str, sources: list[str]) -> bytes:
     """``modelDescription.xml``: pythonfmu's (pythonfmu3's) writer with wetcloth's extensions (units, ranges,
     dependencies; ``description.py``, ``description3.py``), for a unit that needs no execution tool;
@@ -687,8 +696,8 @@ def build_native_fmu(out: str | Path | None = None, fmi_version: int = 2, build_
     cloth = None if loaded is None else native_mesh.cloth_arrays(loaded)
     fixtures = fixtures_source(loaded, cloth)
     fixed = {**native_mesh.fixed_ranges(cloth), **placed_meshes(loaded)}
-    specs = [dataclasses.replace(spec, min=fixed[spec.name][0], max=fixed[spec.name][1], min_open=fixed[spec.name][2])
-             if spec.name in fixed else spec for spec in specs]  # the model description declares what the unit takes
+    specs = [fixed_spec(spec, fixed[spec.name]) if spec.name in fixed else spec
+             for spec in specs]  # the model description declares what the unit takes
     body = variables_source(specs, fmi_version, fixtures=fixtures, fixed=fixed).encode()
     token = "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, "wetcloth-native:" + _digest(
         body, " ".join(CXX_FLAGS).encode(), *(p.read_bytes() for p, _ in files)))) + "}"

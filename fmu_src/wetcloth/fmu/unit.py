@@ -72,6 +72,7 @@ class WetClothUnit:
         # each unit's binary is made to exit safely, and its own manifest checked, here too.
         if self.resources:  # through the bootstrap the script ran, if any: it knows the units checked
             sys.modules.get(bootstrap.MODULE_NAME, bootstrap).load_wetcloth(Path(self.resources))
+        self._tolerance_noted = False
         self.packed = packed_scene.load(self.resources)  # a scene built in (build-fmu --scene), or None
         self.specs = {spec.name: spec for spec in variable_specs(fmi_version=self.FMI_VERSION, packed=self.packed)}
         self.values = {name: spec.start for name, spec in self.specs.items() if spec.causality in ("parameter", "input")}
@@ -90,7 +91,8 @@ class WetClothUnit:
 
     # ------------------------------------------------------------------ logging
     def _report(self, level: str, message: str) -> None:
-        """Log through FMI (shown while the master's logging is on) and Python's logging."""
+        """Log through FMI (shown while the master's logging is on: pythonfmu's binary filters) and
+        Python's logging."""
         self.log(message, self.LOG_STATUS[level])
         getattr(LOG, level)("%s: %s", self.instance_name, message)
 
@@ -100,6 +102,20 @@ class WetClothUnit:
         if name in self.values:
             return functools.partial(self.value, name), functools.partial(self.set_value, name)
         return functools.partial(self.output, name), functools.partial(self.refuse_output, name)
+
+    def check_references(self, function: str, vrs, kind: type, kind_name: str) -> None:
+        """UnitError (logged) unless every value reference in ``vrs`` is a variable of type ``kind`` (pythonfmu's
+        own checks raise KeyError or TypeError, which reach only the binary's stderr)."""
+        for vr in vrs:
+            var = self.vars.get(vr)
+            if var is None:
+                known = sorted(self.vars)
+                self._refuse_call(f"{function}: no variable has the value reference {vr} "
+                                  f"({known[0]} to {known[-1]})" if known else f"{function}: no variables")
+            if not isinstance(var, kind):
+                found = next((c.__name__ for c in type(var).__mro__ if c.__module__.startswith("pythonfmu")
+                              and c.__name__ not in ("ScalarVariable", "ModelVariable", "Arrayable")), "another type")
+                self._refuse_call(f"{function}: variable {var.name!r} is a {found}, not a {kind_name}")
 
     def refuse_output(self, name: str, value) -> None:
         """UnitError (logged): the master set an output."""
@@ -138,8 +154,11 @@ class WetClothUnit:
                     raise ParameterError(name, "is fixed once the simulation starts; only inputs may change")
                 self.sim.set_inputs(**{name: value})  # the simulation owns which parameters may change
         except ParameterError as exc:
-            self.refused[name] = str(exc)
-            self._report("error", f"{exc} (value refused: {name} stays {self.values[name]!r})")
+            reason = str(exc)
+            if self.specs[name].causality == "input":  # the scene's rule calls every value a parameter
+                reason = reason.replace(f"parameter {name!r}", f"input {name!r}", 1)
+            self.refused[name] = reason
+            self._report("error", f"{reason} (value refused: {name} stays {self.values[name]!r})")
             return
         self.values[name] = value
         self.refused.pop(name, None)
@@ -201,12 +220,29 @@ class WetClothUnit:
         if not abs(start_time) <= MAX_TIME:
             self._refuse_call(f"the start time must be a finite number of seconds within +-{MAX_TIME:g} s, "
                               f"got {start_time!r}")
+        self.check_tolerance("fmi2SetupExperiment", tolerance)
         if stop_time is not None and not stop_time >= start_time:
             self._refuse_call(f"fmi2SetupExperiment: stopTime {stop_time!r} s lies before startTime {start_time!r} s; "
                               "allowed: stopTime >= startTime")
         self.start_time, self._clock_set = float(start_time), True
         self.stop_time = None if stop_time is None else float(stop_time)
         self._read.clear()
+
+    def check_tolerance(self, function: str, tolerance) -> None:
+        """The master's experiment tolerance (None: not defined): refused (UnitError, logged) unless > 0; else
+        a warning, once, that the unit's own ``tolerance`` parameter sets its accuracy, not the experiment's
+        (the native units' rule and words)."""
+        if tolerance is None:
+            return
+        if not tolerance > 0.0:
+            self._refuse_call(f"{function}: tolerance {tolerance!r} is not allowed; allowed: a tolerance > 0 where "
+                              "toleranceDefined is true (or none). The unit's accuracy is set by its own parameter "
+                              "'tolerance', not by the experiment's")
+        if not self._tolerance_noted:
+            self._tolerance_noted = True
+            self._report("warning", f"{function}: the experiment's tolerance {tolerance!r} is not used: the unit's "
+                                    f"accuracy is set by its own parameter 'tolerance' "
+                                    f"(now {self.values.get('tolerance')!r})")
 
     def start(self) -> None:
         """Build the simulation from the parameters and start values; UnitError (logged, naming the
@@ -338,6 +374,11 @@ class WetClothUnit:
         if self.sequence is not None:
             self.sequence.close()
             self.sequence = None
+
+    def release(self) -> None:
+        """Drop the simulation and whatever else holds the compiled core's objects (at Python's exit, ``guard``, 5.)."""
+        self.sim = self._preview = None
+        self._read = {}
 
     # ------------------------------------------------------------------ pythonfmu's and pythonfmu3's calls
     def enter_initialization_mode(self):
