@@ -1336,18 +1336,11 @@ def test_a_blow_up_from_a_fast_collider_key_names_it_as_the_python_api_does(buil
 TRIAL_CALLS = r"""
 import ctypes, json, math, sys
 import fmpy
-from fmpy.fmi1 import FMICallException
+from test_fmu_support import call_status as status
 directory, version, blow_up = sys.argv[1], int(sys.argv[2]), json.loads(sys.argv[3])
 md = fmpy.read_model_description(directory)
 vr = {v.name: v.valueReference for v in md.modelVariables}
 messages = []
-
-def status(call, *args, **kwargs):
-    try:
-        call(*args, **kwargs)
-        return 0
-    except FMICallException as exc:
-        return int(exc.status)
 
 def since(k):
     return [[s, m] for s, m in messages[k:]]

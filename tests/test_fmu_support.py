@@ -123,6 +123,17 @@ def run_child(code: str, *args, cwd=None, env=None, timeout: float = 300, stdin:
     return records, done
 
 
+def call_status(call, *args, **kwargs) -> int:
+    """The FMI status of an fmpy call: 0 (OK) unless it raises FMICallException (a child master's helper)."""
+    from fmpy.fmi1 import FMICallException
+
+    try:
+        call(*args, **kwargs)
+        return 0
+    except FMICallException as exc:
+        return int(exc.status)
+
+
 def message_callbacks(messages: list):
     """fmpy's FMI 2.0 callbacks (fmi2CallbackFunctions) whose logger appends (status, text) to ``messages``; keep
     them alive as long as the instance given them."""
