@@ -266,10 +266,12 @@ def test_work_beyond_sane_bounds_is_refused_naming_the_bound(tmp_path, capsys):
 
 
 def test_a_run_that_would_take_hours_is_warned_about_with_cheaper_settings(tmp_path):
-    """A fabric of 1e-9 kg/m2 holds explicit Euler to steps of 1e-11 s: the warning comes a few seconds
-    in (from a timed sample of the run itself), names the cheaper settings, and Ctrl-C then stops it."""
-    proc = subprocess.Popen([sys.executable, "-m", "wetcloth.cli", "run", "--duration", "10", "--set",
-                             "areal_density=1e-9", "--set", "integrator=explicit_euler", "--set", "nx=5", "--set", "ny=5",
+    """The lightest fabric allowed (5 g/m2) at the largest stretch_stiffness holds explicit Euler to steps of
+    3e-8 s: the warning comes a few seconds in (from a timed sample of the run itself), names the cheaper
+    settings, and Ctrl-C then stops it."""
+    proc = subprocess.Popen([sys.executable, "-m", "wetcloth.cli", "run", "--duration", "1000", "--set",
+                             "areal_density=0.005", "--set", "stretch_stiffness=1e8", "--set",
+                             "integrator=explicit_euler", "--set", "nx=5", "--set", "ny=5",
                              "--csv", str(tmp_path / "o.csv"), "--plot", str(tmp_path / "p.png"), "--no-progress"],
                             stderr=subprocess.PIPE, text=True, start_new_session=True,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
@@ -285,9 +287,10 @@ def test_a_run_that_would_take_hours_is_warned_about_with_cheaper_settings(tmp_p
             os.killpg(proc.pid, signal.SIGKILL)
     warning = lines[0] if lines else ""
     assert warning.startswith("wetcloth run: warning: this run will take about "), warning
-    assert re.search(r"steps of 1\.\de-11 s", warning), warning
-    assert "integrator 'implicit_euler'" in warning and "areal_density = 1e-09 kg/m2" in warning, warning
-    assert "a shorter duration (now 10 s)" in warning and proc.returncode == 130
+    assert re.search(r"steps of 2\.\de-08 s", warning), warning
+    assert "integrator 'implicit_euler'" in warning, warning
+    assert "areal_density = 0.005 kg/m2, stretch_stiffness = 1e+08 N/m" in warning, warning
+    assert "a shorter duration (now 1000 s)" in warning and proc.returncode == 130
 
 
 def test_cost_advice_names_the_expensive_settings_and_never_what_is_set():

@@ -265,7 +265,9 @@ class Scene:
         "off", "-", "'off': the mesh file's coordinates as they are (m, z up); 'on': the mesh turned by initial_tilt "
         "about the x axis through its centroid, and its centroid raised to initial_height", choices=SWITCH)
     # --- fabric
-    areal_density: float = _param(0.45, "kg/m2", "dry fabric mass per area", 0.0, 100.0, lo_open=True)
+    #: The lightest fabrics (tulle, tissue) weigh about 0.01 kg/m2; below 5 g/m2 a cloth in a 10 m/s wind took
+    #: minutes a second or blew up (docs/open_problems.md).
+    areal_density: float = _param(0.45, "kg/m2", "dry fabric mass per area", 0.005, 100.0)
     thickness: float = _param(
         0.002, "m", "envelope thickness: buoyant volume = area * thickness", 0.0, 1.0, lo_open=True
     )
