@@ -73,9 +73,14 @@ def check_run_table(table) -> dict[str, float]:
     return values
 
 
+def whole_frames(duration: float, fps: float) -> int:
+    """How many frames at 0, 1/fps, ... lie within ``duration`` (s): the frames an export writes."""
+    return int(math.floor(duration * fps + 1e-9)) + 1
+
+
 def check_frames(duration: float, fps: float, fps_name: str = "fps") -> None:
     """Refuse a run that would record more than ``MAX_FRAMES`` frames, naming the bound."""
-    frames = math.floor(duration * fps + 1e-9) + 1
+    frames = whole_frames(duration, fps)
     if frames > MAX_FRAMES:
         raise RunSettingError(fps_name, f"{duration:g} s at {fps:g} frames/s is {frames:.3g} frames; at most "
                                         f"{MAX_FRAMES} per run: lower {fps_name} or duration")

@@ -16,7 +16,7 @@ import numpy as np
 
 from wetcloth.files import whole_file
 from wetcloth.progress import Watcher, time_bar
-from wetcloth.run_settings import MAX_FRAMES
+from wetcloth.run_settings import MAX_FRAMES, whole_frames
 from wetcloth.scene import Scene
 from wetcloth.simulation import OUTPUT_NAMES, Simulation
 
@@ -68,11 +68,6 @@ def warn_cost(message: str) -> None:
     warnings.warn(message, CostWarning, stacklevel=2)
 
 
-def whole_frames(duration: float, fps: float) -> int:
-    """How many frames at 0, 1/fps, ... lie within ``duration`` (s): the frames an export writes."""
-    return int(math.floor(duration * fps + 1e-9)) + 1
-
-
 def frame_times(duration: float, fps: float) -> np.ndarray:
     """Frame times 0, 1/fps, ... up to ``duration`` (s); the last sample lands on ``duration`` (a sample
     short of a whole frame after the last whole frame when ``duration`` is not a whole number of frames)."""
@@ -80,10 +75,11 @@ def frame_times(duration: float, fps: float) -> np.ndarray:
         raise ValueError(f"fps must be a finite number > 0, got {fps!r}")
     if not (duration >= 0 and math.isfinite(duration)):
         raise ValueError(f"duration must be a finite number >= 0 s, got {duration!r}")
-    if whole_frames(duration, fps) > MAX_FRAMES:  # named as run()'s arguments, not a scene file's [run]
-        raise ValueError(f"duration {duration:g} s at fps {fps:g} is {whole_frames(duration, fps):.3g} frames; at "
+    frames = whole_frames(duration, fps)
+    if frames > MAX_FRAMES:  # named as run()'s arguments, not a scene file's [run]
+        raise ValueError(f"duration {duration:g} s at fps {fps:g} is {frames:.3g} frames; at "
                          f"most {MAX_FRAMES} per run: a duration up to {(MAX_FRAMES - 1) / fps:g} s at this fps")
-    times = np.arange(whole_frames(duration, fps)) / fps
+    times = np.arange(frames) / fps
     if duration - times[-1] > 1e-9:
         times = np.append(times, duration)
     return times

@@ -511,19 +511,28 @@ def check_value(name: str, value):
     return value
 
 
+def spelled_number(text: str, kinds: tuple = (int, float)):
+    """The number ``text`` spells, as the first of ``kinds`` that reads it, or None.  Digits grouped by
+    underscores spell none here: Python reads 1_0 as 10, a scene file (TOML) and a person do not."""
+    if "_" in text:
+        return None
+    for kind in kinds:
+        try:
+            return kind(text.strip())
+        except ValueError:
+            continue
+    return None
+
+
 def parse_text(name: str, text: str):
     """A parameter's value from text (``--set name=text``): the number it spells for a number
     parameter (then the same rule as a TOML value: ``nx=3.0`` is 3), the text for a string one."""
     f = _field(name)
     if f.type == "str":
         return text
-    for kind in (int, float):
-        try:
-            value = kind(text.strip()) if "_" not in text else None  # (Python reads 1_0 as 10)
-        except ValueError:
-            continue
-        if value is not None:
-            return normalise(name, value)
+    value = spelled_number(text)
+    if value is not None:
+        return normalise(name, value)
     raise ParameterError(name, f"expected a number, got {text!r}; allowed: {describe_range(f, name)}")
 
 

@@ -15,8 +15,8 @@ from tqdm.auto import tqdm
 from wetcloth import run_settings
 from wetcloth.commands.common import FAILED, INTERRUPTED, csv_path, path_argument, scene_with_overrides
 from wetcloth.errors import BlowUpError
-from wetcloth.runner import interrupts_held, run, whole_frames
-from wetcloth.scene import read_scene_file
+from wetcloth.runner import interrupts_held, run
+from wetcloth.scene import read_scene_file, spelled_number
 
 
 def parse_assignment(text: str) -> tuple[str, str]:
@@ -31,12 +31,10 @@ def number_argument(kind):
     """An argument type: the ``kind`` (int or float) a command-line number spells, refusing what Python
     reads but a person would not mean (``1_0`` is 10 to ``float``)."""
     def number(text: str):
-        if "_" not in text:
-            try:
-                return kind(text)
-            except ValueError:
-                pass
-        raise argparse.ArgumentTypeError(f"expected {'a whole number' if kind is int else 'a number'}, got {text!r}")
+        value = spelled_number(text, (kind,))
+        if value is None:
+            raise argparse.ArgumentTypeError(f"expected {'a whole number' if kind is int else 'a number'}, got {text!r}")
+        return value
     return number
 
 
@@ -117,7 +115,7 @@ def main(args) -> int:
         try:
             sequence = open_sequence(args.export, fmt=args.format, writer=args.writer, fps=settings.fps, scene=scene,
                                      faces=args.faces, first_frame=args.first_frame, overwrite=args.overwrite,
-                                     frame_count=whole_frames(settings.duration, settings.fps))
+                                     frame_count=run_settings.whole_frames(settings.duration, settings.fps))
         except ExportError as exc:  # the exporter's names of its arguments made the command line's
             message = str(exc).replace(OVERWRITE, "--overwrite")
             if message.startswith("first_frame "):

@@ -16,7 +16,7 @@ import wetcloth
 import wetcloth.fmu as fmu_package
 from wetcloth.fmu import MODEL_NAME, guard
 from wetcloth.fmu.description import extend_model_description, make_variable
-from wetcloth.fmu.unit import OK, WetClothUnit, default_run
+from wetcloth.fmu.unit import OK, WetClothUnit, check_references_before, default_run
 
 #: pythonfmu's methods that the binary calls on an instance, and on the class.
 ENTRY_POINTS = ("setup_experiment", "enter_initialization_mode", "exit_initialization_mode", "do_step", "terminate",
@@ -53,21 +53,5 @@ class Fmi2Unit(WetClothUnit, Fmi2Slave):
         return self.step(current_time, step_size) == OK
 
 
-def _checked(name: str, function: str, kind: type):
-    """pythonfmu's getter or setter ``name``, with its value references checked first (``check_references``)."""
-    base = getattr(Fmi2Slave, name)
-
-    def method(self, vrs, *values):
-        self.check_references(function, vrs, kind, kind.__name__)
-        return base(self, vrs, *values)
-
-    method.__name__ = method.__qualname__ = name
-    return method
-
-
-for _kind in (Real, Integer, Boolean, String):
-    for _verb in ("get", "set"):
-        setattr(Fmi2Unit, f"{_verb}_{_kind.__name__.lower()}",
-                _checked(f"{_verb}_{_kind.__name__.lower()}", f"fmi2{_verb.title()}{_kind.__name__}", _kind))
-
+check_references_before(Fmi2Unit, Fmi2Slave, "fmi2", (Real, Integer, Boolean, String))
 guard.guard(Fmi2Unit, ENTRY_POINTS, CLASS_ENTRY_POINTS)

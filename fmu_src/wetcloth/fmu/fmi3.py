@@ -15,7 +15,7 @@ from pythonfmu3.variables import Boolean, Float64, Int32, Int64, String, UInt64
 import wetcloth
 import wetcloth.fmu as fmu_package
 from wetcloth.fmu import MODEL_NAME, description3, guard
-from wetcloth.fmu.unit import OK, UnitError, WetClothUnit, default_run
+from wetcloth.fmu.unit import OK, UnitError, WetClothUnit, check_references_before, default_run
 
 #: pythonfmu3's methods that the binary calls on an instance, and on the class.
 ENTRY_POINTS = ("enter_initialization_mode", "exit_initialization_mode", "do_step", "terminate", "get_float64",
@@ -65,21 +65,5 @@ class Fmi3Unit(WetClothUnit, Fmi3Slave):
                           "(allowed: fmi3DoStep in step mode)")
 
 
-def _checked(name: str, function: str, kind: type):
-    """pythonfmu3's getter or setter ``name``, with its value references checked first (``check_references``)."""
-    base = getattr(Fmi3Slave, name)
-
-    def method(self, vrs, *values):
-        self.check_references(function, vrs, kind, kind.__name__)
-        return base(self, vrs, *values)
-
-    method.__name__ = method.__qualname__ = name
-    return method
-
-
-for _kind in (Float64, Int32, Int64, UInt64, Boolean, String):
-    for _verb in ("get", "set"):
-        setattr(Fmi3Unit, f"{_verb}_{_kind.__name__.lower()}",
-                _checked(f"{_verb}_{_kind.__name__.lower()}", f"fmi3{_verb.title()}{_kind.__name__}", _kind))
-
+check_references_before(Fmi3Unit, Fmi3Slave, "fmi3", (Float64, Int32, Int64, UInt64, Boolean, String))
 guard.guard(Fmi3Unit, ENTRY_POINTS, CLASS_ENTRY_POINTS)

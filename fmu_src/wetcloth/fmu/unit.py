@@ -52,6 +52,25 @@ def _checkpoint_of(handle) -> Checkpoint:
     return found
 
 
+def check_references_before(cls, base, prefix: str, kinds: tuple) -> None:
+    """Replace ``cls``'s getters and setters (pythonfmu's ``get_real``..., ``base``'s) by ones that check their value
+    references first (``WetClothUnit.check_references``), named as FMI names them (``prefix``: 'fmi2', 'fmi3')."""
+    def checked(name: str, function: str, kind: type):
+        inherited = getattr(base, name)
+
+        def method(self, vrs, *values):
+            self.check_references(function, vrs, kind, kind.__name__)
+            return inherited(self, vrs, *values)
+
+        method.__name__ = method.__qualname__ = name
+        return method
+
+    for kind in kinds:
+        for verb in ("get", "set"):
+            name = f"{verb}_{kind.__name__.lower()}"
+            setattr(cls, name, checked(name, f"{prefix}{verb.title()}{kind.__name__}", kind))
+
+
 def default_run() -> tuple[float, float]:
     """Stop time (s) and communication step (s) of the default experiment: the towel preset's [run]."""
     run = run_settings.resolve(read_scene_file(None).get("run"))
@@ -214,8 +233,6 @@ class WetClothUnit:
                               f"{allowed} state")
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):  # pythonfmu's call
-        if self.initialized:
-            self._refuse_call(f"the start time is fixed once the unit is initialized (got {start_time!r} s)")
         self._check_phase("fmiSetupExperiment", "instantiated")
         if not abs(start_time) <= MAX_TIME:
             self._refuse_call(f"the start time must be a finite number of seconds within +-{MAX_TIME:g} s, "

@@ -21,15 +21,16 @@ try:
     from wetcloth.fmu.fmi3 import Fmi3Unit
 except Exception as _failure:  # noqa: BLE001 (logged by load_wetcloth; raised at instantiation below)
     _START_FAILURE = ImportError(str(_failure))
-    _LOGGED = [True]  # by load_wetcloth, for the instantiation that ran this script
+    _failure_logged = True  # by load_wetcloth, for the instantiation that ran this script
 
     class Fmi3Unit:
         """Stands in for the unit when wetcloth cannot start: every instantiation fails with the reason (logged)."""
 
         def __init__(self, **kwargs):
-            if not _LOGGED.pop():
+            global _failure_logged
+            if not _failure_logged:
                 wetcloth_fmu_bootstrap.LOG.error("%s", _START_FAILURE)
-            _LOGGED.append(False)
+            _failure_logged = False
             raise _START_FAILURE
 
 
