@@ -1479,3 +1479,19 @@ def test_a_step_at_the_wrong_time_says_so_while_a_value_is_pending(trial_calls):
     assert (step_status, terminated) == (2, False)
     assert messages == [[3, "doStep from t = 0.5 s, but the unit is at t = 0.1 s; restore an FMU state to go back "
                             "in time"]]
+
+
+def test_forgetting_unused_objects_passes_over_one_renamed_while_listed(tmp_path, monkeypatch):
+    """Builds sharing an objects folder: another build's object, listed under its temporary name, may be renamed
+    before it is looked at (a FileNotFoundError failed a build in the fresh-clone CI); old objects still go."""
+    import time as clock
+
+    old, new = tmp_path / "old.o", tmp_path / "new.o"
+    old.write_bytes(b"")
+    new.write_bytes(b"")
+    long_ago = clock.time() - (native.KEEP_OBJECTS_DAYS + 1) * 86400.0
+    os.utime(old, (long_ago, long_ago))
+    listed = [tmp_path / "x.o.tmp.o", old, new]  # the first renamed away between the listing and its stat
+    monkeypatch.setattr(type(tmp_path), "glob", lambda self, pattern: listed if pattern == "*.o" else [])
+    native._forget_unused(tmp_path)
+    assert not old.exists() and new.exists()

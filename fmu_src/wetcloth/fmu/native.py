@@ -573,7 +573,11 @@ def _forget_unused(objects: Path) -> None:
     """Remove the objects in ``objects`` (and their lock files) that no build has used for KEEP_OBJECTS_DAYS days."""
     oldest = time.time() - KEEP_OBJECTS_DAYS * 86400.0
     for path in [*objects.glob("*.o"), *objects.glob("*.lock")]:
-        if path.stat().st_mtime < oldest:
+        try:
+            unused = path.stat().st_mtime < oldest
+        except FileNotFoundError:  # another build's object, listed under its temporary name, renamed since
+            continue
+        if unused:
             path.unlink(missing_ok=True)
 
 
