@@ -135,6 +135,24 @@ def test_areal_density_stops_where_fabrics_start():
     assert np.isfinite(sim.positions).all()
 
 
+def test_cells_far_longer_than_wide_are_refused_naming_the_counts_that_square_them():
+    """The random trial's 0.5 m wide, 1.1 mm long cloth of 7 x 7 (cells 455 times as long as wide) took 60 s of CPU
+    for 1 s afloat.  Refused, naming both ways to squarer cells; each suggested count is accepted, and runs."""
+    with pytest.raises(ParameterError, match=r"'ny': the grid's cells are 455 times longer one way than the other "
+                                             r"\(width/\(nx-1\) = 0.0833 m, length/\(ny-1\) = 0.000183 m\).*allowed: "
+                                             r"at most 100 times \(ny <= 2, nx >= 29, or change width or length\)"):
+        wetcloth.load_scene(nx=7, ny=7, length=0.0011)
+    with pytest.raises(ParameterError, match=r"'nx': .* \(nx >= 29, or change width or length\)"):
+        wetcloth.load_scene(nx=2, ny=7, length=0.0011)  # ny cannot go below 2
+    with pytest.raises(ParameterError, match=r"'nx': .*\(nx <= 3, ny >= 121, or change width or length\)"):
+        wetcloth.load_scene(nx=7, ny=50, width=0.001, length=2.0)  # the other way round
+    for squarer in (dict(ny=2), dict(nx=29)):
+        sim = wetcloth.Simulation(wetcloth.load_scene(**(dict(nx=7, ny=7, length=0.0011) | squarer)))
+        sim.advance(1.0)
+        assert np.isfinite(sim.positions).all() and sim.steps < 5000, sim.steps
+    wetcloth.load_scene(nx=2, ny=2, width=0.1, length=0.001)  # 100 times: allowed
+
+
 # ============================================================== 6. what Simulation takes
 def test_a_topology_of_another_cloth_is_refused_naming_topology():
     scene = wetcloth.load_scene(nx=5, ny=5)

@@ -1030,6 +1030,12 @@ k = len(messages)
 r["whole scene"] = [status(floor.enterInitializationMode), status(floor.exitInitializationMode), since(k)]
 floor.freeInstance()
 
+cells = new("cells")
+set(cells, "length", 0.0011)
+k = len(messages)
+r["long cells"] = [status(cells.enterInitializationMode), status(cells.exitInitializationMode), since(k)]
+cells.freeInstance()
+
 blow = new("blow up")
 values = json.loads(sys.argv[2])
 for name, value in values.items():
@@ -1138,6 +1144,14 @@ def test_parameters_that_do_not_fit_together_fail_the_initialization(errors):
     assert (enter, exit_) == (0, 3)
     with pytest.raises(ParameterError) as exc:
         wetcloth.load_scene(initial_height=-0.99)
+    assert messages == [f"initialization refused: {exc.value}"]
+
+
+def test_cells_far_longer_than_wide_fail_the_initialization_as_in_the_python_api(errors):
+    enter, exit_, messages = errors["long cells"]
+    assert (enter, exit_) == (0, 3)
+    with pytest.raises(ParameterError, match="'ny': the grid's cells are") as exc:
+        wetcloth.load_scene(length=0.0011)
     assert messages == [f"initialization refused: {exc.value}"]
 
 
@@ -1328,6 +1342,42 @@ def test_a_blow_up_from_a_fast_collider_key_names_it_as_the_python_api_does(buil
     blow_ups = records[-1]["blow_ups"]
     exc = python_blow_up(wetcloth.load_scene(scene_file), 0.1, {})
     assert "Likely cause: collider_key1 moves collider 1 100 m in 1e-06 s from t = 0 s: 1e+08 m/s" in str(exc)
+    assert len(blow_ups) == 1 and f"BlowUpError: {exc} The unit stays at" in blow_ups[0], (blow_ups, str(exc))
+
+
+def test_a_blow_up_from_a_fast_collider_key_among_interleaved_keys_names_the_scenes_key(build, tmp_path):
+    """The sweep scene with a second ball and keys of the two interleaved (collider 2, 1, 2), the second flinging
+    the first ball 100 m in 1 us: the unit names it collider_key2, as the Python API does (before, its place among
+    the keys by collider, then time: collider_key1)."""
+    scene_file = tmp_path / "interleaved.toml"
+    text = (wetcloth.scene.preset_dir() / "sweep.toml").read_text()
+    keys = text.index("[[collider_key]]")
+    scene_file.write_text(text[:keys] + """[[collider]]
+shape = "sphere"
+x = 2.0
+radius = 0.1
+
+[[collider_key]]
+collider = 2
+time = 0.5
+x = 2.1
+
+[[collider_key]]
+collider = 1
+time = 1e-6
+y = 100.0
+
+[[collider_key]]
+collider = 2
+time = 1.0
+x = 2.2
+
+""" + text[text.index("[run]"):])
+    fmu = native.build_native_fmu(tmp_path / "interleaved.fmu", 2, build_dir=build["objects"], scene=scene_file)
+    records, _ = run_child(BLOW_UP_RUN, fmu, 0.1, json.dumps({"names": [], "rows": []}), "{}")
+    blow_ups = records[-1]["blow_ups"]
+    exc = python_blow_up(wetcloth.load_scene(scene_file), 0.1, {})
+    assert "Likely cause: collider_key2 moves collider 1 100 m in 1e-06 s from t = 0 s" in str(exc)
     assert len(blow_ups) == 1 and f"BlowUpError: {exc} The unit stays at" in blow_ups[0], (blow_ups, str(exc))
 
 

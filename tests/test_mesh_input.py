@@ -403,15 +403,21 @@ def _rectangle_file(tmp_path, scene, order):
 
 
 def test_a_quad_mesh_of_the_rectangle_from_a_file_moves_as_the_rectangle(tmp_path):
-    """In grid order the file takes the grid's own path: after 2 s the cloth is where the built-in rectangle
-    is, within 1e-9 m (issue 26)."""
+    """In grid order the file takes the grid's own path (issue 26): placed, it starts where the built-in
+    rectangle does but for rounding (the file's centroid, 1e-18 m off the axis, turned by the tilt: 5e-20
+    m), and from the same start it moves as the rectangle to the bit (2 s).  (From the two starts the runs
+    stayed within 1e-9 m before each corner took its share of the drag at its own velocity, docs/model.md
+    4.3; since, the 5e-20 m lead the step control to other steps within the first second, and the runs end
+    4.5e-6 m apart, within the steps' error.)"""
     scene = Scene(nx=9, ny=11)
     from_file = _rectangle_file(tmp_path, scene, np.arange(scene.nx * scene.ny))
     assert build_topology(from_file).pairs.shape[1] == 0
     rectangle, mesh = wetcloth.Simulation(scene), wetcloth.Simulation(from_file)
+    np.testing.assert_allclose(mesh.positions, rectangle.positions, rtol=0, atol=1e-18)
+    mesh.state = rectangle.state
     rectangle.advance(2.0)
     mesh.advance(2.0)
-    np.testing.assert_allclose(mesh.positions, rectangle.positions, rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(mesh.positions, rectangle.positions)
 
 
 def test_an_irregular_mesh_dropped_flat_onto_water_stays_flat():

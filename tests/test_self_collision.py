@@ -247,23 +247,20 @@ def test_a_crease_resting_on_the_layer_below_stops_costing_steps():
     assert np.abs(sim.velocities).max() < 1e-3
 
 
-#: A run of the sensitivity example (run 495 of its 512) whose towel sinks onto the floor with a fold whose
-#: corner particles lie on a flat layer and against a sloping one.
+#: A run of the sensitivity example (run 495 of its 512) whose towel sank onto the floor with a fold whose
+#: corner particles lay on a flat layer and against a sloping one.
 CORNER_OF_A_FOLD = dict(nx=5, ny=7, absorption_rate=0.3756255906808212, absorption_capacity=7.365530998446047,
                         areal_density=0.48989970264956356, thickness=0.002070942471921444,
                         initial_tilt=40.39055386092514, drag_normal=1.541422474384308)
 
 
-def test_a_particle_in_the_corner_of_a_fold_rests_on_the_layer_that_holds_it():
-    """A particle touching two still elements, a flat layer and a sloping one, is held on one that holds it
-    within friction (self_contact/resting.cpp, hold_within_friction).  Held on the sloping one, it was let
-    go before every step (the force slides it off), fell onto the flat layer, was pushed back and came to
-    rest there: without hold_within_friction, 243 steps and redone steps every simulated second from 30 to
-    40 s (measured); with it the towel comes to rest and sleeps but for its wakes as it absorbs (measured
-    4.4 a second).  Run as the batch runner does (samples every 0.1 s): fewer than 50 a second, and no edge
-    crosses a triangle in any sample.  (The fold forms on this machine; where rounding lets the towel land
-    without it, the bound holds all the more.  The study's run that shows this changes with the tension-only
-    springs' law: runs 364 and 500 did with their onset rounded over 6e-4 and 3e-3 of strain.)"""
+def test_a_towel_sunk_onto_the_floor_comes_to_rest_with_no_layer_crossing():
+    """Run as the batch runner does (samples every 0.1 s), the towel takes fewer than 50 steps and redone steps
+    a second from 30 to 40 s, and no edge crosses a triangle in any sample.  (This run once folded so that a
+    particle touched a flat layer and a sloping one; held on the sloping one it was let go before every step:
+    243 tries a second without hold_within_friction, self_contact/resting.cpp, and 4.4 with it.  Since each
+    corner takes its share of the drag at its own velocity, docs/model.md 4.3, it lands without that fold, and
+    no sampled towel needs the rule: docs/open_problems.md.)"""
     sim = wetcloth.Simulation(wetcloth.load_scene(**CORNER_OF_A_FOLD))
     crossed = 0
     for _ in range(300):
@@ -275,8 +272,6 @@ def test_a_particle_in_the_corner_of_a_fold_rests_on_the_layer_that_holds_it():
         crossed += crossings(sim.positions, sim.triangles)
     assert (sim.steps + sim.rejected_steps - tries) / 10.0 < 50
     assert crossed == 0
-    z = sim.positions[:, 2]
-    assert np.ptp(z) >= 0.99 * sim.scene.thickness, "folded: a layer lies on another (0.99 e above it at least)"
 
 
 def test_a_fold_carries_the_pushed_particles_history(current_over_pin):
@@ -483,7 +478,8 @@ def test_a_list_searched_wide_is_the_list_built_for_its_margin():
 def test_a_list_that_holds_has_every_pair_that_comes_close():
     """The candidate list's promise, checked from scratch: while it holds for a motion (``_core.covers``), no
     pair outside it comes within a thickness anywhere along that motion.  A soft towel folded over its pinned
-    edge by the current (1.25 s: layers in contact, so the list has pairs), its list built for the least
+    edge by the current (2 s: layers in contact, so the list has pairs; 1.25 s until the drag took each
+    corner's share at its own velocity, docs/model.md 4.3, which folds it later), its list built for the least
     margin (2.5 mm: the pairs within 7 mm).  Then straight-line motions between two states of that towel, both
     moved by 10 cm (the end 2 cm more) and half of them turned (by up to 0.5 rad, the end up to 0.02 rad more;
     four by up to 3 rad more, whose straight lines shrink the towel), each bent (a smooth displacement of up
@@ -491,10 +487,10 @@ def test_a_list_that_holds_has_every_pair_that_comes_close():
     and shaken (up to 0.1 mm along each axis).  The list must hold for some motions and not for others; along
     those it holds for (start, quarters, end), no pair outside it may come closer than the thickness, and some
     must come within two thicknesses: the check is made near the list's limit (with allowances half as large
-    again it fails, 1.5 mm, and without the shrinking of turned straight lines, 0.7 mm)."""
+    again it failed, 1.5 mm, and without the shrinking of turned straight lines, 0.7 mm: measured at 1.25 s)."""
     values = CURRENT_OVER_PIN | {"nx": 11, "ny": 15, "bend_stiffness": 2.0}
     sim = wetcloth.Simulation(wetcloth.load_scene(**values))
-    sim.advance(1.25)
+    sim.advance(2.0)
     contact, thickness = sim._contact, sim.scene.thickness
     ref = sim.state.pos.copy()  # (3, n)
     contact.reference[...] = ref
@@ -697,11 +693,11 @@ def test_a_swinging_sheet_keeps_an_empty_list():
 
 
 def test_a_restored_snapshot_repeats_a_run_in_contact_bit_for_bit(current_over_pin):
-    """Snapshot with the layers in contact, sent through the FMU's byte format and restored twice (into
+    """Snapshot with the layers in contact (2 s), sent through the FMU's byte format and restored twice (into
     the same simulation and into a fresh one): the next 0.5 s repeat exactly, contacts included."""
     values = CURRENT_OVER_PIN | {"nx": 11, "ny": 15, "bend_stiffness": 2.0}
     sim = wetcloth.Simulation(wetcloth.load_scene(**values))
-    sim.advance(1.25)
+    sim.advance(2.0)
     assert sum(sim.contact_counts[k] for k in ("point_triangle_candidates", "edge_edge_candidates")) > 0
     saved = sim.snapshot()
     data = to_bytes(Checkpoint(values={}, refused={}, initialized=True, start_time=0.0, frames=0, scene=sim.scene,

@@ -60,6 +60,14 @@ PINS_ALLOWED = ("'' (none), the name of a point attribute of the mesh file (nonz
 #: stay far from zero, where a size near 0 divides by zero and leaves the cloth motionless.
 SMALLEST_SIZE = 1e-3
 
+#: The most a grid's cells may be longer one way than the other (dx/dy or dy/dx).  A spring's stiffness goes as
+#: its strip's width over its length, so springs across a cell dx/dy as long as wide are (dx/dy)^2 stiffer than
+#: those along it: at 455 (a 0.5 m wide, 1.1 mm long cloth of 7 x 7) a floating cloth's steps fell to
+#: microseconds, 60 s of CPU for 1 s.
+LONGEST_CELL = 100.0
+#: The most particles along a side of the grid (nx, ny).
+MOST_ALONG = 1024
+
 #: s: the least max_step, so that a step still advances time at the latest time a state may hold (MAX_TIME =
 #: 1e9 s, the core's stepping.hpp), where doubles lie 1e9 * 2.2e-16 = 2.2e-7 s apart at most: below that
 #: t + max_step == t and a step never ends (max_step = 1e-300 s did so from t ~ 1e-284 s on).
@@ -253,8 +261,8 @@ class Scene:
     """A cloth dropped onto water.  The defaults are the cotton towel of ``models/towel.toml``."""
 
     # --- cloth geometry and grid
-    nx: int = _param(21, "-", "particles along the width (x)", 2, 1024)
-    ny: int = _param(29, "-", "particles along the length (y)", 2, 1024)
+    nx: int = _param(21, "-", "particles along the width (x)", 2, MOST_ALONG)
+    ny: int = _param(29, "-", "particles along the length (y)", 2, MOST_ALONG)
     width: float = _param(0.5, "m", "cloth size along x", SMALLEST_SIZE, LARGEST_SIZE)
     length: float = _param(0.7, "m", "cloth size along y", SMALLEST_SIZE, LARGEST_SIZE)
     cloth_mesh: str = _param(
@@ -552,6 +560,7 @@ def validate(scene: Scene) -> None:
     mistakes.raise_if_any()
     start = _check_mesh_start(scene) if is_mesh(scene.cloth_mesh) else None
     if start is None:
+        _check_cells(scene)
         half_drop = 0.5 * scene.length * abs(math.sin(math.radians(scene.initial_tilt)))
         lowest = scene.initial_height - half_drop - 0.5 * scene.thickness
         if lowest <= scene.floor_level:
@@ -568,6 +577,25 @@ def validate(scene: Scene) -> None:
         pinned = pinned_mask(scene, positions, mesh)
         _check_collider_start(scene, positions)
         check_pinned_outside(scene, positions, pinned)
+
+
+def _check_cells(scene: Scene) -> None:
+    """A ParameterError for a grid whose cells are more than LONGEST_CELL times longer one way than the other,
+    naming the particle counts that would make them squarer."""
+    dx, dy = scene.width / (scene.nx - 1), scene.length / (scene.ny - 1)
+    if max(dx, dy) <= LONGEST_CELL * min(dx, dy):
+        return
+    # The short side's count (fewer particles along it) or the long side's (more along it) that would do.
+    (short, short_size), (long, long_size) = (("ny", scene.length), ("nx", scene.width)) if dy < dx else \
+        (("nx", scene.width), ("ny", scene.length))
+    fewest = math.floor(short_size * LONGEST_CELL / max(dx, dy)) + 1
+    most = math.ceil(long_size / (LONGEST_CELL * min(dx, dy))) + 1
+    fixes = ([f"{short} <= {fewest}"] if fewest >= 2 else []) + ([f"{long} >= {most}"] if most <= MOST_ALONG else [])
+    raise ParameterError(fixes[0].split()[0] if fixes else short,
+                         f"the grid's cells are {round(max(dx, dy) / min(dx, dy))} times longer one way than the other "
+                         f"(width/(nx-1) = {dx:.3g} m, length/(ny-1) = {dy:.3g} m): the springs across them would be "
+                         f"that squared stiffer than along; allowed: at most {LONGEST_CELL:g} times ("
+                         + ", ".join(fixes + ["or change width or length"]) + ")")
 
 
 def _check_mesh_start(scene: Scene):

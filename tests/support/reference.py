@@ -105,7 +105,8 @@ class NumpyReference:
 
     def _face_drag(self, pos, vel, s, air=False):
         """The water's face drag on each triangle's submerged part (still water: no current), or with
-        ``air`` the air's on the rest, relative to the wind, without the linear term (section 4.4)."""
+        ``air`` the air's on the rest, relative to the wind, without the linear term (section 4.4): each
+        corner takes its share of the triangle's drag at its own velocity."""
         sc = self.model.scene
         tri = self.model.topology.triangles
         a, b, c = (pos[:, tri[:, k]] for k in range(3))
@@ -115,15 +116,18 @@ class NumpyReference:
         share = 1.0 - s[tri].mean(axis=1) if air else s[tri].mean(axis=1)
         wet_area = 0.5 * twice_area * share
         flow = np.array([sc.wind_x, sc.wind_y, sc.wind_z]) if air else np.zeros(3)
-        u = flow[:, None] - vel[:, tri].mean(axis=2)
-        un = (u * normal).sum(axis=0)
-        ut = u - un * normal
-        ut_norm = np.sqrt((ut * ut).sum(axis=0))
         q = 0.5 * (sc.air_density if air else sc.water_density) * wet_area
-        f = q * (sc.drag_normal * np.abs(un) * un * normal + sc.drag_tangential * ut_norm * ut)
-        if not air:
-            f += sc.drag_linear * wet_area * u
-        return sum(self._scatter(tri[:, k], f * self.corner_weights[:, k]) for k in range(3))
+        total = 0.0
+        for k in range(3):
+            u = flow[:, None] - vel[:, tri[:, k]]
+            un = (u * normal).sum(axis=0)
+            ut = u - un * normal
+            ut_norm = np.sqrt((ut * ut).sum(axis=0))
+            f = q * (sc.drag_normal * np.abs(un) * un * normal + sc.drag_tangential * ut_norm * ut)
+            if not air:
+                f += sc.drag_linear * wet_area * u
+            total = total + self._scatter(tri[:, k], f * self.corner_weights[:, k])
+        return total
 
     def explicit_step(self, state: State, h: float) -> State:
         """One explicit-Euler step with floor contact and absorption, as ``Simulation`` takes it."""

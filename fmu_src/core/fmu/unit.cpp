@@ -254,6 +254,8 @@ Fixtures scene_fixtures(const std::vector<double>& colliders) {
     f.cell_items.assign(SCENE_CELL_ITEMS, SCENE_CELL_ITEMS + SCENE_CELL_ITEMS_SIZE);
     f.grip_keys.assign(SCENE_GRIP_KEYS, SCENE_GRIP_KEYS + SCENE_GRIP_KEYS_SIZE);
     f.collider_keys.assign(SCENE_COLLIDER_KEYS, SCENE_COLLIDER_KEYS + SCENE_COLLIDER_KEYS_SIZE);
+    f.collider_key_numbers.assign(SCENE_COLLIDER_KEY_NUMBERS,
+                                  SCENE_COLLIDER_KEY_NUMBERS + SCENE_COLLIDER_KEY_NUMBERS_SIZE);
     f.cloth_mesh = built_in_cloth();
     f.pins = built_in_pins();
     return f;

@@ -27,6 +27,7 @@ WETCLOTH_UNIT_ARRAY(Index, SCENE_CELL_START);
 WETCLOTH_UNIT_ARRAY(Index, SCENE_CELL_ITEMS);
 WETCLOTH_UNIT_ARRAY(double, SCENE_GRIP_KEYS);
 WETCLOTH_UNIT_ARRAY(double, SCENE_COLLIDER_KEYS);
+WETCLOTH_UNIT_ARRAY(Index, SCENE_COLLIDER_KEY_NUMBERS);  // each key row's k in the scene (collider_key<k>)
 
 // A cloth from a mesh file (native_mesh.cloth_header; CLOTH_MESH false: the nx x ny grid, every array empty).
 extern const bool CLOTH_MESH;

@@ -75,5 +75,5 @@ WETCLOTH_BINDINGS(m) {
         nb::arg("c_normal"), nb::arg("c_tangential"), nb::arg("c_linear"), nb::arg("flow_x"), nb::arg("flow_y"),
         nb::arg("h"), nb::arg("force"), nb::arg("blocks"), nb::arg("cells"), nb::arg("skip_dry_rows") = true,
         nb::arg("flow_z") = 0.0, nb::arg("above") = false,
-        "Face drag as face_drag, plus h times its lumped velocity Jacobian added to blocks (6, n).");
+        "Face drag as face_drag, plus h times its velocity Jacobian added to blocks (6, n).");
 }

@@ -132,7 +132,30 @@ std::string scene_problem(const Scene& s, const ClothMesh* mesh, const Pins* pin
     return grid_start_problem(s, pins);
 }
 
+//: "" or the ParameterError's text of a grid whose cells are more than LONGEST_CELL times longer one way than
+//: the other (scene._check_cells, word for word).
+std::string grid_cells_problem(const Scene& s) {
+    const double dx = s.width / static_cast<double>(s.nx - 1), dy = s.length / static_cast<double>(s.ny - 1);
+    const double longer = std::max(dx, dy), shorter = std::min(dx, dy);
+    if (longer <= LONGEST_CELL * shorter) return "";
+    const bool across_y = dy < dx;  // the short side is y's: fewer particles along y, or more along x
+    const std::string short_name = across_y ? "ny" : "nx", long_name = across_y ? "nx" : "ny";
+    const auto fewest = static_cast<long long>(std::floor((across_y ? s.length : s.width) * LONGEST_CELL / longer)) + 1;
+    const auto most = static_cast<long long>(std::ceil((across_y ? s.width : s.length) / (LONGEST_CELL * shorter))) + 1;
+    std::string fixes;
+    if (fewest >= 2) fixes = short_name + " <= " + std::to_string(fewest) + ", ";
+    if (most <= MOST_ALONG) fixes += long_name + " >= " + std::to_string(most) + ", ";
+    const std::string name = fixes.empty() ? short_name : fixes.substr(0, 2);
+    const auto ratio = static_cast<long long>(std::nearbyint(longer / shorter));  // Python's round: half to even
+    return "parameter '" + name + "': the grid's cells are " + std::to_string(ratio) +
+           " times longer one way than the other (width/(nx-1) = " + py_g(dx, 3) + " m, length/(ny-1) = " +
+           py_g(dy, 3) + " m): the springs across them would be that squared stiffer than along; allowed: at most " +
+           py_g(LONGEST_CELL) + " times (" + fixes + "or change width or length)";
+}
+
 std::string grid_start_problem(const Scene& s, const Pins* pins) {
+    const std::string cells = grid_cells_problem(s);
+    if (!cells.empty()) return cells;
     const double half_drop = 0.5 * s.length * std::fabs(std::sin(s.initial_tilt * (PI / 180.0)));
     const double lowest = s.initial_height - half_drop - 0.5 * s.thickness;
     if (lowest <= s.floor_level) {
@@ -1034,7 +1057,9 @@ std::string Simulation::fast_mover(double h) const {
         if (collider != mover) std::fill(last, last + 4, 0.0);  // by collider, then time: its first key
         mover = collider;
         const double key[4] = {row[K_TIME], row[K_X], row[K_Y], row[K_Z]};
-        keyed("collider_key" + std::to_string(k + 1), "collider " + std::to_string(collider + 1), last, key);
+        const std::vector<Index>& numbers = fixtures_.collider_key_numbers;
+        const Index number = numbers.empty() ? static_cast<Index>(k + 1) : numbers[k];
+        keyed("collider_key" + std::to_string(number), "collider " + std::to_string(collider + 1), last, key);
         std::copy(key, key + 4, last);
     }
     // The inputs' part of the grip, reached linearly by the call's end (Simulation._fast_mover).

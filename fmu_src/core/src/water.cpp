@@ -38,12 +38,14 @@ inline double inverse_area(double twice_area) {
     return INV_TINY_AREA < inv ? INV_TINY_AREA : inv;
 }
 
-//: One triangle's drag (N) and, if Blocks, its Jacobian blocks (N s/m: xx, yy, zz, xy, xz, yz), from its
-//: corners' positions (a, b, c), velocities and submerged fractions.  The unit normal n, the part of it
-//: in the fluid share_base + share_sign s_t (s_t its corners' mean submerged fraction: 0 + 1 s_t in
-//: water, 1 - 1 s_t in the air above it), and dF/du = k_normal n n^T + k_tangential (I - n n^T) +
-//: k_linear I + k_slip s s^T, with u the fluid's velocity (flow) relative to the triangle and s its
-//: in-plane part (the slip).  Branch-free, so the grid's loop vectorises around it.
+//: One triangle's drag (N) at one of its corners' velocity (vx, vy, vz) and, if Blocks, its Jacobian blocks
+//: (N s/m: xx, yy, zz, xy, xz, yz), from its corners' positions (a, b, c) and submerged fractions.  The unit
+//: normal n, the part of it in the fluid share_base + share_sign s_t (s_t its corners' mean submerged
+//: fraction: 0 + 1 s_t in water, 1 - 1 s_t in the air above it), and dF/du = k_normal n n^T +
+//: k_tangential (I - n n^T) + k_linear I + k_slip s s^T, with u the fluid's velocity (flow) relative to the
+//: corner and s its in-plane part (the slip).  A corner takes its share of the drag at its own velocity
+//: (docs/model.md 4.3), so the drag's power on it is -share u . F(u) <= 0 and these blocks are its exact
+//: velocity Jacobian.  Branch-free, so the grid's loop vectorises around it.
 struct TriangleDrag {
     double fx, fy, fz, xx, yy, zz, xy, xz, yz;
 };
@@ -51,9 +53,9 @@ struct TriangleDrag {
 template <bool Blocks>
 inline TriangleDrag triangle_drag(double density, double c_normal, double c_tangential, double c_linear,
                                   double flow_x, double flow_y, double flow_z, double share_base, double share_sign,
-                                  double ax, double ay, double az, double avx, double avy, double avz, double as,
-                                  double bx, double by, double bz, double bvx, double bvy, double bvz, double bs,
-                                  double cx_, double cy_, double cz_, double cvx, double cvy, double cvz, double cs) {
+                                  double ax, double ay, double az, double as, double bx, double by, double bz,
+                                  double bs, double cx_, double cy_, double cz_, double cs, double vx, double vy,
+                                  double vz) {
     const double st = share_base + share_sign * ((as + bs + cs) * (1.0 / 3.0));
     const double e1x = bx - ax;
     const double e1y = by - ay;
@@ -70,9 +72,9 @@ inline TriangleDrag triangle_drag(double density, double c_normal, double c_tang
     const double normal_y = cy * inv;
     const double normal_z = cz * inv;
     const double wet_area = 0.5 * twice_area * st;
-    const double ux = flow_x - (avx + bvx + cvx) * (1.0 / 3.0);
-    const double uy = flow_y - (avy + bvy + cvy) * (1.0 / 3.0);
-    const double uz = flow_z - (avz + bvz + cvz) * (1.0 / 3.0);
+    const double ux = flow_x - vx;
+    const double uy = flow_y - vy;
+    const double uz = flow_z - vz;
     const double un = ux * normal_x + uy * normal_y + uz * normal_z;
     const double utx = ux - un * normal_x;
     const double uty = uy - un * normal_y;
@@ -99,27 +101,25 @@ inline TriangleDrag triangle_drag(double density, double c_normal, double c_tang
     return d;
 }
 
-//: Triangles (a[k], b[k], c[k]) for k < count (triangle_drag): force (N) into fx, fy, fz and, if Blocks,
-//: the Jacobian blocks (N s/m) into xx..yz.  Every row is a __restrict parameter: GCC ignores __restrict
-//: on locals and struct members, and with nine written rows run-time overlap checks would be too many.
+//: Triangles (a[k], b[k], c[k]) for k < count (triangle_drag) at the velocities v[k] of one of their corners:
+//: force (N) into fx, fy, fz and, if Blocks, the Jacobian blocks (N s/m) into xx..yz.  Every row is a
+//: __restrict parameter: GCC ignores __restrict on locals and struct members, and with nine written rows
+//: run-time overlap checks would be too many.
 template <bool Blocks>
 void drag_row_loop(Index count, double density, double c_normal, double c_tangential, double c_linear,
                    double flow_x, double flow_y, double flow_z, double share_base, double share_sign,
                    const double* __restrict ax, const double* __restrict ay, const double* __restrict az,
-                   const double* __restrict avx, const double* __restrict avy,
-                   const double* __restrict avz, const double* __restrict as, const double* __restrict bx,
-                   const double* __restrict by, const double* __restrict bz, const double* __restrict bvx,
-                   const double* __restrict bvy, const double* __restrict bvz, const double* __restrict bs,
-                   const double* __restrict cx_, const double* __restrict cy_, const double* __restrict cz_,
-                   const double* __restrict cvx, const double* __restrict cvy, const double* __restrict cvz,
-                   const double* __restrict cs, double* __restrict fx_, double* __restrict fy_,
+                   const double* __restrict as, const double* __restrict bx, const double* __restrict by,
+                   const double* __restrict bz, const double* __restrict bs, const double* __restrict cx_,
+                   const double* __restrict cy_, const double* __restrict cz_, const double* __restrict cs,
+                   const double* __restrict vx, const double* __restrict vy, const double* __restrict vz,
+                   double* __restrict fx_, double* __restrict fy_,
                    double* __restrict fz_, double* __restrict xx, double* __restrict yy, double* __restrict zz,
                    double* __restrict xy, double* __restrict xz, double* __restrict yz) {
     for (Index k = 0; k < count; ++k) {
         const TriangleDrag d = triangle_drag<Blocks>(
             density, c_normal, c_tangential, c_linear, flow_x, flow_y, flow_z, share_base, share_sign, ax[k], ay[k],
-            az[k], avx[k], avy[k], avz[k], as[k], bx[k], by[k], bz[k], bvx[k], bvy[k], bvz[k], bs[k], cx_[k], cy_[k],
-            cz_[k], cvx[k], cvy[k], cvz[k], cs[k]);
+            az[k], as[k], bx[k], by[k], bz[k], bs[k], cx_[k], cy_[k], cz_[k], cs[k], vx[k], vy[k], vz[k]);
         fx_[k] = d.fx;
         fy_[k] = d.fy;
         fz_[k] = d.fz;
@@ -134,16 +134,16 @@ void drag_row_loop(Index count, double density, double c_normal, double c_tangen
     }
 }
 
-//: drag_row_loop over corners a, b, c; out is 9 rows of `stride` from their first slot.
+//: drag_row_loop over corners a, b, c at the velocities of corner `at` (one of them); out is 9 rows of
+//: `stride` from their first slot.
 template <bool Blocks>
-void drag_row(Index count, const Corner& a, const Corner& b, const Corner& c, const Fluid& fluid, double* out,
-              Index stride) {
+void drag_row(Index count, const Corner& a, const Corner& b, const Corner& c, const Corner& at, const Fluid& fluid,
+              double* out, Index stride) {
     const double base = fluid.above ? 1.0 : 0.0, sign = fluid.above ? -1.0 : 1.0;
     drag_row_loop<Blocks>(count, fluid.density, fluid.c_normal, fluid.c_tangential, fluid.c_linear, fluid.flow_x,
-                          fluid.flow_y, fluid.flow_z, base, sign, a.x, a.y, a.z, a.vx, a.vy, a.vz, a.s, b.x, b.y,
-                          b.z, b.vx, b.vy, b.vz, b.s, c.x, c.y, c.z, c.vx, c.vy, c.vz, c.s,
-                          out, out + stride, out + 2 * stride, out + 3 * stride, out + 4 * stride, out + 5 * stride,
-                          out + 6 * stride, out + 7 * stride, out + 8 * stride);
+                          fluid.flow_y, fluid.flow_z, base, sign, a.x, a.y, a.z, a.s, b.x, b.y, b.z, b.s, c.x, c.y,
+                          c.z, c.s, at.vx, at.vy, at.vz, out, out + stride, out + 2 * stride, out + 3 * stride,
+                          out + 4 * stride, out + 5 * stride, out + 6 * stride, out + 7 * stride, out + 8 * stride);
 }
 
 //: Whether a particle with submerged fraction s is out of the fluid: it does not touch water (s = 0)
@@ -162,14 +162,40 @@ inline void zero(double* a, Index count) {
     for (Index i = 0; i < count; ++i) a[i] = 0.0;
 }
 
-//: Every cell's drag (and, if wanted, its Jacobian) into cells; the forces gathered into force.
+inline void gather_corner_loop(Index n, double first_weight, double second_weight, const double* __restrict first,
+                               const double* __restrict second, double* __restrict out) {
+    for (Index v = 0; v < n; ++v) out[v] += first_weight * first[v] + second_weight * second[v];
+}
+
+//: Every particle's share of the drag of the two triangles (rows t1, t2 of n + nx + 1) of which it is corner
+//: `corner` (0, 1, 2: a, b, d of the first, a, d, c of the second), out[v] += scale * share.  Particle v is
+//: corner a (weight 1/4) of both triangles of cell v, the right-angle corner b (1/2) of cell v-1's first
+//: triangle, corner d (1/4) of both triangles of cell v-nx-1, and the right-angle corner c (1/2) of cell
+//: v-nx's second triangle.
+void gather_corner(Index nx, Index n, Index corner, const double* t1, const double* t2, double* out, double scale) {
+    const Index pad = nx + 1;
+    if (corner == 0) return gather_corner_loop(n, 0.25 * scale, 0.25 * scale, t1 + pad, t2 + pad, out);
+    if (corner == 1) return gather_corner_loop(n, 0.5 * scale, 0.25 * scale, t1 + pad - 1, t2, out);
+    gather_corner_loop(n, 0.25 * scale, 0.5 * scale, t1, t2 + 1, out);
+}
+
+//: Every particle's share of its six triangles' drag, each at its own velocity, into force and, with blocks,
+//: h times their Jacobian into blocks: for each corner in turn, the cells' drag at that corner's velocities
+//: (drag_rows), gathered into that corner's particles.
 void drag_forces(Index nx, Index ny, const double* pos, const double* vel, const double* s, const Fluid& fluid,
-                 double* force, double* cells, bool blocks_wanted, bool skip_dry_rows) {
-    drag_rows(nx, ny, pos, vel, s, fluid, cells, blocks_wanted, skip_dry_rows);
+                 double h, double* force, double* blocks, double* cells, bool skip_dry_rows) {
     const Index n = nx * ny;
     const Index length = n + nx + 1;
-    for (Index comp = 0; comp < 3; ++comp) {
-        gather_cells(nx, n, cells + comp * length, cells + (9 + comp) * length, force + comp * n, 1.0);
+    for (Index corner = 0; corner < 3; ++corner) {
+        drag_rows(nx, ny, pos, vel, s, fluid, corner, cells, blocks != nullptr, skip_dry_rows);
+        for (Index comp = 0; comp < 3; ++comp) {
+            gather_corner(nx, n, corner, cells + comp * length, cells + (9 + comp) * length, force + comp * n, 1.0);
+        }
+        if (blocks == nullptr) continue;
+        for (Index comp = 0; comp < 6; ++comp) {
+            gather_corner(nx, n, corner, cells + (3 + comp) * length, cells + (9 + 3 + comp) * length,
+                          blocks + comp * n, h);
+        }
     }
 }
 
@@ -186,16 +212,18 @@ struct MeshChunk {
     double out[MESH_FLUIDS][9][MESH_CHUNK];
 };
 
-//: The drag of fluid f (fluids[f]) on the chunk's count triangles into its rows out[f].
+//: The drag of fluid f (fluids[f]) on the chunk's count triangles at the velocities of their corner `at`
+//: (0, 1, 2) into its rows out[f].
 template <bool Blocks>
-void mesh_chunk_drag(MeshChunk& m, Index f, Index count, const Fluid& fluid) {
+void mesh_chunk_drag(MeshChunk& m, Index f, Index count, Index at, const Fluid& fluid) {
     double(*in)[MESH_CHUNK] = m.in;
     double(*out)[MESH_CHUNK] = m.out[f];
+    double(*v)[MESH_CHUNK] = m.in + 7 * at + 3;
     const double base = fluid.above ? 1.0 : 0.0, sign = fluid.above ? -1.0 : 1.0;
     drag_row_loop<Blocks>(count, fluid.density, fluid.c_normal, fluid.c_tangential, fluid.c_linear, fluid.flow_x,
-                          fluid.flow_y, fluid.flow_z, base, sign, in[0], in[1], in[2], in[3], in[4], in[5], in[6],
-                          in[7], in[8], in[9], in[10], in[11], in[12], in[13], in[14], in[15], in[16], in[17], in[18],
-                          in[19], in[20], out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8]);
+                          fluid.flow_y, fluid.flow_z, base, sign, in[0], in[1], in[2], in[6], in[7], in[8], in[9],
+                          in[13], in[14], in[15], in[16], in[20], v[0], v[1], v[2], out[0], out[1], out[2], out[3],
+                          out[4], out[5], out[6], out[7], out[8]);
 }
 
 }  // namespace
@@ -244,31 +272,12 @@ void stokes_drag(Index n, const double* s, const double* coefficient, double cur
     stokes_loop(n, s, coefficient, current_x, current_y, vel, vel + n, vel + 2 * n, force, force + n, force + 2 * n);
 }
 
-namespace {
-
-inline void gather_loop(Index n, double scale, const double* __restrict a1, const double* __restrict b1,
-                        const double* __restrict d1, const double* __restrict a2, const double* __restrict d2,
-                        const double* __restrict c2, double* __restrict out) {
-    const double quarter = 0.25 * scale, half = 0.5 * scale;
-    for (Index v = 0; v < n; ++v) out[v] += quarter * (a1[v] + d1[v] + a2[v] + d2[v]) + half * (b1[v] + c2[v]);
-}
-
-}  // namespace
-
-// Particle v is corner a (weight 1/4) of both triangles of cell v, the right-angle corner b (1/2) of
-// cell v-1's first triangle, corner d (1/4) of both triangles of cell v-nx-1, and the right-angle
-// corner c (1/2) of cell v-nx's second triangle.
-void gather_cells(Index nx, Index n, const double* t1, const double* t2, double* out, double scale) {
-    const Index pad = nx + 1;
-    gather_loop(n, scale, t1 + pad, t1 + pad - 1, t1, t2 + pad, t2, t2 + 1, out);
-}
-
 // The rows between the highest and lowest ones in the fluid are computed in one run along the grid, as
 // if every particle began a cell (fewer, longer loops: measured faster in numba on 9 x 9 and 32 x 32);
 // the last column's, which are no cells, are then zeroed (triangles outside the fluid have zero drag
 // anyway: their area in it is zero).
 void drag_rows(Index nx, Index ny, const double* pos, const double* vel, const double* s, const Fluid& fluid,
-               double* cells, bool blocks_wanted, bool skip_dry_rows) {
+               Index at, double* cells, bool blocks_wanted, bool skip_dry_rows) {
     const Index n = nx * ny;
     const Index pad = nx + 1;
     const Index length = n + pad;
@@ -294,12 +303,14 @@ void drag_rows(Index nx, Index ny, const double* pos, const double* vel, const d
     const Index lo = pad + start;
     double* first_triangles = cells + lo;
     double* second_triangles = cells + 9 * length + lo;
+    const Corner& first_at = at == 0 ? a : at == 1 ? b : d;  // the corner of (a, b, d) and of (a, d, c)
+    const Corner& second_at = at == 0 ? a : at == 1 ? d : c;
     if (blocks_wanted) {
-        drag_row<true>(count, a, b, d, fluid, first_triangles, length);
-        drag_row<true>(count, a, d, c, fluid, second_triangles, length);
+        drag_row<true>(count, a, b, d, first_at, fluid, first_triangles, length);
+        drag_row<true>(count, a, d, c, second_at, fluid, second_triangles, length);
     } else {
-        drag_row<false>(count, a, b, d, fluid, first_triangles, length);
-        drag_row<false>(count, a, d, c, fluid, second_triangles, length);
+        drag_row<false>(count, a, b, d, first_at, fluid, first_triangles, length);
+        drag_row<false>(count, a, d, c, second_at, fluid, second_triangles, length);
     }
     for (Index r = first; r < last; ++r) {
         for (Index row = 0; row < 18; ++row) cells[row * length + pad + r * nx + nx - 1] = 0.0;
@@ -308,18 +319,13 @@ void drag_rows(Index nx, Index ny, const double* pos, const double* vel, const d
 
 void face_drag(Index nx, Index ny, const double* pos, const double* vel, const double* s, const Fluid& fluid,
                double* force, double* cells, bool skip_dry_rows) {
-    drag_forces(nx, ny, pos, vel, s, fluid, force, cells, false, skip_dry_rows);
+    drag_forces(nx, ny, pos, vel, s, fluid, 0.0, force, nullptr, cells, skip_dry_rows);
 }
 
 void face_drag_and_blocks(Index nx, Index ny, const double* pos, const double* vel, const double* s,
                           const Fluid& fluid, double h, double* force, double* blocks, double* cells,
                           bool skip_dry_rows) {
-    drag_forces(nx, ny, pos, vel, s, fluid, force, cells, true, skip_dry_rows);
-    const Index n = nx * ny;
-    const Index length = n + nx + 1;
-    for (Index comp = 0; comp < 6; ++comp) {
-        gather_cells(nx, n, cells + (3 + comp) * length, cells + (9 + 3 + comp) * length, blocks + comp * n, h);
-    }
+    drag_forces(nx, ny, pos, vel, s, fluid, h, force, blocks, cells, skip_dry_rows);
 }
 
 void mesh_face_drag(Index triangle_count, const Index* triangles, const double* shares, const Fluid* fluids,
@@ -349,20 +355,21 @@ void mesh_face_drag(Index triangle_count, const Index* triangles, const double* 
             }
             m.kept[count++] = t;
         }
-        for (Index f = 0; f < fluid_count; ++f) {
-            if (blocks) {
-                mesh_chunk_drag<true>(m, f, count, fluids[f]);
-            } else {
-                mesh_chunk_drag<false>(m, f, count, fluids[f]);
+        // Each corner's share of the drag at its own velocity (docs/model.md 4.3), corner by corner.
+        for (Index corner = 0; corner < 3; ++corner) {
+            for (Index f = 0; f < fluid_count; ++f) {
+                if (blocks) {
+                    mesh_chunk_drag<true>(m, f, count, corner, fluids[f]);
+                } else {
+                    mesh_chunk_drag<false>(m, f, count, corner, fluids[f]);
+                }
             }
-        }
-        const Index rows = blocks ? 9 : 3;
-        for (Index f = 1; f < fluid_count; ++f)
-            for (Index r = 0; r < rows; ++r)
-                for (Index k = 0; k < count; ++k) m.out[0][r][k] += m.out[f][r][k];
-        for (Index k = 0; k < count; ++k) {
-            const Index t = m.kept[k];
-            for (Index corner = 0; corner < 3; ++corner) {
+            const Index rows = blocks ? 9 : 3;
+            for (Index f = 1; f < fluid_count; ++f)
+                for (Index r = 0; r < rows; ++r)
+                    for (Index k = 0; k < count; ++k) m.out[0][r][k] += m.out[f][r][k];
+            for (Index k = 0; k < count; ++k) {
+                const Index t = m.kept[k];
                 double* sum = records.sums + records.stride * triangles[3 * t + corner];
                 const double share = shares[3 * t + corner];
                 for (Index r = 0; r < 3; ++r) sum[SUM_FORCE + r] += share * m.out[0][r][k];

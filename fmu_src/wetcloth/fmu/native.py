@@ -176,13 +176,21 @@ def _c_array(name: str, kind: str, values) -> str:
 
 
 #: The fixtures' arrays in the generated source (``unit.cpp``'s scene_fixtures): C++ name, element type, and
-#: where each comes from: the collider rows, a ColliderMeshes field (``collider_meshes``), the grip keys.
+#: where each comes from: the collider rows, a ColliderMeshes field (``collider_meshes``), the grip keys, the
+#: collider keys and their k in the scene.
 FIXTURE_ARRAYS = (("SCENE_COLLIDERS", "double", "rows"), ("SCENE_MESH_HEADERS", "double", "headers"),
                   ("SCENE_MESH_VERTICES", "double", "vertices"), ("SCENE_FACE_NORMALS", "double", "face_normals"),
                   ("SCENE_EDGE_NORMALS", "double", "edge_normals"), ("SCENE_VERTEX_NORMALS", "double", "vertex_normals"),
                   ("SCENE_MESH_TRIANGLES", "Index", "triangles"), ("SCENE_CELL_START", "Index", "cell_start"),
                   ("SCENE_CELL_ITEMS", "Index", "cell_items"), ("SCENE_GRIP_KEYS", "double", "grip_keys"),
-                  ("SCENE_COLLIDER_KEYS", "double", "collider_keys"))
+                  ("SCENE_COLLIDER_KEYS", "double", "collider_keys"),
+                  ("SCENE_COLLIDER_KEY_NUMBERS", "Index", "collider_key_numbers"))
+
+
+def collider_key_numbers(keys) -> list[int]:
+    """Each of the core's collider key rows' k (from 1) in the scene's ``[[collider_key]]`` tables, in the rows'
+    order (``collider_key_rows``: by collider, then time), for the unit's blow-up messages: collider_key<k>."""
+    return sorted(range(1, len(keys) + 1), key=lambda k: (keys[k - 1].collider, keys[k - 1].time))
 
 
 def fixtures_source(scene=None, cloth: dict | None = None) -> str:
@@ -197,8 +205,9 @@ def fixtures_source(scene=None, cloth: dict | None = None) -> str:
     from wetcloth.scene import collider_key_rows, grip_key_rows
 
     rows, meshes = meshes_of(scene.colliders) if scene is not None else (np.zeros(0), no_meshes())
+    keys = scene.collider_keys if scene is not None else ()
     sources = dict(meshes._asdict(), rows=rows, grip_keys=grip_key_rows(scene.grip_keys if scene is not None else ()),
-                   collider_keys=collider_key_rows(scene.collider_keys if scene is not None else ()))
+                   collider_keys=collider_key_rows(keys), collider_key_numbers=collider_key_numbers(keys))
     lines = [_c_array(name, kind, sources[source]) for name, kind, source in FIXTURE_ARRAYS]
     lines.append(native_mesh.cloth_source(cloth, _c_array, _c_double, _c_string))
     lines.append(native_mesh.pins_source(scene, _c_array, _c_double, _c_string))

@@ -166,6 +166,11 @@ struct Pins;
 //: fixes (ClothMesh::fixed_problem); with `pins`, a box that holds a particle (pinned_mask).
 std::string scene_problem(const Scene& scene, const ClothMesh* mesh = nullptr, const Pins* pins = nullptr);
 
+//: The most a grid's cells may be longer one way than the other (scene.LONGEST_CELL), and the most particles
+//: along a side (scene.MOST_ALONG).
+constexpr double LONGEST_CELL = 100.0;
+constexpr Index MOST_ALONG = 1024;
+
 //: "" or the ParameterError's text of a bend_rigidity on a native unit's grid built without hinges
 //: (native_mesh.GRID_RIGIDITY): its families have none (built with them, the grid's springs are listed,
 //: topology._hinged_grid: a ClothMesh with hinged_grid).
@@ -367,10 +372,11 @@ struct Fixtures {
     std::vector<Index> mesh_triangles, cell_start, cell_items;
     std::vector<double> grip_keys;  // (g, 4) rows: time s, x, y, z m
     //: (c, COLLIDER_KEY_COLUMNS) rows: collider (from 0), time s, x, y, z m, rotation vector rad; by collider,
-    //: then time (scene.collider_key_rows).  A blow-up's message names a key collider_key<k> by its place k
-    //: (from 1) in these rows: the scene's own k where its keys are listed collider by collider, as a scene
-    //: file or preset usually lists them (interleaved keys of several colliders are sorted here).
+    //: then time (scene.collider_key_rows).
     std::vector<double> collider_keys;
+    //: Each row's k (from 1) among the scene's [[collider_key]] tables, by which a blow-up's message names it
+    //: collider_key<k>; empty: the rows' own places (the scene listed its keys collider by collider).
+    std::vector<Index> collider_key_numbers;
     std::shared_ptr<const ClothMesh> cloth_mesh;  // the cloth from a mesh file, or none: the nx x ny grid
     std::shared_ptr<const Pins> pins;             // the pins by pinned_vertices, or none
     Index collider_count() const { return static_cast<Index>(colliders.size() / COLLIDER_COLUMNS); }

@@ -6,6 +6,8 @@
 // the split of Topology.triangles.  Per-triangle values go into rows of length n + nx + 1 (cell i at
 // slot i + nx + 1; slots of non-cells stay zero), and each particle gathers its share of its six
 // triangles' values with the weights of its area: the right-angle corner 1/2, the other two 1/4 each.
+// A corner takes its share of a triangle's drag at its own velocity (docs/model.md 4.3): the rows are
+// filled once for each corner of the triangles, at that corner's velocities, and gathered into it.
 #pragma once
 #include "wetcloth/core.hpp"
 #include "wetcloth/mesh_records.hpp"
@@ -44,23 +46,22 @@ inline Fluid air_fluid(const Physics& p) {
     return {p.air_density, p.drag_normal, p.drag_tangential, 0.0, p.wind_x, p.wind_y, p.wind_z, true};
 }
 
-//: Every particle's area-weighted share of the six triangles around it, out[v] += scale * share; t1, t2
-//: the two triangles' rows (n + nx + 1), out (n).
-void gather_cells(Index nx, Index n, const double* t1, const double* t2, double* out, double scale);
-
-//: Fill cells (2, 9, n + nx + 1) with both triangles' drag force (N) in the fluid and, if blocks_wanted,
-//: the Jacobian blocks (xx, yy, zz, xy, xz, yz; N s/m) of every cell; with skip_dry_rows the rows of
-//: cells above the highest row in the fluid and below the lowest are zeroed, not computed.
+//: Fill cells (2, 9, n + nx + 1) with both triangles' drag force (N) in the fluid at the velocities of their
+//: corner `at` (0, 1, 2: a, b, d of (a, b, d) and a, d, c of (a, d, c), a = i, b = i + 1, c = i + nx,
+//: d = i + nx + 1) and, if blocks_wanted, the Jacobian blocks (xx, yy, zz, xy, xz, yz; N s/m) of every
+//: cell; with skip_dry_rows the rows of cells above the highest row in the fluid and below the lowest are
+//: zeroed, not computed.
 void drag_rows(Index nx, Index ny, const double* pos, const double* vel, const double* s, const Fluid& fluid,
-               double* cells, bool blocks_wanted, bool skip_dry_rows);
+               Index at, double* cells, bool blocks_wanted, bool skip_dry_rows);
 
 //: Add the face-model drag (docs/model.md section 4.3) of the fluid on the nx x ny grid to force (3, n);
 //: s (n) the particles' submerged fractions; cells (2, 9, n + nx + 1) scratch.
 void face_drag(Index nx, Index ny, const double* pos, const double* vel, const double* s, const Fluid& fluid,
                double* force, double* cells, bool skip_dry_rows = true);
 
-//: Face drag as face_drag, plus h (s) times its lumped velocity Jacobian added to blocks (6, n: xx, yy,
-//: zz, xy, xz, yz): each triangle's Jacobian goes to its particles with the force's weights.
+//: Face drag as face_drag, plus h (s) times its velocity Jacobian added to blocks (6, n: xx, yy, zz, xy, xz,
+//: yz): each particle's share of its triangles' drag depends on its own velocity alone, so these blocks are
+//: the whole of it.
 void face_drag_and_blocks(Index nx, Index ny, const double* pos, const double* vel, const double* s,
                           const Fluid& fluid, double h, double* force, double* blocks, double* cells,
                           bool skip_dry_rows = true);
@@ -70,8 +71,9 @@ inline constexpr Index MESH_FLUIDS = 2;
 
 //: The face drag of fluid_count (at most MESH_FLUIDS) fluids on a mesh's triangles (m, 3) added to the
 //: force sums of its particles' records (from their state), each triangle's shared by its corners as
-//: `shares` (m, 3) says; with the records' blocks, h (s) times its lumped velocity Jacobian added to their
-//: drag blocks likewise.  With skip_idle, triangles with no corner in any of the fluids are skipped.
+//: `shares` (m, 3) says; with the records' blocks, h (s) times its velocity Jacobian added to their
+//: drag blocks likewise (each corner's share at its own velocity).  With skip_idle, triangles with no corner in
+//: any of the fluids are skipped.
 void mesh_face_drag(Index triangle_count, const Index* triangles, const double* shares, const Fluid* fluids,
                     Index fluid_count, double h, const MeshRecords& records, bool skip_idle);
 
