@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import wetcloth
+from wetcloth import _core
 from wetcloth._core import _system_matvec, face_drag_and_blocks
 from wetcloth.model import Model
 from support.reference import NumpyReference
@@ -57,7 +58,7 @@ def test_face_drag_skips_only_dry_rows(air):
     fluid = ((physics.air_density, 0.0, physics.wind_x, physics.wind_y, physics.wind_z) if air else
              (physics.water_density, physics.drag_linear, physics.current_x, physics.current_y, 0.0))
     density, linear, flow_x, flow_y, flow_z = fluid
-    cells = np.zeros((2, 9, n + nx + 1))
+    cells = np.zeros((_core.DRAG_CELL_ROWS, n + nx + 1))
     rng = np.random.default_rng(5)
     for dry_rows in ([], [0, 1, 4, 7, 8], [0, 1, 2, 3, 4, 5, 6, 7, 8], [5, 6, 7, 8], [0, 3]):
         s = rng.uniform(0.1, 1.0, size=n) if not air else rng.uniform(0.0, 0.9, size=n)

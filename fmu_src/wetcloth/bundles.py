@@ -12,6 +12,7 @@ from collections import namedtuple
 
 import numpy as np
 
+from wetcloth import _core
 from wetcloth._core import SOLVER_COUNTERS
 
 #: The fixed cloth: grid size, spring families (offset, rest length m, tension only, stiffness N/m,
@@ -46,7 +47,7 @@ Physics = namedtuple("Physics", "projected wet_factor water_level water_density 
 #: particle; ``saturation`` (n); ``blocks`` (6, n) per-particle symmetric 3x3 blocks (xx, yy, zz,
 #: xy, xz, yz) of the system matrix; ``diagonal_blocks`` (6, n) the springs' part of its diagonal
 #: blocks; ``direction`` (F, 3, n), ``along``, ``across`` (F, n) each spring's block; ``buf`` (4, n);
-#: ``cells`` (2, 9, n + nx + 1) a grid's face-drag rows (a mesh's: its particles' records,
+#: ``cells`` (DRAG_CELL_ROWS, n + nx + 1) a grid's face-drag rows (a mesh's: its particles' records,
 #: mesh_records.hpp); ``wick_buffer`` (6, n); ``pair_direction`` (3, S), ``pair_along``, ``pair_across`` (S) the listed springs' blocks;
 #: ``single_blocks`` (F, 5, n) float32: each spring's block for CG's products (ux, uy, uz, across, along - across);
 #: ``single_buf`` (6, n) float32 those products' scratch.
@@ -78,11 +79,12 @@ Solver = namedtuple("Solver", "mass rhs dv r z p ap hat_pos hat_vel predicted st
 def make_work(n: int, families: int, grid_x: int, pairs: int = 0) -> Work:
     """Zeroed scratch for n particles, ``families`` spring families and rows of ``grid_x`` particles (0:
     a mesh, with ``pairs`` listed springs)."""
-    cells = n + grid_x + 1 if grid_x > 0 else (32 * (n + 1) + 17) // 18  # the core's cells_length
+    rows = _core.DRAG_CELL_ROWS
+    cells = n + grid_x + 1 if grid_x > 0 else -(-_core.MESH_RECORD_SLOTS * (n + 1) // rows)  # the core's cells_length
     return Work(force=np.zeros((3, n)), submerged=np.zeros(n), saturation=np.zeros(n), blocks=np.zeros((6, n)),
                 diagonal_blocks=np.zeros((6, n)), direction=np.zeros((families, 3, n)),
                 along=np.zeros((families, n)), across=np.zeros((families, n)),
-                buf=np.zeros((4, n)), cells=np.zeros((2, 9, cells)), wick_buffer=np.zeros((6, n)),
+                buf=np.zeros((4, n)), cells=np.zeros((rows, cells)), wick_buffer=np.zeros((6, n)),
                 pair_direction=np.zeros((3, pairs)), pair_along=np.zeros(pairs), pair_across=np.zeros(pairs),
                 single_blocks=np.zeros((families, 5, n), dtype=np.float32),
                 single_buf=np.zeros((6, n), dtype=np.float32))

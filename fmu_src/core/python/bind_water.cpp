@@ -8,6 +8,8 @@ namespace nb = nanobind;
 WETCLOTH_BINDINGS(m) {
     using namespace wc;
     using namespace wc::py;
+    m.attr("DRAG_CELL_ROWS") = DRAG_CELL_ROWS;
+    m.attr("MESH_RECORD_SLOTS") = MESH_RECORD_SLOTS;
 
     m.def(
         "submerged_fractions",
@@ -50,14 +52,14 @@ WETCLOTH_BINDINGS(m) {
             const Fluid fluid{density, c_normal, c_tangential, c_linear, flow_x, flow_y, flow_z, truth(above)};
             face_drag(nx, ny, argument<const double>(pos, "pos", 3 * n), argument<const double>(vel, "vel", 3 * n),
                       argument<const double>(s, "s", n), fluid, argument<double>(force, "force", 3 * n),
-                      argument<double>(cells, "cells", 18 * (n + nx + 1)), truth(skip_dry_rows));
+                      argument<double>(cells, "cells", DRAG_CELL_ROWS * (n + nx + 1)), truth(skip_dry_rows));
         },
         nb::arg("nx"), nb::arg("ny"), nb::arg("pos"), nb::arg("vel"), nb::arg("s"), nb::arg("density"),
         nb::arg("c_normal"), nb::arg("c_tangential"), nb::arg("c_linear"), nb::arg("flow_x"), nb::arg("flow_y"),
         nb::arg("force"), nb::arg("cells"), nb::arg("skip_dry_rows") = true, nb::arg("flow_z") = 0.0,
         nb::arg("above") = false,
         "Add the face-model drag of a fluid flowing at (flow_x, flow_y, flow_z) m/s to force: the water's on each "
-        "triangle's submerged part, or with above=True the air's on the rest; cells (2, 9, n + nx + 1) scratch.");
+        "triangle's submerged part, or with above=True the air's on the rest; cells (DRAG_CELL_ROWS, n + nx + 1) scratch.");
 
     m.def(
         "face_drag_and_blocks",
@@ -69,7 +71,7 @@ WETCLOTH_BINDINGS(m) {
             face_drag_and_blocks(nx, ny, argument<const double>(pos, "pos", 3 * n),
                                  argument<const double>(vel, "vel", 3 * n), argument<const double>(s, "s", n), fluid,
                                  h, argument<double>(force, "force", 3 * n), argument<double>(blocks, "blocks", 6 * n),
-                                 argument<double>(cells, "cells", 18 * (n + nx + 1)), truth(skip_dry_rows));
+                                 argument<double>(cells, "cells", DRAG_CELL_ROWS * (n + nx + 1)), truth(skip_dry_rows));
         },
         nb::arg("nx"), nb::arg("ny"), nb::arg("pos"), nb::arg("vel"), nb::arg("s"), nb::arg("density"),
         nb::arg("c_normal"), nb::arg("c_tangential"), nb::arg("c_linear"), nb::arg("flow_x"), nb::arg("flow_y"),

@@ -154,7 +154,7 @@ Work work_from(nb::handle h, const Cloth& cloth) {
     w.along = array<double>(h, "along", f * n);
     w.across = array<double>(h, "across", f * n);
     w.buf = array<double>(h, "buf", 4 * n);
-    w.cells = array<double>(h, "cells", 2 * 9 * cells_length(cloth));
+    w.cells = array<double>(h, "cells", DRAG_CELL_ROWS * cells_length(cloth));
     w.wick_buffer = array<double>(h, "wick_buffer", 6 * n);
     w.pair_direction = array<double>(h, "pair_direction", 3 * cloth.pair_count);
     w.pair_along = array<double>(h, "pair_along", cloth.pair_count);

@@ -544,7 +544,7 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
     }
 
     // Work (bundles.make_work).
-    const std::size_t cells = 2 * 9 * static_cast<std::size_t>(cells_length(cloth));
+    const std::size_t cells = static_cast<std::size_t>(DRAG_CELL_ROWS * cells_length(cloth));
     const std::size_t uf = static_cast<std::size_t>(families);
     const std::size_t pairs = static_cast<std::size_t>(cloth.pair_count);
     work_.assign(un * (3 + 1 + 1 + 6 + 6 + 3 * uf + uf + uf + 4 + 6) + cells + 5 * pairs, 0.0);

@@ -38,25 +38,14 @@ inline double inverse_area(double twice_area) {
     return INV_TINY_AREA < inv ? INV_TINY_AREA : inv;
 }
 
-//: One triangle's drag (N) at one of its corners' velocity (vx, vy, vz) and, if Blocks, its Jacobian blocks
-//: (N s/m: xx, yy, zz, xy, xz, yz), from its corners' positions (a, b, c) and submerged fractions.  The unit
-//: normal n, the part of it in the fluid share_base + share_sign s_t (s_t its corners' mean submerged
-//: fraction: 0 + 1 s_t in water, 1 - 1 s_t in the air above it), and dF/du = k_normal n n^T +
-//: k_tangential (I - n n^T) + k_linear I + k_slip s s^T, with u the fluid's velocity (flow) relative to the
-//: corner and s its in-plane part (the slip).  A corner takes its share of the drag at its own velocity
-//: (docs/model.md 4.3), so the drag's power on it is -share u . F(u) <= 0 and these blocks are its exact
-//: velocity Jacobian.  Branch-free, so the grid's loop vectorises around it.
-struct TriangleDrag {
-    double fx, fy, fz, xx, yy, zz, xy, xz, yz;
+//: A triangle's unit normal, half its area's magnitude (m^2) and its corners' mean submerged fraction: what
+//: its drag on each corner shares (shape_row_loop computes them once for the three corners).
+struct TriangleShape {
+    double nx, ny, nz, half_area, submerged;
 };
 
-template <bool Blocks>
-inline TriangleDrag triangle_drag(double density, double c_normal, double c_tangential, double c_linear,
-                                  double flow_x, double flow_y, double flow_z, double share_base, double share_sign,
-                                  double ax, double ay, double az, double as, double bx, double by, double bz,
-                                  double bs, double cx_, double cy_, double cz_, double cs, double vx, double vy,
-                                  double vz) {
-    const double st = share_base + share_sign * ((as + bs + cs) * (1.0 / 3.0));
+inline TriangleShape triangle_shape(double ax, double ay, double az, double as, double bx, double by, double bz,
+                                    double bs, double cx_, double cy_, double cz_, double cs) {
     const double e1x = bx - ax;
     const double e1y = by - ay;
     const double e1z = bz - az;
@@ -68,10 +57,27 @@ inline TriangleDrag triangle_drag(double density, double c_normal, double c_tang
     const double cz = e1x * e2y - e1y * e2x;
     const double twice_area = std::sqrt(cx * cx + cy * cy + cz * cz);
     const double inv = inverse_area(twice_area);
-    const double normal_x = cx * inv;
-    const double normal_y = cy * inv;
-    const double normal_z = cz * inv;
-    const double wet_area = 0.5 * twice_area * st;
+    return {cx * inv, cy * inv, cz * inv, 0.5 * twice_area, (as + bs + cs) * (1.0 / 3.0)};
+}
+
+//: One triangle's drag (N) at one of its corners' velocity (vx, vy, vz) and, if Blocks, its Jacobian blocks
+//: (N s/m: xx, yy, zz, xy, xz, yz), from its shape: unit normal n, half area, and the part of it in the fluid
+//: share_base + share_sign s_t (s_t its corners' mean submerged fraction: 0 + 1 s_t in water, 1 - 1 s_t in
+//: the air above it); dF/du = k_normal n n^T + k_tangential (I - n n^T) + k_linear I + k_slip s s^T, with u
+//: the fluid's velocity (flow) relative to the corner and s its in-plane part (the slip).  A corner takes its
+//: share of the drag at its own velocity (docs/model.md 4.3), so the drag's power on it is -share u . F(u)
+//: <= 0 and these blocks are its exact velocity Jacobian.  Branch-free, so the loops vectorise around it.
+struct TriangleDrag {
+    double fx, fy, fz, xx, yy, zz, xy, xz, yz;
+};
+
+template <bool Blocks>
+inline TriangleDrag corner_drag(double density, double c_normal, double c_tangential, double c_linear,
+                                double flow_x, double flow_y, double flow_z, double share_base, double share_sign,
+                                double normal_x, double normal_y, double normal_z, double half_area,
+                                double submerged, double vx, double vy, double vz) {
+    const double st = share_base + share_sign * submerged;
+    const double wet_area = half_area * st;
     const double ux = flow_x - vx;
     const double uy = flow_y - vy;
     const double uz = flow_z - vz;
@@ -101,25 +107,43 @@ inline TriangleDrag triangle_drag(double density, double c_normal, double c_tang
     return d;
 }
 
-//: Triangles (a[k], b[k], c[k]) for k < count (triangle_drag) at the velocities v[k] of one of their corners:
-//: force (N) into fx, fy, fz and, if Blocks, the Jacobian blocks (N s/m) into xx..yz.  Every row is a
-//: __restrict parameter: GCC ignores __restrict on locals and struct members, and with nine written rows
-//: run-time overlap checks would be too many.
+//: The shapes (triangle_shape) of triangles (a[k], b[k], c[k]) for k < count into the SHAPE_ROWS rows
+//: out + r * stride.
+constexpr Index SHAPE_ROWS = 5;
+void shape_row_loop(Index count, const double* __restrict ax, const double* __restrict ay,
+                    const double* __restrict az, const double* __restrict as, const double* __restrict bx,
+                    const double* __restrict by, const double* __restrict bz, const double* __restrict bs,
+                    const double* __restrict cx_, const double* __restrict cy_, const double* __restrict cz_,
+                    const double* __restrict cs, double* __restrict normal_x, double* __restrict normal_y,
+                    double* __restrict normal_z, double* __restrict half_area, double* __restrict submerged) {
+    for (Index k = 0; k < count; ++k) {
+        const TriangleShape t = triangle_shape(ax[k], ay[k], az[k], as[k], bx[k], by[k], bz[k], bs[k], cx_[k],
+                                               cy_[k], cz_[k], cs[k]);
+        normal_x[k] = t.nx;
+        normal_y[k] = t.ny;
+        normal_z[k] = t.nz;
+        half_area[k] = t.half_area;
+        submerged[k] = t.submerged;
+    }
+}
+
+//: Triangles of shapes (SHAPE_ROWS rows: normal, half area, submerged) k < count at the velocities v[k] of one
+//: of their corners (corner_drag): force (N) into fx, fy, fz and, if Blocks, the Jacobian blocks (N s/m) into
+//: xx..yz.  Every row is a __restrict parameter: GCC ignores __restrict on locals and struct members, and with
+//: nine written rows run-time overlap checks would be too many.
 template <bool Blocks>
 void drag_row_loop(Index count, double density, double c_normal, double c_tangential, double c_linear,
                    double flow_x, double flow_y, double flow_z, double share_base, double share_sign,
-                   const double* __restrict ax, const double* __restrict ay, const double* __restrict az,
-                   const double* __restrict as, const double* __restrict bx, const double* __restrict by,
-                   const double* __restrict bz, const double* __restrict bs, const double* __restrict cx_,
-                   const double* __restrict cy_, const double* __restrict cz_, const double* __restrict cs,
-                   const double* __restrict vx, const double* __restrict vy, const double* __restrict vz,
-                   double* __restrict fx_, double* __restrict fy_,
+                   const double* __restrict normal_x, const double* __restrict normal_y,
+                   const double* __restrict normal_z, const double* __restrict half_area,
+                   const double* __restrict submerged, const double* __restrict vx, const double* __restrict vy,
+                   const double* __restrict vz, double* __restrict fx_, double* __restrict fy_,
                    double* __restrict fz_, double* __restrict xx, double* __restrict yy, double* __restrict zz,
                    double* __restrict xy, double* __restrict xz, double* __restrict yz) {
     for (Index k = 0; k < count; ++k) {
-        const TriangleDrag d = triangle_drag<Blocks>(
-            density, c_normal, c_tangential, c_linear, flow_x, flow_y, flow_z, share_base, share_sign, ax[k], ay[k],
-            az[k], as[k], bx[k], by[k], bz[k], bs[k], cx_[k], cy_[k], cz_[k], cs[k], vx[k], vy[k], vz[k]);
+        const TriangleDrag d = corner_drag<Blocks>(density, c_normal, c_tangential, c_linear, flow_x, flow_y, flow_z,
+                                                   share_base, share_sign, normal_x[k], normal_y[k], normal_z[k],
+                                                   half_area[k], submerged[k], vx[k], vy[k], vz[k]);
         fx_[k] = d.fx;
         fy_[k] = d.fy;
         fz_[k] = d.fz;
@@ -134,16 +158,22 @@ void drag_row_loop(Index count, double density, double c_normal, double c_tangen
     }
 }
 
-//: drag_row_loop over corners a, b, c at the velocities of corner `at` (one of them); out is 9 rows of
-//: `stride` from their first slot.
+//: drag_row_loop over the shapes' SHAPE_ROWS rows `shape` at the velocities of corner `at`; out is 9 rows;
+//: every row `stride` apart.
 template <bool Blocks>
-void drag_row(Index count, const Corner& a, const Corner& b, const Corner& c, const Corner& at, const Fluid& fluid,
-              double* out, Index stride) {
+void drag_row(Index count, const double* shape, const Corner& at, const Fluid& fluid, double* out, Index stride) {
     const double base = fluid.above ? 1.0 : 0.0, sign = fluid.above ? -1.0 : 1.0;
     drag_row_loop<Blocks>(count, fluid.density, fluid.c_normal, fluid.c_tangential, fluid.c_linear, fluid.flow_x,
-                          fluid.flow_y, fluid.flow_z, base, sign, a.x, a.y, a.z, a.s, b.x, b.y, b.z, b.s, c.x, c.y,
-                          c.z, c.s, at.vx, at.vy, at.vz, out, out + stride, out + 2 * stride, out + 3 * stride,
-                          out + 4 * stride, out + 5 * stride, out + 6 * stride, out + 7 * stride, out + 8 * stride);
+                          fluid.flow_y, fluid.flow_z, base, sign, shape, shape + stride, shape + 2 * stride,
+                          shape + 3 * stride, shape + 4 * stride, at.vx, at.vy, at.vz, out, out + stride,
+                          out + 2 * stride, out + 3 * stride, out + 4 * stride, out + 5 * stride, out + 6 * stride,
+                          out + 7 * stride, out + 8 * stride);
+}
+
+//: shape_row_loop over corners a, b, c into the SHAPE_ROWS rows from `out`, `stride` apart.
+void shape_row(Index count, const Corner& a, const Corner& b, const Corner& c, double* out, Index stride) {
+    shape_row_loop(count, a.x, a.y, a.z, a.s, b.x, b.y, b.z, b.s, c.x, c.y, c.z, c.s, out, out + stride,
+                   out + 2 * stride, out + 3 * stride, out + 4 * stride);
 }
 
 //: Whether a particle with submerged fraction s is out of the fluid: it does not touch water (s = 0)
@@ -180,20 +210,63 @@ void gather_corner(Index nx, Index n, Index corner, const double* t1, const doub
 }
 
 //: Every particle's share of its six triangles' drag, each at its own velocity, into force and, with blocks,
-//: h times their Jacobian into blocks: for each corner in turn, the cells' drag at that corner's velocities
-//: (drag_rows), gathered into that corner's particles.
+//: h times their Jacobian into blocks.  cells (DRAG_CELL_ROWS, n + nx + 1): both triangles' drag rows (9
+//: each) and their shapes' (SHAPE_ROWS each, from row 18).  The cells between the highest and lowest rows in
+//: the fluid are computed in one run along the grid, as if every particle began a cell (fewer, longer loops),
+//: their shapes once, then for each corner in turn their drag at that corner's velocities, gathered into that
+//: corner's particles; the last column's slots, which are no cells, are zeroed, and with skip_dry_rows the
+//: rows of cells outside the fluid are zeroed, not computed (their area in it is zero anyway).
 void drag_forces(Index nx, Index ny, const double* pos, const double* vel, const double* s, const Fluid& fluid,
                  double h, double* force, double* blocks, double* cells, bool skip_dry_rows) {
     const Index n = nx * ny;
-    const Index length = n + nx + 1;
-    for (Index corner = 0; corner < 3; ++corner) {
-        drag_rows(nx, ny, pos, vel, s, fluid, corner, cells, blocks != nullptr, skip_dry_rows);
+    const Index pad = nx + 1;
+    const Index length = n + pad;
+    Index first = 0, last = ny - 2;
+    if (skip_dry_rows) {
+        while (first <= last && outside(s, first * nx, first * nx + 2 * nx, fluid.above)) ++first;
+        while (last >= first && outside(s, last * nx, last * nx + 2 * nx, fluid.above)) --last;
+    }
+    const Index below = pad + first * nx;        // cells[:18, pad:below] = 0
+    const Index above = pad + (last + 1) * nx;  // cells[:18, above:] = 0
+    for (Index row = 0; row < 18; ++row) {
+        double* r = cells + row * length;
+        if (below > pad) zero(r + pad, (below < length ? below : length) - pad);
+        if (above < length) zero(r + (above > 0 ? above : 0), length - (above > 0 ? above : 0));
+    }
+    const Index start = first * nx;
+    const Index count = first <= last ? (last - first + 1) * nx - 1 : 0;
+    const Corner a = corner(n, pos, vel, s, start);
+    const Corner b = corner(n, pos, vel, s, start + 1);
+    const Corner c = corner(n, pos, vel, s, start + nx);
+    const Corner d = corner(n, pos, vel, s, start + nx + 1);
+    const Index lo = pad + start;
+    double* first_shapes = cells + 18 * length + lo;
+    double* second_shapes = first_shapes + SHAPE_ROWS * length;
+    if (count > 0) {
+        shape_row(count, a, b, d, first_shapes, length);
+        shape_row(count, a, d, c, second_shapes, length);
+    }
+    for (Index at = 0; at < 3; ++at) {
+        if (count > 0) {
+            const Corner& first_at = at == 0 ? a : at == 1 ? b : d;  // the corner of (a, b, d) and of (a, d, c)
+            const Corner& second_at = at == 0 ? a : at == 1 ? d : c;
+            if (blocks != nullptr) {
+                drag_row<true>(count, first_shapes, first_at, fluid, cells + lo, length);
+                drag_row<true>(count, second_shapes, second_at, fluid, cells + 9 * length + lo, length);
+            } else {
+                drag_row<false>(count, first_shapes, first_at, fluid, cells + lo, length);
+                drag_row<false>(count, second_shapes, second_at, fluid, cells + 9 * length + lo, length);
+            }
+            for (Index r = first; r < last; ++r) {
+                for (Index row = 0; row < 18; ++row) cells[row * length + pad + r * nx + nx - 1] = 0.0;
+            }
+        }
         for (Index comp = 0; comp < 3; ++comp) {
-            gather_corner(nx, n, corner, cells + comp * length, cells + (9 + comp) * length, force + comp * n, 1.0);
+            gather_corner(nx, n, at, cells + comp * length, cells + (9 + comp) * length, force + comp * n, 1.0);
         }
         if (blocks == nullptr) continue;
         for (Index comp = 0; comp < 6; ++comp) {
-            gather_corner(nx, n, corner, cells + (3 + comp) * length, cells + (9 + 3 + comp) * length,
+            gather_corner(nx, n, at, cells + (3 + comp) * length, cells + (9 + 3 + comp) * length,
                           blocks + comp * n, h);
         }
     }
@@ -204,11 +277,13 @@ void drag_forces(Index nx, Index ny, const double* pos, const double* vel, const
 constexpr Index MESH_CHUNK = 128;
 constexpr Index MESH_INPUTS = 21;  // x, y, z, vx, vy, vz, s of each of the three corners
 
-//: Corner rows (MESH_INPUTS, MESH_CHUNK) of the triangles `kept` (count of them), and the drag's rows
-//: (9, MESH_CHUNK) that drag_row_loop fills for each fluid (at most MESH_FLUIDS).
+//: Corner rows (MESH_INPUTS, MESH_CHUNK) of the triangles `kept` (count of them), their shapes
+//: (shape_row_loop), and the drag's rows (9, MESH_CHUNK) that drag_row_loop fills for each fluid (at most
+//: MESH_FLUIDS).
 struct MeshChunk {
     Index kept[MESH_CHUNK];
     double in[MESH_INPUTS][MESH_CHUNK];
+    double shape[SHAPE_ROWS][MESH_CHUNK];
     double out[MESH_FLUIDS][9][MESH_CHUNK];
 };
 
@@ -216,14 +291,13 @@ struct MeshChunk {
 //: (0, 1, 2) into its rows out[f].
 template <bool Blocks>
 void mesh_chunk_drag(MeshChunk& m, Index f, Index count, Index at, const Fluid& fluid) {
-    double(*in)[MESH_CHUNK] = m.in;
     double(*out)[MESH_CHUNK] = m.out[f];
     double(*v)[MESH_CHUNK] = m.in + 7 * at + 3;
     const double base = fluid.above ? 1.0 : 0.0, sign = fluid.above ? -1.0 : 1.0;
     drag_row_loop<Blocks>(count, fluid.density, fluid.c_normal, fluid.c_tangential, fluid.c_linear, fluid.flow_x,
-                          fluid.flow_y, fluid.flow_z, base, sign, in[0], in[1], in[2], in[6], in[7], in[8], in[9],
-                          in[13], in[14], in[15], in[16], in[20], v[0], v[1], v[2], out[0], out[1], out[2], out[3],
-                          out[4], out[5], out[6], out[7], out[8]);
+                          fluid.flow_y, fluid.flow_z, base, sign, m.shape[0], m.shape[1], m.shape[2], m.shape[3],
+                          m.shape[4], v[0], v[1], v[2], out[0], out[1], out[2], out[3], out[4], out[5], out[6],
+                          out[7], out[8]);
 }
 
 }  // namespace
@@ -272,51 +346,6 @@ void stokes_drag(Index n, const double* s, const double* coefficient, double cur
     stokes_loop(n, s, coefficient, current_x, current_y, vel, vel + n, vel + 2 * n, force, force + n, force + 2 * n);
 }
 
-// The rows between the highest and lowest ones in the fluid are computed in one run along the grid, as
-// if every particle began a cell (fewer, longer loops: measured faster in numba on 9 x 9 and 32 x 32);
-// the last column's, which are no cells, are then zeroed (triangles outside the fluid have zero drag
-// anyway: their area in it is zero).
-void drag_rows(Index nx, Index ny, const double* pos, const double* vel, const double* s, const Fluid& fluid,
-               Index at, double* cells, bool blocks_wanted, bool skip_dry_rows) {
-    const Index n = nx * ny;
-    const Index pad = nx + 1;
-    const Index length = n + pad;
-    Index first = 0, last = ny - 2;
-    if (skip_dry_rows) {
-        while (first <= last && outside(s, first * nx, first * nx + 2 * nx, fluid.above)) ++first;
-        while (last >= first && outside(s, last * nx, last * nx + 2 * nx, fluid.above)) --last;
-    }
-    const Index below = pad + first * nx;        // cells[:, :, pad:below] = 0
-    const Index above = pad + (last + 1) * nx;  // cells[:, :, above:] = 0
-    for (Index row = 0; row < 18; ++row) {
-        double* r = cells + row * length;
-        if (below > pad) zero(r + pad, (below < length ? below : length) - pad);
-        if (above < length) zero(r + (above > 0 ? above : 0), length - (above > 0 ? above : 0));
-    }
-    if (first > last) return;
-    const Index start = first * nx;
-    const Index count = (last - first + 1) * nx - 1;
-    const Corner a = corner(n, pos, vel, s, start);
-    const Corner b = corner(n, pos, vel, s, start + 1);
-    const Corner c = corner(n, pos, vel, s, start + nx);
-    const Corner d = corner(n, pos, vel, s, start + nx + 1);
-    const Index lo = pad + start;
-    double* first_triangles = cells + lo;
-    double* second_triangles = cells + 9 * length + lo;
-    const Corner& first_at = at == 0 ? a : at == 1 ? b : d;  // the corner of (a, b, d) and of (a, d, c)
-    const Corner& second_at = at == 0 ? a : at == 1 ? d : c;
-    if (blocks_wanted) {
-        drag_row<true>(count, a, b, d, first_at, fluid, first_triangles, length);
-        drag_row<true>(count, a, d, c, second_at, fluid, second_triangles, length);
-    } else {
-        drag_row<false>(count, a, b, d, first_at, fluid, first_triangles, length);
-        drag_row<false>(count, a, d, c, second_at, fluid, second_triangles, length);
-    }
-    for (Index r = first; r < last; ++r) {
-        for (Index row = 0; row < 18; ++row) cells[row * length + pad + r * nx + nx - 1] = 0.0;
-    }
-}
-
 void face_drag(Index nx, Index ny, const double* pos, const double* vel, const double* s, const Fluid& fluid,
                double* force, double* cells, bool skip_dry_rows) {
     drag_forces(nx, ny, pos, vel, s, fluid, 0.0, force, nullptr, cells, skip_dry_rows);
@@ -356,6 +385,9 @@ void mesh_face_drag(Index triangle_count, const Index* triangles, const double* 
             m.kept[count++] = t;
         }
         // Each corner's share of the drag at its own velocity (docs/model.md 4.3), corner by corner.
+        double(*in)[MESH_CHUNK] = m.in;
+        shape_row_loop(count, in[0], in[1], in[2], in[6], in[7], in[8], in[9], in[13], in[14], in[15], in[16],
+                       in[20], m.shape[0], m.shape[1], m.shape[2], m.shape[3], m.shape[4]);
         for (Index corner = 0; corner < 3; ++corner) {
             for (Index f = 0; f < fluid_count; ++f) {
                 if (blocks) {

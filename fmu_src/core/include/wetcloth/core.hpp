@@ -72,11 +72,15 @@ inline Index first_hinge(const Cloth& cloth) { return cloth.pair_count - cloth.p
 //: Doubles a mesh's Work::cells holds per particle: its records (mesh_records.hpp), and room to align them.
 inline constexpr Index MESH_RECORD_SLOTS = 32;
 
-//: Length of each of the 18 face-drag rows of Work::cells: a grid's n + grid_x + 1 slots (water.hpp);
-//: for a mesh, whose cells hold its records, MESH_RECORD_SLOTS (n + 1) / 18 rounded up.
+//: Rows of Work::cells a grid's face drag uses (water.cpp's drag_forces): both triangles' drag rows (9 each)
+//: and their shapes' (5 each: normal, half area, mean submerged fraction, computed once for the three corners).
+inline constexpr Index DRAG_CELL_ROWS = 28;
+
+//: Length of each of the DRAG_CELL_ROWS rows of Work::cells: a grid's n + grid_x + 1 slots (water.hpp); for a
+//: mesh, whose cells hold its records, MESH_RECORD_SLOTS (n + 1) / DRAG_CELL_ROWS rounded up.
 inline Index cells_length(const Cloth& cloth) {
     if (!is_mesh(cloth)) return cloth.n + cloth.grid_x + 1;
-    return (MESH_RECORD_SLOTS * (cloth.n + 1) + 17) / 18;
+    return (MESH_RECORD_SLOTS * (cloth.n + 1) + DRAG_CELL_ROWS - 1) / DRAG_CELL_ROWS;
 }
 
 //: The triangle meshes of mesh colliders (collider_mesh.hpp), all in one set of arrays: headers (count,
@@ -126,8 +130,8 @@ struct Physics {
 //: Scratch and results: force (3, n) N; submerged (n) fraction; saturation (n); blocks (6, n)
 //: per-particle symmetric 3x3 blocks (xx, yy, zz, xy, xz, yz) of the system matrix;
 //: diagonal_blocks (6, n) the springs' part of its diagonal blocks; direction (F, 3, n), along,
-//: across (F, n) each spring's block; buf (4, n); cells (2, 9, n + grid_x + 1)
-//: face-drag rows (cells_length); wick_buffer (6, n);
+//: across (F, n) each spring's block; buf (4, n); cells (DRAG_CELL_ROWS,
+//: cells_length) face-drag rows; wick_buffer (6, n);
 //: pair_direction (3, S), pair_along, pair_across (S) the listed springs' blocks; single_blocks (F, 5, n)
 //: each family spring's block in single precision for CG's products (rows ux, uy, uz, across, along - across);
 //: single_buf (6, n) those products' scratch.

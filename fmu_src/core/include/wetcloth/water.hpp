@@ -6,8 +6,9 @@
 // the split of Topology.triangles.  Per-triangle values go into rows of length n + nx + 1 (cell i at
 // slot i + nx + 1; slots of non-cells stay zero), and each particle gathers its share of its six
 // triangles' values with the weights of its area: the right-angle corner 1/2, the other two 1/4 each.
-// A corner takes its share of a triangle's drag at its own velocity (docs/model.md 4.3): the rows are
-// filled once for each corner of the triangles, at that corner's velocities, and gathered into it.
+// A corner takes its share of a triangle's drag at its own velocity (docs/model.md 4.3): the triangles'
+// shapes (normal, area, submerged fraction) are computed once, then the drag rows for each corner of the
+// triangles, at that corner's velocities, and gathered into it.
 #pragma once
 #include "wetcloth/core.hpp"
 #include "wetcloth/mesh_records.hpp"
@@ -46,16 +47,8 @@ inline Fluid air_fluid(const Physics& p) {
     return {p.air_density, p.drag_normal, p.drag_tangential, 0.0, p.wind_x, p.wind_y, p.wind_z, true};
 }
 
-//: Fill cells (2, 9, n + nx + 1) with both triangles' drag force (N) in the fluid at the velocities of their
-//: corner `at` (0, 1, 2: a, b, d of (a, b, d) and a, d, c of (a, d, c), a = i, b = i + 1, c = i + nx,
-//: d = i + nx + 1) and, if blocks_wanted, the Jacobian blocks (xx, yy, zz, xy, xz, yz; N s/m) of every
-//: cell; with skip_dry_rows the rows of cells above the highest row in the fluid and below the lowest are
-//: zeroed, not computed.
-void drag_rows(Index nx, Index ny, const double* pos, const double* vel, const double* s, const Fluid& fluid,
-               Index at, double* cells, bool blocks_wanted, bool skip_dry_rows);
-
 //: Add the face-model drag (docs/model.md section 4.3) of the fluid on the nx x ny grid to force (3, n);
-//: s (n) the particles' submerged fractions; cells (2, 9, n + nx + 1) scratch.
+//: s (n) the particles' submerged fractions; cells (DRAG_CELL_ROWS, n + nx + 1) scratch.
 void face_drag(Index nx, Index ny, const double* pos, const double* vel, const double* s, const Fluid& fluid,
                double* force, double* cells, bool skip_dry_rows = true);
 
