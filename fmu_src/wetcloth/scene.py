@@ -209,11 +209,16 @@ def grip_key_rows(keys) -> np.ndarray:
     return np.array([[k.time, k.x, k.y, k.z] for k in keys], dtype=np.float64).reshape(-1, 4)
 
 
+def collider_key_order(keys) -> list[int]:
+    """The places (from 0) of the collider keys in the core's order: by collider, then time."""
+    return sorted(range(len(keys)), key=lambda j: (keys[j].collider, keys[j].time))
+
+
 def collider_key_rows(keys) -> np.ndarray:
     """The core's rows of collider keys (collider_motion.hpp: collider from 0, time s, x, y, z m, rotation
-    vector rad), by collider and then time; (0, 8) without keys."""
-    rows = sorted(([k.collider - 1, k.time, k.x, k.y, k.z, math.radians(k.rx), math.radians(k.ry),
-                    math.radians(k.rz)] for k in keys), key=lambda r: (r[0], r[1]))
+    vector rad), in collider_key_order; (0, 8) without keys."""
+    rows = [[k.collider - 1, k.time, k.x, k.y, k.z, math.radians(k.rx), math.radians(k.ry), math.radians(k.rz)]
+            for k in (keys[j] for j in collider_key_order(keys))]
     return np.array(rows, dtype=np.float64).reshape(-1, 8)
 
 

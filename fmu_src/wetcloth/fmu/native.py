@@ -187,12 +187,6 @@ FIXTURE_ARRAYS = (("SCENE_COLLIDERS", "double", "rows"), ("SCENE_MESH_HEADERS", 
                   ("SCENE_COLLIDER_KEY_NUMBERS", "Index", "collider_key_numbers"))
 
 
-def collider_key_numbers(keys) -> list[int]:
-    """Each of the core's collider key rows' k (from 1) in the scene's ``[[collider_key]]`` tables, in the rows'
-    order (``collider_key_rows``: by collider, then time), for the unit's blow-up messages: collider_key<k>."""
-    return sorted(range(1, len(keys) + 1), key=lambda k: (keys[k - 1].collider, keys[k - 1].time))
-
-
 def fixtures_source(scene=None, cloth: dict | None = None) -> str:
     """The C++ arrays of what a scene holds beside its variables (``Scene.colliders``, ``Scene.grip_keys``),
     as the Python model hands them to the core (``model.py``), for ``unit.cpp``'s scene_fixtures: each
@@ -202,12 +196,13 @@ def fixtures_source(scene=None, cloth: dict | None = None) -> str:
     import numpy as np
 
     from wetcloth.collider_meshes import meshes_of, no_meshes
-    from wetcloth.scene import collider_key_rows, grip_key_rows
+    from wetcloth.scene import collider_key_order, collider_key_rows, grip_key_rows
 
     rows, meshes = meshes_of(scene.colliders) if scene is not None else (np.zeros(0), no_meshes())
     keys = scene.collider_keys if scene is not None else ()
     sources = dict(meshes._asdict(), rows=rows, grip_keys=grip_key_rows(scene.grip_keys if scene is not None else ()),
-                   collider_keys=collider_key_rows(keys), collider_key_numbers=collider_key_numbers(keys))
+                   collider_keys=collider_key_rows(keys),
+                   collider_key_numbers=[j + 1 for j in collider_key_order(keys)])  # each row's k: collider_key<k>
     lines = [_c_array(name, kind, sources[source]) for name, kind, source in FIXTURE_ARRAYS]
     lines.append(native_mesh.cloth_source(cloth, _c_array, _c_double, _c_string))
     lines.append(native_mesh.pins_source(scene, _c_array, _c_double, _c_string))
