@@ -596,7 +596,8 @@ def _check_cells(scene: Scene) -> None:
     fewest = math.floor(short_size * LONGEST_CELL / max(dx, dy)) + 1
     most = math.ceil(long_size / (LONGEST_CELL * min(dx, dy))) + 1
     fixes = ([f"{short} <= {fewest}"] if fewest >= 2 else []) + ([f"{long} >= {most}"] if most <= MOST_ALONG else [])
-    raise ParameterError(fixes[0].split()[0] if fixes else short,
+    name = long if fewest < 2 and most <= MOST_ALONG else short  # the count the first fix changes
+    raise ParameterError(name,
                          f"the grid's cells are {round(max(dx, dy) / min(dx, dy))} times longer one way than the other "
                          f"(width/(nx-1) = {dx:.3g} m, length/(ny-1) = {dy:.3g} m): the springs across them would be "
                          f"that squared stiffer than along; allowed: at most {LONGEST_CELL:g} times ("

@@ -145,7 +145,7 @@ std::string grid_cells_problem(const Scene& s) {
     std::string fixes;
     if (fewest >= 2) fixes = short_name + " <= " + std::to_string(fewest) + ", ";
     if (most <= MOST_ALONG) fixes += long_name + " >= " + std::to_string(most) + ", ";
-    const std::string name = fixes.empty() ? short_name : fixes.substr(0, 2);
+    const std::string& name = fewest < 2 && most <= MOST_ALONG ? long_name : short_name;  // the first fix's count
     const auto ratio = static_cast<long long>(std::nearbyint(longer / shorter));  // Python's round: half to even
     return "parameter '" + name + "': the grid's cells are " + std::to_string(ratio) +
            " times longer one way than the other (width/(nx-1) = " + py_g(dx, 3) + " m, length/(ny-1) = " +
