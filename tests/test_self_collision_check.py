@@ -82,3 +82,28 @@ def test_lists_kept_from_one_rest_sheet_cut_the_tiers_again_for_another():
     on_second_fresh = built(second, _core.ContactState())
     assert on_second_kept == on_second_fresh
     assert on_second_fresh != on_first
+
+
+def test_a_window_bent_into_an_arc_deviates_by_half_the_range_of_its_offsets():
+    """A 6 x 6 sheet (5 cm spacing) is one window of the finest tier (two cells of three spacings each way).
+    Bent about an axis along x into an arc of radius 1 m, symmetric about its middle row, it keeps its frame
+    (the rotation is the identity), so each particle's offset from its flat place is (0, R sin(v/R) - v,
+    R (1 - cos(v/R))) for its distance v along y from the middle.  The window's deviation must be half the
+    diagonal of the box around those offsets, within 1e-12 m (the window's sums and frames round positions of
+    about a metre: some 1e-14 m): the translation to the box's centre.  The centroids' translation left the farthest offset from
+    their mean, 11 % more here (on a continuous arc, two thirds of the sagitta against a half)."""
+    sim = wetcloth.Simulation(wetcloth.load_scene(nx=6, ny=6, width=0.25, length=0.25, initial_tilt=0.0))
+    contact = sim._contact
+    flat = sim.state.pos.copy()  # (3, n), horizontal
+    contact.reference[...] = flat
+    lists = _core.ContactState()
+    _core.build(contact, sim.scene.thickness, contact.least_margin, lists=lists)
+    radius = 1.0
+    v = flat[1] - flat[1].mean()
+    offsets = np.stack([np.zeros_like(v), radius * np.sin(v / radius) - v, radius * (1.0 - np.cos(v / radius))])
+    bent = flat + offsets
+    expected = 0.5 * np.linalg.norm(np.ptp(offsets, axis=1))
+    from_mean = np.linalg.norm(offsets - offsets.mean(axis=1, keepdims=True), axis=0).max()
+    deviation = _core.deviation(contact, 0, flat, bent, lists=lists)
+    assert abs(deviation - expected) <= 1e-12, (deviation, expected)
+    assert from_mean > 1.1 * expected, (from_mean, expected)
