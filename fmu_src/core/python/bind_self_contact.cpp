@@ -12,6 +12,7 @@
 #include "convert.hpp"
 #include "wetcloth/self_contact.hpp"
 #include "wetcloth/self_contact/broad_phase.hpp"
+#include "wetcloth/self_contact/flat_windows.hpp"
 #include "wetcloth/self_contact/tiers.hpp"
 
 namespace wc::py {
@@ -126,6 +127,25 @@ WETCLOTH_BINDINGS(m) {
         },
         "contact"_a, "thickness"_a, "least"_a, "widest"_a, "lists"_a = nb::none(),
         "Build the candidate lists for the widest margin from least to widest (m) whose lists are empty.");
+    m.def(
+        "unproven_windows",
+        [](nb::handle contact, nb::handle x, double reach, nb::handle lists) {
+            const Index n = particles_of(contact);
+            Contact c = contact_from(contact, n, lists_of(contact, lists));
+            self_contact::prepare_tiers(c, n);
+            self_contact::FlatWindows flat(c, n, argument<const double>(x, "x", 3 * n), reach);
+            std::vector<char> inside(static_cast<std::size_t>(n), 1);
+            Index windows = 0;
+            const Index count = flat.judged() ? flat.unproven(inside, windows) : -1;
+            int through = 0;
+            while (flat.judged() && through + 1 < self_contact::LOCAL_TIERS && flat.all_shown(through + 1, reach))
+                ++through;
+            return nb::make_tuple(count, windows, std::vector<Index>(inside.begin(), inside.end()), through);
+        },
+        "contact"_a, "x"_a, "reach"_a, "lists"_a = nb::none(),
+        "How many windows of the finest tier at x (3, n) are not shown to hold no pair within reach (m; -1: none "
+        "can be), of how many, each particle's lying in one of them (1) or not (0), and the coarsest local tier "
+        "through which every window is shown.");
     m.def(
         "invalidate",
         [](nb::handle contact, nb::handle lists) {

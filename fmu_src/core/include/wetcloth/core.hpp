@@ -435,6 +435,16 @@ struct ContactLists {
     std::vector<std::vector<Index>> far_cells;  // per tier, its cells' elements for the far pairs' search, or
                                                 // empty (far_pairs.cpp); for the tiers as cut `far_cells_made` times
     Index far_cells_made = -1;
+    // The rest sheet's figures for showing windows free of pairs (self_contact/flat_windows.cpp), for the tiers
+    // as cut `flat_made` times: whether the rest sheet is convex; each triangle's rest edges' inverse (2 x 2);
+    // each cell of the finest tier's holding a particle of the sheet's rim (1) or not (0).
+    Index flat_made = -1;
+    bool flat_convex = false;
+    std::vector<double> flat_inverse;
+    std::vector<char> flat_rim;
+    std::vector<double> flat_triangles;             // per triangle figures of the positions
+    std::vector<std::vector<double>> flat_cells;    // per local tier, its cells' figures
+    std::vector<char> flat_inside;     // (n) the particles of the windows not shown free of pairs
     WindowFits fits;                    // the tiers' shapes and fits kept between steps
     std::vector<Index> resting;         // (n, 3) what a particle held on a layer rests on (-1 padding)
     std::vector<double> resting_normal;  // (n, 3) the unit normal from that support to the particle

@@ -101,24 +101,42 @@ inline double box_gap(const Boxes& b, Index u, Index v) {
     return gap;
 }
 
-//: The search: the nearest pair of tier `coarser` that does not fit a window of tier `finer`, so far.
+//: The search over the pairs that do not fit a window of tier `finer`: for the nearest one of tier `coarser`
+//: (`records` null: `bound`, the distance looked within, shrinks to the nearest so far), or for all within
+//: `bound` (appended to records[KIND]).
 struct Search {
     const Contact& contact;
     Index n;
     const double* x;
     Tier finer, coarser;
     double thickness;
-    double nearest;
+    double bound;
+    std::vector<Index>* const* records;
+    double nearest = INF;
 
     template <int KIND>
     void pair(Index a, Index e, const Boxes& first, const Boxes& second) {
-        if (share_a_particle<KIND>(contact, a, e) || !boxes_overlap(first, a, second, e, nearest)) return;
+        if (share_a_particle<KIND>(contact, a, e) || !boxes_overlap(first, a, second, e, bound)) return;
         Index idx[4];
         particles<KIND>(contact, a, e, idx);
-        if (fits(finer, idx) || !fits(coarser, idx)) return;  // a pair of another tier
-        nearest = py_min(nearest, candidate_distance<KIND>(x, contact.rest, n, idx, nearest, thickness));
+        if (fits(finer, idx) || (records == nullptr && !fits(coarser, idx))) return;  // a pair of another tier
+        const double gap = candidate_distance<KIND>(x, contact.rest, n, idx, bound, thickness);
+        if (!(gap < bound)) return;
+        nearest = py_min(nearest, gap);
+        if (records == nullptr) {
+            bound = nearest;
+            return;
+        }
+        std::vector<Index>& out = *records[KIND];
+        out.push_back(a);
+        out.push_back(e);
+        out.push_back(gap_bits(gap));
     }
 };
+
+//: Search s through the cells of tier `finer` that lie apart (their pairs fit no window of it) and within its
+//: bound of each other, the nearest first.
+void search_far_cells(Search& s, int finer, const Boxes& triangles, const Boxes& edges);
 
 }  // namespace
 
@@ -126,6 +144,51 @@ double nearest_far_pair(const Contact& contact, Index n, const double* x, int fi
                         const Boxes& triangles, const Boxes& edges) {
     const Tier t = tier_of(contact, n, finer);
     if (t.nx <= WINDOW && t.ny <= WINDOW) return INF;  // every pair fits one window of the finer tier
+    Search s{contact, n, x, t, tier_of(contact, n, finer + 1), thickness, reach, nullptr};
+    search_far_cells(s, finer, triangles, edges);
+    return s.nearest < reach ? s.nearest : INF;
+}
+
+double far_pairs_within(const Contact& contact, Index n, const double* x, int finer, double reach, double thickness,
+                        const Boxes& triangles, const Boxes& edges, std::vector<Index>& point_triangle,
+                        std::vector<Index>& edge_edge) {
+    const Tier t = tier_of(contact, n, finer);
+    if (t.nx <= WINDOW && t.ny <= WINDOW) return INF;
+    std::vector<Index>* records[2] = {&point_triangle, &edge_edge};
+    static_assert(POINT_TRIANGLE == 0 && EDGE_EDGE == 1, "records by kind");
+    Search s{contact, n, x, t, t, thickness, reach, records};
+    search_far_cells(s, finer, triangles, edges);
+    sort_records(point_triangle);
+    sort_records(edge_edge);  // (a pair of elements touching several cells is found through each)
+    return s.nearest;
+}
+
+void sort_records(std::vector<Index>& records) {
+    struct Record {
+        Index first, second, bits;
+    };
+    std::vector<Record> sorted(records.size() / 3);
+    for (std::size_t k = 0; k < sorted.size(); ++k) sorted[k] = {records[3 * k], records[3 * k + 1], records[3 * k + 2]};
+    std::sort(sorted.begin(), sorted.end(), [](const Record& a, const Record& b) {
+        return a.first < b.first || (a.first == b.first && a.second < b.second);
+    });
+    records.clear();
+    for (std::size_t k = 0; k < sorted.size(); ++k) {
+        if (k > 0 && sorted[k].first == sorted[k - 1].first && sorted[k].second == sorted[k - 1].second) continue;
+        records.push_back(sorted[k].first);
+        records.push_back(sorted[k].second);
+        records.push_back(sorted[k].bits);
+    }
+}
+
+namespace {
+
+void search_far_cells(Search& s, int finer, const Boxes& triangles, const Boxes& edges) {
+    const Contact& contact = s.contact;
+    const Index n = s.n;
+    const double* x = s.x;
+    const double reach = s.bound;
+    const Tier t = s.finer;
     const Index cells = t.nx * t.ny;
     const CellElements elements = cell_elements(contact, n, finer, t);
     const Index* triangle_start = elements.triangle_start;
@@ -193,16 +256,15 @@ double nearest_far_pair(const Contact& contact, Index n, const double* x, int fi
     std::sort(close.begin(), close.end(), [](const Near& a, const Near& b) {
         return a.gap < b.gap || (a.gap == b.gap && (a.u < b.u || (a.u == b.u && a.v < b.v)));
     });
-    Search s{contact, n, x, t, tier_of(contact, n, finer + 1), thickness, reach};
     std::vector<Index> near_points[2], near_triangles[2], near_edges[2];  // each cell's elements near the other
     auto near = [&s](const Boxes& cell, Index other, const Index* items, Index count, const Boxes& of,
                      std::vector<Index>& out) {
         out.clear();
         for (Index q = 0; q < count; ++q)
-            if (boxes_overlap(of, items[q], cell, other, s.nearest)) out.push_back(items[q]);
+            if (boxes_overlap(of, items[q], cell, other, s.bound)) out.push_back(items[q]);
     };
     for (const Near& c : close) {
-        if (!(c.gap < s.nearest)) break;
+        if (!(c.gap < s.bound)) break;
         const Index u = c.u, v = c.v;
         // Only the elements of each cell that come near the other's box can make a nearer pair (a tilted
         // sheet's cells' boxes overlap where the cells do not).
@@ -222,7 +284,8 @@ double nearest_far_pair(const Contact& contact, Index n, const double* x, int fi
             for (const Index b : near_edges[1])
                 if (a != b) s.pair<EDGE_EDGE>(a < b ? a : b, a < b ? b : a, edges, edges);
     }
-    return s.nearest < reach ? s.nearest : INF;
 }
+
+}  // namespace
 
 }  // namespace wc::self_contact

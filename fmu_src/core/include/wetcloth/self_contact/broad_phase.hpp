@@ -30,6 +30,10 @@ inline constexpr double LOOSE = 4.0;
 //: elements' distance (Contact::rest_gap): room for the sheet to be compressed by a tenth without
 //: candidates (0.9 rather than 0.7: fewer rebuilds of empty lists, docs/benchmarks.md).
 inline constexpr double WIDE_REACH = 0.9;
+//: The fraction of the finest tier's windows not shown free of pairs (flat_windows.hpp) beyond which a list's
+//: build searches every pair instead of theirs: searching most windows' elements costs about the whole
+//: search, and the coarser tiers' pairs are then searched too.
+inline constexpr double MOST_UNPROVEN = 0.5;
 //: The most hash cells a box spans (at most 9 along each axis, 10 if rounding puts both ends on a cell's
 //: boundary).
 inline constexpr Index MOST_CELLS = 10 * 10 * 10;

@@ -9,6 +9,8 @@
 // the reach, and the search costs one pass over the cells' boxes.
 #pragma once
 
+#include <vector>
+
 #include "wetcloth/core.hpp"
 #include "wetcloth/self_contact/elements.hpp"
 
@@ -19,5 +21,16 @@ namespace wc::self_contact {
 //: `reach` (m); infinity if none is.  `triangles` and `edges` are the elements' boxes at x.
 double nearest_far_pair(const Contact& contact, Index n, const double* x, int finer, double reach, double thickness,
                         const Boxes& triangles, const Boxes& edges);
+
+//: The candidate pairs at x (3, n) within `reach` (m) whose particles do not fit one window of tier `finer`,
+//: added to the records (first, second, bits of the distance) of `point_triangle` and `edge_edge`, which then
+//: hold each of theirs and these once, ascending in (first, second); returns the least distance of these (m;
+//: infinity if none).  `triangles` and `edges` are the elements' boxes at x.
+double far_pairs_within(const Contact& contact, Index n, const double* x, int finer, double reach, double thickness,
+                        const Boxes& triangles, const Boxes& edges, std::vector<Index>& point_triangle,
+                        std::vector<Index>& edge_edge);
+
+//: Sort records (first, second, bits) ascending in (first, second) and drop repeats.
+void sort_records(std::vector<Index>& records);
 
 }  // namespace wc::self_contact
