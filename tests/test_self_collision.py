@@ -274,6 +274,53 @@ def test_a_towel_sunk_onto_the_floor_comes_to_rest_with_no_layer_crossing():
     assert crossed == 0
 
 
+def test_a_particle_in_the_corner_of_a_fold_is_held_by_the_flat_layer_within_friction():
+    """The rule behind the run above, on its own (self_contact/resting.cpp): particle p lies 0.8 thickness from a
+    still vertical triangle B and a thickness above a still horizontal triangle A (the corner of a fold: a flat
+    layer and a steep one), every other particle still and far away.  hold_on_layers holds it on its first support, B (the
+    list's pairs ascend, and B's index is the lower); a force straight down (0, 0, -1) N does not press it onto B,
+    so release_sliding lets it go; hold_within_friction then holds it on A, its normal straight up.  A force
+    along A beyond friction (0.4) times the force into it, (0.5, 0, -1) N, is refused by both."""
+    sim = wetcloth.Simulation(wetcloth.load_scene(nx=5, ny=5, width=0.4, length=0.4, self_collision="on"))
+    contact, thickness = sim._contact, sim.scene.thickness
+    ix = np.round((contact.rest[0] - contact.rest[0].min()) / 0.1).astype(int)
+    iy = np.round((contact.rest[1] - contact.rest[1].min()) / 0.1).astype(int)
+    p = int(np.flatnonzero((ix == 0) & (iy == 0))[0])
+    corners = sim.triangles
+    b = next(t for t, c in enumerate(corners) if np.all(ix[c] >= 2) and np.all(iy[c] <= 1))
+    a = next(t for t, c in enumerate(corners) if np.all(ix[c] >= 2) and np.all(iy[c] >= 3))
+    assert b < a
+    n = contact.rest.shape[1]
+    pos = np.stack([ix - 30.0, 0.1 * iy, np.full(n, 50.0)])  # every particle far away, up and aside
+    centre = np.array([100.0, 100.0, 0.0])
+    pos[:, corners[a]] = (centre + np.array([[-0.05, -0.05, 0.0], [0.05, -0.05, 0.0], [0.0, 0.05, 0.0]])).T
+    pos[:, p] = centre + [0.0, 0.0, thickness]
+    wall = centre[0] + 0.8 * thickness
+    pos[:, corners[b]] = np.array([[wall, 100.0 - 0.05, 0.5 * thickness], [wall, 100.0 + 0.05, 0.5 * thickness],
+                                   [wall, 100.0, thickness + 0.05]]).T
+    contact.reference[...] = pos
+    vel = np.zeros((3, n))
+    lists = _core.ContactState()
+    _core.build(contact, thickness, contact.least_margin, lists=lists)
+
+    def run(force_on_p):
+        free, held = np.zeros(n), np.zeros(n)
+        free[p] = 1.0  # the others still (held by the floor, say): supports must be
+        force = np.zeros((3, n))
+        force[:, p] = force_on_p
+        steps = [_core.hold_on_layers(contact, thickness, pos, vel, free, held, lists=lists)]
+        support = np.array(lists.resting).reshape(n, 3)[p].copy()
+        steps.append(_core.release_sliding(contact, force, free, held, lists=lists))
+        steps.append(_core.hold_within_friction(contact, thickness, pos, vel, force, free, held, lists=lists))
+        return steps, support, free[p], np.array(lists.resting).reshape(n, 3)[p], np.array(lists.resting_normal).reshape(n, 3)[p]
+
+    steps, first, free_p, support, normal = run([0.0, 0.0, -1.0])
+    assert steps == [1, 1, 1] and sorted(first) == sorted(corners[b]), (steps, first)
+    assert free_p == 0.0 and sorted(support) == sorted(corners[a]) and np.allclose(normal, [0.0, 0.0, 1.0]), (support, normal)
+    steps, _, free_p, _, _ = run([0.5, 0.0, -1.0])
+    assert steps == [1, 1, 0] and free_p == 1.0, steps
+
+
 def test_a_fold_carries_the_pushed_particles_history(current_over_pin):
     """Self-collision's pushes carry the pushed particles' BDF2 history through their pushed state
     (docs/model.md section 6.2, "Time integration") instead of restarting it for the whole cloth.  The

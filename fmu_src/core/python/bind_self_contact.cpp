@@ -68,6 +68,10 @@ WETCLOTH_BINDINGS(m) {
         .def_prop_ro("edge_edge_count", [](ContactState& s) { return s.lists.edge_edge_count(); })
         .def_prop_ro("allowances", [](ContactState& s) { return s.lists.allowances; },
                      "Each tier's allowance (m) of the last list built (empty before one is)")
+        .def_prop_ro("resting", [](ContactState& s) { return s.lists.resting; },
+                     "What each particle held on a layer rests on, (n, 3) flattened: up to three particles, -1 padding")
+        .def_prop_ro("resting_normal", [](ContactState& s) { return s.lists.resting_normal; },
+                     "The unit normal from each held particle's support to it, (n, 3) flattened")
         .def_prop_ro("particle_allowances", [](ContactState& s) { return s.lists.particle_allowances; },
                      "Each particle's own allowances (m) in the finest tier of the last list built, (2, n) "
                      "flattened: for its pairs that fit a window of the fine tier, then for the others (empty if "
@@ -127,6 +131,41 @@ WETCLOTH_BINDINGS(m) {
         },
         "contact"_a, "thickness"_a, "least"_a, "widest"_a, "lists"_a = nb::none(),
         "Build the candidate lists for the widest margin from least to widest (m) whose lists are empty.");
+    m.def(
+        "hold_on_layers",
+        [](nb::handle contact, double thickness, nb::handle pos, nb::handle vel, nb::handle free, nb::handle held,
+           nb::handle lists) {
+            const Index n = particles_of(contact);
+            Contact c = contact_from(contact, n, lists_of(contact, lists));
+            return hold_on_layers(c, thickness, n, argument<const double>(pos, "pos", 3 * n),
+                                  argument<const double>(vel, "vel", 3 * n), argument<double>(free, "free", n),
+                                  argument<double>(held, "held", n));
+        },
+        "contact"_a, "thickness"_a, "pos"_a, "vel"_a, "free"_a, "held"_a, "lists"_a = nb::none(),
+        "Hold the free particles at rest on a still layer (free and held changed in place); how many.");
+    m.def(
+        "release_sliding",
+        [](nb::handle contact, nb::handle force, nb::handle free, nb::handle held, nb::handle lists) {
+            const Index n = particles_of(contact);
+            Contact c = contact_from(contact, n, lists_of(contact, lists));
+            return release_sliding(c, n, argument<const double>(force, "force", 3 * n), argument<double>(free, "free", n),
+                                   argument<double>(held, "held", n));
+        },
+        "contact"_a, "force"_a, "free"_a, "held"_a, "lists"_a = nb::none(),
+        "Release the layer-held particles the force (3, n) N slides off their support; how many.");
+    m.def(
+        "hold_within_friction",
+        [](nb::handle contact, double thickness, nb::handle pos, nb::handle vel, nb::handle force, nb::handle free,
+           nb::handle held, nb::handle lists) {
+            const Index n = particles_of(contact);
+            Contact c = contact_from(contact, n, lists_of(contact, lists));
+            return hold_within_friction(c, thickness, n, argument<const double>(pos, "pos", 3 * n),
+                                        argument<const double>(vel, "vel", 3 * n),
+                                        argument<const double>(force, "force", 3 * n),
+                                        argument<double>(free, "free", n), argument<double>(held, "held", n));
+        },
+        "contact"_a, "thickness"_a, "pos"_a, "vel"_a, "force"_a, "free"_a, "held"_a, "lists"_a = nb::none(),
+        "After release_sliding: hold the free particles another still element holds within friction; how many.");
     m.def(
         "unproven_windows",
         [](nb::handle contact, nb::handle x, double reach, nb::handle lists) {
