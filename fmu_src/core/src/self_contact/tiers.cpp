@@ -336,16 +336,24 @@ void fit_end(const Contact& contact, Index n, const Tier& t, const double* ref, 
                 d[1] = x[n + i] - m[1] - (r[3] * ax + r[4] * ay + r[5] * az);
                 d[2] = x[2 * n + i] - m[2] - (r[6] * ax + r[7] * ay + r[8] * az);
             };
-            double worst = 0.0, lo[3] = {INF, INF, INF}, hi[3] = {-INF, -INF, -INF};
+            // The farthest offset (its square; NaN if any is: their sum is), and the box around the offsets.
+            double worst = 0.0, total = 0.0, lo[3] = {INF, INF, INF}, hi[3] = {-INF, -INF, -INF};
             const std::size_t first_visit = out.size();
-            for_members(t, ws, wx, wy, [&](Index i) {
+            const auto visit = [&](Index i) {
                 double d[3];
                 offset(i, d);
                 for (int c = 0; c < 3; ++c) lo[c] = py_min(lo[c], d[c]), hi[c] = py_max(hi[c], d[c]);
                 const double d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-                worst = worse(worst, d2);
-                if (visits) out.push_back(d2);
-            });
+                worst = d2 > worst ? d2 : worst;
+                total += d2;
+                return d2;
+            };
+            if (visits) {
+                for_members(t, ws, wx, wy, [&](Index i) { out.push_back(visit(i)); });
+            } else {
+                for_members(t, ws, wx, wy, visit);
+            }
+            if (!(total == total)) worst = total;
             const double box[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
             const double half_diagonal = 0.25 * (box[0] * box[0] + box[1] * box[1] + box[2] * box[2]);
             if (half_diagonal < worst) {  // (never where worst is NaN)
