@@ -6,8 +6,12 @@ distances (``close_pairs``), on sheets that swing, fold, curl, ripple or are squ
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import wetcloth
 from wetcloth import _core
@@ -133,10 +137,13 @@ def case(name: str, folder) -> tuple[wetcloth.Simulation, np.ndarray]:
         return sim, curled(flat, 0.8, 0.008, 0.004)
     if name == "squeezed":
         return sim, squeezed(flat, 0.3, 0.55, 0.8)
+    if name == "squeezed whole":  # (the altitudes across the diagonals 31.2 mm, under the reach 31.8 mm)
+        return sim, squeezed(flat, 0.0, 1.0, 0.8)
     return sim, waves(flat, float(name.split()[1]), int(name.split()[2]))
 
 
 CASES = ["swinging 0.3", "swinging 0.6", "swinging 0.9", "folded by a current", "hairpin", "curled edge", "squeezed",
+         "squeezed whole",
          "waves 0.002 1", "waves 0.01 2", "waves 0.03 3"]
 
 
@@ -150,30 +157,70 @@ def test_a_list_built_past_the_shown_windows_holds_every_pair_a_full_search_find
     swinging sheet has most of its windows shown, every bent, squeezed or folded case has pairs within the
     widest reach (which set its margin) and windows not shown."""
     sim, x = case(name, tmp_path)
+    built = listed_against_checker(sim, x)
+    if name.startswith("swinging"):
+        assert built.windows == 13 * 13 and built.unproven <= 0.25 * built.windows, built.unproven  # 14 x 14 cells
+    elif not name.startswith("waves"):
+        assert built.unproven > 0 and built.nearest < np.inf, (built.unproven, built.nearest)
+    assert built.unproven >= 0
+    assert built.margin == pytest.approx(built.expected_margin, abs=BORDER)
+    assert built.expected <= built.listed <= built.expected | built.borderline, (len(built.expected), len(built.listed))
+
+
+class Built(NamedTuple):
+    """A list built at some positions against the checker: its pairs, the checker's within its reach and those
+    at it to rounding (BORDER); the windows not shown, of how many; the list's margin (m), the margin the
+    checker's nearest pair (m) sets."""
+    listed: set
+    expected: set
+    borderline: set
+    unproven: int
+    windows: int
+    margin: float
+    nearest: float
+    expected_margin: float
+
+
+def listed_against_checker(sim: wetcloth.Simulation, x: np.ndarray) -> Built:
+    """Build the list at positions x (3, n) for the widest margin whose list is empty, and the checker's pairs."""
     contact, thickness = sim._contact, sim.scene.thickness
     widest = max(contact.least_margin, 0.5 * (_core.WIDE_REACH * contact.rest_gap - thickness))
     contact.reference[...] = x
     lists = _core.ContactState()
     _core.build_widest(contact, thickness, contact.least_margin, widest, lists=lists)
     unproven, windows, _, _ = _core.unproven_windows(contact, x, thickness + 2.0 * widest, lists=lists)
-    assert unproven >= 0
     with np.errstate(over="ignore"):  # the grid's parallel edges: segment_distances' unused interior
         fabric = set(close_pairs(contact.rest.T, sim.triangles, contact.edges, thickness))
         found = {pair: gap for pair, gap in close_pairs(x.T, sim.triangles, contact.edges,
                                                         thickness + 2.0 * widest).items() if pair not in fabric}
     nearest = min(found.values(), default=np.inf)
-    if name.startswith("swinging"):
-        assert windows == 13 * 13 and unproven <= 0.25 * windows, unproven  # tier 0 of 41 x 41: 14 x 14 cells
-    elif not name.endswith("waves") and not name.startswith("waves"):
-        assert unproven > 0 and found, (unproven, len(found))
     margin = float(contact.margin[0])
-    assert margin == pytest.approx(max(contact.least_margin, min(widest, 0.5 * (nearest - thickness))), abs=BORDER)
     reach = thickness + 2.0 * margin
     listed = {("point_triangle", int(a), int(b)) for a, b in np.asarray(lists.point_triangle).T}
     listed |= {("edge_edge", int(a), int(b)) for a, b in np.asarray(lists.edge_edge).T}
-    expected = {pair for pair, gap in found.items() if gap < reach - BORDER}
-    borderline = {pair for pair, gap in found.items() if abs(gap - reach) <= BORDER}
-    assert expected <= listed and listed <= expected | borderline, (len(expected), len(listed))
+    return Built(listed, {pair for pair, gap in found.items() if gap < reach - BORDER},
+                 {pair for pair, gap in found.items() if abs(gap - reach) <= BORDER}, unproven, windows, margin, nearest,
+                 max(contact.least_margin, min(widest, 0.5 * (nearest - thickness))))
+
+
+@settings(max_examples=25, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(amplitude=st.floats(0.0, 0.05), seed=st.integers(0, 1000), fold_at=st.floats(0.1, 0.9),
+       radius=st.floats(0.0005, 0.05), folded=st.booleans(), squeeze=st.floats(0.6, 1.0), whole=st.booleans())
+def test_a_randomly_bent_sheet_lists_every_pair_a_full_search_finds(amplitude, seed, fold_at, radius, folded, squeeze,
+                                                                     whole):
+    """Random sheets: rippled by waves of up to 5 cm, squeezed along y by down to 0.6 over a third of it or all
+    of it, and perhaps folded back over themselves about a cylinder of 0.5 to 50 mm radius.  Whatever the windows shown,
+    the list's margin is the one the checker's nearest pair sets and it holds exactly the checker's pairs within
+    its reach (those at it, to rounding, either way)."""
+    sim = grid_sheet()
+    flat = sim.state.pos.copy()
+    x = squeezed(flat, 0.0, 1.0, squeeze) if whole else squeezed(flat, 0.3, 0.63, squeeze)
+    if folded:
+        x = hairpin(x, fold_at, radius)
+    built = listed_against_checker(sim, waves(x, amplitude, seed) if amplitude > 0.0 else x)
+    assert built.unproven >= 0
+    assert built.margin == pytest.approx(built.expected_margin, abs=BORDER)
+    assert built.expected <= built.listed <= built.expected | built.borderline, (len(built.expected), len(built.listed))
 
 
 def tier0_cells(contact) -> np.ndarray:
