@@ -442,9 +442,9 @@ struct ContactLists {
     bool flat_convex = false;
     std::vector<double> flat_inverse;
     std::vector<char> flat_rim;
-    std::vector<double> flat_triangles;             // per triangle figures of the positions
-    std::vector<std::vector<double>> flat_cells;    // per local tier, its cells' figures
-    std::vector<char> flat_inside;     // (n) the particles of the windows not shown free of pairs
+    std::vector<double> flat_triangles;           // per triangle, figures of the positions
+    std::vector<std::vector<double>> flat_cells;  // per local tier, its cells' figures
+    std::vector<char> flat_inside;                // (n) the particles of the windows not shown free of pairs
     WindowFits fits;                    // the tiers' shapes and fits kept between steps
     std::vector<Index> resting;         // (n, 3) what a particle held on a layer rests on (-1 padding)
     std::vector<double> resting_normal;  // (n, 3) the unit normal from that support to the particle
