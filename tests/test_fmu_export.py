@@ -118,6 +118,7 @@ manifest = (frames / "frames.json").read_text()
 statuses = [unit.step(0.1), unit._call(unit.fmu.terminate)]
 print(json.dumps({"statuses": statuses, "same_manifest": (frames / "frames.json").read_text() == manifest,
                   "files": sorted(p.name for p in frames.iterdir())}))
+unit.fmu.freeInstance()  # (while its Unit's logger callback lives)
 """
 
 

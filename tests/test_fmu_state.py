@@ -314,6 +314,8 @@ exit_ = target._call(target.fmu.exitInitializationMode)
 target.time = 0.1
 print(json.dumps({"set": restored, "enter": enter, "exit": exit_, "kept": target.outputs() == source.outputs(),
                   "step": target.step(0.1), "errors": target.errors()}))
+source.close()  # (freed while their Units' logger callbacks live)
+target.close()
 """
 
 
