@@ -176,9 +176,7 @@ WETCLOTH_BINDINGS(m) {
             std::vector<char> inside(static_cast<std::size_t>(n), 1);
             Index windows = 0;
             const Index count = flat.judged() ? flat.unproven(inside, windows) : -1;
-            int through = 0;
-            while (flat.judged() && through + 1 < self_contact::LOCAL_TIERS && flat.all_shown(through + 1, reach))
-                ++through;
+            const int through = flat.judged() ? flat.shown_through() : 0;
             return nb::make_tuple(count, windows, std::vector<Index>(inside.begin(), inside.end()), through);
         },
         "contact"_a, "x"_a, "reach"_a, "lists"_a = nb::none(),

@@ -425,10 +425,9 @@ void build_lists(Contact& contact, Index n, double thickness, double least, doub
                                                     lists.index_scratch, lists.edge_edge, inside));
         }
         // The pairs of the coarser tiers, beyond those whose windows are all shown.
-        int through = 0;
-        while (through + 1 < LOCAL_TIERS && flat.all_shown(through + 1, reach)) ++through;
-        nearest_pair = py_min(nearest_pair, far_pairs_within(contact, n, x, through, reach, thickness, triangle_boxes,
-                                                             edge_boxes, lists.point_triangle, lists.edge_edge));
+        nearest_pair = py_min(nearest_pair, far_pairs_within(contact, n, x, flat.shown_through(), reach, thickness,
+                                                             triangle_boxes, edge_boxes, lists.point_triangle,
+                                                             lists.edge_edge));
     }
     // The widest margin whose lists are empty: the nearest pair just out of reach.
     const double margin = py_max(least, py_min(widest, 0.5 * (nearest_pair - thickness)));

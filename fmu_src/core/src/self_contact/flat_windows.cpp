@@ -280,15 +280,20 @@ Index FlatWindows::unproven(std::vector<char>& inside, Index& windows) {
     return unproven;
 }
 
-bool FlatWindows::all_shown(int s, double reach) {
-    const Tier t = tier_of(contact_, n_, s);
-    const double* cells = cells_of(s);
-    const double apart = rest_distance_beyond(contact_, n_, s - 1);
-    bool all = true;
-    for_windows(t, [&](Index wx, Index wy, Index wide_x, Index wide_y) {
-        all = all && shown(t, cells, wx, wy, wide_x, wide_y, reach, apart, nullptr);
-    });
-    return all;
+int FlatWindows::shown_through() {
+    int through = 0;
+    for (int s = 1; s < LOCAL_TIERS; ++s) {
+        const Tier t = tier_of(contact_, n_, s);
+        const double* cells = cells_of(s);
+        const double apart = rest_distance_beyond(contact_, n_, s - 1);
+        bool all = true;
+        for_windows(t, [&](Index wx, Index wy, Index wide_x, Index wide_y) {
+            all = all && shown(t, cells, wx, wy, wide_x, wide_y, reach_, apart, nullptr);
+        });
+        if (!all) break;
+        through = s;
+    }
+    return through;
 }
 
 }  // namespace wc::self_contact

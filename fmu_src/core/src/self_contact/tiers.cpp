@@ -360,12 +360,12 @@ void fit_end(const Contact& contact, Index n, const Tier& t, const double* ref, 
                 worst = half_diagonal;
                 const double shift[3] = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
                 if (visits) {
-                    std::size_t visit = first_visit;
+                    std::size_t slot = first_visit;
                     for_members(t, ws, wx, wy, [&](Index i) {
                         double d[3];
                         offset(i, d);
                         for (int c = 0; c < 3; ++c) d[c] -= shift[c];
-                        out[visit++] = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                        out[slot++] = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
                     });
                 }
                 for (int c = 0; c < 3; ++c) m[c] += shift[c];

@@ -43,9 +43,9 @@ public:
     //: Mark in `inside` (n: 1 for the particles of the finest tier's windows not shown, 0 for the others) and
     //: return how many windows were not shown, of `windows` (judged() first).
     Index unproven(std::vector<char>& inside, Index& windows);
-    //: Whether every window of local tier s >= 1 is shown to hold no pair of its tier within `reach` (m)
-    //: (judged() first).
-    bool all_shown(int s, double reach);
+    //: The coarsest local tier s such that every window of tiers 1 to s is shown to hold no pair of its tier
+    //: (0 if not every one of tier 1's is): no pair of those tiers lies within reach (judged() first).
+    int shown_through();
 
 private:
     const double* cells_of(int s);
