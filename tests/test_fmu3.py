@@ -255,6 +255,15 @@ def test_a_freed_state_is_refused_and_the_host_survives(refusals):
     assert "not a WetCloth FMU state" in errors_of(refusals)
 
 
+def test_each_refusal_reaches_the_master_as_one_fatal_message_with_its_reason(refusals):
+    """pythonfmu3's binary flushes the unit's queued messages through the master's callback while the refusal's
+    exception is pending (guard.py 6.): the exception was lost ("unknown error") and Python code ran in an
+    undefined state.  The unit now folds what it queued into the exception."""
+    fatal = [message for status, message in refusals["messages"] if status == 4]
+    assert len(fatal) == 6 and not any("unknown error" in message for message in fatal), fatal
+    assert "FMU state refused, the unit is unchanged: not a WetCloth FMU state" in fatal[2]
+
+
 def test_bad_text_and_call_order_are_refused_naming_them(refusals):
     assert refusals["not_utf8"] >= 3 and refusals["exit_without_enter"] >= 3
     text = errors_of(refusals)

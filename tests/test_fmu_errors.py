@@ -302,6 +302,15 @@ def test_terminate_before_initialization_is_refused_naming_the_call_and_the_stat
             "state") in "\n".join(record["errors"])
 
 
+def test_a_refusal_reaches_the_master_with_its_reason_not_as_an_unknown_error(calls):
+    """pythonfmu's binary flushes the unit's queued messages through the master's callback while the refusal's
+    exception is pending (guard.py 6.); the unit folds them into the exception, so none is lost."""
+    for name, record in calls.items():
+        errors = "\n".join(record["errors"])
+        assert "is not allowed" in errors or "UTF-8" in errors, (name, errors)
+        assert "unknown error" not in errors, (name, errors)
+
+
 def test_exit_initialization_without_enter_is_refused(calls):
     record = calls["exit_without_enter"]
     assert record["exit"] == FATAL and record["step"] != OK, record

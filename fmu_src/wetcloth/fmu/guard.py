@@ -43,6 +43,15 @@
    the compiled core's module then reports its objects as leaked ("nanobind: leaked 1 instances! ... Stepper").
    At exit every live instance drops its simulation (``_release_all``), so nothing of the core outlives it.
 
+6. On an exception, both binaries' ``handle_py_exception`` flush the instance's log queue to the master's
+   logger callback before they fetch the exception: the master's callback (Python code, in a Python host such
+   as fmpy) then ran with an exception pending.  The exception was lost on the way (the master read "Fatal py
+   exception encountered: ... unknown error"), and running Python code in that state is undefined (a child
+   master of the tests died of a segmentation fault now and then just after such calls).  Each wrapped entry
+   point therefore empties its instance's queue before an exception leaves it, into the exception's own text,
+   which the binary logs (the master reads one Fatal message with the reason, where it read an Error message
+   and "unknown error").
+
 The references given back in 1 and 2 are real reference counts (``Py_IncRef``), not objects held in
 a list: the binary has already dropped them, and a list released at interpreter shutdown would
 drop them a second time.
@@ -114,13 +123,25 @@ def guard(cls, methods: tuple[str, ...], class_methods: tuple[str, ...]):
     return cls
 
 
+def _fold_queued_messages(instance, exc: BaseException) -> None:
+    """Empty ``instance``'s log queue into the text of ``exc``, which the binary logs (see 6.): the queued
+    messages in turn, then the exception's own text unless one of them already says it, joined by "; "."""
+    queue = instance.log_queue
+    held = [message.msg for message in queue if not getattr(message, "debug", False)]
+    del queue[:]  # the binary's own reference to this list stays valid: emptied in place
+    text = str(exc) if exc.args else ""
+    if held:
+        exc.args = ("; ".join(held + [text] if text and not any(text in message for message in held) else held),)
+
+
 def _instance_entry(method):
     @functools.wraps(method)
     def entry(self, *args):
         try:
             return method(self, *args)
-        except BaseException:
+        except BaseException as exc:
             _give_back([self])
+            _fold_queued_messages(self, exc)
             raise
 
     return entry
