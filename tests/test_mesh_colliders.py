@@ -249,15 +249,16 @@ def test_the_bucket_preset_at_frame_steps_keeps_the_washcloth_inside_the_wall():
 
 
 def test_the_washcloth_at_rest_in_the_bucket_stays_at_rest_at_frame_steps():
-    """The bucket preset's towel as the adaptive run leaves it at 3 s, at rest in the water against the wall
-    (no particle faster than 1 cm/s), taken on at fixed frame steps (implicit Euler, tolerance 0, 1/30 s) for
+    """The bucket preset's towel as the adaptive run leaves it at 3.5 s, at rest in the water against the wall
+    (no particle faster than 1 cm/s; at 3 s, since layers are no longer pushed beyond where they started
+    (docs/model.md 6.2), a particle still moved at 1.1 cm/s, 0.05 in a run advanced in quarter seconds), taken on at fixed frame steps (implicit Euler, tolerance 0, 1/30 s) for
     3 s, frame by frame and a second at a time: no particle moves faster than 1 cm/s.  The particles lying on
     the wall slide on it with friction a force of each step; against the direction each slid in at the
     frame's start, the rest of the force along the wall went unopposed for the whole frame, and the towel set
     off again (0.15 m/s frame by frame, 0.07 a second at a time)."""
     scene = load_scene("bucket")
     adaptive = wetcloth.Simulation(scene)
-    adaptive.advance(3.0)
+    adaptive.advance(3.5)
     rest = adaptive.state
     assert np.linalg.norm(rest.vel, axis=0).max() < 0.01
     for call in (1 / 30, 1.0):

@@ -321,6 +321,42 @@ def test_a_particle_in_the_corner_of_a_fold_is_held_by_the_flat_layer_within_fri
     assert steps == [1, 1, 0] and free_p == 1.0, steps
 
 
+@pytest.mark.parametrize("start, end, kept", [(1.5, 0.8, 1.0), (0.7, 0.6, 0.7), (0.3, 0.25, 0.5), (0.7, 0.75, 0.75)])
+def test_a_push_sets_layers_back_to_where_they_started_not_beyond(start, end, kept):
+    """The push of self_contact/response.cpp (docs/model.md 6.2), on its own: particle p falls straight onto a flat
+    triangle A, from `start` to `end` thicknesses above it, every other particle far away.  A pair that started
+    the step at least a thickness apart is pushed to the thickness; one that started closer only back to where
+    it started (at least half the thickness), since lifting it further is work no force did (before: to the
+    thickness, and a crumpled pile's pushes gained energy at nearly every fixed frame step); one that moved
+    apart is left.  The approaching velocity is removed, and the push conserves momentum."""
+    sim = wetcloth.Simulation(wetcloth.load_scene(nx=5, ny=5, width=0.4, length=0.4, self_collision="on"))
+    contact, thickness = sim._contact, sim.scene.thickness
+    ix = np.round((contact.rest[0] - contact.rest[0].min()) / 0.1).astype(int)
+    iy = np.round((contact.rest[1] - contact.rest[1].min()) / 0.1).astype(int)
+    p = int(np.flatnonzero((ix == 0) & (iy == 0))[0])
+    a = next(t for t, c in enumerate(sim.triangles) if np.all(ix[c] >= 2) and np.all(iy[c] >= 3))
+    n = contact.rest.shape[1]
+    x0 = np.stack([ix - 30.0, 0.1 * iy, np.full(n, 50.0)])  # every particle far away, up and aside
+    x0[:, sim.triangles[a]] = (np.array([100.0, 100.0, 0.0]) + [[-0.05, -0.05, 0.0], [0.05, -0.05, 0.0],
+                                                                [0.0, 0.05, 0.0]]).T
+    x0[:, p] = [100.0, 100.0 - 0.05 / 3.0, start * thickness]  # over A's centroid: A moves as one
+    contact.reference[...] = x0
+    lists = _core.ContactState()
+    _core.build(contact, thickness, contact.least_margin, lists=lists)
+    h = 0.01
+    x1, v1 = x0.copy(), np.zeros((3, n))
+    x1[2, p] = end * thickness
+    v1[2, p] = (end - start) * thickness / h
+    mass, free = np.full(n, 0.01), np.ones(n)
+    momentum = (mass * v1).sum(axis=1)
+    _core.resolve(contact, thickness, -10.0, 1e3, mass, free, x0, x1, v1, h, lists=lists)
+    separation = x1[2, p] - x1[2, sim.triangles[a]].mean()
+    assert separation == pytest.approx(kept * thickness, rel=1e-9), (separation / thickness, kept)
+    assert np.allclose((mass * v1).sum(axis=1), momentum, rtol=0.0, atol=1e-15)
+    if end < start:
+        assert v1[2, p] - v1[2, sim.triangles[a]].mean() == pytest.approx(0.0, abs=1e-12)
+
+
 def test_a_fold_carries_the_pushed_particles_history(current_over_pin):
     """Self-collision's pushes carry the pushed particles' BDF2 history through their pushed state
     (docs/model.md section 6.2, "Time integration") instead of restarting it for the whole cloth.  The

@@ -8,7 +8,9 @@
 // contact, where its normal says which side each element is on; a pair that ends the step closer than the
 // thickness without such a contact is treated in its end configuration.  Treating it moves the end
 // positions apart along that normal to the thickness (in proportion to the inverse masses and the closest
-// points' weights; a particle on the floor is not pushed into it), removes the pair's approaching velocity
+// points' weights; a particle on the floor is not pushed into it; a pair treated in its end configuration
+// that started the step closer than the thickness only back to its start distance, kept_distance), removes
+// the pair's approaching velocity
 // (an inelastic impulse) and reduces its sliding velocity by `friction` times the normal velocity removed
 // (Coulomb).  A few passes settle stacked layers.  Pairs whose motion is still not shown safe then form
 // rigid impact zones: each zone moves with its own linear and angular momentum, zones that still meet
@@ -180,7 +182,9 @@ Settled settle_pair(const Candidate& p, double start_distance, const Contact& co
     if (when == CLEAR && length >= (1.0 - SLACK) * thickness) return NOTHING;
     if (!(length > 0.0)) return when == CLEAR ? NOTHING : LEFT;  // no side to push to
     const Vec3 normal = {gap.x / length, gap.y / length, gap.z / length};
-    push_apart(idx, w, normal, thickness, inverse, contact.friction, floor_z, n, x1, v1);
+    const double target = when == CLEAR ? kept_distance(start_distance, thickness) : thickness;
+    if (when == CLEAR && length >= target) return NOTHING;
+    push_apart(idx, w, normal, target, inverse, contact.friction, floor_z, n, x1, v1);
     return PUSHED;
 }
 
