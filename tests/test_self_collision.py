@@ -1,5 +1,5 @@
 """Self-collision (docs/model.md section 6.2): folding cloths never pass through themselves and keep
-their layers a thickness apart; the stage costs nothing where nothing folds, is off on request,
+their layers 0.9 to 1 thickness apart; the stage costs nothing where nothing folds, is off on request,
 and keeps FMU rollback exact.
 
 Crossings are counted by a checker written here from scratch (signed volumes, numpy; none of the
@@ -321,14 +321,16 @@ def test_a_particle_in_the_corner_of_a_fold_is_held_by_the_flat_layer_within_fri
     assert steps == [1, 1, 0] and free_p == 1.0, steps
 
 
-@pytest.mark.parametrize("start, end, kept", [(1.5, 0.8, 1.0), (0.7, 0.6, 0.7), (0.3, 0.25, 0.5), (0.7, 0.75, 0.75)])
+@pytest.mark.parametrize("start, end, kept", [(1.5, 0.8, 1.0), (0.95, 0.8, 0.95), (0.95, 0.945, 0.95), (0.5, 0.4, 0.9),
+                                              (0.95, 0.96, 0.96), (1.5, 0.995, 0.995)])
 def test_a_push_sets_layers_back_to_where_they_started_not_beyond(start, end, kept):
     """The push of self_contact/response.cpp (docs/model.md 6.2), on its own: particle p falls straight onto a flat
     triangle A, from `start` to `end` thicknesses above it, every other particle far away.  A pair that started
     the step at least a thickness apart is pushed to the thickness; one that started closer only back to where
-    it started (at least half the thickness), since lifting it further is work no force did (before: to the
+    it started (at least 0.9 of the thickness), since lifting it further is work no force did (before: to the
     thickness, and a crumpled pile's pushes gained energy at nearly every fixed frame step); one that moved
-    apart is left.  The approaching velocity is removed, and the push conserves momentum."""
+    apart, or that ends within 1 % of the thickness, is left.  The approaching velocity is removed, and the push
+    conserves momentum."""
     sim = wetcloth.Simulation(wetcloth.load_scene(nx=5, ny=5, width=0.4, length=0.4, self_collision="on"))
     contact, thickness = sim._contact, sim.scene.thickness
     ix = np.round((contact.rest[0] - contact.rest[0].min()) / 0.1).astype(int)
@@ -353,8 +355,8 @@ def test_a_push_sets_layers_back_to_where_they_started_not_beyond(start, end, ke
     separation = x1[2, p] - x1[2, sim.triangles[a]].mean()
     assert separation == pytest.approx(kept * thickness, rel=1e-9), (separation / thickness, kept)
     assert np.allclose((mass * v1).sum(axis=1), momentum, rtol=0.0, atol=1e-15)
-    if end < start:
-        assert v1[2, p] - v1[2, sim.triangles[a]].mean() == pytest.approx(0.0, abs=1e-12)
+    approach = v1[2, p] - v1[2, sim.triangles[a]].mean()
+    assert approach == (pytest.approx(0.0, abs=1e-12) if kept != end else (end - start) * thickness / h)
 
 
 def test_a_fold_carries_the_pushed_particles_history(current_over_pin):
@@ -363,7 +365,8 @@ def test_a_fold_carries_the_pushed_particles_history(current_over_pin):
     towel folded by the current (thousands of pushes in 2 s) stays within the defaults' 1 mm accuracy
     aim for the centroid (docs/benchmarks.md, `bench/work_precision.py`; here the particles' mean
     position) of the same scene at tolerance 5e-8 (100 times tighter, computed here) in every frame.
-    Measured: 0.19 mm; restarting at every push gave 0.84 mm with a third more steps."""
+    Measured: 0.26 mm (0.19 while pushes took layers to the thickness from wherever they started);
+    restarting at every push gave 0.84 mm with a third more steps."""
     sim, frames = current_over_pin
     assert sim.contact_counts["responses"] > 1000, "folds for real: the stage pushes"
     _, reference = run_frames(dict(CURRENT_OVER_PIN, tolerance=5e-8), 2.0)
@@ -405,10 +408,11 @@ def test_folded_layers_stay_a_thickness_apart(edge_on_pool):
     (hence also between particles not joined by an edge), by the checker's own distance.
 
     The stage pushes every pair (a particle and a triangle, two edges) closer than 0.99 thickness
-    (``response.SLACK``) back to one thickness; once its settling passes find nothing left to treat,
-    every pair is >= 0.99 thickness apart.  0.9 leaves room for a pair that the last settling pass or
-    an impact zone left closer while the layers were still moving.  That the layers are in contact
-    at all is checked too: in every frame some pair lies within 1.5 thicknesses."""
+    (``response.SLACK``) back to one thickness, or, if it started the step closer, back to where it started
+    but to at least 0.9 thickness (``response.KEPT_FRACTION``); once its settling passes find nothing left to
+    treat, every pair is >= 0.9 thickness apart.  Here the layers rest 0.990-0.991 thickness apart (measured).
+    That the layers are in contact at all is checked too: in every frame some pair lies within 1.5
+    thicknesses."""
     sim, frames = edge_on_pool
     thickness = sim.scene.thickness
     settled = frames[round(4.5 / 0.25) - 1:]

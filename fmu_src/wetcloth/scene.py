@@ -344,7 +344,7 @@ class Scene:
     floor_friction: float = _param(0.5, "-", "Coulomb friction coefficient of the floor", 0.0, 10.0)
     # --- self-collision (docs/model.md section 6.2)
     self_collision: str = _param(
-        "on", "-", "'on': the cloth never passes through itself and keeps its layers a thickness apart; "
+        "on", "-", "'on': the cloth never passes through itself and keeps its layers 0.9 to 1 thickness apart; "
         "'off' skips it (a cloth that cannot fold saves its small cost)", choices=SWITCH)
     self_friction: float = _param(0.4, "-", "Coulomb friction coefficient between layers of the cloth", 0.0, 10.0)
     pinned_edge: str = _param("none", "-", "edge held fixed in space: none, x_min, x_max, y_min, y_max", choices=EDGES)

@@ -1,5 +1,5 @@
 """The arrays of self-collision (the compiled core's ``self_contact/``; docs/model.md section 6.2):
-the cloth never passes through itself and keeps its layers ``thickness`` apart.
+the cloth never passes through itself and keeps its layers 0.9 to 1 ``thickness`` apart.
 
 One stage per accepted step, after the floor: a spatial hash finds the candidate pairs (point and
 triangle, edge and edge) and the list is kept while the motion allows; close pairs are pushed apart

@@ -180,10 +180,10 @@ Settled settle_pair(const Candidate& p, double start_distance, const Contact& co
     const Vec3 gap = combine(w, a, b, c, d);
     const double length = std::sqrt(gap.x * gap.x + gap.y * gap.y + gap.z * gap.z);
     if (when == CLEAR && length >= (1.0 - SLACK) * thickness) return NOTHING;
-    if (!(length > 0.0)) return when == CLEAR ? NOTHING : LEFT;  // no side to push to
-    const Vec3 normal = {gap.x / length, gap.y / length, gap.z / length};
     const double target = when == CLEAR ? kept_distance(start_distance, thickness) : thickness;
     if (when == CLEAR && length >= target) return NOTHING;
+    if (!(length > 0.0)) return when == CLEAR ? NOTHING : LEFT;  // no side to push to
+    const Vec3 normal = {gap.x / length, gap.y / length, gap.z / length};
     push_apart(idx, w, normal, target, inverse, contact.friction, floor_z, n, x1, v1);
     return PUSHED;
 }

@@ -16,13 +16,14 @@ namespace wc::self_contact {
 //: The terms' penalty stiffness as a multiple of the cloth's stiffest spring (N/m per N/m).  Soft: a fixed normal
 //: keeps each layer on its side through a frame-long step, and the thickness is left to the stage after the solve.
 //: bench/self_contact_energy.py (a 41 x 41 sheet hung by a corner, the 2.5k-vertex disc hung by its cap, 1/30 s
-//: steps, three starting heights a micrometre apart), frames in which the energy rose, and the time against
-//: the stage alone (which let it rise in 18-27 and 9-12 frames, by up to 0.12 J): at 0.025 0-1 on either (one
-//: frame in seven starts of the sheet, 0.0002 J; one in three of the disc, 0.001 J), 0.6x and 0.97x the time; at 0.005 none, 0.55x and 1.03x; at 0 (the
-//: terms there but without force) as without them; at 0.1 0-2 frames on the sheet (up to 0.054 J), 1-8 on the
-//: disc, 0.7x and 1.1x; at 0.4 2-4 and 3-7, 0.4x and 1.0x; at 10, the colliders' stiffness, up to 0.086 J,
-//: 0.3x and 1.5x.
-inline constexpr double SELF_SUPPORT_STIFFNESS = 0.025;
+//: steps, eight starting heights a micrometre apart, 720 frames each): the energy rose in no frame, at 33-50 and
+//: 48-55 ms a frame (the same at 0.025, and at 1, with the stage's pushes of response.hpp's kept_distance).  The
+//: crumpled 21 x 29 pile of bench/self_collision.py (--pile-only), on the floor from about 4 s: at 0.025 its layers
+//: sank into each other in every step and the stage's pushes added the energy back (8e-5 J a step, mostly the
+//: springs'), so every step gained energy and was taken again in halves down to GAIN_SUBSTEP_LEAST: 740 steps
+//: and 10 s of CPU a simulated second, against 60-95 steps and 1.3-2.1 s at 0.1.  (Before kept_distance, at 0.1
+//: the sheet's energy rose in 0-2 frames of three starts, up to 0.054 J, the disc's in 1-8; at 0.4 in 2-4 and 3-7.)
+inline constexpr double SELF_SUPPORT_STIFFNESS = 0.1;
 
 //: Append to supports the candidate pairs (the list in contact) whose gap at positions pos (3, n) is below
 //: `thickness` (m) plus how far they close in `ahead` s at velocities vel (3, n), as SELF_SUPPORT terms whose
