@@ -124,20 +124,27 @@ def hanging_sheet_cost(repeat: int, duration: float = 0.5) -> None:
               f"at most {most} candidate pairs after a frame", flush=True)
 
 
+def off_and_on(values: dict, duration: float, repeat: int) -> tuple[dict, dict]:
+    """The least CPU time (s) of each mode ("off", "on") over ``repeat`` alternating runs of ``duration`` s,
+    and each mode's first run: its simulation and the most crossings in a frame."""
+    best, first = {}, {}
+    for k in range(repeat):
+        for mode in ("off", "on"):
+            spent, sim, worst = timed_run(values | {"self_collision": mode}, duration, count_crossings=k == 0)
+            best[mode] = min(best.get(mode, spent), spent)
+            if k == 0:
+                first[mode] = (sim, worst)
+    return best, first
+
+
 def folding_cost(repeat: int) -> None:
     print("\n| scene | simulated | off: CPU, steps, most crossings | on: CPU, steps, most crossings | on / off |")
     print("|---|---|---|---|---|")
     for name, values, duration in (("edge-on drop into a 0.6 m pool (15 x 21)", EDGE_ON_POOL, 6.0),
                                    ("folded over its pinned edge by a current (15 x 21)", CURRENT_OVER_PIN, 2.0),
                                    ("crumpled: soft towel dropped upright from 0.4 m in air (11 x 15)", CRUMPLED, 1.5)):
-        best, rows = {}, {}
-        for k in range(repeat):
-            for mode in ("off", "on"):
-                spent, sim, worst = timed_run(values | {"self_collision": mode}, duration, count_crossings=k == 0)
-                best[mode] = min(best.get(mode, spent), spent)
-                if k == 0:
-                    rows[mode] = (sim.steps, worst)
-        cells = [f"{best[m]:.2f} s, {rows[m][0]} steps, {rows[m][1]}" for m in ("off", "on")]
+        best, first = off_and_on(values, duration, repeat)
+        cells = [f"{best[m]:.2f} s, {first[m][0].steps} steps, {first[m][1]}" for m in ("off", "on")]
         print(f"| {name} | {duration:g} s | {cells[0]} | {cells[1]} | {best['on'] / best['off']:.2f}x |", flush=True)
 
 
@@ -148,15 +155,9 @@ PILE = CRUMPLED | dict(nx=21, ny=29, integrator="implicit_euler") | FRAME_STEPS
 def pile_at_frame_steps(repeat: int, duration: float = 3.0) -> None:
     """The 21 x 29 pile at fixed 1/30 s steps: CPU time off and on, steps, steps taken again (a step whose
     pushes gained energy is taken again in halves) and the most crossings in a 0.25 s frame."""
-    best, rows = {}, {}
-    for k in range(repeat):
-        for mode in ("off", "on"):
-            spent, sim, worst = timed_run(PILE | {"self_collision": mode}, duration, count_crossings=k == 0)
-            best[mode] = min(best.get(mode, spent), spent)
-            if k == 0:
-                rows[mode] = (sim.steps, sim.rejected_steps, worst)
-    cells = [f"{best[m]:.2f} s, {rows[m][0]} steps, {rows[m][1]} taken again, {rows[m][2]} crossings"
-             for m in ("off", "on")]
+    best, first = off_and_on(PILE, duration, repeat)
+    cells = [f"{best[m]:.2f} s, {first[m][0].steps} steps, {first[m][0].rejected_steps} taken again, "
+             f"{first[m][1]} crossings" for m in ("off", "on")]
     print(f"\ncrumpled 21 x 29 pile at fixed 1/30 s steps (implicit_euler), {duration:g} s: off {cells[0]}; "
           f"on {cells[1]}; on / off {best['on'] / best['off']:.2f}x", flush=True)
 
