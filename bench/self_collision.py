@@ -21,7 +21,8 @@
   edge-triangle crossings in any 0.25 s frame (the test's checker), without and with the stage.
 * A larger crumpled pile (the default towel's 21 x 29 grid, dropped upright as the crumpling one) at the
   fixed-step mode (``implicit_euler``, 1/30 s steps), 3 s: CPU time, steps and steps taken again (a step
-  whose pushes gained energy is taken again in halves), without and with the stage (``--pile-only``).
+  whose pushes gained energy is taken again in halves), without and with the stage (``--pile-only``; it lies on
+  the floor from about 4 s: ``--pile-duration 8``).
 * The adaptive stability sweep of ``bench/stability.py`` (quick grid: 324 stressed runs, every
   integrator) with the stage on, as it is by default; ``--skip-stability`` leaves it out.
 """
@@ -181,10 +182,11 @@ def main() -> None:
     parser.add_argument("--hanging-only", action="store_true", help="only the hanging sheet")
     parser.add_argument("--hanging-duration", type=float, default=0.5, help="simulated s of the hanging sheet")
     parser.add_argument("--pile-only", action="store_true", help="only the crumpled pile at fixed frame steps")
+    parser.add_argument("--pile-duration", type=float, default=3.0, help="simulated s of the pile (default 3)")
     args = parser.parse_args()
     wetcloth.Simulation(wetcloth.load_scene(nx=3, ny=3)).advance(0.01)  # one untimed run first
     if args.pile_only:
-        pile_at_frame_steps(args.repeat)
+        pile_at_frame_steps(args.repeat, args.pile_duration)
         return
     if not args.landing_only:
         hanging_sheet_cost(args.repeat, args.hanging_duration)
@@ -195,7 +197,7 @@ def main() -> None:
         return
     towel_overhead(args.repeat)
     folding_cost(max(1, args.repeat // 2))
-    pile_at_frame_steps(max(1, args.repeat // 2))
+    pile_at_frame_steps(max(1, args.repeat // 2), args.pile_duration)
     if not args.skip_stability:
         stability()
 
