@@ -46,8 +46,9 @@
 6. On an exception, both binaries' ``handle_py_exception`` flush the instance's log queue to the master's
    logger callback before they fetch the exception: the master's callback (Python code, in a Python host such
    as fmpy) then ran with an exception pending.  The exception was lost on the way (the master read "Fatal py
-   exception encountered: ... unknown error"), and running Python code in that state is undefined (a child
-   master of the tests died of a segmentation fault now and then just after such calls).  Each wrapped entry
+   exception encountered: ... unknown error"), and running Python code in that state is undefined (a suspect
+   of a test's child master dying of a segmentation fault now and then just after such calls; not reproduced
+   since on another machine, docs/open_problems.md).  Each wrapped entry
    point therefore empties its instance's queue before an exception leaves it, into the exception's own text,
    which the binary logs (the master reads one Fatal message with the reason, where it read an Error message
    and "unknown error").
