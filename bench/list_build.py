@@ -13,13 +13,10 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import time
-from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # idle BLAS threads would spin on the CPU clock
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 import wetcloth  # noqa: E402
 from wetcloth import _core  # noqa: E402
 import _paths  # noqa: E402,F401  (tests/ on sys.path)

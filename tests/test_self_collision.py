@@ -274,6 +274,23 @@ def test_a_towel_sunk_onto_the_floor_comes_to_rest_with_no_layer_crossing():
     assert crossed == 0
 
 
+def particle_and_triangle():
+    """A 5 x 5 sheet (0.1 m spacing) laid out to test one pair on its own: every particle far away (x = its
+    column - 30 m, 50 m up), but triangle A of the far rows lying flat about (100, 100, 0) m (corners 5 cm out).
+    Returns the simulation, its contact and thickness (m), each particle's column and row, the corner particle p
+    (column 0, row 0, for the caller to place), A's index and the positions (3, n)."""
+    sim = wetcloth.Simulation(wetcloth.load_scene(nx=5, ny=5, width=0.4, length=0.4, self_collision="on"))
+    contact, thickness = sim._contact, sim.scene.thickness
+    ix = np.round((contact.rest[0] - contact.rest[0].min()) / 0.1).astype(int)
+    iy = np.round((contact.rest[1] - contact.rest[1].min()) / 0.1).astype(int)
+    p = int(np.flatnonzero((ix == 0) & (iy == 0))[0])
+    a = next(t for t, c in enumerate(sim.triangles) if np.all(ix[c] >= 2) and np.all(iy[c] >= 3))
+    pos = np.stack([ix - 30.0, 0.1 * iy, np.full(ix.size, 50.0)])
+    pos[:, sim.triangles[a]] = (np.array([100.0, 100.0, 0.0]) + [[-0.05, -0.05, 0.0], [0.05, -0.05, 0.0],
+                                                                 [0.0, 0.05, 0.0]]).T
+    return sim, contact, thickness, ix, iy, p, a, pos
+
+
 def test_a_particle_in_the_corner_of_a_fold_is_held_by_the_flat_layer_within_friction():
     """The rule behind the run above, on its own (self_contact/resting.cpp): particle p lies 0.8 thickness from a
     still vertical triangle B and a thickness above a still horizontal triangle A (the corner of a fold: a flat
@@ -281,19 +298,12 @@ def test_a_particle_in_the_corner_of_a_fold_is_held_by_the_flat_layer_within_fri
     list's pairs ascend, and B's index is the lower); a force straight down (0, 0, -1) N does not press it onto B,
     so release_sliding lets it go; hold_within_friction then holds it on A, its normal straight up.  A force
     along A beyond friction (0.4) times the force into it, (0.5, 0, -1) N, is refused by both."""
-    sim = wetcloth.Simulation(wetcloth.load_scene(nx=5, ny=5, width=0.4, length=0.4, self_collision="on"))
-    contact, thickness = sim._contact, sim.scene.thickness
-    ix = np.round((contact.rest[0] - contact.rest[0].min()) / 0.1).astype(int)
-    iy = np.round((contact.rest[1] - contact.rest[1].min()) / 0.1).astype(int)
-    p = int(np.flatnonzero((ix == 0) & (iy == 0))[0])
+    sim, contact, thickness, ix, iy, p, a, pos = particle_and_triangle()
     corners = sim.triangles
     b = next(t for t, c in enumerate(corners) if np.all(ix[c] >= 2) and np.all(iy[c] <= 1))
-    a = next(t for t, c in enumerate(corners) if np.all(ix[c] >= 2) and np.all(iy[c] >= 3))
     assert b < a
     n = contact.rest.shape[1]
-    pos = np.stack([ix - 30.0, 0.1 * iy, np.full(n, 50.0)])  # every particle far away, up and aside
     centre = np.array([100.0, 100.0, 0.0])
-    pos[:, corners[a]] = (centre + np.array([[-0.05, -0.05, 0.0], [0.05, -0.05, 0.0], [0.0, 0.05, 0.0]])).T
     pos[:, p] = centre + [0.0, 0.0, thickness]
     wall = centre[0] + 0.8 * thickness
     pos[:, corners[b]] = np.array([[wall, 100.0 - 0.05, 0.5 * thickness], [wall, 100.0 + 0.05, 0.5 * thickness],
@@ -331,16 +341,8 @@ def test_a_push_sets_layers_back_to_where_they_started_not_beyond(start, end, ke
     thickness, and a crumpled pile's pushes gained energy at nearly every fixed frame step); one that moved
     apart, or that ends within 1 % of the thickness, is left.  The approaching velocity is removed, and the push
     conserves momentum."""
-    sim = wetcloth.Simulation(wetcloth.load_scene(nx=5, ny=5, width=0.4, length=0.4, self_collision="on"))
-    contact, thickness = sim._contact, sim.scene.thickness
-    ix = np.round((contact.rest[0] - contact.rest[0].min()) / 0.1).astype(int)
-    iy = np.round((contact.rest[1] - contact.rest[1].min()) / 0.1).astype(int)
-    p = int(np.flatnonzero((ix == 0) & (iy == 0))[0])
-    a = next(t for t, c in enumerate(sim.triangles) if np.all(ix[c] >= 2) and np.all(iy[c] >= 3))
+    sim, contact, thickness, _, _, p, a, x0 = particle_and_triangle()
     n = contact.rest.shape[1]
-    x0 = np.stack([ix - 30.0, 0.1 * iy, np.full(n, 50.0)])  # every particle far away, up and aside
-    x0[:, sim.triangles[a]] = (np.array([100.0, 100.0, 0.0]) + [[-0.05, -0.05, 0.0], [0.05, -0.05, 0.0],
-                                                                [0.0, 0.05, 0.0]]).T
     x0[:, p] = [100.0, 100.0 - 0.05 / 3.0, start * thickness]  # over A's centroid: A moves as one
     contact.reference[...] = x0
     lists = _core.ContactState()

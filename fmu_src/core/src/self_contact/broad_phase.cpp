@@ -410,21 +410,16 @@ void build_lists(Contact& contact, Index n, double thickness, double least, doub
     FlatWindows flat(contact, n, x, reach, !own);
     Index windows = 0;
     const Index unproven = flat.judged() ? flat.unproven(lists.flat_inside, windows) : -1;
+    const bool whole = unproven < 0 || MOST_UNPROVEN * static_cast<double>(windows) < static_cast<double>(unproven);
+    const char* inside = whole ? nullptr : lists.flat_inside.data();  // (null: every element searched)
     double nearest_pair = INF;
-    if (unproven < 0 || MOST_UNPROVEN * static_cast<double>(windows) < static_cast<double>(unproven)) {
+    if (whole || unproven > 0) {
         nearest_pair = py_min(search<POINT_TRIANGLE>(contact, n, x, particle_boxes, triangle_boxes, reach, thickness, g,
-                                                     lists.index_scratch, lists.point_triangle),
+                                                     lists.index_scratch, lists.point_triangle, inside),
                               search<EDGE_EDGE>(contact, n, x, edge_boxes, edge_boxes, reach, thickness, g,
-                                                lists.index_scratch, lists.edge_edge));
-    } else {
-        const char* inside = lists.flat_inside.data();
-        if (unproven > 0) {
-            nearest_pair = py_min(search<POINT_TRIANGLE>(contact, n, x, particle_boxes, triangle_boxes, reach, thickness,
-                                                         g, lists.index_scratch, lists.point_triangle, inside),
-                                  search<EDGE_EDGE>(contact, n, x, edge_boxes, edge_boxes, reach, thickness, g,
-                                                    lists.index_scratch, lists.edge_edge, inside));
-        }
-        // The pairs of the coarser tiers, beyond those whose windows are all shown.
+                                                lists.index_scratch, lists.edge_edge, inside));
+    }
+    if (!whole) {  // the pairs of the coarser tiers, beyond those whose windows are all shown
         nearest_pair = py_min(nearest_pair, far_pairs_within(contact, n, x, flat.shown_through(), reach, thickness,
                                                              triangle_boxes, edge_boxes, lists.point_triangle,
                                                              lists.edge_edge));

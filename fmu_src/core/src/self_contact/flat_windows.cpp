@@ -110,7 +110,7 @@ bool triangle_figures(const Contact& contact, Index n, const double* x, std::vec
         const Index* p = contact.triangles + 3 * k;
         const Vec3 a = point(x, n, p[0]), b = point(x, n, p[1]), c = point(x, n, p[2]);
         const Vec3 e1 = sub(b, a), e2 = sub(c, a), e3 = sub(c, b);
-        const Vec3 normal = {e1.y * e2.z - e1.z * e2.y, e1.z * e2.x - e1.x * e2.z, e1.x * e2.y - e1.y * e2.x};
+        const Vec3 normal = cross(e1, e2);
         const double twice_area = norm(normal);
         const double longest = std::sqrt(py_max(py_max(dot(e1, e1), dot(e2, e2)), dot(e3, e3)));
         const double* inv = inverse + 4 * k;
@@ -192,10 +192,10 @@ bool shown(const Tier& t, const double* cells, Index wx, Index wy, Index wide_x,
     const Vec3 axis = std::fabs(nu.x) <= std::fabs(nu.y) && std::fabs(nu.x) <= std::fabs(nu.z) ? Vec3{1.0, 0.0, 0.0}
                       : std::fabs(nu.y) <= std::fabs(nu.z)                                   ? Vec3{0.0, 1.0, 0.0}
                                                                                               : Vec3{0.0, 0.0, 1.0};
-    Vec3 t1 = {nu.y * axis.z - nu.z * axis.y, nu.z * axis.x - nu.x * axis.z, nu.x * axis.y - nu.y * axis.x};
+    Vec3 t1 = cross(nu, axis);
     const double l1 = norm(t1);
     t1 = {t1.x / l1, t1.y / l1, t1.z / l1};
-    const Vec3 t2 = {nu.y * t1.z - nu.z * t1.y, nu.z * t1.x - nu.x * t1.z, nu.x * t1.y - nu.y * t1.x};
+    const Vec3 t2 = cross(nu, t1);
     // A: the mean Jacobian projected onto the plane (2 x 2); its least singular value.
     double a[4];
     for (int k = 0; k < 2; ++k) {

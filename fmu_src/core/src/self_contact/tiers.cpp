@@ -48,7 +48,7 @@ bool frame(const double f[6], double e[9]) {
     const double lu = norm(u);
     if (!(lu > 1e-9 * norm(b))) return false;
     const Vec3 e2 = {u.x / lu, u.y / lu, u.z / lu};
-    const Vec3 e3 = {e1.y * e2.z - e1.z * e2.y, e1.z * e2.x - e1.x * e2.z, e1.x * e2.y - e1.y * e2.x};
+    const Vec3 e3 = cross(e1, e2);
     const double cols[3][3] = {{e1.x, e2.x, e3.x}, {e1.y, e2.y, e3.y}, {e1.z, e2.z, e3.z}};
     for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c) e[3 * r + c] = cols[r][c];

@@ -47,6 +47,9 @@ inline Vec3 sub(const Vec3& a, const Vec3& b) { return {a.x - b.x, a.y - b.y, a.
 inline double dot(const Vec3& a, const Vec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 inline double clamp01(double v) { return py_min(1.0, py_max(0.0, v)); }
 inline double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
+inline Vec3 cross(const Vec3& a, const Vec3& b) {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
 
 //: The point x + t p: where x is after a fraction t of its motion p.
 inline Vec3 along(const Vec3& x, double t, const Vec3& p) { return {x.x + t * p.x, x.y + t * p.y, x.z + t * p.z}; }
