@@ -102,17 +102,20 @@ WETCLOTH_BINDINGS(m) {
     m.def(
         "resolve",
         [](nb::handle contact, double thickness, double floor_z, double blow_up_speed, nb::handle mass,
-           nb::handle free, nb::handle x0, nb::handle x1, nb::handle v1, double h, nb::handle lists) {
+           nb::handle free, nb::handle x0, nb::handle x1, nb::handle v1, double h, nb::handle lists,
+           bool layers_solved) {
             const Index n = size_of(x0) / 3;
             Contact c = contact_from(contact, n, lists_of(contact, lists));
+            c.layers_solved = layers_solved;
             return resolve(c, thickness, floor_z, blow_up_speed, n, argument<const double>(mass, "mass", n),
                            argument<const double>(free, "free", n), argument<const double>(x0, "x0", 3 * n),
                            argument<double>(x1, "x1", 3 * n), argument<double>(v1, "v1", 3 * n), h);
         },
         "contact"_a, "thickness"_a, "floor_z"_a, "blow_up_speed"_a, "mass"_a, "free"_a, "x0"_a, "x1"_a, "v1"_a, "h"_a,
-        "lists"_a = nb::none(),
+        "lists"_a = nb::none(), "layers_solved"_a = false,
         "The self-collision stage of one step of h s from x0 to x1 (x1, v1 changed in place); whether it changed "
-        "them.");
+        "them.  layers_solved: the step's solve held the listed pairs (a fixed step's supports), so pairs it left "
+        "at least KEPT_FRACTION of the thickness apart are left.");
     m.def(
         "build",
         [](nb::handle contact, double thickness, double margin, nb::handle lists) {

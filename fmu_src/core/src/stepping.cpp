@@ -673,6 +673,7 @@ Status step(Core& core, double remaining, double span, bool retried = false) {
         copy(3 * n, buf.trial_pos, unpushed_pos);
         copy(3 * n, buf.trial_vel, unpushed_vel);
     }
+    core.contact.layers_solved = self_supports;  // the solve held the layers: the stage leaves what it balanced
     bool kinked = resolve(core.contact, phys.thickness, phys.floor_z, control.blow_up_speed, n, core.solver.mass,
                           cloth.free, buf.pos, buf.trial_pos, buf.trial_vel, h);
     // A fixed step whose self-collision needed rigid impact zones or undid its motion (a frame-long step's

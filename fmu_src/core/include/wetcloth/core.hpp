@@ -481,6 +481,8 @@ inline constexpr Index ZONE_ROWS = 21;
 //: (ZONE_ROWS, n) scratch of the impact zones; counters (CONTACT_COUNTERS); the lists.
 struct Contact {
     bool enabled = false;
+    bool layers_solved = false;  // this step's solve held the listed pairs (self_contact/supports.hpp): the stage
+                                 // leaves pairs KEPT_FRACTION of the thickness apart (self_contact/response.hpp)
     double friction = 0, least_margin = 0, rest_gap = 0, typical_gap = 0;
     Index triangle_count = 0;
     const Index* triangles = nullptr;

@@ -9,7 +9,8 @@
 // thickness without such a contact is treated in its end configuration.  Treating it moves the end
 // positions apart along that normal to the thickness (in proportion to the inverse masses and the closest
 // points' weights; a particle on the floor is not pushed into it; a pair treated in its end configuration
-// that started the step closer than the thickness only back to its start distance, kept_distance), removes
+// that started the step closer than the thickness only back to its start distance, kept_distance; after a
+// solve that held the pairs, Contact::layers_solved, only pairs it left closer than KEPT_FRACTION of it), removes
 // the pair's approaching velocity
 // (an inelastic impulse) and reduces its sliding velocity by `friction` times the normal velocity removed
 // (Coulomb).  A few passes settle stacked layers.  Pairs whose motion is still not shown safe then form
@@ -179,7 +180,8 @@ Settled settle_pair(const Candidate& p, double start_distance, const Contact& co
     const Weights w = closest(p.kind, a, b, c, d);
     const Vec3 gap = combine(w, a, b, c, d);
     const double length = std::sqrt(gap.x * gap.x + gap.y * gap.y + gap.z * gap.z);
-    if (when == CLEAR && length >= (1.0 - SLACK) * thickness) return NOTHING;
+    const double left_alone = contact.layers_solved ? KEPT_FRACTION : 1.0 - SLACK;  // of the thickness
+    if (when == CLEAR && length >= left_alone * thickness) return NOTHING;
     const double target = when == CLEAR ? kept_distance(start_distance, thickness) : thickness;
     if (when == CLEAR && length >= target) return NOTHING;
     if (!(length > 0.0)) return when == CLEAR ? NOTHING : LEFT;  // no side to push to

@@ -10,7 +10,8 @@ namespace wc::self_contact {
 
 //: Settling passes over the candidates per step (each pass treats every pair that needs it).
 inline constexpr int PASSES_MAX = 8;
-//: A pair whose end distance is within this fraction below the thickness is left alone.
+//: A pair whose end distance is within this fraction below the thickness is left alone (with adaptive steps;
+//: at fixed steps, whose solve holds the pairs, within 1 - KEPT_FRACTION: see Contact::layers_solved).
 inline constexpr double SLACK = 0.01;
 //: The safe minimum distance of a pair along the step: this fraction of the thickness, or half the pair's
 //: distance at the start of the step if that is less.
@@ -20,7 +21,12 @@ inline constexpr double SAFE_FRACTION = 0.1;
 //: time (14M pushes in 0.5 s, the settling passes at their limit in every step, against 0.6M): layers left that
 //: close lie within each other's reach, and the current presses them in every step.  At 0.9 its adaptive run takes
 //: about the time it took with every push to the thickness (5.6M pushes but 24k steps instead of 31k), its run at
-//: frame steps 1.2 times.
+//: frame steps 1.2 times.  At fixed steps, whose solve held the listed pairs with its penalty (self_contact/
+//: supports.hpp), a pair it left at least this fraction of the thickness apart is not pushed at all: the solve
+//: found it in balance there, and pushing it back to where it started undid each step's settling.  The crumpled
+//: pile of bench/self_collision.py (--pile-only) then gained energy in its pushes in a third to half of its
+//: steps for ever (taken again in halves, 90-300 tries a simulated second on the floor); now it comes to rest at
+//: one step a frame.
 inline constexpr double KEPT_FRACTION = 0.9;
 //: How far apart (m) a push sets a pair that ends the step closer than (1 - SLACK) `thickness` without meeting on
 //: the way: the thickness, unless the pair started the step closer; then back to its distance at the start (at

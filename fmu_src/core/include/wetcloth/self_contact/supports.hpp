@@ -21,7 +21,8 @@ namespace wc::self_contact {
 //: crumpled 21 x 29 pile of bench/self_collision.py (--pile-only), on the floor from about 4 s: at 0.025 its layers
 //: sank into each other in every step and the stage's pushes added the energy back (8e-5 J a step, mostly the
 //: springs'), so every step gained energy and was taken again in halves down to GAIN_SUBSTEP_LEAST: 740 steps
-//: and 10 s of CPU a simulated second, against 60-95 steps and 1.3-2.1 s at 0.1.  (Before kept_distance, at 0.1
+//: and 10 s of CPU a simulated second, against 60-95 steps and 1.3-2.1 s at 0.1; one step a frame and 0.2 s since
+//: the stage leaves the pairs the solve balanced (Contact::layers_solved).  (Before kept_distance, at 0.1
 //: the sheet's energy rose in 0-2 frames of three starts, up to 0.054 J, the disc's in 1-8; at 0.4 in 2-4 and 3-7.)
 inline constexpr double SELF_SUPPORT_STIFFNESS = 0.1;
 
