@@ -21,8 +21,9 @@
   edge-triangle crossings in any 0.25 s frame (the test's checker), without and with the stage.
 * A larger crumpled pile (the default towel's 21 x 29 grid, dropped upright as the crumpling one) at the
   fixed-step mode (``implicit_euler``, 1/30 s steps), 3 s: CPU time, steps and steps taken again (a step
-  whose pushes gained energy is taken again in halves), without and with the stage (``--pile-only``; it lies on
-  the floor from about 4 s: ``--pile-duration 8``).
+  whose pushes gained energy is taken again in halves), without and with the stage, and whether it is asleep at
+  the end (``--pile-only``; it lies on the floor from about 4 s: ``--pile-duration 8``, asleep by about 12 s:
+  ``--pile-duration 16``).
 * The adaptive stability sweep of ``bench/stability.py`` (quick grid: 324 stressed runs, every
   integrator) with the stage on, as it is by default; ``--skip-stability`` leaves it out.
 """
@@ -155,10 +156,12 @@ PILE = CRUMPLED | dict(nx=21, ny=29, integrator="implicit_euler") | FRAME_STEPS
 
 def pile_at_frame_steps(repeat: int, duration: float = 3.0) -> None:
     """The 21 x 29 pile at fixed 1/30 s steps: CPU time off and on, steps, steps taken again (a step whose
-    pushes gained energy is taken again in halves) and the most crossings in a 0.25 s frame."""
+    pushes gained energy is taken again in halves), the most crossings in a 0.25 s frame, and whether it is
+    asleep at the end."""
     best, first = off_and_on(PILE, duration, repeat)
     cells = [f"{best[m]:.2f} s, {first[m][0].steps} steps, {first[m][0].rejected_steps} taken again, "
-             f"{first[m][1]} crossings" for m in ("off", "on")]
+             f"{first[m][1]} crossings, {'asleep' if first[m][0].sleeping else 'awake'} at the end"
+             for m in ("off", "on")]
     print(f"\ncrumpled 21 x 29 pile at fixed 1/30 s steps (implicit_euler), {duration:g} s: off {cells[0]}; "
           f"on {cells[1]}; on / off {best['on'] / best['off']:.2f}x", flush=True)
 

@@ -41,6 +41,11 @@ double cloth_along(const Supports& supports, Index t, Index n, const double* pos
     return g;
 }
 
+//: Term t's slip speed (m/s): below it the term's friction is a stick.
+double slip_speed_of(const Supports& supports, Index t) {
+    return supports.collider[static_cast<std::size_t>(t)] == SELF_SUPPORT ? SELF_SLIP_SPEED : SUPPORT_SLIP_SPEED;
+}
+
 //: Whether term t has friction in the step (a coefficient above 0 and a normal force at the step's start).
 bool rubs(const Supports& supports, Index t) {
     const std::size_t u = static_cast<std::size_t>(t);
@@ -55,9 +60,10 @@ void add_friction(Supports& supports, Index t, Index n, const double* vel, doubl
     const double y = slip_velocity(supports, t, n, vel, u);
     const std::size_t term = static_cast<std::size_t>(t);
     const double mu_n = supports.friction[term] * supports.normal_force[term];
-    const double a = slip_factor(y);
+    const double eps = slip_speed_of(supports, t);
+    const double a = slip_factor(y, eps);
     double* h = supports.friction_block.data() + 6 * t;
-    slip_stiffness(mu_n, y, u, supports.normal.data() + 3 * t, h);
+    slip_stiffness(mu_n, y, u, supports.normal.data() + 3 * t, h, eps);
     each_point(supports, t, [&](Index i, double w) {
         for (Index c = 0; c < 3; ++c) force[c * n + i] -= w * mu_n * a * u[c];
         const double scaled = supports.velocity_scale * w * w;
@@ -225,7 +231,7 @@ double support_dissipation(const Supports& supports, Index n, const double* vel)
         double u[3];
         const double y = slip_velocity(supports, t, n, vel, u);
         const std::size_t term = static_cast<std::size_t>(t);
-        dissipation += supports.friction[term] * supports.normal_force[term] * smoothed_speed(y);
+        dissipation += supports.friction[term] * supports.normal_force[term] * smoothed_speed(y, slip_speed_of(supports, t));
     }
     return dissipation;
 }
