@@ -195,44 +195,49 @@ FRICTIONS = np.array([0.4, 0.7])
 NORMAL_FORCES = np.array([0.5, 0.3])  # N: each term's normal force at the step's start (lagged)
 
 
-def _friction_terms(pos, vel, collider_velocities, p=None, scale=3e-3):
+def _friction_terms(pos, vel, collider_velocities, p=None, scale=3e-3, self_pairs=False):
     """The two terms of _terms with friction (FRICTIONS, their normal forces NORMAL_FORCES) against collider
     points moving at collider_velocities (2, 3) m/s, at pos and vel (3, n): their dissipation (W), friction
     forces (3, n: the penalty's forces taken off), and their friction's velocity stiffness times scale (s):
-    diagonal blocks (6, n) and the rest times p (3, n)."""
+    diagonal blocks (6, n) and the rest times p (3, n).  self_pairs: the terms as pairs of the cloth with itself."""
     n = pos.shape[1]
     force, blocks, product = np.zeros((3, n)), np.zeros((6, n)), np.zeros((3, n))
     dissipation = _core.support_friction_terms(*TWO_TERMS, STIFFNESS, DISTANCE, FRICTIONS,
                                                NORMAL_FORCES, collider_velocities, scale, pos, vel, np.ones(n),
-                                               np.zeros((3, n)) if p is None else p, force, blocks, product)
+                                               np.zeros((3, n)) if p is None else p, force, blocks, product,
+                                               self_pairs=self_pairs)
     return dissipation, force - _terms(pos)[1], blocks, product
 
 
-def _sliding_and_sticking(pos):
+def _sliding_and_sticking(pos, slip_speed=_core.SUPPORT_SLIP_SPEED):
     """Velocities (3, 5) and collider velocities (2, 3) at which the first term slips at 0.3 m/s (Coulomb's
-    constant force) and the second at 0.4 SUPPORT_SLIP_SPEED (the smoothed stick), each across its normal."""
+    constant force) and the second at 0.4 slip_speed (the smoothed stick), each across its normal."""
     rng = np.random.default_rng(7)
     vel = rng.normal(scale=0.2, size=pos.shape)
     normals = np.array([[0.36, 0.48, 0.8], [0.0, 0.6, -0.8]])
     cloth = [vel[:, :3] @ np.array([-0.2, -0.3, -0.5]), vel[:, 3:] @ np.array([0.6, 0.4])]
     collider_velocities = np.zeros((2, 3))
-    for term, slip in enumerate((0.3, 0.4 * _core.SUPPORT_SLIP_SPEED)):
+    for term, slip in enumerate((0.3, 0.4 * slip_speed)):
         across = np.cross(normals[term], [1.0, 0.0, 0.0])
         across /= np.linalg.norm(across)
         collider_velocities[term] = slip * across + 0.05 * normals[term] - cloth[term]
     return vel, collider_velocities
 
 
-def test_the_friction_is_minus_the_velocity_gradient_of_its_dissipation():
+@pytest.mark.parametrize("self_pairs", [False, True])
+def test_the_friction_is_minus_the_velocity_gradient_of_its_dissipation(self_pairs):
     """Central differences of the dissipation potential D = mu N f0(|u_t|) (N fixed) in each velocity (steps
     of 1e-8 m/s, f0 a cubic below the slip speed and |u_t| above, both smooth where the terms slip: exact but
     for rounding and the step's square, about 1e-7 of the force) against the friction forces, one term sliding
-    and one sticking.  On the old code there is no friction (support_friction_terms is missing)."""
+    and one sticking; as a collider's terms and as pairs of the cloth with itself (their own slip speed).  On the
+    old code there is no friction (support_friction_terms is missing)."""
     pos = _pressing_place()
-    vel, collider_velocities = _sliding_and_sticking(pos)
-    dissipation, force, _, _ = _friction_terms(pos, vel, collider_velocities)
+    vel, collider_velocities = _sliding_and_sticking(
+        pos, _core.SELF_SLIP_SPEED if self_pairs else _core.SUPPORT_SLIP_SPEED)
+    dissipation, force, _, _ = _friction_terms(pos, vel, collider_velocities, self_pairs=self_pairs)
     assert dissipation > 0.0 and np.abs(force[:, :3]).max() > 0.05 and np.abs(force[:, 3:]).max() > 0.01
-    difference = -_central_differences(lambda v: _friction_terms(pos, v, collider_velocities)[0], vel, 1e-8)
+    difference = -_central_differences(
+        lambda v: _friction_terms(pos, v, collider_velocities, self_pairs=self_pairs)[0], vel, 1e-8)
     np.testing.assert_allclose(difference, force, rtol=0, atol=1e-6 * np.abs(force).max())
 
 
@@ -252,6 +257,23 @@ def test_the_friction_force_is_coulombs_across_the_normal():
     assert abs(on_cloth[1] @ normals[1]) <= 1e-12
     # below the slip speed f1(y) = 2 y / eps - y^2 / eps^2: 0.64 at y = 0.4 eps
     assert abs(stick - 0.64 * FRICTIONS[1] * NORMAL_FORCES[1]) <= 1e-12
+
+
+def test_layers_stick_ten_times_slower_than_on_a_collider():
+    """The cloth's pairs with itself stick below SELF_SLIP_SPEED, 0.1 mm/s, a tenth of a collider's slip speed, so
+    that layers held within friction on layers creep at most that fast (at 1 mm/s a crumpled pile crept at 1-7
+    mm/s and never fell asleep; docs/model.md 6.3, "Friction on the supports").  Slipping at 0.4 of it, a self
+    pair's friction is mu N f1(0.4 eps) = 0.64 mu N; a collider's term at the same slip, 0.04 of its slip speed,
+    only 2 (0.04) - 0.04^2 = 0.0784 mu N."""
+    assert _core.SELF_SLIP_SPEED == pytest.approx(0.1 * _core.SUPPORT_SLIP_SPEED, rel=1e-12)
+    pos = _pressing_place()
+    vel, collider_velocities = _sliding_and_sticking(pos, _core.SELF_SLIP_SPEED)
+    normal = np.array([0.0, 0.6, -0.8])
+    for self_pairs, f1 in ((True, 0.64), (False, 0.0784)):
+        _, force, _, _ = _friction_terms(pos, vel, collider_velocities, self_pairs=self_pairs)
+        on_cloth = force[:, 3:].sum(axis=1)
+        assert abs(on_cloth @ normal) <= 1e-12
+        assert abs(np.linalg.norm(on_cloth) - f1 * FRICTIONS[1] * NORMAL_FORCES[1]) <= 1e-12, self_pairs
 
 
 def test_the_friction_stiffness_is_the_derivative_of_its_force():

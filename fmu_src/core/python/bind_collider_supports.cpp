@@ -66,15 +66,17 @@ WETCLOTH_BINDINGS(m) {
         "force (3, n), their stiffness's diagonal blocks times scale into blocks (6, n) and the rest of their "
         "stiffness times scale times p (3, n) into product (3, n) (rows of free particles); returns the energy (J).");
     m.attr("SUPPORT_SLIP_SPEED") = SUPPORT_SLIP_SPEED;
+    m.attr("SELF_SLIP_SPEED") = SELF_SLIP_SPEED;
     m.def(
         "support_friction_terms",
         [](nb::handle points, nb::handle weights, nb::handle normals, nb::handle offsets, double stiffness,
            double distance, nb::handle frictions, nb::handle normal_forces, nb::handle collider_velocities,
            double velocity_scale,
            nb::handle pos, nb::handle vel, nb::handle free, nb::handle p, nb::handle force, nb::handle blocks,
-           nb::handle product) {
+           nb::handle product, bool self_pairs) {
             Supports s = given_supports(points, weights, normals, offsets);
             const Index count = s.count();
+            if (self_pairs) s.collider.assign(static_cast<std::size_t>(count), SELF_SUPPORT);
             const Index n = size_of(free);
             const double* mu = argument<const double>(frictions, "frictions", count);
             const double* normal_force = argument<const double>(normal_forces, "normal_forces", count);
@@ -83,7 +85,8 @@ WETCLOTH_BINDINGS(m) {
             s.normal_force.assign(normal_force, normal_force + count);
             s.collider_velocity.assign(cv, cv + 3 * count);
             s.friction_block.assign(6 * static_cast<std::size_t>(count), 0.0);
-            s.stiffness = stiffness, s.distance = distance, s.scale = 0.0, s.velocity_scale = velocity_scale;
+            s.stiffness = s.self_stiffness = stiffness;
+            s.distance = distance, s.scale = 0.0, s.velocity_scale = velocity_scale;
             for (Index t = 0; t < count; ++t) s.any_friction = s.any_friction || mu[t] > 0.0;
             const double* x = argument<const double>(pos, "pos", 3 * n);
             const double* v = argument<const double>(vel, "vel", 3 * n);
@@ -94,12 +97,12 @@ WETCLOTH_BINDINGS(m) {
         nb::arg("distance"), nb::arg("frictions"), nb::arg("normal_forces"), nb::arg("collider_velocities"),
         nb::arg("velocity_scale"),
         nb::arg("pos"), nb::arg("vel"), nb::arg("free"), nb::arg("p"), nb::arg("force"), nb::arg("blocks"),
-        nb::arg("product"),
+        nb::arg("product"), nb::arg("self_pairs") = false,
         "support_terms' terms with friction (frictions (m), normal forces at the step's start (m) N, the "
         "collider's points' weighted velocities (m, 3) m/s) at pos and vel (3, n), the position stiffness left "
         "out (scale 0): adds their forces (N, normal and friction) into force (3, n), their friction's stiffness in velocity times velocity_scale (s): the "
         "diagonal blocks into blocks (6, n), the rest times p (3, n) into product (3, n); returns the friction's "
-        "dissipation potential (W).");
+        "dissipation potential (W).  self_pairs: the terms are pairs of the cloth with itself (SELF_SLIP_SPEED).");
     m.def(
         "support_arrivals",
         [](nb::handle points, nb::handle weights, nb::handle normals, nb::handle offsets, double stiffness,
