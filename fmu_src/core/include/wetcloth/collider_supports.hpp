@@ -40,7 +40,7 @@ inline constexpr double SUPPORT_SLIP_SPEED = SLIP_SPEED;
 //: rest on layers creep at most 0.1 mm/s and the cloth can fall asleep.  At SLIP_SPEED the crumpled 21 x 29 pile
 //: of bench/self_collision.py (--pile-only) crept at 1-7 mm/s for as long as it ran (20 s, three starts a
 //: micrometre apart; 0.25 s frames of the 11 x 15 one: two of six asleep by 20 s); at this speed all three fell
-//: asleep at 7-11 s (the smaller one's six at 6-15 s), in 3-4 s of CPU for 20 s against 5-7.
+//: asleep at 7-11 s (the smaller one's six at 6-15 s), in 2.9-4.0 s of CPU for 20 s against 4.7-7.0.
 inline constexpr double SELF_SLIP_SPEED = 1e-4;
 
 //: The cloth particles a term holds at most (a pair of the cloth with itself: four; with a collider: up to three,
