@@ -337,9 +337,14 @@ def test_blow_up_advice_never_suggests_what_is_already_set():
             in message), message
     assert "'implicit_euler' (stable" not in message and "tolerance > 0" not in message
     explicit = wetcloth.Scene(integrator="explicit_euler", tolerance=0.0)
-    assert blow_up_advice(explicit) == ("use integrator 'implicit_euler' (stable at any step), a smaller max_step "
-                                        f"(now {explicit.max_step:g} s) or a tolerance > 0 (steps adapted to an error "
-                                        "bound)")
+    assert blow_up_advice(explicit, stable_step=1.0) == (
+        "use integrator 'implicit_euler' (stable at any step), a smaller max_step "
+        f"(now {explicit.max_step:g} s) or a tolerance > 0 (steps adapted to an error bound)")
+    # Fixed steps above the scheme's stability bound: the advice names the bound.
+    assert blow_up_advice(explicit, stable_step=9.04e-5) == (
+        "use integrator 'implicit_euler' (stable at any step), a smaller max_step "
+        f"(now {explicit.max_step:g} s; explicit_euler is stable on this cloth at rest at steps up to 9e-05 s, a "
+        "cautious bound) or a tolerance > 0 (steps adapted to an error bound)")
 
 
 def test_progress_moves_by_wall_time_within_a_frame(tmp_path, capfd, monkeypatch):

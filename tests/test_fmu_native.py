@@ -1164,6 +1164,10 @@ def test_a_blow_up_is_discarded_naming_the_time_and_the_unit_stays_finite(errors
     assert messages[0].startswith(f"step from t = {t:g} s by 0.05 s failed: BlowUpError: the cloth state ")
     assert "Last good time:" in messages[0] and messages[0].endswith(f"The unit stays at t = {t:g} s with its last "
                                                                      "good outputs.")
+    # In the Python API's words (its advice names the explicit scheme's stability bound).
+    exc = python_blow_up(wetcloth.scene.from_dict(BLOW_UP), t + 0.05, {})
+    assert "explicit_euler is stable on this cloth at rest at steps up to" in str(exc)
+    assert f"BlowUpError: {exc} The unit stays at" in messages[0], (messages[0], str(exc))
 
 
 def test_a_blow_up_while_the_grip_moves_is_discarded_too(errors):

@@ -165,6 +165,13 @@ def test_blow_up_guard_stops_with_cause_and_last_good_time():
     assert err.value.last_good_time == sim.time < 10.0
     assert sim.state.is_finite()
     assert all(math.isfinite(v) for v in sim.outputs().values())
+    # The message names the scheme's stability bound at rest, and fixed steps of that bound hold the same scene
+    # through the time it blew up in and as long again.
+    bound = sim.integrator.stable_step(0.0)
+    assert f"explicit_euler is stable on this cloth at rest at steps up to {bound:.2g} s" in message, message
+    held = wetcloth.Simulation(scene.replace(max_step=bound))
+    held.advance(2.0 * sim.time)
+    assert held.state.is_finite() and np.abs(held.velocities).max() < 10.0
 
 
 def test_same_scene_with_adaptive_steps_does_not_blow_up():

@@ -429,9 +429,10 @@ class Simulation:
         scene = self.scene
         mover = self._fast_mover(h, end)
         pinned = self._pinned_cause(buf.trial_pos)
+        advice = blow_up_advice(scene, self.integrator.stable_step(0.0))
         if finite and speed < self._control.blow_up_speed:  # neither: no step was accepted (the core's bound)
             cause = mover or pinned or (f"a state the cloth cannot be in, or a scene stiffer than the smallest step "
-                                        f"resolves; {blow_up_advice(scene)}")
+                                        f"resolves; {advice}")
             raise BlowUpError(
                 f"the cloth state could not be stepped from t = {self.time:.6g} s: the step control accepted "
                 f"no step (rejected more than {MAX_REJECTIONS} times, the last of {h:.3g} s; integrator "
@@ -440,7 +441,7 @@ class Simulation:
             )
         what = "became non-finite" if not finite else f"exploded (speed {speed:.3g} m/s)"
         cause = mover or pinned or (f"the step is too large for stretch_stiffness = {scene.stretch_stiffness:g} N/m; "
-                                    f"{blow_up_advice(scene)}")
+                                    f"{advice}")
         raise BlowUpError(
             f"the cloth state {what} in the step from t = {self.time:.6g} s to {self.time + h:.6g} s "
             f"(step {h:.3g} s, integrator {scene.integrator!r}). Likely cause: {cause}. "

@@ -1108,7 +1108,15 @@ std::string Simulation::blow_up_message() const {
     // advice.blow_up_advice
     std::vector<std::string> options;
     if (scene_.integrator != IMPLICIT_EULER) options.emplace_back("integrator 'implicit_euler' (stable at any step)");
-    options.push_back("a smaller max_step (now " + py_g(scene_.max_step) + " s)");
+    const double stable = stable_step(core_.control, 0.0);
+    const bool explicit_scheme = scene_.integrator == EXPLICIT_EULER || scene_.integrator == SYMPLECTIC_EULER;
+    if (scene_.tolerance == 0.0 && explicit_scheme && scene_.max_step > stable) {
+        options.push_back("a smaller max_step (now " + py_g(scene_.max_step) + " s; " +
+                          INTEGRATOR_NAMES[scene_.integrator] + " is stable on this cloth at rest at steps up to " +
+                          py_g(stable, 2) + " s, a cautious bound)");
+    } else {
+        options.push_back("a smaller max_step (now " + py_g(scene_.max_step) + " s)");
+    }
     options.push_back(scene_.tolerance == 0.0 ? "a tolerance > 0 (steps adapted to an error bound)"
                                               : "a smaller tolerance (now " + py_g(scene_.tolerance) + ")");
     std::string advice = "use ";
