@@ -473,7 +473,7 @@ struct ContactLists {
 //: pairs pushed apart; rounds of impact zones; steps undone as a last resort.
 enum ContactCounter : Index { REBUILDS = 0, BUSY_STEPS = 1, PASSES = 2, RESPONSES = 3, ZONE_ROUNDS = 4, FREEZES = 5 };
 inline constexpr Index CONTACT_COUNTERS = 6;
-inline constexpr Index ZONE_ROWS = 21;
+inline constexpr Index ZONE_ROWS = 25;
 
 //: Self-collision (self_contact/): enabled; friction (-); least_margin (m); rest_gap (m); typical_gap (m);
 //: triangles (m, 3) and edges (k, 2) particle indices; rest positions (3, n) m; the candidate

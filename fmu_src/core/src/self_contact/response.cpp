@@ -15,11 +15,13 @@
 // (an inelastic impulse) and reduces its sliding velocity by `friction` times the normal velocity removed
 // (Coulomb).  A few passes settle stacked layers.  Pairs whose motion is still not shown safe then form
 // rigid impact zones: each zone moves with its own linear and angular momentum, zones that still meet
-// merge, and a zone holding a pinned particle, or that would enter the floor, stays where it was.
+// merge; a zone holding pinned particles moves with the grip, and one that the grip leaves still, or that would
+// enter the floor, stays where it was.
 #include "wetcloth/self_contact/response.hpp"
 
 #include <cmath>
 
+#include "wetcloth/grip.hpp"
 #include "wetcloth/integration.hpp"
 #include "wetcloth/self_contact.hpp"
 #include "wetcloth/self_contact/broad_phase.hpp"
@@ -260,8 +262,10 @@ inline Vec3 solve_inertia(const double* s, Index n, Index r) {
 
 //: Give every zone (a root with members) the rigid motion of its members' linear and angular momentum over
 //: the step: motion h (v + w x r) about the centre of mass, which never brings two points of a zone closer
-//: along the straight-line path.  A zone holding a pinned particle, or one whose motion would take a member
-//: below the floor, stays where it started (velocities zero).
+//: along the straight-line path.  A zone holding pinned particles that the grip moves together moves with
+//: them (the grip carries what it presses on; the pinned particles' velocities stay the grip's).  A zone
+//: holding pinned particles that stay, or move apart (one the grip had left behind), or whose motion would
+//: take a member below the floor, stays where it started (velocities zero).
 void move_zones(Contact& contact, double floor_z, Index n, const double* mass, const double* free, const double* x0,
                 double* x1, double* v1, double h) {
     Index* parent = contact.zone;
@@ -278,7 +282,17 @@ void move_zones(Contact& contact, double floor_z, Index n, const double* mass, c
             S(POS + c, r) += m * x0[c * n + i];
             S(MOVE + c, r) += m * (x1[c * n + i] - x0[c * n + i]);
         }
-        if (free[i] == 0.0) S(HELD, r) = 1.0;
+        if (free[i] == 0.0) {  // pinned (the floor's and colliders' holds are released before the stage)
+            for (Index c = 0; c < 3; ++c) {
+                const double move = x1[c * n + i] - x0[c * n + i];
+                if (S(PINNED, r) == 0.0) {
+                    S(CARRY + c, r) = move;
+                } else if (std::fabs(move - S(CARRY + c, r)) > GRIP_RESOLUTION) {
+                    S(HELD, r) = 1.0;
+                }
+            }
+            S(PINNED, r) = 1.0;
+        }
     }
     for (Index i = 0; i < n; ++i) {
         if (parent[i] != i) continue;
@@ -308,13 +322,15 @@ void move_zones(Contact& contact, double floor_z, Index n, const double* mass, c
         if (parent[i] == i) {
             const Vec3 spin = solve_inertia(s, n, i);  // from displacements: h times the angular velocity
             S(SPIN, i) = spin.x, S(SPIN + 1, i) = spin.y, S(SPIN + 2, i) = spin.z;
+            const bool carried = S(CARRY, i) != 0.0 || S(CARRY + 1, i) != 0.0 || S(CARRY + 2, i) != 0.0;
+            if (S(PINNED, i) != 0.0 && !carried) S(HELD, i) = 1.0;  // a still grip holds its zone where it was
         }
     }
     for (Index i = 0; i < n; ++i) {
         const Index r = root(parent, i);
         if (S(MEMBERS, r) == 1.0) continue;  // a particle in no zone
         const double rx = x0[i] - S(POS, r), ry = x0[n + i] - S(POS + 1, r);
-        const double dz = S(MOVE + 2, r) + S(SPIN, r) * ry - S(SPIN + 1, r) * rx;
+        const double dz = S(PINNED, r) != 0.0 ? S(CARRY + 2, r) : S(MOVE + 2, r) + S(SPIN, r) * ry - S(SPIN + 1, r) * rx;
         if (x0[2 * n + i] + dz < floor_z) S(HELD, r) = 1.0;
     }
     for (Index i = 0; i < n; ++i) {
@@ -328,9 +344,12 @@ void move_zones(Contact& contact, double floor_z, Index n, const double* mass, c
             continue;
         }
         const double rx = x0[i] - S(POS, r), ry = x0[n + i] - S(POS + 1, r), rz = x0[2 * n + i] - S(POS + 2, r);
-        const double wx = S(SPIN, r), wy = S(SPIN + 1, r), wz = S(SPIN + 2, r);
-        const double move[3] = {S(MOVE, r) + wy * rz - wz * ry, S(MOVE + 1, r) + wz * rx - wx * rz,
-                                S(MOVE + 2, r) + wx * ry - wy * rx};
+        const bool carried = S(PINNED, r) != 0.0;  // moved with its pinned particles, without turning
+        const double wx = carried ? 0.0 : S(SPIN, r), wy = carried ? 0.0 : S(SPIN + 1, r),
+                     wz = carried ? 0.0 : S(SPIN + 2, r);
+        const double* shift = carried ? &S(CARRY, r) : &S(MOVE, r);
+        const double move[3] = {shift[0 * n] + wy * rz - wz * ry, shift[1 * n] + wz * rx - wx * rz,
+                                shift[2 * n] + wx * ry - wy * rx};
         for (Index c = 0; c < 3; ++c) {
             v1[c * n + i] += (move[c] - (x1[c * n + i] - x0[c * n + i])) / h;
             x1[c * n + i] = x0[c * n + i] + move[c];

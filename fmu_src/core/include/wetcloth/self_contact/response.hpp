@@ -47,9 +47,11 @@ inline constexpr double ON_FLOOR = 0.01;
 inline constexpr int ATTEMPTS = 6;
 
 //: Rows of Contact::zone_sums per zone root: mass; mass-weighted start position (3) and motion (3);
-//: whether held; angular momentum (3); inertia (xx, yy, zz, xy, xz, yz); rotation over the step (3);
-//: members.
-enum ZoneRow : Index { MASS = 0, POS = 1, MOVE = 4, HELD = 7, MOMENT = 8, INERTIA = 11, SPIN = 17, MEMBERS = 20 };
+//: whether held; angular momentum (3); inertia (xx, yy, zz, xy, xz, yz); rotation over the step (3); the
+//: motion of its pinned particles (3) and whether it has any; members.
+enum ZoneRow : Index {
+    MASS = 0, POS = 1, MOVE = 4, HELD = 7, MOMENT = 8, INERTIA = 11, SPIN = 17, CARRY = 20, PINNED = 23, MEMBERS = 24
+};
 static_assert(MEMBERS + 1 == ZONE_ROWS, "Contact::zone_sums rows");
 
 //: The inverse masses (1/kg) of a pair's four particles (0: pinned, held or immovable).
