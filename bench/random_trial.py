@@ -146,9 +146,10 @@ def outcome_of(case: dict, budget: float) -> dict:
 
 
 def command_of(case: dict) -> str:
-    """The ``wetcloth run`` command that reproduces ``case``."""
-    sets = " ".join(f"--set {k}={v}" if isinstance(v, str) else f"--set {k}={v:.6g}" for k, v in case["values"].items())
-    return f"wetcloth run {case['preset']} --duration {case['duration']:g} {sets}"
+    """The ``wetcloth run`` command that reproduces ``case``: every value in full (a chaotic run differs with the
+    last digit), in frames of the trial's advances."""
+    sets = " ".join(f"--set {k}={v}" if isinstance(v, str) else f"--set {k}={v!r}" for k, v in case["values"].items())
+    return f"wetcloth run {case['preset']} --duration {case['duration']:g} --fps {1.0 / ADVANCE:g} {sets}"
 
 
 def main() -> None:
