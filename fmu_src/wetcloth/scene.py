@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from wetcloth import _core
 from wetcloth.errors import ConfigError, Mistakes, ParameterError, did_you_mean, not_a_number
 from wetcloth.mesh_file import ALLOWED as MESH_ALLOWED
 from wetcloth.mesh_file import LARGEST_SIZE, MeshFile, is_mesh, resolve
@@ -60,11 +61,6 @@ PINS_ALLOWED = ("'' (none), the name of a point attribute of the mesh file (nonz
 #: stay far from zero, where a size near 0 divides by zero and leaves the cloth motionless.
 SMALLEST_SIZE = 1e-3
 
-#: The most a grid's cells may be longer one way than the other (dx/dy or dy/dx).  A spring's stiffness goes as
-#: its strip's width over its length, so springs across a cell dx/dy as long as wide are (dx/dy)^2 stiffer than
-#: those along it: at 455 (a 0.5 m wide, 1.1 mm long cloth of 7 x 7) a floating cloth's steps fell to
-#: microseconds, 60 s of CPU for 1 s.
-LONGEST_CELL = 100.0
 #: The most particles along a side of the grid (nx, ny).
 MOST_ALONG = 1024
 
@@ -565,15 +561,7 @@ def validate(scene: Scene) -> None:
     mistakes.raise_if_any()
     start = _check_mesh_start(scene) if is_mesh(scene.cloth_mesh) else None
     if start is None:
-        _check_cells(scene)
-        half_drop = 0.5 * scene.length * abs(math.sin(math.radians(scene.initial_tilt)))
-        lowest = scene.initial_height - half_drop - 0.5 * scene.thickness
-        if lowest <= scene.floor_level:
-            raise ParameterError(
-                "initial_height",
-                f"the cloth starts at or below the floor (lowest point {lowest:g} m, floor_level "
-                f"{scene.floor_level:g} m); allowed: initial_height > floor_level + {half_drop + 0.5 * scene.thickness:g} m",
-            )
+        _check_grid_start(scene)
     if scene.colliders or scene.pinned_vertices.strip() or scene.pinned_edge != "none":
         from wetcloth.pinned_paths import check_pinned_outside
         from wetcloth.topology import pinned_mask, start_positions
@@ -584,24 +572,16 @@ def validate(scene: Scene) -> None:
         check_pinned_outside(scene, positions, pinned)
 
 
-def _check_cells(scene: Scene) -> None:
-    """A ParameterError for a grid whose cells are more than LONGEST_CELL times longer one way than the other,
-    naming the particle counts that would make them squarer."""
-    dx, dy = scene.width / (scene.nx - 1), scene.length / (scene.ny - 1)
-    if max(dx, dy) <= LONGEST_CELL * min(dx, dy):
-        return
-    # The short side's count (fewer particles along it) or the long side's (more along it) that would do.
-    (short, short_size), (long, long_size) = (("ny", scene.length), ("nx", scene.width)) if dy < dx else \
-        (("nx", scene.width), ("ny", scene.length))
-    fewest = math.floor(short_size * LONGEST_CELL / max(dx, dy)) + 1
-    most = math.ceil(long_size / (LONGEST_CELL * min(dx, dy))) + 1
-    fixes = ([f"{short} <= {fewest}"] if fewest >= 2 else []) + ([f"{long} >= {most}"] if most <= MOST_ALONG else [])
-    name = long if fewest < 2 and most <= MOST_ALONG else short  # the count the first fix changes
-    raise ParameterError(name,
-                         f"the grid's cells are {round(max(dx, dy) / min(dx, dy))} times longer one way than the other "
-                         f"(width/(nx-1) = {dx:.3g} m, length/(ny-1) = {dy:.3g} m): the springs across them would be "
-                         f"that squared stiffer than along; allowed: at most {LONGEST_CELL:g} times ("
-                         + ", ".join(fixes + ["or change width or length"]) + ")")
+def _check_grid_start(scene: Scene) -> None:
+    """The compiled core's rule on the grid's start, which the native units apply as well: its cells at most
+    LONGEST_CELL (100) times longer one way than the other, and the cloth above the floor; a ParameterError
+    naming the parameter to change (for long cells, the particle counts that would make them squarer)."""
+    problem = _core.grid_start_problem(nx=scene.nx, ny=scene.ny, width=scene.width, length=scene.length,
+                                       thickness=scene.thickness, initial_height=scene.initial_height,
+                                       initial_tilt=scene.initial_tilt, floor_level=scene.floor_level)
+    if problem:
+        name, message = problem.removeprefix("parameter '").split("': ", 1)
+        raise ParameterError(name, message)
 
 
 def _check_mesh_start(scene: Scene):

@@ -133,7 +133,7 @@ std::string scene_problem(const Scene& s, const ClothMesh* mesh, const Pins* pin
 }
 
 //: "" or the ParameterError's text of a grid whose cells are more than LONGEST_CELL times longer one way than
-//: the other (scene._check_cells, word for word).
+//: the other, naming the particle counts that would make them squarer.
 std::string grid_cells_problem(const Scene& s) {
     const double dx = s.width / static_cast<double>(s.nx - 1), dy = s.length / static_cast<double>(s.ny - 1);
     const double longer = std::max(dx, dy), shorter = std::min(dx, dy);

@@ -166,8 +166,11 @@ struct Pins;
 //: fixes (ClothMesh::fixed_problem); with `pins`, a box that holds a particle (pinned_mask).
 std::string scene_problem(const Scene& scene, const ClothMesh* mesh = nullptr, const Pins* pins = nullptr);
 
-//: The most a grid's cells may be longer one way than the other (scene.LONGEST_CELL), and the most particles
-//: along a side (scene.MOST_ALONG).
+//: The most a grid's cells may be longer one way than the other (dx/dy or dy/dx; grid_start_problem, which
+//: scene.validate calls too).  A spring's stiffness goes as its strip's width over its length, so springs
+//: across a cell dx/dy as long as wide are (dx/dy)^2 stiffer than those along it: at 455 (a 0.5 m wide, 1.1 mm
+//: long cloth of 7 x 7) a floating cloth's steps fell to microseconds, 60 s of CPU for 1 s.  And the most
+//: particles along a side (scene.MOST_ALONG).
 constexpr double LONGEST_CELL = 100.0;
 constexpr Index MOST_ALONG = 1024;
 
