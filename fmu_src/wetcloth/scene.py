@@ -579,6 +579,11 @@ def _check_grid_start(scene: Scene) -> None:
     problem = _core.grid_start_problem(nx=scene.nx, ny=scene.ny, width=scene.width, length=scene.length,
                                        thickness=scene.thickness, initial_height=scene.initial_height,
                                        initial_tilt=scene.initial_tilt, floor_level=scene.floor_level)
+    _refuse(problem)
+
+
+def _refuse(problem: str) -> None:
+    """Raise the ParameterError of a core rule's text ("parameter 'NAME': MESSAGE"), if any."""
     if problem:
         name, message = problem.removeprefix("parameter '").split("': ", 1)
         raise ParameterError(name, message)
@@ -590,13 +595,8 @@ def _check_mesh_start(scene: Scene):
     from wetcloth.topology import start_positions
 
     positions, mesh = start_positions(scene)
-    lowest = float(positions[2].min()) - 0.5 * scene.thickness
-    if lowest <= scene.floor_level:
-        name, fix = (("initial_height", "raise initial_height") if scene.place_mesh == "on"
-                     else ("cloth_mesh", "raise the mesh in its file, or place it: place_mesh = 'on'"))
-        raise ParameterError(name, f"the cloth starts at or below the floor (lowest point {lowest:g} m with "
-                                   f"thickness/2, floor_level {scene.floor_level:g} m): {fix}; allowed: every vertex "
-                                   f"above floor_level + thickness/2")
+    _refuse(_core.mesh_floor_problem(np.ascontiguousarray(positions, dtype=float), thickness=scene.thickness,
+                                     floor_level=scene.floor_level, placed=scene.place_mesh == "on"))
     return positions, mesh
 
 

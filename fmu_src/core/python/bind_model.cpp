@@ -20,6 +20,17 @@ WETCLOTH_BINDINGS(m) {
         nb::arg("initial_height"), nb::arg("initial_tilt"), nb::arg("floor_level"),
         "'' or the ParameterError's text of a grid whose cells are more than LONGEST_CELL times longer one way "
         "than the other, or that starts at or below the floor");
+    m.def(
+        "mesh_floor_problem",
+        [](nb::handle pos, double thickness, double floor_level, bool placed) {
+            const Index n = size_of(pos) / 3;
+            Scene scene;
+            scene.thickness = thickness, scene.floor_level = floor_level;
+            scene.place_mesh = placed ? SWITCH_ON : SWITCH_OFF;
+            return mesh_floor_problem(scene, argument<const double>(pos, "pos", 3 * n), n);
+        },
+        nb::arg("pos"), nb::arg("thickness"), nb::arg("floor_level"), nb::arg("placed"),
+        "'' or the ParameterError's text of a mesh cloth whose start positions pos (3, n) m reach the floor");
 }
 
 }  // namespace wc::py

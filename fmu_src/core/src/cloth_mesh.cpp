@@ -137,18 +137,7 @@ std::vector<char> ClothMesh::pinned_at(const Scene& scene, const std::vector<dou
     return pinned;
 }
 
-namespace {
-
-//: Where the mesh starts (3, n) m and which particles are pinned there, for `scene`; `problem` "" or the
-//: first thing the scene asks that the mesh cannot be (scene.py's _check_mesh_start).
-struct MeshStart {
-    std::vector<double> pos;
-    std::vector<char> pinned;
-    std::string problem;
-};
-
-//: "" or the ParameterError's text of a mesh whose start positions `pos` (3, n) reach the floor (_check_mesh_start).
-std::string floor_problem(const Scene& scene, const std::vector<double>& pos, Index n) {
+std::string mesh_floor_problem(const Scene& scene, const double* pos, Index n) {
     double lowest = pos[2 * n];
     for (Index i = 0; i < n; ++i) lowest = std::fmin(lowest, pos[2 * n + i]);
     lowest -= 0.5 * scene.thickness;
@@ -162,13 +151,24 @@ std::string floor_problem(const Scene& scene, const std::vector<double>& pos, In
                                "; allowed: every vertex above floor_level + thickness/2");
 }
 
+namespace {
+
+//: Where the mesh starts (3, n) m and which particles are pinned there, for `scene`; `problem` "" or the
+//: first thing the scene asks that the mesh cannot be (scene.py's _check_mesh_start).
+struct MeshStart {
+    std::vector<double> pos;
+    std::vector<char> pinned;
+    std::string problem;
+};
+
+
 MeshStart mesh_start(const Scene& scene, const ClothMesh& mesh, const Pins* pins) {
     MeshStart start;
     start.problem = mesh.fixed_problem(scene);
     if (!start.problem.empty()) return start;
     start.pos = mesh.start_positions(scene);
     // (the built-in grid bent by hinges starts as the grid, checked as the grid is)
-    start.problem = mesh.hinged_grid ? grid_start_problem(scene, pins) : floor_problem(scene, start.pos, mesh.n);
+    start.problem = mesh.hinged_grid ? grid_start_problem(scene, pins) : mesh_floor_problem(scene, start.pos.data(), mesh.n);
     if (!start.problem.empty()) return start;
     start.pinned = mesh.pinned_at(scene, start.pos, pins, start.problem);
     return start;

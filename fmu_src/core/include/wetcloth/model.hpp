@@ -310,6 +310,11 @@ Topology build_topology(const Scene& scene, const ClothMesh* mesh = nullptr, con
 //: The nx x ny grid's topology of `scene`, pinned by pinned_edge and `pins` at grid_start.
 Topology grid_topology(const Scene& scene, const Pins* pins);
 
+//: "" or the ParameterError's text of a mesh cloth whose start positions `pos` (3, n) m, thickness/2 included,
+//: reach the floor (naming initial_height if the scene places the mesh, else cloth_mesh; scene.validate calls
+//: it too).
+std::string mesh_floor_problem(const Scene& scene, const double* pos, Index n);
+
 //: scene_problem and build_topology of a cloth from a mesh (cloth_mesh.cpp).
 std::string mesh_scene_problem(const Scene& scene, const ClothMesh& mesh, const Pins* pins);
 Topology mesh_topology(const Scene& scene, const ClothMesh& mesh, const Pins* pins);
