@@ -161,14 +161,14 @@ struct MeshStart {
     std::string problem;
 };
 
-
 MeshStart mesh_start(const Scene& scene, const ClothMesh& mesh, const Pins* pins) {
     MeshStart start;
     start.problem = mesh.fixed_problem(scene);
     if (!start.problem.empty()) return start;
     start.pos = mesh.start_positions(scene);
     // (the built-in grid bent by hinges starts as the grid, checked as the grid is)
-    start.problem = mesh.hinged_grid ? grid_start_problem(scene, pins) : mesh_floor_problem(scene, start.pos.data(), mesh.n);
+    start.problem = mesh.hinged_grid ? grid_start_problem(scene, pins)
+                                     : mesh_floor_problem(scene, start.pos.data(), mesh.n);
     if (!start.problem.empty()) return start;
     start.pinned = mesh.pinned_at(scene, start.pos, pins, start.problem);
     return start;

@@ -330,7 +330,8 @@ void move_zones(Contact& contact, double floor_z, Index n, const double* mass, c
         const Index r = root(parent, i);
         if (S(MEMBERS, r) == 1.0) continue;  // a particle in no zone
         const double rx = x0[i] - S(POS, r), ry = x0[n + i] - S(POS + 1, r);
-        const double dz = S(PINNED, r) != 0.0 ? S(CARRY + 2, r) : S(MOVE + 2, r) + S(SPIN, r) * ry - S(SPIN + 1, r) * rx;
+        const double dz =
+            S(PINNED, r) != 0.0 ? S(CARRY + 2, r) : S(MOVE + 2, r) + S(SPIN, r) * ry - S(SPIN + 1, r) * rx;
         if (x0[2 * n + i] + dz < floor_z) S(HELD, r) = 1.0;
     }
     for (Index i = 0; i < n; ++i) {
