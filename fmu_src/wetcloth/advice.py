@@ -18,8 +18,6 @@ if TYPE_CHECKING:
 #: A run estimated to take longer than this (s of wall-clock time) is warned about.
 WARN_AFTER = 300.0
 IMPLICIT = "implicit_euler"
-#: The schemes with a stability limit on their step.
-EXPLICIT = ("explicit_euler", "symplectic_euler")
 
 
 def _default(name: str):
@@ -32,12 +30,13 @@ def _either(options: list[str]) -> str:
 
 def blow_up_advice(scene: Scene, stable_step: float) -> str:
     """'use integrator 'implicit_euler', a smaller max_step (now 0.01 s) or ...': what may keep
-    ``scene`` from blowing up, leaving out what it already does.  ``stable_step`` (s) is the explicit
-    schemes' stability bound at rest (``Integrator.stable_step(0)``): named where fixed steps exceed it."""
+    ``scene`` from blowing up, leaving out what it already does.  ``stable_step`` (s) is the scheme's
+    stability bound at rest (``Integrator.stable_step(0)``, infinite for the implicit ones): named where fixed
+    steps exceed it."""
     options = []
     if scene.integrator != IMPLICIT:
         options.append(f"integrator '{IMPLICIT}' (stable at any step)")
-    if scene.tolerance == 0.0 and scene.integrator in EXPLICIT and scene.max_step > stable_step:
+    if scene.tolerance == 0.0 and scene.max_step > stable_step:
         options.append(f"a smaller max_step (now {scene.max_step:g} s; {scene.integrator} is stable on this cloth at "
                        f"rest at steps up to {stable_step:.2g} s, a cautious bound)")
     else:

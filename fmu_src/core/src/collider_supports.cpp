@@ -231,7 +231,8 @@ double support_dissipation(const Supports& supports, Index n, const double* vel)
         double u[3];
         const double y = slip_velocity(supports, t, n, vel, u);
         const std::size_t term = static_cast<std::size_t>(t);
-        dissipation += supports.friction[term] * supports.normal_force[term] * smoothed_speed(y, slip_speed_of(supports, t));
+        const double eps = slip_speed_of(supports, t);
+        dissipation += supports.friction[term] * supports.normal_force[term] * smoothed_speed(y, eps);
     }
     return dissipation;
 }

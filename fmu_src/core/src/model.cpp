@@ -1108,9 +1108,8 @@ std::string Simulation::blow_up_message() const {
     // advice.blow_up_advice
     std::vector<std::string> options;
     if (scene_.integrator != IMPLICIT_EULER) options.emplace_back("integrator 'implicit_euler' (stable at any step)");
-    const double stable = stable_step(core_.control, 0.0);
-    const bool explicit_scheme = scene_.integrator == EXPLICIT_EULER || scene_.integrator == SYMPLECTIC_EULER;
-    if (scene_.tolerance == 0.0 && explicit_scheme && scene_.max_step > stable) {
+    const double stable = stable_step(core_.control, 0.0);  // (infinite for the implicit schemes)
+    if (scene_.tolerance == 0.0 && scene_.max_step > stable) {
         options.push_back("a smaller max_step (now " + py_g(scene_.max_step) + " s; " +
                           INTEGRATOR_NAMES[scene_.integrator] + " is stable on this cloth at rest at steps up to " +
                           py_g(stable, 2) + " s, a cautious bound)");
