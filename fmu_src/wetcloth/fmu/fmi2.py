@@ -21,7 +21,7 @@ from wetcloth.fmu.unit import OK, WetClothUnit, check_references_before, default
 #: pythonfmu's methods that the binary calls on an instance, and on the class.
 ENTRY_POINTS = ("setup_experiment", "enter_initialization_mode", "exit_initialization_mode", "do_step", "terminate",
                 "get_integer", "get_real", "get_boolean", "get_string", "set_integer", "set_real", "set_boolean",
-                "set_string", "_get_fmu_state", "_set_fmu_state", "_refuse_undecodable_text")
+                "set_string", "_get_fmu_state", "_set_fmu_state")
 CLASS_ENTRY_POINTS = ("_fmu_state_to_bytes", "_fmu_state_from_bytes")
 
 

@@ -21,7 +21,7 @@ from wetcloth.fmu.unit import OK, UnitError, WetClothUnit, check_references_befo
 ENTRY_POINTS = ("enter_initialization_mode", "exit_initialization_mode", "do_step", "terminate", "get_float64",
                 "get_int32", "get_int64", "get_uint64", "get_boolean", "get_string", "set_float64", "set_int32",
                 "set_int64", "set_uint64", "set_boolean", "set_string", "_get_fmu_state", "_set_fmu_state",
-                "update_discrete_states", "_refuse_undecodable_text")
+                "update_discrete_states")
 CLASS_ENTRY_POINTS = ("_fmu_state_to_bytes", "_fmu_state_from_bytes")
 
 

@@ -46,12 +46,24 @@
 6. On an exception, both binaries' ``handle_py_exception`` flush the instance's log queue to the master's
    logger callback before they fetch the exception: the master's callback (Python code, in a Python host such
    as fmpy) then ran with an exception pending.  The exception was lost on the way (the master read "Fatal py
-   exception encountered: ... unknown error"), and running Python code in that state is undefined (a suspect
-   of a test's child master dying of a segmentation fault now and then just after such calls; not reproduced
-   since on another machine, docs/open_problems.md).  Each wrapped entry
+   exception encountered: ... unknown error"), and running Python code in that state is undefined.  Each wrapped entry
    point therefore empties its instance's queue before an exception leaves it, into the exception's own text,
    which the binary logs (the master reads one Fatal message with the reason, where it read an Error message
    and "unknown error").
+
+7. Both binaries build ``set_string``'s list of texts with ``Py_BuildValue("s")``: a text that is not UTF-8
+   leaves an empty slot (NULL) in the list, and the binary looks ``set_string`` up and calls it with that
+   decoding error still pending.  With an error pending, CPython's attribute lookup is a matter of luck:
+   a lookup that misses its type attribute cache fails in the first class of the instance's MRO that lacks
+   the name, clearing the error as it goes.  The unit's ``__getattr__`` used to take the refusal from there,
+   but a miss on ``__getattr__`` itself (whenever another lookup had taken its cache slot) made CPython drop
+   the class's ``__getattr__`` hook for good and find the real ``set_string``, which read the empty slot:
+   a segmentation fault in the host, now and then (a test's child master: 1 run in 10 to 30; every run when
+   the class is changed just before the call, which empties its cache entries).
+   ``set_string`` is now found in the class's own dict (``WetClothUnit.__init_subclass__``), before any
+   failing lookup; it is a data descriptor (``TextSetter``), so that CPython reaches it before the
+   instance's dict; its getter clears the pending error before anything else runs, and the method refuses
+   a list with an empty slot before reading it.
 
 The references given back in 1 and 2 are real reference counts (``Py_IncRef``), not objects held in
 a list: the binary has already dropped them, and a list released at interpreter shutdown would
@@ -63,7 +75,9 @@ from __future__ import annotations
 import atexit
 import ctypes
 import functools
+import gc
 import inspect
+import types
 import weakref
 
 _incref = ctypes.pythonapi.Py_IncRef
@@ -114,7 +128,11 @@ def guard(cls, methods: tuple[str, ...], class_methods: tuple[str, ...]):
     """Wrap ``cls``'s entry points in place: ``methods`` are called on an instance,
     ``class_methods`` (static or class methods) on the class; returns ``cls``."""
     for name in methods:
-        setattr(cls, name, _instance_entry(getattr(cls, name)))
+        method = getattr(cls, name)
+        if name == TEXT_SETTER:
+            setattr(cls, name, TextSetter(_instance_entry(_refusing_empty_slots(method))))
+        else:
+            setattr(cls, name, _instance_entry(method))
     for name in class_methods:
         found = inspect.getattr_static(cls, name)
         if isinstance(found, classmethod):
@@ -158,6 +176,57 @@ def _class_entry(function):
             raise
 
     return entry
+
+
+# ------------------------------------------------------------------------------------ texts (see 7.)
+#: The entry point through which both binaries set texts.
+TEXT_SETTER = "set_string"
+
+
+class _Settled(Exception):
+    """Raised and caught at once: the exception that replaces a pending one (see 7.)."""
+
+
+def _settle_pending_error() -> None:
+    """Clear any exception the binary left pending: raising one replaces it, and catching that clears it.
+    (Raising the class may itself fail with an error pending, as a SystemError: caught alike.)"""
+    try:
+        raise _Settled
+    except BaseException:
+        pass
+
+
+def empty_slots(values: list) -> int:
+    """How many slots of ``values`` are empty (NULL, where the binary failed to decode a text), counted without
+    reading them: the garbage collector's traversal of a list skips empty slots."""
+    return len(values) - len(gc.get_referents(values))
+
+
+def _refusing_empty_slots(method):
+    @functools.wraps(method)
+    def set_texts(self, vrs, values):
+        if empty_slots(values):
+            self._refuse_undecodable_text(vrs)
+        return method(self, vrs, values)
+
+    return set_texts
+
+
+class TextSetter:
+    """``set_string`` as the binaries find it (see 7.): a data descriptor whose getter first clears the decoding
+    error the binary may have left pending, then gives the guarded method bound to the instance."""
+
+    __slots__ = ("method",)
+
+    def __init__(self, method) -> None:
+        self.method = method
+
+    def __get__(self, instance, owner=None):
+        _settle_pending_error()
+        return self if instance is None else types.MethodType(self.method, instance)
+
+    def __set__(self, instance, value) -> None:
+        raise AttributeError(f"{TEXT_SETTER} is the unit's entry point; it cannot be replaced on an instance")
 
 
 # ------------------------------------------------------------------------------------ FMU state handles

@@ -16,6 +16,7 @@ until a valid value arrives.  Every message names the variable and its allowed r
 from __future__ import annotations
 
 import functools
+import inspect
 import logging
 import sys
 from pathlib import Path
@@ -141,16 +142,14 @@ class WetClothUnit:
         self._refuse_call(f"fmiSet: variable {name!r} is an output: the master cannot set it "
                           f"(allowed: parameters and inputs; value {value!r} refused)")
 
-    def __getattr__(self, name: str):
-        """pythonfmu's binary looks ``set_string`` up with its failed decoding of a text still pending,
-        and that lookup fails: here it finds the refusal (pythonfmu's binaries as of Python 3.11)."""
-        if name == "set_string":
-            return self._refuse_undecodable_text
-        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+    def __init_subclass__(cls, **kwargs):
+        """Give every unit class ``set_string`` in its own dict (guard.py 7.): the binaries call it with a failed
+        decoding pending, when a lookup that reaches a class lacking the name fails."""
+        super().__init_subclass__(**kwargs)
+        cls.set_string = inspect.getattr_static(cls, "set_string")
 
-    def _refuse_undecodable_text(self, vrs, values) -> None:
-        """UnitError (logged, pending like any refused value): a text the binary could not decode as
-        UTF-8 (``values`` holds no objects then: never read)."""
+    def _refuse_undecodable_text(self, vrs) -> None:
+        """UnitError (logged, pending like any refused value): a text the binary could not decode as UTF-8."""
         names = [self.vars[vr].name for vr in vrs if vr in self.vars]
         message = (f"fmiSetString: the text for variable {' or '.join(map(repr, names)) or 'unknown'} is not "
                    "UTF-8; allowed: UTF-8 text (value refused)")
