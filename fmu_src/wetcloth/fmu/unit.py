@@ -146,7 +146,9 @@ class WetClothUnit:
         """Give every unit class ``set_string`` in its own dict (guard.py 7.): the binaries call it with a failed
         decoding pending, when a lookup that reaches a class lacking the name fails."""
         super().__init_subclass__(**kwargs)
-        cls.set_string = inspect.getattr_static(cls, "set_string")
+        setter = inspect.getattr_static(cls, "set_string", None)
+        if setter is not None:
+            cls.set_string = setter
 
     def _refuse_undecodable_text(self, vrs) -> None:
         """UnitError (logged, pending like any refused value): a text the binary could not decode as UTF-8."""
