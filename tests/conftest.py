@@ -5,6 +5,7 @@ import pytest
 from hypothesis import settings
 
 import wetcloth
+from wetcloth.integrators import SMALLEST_STEP
 
 # Property tests draw the same examples on every run (derived from each test's source), so that the
 # suite's verdict never depends on the luck of a draw on a CI machine; to search further, draw new
@@ -46,3 +47,13 @@ def heavy_submerged_scene(**overrides) -> wetcloth.Scene:
         absorption_capacity=0.0, absorption_rate=0.0,
     )
     return wetcloth.load_scene(**(base | overrides))
+
+
+def explicit_near_the_smallest_step(margin: float) -> wetcloth.Scene:
+    """The towel under explicit Euler with its damping set so that the scheme's stability bound at rest is
+    (1 + margin) times the smallest step: the bound is 0.9 * 2 / (damping rate + drag rate) there, the damping
+    rate proportional to ``damping`` (read off a run at 1e4 N s/m, bound 3.6e-9 s)."""
+    scene = wetcloth.load_scene(integrator="explicit_euler", damping=1e4)
+    control = wetcloth.Simulation(scene).integrator.control()
+    rate = 1.8 / (SMALLEST_STEP * (1.0 + margin)) - control.drag_rate_offset
+    return scene.replace(damping=1e4 * rate / control.damping_rate)

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import explicit_near_the_smallest_step
 from test_fmu_support import BLOW_UP, SMALL, assert_like_direct_runs, last_good_time, run_child
 
 import wetcloth
@@ -1153,6 +1154,72 @@ def test_cells_far_longer_than_wide_fail_the_initialization_as_in_the_python_api
     with pytest.raises(ParameterError, match="'ny': the grid's cells are") as exc:
         wetcloth.load_scene(length=0.0011)
     assert messages == [f"initialization refused: {exc.value}"]
+
+
+STABILITY = r"""
+import json, sys
+import fmpy
+from fmpy.fmi1 import FMICallException
+from fmpy import calloc, free
+from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
+                       fmi2CallbackLoggerTYPE)
+directory, near_damping = sys.argv[1], float(sys.argv[2])
+md = fmpy.read_model_description(directory)
+var = {v.name: v for v in md.modelVariables}
+messages = []
+callbacks = fmi2CallbackFunctions()
+callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, instance, status, category, message: messages.append(
+    message.decode()))
+callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+
+def status(call, *args):
+    try:
+        call(*args)
+        return 0
+    except FMICallException as exc:
+        return int(exc.status)
+
+def unit(name, damping):
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier="WetCloth", instanceName=name)
+    fmu.instantiate(callbacks=callbacks, loggingOn=False)
+    fmu.setupExperiment(startTime=0.0)
+    fmu.setString([var["integrator"].valueReference], ["explicit_euler"])
+    fmu.setReal([var["damping"].valueReference], [damping])
+    return fmu, [status(fmu.enterInitializationMode), status(fmu.exitInitializationMode)]
+
+r = {}
+stiff, r["stiff"] = unit("stiff", 2.7e5)
+r["stiff"].append(list(messages))
+messages.clear()
+near, statuses = unit("near", near_damping)
+statuses.append(status(near.doStep, 0.0, 2e-8))
+statuses.append(status(near.setReal, [var["current_x"].valueReference], [10.0]))
+statuses.append(status(near.doStep, 2e-8, 2e-8))
+statuses.append(status(near.setReal, [var["current_x"].valueReference], [0.0]))
+statuses.append(status(near.doStep, 2e-8, 2e-8))
+r["near"] = statuses + [list(messages)]
+print(json.dumps(r))
+"""
+
+
+def test_an_explicit_scheme_below_the_smallest_step_is_refused_as_in_the_python_api(build):
+    """The rule of tests/test_sanity.py, in the native unit: refused at initialization; an input that would take
+    the bound below the smallest step refused (steps discarded until it is set back, as for any refused input);
+    the messages the Python API's."""
+    near = explicit_near_the_smallest_step(1e-6)
+    records, _ = run_child(STABILITY, build[2]["dir"], repr(near.damping))
+    stiff, near_run = records[-1]["stiff"], records[-1]["near"]
+    with pytest.raises(ParameterError) as refused:
+        wetcloth.Simulation(wetcloth.load_scene(integrator="explicit_euler", damping=2.7e5))
+    assert stiff == [0, 3, [f"initialization refused: {refused.value}"]]
+    sim = wetcloth.Simulation(near)
+    sim.advance(2e-8)
+    with pytest.raises(ParameterError) as input_refused:
+        sim.set_inputs(current_x=10.0)
+    assert near_run[:7] == [0, 0, 0, 3, 2, 0, 0], near_run
+    assert near_run[7][0].startswith(f"{input_refused.value} (value refused: current_x stays 0.0)"), near_run[7]
+    assert near_run[7][1].startswith("step refused at t = 2e-08 s: "), near_run[7]
 
 
 def test_a_blow_up_is_discarded_naming_the_time_and_the_unit_stays_finite(errors):

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 import wetcloth
-from conftest import G, INTEGRATORS
+from conftest import G, INTEGRATORS, explicit_near_the_smallest_step
 from wetcloth.energy import mechanical_energy
+from wetcloth.integrators import SMALLEST_STEP
 
 DRY_AIR = dict(water_level=-50.0, floor_level=-100.0, initial_tilt=0.0, initial_height=0.0)
 #: Free fall's closed form holds in vacuum: without the air's drag (air_density 0), which at 1 m/s
@@ -172,6 +173,46 @@ def test_blow_up_guard_stops_with_cause_and_last_good_time():
     held = wetcloth.Simulation(scene.replace(max_step=bound))
     held.advance(2.0 * sim.time)
     assert held.state.is_finite() and np.abs(held.velocities).max() < 10.0
+
+
+@pytest.mark.parametrize("integrator", ["explicit_euler", "symplectic_euler"])
+def test_an_explicit_scheme_that_needs_steps_below_the_smallest_is_refused_naming_what_sets_its_bound(integrator):
+    """Found by a random trial: symplectic Euler with damping = 2.7e5 N s/m is stable on the towel only at steps
+    of 1.3e-10 s, and crept on (a second of it, hours; an FMU's 0.05 s doStep, minutes).  Now refused at the start,
+    as the native units refuse it; the implicit schemes take the same scene."""
+    stiff = wetcloth.load_scene(integrator=integrator, damping=2.7e5)
+    with pytest.raises(wetcloth.ParameterError) as exc:
+        wetcloth.Simulation(stiff)
+    assert exc.value.name == "integrator"
+    assert str(exc.value).startswith(f"parameter 'integrator': '{integrator}' is stable on this cloth only at steps "
+                                     "up to 1.3e-10 s, below the smallest step (1e-09 s), set by the springs' "
+                                     "damping (parameter damping: a rate of 1.3e+10 1/s); allowed: 'bdf2' or "
+                                     "'implicit_euler'"), str(exc.value)
+    tiny = wetcloth.load_scene(integrator=integrator, damping=0.0, stretch_stiffness=1e8, width=1e-3, length=1e-3,
+                               nx=81, ny=81)
+    with pytest.raises(wetcloth.ParameterError, match="set by the springs' stiffness over the particles' masses"):
+        wetcloth.Simulation(tiny)
+    dragged = wetcloth.load_scene(integrator=integrator, water_density=1e5, drag_normal=100.0, current_x=10.0,
+                                  areal_density=0.005)
+    with pytest.raises(wetcloth.ParameterError, match=r"set by the drag at rest \(water_density, .* less drag$"):
+        wetcloth.Simulation(dragged)
+    for implicit in ("bdf2", "implicit_euler"):
+        wetcloth.Simulation(stiff.replace(integrator=implicit)).advance(0.01)
+
+
+def test_an_explicit_scheme_just_above_the_smallest_step_runs_and_an_input_that_would_take_it_below_is_refused():
+    """The rule's edge: a bound 1e-6 above the smallest step runs, at steps of that bound; a current (an input,
+    adding drag) that takes the bound below it is refused naming the rule, and the run goes on unchanged."""
+    scene = explicit_near_the_smallest_step(1e-6)
+    sim = wetcloth.Simulation(scene)
+    assert SMALLEST_STEP < sim.integrator.stable_step(0.0) < 1.00001 * SMALLEST_STEP
+    sim.advance(2e-8)
+    assert sim.state.is_finite()
+    with pytest.raises(wetcloth.ParameterError, match="'explicit_euler' is stable on this cloth only at steps up to"):
+        sim.set_inputs(current_x=10.0)
+    assert sim.scene == scene and sim.integrator.control() == sim._control
+    with pytest.raises(wetcloth.ParameterError, match="below the smallest step"):
+        wetcloth.Simulation(explicit_near_the_smallest_step(-1e-6))
 
 
 def test_same_scene_with_adaptive_steps_does_not_blow_up():

@@ -579,10 +579,10 @@ def _check_grid_start(scene: Scene) -> None:
     problem = _core.grid_start_problem(nx=scene.nx, ny=scene.ny, width=scene.width, length=scene.length,
                                        thickness=scene.thickness, initial_height=scene.initial_height,
                                        initial_tilt=scene.initial_tilt, floor_level=scene.floor_level)
-    _refuse(problem)
+    refuse_problem(problem)
 
 
-def _refuse(problem: str) -> None:
+def refuse_problem(problem: str) -> None:
     """Raise the ParameterError of a core rule's text ("parameter 'NAME': MESSAGE"), if any."""
     if problem:
         name, message = problem.removeprefix("parameter '").split("': ", 1)
@@ -595,7 +595,7 @@ def _check_mesh_start(scene: Scene):
     from wetcloth.topology import start_positions
 
     positions, mesh = start_positions(scene)
-    _refuse(_core.mesh_floor_problem(np.ascontiguousarray(positions, dtype=float), thickness=scene.thickness,
+    refuse_problem(_core.mesh_floor_problem(np.ascontiguousarray(positions, dtype=float), thickness=scene.thickness,
                                      floor_level=scene.floor_level, placed=scene.place_mesh == "on"))
     return positions, mesh
 

@@ -20,7 +20,7 @@ from wetcloth.errors import BlowUpError, ParameterError, did_you_mean, not_a_num
 from wetcloth.integrators import make_integrator
 from wetcloth.model import Model
 from wetcloth.preconditioner import plane_for
-from wetcloth.scene import INPUT, PARAMETERS, Scene, grip_key_rows, load_scene
+from wetcloth.scene import INPUT, PARAMETERS, Scene, grip_key_rows, load_scene, refuse_problem
 from wetcloth.state import State, initial_state
 from wetcloth.topology import Topology, initial_positions, start_positions
 
@@ -109,6 +109,7 @@ class Simulation:
         self._clock[NEXT_STEP] = scene.max_step
         self.integrator = make_integrator(scene.integrator, model)
         self._control = self.integrator.control()
+        refuse_problem(_core.stability_problem(self._control))
         self._solver = make_solver(topo.n)
         self._plane = plane_for(topo, fixed_steps=scene.tolerance == 0.0)
         self._contact = self_collision.make_contact(topo, scene.self_collision == "on", scene.self_friction)
@@ -254,9 +255,16 @@ class Simulation:
         return self.model.scene
 
     def _set_scene(self, scene: Scene) -> None:
+        """Take ``scene`` (of the same cloth) from now on; a ParameterError, and nothing changed, for a scene the
+        explicit scheme cannot step (``_core.stability_problem``)."""
         model = self.model
-        model.scene = scene
-        self._control = self.integrator.control()
+        previous, model.scene = model.scene, scene
+        control = self.integrator.control()
+        problem = _core.stability_problem(control)
+        if problem:
+            model.scene = previous
+            refuse_problem(problem)
+        self._control = control
         self._stepper.set_cloth(model.cloth)
         self._stepper.set_physics(model.physics)
         self._stepper.set_control(self._control)

@@ -31,6 +31,11 @@ WETCLOTH_BINDINGS(m) {
         },
         nb::arg("pos"), nb::arg("thickness"), nb::arg("floor_level"), nb::arg("placed"),
         "'' or the ParameterError's text of a mesh cloth whose start positions pos (3, n) m reach the floor");
+    m.def(
+        "stability_problem", [](nb::handle control) { return stability_problem(control_from(control)); },
+        nb::arg("control"),
+        "'' or the ParameterError's text of an explicit scheme stable on this cloth at rest only at steps below "
+        "the smallest step, naming what sets that bound");
 }
 
 }  // namespace wc::py

@@ -168,6 +168,34 @@ std::string grid_start_problem(const Scene& s, const Pins* pins) {
     return pins->pin(s.nx * s.ny, grid_start(s).data(), pinned);
 }
 
+std::string stability_problem(const Control& control) {
+    const double stable = stable_step(control, 0.0);  // (infinite for the implicit schemes)
+    if (!(stable < control.smallest_step)) return "";
+    // What sets the bound (stable_step): the damping rate (1/s: the springs' and the drag's at rest) or the
+    // frequency (rad/s: the springs'; the buoyancy's stays below 2e4 rad/s within the parameters' ranges).
+    const double gamma = control.damping_rate + control.drag_rate_offset;
+    const double omega = std::sqrt(control.omega_squared + control.buoyancy_omega_squared);
+    const bool by_rate =
+        control.integrator == EXPLICIT_EULER ? 2.0 / gamma <= control.spring_limit : gamma >= 2.0 * omega;
+    std::string cause, fix;
+    if (by_rate && control.damping_rate >= control.drag_rate_offset) {
+        cause = "the springs' damping (parameter damping: a rate of " + py_g(control.damping_rate, 2) + " 1/s)";
+        fix = "less damping";
+    } else if (by_rate) {
+        cause = "the drag at rest (water_density, the drag coefficients, the current, the wind, water_viscosity for "
+                "Stokes drag, over areal_density: a rate of " + py_g(control.drag_rate_offset, 2) + " 1/s)";
+        fix = "less drag";
+    } else {
+        cause = "the springs' stiffness over the particles' masses (stretch_stiffness, bend_stiffness, areal_density, "
+                "the cloth's cells: up to " + py_g(omega, 2) + " rad/s)";
+        fix = "softer springs or larger cells";
+    }
+    return "parameter 'integrator': " + py_repr(std::string_view(INTEGRATOR_NAMES[control.integrator])) +
+           " is stable on this cloth only at steps up to " + py_g(stable, 2) + " s, below the smallest step (" +
+           py_g(control.smallest_step) + " s), set by " + cause + "; allowed: 'bdf2' or 'implicit_euler' (stable at "
+           "any step), or an explicit scheme with " + fix;
+}
+
 std::vector<double> grid_start(const Scene& scene) {
     const Index nx = scene.nx, n = scene.nx * scene.ny;
     const double dx = scene.width / static_cast<double>(nx - 1);
@@ -703,6 +731,8 @@ Simulation::Simulation(const Scene& scene, Fixtures fixtures)
     if (omega_squared_ > 0) limit = pymax(limit, 0.1 / std::sqrt(omega_squared_));
     spring_limit_ = limit;
     set_control();
+    const std::string unstable = stability_problem(core_.control);
+    if (!unstable.empty()) throw std::invalid_argument(unstable);
 }
 
 namespace {
@@ -985,8 +1015,15 @@ bool Simulation::set_inputs(const Scene& next) {
         throw std::invalid_argument(fixed + " are fixed once the simulation starts; only inputs may change");
     }
     if (field_values(scene_) == field_values(next)) return false;  // Python's scene equality: 0.0 == -0.0
+    const Scene previous = scene_;
     set_scene(next);
     set_control();
+    const std::string unstable = stability_problem(core_.control);
+    if (!unstable.empty()) {  // refused: the scene stays as it was
+        set_scene(previous);
+        set_control();
+        throw std::invalid_argument(unstable);
+    }
     // Wake a sleeping cloth (Simulation._wake).
     clock_[SLEEPING] = 0.0;
     clock_[CALM_TIME] = 0.0;

@@ -185,6 +185,12 @@ std::vector<double> grid_start(const Scene& scene);
 //: scene_problem's rule on the grid's start: above the floor, and `pins`' box holding a particle there.
 std::string grid_start_problem(const Scene& scene, const Pins* pins);
 
+//: "" or the ParameterError's text of an explicit scheme (control.integrator) that is stable on this cloth at
+//: rest only at steps below control.smallest_step (it would creep on at under 1e-9 s a step), naming what sets
+//: that bound: the springs' damping, the drag at rest or the springs' stiffness.  Simulation checks it at
+//: the start and when inputs change, as the Python API does.
+std::string stability_problem(const Control& control);
+
 //: Whether particle i of the scene's nx x ny grid is on its pinned_edge (pinned_mask).
 bool on_pinned_edge(const Scene& scene, Index i);
 
