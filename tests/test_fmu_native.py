@@ -1037,6 +1037,19 @@ k = len(messages)
 r["long cells"] = [status(cells.enterInitializationMode), status(cells.exitInitializationMode), since(k)]
 cells.freeInstance()
 
+for case, damping in [("stiff explicit", 2.7e5), ("near the smallest step", float(sys.argv[3]))]:
+    explicit = new(case)
+    set(explicit, "integrator", "explicit_euler")
+    set(explicit, "damping", damping)
+    k = len(messages)
+    r[case] = [status(explicit.enterInitializationMode), status(explicit.exitInitializationMode)]
+    if case == "near the smallest step":  # a current that would take the bound below it, refused, then undone
+        r[case] += [status(explicit.doStep, 0.0, 2e-8), set(explicit, "current_x", 10.0),
+                    status(explicit.doStep, 2e-8, 2e-8), set(explicit, "current_x", 0.0),
+                    status(explicit.doStep, 2e-8, 2e-8)]
+    r[case].append(since(k))
+    explicit.freeInstance()
+
 blow = new("blow up")
 values = json.loads(sys.argv[2])
 for name, value in values.items():
@@ -1070,7 +1083,8 @@ print(json.dumps(r))
 
 @pytest.fixture(scope="module")
 def errors(build):
-    records, _ = run_child(ERRORS, build[2]["dir"], json.dumps(BLOW_UP))
+    near_damping = explicit_near_the_smallest_step(1e-6).damping  # (the stability rule's edge, N s/m)
+    records, _ = run_child(ERRORS, build[2]["dir"], json.dumps(BLOW_UP), repr(near_damping))
     return records[-1]
 
 
@@ -1156,60 +1170,12 @@ def test_cells_far_longer_than_wide_fail_the_initialization_as_in_the_python_api
     assert messages == [f"initialization refused: {exc.value}"]
 
 
-STABILITY = r"""
-import json, sys
-import fmpy
-from fmpy.fmi1 import FMICallException
-from fmpy import calloc, free
-from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
-                       fmi2CallbackLoggerTYPE)
-directory, near_damping = sys.argv[1], float(sys.argv[2])
-md = fmpy.read_model_description(directory)
-var = {v.name: v for v in md.modelVariables}
-messages = []
-callbacks = fmi2CallbackFunctions()
-callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, instance, status, category, message: messages.append(
-    message.decode()))
-callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-
-def status(call, *args):
-    try:
-        call(*args)
-        return 0
-    except FMICallException as exc:
-        return int(exc.status)
-
-def unit(name, damping):
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=directory, modelIdentifier="WetCloth", instanceName=name)
-    fmu.instantiate(callbacks=callbacks, loggingOn=False)
-    fmu.setupExperiment(startTime=0.0)
-    fmu.setString([var["integrator"].valueReference], ["explicit_euler"])
-    fmu.setReal([var["damping"].valueReference], [damping])
-    return fmu, [status(fmu.enterInitializationMode), status(fmu.exitInitializationMode)]
-
-r = {}
-stiff, r["stiff"] = unit("stiff", 2.7e5)
-r["stiff"].append(list(messages))
-messages.clear()
-near, statuses = unit("near", near_damping)
-statuses.append(status(near.doStep, 0.0, 2e-8))
-statuses.append(status(near.setReal, [var["current_x"].valueReference], [10.0]))
-statuses.append(status(near.doStep, 2e-8, 2e-8))
-statuses.append(status(near.setReal, [var["current_x"].valueReference], [0.0]))
-statuses.append(status(near.doStep, 2e-8, 2e-8))
-r["near"] = statuses + [list(messages)]
-print(json.dumps(r))
-"""
-
-
-def test_an_explicit_scheme_below_the_smallest_step_is_refused_as_in_the_python_api(build):
+def test_an_explicit_scheme_below_the_smallest_step_is_refused_as_in_the_python_api(errors):
     """The rule of tests/test_sanity.py, in the native unit: refused at initialization; an input that would take
     the bound below the smallest step refused (steps discarded until it is set back, as for any refused input);
     the messages the Python API's."""
     near = explicit_near_the_smallest_step(1e-6)
-    records, _ = run_child(STABILITY, build[2]["dir"], repr(near.damping))
-    stiff, near_run = records[-1]["stiff"], records[-1]["near"]
+    stiff, near_run = errors["stiff explicit"], errors["near the smallest step"]
     with pytest.raises(ParameterError) as refused:
         wetcloth.Simulation(wetcloth.load_scene(integrator="explicit_euler", damping=2.7e5))
     assert stiff == [0, 3, [f"initialization refused: {refused.value}"]]
