@@ -46,10 +46,10 @@
 6. On an exception, both binaries' ``handle_py_exception`` flush the instance's log queue to the master's
    logger callback before they fetch the exception: the master's callback (Python code, in a Python host such
    as fmpy) then ran with an exception pending.  The exception was lost on the way (the master read "Fatal py
-   exception encountered: ... unknown error"), and running Python code in that state is undefined.  Each wrapped entry
-   point therefore empties its instance's queue before an exception leaves it, into the exception's own text,
-   which the binary logs (the master reads one Fatal message with the reason, where it read an Error message
-   and "unknown error").
+   exception encountered: ... unknown error"), and running Python code in that state is undefined.  Each
+   wrapped entry point therefore empties its instance's queue before an exception leaves it, into the
+   exception's own text, which the binary logs (the master reads one Fatal message with the reason, where it
+   read an Error message and "unknown error").
 
 7. Both binaries build ``set_string``'s list of texts with ``Py_BuildValue("s")``: a text that is not UTF-8
    leaves an empty slot (NULL) in the list, and the binary looks ``set_string`` up and calls it with that
@@ -196,7 +196,7 @@ def _settle_pending_error() -> None:
         pass
 
 
-def empty_slots(values: list) -> int:
+def _empty_slots(values: list) -> int:
     """How many slots of ``values`` are empty (NULL, where the binary failed to decode a text), counted without
     reading them: the garbage collector's traversal of a list skips empty slots."""
     return len(values) - len(gc.get_referents(values))
@@ -205,7 +205,7 @@ def empty_slots(values: list) -> int:
 def _refusing_empty_slots(method):
     @functools.wraps(method)
     def set_texts(self, vrs, values):
-        if empty_slots(values):
+        if _empty_slots(values):
             self._refuse_undecodable_text(vrs)
         return method(self, vrs, values)
 
