@@ -201,8 +201,8 @@ def test_an_explicit_scheme_that_needs_steps_below_the_smallest_is_refused_namin
 
 
 def test_an_explicit_scheme_just_above_the_smallest_step_runs_and_an_input_that_would_take_it_below_is_refused():
-    """The rule's edge: a bound 1e-6 above the smallest step runs, at steps of that bound; a current (an input,
-    adding drag) that takes the bound below it is refused naming the rule, and the run goes on unchanged."""
+    """The rule's edge: a bound 1e-6 above the smallest step runs; a current (an input, adding drag) that takes
+    the bound below it is refused naming the rule, and the run goes on unchanged."""
     scene = explicit_near_the_smallest_step(1e-6)
     sim = wetcloth.Simulation(scene)
     assert SMALLEST_STEP < sim.integrator.stable_step(0.0) < 1.00001 * SMALLEST_STEP
@@ -211,6 +211,8 @@ def test_an_explicit_scheme_just_above_the_smallest_step_runs_and_an_input_that_
     with pytest.raises(wetcloth.ParameterError, match="'explicit_euler' is stable on this cloth only at steps up to"):
         sim.set_inputs(current_x=10.0)
     assert sim.scene == scene and sim.integrator.control() == sim._control
+    sim.advance(2e-8)
+    assert sim.time == pytest.approx(4e-8) and sim.state.is_finite()
     with pytest.raises(wetcloth.ParameterError, match="below the smallest step"):
         wetcloth.Simulation(explicit_near_the_smallest_step(-1e-6))
 

@@ -596,7 +596,7 @@ def _check_mesh_start(scene: Scene):
 
     positions, mesh = start_positions(scene)
     refuse_problem(_core.mesh_floor_problem(np.ascontiguousarray(positions, dtype=float), thickness=scene.thickness,
-                                     floor_level=scene.floor_level, placed=scene.place_mesh == "on"))
+                                            floor_level=scene.floor_level, placed=scene.place_mesh == "on"))
     return positions, mesh
 
 
