@@ -90,10 +90,11 @@ Trial take_step(Core& core, double h, const GripMove& grip) {
                phys.absorption_rate, h, buf.water, step_water);
     }
     const NewtonMode mode = core.control.allowed > 0.0 ? NewtonMode::ADAPTIVE : NewtonMode::FIXED;
+    const double base = euler ? DESCENT_CG_TOLERANCE : core.control.cg_tolerance;
+    const double cg_tolerance = mode == NewtonMode::ADAPTIVE ? adaptive_cg_tolerance(base, core.control, h) : base;
     const StepEstimate step = bdf2_step(cloth, phys, core.work, solver, core.plane, buf.pos, buf.vel, buf.water,
                                         step_water, buf.prev_pos, buf.prev_vel, buf.prev_water, buf.acceleration, h,
-                                        h_prev, core.control.newton_tolerance,
-                                        euler ? DESCENT_CG_TOLERANCE : core.control.cg_tolerance, mode, euler,
+                                        h_prev, core.control.newton_tolerance, cg_tolerance, mode, euler,
                                         clock + NEWTON_RATE,
                                         buf.trial_pos, buf.trial_vel, buf.held, grip.acts ? grip.rate : nullptr,
                                         core.reused);

@@ -5,6 +5,8 @@
 // coefficient), which forces_and_blocks (assembly.hpp) leaves as per-particle and per-spring blocks;
 // compressed springs contribute no negative stiffness, so A is symmetric positive definite.
 #pragma once
+#include <cmath>
+
 #include "wetcloth/core.hpp"
 
 namespace wc {
@@ -41,6 +43,24 @@ inline constexpr double CG_TOLERANCE = 1e-1;
 inline constexpr double FIXED_STEP_CG_TOLERANCE = 1e-2;
 inline constexpr double CG_FLOOR = 1e-2;
 inline constexpr Index NEWTON_CG_ITERATIONS = 300;
+//: How adaptive_cg_tolerance tightens with the overdamping D.  The hanging sheet swung 1 s at the default
+//: tolerance against one 100 times tighter, at damping 100 to 1e5 N s/m: with the base tolerance the
+//: 21 x 21 sheet erred 1.3-839 mm (at 1e5 it rose 0.8 m over the other's path) and the 11 x 11 0.8-55 mm;
+//: with D^1 0.2-0.7 mm and 0.5-5.0 mm; with D^1.5 0.2-0.4 mm both (bench/overdamped.py).
+inline constexpr double OVERDAMPED_EXPONENT = 1.5;
+
+//: The relative tolerance of an adaptive step's linear solves: `base` divided by the step's overdamping
+//: D = h gamma / (1 + h^2 omega^2) (Control's damping_rate gamma and omega_squared) to the power
+//: OVERDAMPED_EXPONENT, where D exceeds 1.  Over h, D peaks at gamma / (2 omega), the damping ratio of
+//: the stiffest springs' mode, so only overdamped springs tighten it (every preset's ratio is at most
+//: 1.02).  There the damped stretch dominates the step's matrix and the residual's first value, and a
+//: solve stopped at a tenth of that leaves the slow motion (the cloth swinging on its pins) unsolved,
+//: unseen by Newton's corrections and the error estimate (docs/model.md section 7).  Fixed steps keep
+//: theirs: their preconditioner, from the Jacobian, holds the damping.
+inline double adaptive_cg_tolerance(double base, const Control& control, double h) {
+    const double overdamping = h * control.damping_rate / (1.0 + h * h * control.omega_squared);
+    return overdamping > 1.0 ? base / std::pow(overdamping, OVERDAMPED_EXPONENT) : base;
+}
 
 //: How bdf2_step builds its preconditioner.  ADAPTIVE (an error estimate watches the steps, tolerance
 //: > 0): the rest-stiffness factors, reused across steps and refreshed from the Jacobian when solves
