@@ -56,7 +56,8 @@ Work = namedtuple("Work", "force submerged saturation blocks diagonal_blocks dir
 #: Integrator and controller settings: ``integrator`` (code: ``wetcloth.integrators.INTEGRATORS``),
 #: ``tolerance`` (-), ``allowed`` local position error per step (m, 0 = fixed steps of ``max_step``
 #: s); ``newton_tolerance`` (m); ``cg_tolerance`` (-, BDF2's linear solves, relative to the
-#: correction); the explicit schemes' stability data: ``omega_squared`` (1/s2, Gershgorin bound of
+#: correction; adaptive steps with overdamped springs tighten it: ``adaptive_cg_tolerance`` in
+#: implicit.hpp); the explicit schemes' stability data: ``omega_squared`` (1/s2, Gershgorin bound of
 #: the springs), ``buoyancy_omega_squared`` (1/s2), ``damping_rate`` (1/s), ``spring_limit`` (s,
 #: explicit Euler), drag rate ``drag_rate_offset + drag_rate_slope * speed`` (1/s); step limits and
 #: factors; the blow-up speed (m/s); the sleep rule: ``sleep_distance`` (m) for ``sleep_after`` s.
