@@ -326,7 +326,11 @@ def test_a_tiny_max_step_is_named_as_what_makes_the_run_long(max_step, tolerance
 
 
 def test_blow_up_advice_never_suggests_what_is_already_set():
-    from wetcloth.advice import blow_up_advice
+    from wetcloth import _core
+    from wetcloth.integrators import INTEGRATORS
+
+    def blow_up_advice(scene, stable_step):
+        return _core.blow_up_advice(INTEGRATORS[scene.integrator], scene.tolerance, scene.max_step, stable_step)
 
     sim = wetcloth.Simulation(wetcloth.load_scene(nx=3, ny=3, integrator="implicit_euler", tolerance=1e-4))
     sim._buffers.vel[2, 0] = 1e9  # as if exploded: the guard refuses the next step

@@ -1,4 +1,5 @@
-"""What to change in a scene: after a blow-up, and when a run would take long.
+"""What to change in a scene: what moved too fast before a blow-up, and when a run would take long (the
+blow-up's advice on settings is the core's, ``_core.blow_up_text``, which the native units' messages share).
 
 Advice names only settings that differ from what the scene already has (no 'use implicit_euler'
 on implicit_euler), each with its current value.
@@ -22,30 +23,6 @@ IMPLICIT = "implicit_euler"
 
 def _default(name: str):
     return PARAMETERS[name].default
-
-
-def _either(options: list[str]) -> str:
-    return options[0] if len(options) == 1 else ", ".join(options[:-1]) + " or " + options[-1]
-
-
-def blow_up_advice(scene: Scene, stable_step: float) -> str:
-    """'use integrator 'implicit_euler', a smaller max_step (now 0.01 s) or ...': what may keep
-    ``scene`` from blowing up, leaving out what it already does.  ``stable_step`` (s) is the scheme's
-    stability bound at rest (``Integrator.stable_step(0)``, infinite for the implicit ones): named where fixed
-    steps exceed it."""
-    options = []
-    if scene.integrator != IMPLICIT:
-        options.append(f"integrator '{IMPLICIT}' (stable at any step)")
-    if scene.tolerance == 0.0 and scene.max_step > stable_step:
-        options.append(f"a smaller max_step (now {scene.max_step:g} s; {scene.integrator} is stable on this cloth at "
-                       f"rest at steps up to {stable_step:.2g} s, a cautious bound)")
-    else:
-        options.append(f"a smaller max_step (now {scene.max_step:g} s)")
-    if scene.tolerance == 0.0:
-        options.append("a tolerance > 0 (steps adapted to an error bound)")
-    else:
-        options.append(f"a smaller tolerance (now {scene.tolerance:g})")
-    return "use " + _either(options)
 
 
 #: A move of the grip or of a collider at this fraction of the blow-up speed (m/s) or faster is named as a

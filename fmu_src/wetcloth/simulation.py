@@ -10,14 +10,14 @@ import numpy as np
 
 from wetcloth import _core, self_collision
 from wetcloth._core import (BLOWN_UP, CALM_TIME, CG_ITERATIONS, CLOCK_SIZE, EXCHANGING, FACTORISATIONS, FAILED_STEP,
-                            FIRST_GUESS, LAST_SOLVE, LAST_STEP, MAX_REJECTIONS, NEWTON_ITERATIONS, NEWTON_RATE,
+                            FIRST_GUESS, LAST_SOLVE, LAST_STEP, NEWTON_ITERATIONS, NEWTON_RATE,
                             NEXT_STEP, OUTPUT_COUNT, PAUSE_AFTER, PAUSED, RATE_CORRECTION, REJECTED, REUSE_RULE_SIZE,
                             RESTARTS, SLEEPING, SPEED, STEPS, TIME, UNCHECKED_TIME, UNCONVERGED,
                             LARGEST_ERROR, MAX_TIME, GRIP_RESOLUTION)
-from wetcloth.advice import blow_up_advice, fast_move, keyed_moves
+from wetcloth.advice import fast_move, keyed_moves
 from wetcloth.bundles import Buffers, make_solver
 from wetcloth.errors import BlowUpError, ParameterError, did_you_mean, not_a_number
-from wetcloth.integrators import make_integrator
+from wetcloth.integrators import INTEGRATORS, make_integrator
 from wetcloth.model import Model
 from wetcloth.preconditioner import plane_for
 from wetcloth.scene import INPUT, PARAMETERS, Scene, grip_key_rows, load_scene, refuse_problem
@@ -435,25 +435,10 @@ class Simulation:
         buf = self._buffers
         speed, finite = _core.speed_and_finiteness(buf.trial_pos, buf.trial_vel, buf.trial_water)
         scene = self.scene
-        mover = self._fast_mover(h, end)
-        pinned = self._pinned_cause(buf.trial_pos)
-        advice = blow_up_advice(scene, self.integrator.stable_step(0.0))
-        if finite and speed < self._control.blow_up_speed:  # neither: no step was accepted (the core's bound)
-            cause = mover or pinned or (f"a state the cloth cannot be in, or a scene stiffer than the smallest step "
-                                        f"resolves; {advice}")
-            raise BlowUpError(
-                f"the cloth state could not be stepped from t = {self.time:.6g} s: the step control accepted "
-                f"no step (rejected more than {MAX_REJECTIONS} times, the last of {h:.3g} s; integrator "
-                f"{scene.integrator!r}). Likely cause: {cause}. Last good time: {self.time:.6g} s.",
-                last_good_time=self.time,
-            )
-        what = "became non-finite" if not finite else f"exploded (speed {speed:.3g} m/s)"
-        cause = mover or pinned or (f"the step is too large for stretch_stiffness = {scene.stretch_stiffness:g} N/m; "
-                                    f"{advice}")
+        cause = self._fast_mover(h, end) or self._pinned_cause(buf.trial_pos)
         raise BlowUpError(
-            f"the cloth state {what} in the step from t = {self.time:.6g} s to {self.time + h:.6g} s "
-            f"(step {h:.3g} s, integrator {scene.integrator!r}). Likely cause: {cause}. "
-            f"Last good time: {self.time:.6g} s.",
+            _core.blow_up_text(INTEGRATORS[scene.integrator], scene.tolerance, scene.max_step, scene.stretch_stiffness,
+                               self._control, finite, speed, self.time, h, cause),
             last_good_time=self.time,
         )
 

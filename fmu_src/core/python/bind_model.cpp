@@ -36,6 +36,33 @@ WETCLOTH_BINDINGS(m) {
         nb::arg("control"),
         "'' or the ParameterError's text of an explicit scheme stable on this cloth at rest only at steps below "
         "the smallest step, naming what sets that bound");
+    //: The Scene fields blow_up_advice and blow_up_text read.
+    const auto settings = [](Index integrator, double tolerance, double max_step, double stretch_stiffness) {
+        Scene scene;
+        scene.integrator = integrator, scene.tolerance = tolerance, scene.max_step = max_step;
+        scene.stretch_stiffness = stretch_stiffness;
+        return scene;
+    };
+    m.def(
+        "blow_up_advice",
+        [settings](Index integrator, double tolerance, double max_step, double stable_step) {
+            return blow_up_advice(settings(integrator, tolerance, max_step, 0.0), stable_step);
+        },
+        nb::arg("integrator"), nb::arg("tolerance"), nb::arg("max_step"), nb::arg("stable_step"),
+        "What may keep a scene with these settings (integrator code, tolerance, max_step s) from blowing up, "
+        "leaving out what it already does; where fixed steps exceed stable_step (s, the scheme's stability bound "
+        "at rest), that bound");
+    m.def(
+        "blow_up_text",
+        [settings](Index integrator, double tolerance, double max_step, double stretch_stiffness, nb::handle control,
+                   bool finite, double speed, double t, double h, const std::string& cause) {
+            return blow_up_text(settings(integrator, tolerance, max_step, stretch_stiffness), control_from(control),
+                                finite, speed, t, h, cause);
+        },
+        nb::arg("integrator"), nb::arg("tolerance"), nb::arg("max_step"), nb::arg("stretch_stiffness"),
+        nb::arg("control"), nb::arg("finite"), nb::arg("speed"), nb::arg("time"), nb::arg("step"), nb::arg("cause"),
+        "The BlowUpError's text of a step of `step` s from `time` s that ended non-finite or at `speed` m/s (below "
+        "the control's blow_up_speed: no step accepted), its likely cause `cause` or, if '', the settings' advice");
 }
 
 }  // namespace wc::py

@@ -1137,29 +1137,51 @@ std::string Simulation::fast_mover(double h) const {
            "longer advance)";
 }
 
-std::string Simulation::blow_up_message() const {
-    const Buffers& b = core_.buf;
-    const SpeedCheck check = speed_and_finiteness(topo_.n, b.trial_pos, b.trial_vel, b.trial_water);
-    const std::string what = !check.finite ? "became non-finite" : "exploded (speed " + py_g(check.speed, 3) + " m/s)";
-    const double t = time(), h = clock_[FAILED_STEP];
-    // advice.blow_up_advice
+std::string blow_up_advice(const Scene& scene, double stable) {
     std::vector<std::string> options;
-    if (scene_.integrator != IMPLICIT_EULER) options.emplace_back("integrator 'implicit_euler' (stable at any step)");
-    const double stable = stable_step(core_.control, 0.0);  // (infinite for the implicit schemes)
-    if (scene_.tolerance == 0.0 && scene_.max_step > stable) {
-        options.push_back("a smaller max_step (now " + py_g(scene_.max_step) + " s; " +
-                          INTEGRATOR_NAMES[scene_.integrator] + " is stable on this cloth at rest at steps up to " +
+    if (scene.integrator != IMPLICIT_EULER) options.emplace_back("integrator 'implicit_euler' (stable at any step)");
+    if (scene.tolerance == 0.0 && scene.max_step > stable) {
+        options.push_back("a smaller max_step (now " + py_g(scene.max_step) + " s; " +
+                          INTEGRATOR_NAMES[scene.integrator] + " is stable on this cloth at rest at steps up to " +
                           py_g(stable, 2) + " s, a cautious bound)");
     } else {
-        options.push_back("a smaller max_step (now " + py_g(scene_.max_step) + " s)");
+        options.push_back("a smaller max_step (now " + py_g(scene.max_step) + " s)");
     }
-    options.push_back(scene_.tolerance == 0.0 ? "a tolerance > 0 (steps adapted to an error bound)"
-                                              : "a smaller tolerance (now " + py_g(scene_.tolerance) + ")");
+    options.push_back(scene.tolerance == 0.0 ? "a tolerance > 0 (steps adapted to an error bound)"
+                                             : "a smaller tolerance (now " + py_g(scene.tolerance) + ")");
     std::string advice = "use ";
     for (std::size_t k = 0; k < options.size(); ++k) {
         advice += (k == 0 ? "" : k + 1 == options.size() ? " or " : ", ") + options[k];
     }
-    const std::string integrator = py_repr(std::string_view(INTEGRATOR_NAMES[scene_.integrator]));
+    return advice;
+}
+
+std::string blow_up_text(const Scene& scene, const Control& control, bool finite, double speed, double t, double h,
+                         const std::string& cause) {
+    const std::string advice = blow_up_advice(scene, stable_step(control, 0.0));  // (infinite if implicit)
+    const std::string integrator = py_repr(std::string_view(INTEGRATOR_NAMES[scene.integrator]));
+    if (finite && speed < control.blow_up_speed) {  // no step was accepted (stepping.hpp)
+        return "the cloth state could not be stepped from t = " + py_g(t) + " s: the step control accepted no step "
+               "(rejected more than " + std::to_string(MAX_REJECTIONS) + " times, the last of " + py_g(h, 3) +
+               " s; integrator " + integrator + "). Likely cause: " +
+               (cause.empty() ? "a state the cloth cannot be in, or a scene stiffer than the smallest step resolves; " +
+                                    advice
+                              : cause) +
+               ". Last good time: " + py_g(t) + " s.";
+    }
+    const std::string what = !finite ? "became non-finite" : "exploded (speed " + py_g(speed, 3) + " m/s)";
+    return "the cloth state " + what + " in the step from t = " + py_g(t) + " s to " + py_g(t + h) + " s (step " +
+           py_g(h, 3) + " s, integrator " + integrator + "). Likely cause: " +
+           (cause.empty() ? "the step is too large for stretch_stiffness = " + py_g(scene.stretch_stiffness) + " N/m; " +
+                                advice
+                          : cause) +
+           ". Last good time: " + py_g(t) + " s.";
+}
+
+std::string Simulation::blow_up_message() const {
+    const Buffers& b = core_.buf;
+    const SpeedCheck check = speed_and_finiteness(topo_.n, b.trial_pos, b.trial_vel, b.trial_water);
+    const double h = clock_[FAILED_STEP];
     // (wetcloth.simulation.Simulation._fast_mover, then _pinned_cause)
     std::string cause = fast_mover(h);
     const PinnedPressed pinned = pinned_pressed(core_.phys, topo_.n, core_.cloth.free, b.trial_pos);
@@ -1171,21 +1193,7 @@ std::string Simulation::blow_up_message() const {
                 py_g(pinned.distance, 3) + " m off its surface at every step while the grip holds it in; move the "
                 "grip (grip_x, grip_y, grip_z, its keys) or the collider so that the pinned particles stay clear of it";
     }
-    if (check.finite && check.speed < core_.control.blow_up_speed) {  // no step was accepted (stepping.hpp)
-        return "the cloth state could not be stepped from t = " + py_g(t) + " s: the step control accepted no step "
-               "(rejected more than " + std::to_string(MAX_REJECTIONS) + " times, the last of " + py_g(h, 3) +
-               " s; integrator " + integrator + "). Likely cause: " +
-               (cause.empty() ? "a state the cloth cannot be in, or a scene stiffer than the smallest step resolves; " +
-                                    advice
-                              : cause) +
-               ". Last good time: " + py_g(t) + " s.";
-    }
-    return "the cloth state " + what + " in the step from t = " + py_g(t) + " s to " + py_g(t + h) + " s (step " +
-           py_g(h, 3) + " s, integrator " + integrator + "). Likely cause: " +
-           (cause.empty() ? "the step is too large for stretch_stiffness = " + py_g(scene_.stretch_stiffness) + " N/m; " +
-                                advice
-                          : cause) +
-           ". Last good time: " + py_g(t) + " s.";
+    return blow_up_text(scene_, core_.control, check.finite, check.speed, time(), h, cause);
 }
 
 // ------------------------------------------------------------------------------------------ checkpoints

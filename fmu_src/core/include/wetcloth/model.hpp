@@ -201,6 +201,19 @@ std::string py_repr(std::string_view text);
 //: Python's format(value, f".{precision}g") ('0.1', '1e-05', 'inf').
 std::string py_g(double value, int precision = 6);
 
+// ------------------------------------------------------------------------------------------ blow-ups
+//: What may keep `scene` from blowing up ("use integrator 'implicit_euler' (stable at any step), a smaller
+//: max_step (now 0.01 s) or a smaller tolerance (now 5e-06)"), leaving out what it already does; where its
+//: fixed steps exceed `stable` (s), the scheme's stability bound at rest (stable_step(control, 0)), naming it.
+std::string blow_up_advice(const Scene& scene, double stable);
+//: The BlowUpError's text, the Python API's and the native units' alike: a step of h s from t s ended
+//: non-finite or at `speed` m/s (over control.blow_up_speed; below it, no step was accepted), its likely
+//: cause `cause` (a fast move of the grip or a collider, a pinned particle pressed into a collider) or,
+//: if empty, the scene's settings with blow_up_advice's.  Reads the scene's integrator, tolerance, max_step
+//: and stretch_stiffness.
+std::string blow_up_text(const Scene& scene, const Control& control, bool finite, double speed, double t, double h,
+                         const std::string& cause);
+
 // ------------------------------------------------------------------------------------------ topology
 //: Spring families (topology.py), in the order they are built.
 enum Family : Index { STRUCTURAL_X = 0, STRUCTURAL_Y, SHEAR_UP_RIGHT, SHEAR_UP_LEFT, BEND_X, BEND_Y };
