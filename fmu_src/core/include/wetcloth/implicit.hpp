@@ -46,7 +46,7 @@ inline constexpr Index NEWTON_CG_ITERATIONS = 300;
 //: How adaptive_cg_tolerance tightens with the overdamping D.  The hanging sheet swung 1 s at the default
 //: tolerance against one 100 times tighter, at damping 100 to 1e5 N s/m: with the base tolerance the
 //: 21 x 21 sheet erred 1.3-839 mm (at 1e5 it rose 0.8 m over the other's path) and the 11 x 11 0.8-55 mm;
-//: with D^1 0.2-0.7 mm and 0.5-5.0 mm; with D^1.5 0.2-0.4 mm both (bench/overdamped.py).
+//: with D^1 0.2-0.5 mm and 0.5-5.0 mm; with D^1.5 0.2-0.5 mm both (bench/overdamped.py).
 inline constexpr double OVERDAMPED_EXPONENT = 1.5;
 
 //: The relative tolerance of an adaptive step's linear solves: `base` divided by the step's overdamping
