@@ -435,7 +435,7 @@ class Simulation:
         buf = self._buffers
         speed, finite = _core.speed_and_finiteness(buf.trial_pos, buf.trial_vel, buf.trial_water)
         scene = self.scene
-        cause = self._fast_mover(h, end) or self._pinned_cause(buf.trial_pos)
+        cause = self._fast_mover(h, end) or _core.pinned_cause(self.model.physics, self.model.cloth.free, buf.trial_pos)
         raise BlowUpError(
             _core.blow_up_text(INTEGRATORS[scene.integrator], scene.tolerance, scene.max_step, scene.stretch_stiffness,
                                self._control, finite, speed, self.time, h, cause),
@@ -461,19 +461,6 @@ class Simulation:
                                                             f"{distance:.3g} m over the {end - self.time:.3g} s to "
                                                             f"t = {end:.6g} s"))
         return fast_move(moves, self._control.blow_up_speed)
-
-    def _pinned_cause(self, pos: np.ndarray) -> str:
-        """Why a step that ends at pos (3, n) m failed, if a pinned particle is pressed into a collider there
-        (the core's pinned_pressed; the native unit's Simulation::blow_up_message says the same), else ''."""
-        if not self.scene.colliders:
-            return ""
-        i, k, distance = _core.pinned_pressed(self.model.physics, self.model.cloth.free, pos)
-        if i < 0:
-            return ""
-        return (f"the grip presses pinned particle {i} into collider {k + 1} (a {self.scene.colliders[k].shape}), "
-                f"whose contact puts it back {distance:.3g} m off its surface at every step while the grip holds it in; "
-                f"move the grip (grip_x, grip_y, grip_z, its keys) or the collider so that the pinned particles stay "
-                f"clear of it")
 
     # ----------------------------------------------------------------- results
     def outputs(self) -> dict[str, float]:

@@ -81,18 +81,6 @@ WETCLOTH_BINDINGS(m) {
         "(x, y, z) m: the grip keys' displacement of the pinned particles at t (s), keys the rows (k, 4) of time s and "
         "x, y, z m (scene.grip_key_rows): 0 at t = 0, linear between keys, the last key's after it.");
     m.def(
-        "pinned_pressed",
-        [](nb::handle phys, nb::handle free, nb::handle pos) {
-            const Index n = size_of(free);
-            const PinnedPressed nearest = pinned_pressed(physics_from(phys), n, argument<const double>(free, "free", n),
-                                                         argument<const double>(pos, "pos", 3 * n));
-            return nb::make_tuple(nearest.particle, nearest.collider, nearest.distance);
-        },
-        nb::arg("phys"), nb::arg("free"), nb::arg("pos"),
-        "(particle, collider, signed distance m) of the pinned particle (free (n) 0) of pos (3, n) nearest a "
-        "collider's surface of phys, where the colliders are now, if no farther than thickness / 2; else (-1, -1, "
-        "about thickness / 2).");
-    m.def(
         "mesh_triangles_in",
         [](nb::handle meshes, Index mesh, nb::handle lo, nb::handle hi) {
             const ColliderMeshes m = mesh_of(meshes, mesh);

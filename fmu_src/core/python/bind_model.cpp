@@ -36,6 +36,17 @@ WETCLOTH_BINDINGS(m) {
         nb::arg("control"),
         "'' or the ParameterError's text of an explicit scheme stable on this cloth at rest only at steps below "
         "the smallest step, naming what sets that bound");
+    m.def(
+        "pinned_cause",
+        [](nb::handle phys, nb::handle free, nb::handle pos) {
+            const Index n = size_of(free);
+            return pinned_cause(physics_from(phys), n, argument<const double>(free, "free", n),
+                                argument<const double>(pos, "pos", 3 * n));
+        },
+        nb::arg("phys"), nb::arg("free"), nb::arg("pos"),
+        "A blow-up's cause where a step ending at pos (3, n) m leaves a pinned particle (free (n) 0) pressed into a "
+        "collider of phys, where the colliders are now (no farther out than thickness / 2): which, into which and "
+        "what to move; else ''.");
     //: The Scene fields blow_up_advice and blow_up_text read.
     const auto settings = [](Index integrator, double tolerance, double max_step, double stretch_stiffness) {
         Scene scene;

@@ -1156,6 +1156,16 @@ std::string blow_up_advice(const Scene& scene, double stable) {
     return advice;
 }
 
+std::string pinned_cause(const Physics& phys, Index n, const double* free, const double* pos) {
+    const PinnedPressed pinned = pinned_pressed(phys, n, free, pos);
+    if (pinned.particle < 0) return "";
+    const Index shape = static_cast<Index>(phys.colliders[pinned.collider * COLLIDER_COLUMNS + C_SHAPE]);
+    return "the grip presses pinned particle " + std::to_string(pinned.particle) + " into collider " +
+           std::to_string(pinned.collider + 1) + " (a " + SHAPE_NAMES[shape] + "), whose contact puts it back " +
+           py_g(pinned.distance, 3) + " m off its surface at every step while the grip holds it in; move the "
+           "grip (grip_x, grip_y, grip_z, its keys) or the collider so that the pinned particles stay clear of it";
+}
+
 std::string blow_up_text(const Scene& scene, const Control& control, bool finite, double speed, double t, double h,
                          const std::string& cause) {
     const std::string advice = blow_up_advice(scene, stable_step(control, 0.0));  // (infinite if implicit)
@@ -1182,17 +1192,9 @@ std::string Simulation::blow_up_message() const {
     const Buffers& b = core_.buf;
     const SpeedCheck check = speed_and_finiteness(topo_.n, b.trial_pos, b.trial_vel, b.trial_water);
     const double h = clock_[FAILED_STEP];
-    // (wetcloth.simulation.Simulation._fast_mover, then _pinned_cause)
+    // (wetcloth.simulation.Simulation._fast_mover, then the pinned particles)
     std::string cause = fast_mover(h);
-    const PinnedPressed pinned = pinned_pressed(core_.phys, topo_.n, core_.cloth.free, b.trial_pos);
-    if (cause.empty() && pinned.particle >= 0) {
-        const Index i = pinned.particle;
-        const Index shape = static_cast<Index>(core_.phys.colliders[pinned.collider * COLLIDER_COLUMNS + C_SHAPE]);
-        cause = "the grip presses pinned particle " + std::to_string(i) + " into collider " +
-                std::to_string(pinned.collider + 1) + " (a " + SHAPE_NAMES[shape] + "), whose contact puts it back " +
-                py_g(pinned.distance, 3) + " m off its surface at every step while the grip holds it in; move the "
-                "grip (grip_x, grip_y, grip_z, its keys) or the collider so that the pinned particles stay clear of it";
-    }
+    if (cause.empty()) cause = pinned_cause(core_.phys, topo_.n, core_.cloth.free, b.trial_pos);
     return blow_up_text(scene_, core_.control, check.finite, check.speed, time(), h, cause);
 }
 

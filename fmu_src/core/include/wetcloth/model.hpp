@@ -206,6 +206,9 @@ std::string py_g(double value, int precision = 6);
 //: max_step (now 0.01 s) or a smaller tolerance (now 5e-06)"), leaving out what it already does; where its
 //: fixed steps exceed `stable` (s), the scheme's stability bound at rest (stable_step(control, 0)), naming it.
 std::string blow_up_advice(const Scene& scene, double stable);
+//: A blow-up's cause where a step ending at pos (3, n) m leaves a pinned particle (free (n) 0) pressed into a
+//: collider of phys (pinned_pressed): which, into which, and what to move; else ''.
+std::string pinned_cause(const Physics& phys, Index n, const double* free, const double* pos);
 //: The BlowUpError's text, the Python API's and the native units' alike: a step of h s from t s ended
 //: non-finite or at `speed` m/s (over control.blow_up_speed; below it, no step was accepted), its likely
 //: cause `cause` (a fast move of the grip or a collider, a pinned particle pressed into a collider) or,
