@@ -1,5 +1,5 @@
-"""What to change in a scene: what moved too fast before a blow-up, and when a run would take long (the
-blow-up's advice on settings is the core's, ``_core.blow_up_text``, which the native units' messages share).
+"""What to change in a scene when a run would take long (a blow-up's likely cause and advice are the core's,
+``_core.blow_up_text`` and its kin, which the native units' messages share).
 
 Advice names only settings that differ from what the scene already has (no 'use implicit_euler'
 on implicit_euler), each with its current value.
@@ -7,7 +7,6 @@ on implicit_euler), each with its current value.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -23,39 +22,6 @@ IMPLICIT = "implicit_euler"
 
 def _default(name: str):
     return PARAMETERS[name].default
-
-
-#: A move of the grip or of a collider at this fraction of the blow-up speed (m/s) or faster is named as a
-#: blow-up's likely cause: the cloth it drags or hits moves at least about as fast.
-FAST_MOVE = 0.1
-
-
-def keyed_moves(scene: Scene, after: float, before: float) -> list[tuple[float, str]]:
-    """(speed m/s, what) of each move between consecutive keys of the grip and of each collider (from its
-    start at t = 0 to its first key) under way between ``after`` and ``before`` s: 'grip_key1 moves the pinned
-    particles 1 m in 0.5 s from t = 0 s'."""
-    moves, last = [], {}  # last: each mover's latest key (time, x, y, z); the grip is mover 0
-    keyed = [(f"grip_key{k}", 0, "the pinned particles", key) for k, key in enumerate(scene.grip_keys, 1)]
-    keyed += [(f"collider_key{k}", key.collider, f"collider {key.collider}", key)
-              for k, key in enumerate(scene.collider_keys, 1)]
-    for name, mover, what, key in keyed:
-        start, *at = last.get(mover, (0.0, 0.0, 0.0, 0.0))
-        last[mover] = (key.time, key.x, key.y, key.z)
-        if start < before and key.time >= after:
-            distance = math.dist(at, (key.x, key.y, key.z))
-            moves.append((distance / (key.time - start), f"{name} moves {what} {distance:.3g} m in "
-                                                         f"{key.time - start:.3g} s from t = {start:.6g} s"))
-    return moves
-
-
-def fast_move(moves: list[tuple[float, str]], blow_up_speed: float) -> str:
-    """The likely cause of a blow-up among ``moves`` ((speed m/s, what) of the grip's and the colliders'):
-    the fastest, if at least FAST_MOVE times ``blow_up_speed`` (m/s), and what to change; else ''."""
-    speed, what = max(moves, default=(0.0, ""))
-    if speed < FAST_MOVE * blow_up_speed:
-        return ""
-    return (f"{what}: {speed:.3g} m/s, too fast for the cloth (it blows up at {blow_up_speed:g} m/s); make that "
-            f"move smaller or slower (a later key; for the grip's inputs, a longer advance)")
 
 
 @dataclass(frozen=True)

@@ -13,14 +13,13 @@ from wetcloth._core import (BLOWN_UP, CALM_TIME, CG_ITERATIONS, CLOCK_SIZE, EXCH
                             FIRST_GUESS, LAST_SOLVE, LAST_STEP, NEWTON_ITERATIONS, NEWTON_RATE,
                             NEXT_STEP, OUTPUT_COUNT, PAUSE_AFTER, PAUSED, RATE_CORRECTION, REJECTED, REUSE_RULE_SIZE,
                             RESTARTS, SLEEPING, SPEED, STEPS, TIME, UNCHECKED_TIME, UNCONVERGED,
-                            LARGEST_ERROR, MAX_TIME, GRIP_RESOLUTION)
-from wetcloth.advice import fast_move, keyed_moves
+                            LARGEST_ERROR, MAX_TIME)
 from wetcloth.bundles import Buffers, make_solver
 from wetcloth.errors import BlowUpError, ParameterError, did_you_mean, not_a_number
 from wetcloth.integrators import INTEGRATORS, make_integrator
 from wetcloth.model import Model
 from wetcloth.preconditioner import plane_for
-from wetcloth.scene import INPUT, PARAMETERS, Scene, grip_key_rows, load_scene, refuse_problem
+from wetcloth.scene import INPUT, PARAMETERS, Scene, collider_key_order, load_scene, refuse_problem
 from wetcloth.state import State, initial_state
 from wetcloth.topology import Topology, initial_positions, start_positions
 
@@ -435,32 +434,16 @@ class Simulation:
         buf = self._buffers
         speed, finite = _core.speed_and_finiteness(buf.trial_pos, buf.trial_vel, buf.trial_water)
         scene = self.scene
-        cause = self._fast_mover(h, end) or _core.pinned_cause(self.model.physics, self.model.cloth.free, buf.trial_pos)
+        free = self.model.cloth.free
+        places = np.array(collider_key_order(scene.collider_keys), dtype=np.int64) + 1  # in the core's rows' order
+        cause = (_core.fast_move_cause(self.model.physics, places, buf.pos, free, buf.held, self.time, h, end,
+                                       self._control.blow_up_speed)
+                 or _core.pinned_cause(self.model.physics, free, buf.trial_pos))
         raise BlowUpError(
             _core.blow_up_text(INTEGRATORS[scene.integrator], scene.tolerance, scene.max_step, scene.stretch_stiffness,
                                self._control, finite, speed, self.time, h, cause),
             last_good_time=self.time,
         )
-
-    def _fast_mover(self, h: float, end: float) -> str:
-        """The grip's or a keyed collider's move under way in the step of ``h`` s that failed, in a call that
-        steps to ``end`` s, if fast enough to blow the cloth up (``advice.fast_move``), and what to do about it;
-        else ''."""
-        scene = self.scene
-        moves = keyed_moves(scene, self.time, self.time + h)
-        pinned = np.flatnonzero((self.model.free == 0.0) & (self._buffers.held == 0.0))  # as the core's grip
-        if pinned.size and end > self.time:  # the inputs' part of the grip: reached linearly by ``end``
-            p = int(pinned[0])
-            keys = np.asarray(_core.grip_key_displacement(grip_key_rows(scene.grip_keys), self.time))
-            part = self._buffers.pos[:, p] - self.model.grip_origin[:, p] - keys
-            change = np.array([scene.grip_x, scene.grip_y, scene.grip_z]) - part
-            names = ", ".join(f"grip_{c}" for c, d in zip("xyz", change) if abs(d) > GRIP_RESOLUTION)
-            distance = float(np.linalg.norm(change))
-            if names:
-                moves.append((distance / (end - self.time), f"the grip's inputs ({names}) move the pinned particles "
-                                                            f"{distance:.3g} m over the {end - self.time:.3g} s to "
-                                                            f"t = {end:.6g} s"))
-        return fast_move(moves, self._control.blow_up_speed)
 
     # ----------------------------------------------------------------- results
     def outputs(self) -> dict[str, float]:

@@ -37,6 +37,25 @@ WETCLOTH_BINDINGS(m) {
         "'' or the ParameterError's text of an explicit scheme stable on this cloth at rest only at steps below "
         "the smallest step, naming what sets that bound");
     m.def(
+        "fast_move_cause",
+        [](nb::handle phys, nb::handle numbers, nb::handle pos, nb::handle free, nb::handle held, double t, double h,
+           double end, double blow_up_speed) {
+            const Physics p = physics_from(phys);
+            const Index n = size_of(free);
+            const Index* places = p.collider_key_count > 0
+                                      ? argument<const Index>(numbers, "numbers", p.collider_key_count)
+                                      : nullptr;
+            return fast_move_cause(p, places, n, argument<const double>(pos, "pos", 3 * n),
+                                   argument<const double>(free, "free", n), argument<const double>(held, "held", n), t,
+                                   h, end, blow_up_speed);
+        },
+        nb::arg("phys"), nb::arg("numbers"), nb::arg("pos"), nb::arg("free"), nb::arg("held"), nb::arg("time"),
+        nb::arg("step"), nb::arg("end"), nb::arg("blow_up_speed"),
+        "A blow-up's cause where the grip or a keyed collider of phys moves fast in the failed step of `step` s from "
+        "`time` s, in a call to `end` s (the grip inputs' part as the first pinned particle not held, free and held "
+        "(n) 0, of pos (3, n) m has it; numbers (int64, one per collider key row) the keys' places in the scene, "
+        "from 1): the fastest move, if at least FAST_MOVE times blow_up_speed (m/s), and what to change; else ''.");
+    m.def(
         "pinned_cause",
         [](nb::handle phys, nb::handle free, nb::handle pos) {
             const Index n = size_of(free);

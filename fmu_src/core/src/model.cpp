@@ -1065,10 +1065,11 @@ void Simulation::wetness(double* out) const {
     }
 }
 
-std::string Simulation::fast_mover(double h) const {
-    const double after = time(), before = time() + h;
-    // advice.keyed_moves: each move between consecutive keys of the grip and of each collider (from its start
-    // at t = 0 to its first key) under way between `after` and `before` s, as (speed m/s, what).
+std::string fast_move_cause(const Physics& phys, const Index* numbers, Index n, const double* pos, const double* free,
+                            const double* held, double t, double h, double end, double blow_up_speed) {
+    const double after = t, before = t + h;
+    // Each move between consecutive keys of the grip and of each collider (from its start at t = 0 to its first
+    // key) under way between `after` and `before` s, as (speed m/s, what).
     std::vector<std::pair<double, std::string>> moves;
     const auto keyed = [&](const std::string& name, const std::string& what, const double* start, const double* key) {
         // start, key: (time s, x, y, z m) of the mover's previous key (0 at t = 0) and of this one
@@ -1079,41 +1080,37 @@ std::string Simulation::fast_mover(double h) const {
                                    py_g(key[0] - start[0], 3) + " s from t = " + py_g(start[0]) + " s");
         }
     };
-    const std::vector<double>& grip = fixtures_.grip_keys;
     double last[4] = {0.0, 0.0, 0.0, 0.0};
-    for (std::size_t k = 0; k < grip.size() / 4; ++k) {
-        const double* key = grip.data() + 4 * k;
+    for (Index k = 0; k < phys.grip_key_count; ++k) {
+        const double* key = phys.grip_keys + 4 * k;
         keyed("grip_key" + std::to_string(k + 1), "the pinned particles", last, key);
         std::copy(key, key + 4, last);
     }
-    const std::vector<double>& keys = fixtures_.collider_keys;
     Index mover = -1;
-    for (std::size_t k = 0; k < keys.size() / COLLIDER_KEY_COLUMNS; ++k) {
-        const double* row = keys.data() + COLLIDER_KEY_COLUMNS * k;
+    for (Index k = 0; k < phys.collider_key_count; ++k) {
+        const double* row = phys.collider_keys + COLLIDER_KEY_COLUMNS * k;
         const Index collider = static_cast<Index>(row[K_COLLIDER]);
         if (collider != mover) std::fill(last, last + 4, 0.0);  // by collider, then time: its first key
         mover = collider;
         const double key[4] = {row[K_TIME], row[K_X], row[K_Y], row[K_Z]};
-        const std::vector<Index>& numbers = fixtures_.collider_key_numbers;
-        const Index number = numbers.empty() ? static_cast<Index>(k + 1) : numbers[k];
+        const Index number = numbers == nullptr ? k + 1 : numbers[k];
         keyed("collider_key" + std::to_string(number), "collider " + std::to_string(collider + 1), last, key);
         std::copy(key, key + 4, last);
     }
-    // The inputs' part of the grip, reached linearly by the call's end (Simulation._fast_mover).
-    const Index n = topo_.n;
-    const double end = advance_end_;
+    // The inputs' part of the grip, reached linearly by the call's end, as the first pinned particle not held
+    // has it (the core's grip reads the same).
     Index p = -1;
     for (Index i = 0; i < n && p < 0; ++i) {
-        if (core_.cloth.free[i] == 0.0 && core_.buf.held[i] == 0.0) p = i;
+        if (free[i] == 0.0 && held[i] == 0.0) p = i;
     }
-    if (p >= 0 && !grip_origin_.empty() && end > time()) {
+    if (p >= 0 && phys.grip_origin != nullptr && end > t) {
         double keys_now[3];
-        key_displacement(core_.phys, time(), keys_now);
-        const double target[3] = {scene_.grip_x, scene_.grip_y, scene_.grip_z};
+        key_displacement(phys, t, keys_now);
+        const double target[3] = {phys.grip_x, phys.grip_y, phys.grip_z};
         double change[3];
         std::string names;
         for (Index c = 0; c < 3; ++c) {
-            const double part = core_.buf.pos[c * n + p] - grip_origin_[c * n + p] - keys_now[c];
+            const double part = pos[c * n + p] - phys.grip_origin[c * n + p] - keys_now[c];
             change[c] = target[c] - part;
             if (std::fabs(change[c]) > GRIP_RESOLUTION) {
                 names += std::string(names.empty() ? "" : ", ") + "grip_" + "xyz"[c];
@@ -1122,15 +1119,14 @@ std::string Simulation::fast_mover(double h) const {
         const double distance =
             std::sqrt(change[0] * change[0] + change[1] * change[1] + change[2] * change[2]);
         if (!names.empty()) {
-            moves.emplace_back(distance / (end - time()),
+            moves.emplace_back(distance / (end - t),
                                "the grip's inputs (" + names + ") move the pinned particles " + py_g(distance, 3) +
-                                   " m over the " + py_g(end - time(), 3) + " s to t = " + py_g(end) + " s");
+                                   " m over the " + py_g(end - t, 3) + " s to t = " + py_g(end) + " s");
         }
     }
-    // advice.fast_move: the fastest (Python's max of (speed, what)), if fast enough.
+    // The fastest (Python's max of (speed, what)), if fast enough.
     std::pair<double, std::string> fastest{0.0, ""};
     for (const auto& move : moves) fastest = std::max(fastest, move);
-    const double blow_up_speed = core_.control.blow_up_speed;
     if (fastest.first < FAST_MOVE * blow_up_speed) return "";
     return fastest.second + ": " + py_g(fastest.first, 3) + " m/s, too fast for the cloth (it blows up at " +
            py_g(blow_up_speed) + " m/s); make that move smaller or slower (a later key; for the grip's inputs, a "
@@ -1192,8 +1188,9 @@ std::string Simulation::blow_up_message() const {
     const Buffers& b = core_.buf;
     const SpeedCheck check = speed_and_finiteness(topo_.n, b.trial_pos, b.trial_vel, b.trial_water);
     const double h = clock_[FAILED_STEP];
-    // (wetcloth.simulation.Simulation._fast_mover, then the pinned particles)
-    std::string cause = fast_mover(h);
+    const std::vector<Index>& numbers = fixtures_.collider_key_numbers;
+    std::string cause = fast_move_cause(core_.phys, numbers.empty() ? nullptr : numbers.data(), topo_.n, b.pos,
+                                        core_.cloth.free, b.held, time(), h, advance_end_, core_.control.blow_up_speed);
     if (cause.empty()) cause = pinned_cause(core_.phys, topo_.n, core_.cloth.free, b.trial_pos);
     return blow_up_text(scene_, core_.control, check.finite, check.speed, time(), h, cause);
 }

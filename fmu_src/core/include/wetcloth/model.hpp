@@ -206,6 +206,14 @@ std::string py_g(double value, int precision = 6);
 //: max_step (now 0.01 s) or a smaller tolerance (now 5e-06)"), leaving out what it already does; where its
 //: fixed steps exceed `stable` (s), the scheme's stability bound at rest (stable_step(control, 0)), naming it.
 std::string blow_up_advice(const Scene& scene, double stable);
+//: A blow-up's cause where the grip or a keyed collider moves fast in the failed step of h s from t s, in a
+//: call that steps to `end` s: the fastest move under way, if at least FAST_MOVE times blow_up_speed (m/s), and
+//: what to change; else ''.  The moves: each between consecutive keys of the grip and of each collider (phys's
+//: rows; the collider keys numbered `numbers` (one per row: their places in the scene, from 1), or 1, 2, ... if
+//: null) and the grip inputs' part, reached linearly by `end`, as the first pinned particle not held (free and
+//: held (n) 0) of pos (3, n) m has it against phys.grip_origin.
+std::string fast_move_cause(const Physics& phys, const Index* numbers, Index n, const double* pos, const double* free,
+                            const double* held, double t, double h, double end, double blow_up_speed);
 //: A blow-up's cause where a step ending at pos (3, n) m leaves a pinned particle (free (n) 0) pressed into a
 //: collider of phys (pinned_pressed): which, into which, and what to move; else ''.
 std::string pinned_cause(const Physics& phys, Index n, const double* free, const double* pos);
@@ -477,9 +485,6 @@ private:
     void check(const Checkpoint& checkpoint) const;
     void build_plane();                  // make_plane, make_hierarchy
     void build_mesh_plane();             // make_mesh_plane from the ClothMesh's arrays
-    //: Simulation._fast_mover: the grip's or a keyed collider's move under way in the failed step of h s, if
-    //: fast enough to blow the cloth up (advice.keyed_moves, advice.fast_move), and what to do; else "".
-    std::string fast_mover(double h) const;
     Index along_count() const;           // size of the plane's jacobian_along: F n (grid), S (mesh)
     //: The arrays a Checkpoint's values keep, in their order (const for a const self), and where each
     //: starts there (doubles; the last entry: their end).
