@@ -360,7 +360,7 @@ std::vector<std::pair<Index, Index>> level_sizes(Index nx, Index ny, Index coars
 inline constexpr double SMALLEST_STEP = 1e-9;
 inline constexpr double STEP_GROWTH = 2.0, STEP_SHRINK = 0.2;
 inline constexpr double BLOW_UP_SPEED = 1.0e3;
-//: advice.FAST_MOVE: a move of the grip or of a collider at this fraction of the blow-up speed or faster is
+//: fast_move_cause: a move of the grip or of a collider at this fraction of the blow-up speed or faster is
 //: named as a blow-up's likely cause.
 inline constexpr double FAST_MOVE = 0.1;
 inline constexpr double NEWTON_FRACTION = 0.1;
