@@ -42,11 +42,12 @@ def test_a_tighter_tolerance_gives_a_smaller_error(references):
     assert tight["centroid_error"] < loose["centroid_error"] / 3, (loose, tight)
 
 
-def swinging_sheet_scene(tolerance):
-    """A 21 x 21 sheet, 1 m square, to swing down from one edge in air (its springs going slack and taut:
-    Newton's slowest case), at `tolerance`."""
-    return wetcloth.load_scene(nx=21, ny=21, width=1.0, length=1.0, pinned_edge="y_max", initial_tilt=0.0,
-                               initial_height=2.0, water_level=-10.0, floor_level=-20.0, tolerance=tolerance)
+def swinging_sheet_scene(tolerance, side=21, **overrides):
+    """A `side` x `side` sheet, 1 m square, to swing down from one edge in air (its springs going slack and
+    taut: Newton's slowest case), at `tolerance`, with other parameters `overrides`."""
+    return wetcloth.load_scene(nx=side, ny=side, width=1.0, length=1.0, pinned_edge="y_max", initial_tilt=0.0,
+                               initial_height=2.0, water_level=-10.0, floor_level=-20.0, tolerance=tolerance,
+                               **overrides)
 
 
 def swinging_sheet_positions(tolerance):
@@ -76,9 +77,7 @@ def test_the_swinging_sheets_error_falls_with_the_tolerance_at_bdf2s_rate(swingi
 def overdamped_sheet_centroids(damping, tolerance):
     """The centroid (frames, 3) m of an 11 x 11 sheet, 1 m square, swinging down from its y_max edge in
     air, at the end of each 1/30 s frame of 1 s, with springs damped by `damping` N s/m."""
-    sim = wetcloth.Simulation(wetcloth.load_scene(
-        nx=11, ny=11, width=1.0, length=1.0, pinned_edge="y_max", initial_tilt=0.0, initial_height=2.0,
-        water_level=-10.0, floor_level=-20.0, damping=damping, tolerance=tolerance))
+    sim = wetcloth.Simulation(swinging_sheet_scene(tolerance, side=11, damping=damping))
     centroids = []
     for _ in range(30):
         sim.advance(1.0 / 30.0)
@@ -169,9 +168,7 @@ def test_the_default_swings_a_hanging_sheet_in_few_steps_and_newton_iterations()
     on the machine that set these bounds.  The bounds, 1000 steps and 2.8 iterations a step, leave 10-14 %
     for other CPUs' rounding of a chaotic swing; a step control fooled by slack springs (the issue's 23
     steps a frame at 81 x 81, against 12 now) or a Newton that lost its rate fails them."""
-    scene = wetcloth.load_scene(nx=41, ny=41, width=1.0, length=1.0, pinned_edge="y_max", initial_tilt=0.0,
-                                initial_height=2.0, water_level=-10.0, floor_level=-20.0, self_collision="on")
-    sim = wetcloth.Simulation(scene)
+    sim = wetcloth.Simulation(swinging_sheet_scene(DEFAULTS.tolerance, side=41, self_collision="on"))
     sim.advance(3.0)
     newton = sim.solver_counts["newton_iterations"]
     assert sim.steps <= 1000 and newton <= 2.8 * sim.steps, (sim.steps, sim.rejected_steps, newton)
