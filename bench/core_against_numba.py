@@ -42,6 +42,8 @@ from pathlib import Path
 
 import numpy as np
 
+from _hanging_scene import HANGING
+
 ROOT = Path(__file__).resolve().parent.parent
 FPS = 30.0
 JOBS = ("towel", "sink_map", "landing64", "landing81", "hanging81", "hanging81_self")
@@ -49,9 +51,6 @@ JOBS = ("towel", "sink_map", "landing64", "landing81", "hanging81", "hanging81_s
 SECONDS = {"towel": 90.0, "landing64": 3.0, "landing81": 3.0, "hanging81": 1.0, "hanging81_self": 1.0}
 #: ms per 1/30 s frame that issue 25 quoted from its machine (a 2-core AMD EPYC): (least, most).
 ISSUE_25_MS_PER_FRAME = {"landing81": (108.0, 108.0), "hanging81": (359.0, 359.0), "hanging81_self": (2533.0, 3185.0)}
-#: The hanging sheet of issue 25 (as bench/hanging_sheet.py's), self-collision set by the job.
-HANGING = dict(nx=81, ny=81, width=1.0, length=1.0, pinned_edge="y_max", initial_tilt=0.0, initial_height=2.0,
-               water_level=-10.0, floor_level=-20.0)
 
 
 def export_numba_package(rev: str, folder: Path) -> Path:
@@ -123,13 +122,19 @@ def sink_map(package: Package) -> np.ndarray:
     return np.array([[s["depth"][-1], s["wet_mass"][-1]] for s in series])
 
 
+def span(low: float, high: float, spec: str) -> str:
+    """``low`` (if ``high`` equals it) or ``low-high``, each formatted by ``spec``."""
+    return format(low, spec) if low == high else f"{low:{spec}}-{high:{spec}}"
+
+
 def job(name: str, package: Package) -> np.ndarray:
     if name == "sink_map":
         return sink_map(package)
     if name == "towel":
         return frames(package, SECONDS[name])
     if name.startswith("hanging81"):
-        return frames(package, SECONDS[name], self_collision="on" if name.endswith("_self") else "off", **HANGING)
+        return frames(package, SECONDS[name], nx=81, ny=81, self_collision="on" if name.endswith("_self") else "off",
+                      **HANGING)
     size = {"landing64": 64, "landing81": 81}[name]
     return frames(package, SECONDS[name], nx=size, ny=size)
 
@@ -164,10 +169,8 @@ def main() -> None:
             if name in ISSUE_25_MS_PER_FRAME:
                 here = 1e3 * best["numba"] / (SECONDS[name] * FPS)
                 least, most = ISSUE_25_MS_PER_FRAME[name]
-                quoted = f"{least:g}" if least == most else f"{least:g}-{most:g}"
-                speed = f"{least / here:.2f}" if least == most else f"{least / here:.2f}-{most / here:.2f}"
-                print(f"{name:10s} numba here {here:.1f} ms/frame, on issue 25's machine {quoted}: this machine "
-                      f"{speed}x its speed", flush=True)
+                print(f"{name:10s} numba here {here:.1f} ms/frame, on issue 25's machine {span(least, most, 'g')}: "
+                      f"this machine {span(least / here, most / here, '.2f')}x its speed", flush=True)
 
 
 if __name__ == "__main__":

@@ -31,6 +31,7 @@ import numpy as np  # noqa: E402
 
 import wetcloth  # noqa: E402
 from wetcloth.energy import mechanical_energy  # noqa: E402
+from _hanging_scene import HANGING  # noqa: E402
 
 FRAME = 1.0 / 30.0
 #: The converged reference's tolerance: a hundredth of the default's (5e-6).
@@ -38,9 +39,7 @@ REFERENCE_TOLERANCE = 5e-8
 
 
 def sheet(side: int, self_collision: str, **overrides) -> wetcloth.Scene:
-    return wetcloth.load_scene(nx=side, ny=side, width=1.0, length=1.0, pinned_edge="y_max", initial_tilt=0.0,
-                               initial_height=2.0, water_level=-10.0, floor_level=-20.0,
-                               self_collision=self_collision, **overrides)
+    return wetcloth.load_scene(nx=side, ny=side, self_collision=self_collision, **HANGING, **overrides)
 
 
 def run(label: str, scene: wetcloth.Scene, duration: float) -> tuple[np.ndarray, float]:
