@@ -42,7 +42,8 @@ from pathlib import Path
 
 import numpy as np
 
-from _hanging_scene import HANGING
+import _paths  # noqa: F401  (tests/ on sys.path)
+from support.hanging import HANGING
 
 ROOT = Path(__file__).resolve().parent.parent
 FPS = 30.0

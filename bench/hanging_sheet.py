@@ -31,7 +31,8 @@ import numpy as np  # noqa: E402
 
 import wetcloth  # noqa: E402
 from wetcloth.energy import mechanical_energy  # noqa: E402
-from _hanging_scene import HANGING  # noqa: E402
+import _paths  # noqa: E402,F401  (tests/ on sys.path)
+from support.hanging import HANGING  # noqa: E402
 
 FRAME = 1.0 / 30.0
 #: The converged reference's tolerance: a hundredth of the default's (5e-6).

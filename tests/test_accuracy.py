@@ -13,6 +13,7 @@ import pytest
 import wetcloth
 from wetcloth import integrators
 from support.accuracy import REFERENCE_STEP, cases, errors, reference, simulate
+from support.hanging import HANGING
 
 DEFAULTS = wetcloth.Scene()
 CASES = {case.name: case for case in cases()}
@@ -45,9 +46,7 @@ def test_a_tighter_tolerance_gives_a_smaller_error(references):
 def swinging_sheet_scene(tolerance, side=21, **overrides):
     """A `side` x `side` sheet, 1 m square, to swing down from one edge in air (its springs going slack and
     taut: Newton's slowest case), at `tolerance`, with other parameters `overrides`."""
-    return wetcloth.load_scene(nx=side, ny=side, width=1.0, length=1.0, pinned_edge="y_max", initial_tilt=0.0,
-                               initial_height=2.0, water_level=-10.0, floor_level=-20.0, tolerance=tolerance,
-                               **overrides)
+    return wetcloth.load_scene(nx=side, ny=side, tolerance=tolerance, **HANGING, **overrides)
 
 
 def swinging_sheet_positions(tolerance):

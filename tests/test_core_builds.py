@@ -12,6 +12,7 @@ import sys
 import pytest
 
 from wetcloth import core_build
+from support.hanging import HANGING
 
 #: A scene of every kind of work the core does, each with overrides and seconds: water and absorption,
 #: the grid's V-cycle and self-collision (41 across: past the band factors), the fixed-step mode with its
@@ -19,11 +20,8 @@ from wetcloth import core_build
 #: a cylinder, a mesh collider with water, wind.
 SCENES = [
     ("towel", {}, 2.0),
-    ("towel", dict(nx=41, ny=41, width=1.0, length=1.0, pinned_edge="y_max", initial_tilt=0.0, initial_height=2.0,
-                   water_level=-10.0, floor_level=-20.0, self_collision="on"), 0.3),
-    ("towel", dict(nx=41, ny=41, width=1.0, length=1.0, pinned_edge="y_max", initial_tilt=0.0, initial_height=2.0,
-                   water_level=-10.0, floor_level=-20.0, integrator="implicit_euler", tolerance=0.0,
-                   max_step=1 / 30), 0.2),
+    ("towel", dict(nx=41, ny=41, self_collision="on", **HANGING), 0.3),
+    ("towel", dict(nx=41, ny=41, integrator="implicit_euler", tolerance=0.0, max_step=1 / 30, **HANGING), 0.2),
     ("sweep", {}, 0.5),
     ("tablecloth", {}, 0.1),
     ("bucket", {}, 0.3),

@@ -8,6 +8,7 @@ import pytest
 
 import wetcloth
 from conftest import G, INTEGRATORS, explicit_near_the_smallest_step
+from support.hanging import HANGING
 from wetcloth.energy import mechanical_energy
 from wetcloth.integrators import SMALLEST_STEP
 
@@ -93,9 +94,7 @@ def test_frame_long_implicit_euler_steps_never_fail_and_lose_energy_in_every_fra
     frame-long steps cost: millimetres to centimetres here (the largest frame's: 2.1 cm in air, 2.7 cm in vacuum),
     where the default's steps err by micrometres.  The largest over the frames, not the last frame's:
     the air damps the swing, and by the last frame the sheet barely moves (0.7 mm in air, 3 mm in vacuum)."""
-    scene = wetcloth.load_scene(nx=41, ny=41, width=1.0, length=1.0, pinned_edge="y_max", initial_tilt=0.0,
-                                initial_height=2.0, water_level=-10.0, floor_level=-20.0,
-                                integrator="implicit_euler", tolerance=0.0, max_step=1 / 30)
+    scene = wetcloth.load_scene(nx=41, ny=41, integrator="implicit_euler", tolerance=0.0, max_step=1 / 30, **HANGING)
     sim = wetcloth.Simulation(scene)
     energies, estimates = [mechanical_energy(sim)], []
     for _ in range(90):
@@ -119,9 +118,7 @@ def test_a_frame_long_steps_error_estimate_is_the_size_of_its_true_error():
     most 4 times it.  A zero or a fixed figure fails: the true errors span a factor of 11, more than the
     bound's 8.  (bb80f15 counted the last Newton correction as unsolved: 12 times the true error where
     the energy test stopped Newton.)"""
-    scene = wetcloth.load_scene(nx=41, ny=41, width=1.0, length=1.0, pinned_edge="y_max", initial_tilt=0.0,
-                                initial_height=2.0, water_level=-10.0, floor_level=-20.0,
-                                integrator="implicit_euler", tolerance=0.0, max_step=1 / 30)
+    scene = wetcloth.load_scene(nx=41, ny=41, integrator="implicit_euler", tolerance=0.0, max_step=1 / 30, **HANGING)
     sim = wetcloth.Simulation(scene)
     checked = range(1, 61, 4)
     for frame in range(1, 61):

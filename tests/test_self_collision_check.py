@@ -8,14 +8,13 @@ import numpy as np
 
 import wetcloth
 from wetcloth import _core
+from support.hanging import HANGING
 
 
 def swinging_states() -> tuple[wetcloth.Simulation, list[np.ndarray]]:
     """A 21 x 21 sheet hanging from one edge, released horizontal: its positions (3, n) m at 0.20, 0.21 and
     0.22 s (it swings down, turns and bends, so the check looks at its windows, not only at a translation)."""
-    sim = wetcloth.Simulation(wetcloth.load_scene(nx=21, ny=21, width=1.0, length=1.0, pinned_edge="y_max",
-                                                  initial_tilt=0.0, initial_height=2.0, water_level=-10.0,
-                                                  floor_level=-20.0))
+    sim = wetcloth.Simulation(wetcloth.load_scene(nx=21, ny=21, **HANGING))
     states = []
     for duration in (0.2, 0.01, 0.01):
         sim.advance(duration)
