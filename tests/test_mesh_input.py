@@ -286,6 +286,52 @@ def test_a_collider_in_the_mesh_cloth_at_the_start_is_refused(tmp_path, disc):
         Scene(cloth_mesh=str(path), colliders=({"shape": "sphere", "z": 0.4, "radius": 0.1},))
 
 
+def _quad_sheet(nx: int, ny: int, width: float, length: float) -> tuple[np.ndarray, np.ndarray]:
+    """An nx x ny grid of points (n, 3) over width x length m in z = 0, centred on 0, and its quads (k, 4)."""
+    x, y = np.meshgrid(np.linspace(-width / 2, width / 2, nx), np.linspace(-length / 2, length / 2, ny))
+    corner = (np.arange(ny - 1)[:, None] * nx + np.arange(nx - 1)).ravel()
+    return (np.stack([x.ravel(), y.ravel(), np.zeros(x.size)], axis=1),
+            np.stack([corner, corner + 1, corner + nx + 1, corner + nx], axis=1))
+
+
+def _folded(points: np.ndarray, radius: float) -> np.ndarray:
+    """The sheet's points folded over the line x = 0 (its half at x > 0 laid back over the other, 2 radius
+    above it, round a half cylinder of that radius)."""
+    x = points[:, 0]
+    turn = np.clip(x / radius, 0.0, np.pi)
+    out = points.copy()
+    out[:, 0] = np.where(x <= 0.0, x, np.where(turn < np.pi, radius * np.sin(turn), np.pi * radius - x))
+    out[:, 2] = np.where(x <= 0.0, 0.0, radius * (1.0 - np.cos(turn)))
+    return out
+
+
+def test_a_mesh_folded_over_itself_or_in_stacked_layers_is_refused_with_self_collision_on():
+    """Self-collision measures a mesh cloth laid out flat (its rest sheet, docs/model.md section 2.4) and leaves
+    out the pairs close there: a towel folded in half in its file, or two sheets stacked, would pass through
+    themselves.  Refused naming cloth_mesh and the faces that lie over each other; run with self_collision
+    off.  The same sheet laid out flat, rippled or as the round tablecloth passes."""
+    points, quads = _quad_sheet(21, 11, 0.4, 0.2)
+    lifted = [0.0, 0.0, 0.5]
+    folded = make_mesh(_folded(points, 0.002) + lifted, [quads])
+    small, small_quads = _quad_sheet(6, 6, 0.1, 0.1)
+    stacked = make_mesh(np.vstack([points, small + [0.0, 0.0, 0.0021]]) + lifted,
+                        [np.vstack([quads, small_quads + len(points)])])
+    for mesh in (folded, stacked):
+        with pytest.raises(wetcloth.ParameterError, match=r"'cloth_mesh'.*faces \d+ and \d+ lie over each other.*"
+                                                          r"self_collision = 'off'") as err:
+            Scene(cloth_mesh=mesh)
+        first, second = (int(k) for k in re.search(r"faces (\d+) and (\d+)", str(err.value)).groups())
+        centres = mesh.points[mesh.blocks[0]].mean(axis=1)
+        assert np.linalg.norm(centres[first, :2] - centres[second, :2]) < 0.02  # over each other
+        assert abs(centres[first, 2] - centres[second, 2]) > 0.001  # in two layers
+        assert Scene(cloth_mesh=mesh, self_collision="off").self_collision == "off"
+    rippled = points + lifted
+    rippled[:, 2] += 0.05 * np.sin(30.0 * points[:, 0])
+    for mesh in (make_mesh(points + lifted, [quads]), make_mesh(rippled, [quads]),
+                 read_mesh_file(str(Path(__file__).parents[1] / "models" / "meshes" / "round_tablecloth.ply"))):
+        assert Scene(cloth_mesh=mesh).self_collision == "on"
+
+
 @pytest.mark.parametrize("faces", ["quads", "triangles"])
 def test_the_exporter_writes_the_files_faces_and_uvs(tmp_path, faces):
     points = np.array([[0, 0, 0], [1, 0, 0.1], [1, 1, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0.2]], dtype=float) * 0.2

@@ -299,6 +299,39 @@ def flat_coordinates(points: np.ndarray, area: np.ndarray, triangles: np.ndarray
     return np.stack([d @ first, d @ second])
 
 
+#: How far inside another face a face's centroid must lie, seen along the cloth's best-fitting plane (the
+#: least of its barycentric coordinates there), for flat_overlap to call the two overlapping.
+OVERLAP_DEPTH = 1e-3
+
+
+def flat_overlap(rest_xy: np.ndarray, triangles: np.ndarray) -> tuple[int, int] | None:
+    """Two triangles (rows of ``triangles`` (m, 3)) that share no vertex and overlap in the flat rest sheet
+    ``rest_xy`` (2, n) m, the first's centroid inside the second by OVERLAP_DEPTH, or None: a mesh that
+    folds over itself or holds stacked layers, which self-collision cannot take (its pairs and bounds are
+    set in the flat rest sheet, docs/model.md section 6.2)."""
+    from scipy.spatial import cKDTree
+
+    corners = rest_xy.T[triangles]  # (m, 3, 2)
+    centroid = corners.mean(axis=1)
+    reach = np.linalg.norm(corners - centroid[:, None], axis=2).max(axis=1)
+    near = cKDTree(centroid).query_ball_point(centroid, reach)  # per container: the centroids within its reach
+    count = np.fromiter(map(len, near), dtype=np.int64, count=len(near))
+    container = np.repeat(np.arange(len(near)), count)
+    inside = np.fromiter(itertools.chain.from_iterable(near), dtype=np.int64, count=int(count.sum()))
+    shared = (triangles[inside][:, :, None] == triangles[container][:, None, :]).any(axis=(1, 2))
+    container, inside = container[~shared], inside[~shared]
+    a, b, c = (corners[container, k] for k in range(3))
+    e1, e2, q = b - a, c - a, centroid[inside] - a
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    scale = np.einsum("ij,ij->i", e1, e1) + np.einsum("ij,ij->i", e2, e2)
+    solid = np.abs(det) > 1e-12 * scale  # (a face seen edge-on contains nothing)
+    det = np.where(solid, det, 1.0)
+    u = (q[:, 0] * e2[:, 1] - q[:, 1] * e2[:, 0]) / det
+    v = (e1[:, 0] * q[:, 1] - e1[:, 1] * q[:, 0]) / det
+    hit = np.flatnonzero(solid & (u > OVERLAP_DEPTH) & (v > OVERLAP_DEPTH) & (1.0 - u - v > OVERLAP_DEPTH))
+    return (int(inside[hit[0]]), int(container[hit[0]])) if len(hit) else None
+
+
 def _mesh(scene: Scene, mesh: MeshFile, faces: MeshFaces | None) -> Topology:
     n = mesh.n
     area = vertex_areas(mesh)
