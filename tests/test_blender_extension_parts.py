@@ -189,6 +189,35 @@ def test_a_cloth_no_spring_can_join_is_refused_naming_the_object():
         cloth_of(points, np.zeros((0, 2)), ([4, 4], fin[:2].ravel()), no_ngons, [], "Dot")
 
 
+def test_a_cloth_folded_in_blender_takes_its_uv_map_where_it_has_one_uv_per_vertex():
+    """A 7 x 5 plane folded in half over x = 0 (its half at x > 0 laid back 4 mm above the other), its UV map
+    the unfolded plane as Blender's plane has it, per face corner: the mesh cloth gets one UV per vertex, and
+    its scene is taken with self-collision on.  A seam (a vertex whose corners differ) or no map leaves it
+    without UVs, and the folded cloth is refused, naming it."""
+    points, edges, shuffle = plane(7, 5, 0.6, 0.4, centre=(0.0, 0.0, 0.5))
+    blender_vertex = np.argsort(shuffle)
+    cells = np.array([[g, g + 1, g + 8, g + 7] for g in range(28) if g % 7 < 6])
+    quads = blender_vertex[cells]
+    faces = ([4] * len(quads), quads.ravel()), (np.zeros((0, 3)), [])
+    flat_uv = (points[:, :2] - points[:, :2].min(axis=0)) / 0.6
+    loop_uv = flat_uv[quads.ravel()]
+    x = points[:, 0]
+    folded = points.copy()
+    folded[:, 0] = np.where(x > 0.0, -x, x)
+    folded[:, 2] += np.where(x > 0.0, 0.004, 0.0)
+    cloth, _ = cloth_of(folded, edges, *faces, [], "Towel", loop_uv)
+    assert isinstance(cloth, MeshCloth)
+    np.testing.assert_array_equal(cloth.mesh.uv, flat_uv)
+    assert from_dict(cloth.scene_values() | {"self_collision": "on"}).self_collision == "on"
+    seam = loop_uv.copy()
+    seam[np.flatnonzero(np.bincount(quads.ravel())[quads.ravel()] == 4)[0]] += 0.01  # one corner of an inner vertex
+    for uv in (seam, None):
+        cloth, _ = cloth_of(folded, edges, *faces, [], "Towel", uv)
+        assert cloth.mesh.uv is None
+        with pytest.raises(wetcloth.ParameterError, match=r"'cloth_mesh'.*'Towel'.*lie over each other"):
+            from_dict(cloth.scene_values() | {"self_collision": "on"})
+
+
 def test_each_scene_parameter_has_one_place():
     """Every scene parameter is set by the cloth object, its fabric or the scene, and by one only."""
     places = FROM_CLOTH + FABRIC + SCENE

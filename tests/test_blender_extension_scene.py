@@ -7,6 +7,7 @@ WETCLOTH_REQUIRE_BLENDER=1), as in tests/test_blender_extension.py.
 """
 
 import math
+import re
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -162,3 +163,16 @@ def test_a_refusal_names_the_cloth_and_its_blender_setting(probed):
     overlap = probed.unnamed["overlap"]
     assert "cloth 'Bib', collider 'Ball': the sphere overlaps the cloth" in overlap
     assert "initial_height" not in overlap and "Location Z" in overlap
+
+
+def test_a_towel_folded_in_blender_bakes_with_its_uv_map_and_is_refused_without(probed):
+    """Folded in half in the object (4 mm between its layers) 5 mm above a dry floor, self-collision on: its UV
+    map (the plane's, unfolded) lays it out flat, so it bakes, and landed on the floor its upper layer lies on
+    the lower one at the last frame, at least 0.9 of the thickness above it (docs/model.md section 6.2; less
+    1 um of float32 rounding; measured 1.99 mm of 2), where it would fall through onto the floor without
+    self-collision; without a UV map, refused naming the cloth and two faces that lie over each other."""
+    folded = probed.folded
+    assert folded["with_uv"]["result"] == ["FINISHED"], folded["with_uv"]["error"]
+    assert min(folded["with_uv"]["gaps"]) > 0.9 * folded["with_uv"]["thickness"] - 1e-6
+    assert folded["without_uv"]["result"] == ["ERROR"]
+    assert re.search(r"cloth 'Towel'.*faces \d+ and \d+ lie over each other", folded["without_uv"]["error"])

@@ -332,6 +332,43 @@ def test_a_mesh_folded_over_itself_or_in_stacked_layers_is_refused_with_self_col
         assert Scene(cloth_mesh=mesh).self_collision == "on"
 
 
+def test_a_folded_mesh_whose_uvs_lay_it_out_flat_keeps_its_layers_apart():
+    """A towel folded in half in its file, its UVs the unfolded sheet (0..1 over its 0.4 m): its flat rest
+    sheet is the UVs' layout scaled to its edges (the unfolded sheet, scaled by 0.993: the edges across the
+    fold are chords of the 2 mm bend), so self-collision
+    takes it, and dropped 0.1 m onto the floor its folded half comes to lie on the other one, a thickness
+    above it (0.9 to 1.1 of it, section 6.2's 0.9 e to e and the floor's), crossing it nowhere.  With
+    self_collision off the same half falls through onto the floor (within 1 um of the other).  A UV map with
+    the fold in it (the folded points' own x, y) lays nothing out flat: refused."""
+    from test_self_collision import crossings
+
+    points, quads = _quad_sheet(21, 11, 0.4, 0.2)
+    folded = _folded(points, 0.002) + [0.0, 0.0, 0.1]
+    uv = (points[:, :2] - points[:, :2].min(axis=0)) / 0.4
+    mesh = make_mesh(folded, [quads], None, uv)
+    topology = build_topology(Scene(cloth_mesh=mesh))
+    unfolded = points[:, :2].T - points[:, :2].mean(axis=0)[:, None]
+    laid = topology.rest_xy - topology.rest_xy.mean(axis=1, keepdims=True)  # (centred by the vertices' areas)
+    scale = np.sum(laid * unfolded) / np.sum(unfolded * unfolded)
+    assert 0.99 < scale < 1.0
+    np.testing.assert_allclose(laid, scale * unfolded, rtol=0, atol=1e-12)
+    upper = points[:, 0] > 0.01  # the half laid back over the other
+    lower = points[:, 0] < -0.01
+    gaps = {}
+    for setting in ("on", "off"):
+        scene = Scene(cloth_mesh=mesh, self_collision=setting, floor_level=0.0, water_level=-5.0)
+        sim = wetcloth.Simulation(scene)
+        for _ in range(20):
+            sim.advance(0.05)
+            assert setting == "off" or crossings(sim.positions, topology.triangles) == 0
+        gaps[setting] = sim.positions[upper, 2].mean() - sim.positions[lower, 2].mean()
+    thickness = Scene().thickness
+    assert 0.9 * thickness <= gaps["on"] <= 1.1 * thickness, gaps
+    assert abs(gaps["off"]) < 1e-6, gaps
+    with pytest.raises(wetcloth.ParameterError, match=r"'cloth_mesh'.*lie over each other"):
+        Scene(cloth_mesh=make_mesh(folded, [quads], None, folded[:, :2] - folded[:, :2].min(axis=0)))
+
+
 @pytest.mark.parametrize("faces", ["quads", "triangles"])
 def test_the_exporter_writes_the_files_faces_and_uvs(tmp_path, faces):
     points = np.array([[0, 0, 0], [1, 0, 0.1], [1, 1, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0.2]], dtype=float) * 0.2

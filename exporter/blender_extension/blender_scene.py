@@ -109,6 +109,16 @@ def cloth_mesh(obj) -> tuple:
     return positions, edges, (sizes, loops), _triangles(mesh)
 
 
+def cloth_uv(obj) -> np.ndarray | None:
+    """The cloth's active UV map, per face corner (corners, 2), or None without one."""
+    layer = obj.data.uv_layers.active
+    if layer is None:
+        return None
+    uv = np.empty(len(obj.data.loops) * 2)
+    layer.data.foreach_get("uv", uv)
+    return uv.reshape(-1, 2)
+
+
 def pin_members(obj) -> list[int]:
     """The vertices of the cloth's pin group (weight above 0); ValueError if the group is missing."""
     if not obj.wetcloth.pin_group:
@@ -348,7 +358,7 @@ def cloth_jobs(context) -> list[ClothJob]:
     for obj in cloths:
         members = pin_members(obj)
         mesh = cloth_mesh(obj)
-        cloth, pins = cloth_of(*mesh, members, obj.name)
+        cloth, pins = cloth_of(*mesh, members, obj.name, cloth_uv(obj))
         if isinstance(cloth, GridCloth):
             cloth = replace(cloth, width=clean(cloth.width), length=clean(cloth.length),
                             centre=tuple(clean(c) for c in cloth.centre), tilt=clean(cloth.tilt))

@@ -187,13 +187,30 @@ def check_cells(grid: GridCloth, sizes, loops, name: str = "cloth") -> None:
         raise ValueError(f"cloth {name!r}: its faces are not the quads of its grid, each once")
 
 
-def cloth_of(positions, edges, polygons, loop_triangles, pins, name: str = "cloth"):
+def vertex_uv(loops, loop_uv, n: int) -> np.ndarray | None:
+    """Per-vertex UVs (n, 2) from a UV map's per-corner ones ``loop_uv`` (corners, 2) at corner vertices
+    ``loops``, where every vertex's corners agree (to 1e-6: no seam runs through the cloth) and every vertex
+    has one; else (or with no map, ``loop_uv`` None) None."""
+    if loop_uv is None:
+        return None
+    loops = np.asarray(loops, dtype=np.int64)
+    loop_uv = np.asarray(loop_uv, dtype=float).reshape(-1, 2)
+    uv = np.full((n, 2), np.nan)
+    uv[loops] = loop_uv
+    if np.isnan(uv).any() or np.abs(uv[loops] - loop_uv).max(initial=0.0) > 1e-6:
+        return None
+    return uv
+
+
+def cloth_of(positions, edges, polygons, loop_triangles, pins, name: str = "cloth", loop_uv=None):
     """The cloth of a Cloth object: a GridCloth (and its pinned_edge) if the mesh is a subdivided plane
     (its faces the grid's cells, check_cells) and ``pins`` (the pin group's vertex indices) are none or one
     whole edge of it, else a MeshCloth (and 'none') of vertex ``positions`` (n, 3) in world space (m) and
     faces ``polygons`` (corner counts, corner vertices), n-gons split as ``loop_triangles`` (vertices,
-    faces) are (face_blocks); ``edges`` (e, 2).  A ValueError naming the object for a mesh no cloth can be
-    (no faces, non-manifold, loose vertices)."""
+    faces) are (face_blocks); ``edges`` (e, 2); its UVs those of ``loop_uv`` (the UV map's per-corner
+    UVs, or None) where they are one per vertex (vertex_uv: what lays a cloth folded in the object out flat
+    for self-collision).  A ValueError naming the object for a mesh no cloth can be (no faces,
+    non-manifold, loose vertices)."""
     if not len(polygons[0]):
         raise ValueError(f"cloth {name!r} has no faces: a cloth is a surface (a mesh with faces; "
                          "Add > Mesh > Grid, or a Plane subdivided)")
@@ -206,7 +223,8 @@ def cloth_of(positions, edges, polygons, loop_triangles, pins, name: str = "clot
     pinned = np.zeros(len(positions))
     pinned[np.asarray(pins, dtype=np.int64)] = 1.0
     try:
-        mesh = make_mesh(positions, face_blocks(*polygons, *loop_triangles), {PIN_ATTRIBUTE: pinned}, None, name)
+        uv = vertex_uv(polygons[1], loop_uv, len(positions))
+        mesh = make_mesh(positions, face_blocks(*polygons, *loop_triangles), {PIN_ATTRIBUTE: pinned}, uv, name)
     except ParameterError as exc:
         raise ValueError(f"cloth {name!r} cannot be the cloth: {exc.problems[0][2]}") from None
     polygons = tuple(np.asarray(a, dtype=np.int64) for a in polygons)

@@ -299,29 +299,33 @@ def flat_coordinates(points: np.ndarray, area: np.ndarray, triangles: np.ndarray
     return np.stack([d @ first, d @ second])
 
 
-#: How far inside another face a face's centroid must lie, seen along the cloth's best-fitting plane (the
+#: How far inside another face a point of a face must lie, seen along the cloth's best-fitting plane (the
 #: least of its barycentric coordinates there), for flat_overlap to call the two overlapping.
 OVERLAP_DEPTH = 1e-3
 
 
 def flat_overlap(rest_xy: np.ndarray, triangles: np.ndarray) -> tuple[int, int] | None:
     """Two triangles (rows of ``triangles`` (m, 3)) that share no vertex and overlap in the flat rest sheet
-    ``rest_xy`` (2, n) m, the first's centroid inside the second by OVERLAP_DEPTH, or None: a mesh that
-    folds over itself or holds stacked layers, which self-collision cannot take (its pairs and bounds are
-    set in the flat rest sheet, docs/model.md section 6.2)."""
+    ``rest_xy`` (2, n) m, a point of the first (its centroid, or a point halfway from there to a corner) inside
+    the second by OVERLAP_DEPTH, or None: a mesh that folds over itself or holds stacked layers, which
+    self-collision cannot take (its pairs and bounds are set in the flat rest sheet, docs/model.md section
+    6.2).  (Four points, not the centroid alone: a quad sheet folded onto itself along a grid line puts the
+    centroids of one layer's triangles on the diagonals of the other's quads.)"""
     from scipy.spatial import cKDTree
 
     corners = rest_xy.T[triangles]  # (m, 3, 2)
     centroid = corners.mean(axis=1)
+    samples = np.concatenate([centroid[:, None], 0.5 * (corners + centroid[:, None])], axis=1).reshape(-1, 2)
     reach = np.linalg.norm(corners - centroid[:, None], axis=2).max(axis=1)
-    near = cKDTree(centroid).query_ball_point(centroid, reach)  # per container: the centroids within its reach
+    near = cKDTree(samples).query_ball_point(centroid, reach, return_sorted=False)  # per container: the samples in reach
     count = np.fromiter(map(len, near), dtype=np.int64, count=len(near))
     container = np.repeat(np.arange(len(near)), count)
-    inside = np.fromiter(itertools.chain.from_iterable(near), dtype=np.int64, count=int(count.sum()))
+    sample = np.fromiter(itertools.chain.from_iterable(near), dtype=np.int64, count=int(count.sum()))
+    inside = sample // 4
     shared = (triangles[inside][:, :, None] == triangles[container][:, None, :]).any(axis=(1, 2))
-    container, inside = container[~shared], inside[~shared]
+    container, inside, sample = container[~shared], inside[~shared], sample[~shared]
     a, b, c = (corners[container, k] for k in range(3))
-    e1, e2, q = b - a, c - a, centroid[inside] - a
+    e1, e2, q = b - a, c - a, samples[sample] - a
     det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
     scale = np.einsum("ij,ij->i", e1, e1) + np.einsum("ij,ij->i", e2, e2)
     solid = np.abs(det) > 1e-12 * scale  # (a face seen edge-on contains nothing)
@@ -332,13 +336,55 @@ def flat_overlap(rest_xy: np.ndarray, triangles: np.ndarray) -> tuple[int, int] 
     return (int(inside[hit[0]]), int(container[hit[0]])) if len(hit) else None
 
 
+def uv_layout(mesh: MeshFile, area: np.ndarray) -> np.ndarray | None:
+    """The mesh laid out flat by its per-vertex UVs (2, n) m, each connected part scaled to its edges' lengths
+    (the least-squares scale of its UV edges to its edges) and centred on the area-weighted centroid, or None
+    where the file has no UVs or a part's UV triangles are not all turned the same way (a fold in the map)."""
+    if mesh.uv is None:
+        return None
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    edges = face_edges(mesh.blocks)[0]
+    n = mesh.n
+    graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    parts, part = connected_components(graph, directed=False)
+    uv = np.asarray(mesh.uv, dtype=float)
+    along = np.linalg.norm(mesh.points[edges[:, 1]] - mesh.points[edges[:, 0]], axis=1)
+    mapped = np.linalg.norm(uv[edges[:, 1]] - uv[edges[:, 0]], axis=1)
+    edge_part = part[edges[:, 0]]
+    scale = (np.bincount(edge_part, along * mapped, parts)
+             / np.maximum(np.bincount(edge_part, mapped * mapped, parts), np.finfo(float).tiny))
+    a, b, c = (uv[mesh.triangles[:, k]] for k in range(3))
+    turn = np.sign((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+    triangle_part = part[mesh.triangles[:, 0]]
+    if np.any(turn == 0) or np.any(np.bincount(triangle_part, turn, parts) ** 2
+                                   != np.bincount(triangle_part, minlength=parts) ** 2):
+        return None
+    laid = uv * scale[part][:, None]
+    return (laid - area @ laid / area.sum()).T
+
+
+def flat_sheet(mesh: MeshFile, area: np.ndarray) -> tuple[np.ndarray, tuple[int, int] | None]:
+    """The flat rest sheet (2, n) m of a mesh cloth and two of its triangles that overlap there (flat_overlap;
+    None if none do): its points projected onto their best-fitting plane (flat_coordinates), or, where those
+    lie over themselves and its UVs lay it out flat without overlap (uv_layout), the UVs' layout (a towel
+    folded in its file, unwrapped flat in its UV map)."""
+    projected = flat_coordinates(mesh.points, area, mesh.triangles)
+    overlap = flat_overlap(projected, mesh.triangles)
+    laid = uv_layout(mesh, area) if overlap is not None else None
+    if laid is not None and flat_overlap(laid, mesh.triangles) is None:
+        return laid, None
+    return projected, overlap
+
+
 def _mesh(scene: Scene, mesh: MeshFile, faces: MeshFaces | None) -> Topology:
     n = mesh.n
     area = vertex_areas(mesh)
     springs = listed_springs(mesh, scene)
     length = float(np.median(springs["pair_rest"][springs["pair_kind"] == STRETCH]))
     empty = np.zeros((0, n))
-    rest_xy = flat_coordinates(mesh.points, area, mesh.triangles)
+    rest_xy = flat_sheet(mesh, area)[0]
     return Topology(
         nx=n, ny=1, dx=length, dy=length, rest_pos=mesh.points.T.copy(), rest_xy=rest_xy, area=area,
         spring_offset=np.zeros(0, dtype=np.int64), spring_rest=np.zeros(0), spring_tension_only=np.zeros(0, dtype=bool),

@@ -14,7 +14,9 @@ bake's result and error:
               (keys that do not move it);
   "limits": for each setting in LIMITS, its panel limits (hard_min, soft_min) and a bake with it at hard_min;
   "unnamed": two cloths, 'Bib' with areal_density 0, then 'Bib' below the floor, then a ball 'Bib' passes
-             through.
+             through;
+  "folded": the towel folded in half in the object, self-collision on, with its UV map (and the gaps of its
+            layers at the last frame) and without.
 """
 
 import json
@@ -74,6 +76,32 @@ def no_faces(spec):
     fresh(spec, "no_faces")
     delete(bpy.data.objects["Towel"], "FACES_ONLY")
     return operator(bpy.ops.wetcloth.bake)
+
+
+def folded(spec):
+    """The towel folded in half over x = 0 (its half at x > 0 laid back 4 mm above the other, as a modeller
+    would leave it; its UV map, from the plane, stays the unfolded one), 5 mm above a dry floor, self-collision
+    on: baked for 8 frames, with the gaps of the fold's two layers (the vertices over each other at the start)
+    played at the last frame; then the same towel without its UV map."""
+    scene, towel = fresh(spec, "folded")
+    scene.wetcloth.self_collision = "on"
+    scene.frame_end = 8  # a third of a second: it lands on the floor 5 mm below at about 0.03 s
+    scene.wetcloth.water_level = scene.wetcloth.floor_level  # a dry floor
+    towel.location.z = scene.wetcloth.floor_level + 0.005
+    for v in towel.data.vertices:
+        if v.co.x > 1e-6:
+            v.co.x, v.co.z = -v.co.x, v.co.z + 0.004
+    start = np.array([v.co[:] for v in towel.data.vertices])
+    upper = np.flatnonzero(start[:, 2] > 0.002)
+    lower = [int(np.argmin(np.linalg.norm(start - start[k] + [0.0, 0.0, 0.004], axis=1))) for k in upper]
+    out = {"with_uv": operator(bpy.ops.wetcloth.bake)}
+    end = np.array(played(towel, scene.frame_end))
+    out["with_uv"]["gaps"] = (end[upper, 2] - end[lower, 2]).tolist()
+    out["with_uv"]["thickness"] = manifest(spec)["scene"]["thickness"]
+    while towel.data.uv_layers:
+        towel.data.uv_layers.remove(towel.data.uv_layers[0])
+    out["without_uv"] = operator(bpy.ops.wetcloth.bake)
+    return out
 
 
 def played(obj, frame):
@@ -173,7 +201,7 @@ def main(spec_path, result_path):
     with reported(result_path, result):
         result["install"] = operator(bpy.ops.extensions.package_install_files, filepath=spec["zip"],
                                      repo="user_default", enable_on_install=True)
-        for case in (hole, no_faces, unit_scale, animated, limits, unnamed):
+        for case in (hole, no_faces, unit_scale, animated, limits, unnamed, folded):
             result[case.__name__] = case(spec)
 
 
