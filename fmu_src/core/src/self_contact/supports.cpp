@@ -1,6 +1,8 @@
 // The cloth's pairs with itself as supports (self_contact/supports.hpp).
 #include "wetcloth/self_contact/supports.hpp"
 
+#include <cmath>
+
 #include "wetcloth/collider_supports.hpp"
 #include "wetcloth/self_contact/elements.hpp"
 #include "wetcloth/self_contact/geometry.hpp"
@@ -8,6 +10,25 @@
 namespace wc::self_contact {
 
 namespace {
+
+//: Edges closer to parallel than this sine have no cross product to measure a normal against.
+constexpr double PARALLEL_SINE = 0.1;
+
+//: How far a pair's contact normal leans from the normal of its elements (the sine of the angle between them):
+//: a triangle's own normal, or the cross product of two edges (1 for edges within 0.1 rad of parallel,
+//: whose cross product says nothing).  0 for a point over a triangle (its closest point inside, or on its
+//: edge or corner straight below) and for crossing edges; up to 1 for a point beside a triangle or an edge
+//: beside a parallel one.
+template <int KIND>
+double tilt(const Vec3& normal, const Vec3 x[4]) {
+    const Vec3 a = KIND == POINT_TRIANGLE ? sub(x[2], x[1]) : sub(x[1], x[0]);
+    const Vec3 b = KIND == POINT_TRIANGLE ? sub(x[3], x[1]) : sub(x[3], x[2]);
+    const Vec3 across = cross(a, b);
+    const double size = norm(across);
+    if (!(size > PARALLEL_SINE * norm(a) * norm(b))) return 1.0;
+    const double along = dot(normal, across) / size;
+    return std::sqrt(py_max(0.0, 1.0 - along * along));
+}
 
 //: Append the listed pairs of one kind (rows: first elements, then second; count of them).
 template <int KIND>
@@ -22,6 +43,7 @@ void gather(const Contact& contact, const Index* rows, Index count, Index n, con
         const double gap = norm(d);
         if (!(gap > 0.0)) continue;  // no normal: the stage after the solve takes it
         const Vec3 normal{d.x / gap, d.y / gap, d.z / gap};
+        if (tilt<KIND>(normal, x) > SUPPORT_TILT) continue;
         const Vec3 v[4] = {point(vel, n, idx[0]), point(vel, n, idx[1]), point(vel, n, idx[2]), point(vel, n, idx[3])};
         const double closing = -dot(normal, combine(w, v[0], v[1], v[2], v[3]));  // m/s
         if (!(gap < thickness + ahead * py_max(closing, 0.0))) continue;

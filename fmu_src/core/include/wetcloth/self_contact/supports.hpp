@@ -26,6 +26,14 @@ namespace wc::self_contact {
 //: the sheet's energy rose in 0-2 frames of three starts, up to 0.054 J, the disc's in 1-8; at 0.4 in 2-4 and 3-7.)
 inline constexpr double SELF_SUPPORT_STIFFNESS = 0.1;
 
+//: A pair becomes a term only where its contact normal stands across its elements, within this lean (the sine
+//: of its angle with their normal, supports.cpp's tilt; 0.05, 3 degrees).  A point beside a triangle, or an
+//: edge beside a parallel one, gathered because it closes on it within the step, has its normal along the
+//: layer, and its fixed-normal penalty held a layer that slid over another back: a sheet on a pinned sheet on
+//: a 15 deg slope, frictionless, at 1/30 s steps slid 0.28x as far as it should (bench/layer_friction.py).
+//: A point over a layer stands over some triangle of it; the stage after the solve still takes every pair.
+inline constexpr double SUPPORT_TILT = 0.05;
+
 //: Append to supports the candidate pairs (the list in contact) whose gap at positions pos (3, n) is below
 //: `thickness` (m) plus how far they close in `ahead` s at velocities vel (3, n), as SELF_SUPPORT terms whose
 //: penalty starts at `thickness` (its onset `distance`, m: the supports' gap, Supports::distance), their
