@@ -27,6 +27,7 @@ import wetcloth  # noqa: E402
 from wetcloth._core import GRAVITY  # noqa: E402
 from wetcloth.mesh_file import make_mesh  # noqa: E402
 from wetcloth.scene import from_dict  # noqa: E402
+from wetcloth.topology import grid_cells  # noqa: E402
 
 THICKNESS = 0.002  # m
 HEIGHT = 0.3  # m, the large sheet's centre
@@ -37,9 +38,7 @@ MODES = {"default (bdf2, adaptive)": {},
 def sheet(side: int, size: float, corner: tuple[float, float], z: float) -> tuple[np.ndarray, np.ndarray]:
     """A side x side grid of points (n, 3) over size x size m from ``corner`` at height z, and its quads (k, 4)."""
     x, y = np.meshgrid(corner[0] + np.linspace(0.0, size, side), corner[1] + np.linspace(0.0, size, side))
-    first = (np.arange(side - 1)[:, None] * side + np.arange(side - 1)).ravel()
-    return (np.stack([x.ravel(), y.ravel(), np.full(x.size, z)], axis=1),
-            np.stack([first, first + 1, first + side + 1, first + side], axis=1))
+    return np.stack([x.ravel(), y.ravel(), np.full(x.size, z)], axis=1), grid_cells(side, side)
 
 
 def stack_scene(angle: float, self_friction: float, held_by: str, **settings) -> tuple[wetcloth.Scene, int, np.ndarray]:

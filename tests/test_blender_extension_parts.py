@@ -19,6 +19,7 @@ from wetcloth.exporter.blender_extension.geometry import (PIN_ATTRIBUTE, GridClo
 from wetcloth.exporter.blender_extension.parameters import FABRIC, FROM_CLOTH, SCENE
 from wetcloth.scene import PARAMETERS, from_dict
 from wetcloth.simulation import Simulation
+from wetcloth.topology import grid_cells
 
 
 def plane(nx, ny, width, length, centre=(0.0, 0.0, 0.0), tilt=0.0, seed=0):
@@ -196,8 +197,7 @@ def test_a_cloth_folded_in_blender_takes_its_uv_map_where_it_has_one_uv_per_vert
     without UVs, and the folded cloth is refused, naming it."""
     points, edges, shuffle = plane(7, 5, 0.6, 0.4, centre=(0.0, 0.0, 0.5))
     blender_vertex = np.argsort(shuffle)
-    cells = np.array([[g, g + 1, g + 8, g + 7] for g in range(28) if g % 7 < 6])
-    quads = blender_vertex[cells]
+    quads = blender_vertex[grid_cells(7, 5)]
     faces = ([4] * len(quads), quads.ravel()), (np.zeros((0, 3)), [])
     flat_uv = (points[:, :2] - points[:, :2].min(axis=0)) / 0.6
     loop_uv = flat_uv[quads.ravel()]

@@ -21,7 +21,7 @@ from wetcloth.scene import PARAMETERS, Scene, describe_range, load_scene
 from wetcloth._core import GRAVITY
 from wetcloth.energy import mechanical_energy
 from wetcloth.model import Model
-from wetcloth.topology import BEND, STRETCH, build_topology, initial_positions
+from wetcloth.topology import BEND, STRETCH, build_topology, grid_cells, initial_positions
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "docs"))
 from make_meshes import round_cloth  # noqa: E402
@@ -289,9 +289,7 @@ def test_a_collider_in_the_mesh_cloth_at_the_start_is_refused(tmp_path, disc):
 def _quad_sheet(nx: int, ny: int, width: float, length: float) -> tuple[np.ndarray, np.ndarray]:
     """An nx x ny grid of points (n, 3) over width x length m in z = 0, centred on 0, and its quads (k, 4)."""
     x, y = np.meshgrid(np.linspace(-width / 2, width / 2, nx), np.linspace(-length / 2, length / 2, ny))
-    corner = (np.arange(ny - 1)[:, None] * nx + np.arange(nx - 1)).ravel()
-    return (np.stack([x.ravel(), y.ravel(), np.zeros(x.size)], axis=1),
-            np.stack([corner, corner + 1, corner + nx + 1, corner + nx], axis=1))
+    return np.stack([x.ravel(), y.ravel(), np.zeros(x.size)], axis=1), grid_cells(nx, ny)
 
 
 def _folded(points: np.ndarray, radius: float) -> np.ndarray:

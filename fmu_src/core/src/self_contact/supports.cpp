@@ -43,10 +43,10 @@ void gather(const Contact& contact, const Index* rows, Index count, Index n, con
         const double gap = norm(d);
         if (!(gap > 0.0)) continue;  // no normal: the stage after the solve takes it
         const Vec3 normal{d.x / gap, d.y / gap, d.z / gap};
-        if (tilt<KIND>(normal, x) > SUPPORT_TILT) continue;
         const Vec3 v[4] = {point(vel, n, idx[0]), point(vel, n, idx[1]), point(vel, n, idx[2]), point(vel, n, idx[3])};
         const double closing = -dot(normal, combine(w, v[0], v[1], v[2], v[3]));  // m/s
         if (!(gap < thickness + ahead * py_max(closing, 0.0))) continue;
+        if (tilt<KIND>(normal, x) > SUPPORT_TILT) continue;  // (after the gap: most candidates are far)
         const double weights[4] = {w.w0, w.w1, w.w2, w.w3};
         static_assert(SUPPORT_POINTS == 4, "a pair's four particles fill a term");
         supports.points.insert(supports.points.end(), idx, idx + 4);
