@@ -21,48 +21,13 @@ import os
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # idle BLAS threads would spin on the CPU clock
 
-import numpy as np  # noqa: E402
-
 import wetcloth  # noqa: E402
 from wetcloth._core import GRAVITY  # noqa: E402
-from wetcloth.mesh_file import make_mesh  # noqa: E402
-from wetcloth.scene import from_dict  # noqa: E402
-from wetcloth.topology import grid_cells  # noqa: E402
+import _paths  # noqa: E402,F401  (tests/ on sys.path)
+from support.layers import stack_scene  # noqa: E402
 
-THICKNESS = 0.002  # m
-HEIGHT = 0.3  # m, the large sheet's centre
 MODES = {"default (bdf2, adaptive)": {},
          "fixed-step mode (implicit_euler, 1/30 s)": dict(integrator="implicit_euler", tolerance=0.0, max_step=1 / 30)}
-
-
-def sheet(side: int, size: float, corner: tuple[float, float], z: float) -> tuple[np.ndarray, np.ndarray]:
-    """A side x side grid of points (n, 3) over size x size m from ``corner`` at height z, and its quads (k, 4)."""
-    x, y = np.meshgrid(corner[0] + np.linspace(0.0, size, side), corner[1] + np.linspace(0.0, size, side))
-    return np.stack([x.ravel(), y.ravel(), np.full(x.size, z)], axis=1), grid_cells(side, side)
-
-
-def stack_scene(angle: float, self_friction: float, held_by: str, **settings) -> tuple[wetcloth.Scene, int, np.ndarray]:
-    """The two sheets tilted by ``angle`` deg, the large one held ``held_by`` "pins" or "plane"; the scene, the
-    large sheet's vertex count (its vertices come first) and the downhill direction."""
-    large, large_quads = sheet(16, 0.3, (-0.15, -0.15), 0.0)
-    small, small_quads = sheet(6, 0.1, (-0.043, 0.0237), THICKNESS + 1e-6)  # uphill (+y), off the large grid's lines
-    t = math.radians(angle)
-    turn = np.array([[1.0, 0.0, 0.0], [0.0, math.cos(t), -math.sin(t)], [0.0, math.sin(t), math.cos(t)]])
-    points = np.vstack([large, small]) @ turn.T + [0.0, 0.0, HEIGHT]
-    mesh = make_mesh(points, [np.vstack([large_quads, small_quads + len(large)])],
-                     {"pin": np.r_[np.ones(len(large)), np.zeros(len(small))]},
-                     np.vstack([large[:, :2], small[:, :2] + [0.5, 0.0]]))  # UVs: side by side
-    values = dict(cloth_mesh=mesh, thickness=THICKNESS, water_level=-5.0, floor_level=-4.0, air_density=0.0,
-                  self_friction=self_friction, **settings)
-    normal = turn @ [0.0, 0.0, 1.0]
-    if held_by == "pins":
-        values["pinned_vertices"] = "pin"
-    else:
-        point = np.array([0.0, 0.0, HEIGHT]) - (0.5 * THICKNESS + 1e-6) * normal
-        values |= dict(collider1_shape="plane", collider1_x=point[0], collider1_y=point[1], collider1_z=point[2],
-                       collider1_normal_x=normal[0], collider1_normal_y=normal[1], collider1_normal_z=normal[2],
-                       collider1_friction=5.0)
-    return from_dict(values), len(large), np.array([0.0, -math.cos(t), -math.sin(t)])
 
 
 def main() -> None:

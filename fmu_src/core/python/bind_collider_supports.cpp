@@ -26,6 +26,7 @@ Supports given_supports(nb::handle points, nb::handle weights, nb::handle normal
     s.collider.assign(static_cast<std::size_t>(count), 0);
     s.pressing.assign(static_cast<std::size_t>(count), 0);
     s.anticipated.assign(static_cast<std::size_t>(count), 0);
+    s.arrived.assign(static_cast<std::size_t>(count), 0);
     s.stiff.assign(static_cast<std::size_t>(count), 0);
     return s;
 }

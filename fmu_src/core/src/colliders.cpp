@@ -397,17 +397,21 @@ bool normal_turning(const Physics& phys, Index k, const double* nrm, const doubl
     return turning[0] != 0.0 || turning[1] != 0.0 || turning[2] != 0.0;
 }
 
-Index touched_collider(const Physics& phys, Index n, Index i, const double* pos, double* nrm) {
+Index touched_collider(const Physics& phys, Index n, Index i, const double* pos, double* nrm, double slack) {
     const double reach = 0.5 * phys.thickness * (1.0 + 1e-9);
     const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
     for (Index k = 0; k < phys.collider_count; ++k) {
-        if (collider_distance(phys, k, p, 2.0 * reach, nrm) <= reach) return k;
+        // (the slack where analytic supports hold the cloth: still colliders of analytic shapes)
+        const bool slack_here = slack > 0.0 && !collider_moves(phys, k) &&
+                                static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_SHAPE]) != MESH;
+        const double within = slack_here ? reach + slack : reach;
+        if (collider_distance(phys, k, p, 2.0 * within, nrm) <= within) return k;
     }
     return -1;
 }
 
 Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const double* vel, double* free, double* held,
-                        double last_step) {
+                        double last_step, double slack) {
     Index holding = 0;
     if (phys.collider_count == 0) return 0;
     const double still[3] = {0.0, 0.0, 0.0};
@@ -415,7 +419,7 @@ Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const d
         if (free[i] == 0.0) continue;
         if (phys.collider_motion == nullptr && (vel[i] != 0.0 || vel[n + i] != 0.0 || vel[2 * n + i] != 0.0)) continue;
         double nrm[3];
-        const Index k = touched_collider(phys, n, i, pos, nrm);
+        const Index k = touched_collider(phys, n, i, pos, nrm, slack);
         if (k < 0) continue;
         const double* shift = collider_shift(phys, k);
         double u[3] = {still[0], still[1], still[2]};  // at rest on it: moving with it
@@ -438,12 +442,13 @@ Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const d
 }
 
 Index release_from_colliders(Index n, const Physics& phys, const double* pos, const double* force, const double* mass,
-                             double* free, double* held, double cone) {
+                             double* free, double* held, double cone, bool still_only) {
     Index released = 0;
     const double reach = phys.thickness;  // a held particle sits at thickness / 2
     for (Index i = 0; i < n; ++i) {
         if (held[i] < collider_held(0)) continue;  // not on a collider (floor 1, layer 2, free 0)
         const Index k = static_cast<Index>(held[i] - collider_held(0));
+        if (still_only && collider_moves(phys, k)) continue;
         const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
         double nrm[3];
         const bool on = collider_distance(phys, k, p, reach, nrm) < reach;  // a mesh's is not looked for farther
@@ -456,6 +461,26 @@ Index release_from_colliders(Index n, const Physics& phys, const double* pos, co
         }
     }
     return released;
+}
+
+Index supported_normals(Index n, const Physics& phys, const double* pos, const double* held, const Sliding* sliding,
+                        double* out) {
+    Index supported = 0;
+    for (Index i = 0; i < n; ++i) {
+        if (held[i] < collider_held(0)) continue;  // not on a collider (floor 1, layer 2, free 0)
+        const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
+        double nrm[3];
+        collider_distance(phys, static_cast<Index>(held[i] - collider_held(0)), p, phys.thickness, nrm);
+        for (Index c = 0; c < 3; ++c) out[c * n + i] = nrm[c];
+        supported += 1;
+    }
+    for (Index s = 0; sliding != nullptr && s < sliding->count(); ++s) {
+        if (sliding->collider[s] < 0) continue;  // on the floor: the stage's own rule
+        const Index i = sliding->index[s];
+        for (Index c = 0; c < 3; ++c) out[c * n + i] = sliding->normal[3 * s + c];
+        supported += 1;
+    }
+    return supported;
 }
 
 double onto_surface(const Physics& phys, Index k, Index n, Index i, double reach, double h, double* pos, double* vel) {

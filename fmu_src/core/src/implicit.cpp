@@ -447,7 +447,8 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
     double correction = 0.0;  // m/s, the last iteration's
     // A support met within a fixed step has no normal force at its start, so no friction: its particle landed
     // frictionless (a sheet released onto an incline kept the whole step's slide along it).  Its normal force
-    // is lagged from the first Newton iterate at which it presses instead (IPC's lag), held from then on.
+    // is lagged from the first Newton iterate at which it presses instead (IPC's lag), held from then on unless
+    // the solve ends with it apart (drop_departed).
     const bool lags_arrivals = !adaptive && solver.supports != nullptr && solver.supports->any_friction;
     //: Whether supports met at the iterate got their normal force (the potential changed, and the solve goes on;
     //: a residual in hand, the line search's, takes their friction).
@@ -457,6 +458,15 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
             return false;
         }
         if (residual_ready) residual_of_force(cloth, work, solver, hat_vel, out_vel, bh);
+        previous = 0.0;
+        return true;
+    };
+    //: Whether supports lagged within the step that the iterate leaves not pressing lost their friction (the
+    //: potential changed, and the solve goes on from the residual without it).
+    const auto departed = [&]() {
+        if (!(lags_arrivals && drop_departed(*solver.supports, n, out_pos) > 0)) return false;
+        newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh, slack_slope);
+        residual_ready = true;
         previous = 0.0;
         return true;
     };
@@ -520,7 +530,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
             correction = largest;
             if (!std::isfinite(largest)) break;
             if (descent && !adaptive && energy_settled(n, mass, free, out_vel, hat_vel, rhs) &&
-                !(iteration + 1 < iterations && lagged())) {
+                !(iteration + 1 < iterations && (lagged() || departed()))) {
                 break;
             }
             // The velocity's tolerance: an error left in every step's velocity is not random and adds up, so
@@ -542,7 +552,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
                 trust = banded(plane) ? FIRST_ITERATION_TRUST : 0.0;
             }
             if (largest <= tolerance || (0.0 < rate && rate < 1.0 && rate / (1.0 - rate) * largest <= trust * tolerance)) {
-                if (iteration + 1 < iterations && lagged()) continue;
+                if (iteration + 1 < iterations && (lagged() || departed())) continue;
                 converged = true;
                 break;
             }

@@ -25,10 +25,10 @@ namespace wc {
 namespace {
 
 //: The surface particle i lies on: the floor (centre at floor_z or below) or the collider it touches (k, -1:
-//: the floor), its outward normal into nrm, its friction and its velocity u (m/s: a moving collider's, else 0);
-//: false if none.
-bool surface_under(const Physics& phys, Index n, Index i, const double* pos, double nrm[3], double& friction,
-                   bool& on_floor, double u[3], Index& k) {
+//: the floor; touched_collider's, with `slack` m), its outward normal into nrm, its friction and its velocity u
+//: (m/s: a moving collider's, else 0); false if none.
+bool surface_under(const Physics& phys, Index n, Index i, const double* pos, double slack, double nrm[3],
+                   double& friction, bool& on_floor, double u[3], Index& k) {
     nrm[0] = 0.0;
     nrm[1] = 0.0;
     nrm[2] = 1.0;
@@ -37,7 +37,7 @@ bool surface_under(const Physics& phys, Index n, Index i, const double* pos, dou
     on_floor = pos[2 * n + i] <= phys.floor_z;
     k = -1;
     if (on_floor) return true;
-    k = phys.collider_count > 0 ? touched_collider(phys, n, i, pos, nrm) : -1;
+    k = phys.collider_count > 0 ? touched_collider(phys, n, i, pos, nrm, slack) : -1;
     if (k < 0) return false;
     friction = phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION];
     const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
@@ -184,14 +184,14 @@ void Sliding::move_entry(Index to, Index from) {
 }
 
 Index gather_sliding(Index n, const Physics& phys, const double* pos, const double* vel, const double* free,
-                     Sliding& sliding) {
+                     Sliding& sliding, double slack) {
     sliding.resize(0);
     for (Index i = 0; i < n; ++i) {
         if (free[i] == 0.0) continue;  // pinned, or held at rest
         double nrm[3], friction, u[3];
         bool on_floor;
         Index k;
-        if (!surface_under(phys, n, i, pos, nrm, friction, on_floor, u, k)) continue;
+        if (!surface_under(phys, n, i, pos, slack, nrm, friction, on_floor, u, k)) continue;
         const double v[3] = {vel[i] - u[0], vel[n + i] - u[1], vel[2 * n + i] - u[2]};  // relative to the surface
         double t[3];
         const double slide = along_surface(v, nrm, t);
@@ -206,7 +206,7 @@ Index gather_sliding(Index n, const Physics& phys, const double* pos, const doub
 }
 
 Index add_released(Index n, const Physics& phys, const double* pos, const double* vel, const double* free,
-                   const double* force, Sliding& sliding) {
+                   const double* force, Sliding& sliding, double slack) {
     std::vector<char> listed(n, 0);
     for (const Index i : sliding.index) listed[i] = 1;
     Index added = 0;
@@ -215,7 +215,7 @@ Index add_released(Index n, const Physics& phys, const double* pos, const double
         double nrm[3], friction, u[3];
         bool on_floor;
         Index k;
-        if (!surface_under(phys, n, i, pos, nrm, friction, on_floor, u, k)) continue;
+        if (!surface_under(phys, n, i, pos, slack, nrm, friction, on_floor, u, k)) continue;
         if (vel[i] != u[0] || vel[n + i] != u[1] || vel[2 * n + i] != u[2]) continue;  // not at rest on it
         const double f[3] = {force[i], force[n + i], force[2 * n + i]};
         const double fn = f[0] * nrm[0] + f[1] * nrm[1] + f[2] * nrm[2];

@@ -432,11 +432,20 @@ Status step(Core& core, double remaining, double span, bool retried = false) {
                                        moving.frame);
     }
     const bool weighs_work = weighs_colliders && !(moving.in_frame && moving.frame[2] == 0.0);
+    // Layers lying on layers where the cloth starts (a mesh folded in its file, a state set or restored without
+    // a list) are seen from the first step: without a candidate list the stage builds one only after the step's
+    // solve, which then had no layers' supports or holds (at frame steps a sheet lying on another slid through
+    // its first frame as if frictionless: bench/layer_friction.py).
+    if (core.contact.enabled && core.contact.lists != nullptr && core.contact.margin != nullptr &&
+        core.contact.margin[0] == 0.0) {
+        self_contact::rebuild_for_step(core.contact, n, phys.thickness, buf.pos, buf.pos);
+    }
     // Particles at rest on the floor take no part in the step (a constraint of its solve) unless its forces
     // would move them; the model's free flags are theirs again before the step ends.
+    const double touch_slack = implicit && !adaptive ? FRAME_TOUCH_SLACK * 0.5 * phys.thickness : 0.0;  // m
     Index held = hold_resting(n, phys.floor_z, buf.pos, buf.vel, cloth.free, buf.held);
     const Index held_on_colliders = hold_on_colliders(n, phys, buf.pos, buf.vel, cloth.free, buf.held,
-                                                          clock[LAST_STEP]);
+                                                          clock[LAST_STEP], touch_slack);
     held += held_on_colliders;
     const Index held_on_edges = core.contact.lists != nullptr ? hold_on_collider_edges(core.contact, *core.contact.lists,
                                                                                        phys, n, buf.pos, buf.vel,
@@ -444,8 +453,15 @@ Status step(Core& core, double remaining, double span, bool retried = false) {
                                                               : 0;
     held += held_on_edges;
     const Index on_layers = hold_on_layers(core.contact, phys.thickness, n, buf.pos, buf.vel, cloth.free, buf.held);
+    // At fixed steps those the forces in hand would slip on a still collider slide on it from the step's start (in
+    // the sliding set below, friction a force of the solve): held through the step, a slip made at its end moves
+    // each particle as if alone against its springs, and a sheet set at rest on a slope steeper than its friction
+    // lost its first frame's slide (tests/test_colliders.py).  (On a moving collider add_released takes only those
+    // exactly at its surface's velocity, a test the rounding of its motion decides: a box and its mesh under a sheet
+    // parted by 1.5 um, tests/test_turning_colliders.py; they slip at the step's end, as before.)
+    const bool slips_checked = implicit && !adaptive && held_on_colliders > 0;
+    if (on_layers > 0 || slips_checked) forces(cloth, phys, core.work, buf.pos, buf.vel, buf.water);
     if (on_layers > 0) {  // whom the forces in hand would slide off their layer go free at once
-        forces(cloth, phys, core.work, buf.pos, buf.vel, buf.water);
         const Index slid = release_sliding(core.contact, n, core.work.force, cloth.free, buf.held);
         held += on_layers - slid;
         // and any of them another still element holds within friction is held on that one
@@ -455,7 +471,14 @@ Status step(Core& core, double remaining, double span, bool retried = false) {
         }
     }
     // Particles sliding on the floor or a collider stay on it through an implicit step, friction a force of it.
-    const bool sliding = implicit && gather_sliding(n, phys, buf.pos, buf.vel, cloth.free, core.sliding) > 0;
+    if (implicit) gather_sliding(n, phys, buf.pos, buf.vel, cloth.free, core.sliding, touch_slack);
+    if (slips_checked) {
+        const Index slipping = release_from_colliders(n, phys, buf.pos, core.work.force, core.solver.mass, cloth.free,
+                                                      buf.held, 1.0, true);
+        held -= slipping;
+        if (slipping > 0) add_released(n, phys, buf.pos, buf.vel, cloth.free, core.work.force, core.sliding, touch_slack);
+    }
+    const bool sliding = implicit && core.sliding.count() > 0;
     core.sliding.smoothed = !adaptive;
     core.solver.sliding = sliding ? &core.sliding : nullptr;
     core.solver.near_itself = core.contact.enabled && core.contact.lists != nullptr &&
@@ -582,7 +605,8 @@ Status step(Core& core, double remaining, double span, bool retried = false) {
                                                         RELEASE_ROUND_CONE);
                 }
                 // Those released on the floor or a collider slide on it in the step taken again.
-                if (implicit && add_released(n, phys, buf.pos, buf.vel, cloth.free, core.work.force, core.sliding) > 0) {
+                if (implicit && add_released(n, phys, buf.pos, buf.vel, cloth.free, core.work.force, core.sliding,
+                                             touch_slack) > 0) {
                     core.solver.sliding = &core.sliding;
                 }
                 clock[REJECTED] += 1;
@@ -644,6 +668,13 @@ Status step(Core& core, double remaining, double span, bool retried = false) {
         core.contact.lists->collider_free.assign(cloth.free, cloth.free + n);
     }
     if (weighs_work) moving.acted_on = on_moving_colliders(core);
+    // The colliders the cloth lies on through the step: self-collision's pushes do not take it into them.
+    if (core.contact.enabled && core.contact.lists != nullptr) {
+        std::vector<double>& normals = core.contact.lists->supported_normal;
+        const bool on = held_on_colliders > 0 || (core.solver.sliding != nullptr && phys.collider_count > 0);
+        normals.assign(on ? 3 * static_cast<std::size_t>(n) : 0, 0.0);
+        if (on && supported_normals(n, phys, buf.pos, buf.held, core.solver.sliding, normals.data()) == 0) normals.clear();
+    }
     if (held > 0) release_all(n, cloth.free, buf.held);
     if (std::isfinite(trial.error)) clock[LARGEST_ERROR] = pymax(clock[LARGEST_ERROR], trial.error);
     if (!(h > 0.0 && clock[TIME] + h > clock[TIME])) {  // a step that would not advance the time

@@ -53,8 +53,17 @@ Index collider_contact(Index n, const Physics& phys, const double* start, double
 bool normal_turning(const Physics& phys, Index k, const double* nrm, const double* v, double* turning);
 
 //: The first collider that particle i of pos (3, n) touches: within thickness / 2 of it, up to rounding
-//: (where collider_contact puts a particle), its normal there into nrm; -1 if none.
-Index touched_collider(const Physics& phys, Index n, Index i, const double* pos, double* nrm);
+//: (where collider_contact puts a particle), and `slack` (m) for a still collider of analytic shape (whose
+//: supports the fixed steps' solve sees: collider_analytic_supports.hpp), its normal there into nrm; -1 if none.
+Index touched_collider(const Physics& phys, Index n, Index i, const double* pos, double* nrm, double slack = 0.0);
+
+//: At fixed implicit steps a particle still touches a still analytic collider (is held on it, or slides on it with
+//: its friction) up to this fraction of thickness / 2 beyond its contact distance: the step's solve may leave one
+//: that its support caught (collider_analytic_supports.hpp) that far above it, where the line search stopped
+//: short of the support's wall, and collider_contact then leaves it there.  Without it a sheet lying on a
+//: 15 deg plane of friction 5 hovered 0.3-0.9 um above it for as long as another sheet slid on it, never held,
+//: its friction only what each step's first iterate met, and slid 2.2 mm in one frame (bench/layer_friction.py).
+inline constexpr double FRAME_TOUCH_SLACK = 0.01;
 
 //: The value of Buffers::held for a particle collider k holds (the floor's is 1, a layer's 2).
 inline double collider_held(Index k) { return 3.0 + static_cast<double>(k); }
@@ -63,15 +72,22 @@ inline double collider_held(Index k) { return 3.0 + static_cast<double>(k); }
 //: (friction stopped them) are held for the coming step (free 0, held collider_held(k)); on a moving collider
 //: at its surface's velocity there, on a turning one within |omega| |omega x r| last_step (s) of it (the
 //: change of the surface's velocity over the last step's travel, which a step stopping a particle on it
-//: leaves).  Returns how many.
+//: leaves); touching as touched_collider's with `slack` (m).  Returns how many.
 Index hold_on_colliders(Index n, const Physics& phys, const double* pos, const double* vel, double* free, double* held,
-                        double last_step = 0.0);
+                        double last_step = 0.0, double slack = 0.0);
+
+//: Into out (3, n): the outward normal of the collider each particle lies on through a step from pos (3, n),
+//: held on it (held (n): collider_held(k)) or sliding on it (sliding, null if none); zero for the others.
+//: Returns how many have one.
+Index supported_normals(Index n, const Physics& phys, const double* pos, const double* held, const Sliding* sliding,
+                        double* out);
 
 //: As the floor's release_slipping: release the particles held on a collider that the step's force (N,
 //: (3, n)) lifts off it or pushes along it above cone times friction times the force into it (on a turning
-//: collider the force less mass (kg, (n)) times the surface's centripetal acceleration).  Returns how many.
+//: collider the force less mass (kg, (n)) times the surface's centripetal acceleration); with `still_only`, only
+//: those on colliders that do not move.  Returns how many.
 Index release_from_colliders(Index n, const Physics& phys, const double* pos, const double* force, const double* mass,
-                             double* free, double* held, double cone = 1.0);
+                             double* free, double* held, double cone = 1.0, bool still_only = false);
 
 //: Put particle i, which a step moved along a tangent plane of collider k where it curves (a sphere, a
 //: cylinder's side), exactly back onto it (at reach m along its normal there) and turn its velocity relative

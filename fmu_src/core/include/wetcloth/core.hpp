@@ -237,13 +237,15 @@ struct Sliding {
 //: anticipated: the terms the step's matrix holds stiff before they press (those a Newton correction pressed
 //: at its full length where the line search stalled short of it, bdf2_step: the wall it met within the step);
 //: stiff: whether a term's stiffness is in the matrix at the last force evaluation (pressing or anticipated).
+//: arrived: whether a term's normal force was lagged from an iterate within the step (ARRIVED) or dropped again
+//: where the solve left it not pressing (DEPARTED: collider_supports.hpp, lag_arriving_normal_force, drop_departed).
 struct Supports {
     std::vector<Index> points;
     std::vector<double> weights;
     std::vector<double> table_normal, table_part;
     std::vector<Index> collider;
     std::vector<double> normal, offset;
-    std::vector<char> pressing, anticipated, stiff;
+    std::vector<char> pressing, anticipated, stiff, arrived;
     std::vector<double> friction, normal_force, collider_velocity, friction_block;
     double stiffness = 0.0, distance = 0.0, scale = 0.0, velocity_scale = 0.0;
     double self_stiffness = 0.0, self_friction = 0.0;
@@ -448,6 +450,9 @@ struct ContactLists {
     WindowFits fits;                    // the tiers' shapes and fits kept between steps
     std::vector<Index> resting;         // (n, 3) what a particle held on a layer rests on (-1 padding)
     std::vector<double> resting_normal;  // (n, 3) the unit normal from that support to the particle
+    std::vector<double> supported_normal;  // (3, n) the outward normal of the collider a particle lay or slid on
+                                           // through the step, zero if none (empty: none at all); the stage does
+                                           // not push it into that collider (self_contact/response.hpp)
     std::vector<std::array<Index, 7>> collider_pairs;  // the cloth's pairs with mesh colliders' features (collider_edges.hpp)
     ColliderPairList collider_kept;      // the still meshes' pairs, in the world
     std::vector<ColliderPairList> collider_moving_kept;  // (collider_count) a moving mesh k's, in its table frame

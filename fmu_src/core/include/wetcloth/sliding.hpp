@@ -14,15 +14,16 @@ namespace wc {
 inline constexpr double ACROSS_ROUNDING = 1e-9;
 
 //: Gather the free, not held particles that lie on the floor (centre at floor_z or below) or touch a collider
-//: and slide along it: moving along the surface, not away from it.  Returns how many.
+//: (touched_collider's, with `slack` m) and slide along it: moving along the surface, not away from it.
+//: Returns how many.
 Index gather_sliding(Index n, const Physics& phys, const double* pos, const double* vel, const double* free,
-                     Sliding& sliding);
+                     Sliding& sliding, double slack = 0.0);
 
 //: Add to the sliding set the free particles at rest (velocity (3, n) zero) on the floor or a collider that
 //: a step's force (3, n, N) presses onto it and pushes along it: released from their hold, they would slide
-//: along that push (their direction of sliding).  Returns how many.
+//: along that push (their direction of sliding); touching as gather_sliding's.  Returns how many.
 Index add_released(Index n, const Physics& phys, const double* pos, const double* vel, const double* free,
-                   const double* force, Sliding& sliding);
+                   const double* force, Sliding& sliding, double slack = 0.0);
 
 //: Remove the parts of a (3, n) along the sliding particles' normals.
 void project_sliding(const Sliding& sliding, Index n, double* a);

@@ -87,7 +87,8 @@ inline double share(const Inverse& inverse, int held, int k) { return (held >> k
 }  // namespace
 
 void push_apart(const Index idx[4], const Weights& weights, const Vec3& normal, double target,
-                const Inverse& inverse, double friction, double floor_z, Index n, double* x1, double* v1) {
+                const Inverse& inverse, double friction, double floor_z, Index n, double* x1, double* v1,
+                const double* supported) {
     const double w[4] = {weights.w0, weights.w1, weights.w2, weights.w3};
     const double nx = normal.x, ny = normal.y, nz = normal.z;
     double* x1x = x1;
@@ -96,6 +97,10 @@ void push_apart(const Index idx[4], const Weights& weights, const Vec3& normal, 
     int held = 0;  // bit k: particle k is on the floor and the push would take it down
     for (int k = 0; k < 4; ++k) {
         if (w[k] * nz < 0.0 && x1z[idx[k]] <= floor_z + ON_FLOOR * target) held |= 1 << k;
+        if (supported != nullptr) {
+            const Index i = idx[k];
+            if (w[k] * (nx * supported[i] + ny * supported[n + i] + nz * supported[2 * n + i]) < 0.0) held |= 1 << k;
+        }
     }
     double separation = 0.0;
     for (int k = 0; k < 4; ++k) {
@@ -188,7 +193,9 @@ Settled settle_pair(const Candidate& p, double start_distance, const Contact& co
     if (when == CLEAR && length >= target) return NOTHING;
     if (!(length > 0.0)) return when == CLEAR ? NOTHING : LEFT;  // no side to push to
     const Vec3 normal = {gap.x / length, gap.y / length, gap.z / length};
-    push_apart(idx, w, normal, target, inverse, contact.friction, floor_z, n, x1, v1);
+    const std::vector<double>& supported = contact.lists->supported_normal;
+    push_apart(idx, w, normal, target, inverse, contact.friction, floor_z, n, x1, v1,
+               supported.empty() ? nullptr : supported.data());
     return PUSHED;
 }
 

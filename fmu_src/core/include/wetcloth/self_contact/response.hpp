@@ -98,9 +98,13 @@ inline ContactTime contact_time(int kind, const Vec3 x[4], const Vec3 p[4], doub
 //: Move the end positions x1 (3, n) of the pair's particles idx so that its separation along `normal`
 //: (closest-point weights kept) is `target` (m); then remove its approaching velocity (v1 (3, n), m/s) and
 //: apply Coulomb friction.  A particle on the floor (or that the push would take below floor_z) takes no
-//: share of a push downwards.
+//: share of a push downwards, nor one lying on a collider (supported (3, n): its outward normal, zero if none;
+//: null: none) of a push into it.  (Where the collider's particles moved, a sheet sliding frictionless on a
+//: layer that a plane held took 3-8 times the pushes of a pinned one, each carrying the layer into the plane and
+//: back, and slid 0.78x as far: bench/layer_friction.py.)
 void push_apart(const Index idx[4], const Weights& weights, const Vec3& normal, double target,
-                const Inverse& inverse, double friction, double floor_z, Index n, double* x1, double* v1);
+                const Inverse& inverse, double friction, double floor_z, Index n, double* x1, double* v1,
+                const double* supported = nullptr);
 
 //: Whether the step's blow-up guard will refuse it: a value not finite, or a particle at blow_up_speed
 //: (m/s) or faster.
