@@ -188,9 +188,7 @@ Index lag_arriving_normal_force(Supports& supports, Index n, const double* mass,
     Index arrived = 0;
     for (Index t = 0; t < supports.count(); ++t) {
         const std::size_t term = static_cast<std::size_t>(t);
-        if (!(supports.friction[term] > 0.0) || supports.normal_force[term] > 0.0 || supports.arrived[term] == DEPARTED) {
-            continue;
-        }
+        if (!(supports.friction[term] > 0.0) || supports.normal_force[term] > 0.0) continue;
         // (Not the cloth's own pairs: with the friction of those met within the step, the corner-hung sheet of
         // bench/self_contact_energy.py rose in 0-4 frames of seven starts, without it in 0-1.)
         if (supports.collider[term] == SELF_SUPPORT) continue;
@@ -212,7 +210,7 @@ Index lag_arriving_normal_force(Supports& supports, Index n, const double* mass,
         const double inertia = compliance > 0.0 ? 1.0 / compliance : 0.0;
         const double landing = inertia * (std::max(approach, 0.0) / h + GRAVITY * std::max(nn[2], 0.0));
         supports.normal_force[term] = std::min(term_stiffness(supports, t) * depth, landing);
-        supports.arrived[term] = ARRIVED;
+        supports.arrived[term] = 1;
         add_friction(supports, t, n, vel, force, blocks);
         arrived += 1;
     }
@@ -223,9 +221,9 @@ Index drop_departed(Supports& supports, Index n, const double* pos) {
     Index dropped = 0;
     for (Index t = 0; t < supports.count(); ++t) {
         const std::size_t term = static_cast<std::size_t>(t);
-        if (supports.arrived[term] != ARRIVED || supports.distance - support_gap(supports, t, n, pos) > 0.0) continue;
+        if (!supports.arrived[term] || supports.distance - support_gap(supports, t, n, pos) > 0.0) continue;
         supports.normal_force[term] = 0.0;
-        supports.arrived[term] = DEPARTED;
+        supports.arrived[term] = 0;
         dropped += 1;
     }
     return dropped;

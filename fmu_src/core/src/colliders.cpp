@@ -401,9 +401,11 @@ Index touched_collider(const Physics& phys, Index n, Index i, const double* pos,
     const double reach = 0.5 * phys.thickness * (1.0 + 1e-9);
     const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
     for (Index k = 0; k < phys.collider_count; ++k) {
-        // (the slack where analytic supports hold the cloth: still colliders of analytic shapes)
-        const bool slack_here = slack > 0.0 && !collider_moves(phys, k) &&
-                                static_cast<Index>(phys.colliders[k * COLLIDER_COLUMNS + C_SHAPE]) != MESH;
+        // (the slack where analytic supports hold the cloth, and friction acts: still colliders of analytic shapes
+        // with friction)
+        const double* row = phys.colliders + k * COLLIDER_COLUMNS;
+        const bool slack_here = slack > 0.0 && !collider_moves(phys, k) && static_cast<Index>(row[C_SHAPE]) != MESH &&
+                                row[C_FRICTION] > 0.0;
         const double within = slack_here ? reach + slack : reach;
         if (collider_distance(phys, k, p, 2.0 * within, nrm) <= within) return k;
     }
@@ -448,7 +450,7 @@ Index release_from_colliders(Index n, const Physics& phys, const double* pos, co
     for (Index i = 0; i < n; ++i) {
         if (held[i] < collider_held(0)) continue;  // not on a collider (floor 1, layer 2, free 0)
         const Index k = static_cast<Index>(held[i] - collider_held(0));
-        if (still_only && collider_moves(phys, k)) continue;
+        if (still_only && (collider_moves(phys, k) || !(phys.colliders[k * COLLIDER_COLUMNS + C_FRICTION] > 0.0))) continue;
         const double p[3] = {pos[i], pos[n + i], pos[2 * n + i]};
         double nrm[3];
         const bool on = collider_distance(phys, k, p, reach, nrm) < reach;  // a mesh's is not looked for farther

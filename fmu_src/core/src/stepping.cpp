@@ -410,6 +410,19 @@ void carry_pushed_history(Index n, const double* pushed, const double* pos, cons
     }
 }
 
+//: Note for self-collision's stage the colliders the cloth lies on through the step (ContactLists::supported_normal,
+//: from the particles held on colliders and sliding on them, before their holds are released), if it lies `on` any:
+//: the stage's pushes do not take those particles into them.
+void note_collider_supports(Core& core, bool on) {
+    if (!core.contact.enabled || core.contact.lists == nullptr) return;
+    const Index n = core.cloth.n;
+    std::vector<double>& normals = core.contact.lists->supported_normal;
+    normals.assign(on ? 3 * static_cast<std::size_t>(n) : 0, 0.0);
+    if (on && supported_normals(n, core.phys, core.buf.pos, core.buf.held, core.solver.sliding, normals.data()) == 0) {
+        normals.clear();
+    }
+}
+
 //: Take one accepted step of at most `span` s, `remaining` s before the end of the interval being advanced
 //: (span is shorter when a collider's key comes first); `retried`: a fixed step taken again in halves (for
 //: self-collision's impact zones or energy gained).  Returns DONE or BLOWN_UP.
@@ -453,12 +466,14 @@ Status step(Core& core, double remaining, double span, bool retried = false) {
                                                               : 0;
     held += held_on_edges;
     const Index on_layers = hold_on_layers(core.contact, phys.thickness, n, buf.pos, buf.vel, cloth.free, buf.held);
-    // At fixed steps those the forces in hand would slip on a still collider slide on it from the step's start (in
+    // At fixed steps those the forces in hand would slip on a still collider with friction slide on it from the
+    // step's start (in
     // the sliding set below, friction a force of the solve): held through the step, a slip made at its end moves
     // each particle as if alone against its springs, and a sheet set at rest on a slope steeper than its friction
     // lost its first frame's slide (tests/test_colliders.py).  (On a moving collider add_released takes only those
     // exactly at its surface's velocity, a test the rounding of its motion decides: a box and its mesh under a sheet
-    // parted by 1.5 um, tests/test_turning_colliders.py; they slip at the step's end, as before.)
+    // parted by 1.5 um, tests/test_turning_colliders.py; they, and those on a frictionless one, slip at the step's
+    // end, as before.)
     const bool slips_checked = implicit && !adaptive && held_on_colliders > 0;
     if (on_layers > 0 || slips_checked) forces(cloth, phys, core.work, buf.pos, buf.vel, buf.water);
     if (on_layers > 0) {  // whom the forces in hand would slide off their layer go free at once
@@ -668,13 +683,7 @@ Status step(Core& core, double remaining, double span, bool retried = false) {
         core.contact.lists->collider_free.assign(cloth.free, cloth.free + n);
     }
     if (weighs_work) moving.acted_on = on_moving_colliders(core);
-    // The colliders the cloth lies on through the step: self-collision's pushes do not take it into them.
-    if (core.contact.enabled && core.contact.lists != nullptr) {
-        std::vector<double>& normals = core.contact.lists->supported_normal;
-        const bool on = held_on_colliders > 0 || (core.solver.sliding != nullptr && phys.collider_count > 0);
-        normals.assign(on ? 3 * static_cast<std::size_t>(n) : 0, 0.0);
-        if (on && supported_normals(n, phys, buf.pos, buf.held, core.solver.sliding, normals.data()) == 0) normals.clear();
-    }
+    note_collider_supports(core, held_on_colliders > 0 || (core.solver.sliding != nullptr && phys.collider_count > 0));
     if (held > 0) release_all(n, cloth.free, buf.held);
     if (std::isfinite(trial.error)) clock[LARGEST_ERROR] = pymax(clock[LARGEST_ERROR], trial.error);
     if (!(h > 0.0 && clock[TIME] + h > clock[TIME])) {  // a step that would not advance the time

@@ -85,17 +85,12 @@ void place_supports(Supports& supports, const Physics& phys, Index n, const doub
 Index lag_arriving_normal_force(Supports& supports, Index n, const double* mass, const double* start_vel,
                                 const double* pos, const double* vel, double h, double* force, double* blocks);
 
-//: Supports::arrived: a term whose normal force lag_arriving_normal_force took from an iterate; one whose
-//: iterate's contact the solve then left (drop_departed), without friction for the rest of the step.
-inline constexpr char ARRIVED = 1;
-inline constexpr char DEPARTED = 2;
-
-//: The terms lagged from an iterate (ARRIVED) that do not press at positions pos (3, n), a solve's end: their
-//: normal force back to 0 (DEPARTED, not lagged again in the step), so that friction acts only where the step
-//: ends in contact.  A Newton iterate far from the solution may press a support the solution never reaches: a
-//: frame step's first iterate let a sheet lying on another fall through it onto the plane under both, and that
-//: plane's friction held the top sheet from sliding on the bottom one for the frame (bench/layer_friction.py).
-//: Returns how many.
+//: The terms whose normal force lag_arriving_normal_force took from an iterate (Supports::arrived) that do not press
+//: at positions pos (3, n), a converged solve's end: their normal force back to 0 (lagged again should a later
+//: iterate press them), so that friction acts only where the step ends in contact.  A Newton iterate far from the
+//: solution may press a support the solution never reaches: a frame step's first iterate let a sheet lying on
+//: another fall through it onto the plane under both, and that plane's friction held the top sheet from sliding on
+//: the bottom one for the frame (bench/layer_friction.py).  Returns how many.
 Index drop_departed(Supports& supports, Index n, const double* pos);
 
 //: Each term's gap at positions pos (3, n, m): offset + sum_k w_k normal . x_k (m).

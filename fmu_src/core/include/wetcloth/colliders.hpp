@@ -53,12 +53,15 @@ Index collider_contact(Index n, const Physics& phys, const double* start, double
 bool normal_turning(const Physics& phys, Index k, const double* nrm, const double* v, double* turning);
 
 //: The first collider that particle i of pos (3, n) touches: within thickness / 2 of it, up to rounding
-//: (where collider_contact puts a particle), and `slack` (m) for a still collider of analytic shape (whose
-//: supports the fixed steps' solve sees: collider_analytic_supports.hpp), its normal there into nrm; -1 if none.
+//: (where collider_contact puts a particle), and `slack` (m) for a still collider of analytic shape with friction
+//: (whose supports the fixed steps' solve sees: collider_analytic_supports.hpp), its normal there into nrm; -1 if
+//: none.
 Index touched_collider(const Physics& phys, Index n, Index i, const double* pos, double* nrm, double slack = 0.0);
 
-//: At fixed implicit steps a particle still touches a still analytic collider (is held on it, or slides on it with
-//: its friction) up to this fraction of thickness / 2 beyond its contact distance: the step's solve may leave one
+//: At fixed implicit steps a particle still touches a still analytic collider with friction (is held on it, or
+//: slides on it with its friction) up to this fraction of thickness / 2 beyond its contact distance (on a frictionless
+//: one, where it has no friction to give, a sheet sliding off a ball took twice the steps again, 4 starts of
+//: bench/frame_step_energy.py, and stretched its springs by 6-9 % against 4-6 %): the step's solve may leave one
 //: that its support caught (collider_analytic_supports.hpp) that far above it, where the line search stopped
 //: short of the support's wall, and collider_contact then leaves it there.  Without it a sheet lying on a
 //: 15 deg plane of friction 5 hovered 0.3-0.9 um above it for as long as another sheet slid on it, never held,
@@ -85,7 +88,7 @@ Index supported_normals(Index n, const Physics& phys, const double* pos, const d
 //: As the floor's release_slipping: release the particles held on a collider that the step's force (N,
 //: (3, n)) lifts off it or pushes along it above cone times friction times the force into it (on a turning
 //: collider the force less mass (kg, (n)) times the surface's centripetal acceleration); with `still_only`, only
-//: those on colliders that do not move.  Returns how many.
+//: those on colliders that do not move and have friction.  Returns how many.
 Index release_from_colliders(Index n, const Physics& phys, const double* pos, const double* force, const double* mass,
                              double* free, double* held, double cone = 1.0, bool still_only = false);
 

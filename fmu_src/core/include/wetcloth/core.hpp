@@ -237,8 +237,8 @@ struct Sliding {
 //: anticipated: the terms the step's matrix holds stiff before they press (those a Newton correction pressed
 //: at its full length where the line search stalled short of it, bdf2_step: the wall it met within the step);
 //: stiff: whether a term's stiffness is in the matrix at the last force evaluation (pressing or anticipated).
-//: arrived: whether a term's normal force was lagged from an iterate within the step (ARRIVED) or dropped again
-//: where the solve left it not pressing (DEPARTED: collider_supports.hpp, lag_arriving_normal_force, drop_departed).
+//: arrived: whether a term's normal force was lagged from an iterate within the step (collider_supports.hpp,
+//: lag_arriving_normal_force; drop_departed undoes it where a converged solve leaves the term apart).
 struct Supports {
     std::vector<Index> points;
     std::vector<double> weights;
