@@ -217,6 +217,25 @@ Index lag_arriving_normal_force(Supports& supports, Index n, const double* mass,
     return arrived;
 }
 
+bool relag_self_normal_force(Supports& supports, Index n, const double* pos) {
+    if (!(supports.self_friction > 0.0)) return false;
+    const auto force_at = [&](Index t) {
+        const double depth = supports.distance - support_gap(supports, t, n, pos);
+        return depth > 0.0 ? supports.self_stiffness * depth : 0.0;
+    };
+    double lagged = 0.0, now = 0.0;
+    for (Index t = 0; t < supports.count(); ++t) {
+        if (supports.collider[t] != SELF_SUPPORT) continue;
+        lagged += supports.normal_force[static_cast<std::size_t>(t)];
+        now += force_at(t);
+    }
+    if (!(std::abs(now - lagged) > SELF_RELAG_CHANGE * lagged)) return false;
+    for (Index t = 0; t < supports.count(); ++t) {
+        if (supports.collider[t] == SELF_SUPPORT) supports.normal_force[static_cast<std::size_t>(t)] = force_at(t);
+    }
+    return true;
+}
+
 Index drop_departed(Supports& supports, Index n, const double* pos) {
     Index dropped = 0;
     for (Index t = 0; t < supports.count(); ++t) {

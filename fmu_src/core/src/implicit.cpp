@@ -473,6 +473,15 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
         previous = 0.0;
         return true;
     };
+    //: Whether the layers' normal forces at the iterate the solve would stop at are taken again
+    //: (relag_self_normal_force: the potential changed, and the solve goes on from the residual with them).
+    const auto relagged = [&]() {
+        if (adaptive || solver.supports == nullptr || !relag_self_normal_force(*solver.supports, n, out_pos)) return false;
+        newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh, slack_slope);
+        residual_ready = true;
+        previous = 0.0;
+        return true;
+    };
     const auto iterate = [&]() {
         for (Index iteration = 0; iteration < iterations; ++iteration) {
             lagged();
@@ -533,7 +542,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
             correction = largest;
             if (!std::isfinite(largest)) break;
             if (descent && !adaptive && energy_settled(n, mass, free, out_vel, hat_vel, rhs) &&
-                !(iteration + 1 < iterations && lagged())) {
+                !(iteration + 1 < iterations && (lagged() || relagged()))) {
                 break;
             }
             // The velocity's tolerance: an error left in every step's velocity is not random and adds up, so
@@ -555,7 +564,7 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
                 trust = banded(plane) ? FIRST_ITERATION_TRUST : 0.0;
             }
             if (largest <= tolerance || (0.0 < rate && rate < 1.0 && rate / (1.0 - rate) * largest <= trust * tolerance)) {
-                if (iteration + 1 < iterations && (lagged() || departed())) continue;
+                if (iteration + 1 < iterations && (lagged() || departed() || relagged())) continue;
                 converged = true;
                 break;
             }
