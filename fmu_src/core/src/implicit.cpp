@@ -461,26 +461,25 @@ StepEstimate bdf2_step(const Cloth& cloth, const Physics& phys, Work& work, Solv
         previous = 0.0;
         return true;
     };
-    //: Whether supports lagged within the step that the iterate leaves not pressing lost their friction (the
-    //: potential changed, and the solve goes on from the residual without it).  Only where the solve converged:
-    //: an iterate its energy test let stand is no solution to judge the contact by (after a restart from rest,
-    //: the tablecloth_sphere's solve at frame steps dropped 83 of the ball's terms there, and its frame's estimated
-    //: error rose from 16 to 72 mm, bench/frame_steps.py).
-    const auto departed = [&]() {
-        if (!(lags_arrivals && drop_departed(*solver.supports, n, out_pos) > 0)) return false;
+    //: The supports' friction changed at the iterate: its residual anew, from which the solve goes on.
+    const auto friction_changed = [&]() {
         newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh, slack_slope);
         residual_ready = true;
         previous = 0.0;
         return true;
     };
+    //: Whether supports lagged within the step that the iterate leaves not pressing lost their friction.  Only
+    //: where the solve converged: an iterate its energy test let stand is no solution to judge the contact by
+    //: (after a restart from rest, the tablecloth_sphere's solve at frame steps dropped 83 of the ball's terms
+    //: there, and its frame's estimated error rose from 16 to 72 mm, bench/frame_steps.py).
+    const auto departed = [&]() {
+        return lags_arrivals && drop_departed(*solver.supports, n, out_pos) > 0 && friction_changed();
+    };
     //: Whether the layers' normal forces at the iterate the solve would stop at are taken again
-    //: (relag_self_normal_force: the potential changed, and the solve goes on from the residual with them).
+    //: (relag_self_normal_force).
     const auto relagged = [&]() {
-        if (adaptive || solver.supports == nullptr || !relag_self_normal_force(*solver.supports, n, out_pos)) return false;
-        newton_residual(cloth, phys, work, solver, hat_vel, step_water, out_pos, out_vel, bh, slack_slope);
-        residual_ready = true;
-        previous = 0.0;
-        return true;
+        return !adaptive && solver.supports != nullptr && relag_self_normal_force(*solver.supports, n, out_pos) &&
+               friction_changed();
     };
     const auto iterate = [&]() {
         for (Index iteration = 0; iteration < iterations; ++iteration) {
