@@ -307,8 +307,7 @@ Index stop_reversed(const Sliding& sliding, Index n, const double* hat_pos, doub
         const double* t = &sliding.direction[3 * s];
         const double* u = &sliding.surface_velocity[3 * s];
         if (sliding.smoothed) {  // held by the smoothed law's stick: at rest where the solve put it
-            // (no stick without friction: stopped there, a frictionless ball's sheet, released from its hold at a
-            // frame's start, stretched its springs by 16 % as it slid off, bench/frame_step_energy.py)
+            // (not one without friction: it has no stick, and slides on however slowly)
             if (!(sliding.friction[s] > 0.0) || !(slip_speed(sliding, s, n, vel) < SLIP_SPEED)) continue;
             stopped += 1;
             for (int c = 0; c < 3; ++c) vel[c * n + i] = u[c];
