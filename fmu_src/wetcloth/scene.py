@@ -593,13 +593,13 @@ def _check_mesh_start(scene: Scene):
     """The mesh cloth's positions at t = 0 (3, n) m and its mesh file; a ParameterError for a mesh file that
     cannot be read or used, a cloth that starts at or below the floor, or one that self-collision cannot
     take: folded over itself or in stacked layers in its file."""
-    from wetcloth.topology import flat_sheet, start_positions, vertex_areas
+    from wetcloth.topology import mesh_flat_sheet, start_positions
 
     positions, mesh = start_positions(scene)
     refuse_problem(_core.mesh_floor_problem(np.ascontiguousarray(positions, dtype=float), thickness=scene.thickness,
                                             floor_level=scene.floor_level, placed=scene.place_mesh == "on"))
     if scene.self_collision == "on":
-        overlap = flat_sheet(mesh, vertex_areas(mesh))[1]
+        overlap = mesh_flat_sheet(mesh)[1]
         if overlap is not None:
             first, second = (int(mesh.face_of[t]) for t in overlap)
             raise ParameterError("cloth_mesh", f"{mesh.source!r}: faces {first} and {second} lie over each other "
